@@ -1,0 +1,42 @@
+# Two entry points: `make demo` and `make test`. Both create .venv and install the project.
+PYTHON ?= python3.11
+VENV := .venv
+PY := $(VENV)/bin/python
+PIP := $(VENV)/bin/pip
+STAMP := $(VENV)/.installed
+export VTK_DEFAULT_OPENGL_WINDOW := vtkEGLRenderWindow
+export XDG_CONFIG_HOME := $(CURDIR)/.cache/xdg-config
+export XDG_DATA_HOME := $(CURDIR)/.cache/xdg-data
+export NUMBA_CACHE_DIR := $(CURDIR)/.cache/numba
+
+.PHONY: demo test setup bench clean
+
+setup: $(STAMP)
+
+$(STAMP): pyproject.toml Makefile
+	@command -v $(PYTHON) >/dev/null || (echo "need $(PYTHON) on PATH" >&2; exit 2)
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	# open3d needs libusb at import time; install it when missing and we may (root, apt present).
+	@if ! ldconfig -p 2>/dev/null | grep -q libusb-1.0; then \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	    (apt-get update -qq && apt-get install -y -qq libusb-1.0-0) >/dev/null 2>&1 || echo "warning: could not install libusb-1.0-0; open3d features off"; \
+	  else echo "warning: libusb-1.0-0 missing; open3d features off"; fi; fi
+	# torch first, pinned, so no later requirement pulls a CUDA build.
+	$(PIP) install -q torch==2.13.0
+	$(PIP) install -q -e '.[learned,test]'
+	$(PIP) check
+	touch $(STAMP)
+
+demo: $(STAMP)
+	$(PY) -m vs_inspect.cli demo
+
+test: $(STAMP)
+	# pytest exit 5 (no tests collected) is a failure here; timeout kills a hung process (pycolmap hazard).
+	timeout -k 30 1500 $(PY) -m pytest -q -p no:cacheprovider; rc=$$?; \
+	  if [ $$rc -eq 5 ]; then echo "no tests collected" >&2; exit 1; fi; exit $$rc
+
+bench: $(STAMP)
+	$(PY) -m vs_inspect.cli bench-energy
+
+clean:
+	rm -rf $(VENV) .cache

@@ -1,0 +1,69 @@
+"""Accuracy of estimated offsets against true ones.
+
+A@T: area under the accuracy-vs-threshold curve for thresholds 0..T ms over all pairs of videos,
+in % (100 = every pair exact). For one pair with error e the area is max(0, 1 - e/T), so A@T is
+the mean of that over pairs. A pair involving an unresolved video counts as wrong (area 0).
+δ: per-video error in ms after fixing the reference's offset to its true value.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class SyncMetrics:
+    a100: float  # %, pairwise AUC up to 100 ms
+    a500: float  # %, pairwise AUC up to 500 ms
+    delta_mean_ms: float  # mean per-video error over resolved non-reference videos (NaN if none)
+    delta_med_ms: float  # median of the same
+    delta_max_ms: float  # worst resolved video
+    num_unresolved: int  # videos with no estimate (their pairs count as wrong above)
+    per_video_ms: dict[str, float | None]  # error of each video, None if unresolved
+    reference: str
+
+
+def pair_auc(errors_ms: np.ndarray, threshold_ms: float) -> float:
+    """Mean over pairs of the area under accuracy(τ) for τ in [0, T], normalized to %."""
+    e = np.asarray(errors_ms, dtype=np.float64)
+    if e.size == 0:
+        return float("nan")
+    area = np.where(np.isfinite(e), np.clip(1.0 - e / threshold_ms, 0.0, 1.0), 0.0)
+    return float(100.0 * area.mean())
+
+
+def evaluate_offsets(estimated_s: dict[str, float | None], true_s: dict[str, float],
+                     reference: str) -> SyncMetrics:
+    missing = sorted(set(true_s) - set(estimated_s))
+    if missing:
+        raise ValueError(f"result has no entry for videos {missing}")
+    names = sorted(true_s)
+    pair_err = []
+    for a, b in itertools.combinations(names, 2):
+        ea, eb = estimated_s[a], estimated_s[b]
+        if ea is None or eb is None:
+            pair_err.append(math.inf)
+        else:
+            pair_err.append(1000.0 * abs((eb - ea) - (true_s[b] - true_s[a])))
+    ref_est = estimated_s.get(reference)
+    per_video: dict[str, float | None] = {}
+    for v in names:
+        if v == reference:
+            continue
+        ev = estimated_s[v]
+        if ev is None or ref_est is None:
+            per_video[v] = None
+        else:
+            per_video[v] = 1000.0 * abs((ev - ref_est) - (true_s[v] - true_s[reference]))
+    errs = np.array([e for e in per_video.values() if e is not None])
+    return SyncMetrics(
+        pair_auc(np.array(pair_err), 100.0), pair_auc(np.array(pair_err), 500.0),
+        float(errs.mean()) if errs.size else float("nan"),
+        float(np.median(errs)) if errs.size else float("nan"),
+        float(errs.max()) if errs.size else float("nan"),
+        sum(1 for e in per_video.values() if e is None) + (1 if ref_est is None else 0),
+        per_video, reference)

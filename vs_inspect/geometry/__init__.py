@@ -1,0 +1,1 @@
+"""Pure geometry: no I/O, no logging set-up, no rerun."""

@@ -1,0 +1,107 @@
+"""Fundamental matrices between two cameras at two moments, and the paper's four residuals.
+
+Convention: F_ab maps a point of b to its epipolar line in a, so x_aᵀ F_ab x_b = 0.
+Everything is vectorized over leading dimensions.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+RESIDUALS = ("sampson", "symmetric", "cosine", "algebraic")
+
+
+def skew(v: np.ndarray) -> np.ndarray:
+    """(...,3) -> (...,3,3) cross-product matrix [v]x."""
+    v = np.asarray(v, dtype=np.float64)
+    z = np.zeros(v.shape[:-1])
+    return np.stack([
+        np.stack([z, -v[..., 2], v[..., 1]], -1),
+        np.stack([v[..., 2], z, -v[..., 0]], -1),
+        np.stack([-v[..., 1], v[..., 0], z], -1),
+    ], -2)
+
+
+def relative_pose(a_from_world: np.ndarray, b_from_world: np.ndarray) -> np.ndarray:
+    """(...,4,4) a_from_b = a_from_world · inverse(b_from_world)."""
+    R_b, t_b = b_from_world[..., :3, :3], b_from_world[..., :3, 3]
+    world_from_b = np.zeros(np.broadcast_shapes(a_from_world.shape, b_from_world.shape))
+    world_from_b[..., :3, :3] = np.swapaxes(R_b, -1, -2)
+    world_from_b[..., :3, 3] = -np.einsum("...ji,...j->...i", R_b, t_b)
+    world_from_b[..., 3, 3] = 1.0
+    return a_from_world @ world_from_b
+
+
+def fundamental_from_cameras(K_a: np.ndarray, a_from_world: np.ndarray,
+                             K_b: np.ndarray, b_from_world: np.ndarray) -> np.ndarray:
+    """(...,3,3) F_ab with x_aᵀ F_ab x_b = 0 for a 3D point seen by camera a and camera b.
+
+    Each camera is taken at its own moment, so a moving camera contributes the pose it had then.
+    F is scaled to unit Frobenius norm (the residuals below are scale-invariant except algebraic).
+    """
+    a_from_b = relative_pose(np.asarray(a_from_world, float), np.asarray(b_from_world, float))
+    R, t = a_from_b[..., :3, :3], a_from_b[..., :3, 3]
+    E = skew(t) @ R
+    F = np.swapaxes(np.linalg.inv(K_a), -1, -2) @ E @ np.linalg.inv(K_b)
+    norm = np.linalg.norm(F, axis=(-2, -1), keepdims=True)
+    return F / np.where(norm > 0, norm, 1.0)
+
+
+def _homogeneous(x: np.ndarray) -> np.ndarray:
+    return np.concatenate([x, np.ones(x.shape[:-1] + (1,), dtype=x.dtype)], axis=-1)
+
+
+def epipolar_residual(F_ab: np.ndarray, x_a: np.ndarray, x_b: np.ndarray,
+                      kind: str = "sampson") -> np.ndarray:
+    """Residual of x_aᵀ F_ab x_b = 0, broadcast over leading dims. x_a, x_b: (...,2) px.
+
+    sampson:   (x_aᵀFx_b)² / (|(Fx_b)_12|² + |(Fᵀx_a)_12|²)          px²
+    symmetric: (x_aᵀFx_b)² (1/|(Fx_b)_12|² + 1/|(Fᵀx_a)_12|²)         px²
+    cosine:    (x_aᵀFx_b)² (1/(|x_a|²|Fx_b|²) + 1/(|Fᵀx_a|²|x_b|²))   unitless (homogeneous norms)
+    algebraic: |x_aᵀFx_b|                                             depends on F's scale
+    """
+    if kind not in RESIDUALS:
+        raise ValueError(f"unknown residual {kind!r}; choose one of {RESIDUALS}")
+    xa = _homogeneous(np.asarray(x_a, dtype=np.float64))
+    xb = _homogeneous(np.asarray(x_b, dtype=np.float64))
+    l_a = np.einsum("...ij,...j->...i", F_ab, xb)  # line in a
+    l_b = np.einsum("...ji,...j->...i", F_ab, xa)  # line in b
+    num = np.einsum("...i,...i->...", xa, l_a)
+    if kind == "algebraic":
+        return np.abs(num)
+    num2 = num * num
+    na = l_a[..., 0] ** 2 + l_a[..., 1] ** 2
+    nb = l_b[..., 0] ** 2 + l_b[..., 1] ** 2
+    if kind == "sampson":
+        return num2 / (na + nb)
+    if kind == "symmetric":
+        return num2 * (1.0 / na + 1.0 / nb)
+    return num2 * (1.0 / (np.sum(xa * xa, -1) * np.sum(l_a * l_a, -1))
+                   + 1.0 / (np.sum(l_b * l_b, -1) * np.sum(xb * xb, -1)))
+
+
+def project(K: np.ndarray, cam_from_world: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """(...,3) world points -> (...,2) px. Points behind the camera come out NaN."""
+    Xc = np.einsum("...ij,...j->...i", cam_from_world[..., :3, :3], X) + cam_from_world[..., :3, 3]
+    uvw = np.einsum("...ij,...j->...i", K, Xc)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xy = uvw[..., :2] / uvw[..., 2:3]
+    xy[Xc[..., 2] <= 1e-9] = np.nan
+    return xy
+
+
+def look_at(center: np.ndarray, target: np.ndarray, up=(0.0, 0.0, 1.0)) -> np.ndarray:
+    """(4,4) cam_from_world of a camera at center looking at target (OpenCV: x right, y down, z ahead)."""
+    center, target, up = (np.asarray(v, dtype=np.float64) for v in (center, target, up))
+    z = target - center
+    z /= np.linalg.norm(z)
+    x = np.cross(z, up)
+    if np.linalg.norm(x) < 1e-9:
+        x = np.cross(z, [0.0, 1.0, 0.0])
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    R = np.stack([x, y, z])
+    T = np.eye(4)
+    T[:3, :3] = R
+    T[:3, 3] = -R @ center
+    return T

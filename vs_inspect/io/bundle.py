@@ -1,0 +1,244 @@
+"""Cue bundle v1 (DESIGN.md): reader and writer, validated at the boundary.
+
+Every problem is raised as BundleError naming the file and what is wrong with it.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import os
+import shutil
+import tempfile
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import BundleError
+from ..types import CameraTrack, CueBundle, TrackPairs, Tracks, VideoInfo
+
+log = logging.getLogger(__name__)
+
+FORMAT = "vs-inspect-cues"
+VERSION = 1
+
+
+def _load_npz(path: Path) -> dict[str, np.ndarray]:
+    if not path.is_file():
+        raise BundleError(path, "missing file")
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return {k: z[k] for k in z.files}
+    except (ValueError, OSError, zipfile.BadZipFile, EOFError) as exc:
+        raise BundleError(path, f"not a readable .npz file ({exc})") from None
+
+
+def _require(path: Path, data: dict, key: str) -> np.ndarray:
+    if key not in data:
+        raise BundleError(path, f"missing array {key!r} (has {sorted(data)})")
+    return data[key]
+
+
+def _read_video_entry(path: Path, i: int, entry) -> VideoInfo:
+    where = f"videos[{i}]"
+    if not isinstance(entry, dict):
+        raise BundleError(path, f"{where} must be an object, got {type(entry).__name__}")
+    name = entry.get("name")
+    if not isinstance(name, str) or not name or "/" in name or name.startswith("."):
+        raise BundleError(path, f"{where}: 'name' must be a non-empty file-safe string, got {name!r}")
+    where = f"video {name!r}"
+    for key in ("width", "height", "num_frames"):
+        val = entry.get(key)
+        if not isinstance(val, int) or isinstance(val, bool) or val < 1:
+            raise BundleError(path, f"{where}: {key!r} must be a positive integer, got {val!r}")
+    try:
+        if entry.get("timestamps_s") is not None:
+            ts = np.asarray(entry["timestamps_s"], dtype=np.float64)
+            fps = entry.get("fps")
+            return VideoInfo(name, entry["width"], entry["height"], entry["num_frames"], ts,
+                             float(fps) if fps else None)
+        fps = entry.get("fps")
+        if not isinstance(fps, (int, float)) or isinstance(fps, bool) or not math.isfinite(fps) or fps <= 0:
+            raise BundleError(path, f"{where}: needs a positive 'fps' or 'timestamps_s', got fps={fps!r}")
+        return VideoInfo.constant_rate(name, entry["width"], entry["height"], entry["num_frames"], fps)
+    except (ValueError, TypeError) as exc:
+        raise BundleError(path, f"{where}: {exc}") from None
+
+
+def _split_pair_name(stem: str, names: list[str]) -> tuple[str, str] | None:
+    """'<a>__<b>' -> (a, b), choosing the split where both sides are known videos."""
+    parts = stem.split("__")
+    for k in range(1, len(parts)):
+        a, b = "__".join(parts[:k]), "__".join(parts[k:])
+        if a in names and b in names:
+            return a, b
+    return None
+
+
+def read_bundle(folder: str | os.PathLike) -> CueBundle:
+    """Read and validate a cue bundle folder."""
+    root = Path(folder)
+    if not root.is_dir():
+        raise BundleError(root, "not a folder (a cue bundle is a folder with bundle.json)")
+    meta_path = root / "bundle.json"
+    if not meta_path.is_file():
+        raise BundleError(meta_path, "missing file")
+    try:
+        meta = json.loads(meta_path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise BundleError(meta_path, f"not valid JSON ({exc})") from None
+    if not isinstance(meta, dict):
+        raise BundleError(meta_path, "must hold a JSON object")
+    if meta.get("format") != FORMAT:
+        raise BundleError(meta_path, f"'format' must be {FORMAT!r}, got {meta.get('format')!r}")
+    if meta.get("version") != VERSION:
+        raise BundleError(meta_path, f"'version' must be {VERSION}, got {meta.get('version')!r}")
+    entries = meta.get("videos")
+    if not isinstance(entries, list) or not entries:
+        raise BundleError(meta_path, "empty bundle: 'videos' must be a non-empty list")
+    videos = [_read_video_entry(meta_path, i, e) for i, e in enumerate(entries)]
+    names = [v.name for v in videos]
+    dupes = sorted({n for n in names if names.count(n) > 1})
+    if dupes:
+        raise BundleError(meta_path, f"duplicate video names {dupes}")
+
+    cameras: dict[str, CameraTrack] = {}
+    tracks: dict[str, Tracks] = {}
+    for v in videos:
+        cpath = root / "cameras" / f"{v.name}.npz"
+        cdata = _load_npz(cpath)
+        try:
+            cam = CameraTrack(_require(cpath, cdata, "K"), _require(cpath, cdata, "cam_from_world"),
+                              cdata.get("valid"))
+        except ValueError as exc:
+            raise BundleError(cpath, str(exc)) from None
+        if cam.is_moving and cam.num_pose_frames != v.num_frames:
+            raise BundleError(cpath, f"has {cam.num_pose_frames} per-frame entries but video "
+                                     f"{v.name!r} has num_frames={v.num_frames}")
+        cameras[v.name] = cam
+
+        tpath = root / "tracks" / f"{v.name}.npz"
+        tdata = _load_npz(tpath)
+        try:
+            tr = Tracks(_require(tpath, tdata, "xy"), tdata.get("instance"))
+        except ValueError as exc:
+            raise BundleError(tpath, str(exc)) from None
+        if tr.num_frames != v.num_frames:
+            raise BundleError(tpath, f"xy has {tr.num_frames} frames (shape {tr.xy.shape}) but "
+                                     f"video {v.name!r} has num_frames={v.num_frames}")
+        tracks[v.name] = tr
+
+    pairs: dict[tuple[str, str], TrackPairs] = {}
+    pair_dir = root / "pairs"
+    if pair_dir.is_dir():
+        for ppath in sorted(pair_dir.glob("*.npz")):
+            ab = _split_pair_name(ppath.stem, names)
+            if ab is None:
+                raise BundleError(ppath, f"file name must be <a>__<b>.npz with known videos {names}")
+            a, b = ab
+            if a == b:
+                raise BundleError(ppath, "pairs a video with itself")
+            if (b, a) in pairs:
+                raise BundleError(ppath, f"pair given twice (also as {b}__{a}.npz)")
+            pdata = _load_npz(ppath)
+            try:
+                tp = TrackPairs(a, b, _require(ppath, pdata, "index"), pdata.get("weight"))
+            except ValueError as exc:
+                raise BundleError(ppath, str(exc)) from None
+            for col, n in ((0, a), (1, b)):
+                if len(tp.index) == 0:
+                    continue
+                bad = (tp.index[:, col] < 0) | (tp.index[:, col] >= tracks[n].num_tracks)
+                if bad.any():
+                    row = int(np.argmax(bad))
+                    raise BundleError(ppath, f"row {row}: track index {int(tp.index[row, col])} out of "
+                                             f"range for {n!r} ({tracks[n].num_tracks} tracks)")
+            pairs[(a, b)] = tp
+        others = [p.name for p in pair_dir.iterdir() if p.suffix != ".npz"]
+        if others:
+            log.warning("%s: ignoring files that are not .npz: %s", pair_dir, others)
+
+    gt = None
+    gt_path = root / "gt.json"
+    if gt_path.is_file():
+        gt = read_gt(gt_path, names)
+    try:
+        return CueBundle(tuple(videos), cameras, tracks, pairs, gt)
+    except ValueError as exc:
+        raise BundleError(root, str(exc)) from None
+
+
+def read_gt(path: str | os.PathLike, names: list[str] | None = None) -> dict[str, float]:
+    """Read {"offsets_s": {...}} and check it names the known videos."""
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise BundleError(path, "missing file") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise BundleError(path, f"not valid JSON ({exc})") from None
+    offs = data.get("offsets_s") if isinstance(data, dict) else None
+    if not isinstance(offs, dict) or not offs:
+        raise BundleError(path, "needs a non-empty object 'offsets_s'")
+    out = {}
+    for k, v in offs.items():
+        if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
+            raise BundleError(path, f"offset of {k!r} must be a finite number, got {v!r}")
+        out[str(k)] = float(v)
+    if names is not None:
+        unknown = sorted(set(out) - set(names))
+        if unknown:
+            raise BundleError(path, f"names unknown videos {unknown} (known: {names})")
+    return out
+
+
+def write_bundle(bundle: CueBundle, folder: str | os.PathLike, overwrite: bool = False) -> Path:
+    """Write a bundle atomically: into a temporary sibling folder, renamed when complete."""
+    dest = Path(folder)
+    occupied = dest.is_file() or (dest.is_dir() and any(dest.iterdir()))
+    if occupied and not overwrite:
+        raise FileExistsError(f"{dest} exists and is not empty")
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.partial-", dir=dest.parent))
+    try:
+        videos = []
+        for v in bundle.videos:
+            entry = {"name": v.name, "width": int(v.width), "height": int(v.height),
+                     "num_frames": int(v.num_frames)}
+            if v.fps is not None:
+                entry["fps"] = float(v.fps)
+            const = v.fps is not None and np.allclose(v.timestamps_s, np.arange(v.num_frames) / v.fps,
+                                                      atol=1e-9, rtol=0)
+            if not const:
+                entry["timestamps_s"] = [float(t) for t in v.timestamps_s]
+            videos.append(entry)
+        (tmp / "bundle.json").write_text(
+            json.dumps({"format": FORMAT, "version": VERSION, "videos": videos}, indent=1))
+        for sub in ("cameras", "tracks", "pairs"):
+            (tmp / sub).mkdir()
+        for name, cam in bundle.cameras.items():
+            arrays = {"K": cam.K, "cam_from_world": cam.cam_from_world}
+            if cam.valid is not None:
+                arrays["valid"] = cam.valid
+            np.savez_compressed(tmp / "cameras" / f"{name}.npz", **arrays)
+        for name, tr in bundle.tracks.items():
+            arrays = {"xy": tr.xy}
+            if tr.instance is not None:
+                arrays["instance"] = tr.instance
+            np.savez_compressed(tmp / "tracks" / f"{name}.npz", **arrays)
+        for (a, b), tp in bundle.pairs.items():
+            arrays = {"index": tp.index}
+            if tp.weight is not None:
+                arrays["weight"] = tp.weight
+            np.savez_compressed(tmp / "pairs" / f"{a}__{b}.npz", **arrays)
+        if bundle.gt_offsets_s is not None:
+            (tmp / "gt.json").write_text(json.dumps({"offsets_s": bundle.gt_offsets_s}, indent=1))
+        if dest.exists():
+            shutil.rmtree(dest)
+        os.replace(tmp, dest)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return dest

@@ -1,0 +1,115 @@
+"""Settings of Stage 1 and Stage 2, one docstring per field (the CLI shows them as help)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+from ..geometry.epipolar import RESIDUALS
+
+
+@dataclass(frozen=True)
+class LandscapeConfig:
+    residual: str = "sampson"
+    """Epipolar residual: sampson (default), symmetric, cosine or algebraic (the paper's ablation)."""
+    loss: str = "truncated"
+    """Aggregation over (track pair, frame) terms: truncated (robust, default) or mean (the paper's plain mean)."""
+    robust_scale: float | None = None
+    """Truncation level of the robust loss in the residual's units (px² for sampson); None = 9 x the median residual at the best coarse offset."""
+    min_overlap_s: float = 1.0
+    """Only offsets that leave at least this much common time of the two videos are searched."""
+    range_s: float | None = None
+    """Search only |Δ| <= range_s (seconds); None = every offset with enough overlap."""
+    step_s: float | None = None
+    """Grid step of the discrete search; None = the finer of the two frame intervals."""
+    min_terms: int = 30
+    """An offset with fewer (track pair, frame) terms gets no energy (NaN)."""
+    refine: bool = True
+    """Refine the best discrete offset below the grid step (bounded 1-D search on the continuous energy)."""
+    threads: int = 0
+    """Worker threads of the compiled kernel; 0 = numba's default (all cores)."""
+
+    def __post_init__(self) -> None:
+        if self.residual not in RESIDUALS:
+            raise ValueError(f"unknown residual {self.residual!r}; choose one of {RESIDUALS}")
+        if self.loss not in ("truncated", "mean"):
+            raise ValueError(f"unknown loss {self.loss!r}; choose truncated or mean")
+        if self.min_overlap_s < 0:
+            raise ValueError(f"min_overlap_s must be >= 0, got {self.min_overlap_s}")
+        if self.range_s is not None and self.range_s <= 0:
+            raise ValueError(f"range_s must be positive, got {self.range_s}")
+        if self.step_s is not None and self.step_s <= 0:
+            raise ValueError(f"step_s must be positive, got {self.step_s}")
+
+
+@dataclass(frozen=True)
+class DecisionConfig:
+    enabled: bool = True
+    """Reject pairs whose landscape is ambiguous (off = accept every pair with a minimum: the ablation)."""
+    min_track_pairs: int = 8
+    """A pair with fewer cross-view track pairs is rejected."""
+    min_contrast: float = 0.3
+    """Reject when the best energy is less than this fraction below the landscape's median (flat landscape)."""
+    max_second_ratio: float = 0.7
+    """Reject when another minimum is at least this deep relative to the best (depth below the median)."""
+    max_minima: int = 2
+    """Reject when more local minima than this are at least half as deep as the best (the paper uses 2)."""
+    min_prominence: float = 0.1
+    """A local minimum counts only with a prominence of this fraction of the best depth."""
+    reject_range_edge: bool = True
+    """Reject when the best minimum lies on the border of the search range."""
+
+
+@dataclass(frozen=True)
+class SolveConfig:
+    solver: str = "irls"
+    """irls (Huber-loss iteratively reweighted least squares, default) or ls (plain least squares)."""
+    huber_delta_s: float | None = None
+    """Huber threshold in seconds; None = half the coarsest frame interval of the videos."""
+    max_iterations: int = 50
+    """IRLS iterations at most."""
+    reference: str | None = None
+    """Video whose offset is 0; None = the first video."""
+
+    def __post_init__(self) -> None:
+        if self.solver not in ("irls", "ls"):
+            raise ValueError(f"unknown solver {self.solver!r}; choose irls or ls")
+
+
+@dataclass(frozen=True)
+class PairSelection:
+    mode: str = "all"
+    """all pairs, a random fraction (keeps a spanning tree so every video stays connected), or rst (a random spanning tree)."""
+    fraction: float = 1.0
+    """Share of pairs for mode 'fraction'."""
+    seed: int = 0
+    """Seed of the random choices."""
+
+    @staticmethod
+    def parse(text: str, seed: int = 0) -> PairSelection:
+        """'all' | 'rst' | a fraction in (0,1] such as '0.5'."""
+        if text in ("all", "rst"):
+            return PairSelection(text, 1.0, seed)
+        try:
+            frac = float(text)
+        except ValueError:
+            raise ValueError(f"--pairs must be all, rst or a fraction in (0,1], got {text!r}") from None
+        if not 0 < frac <= 1:
+            raise ValueError(f"--pairs fraction must be in (0,1], got {frac}")
+        return PairSelection("fraction", frac, seed)
+
+
+@dataclass(frozen=True)
+class SyncConfig:
+    landscape: LandscapeConfig = LandscapeConfig()
+    decision: DecisionConfig = DecisionConfig()
+    solve: SolveConfig = SolveConfig()
+    pairs: PairSelection = PairSelection()
+
+
+def config_to_dict(cfg) -> dict:
+    """Nested plain dict of a config dataclass (for result.json)."""
+    out = {}
+    for f in fields(cfg):
+        v = getattr(cfg, f.name)
+        out[f.name] = config_to_dict(v) if hasattr(v, "__dataclass_fields__") else v
+    return out

@@ -1,0 +1,320 @@
+"""Typed, frozen records passed between stages.
+
+Every array field states its shape and unit. Constructors validate shapes and raise ValueError
+naming what they received; the bundle reader turns those into BundleError with the file name.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+def _require_shape(name: str, array: np.ndarray, shape: tuple) -> None:
+    """Raise ValueError unless array matches shape (None = any length)."""
+    ok = array.ndim == len(shape) and all(s is None or s == d for s, d in zip(shape, array.shape))
+    if not ok:
+        want = "(" + ",".join("N" if s is None else str(s) for s in shape) + ")"
+        raise ValueError(f"{name} must have shape {want}, got {tuple(array.shape)}")
+
+
+@dataclass(frozen=True)
+class VideoInfo:
+    """One video's clock and image size."""
+
+    name: str
+    width: int  # px
+    height: int  # px
+    num_frames: int
+    timestamps_s: np.ndarray  # (T,) float64, local time of each frame, strictly increasing
+    fps: float | None = None  # nominal rate when the video has a constant one
+
+    def __post_init__(self) -> None:
+        ts = np.asarray(self.timestamps_s, dtype=np.float64)
+        object.__setattr__(self, "timestamps_s", ts)
+        _require_shape(f"{self.name}: timestamps_s", ts, (self.num_frames,))
+        if self.num_frames < 1:
+            raise ValueError(f"{self.name}: num_frames must be >= 1, got {self.num_frames}")
+        if not np.all(np.isfinite(ts)):
+            raise ValueError(f"{self.name}: timestamps_s has NaN or inf")
+        if self.num_frames > 1 and not np.all(np.diff(ts) > 0):
+            bad = int(np.argmin(np.diff(ts) > 0))
+            raise ValueError(
+                f"{self.name}: timestamps_s must be strictly increasing "
+                f"(frame {bad + 1} at {ts[bad + 1]:.6f} s after frame {bad} at {ts[bad]:.6f} s)"
+            )
+
+    @staticmethod
+    def constant_rate(name: str, width: int, height: int, num_frames: int, fps: float) -> VideoInfo:
+        if not (np.isfinite(fps) and fps > 0):
+            raise ValueError(f"{name}: fps must be positive, got {fps}")
+        return VideoInfo(name, width, height, num_frames, np.arange(num_frames) / fps, float(fps))
+
+    @property
+    def duration_s(self) -> float:
+        """Local time of the last frame (first frame is at 0 by convention, but not required)."""
+        return float(self.timestamps_s[-1] - self.timestamps_s[0])
+
+    @property
+    def frame_interval_s(self) -> float:
+        """Median spacing of frames; 1/fps for constant-rate video."""
+        if self.fps:
+            return 1.0 / self.fps
+        if self.num_frames < 2:
+            return float("inf")
+        return float(np.median(np.diff(self.timestamps_s)))
+
+
+@dataclass(frozen=True)
+class CameraTrack:
+    """Intrinsics and pose of one camera, static or per frame (OpenCV pinhole, undistorted)."""
+
+    K: np.ndarray  # (3,3) or (T,3,3) px
+    cam_from_world: np.ndarray  # (4,4) or (T,4,4), x_cam = R X + t, metres or arbitrary scale
+    valid: np.ndarray | None = None  # (T,) bool for per-frame poses; None = all valid
+
+    def __post_init__(self) -> None:
+        K = np.asarray(self.K, dtype=np.float64)
+        T = np.asarray(self.cam_from_world, dtype=np.float64)
+        object.__setattr__(self, "K", K)
+        object.__setattr__(self, "cam_from_world", T)
+        if K.shape not in ((3, 3),) and not (K.ndim == 3 and K.shape[1:] == (3, 3)):
+            raise ValueError(f"K must have shape (3,3) or (T,3,3), got {K.shape}")
+        if T.shape != (4, 4) and not (T.ndim == 3 and T.shape[1:] == (4, 4)):
+            raise ValueError(f"cam_from_world must have shape (4,4) or (T,4,4), got {T.shape}")
+        if not np.all(np.isfinite(K)):
+            raise ValueError("K has NaN or inf")
+        if not np.all(np.isfinite(T)):
+            raise ValueError("cam_from_world has NaN or inf")
+        dets = np.linalg.det(K.reshape(-1, 3, 3))
+        if np.any(np.abs(dets) < 1e-9):
+            raise ValueError("K is singular")
+        R = T.reshape(-1, 4, 4)[:, :3, :3]
+        ortho = np.abs(np.einsum("nij,nkj->nik", R, R) - np.eye(3)).max()
+        if ortho > 1e-4 or np.any(np.linalg.det(R) < 0):
+            raise ValueError(f"cam_from_world rotation is not a rotation (|RRᵀ-I| = {ortho:.2g})")
+        if K.ndim == 3 and T.ndim == 3 and K.shape[0] != T.shape[0]:
+            raise ValueError(f"K has {K.shape[0]} frames but cam_from_world has {T.shape[0]}")
+        if self.valid is not None:
+            v = np.asarray(self.valid, dtype=bool)
+            object.__setattr__(self, "valid", v)
+            n = self.num_pose_frames
+            if v.shape != (n,):
+                raise ValueError(f"valid must have shape ({n},), got {v.shape}")
+
+    @property
+    def is_moving(self) -> bool:
+        return self.cam_from_world.ndim == 3 or self.K.ndim == 3
+
+    @property
+    def num_pose_frames(self) -> int:
+        """Number of per-frame entries (1 for a static camera)."""
+        if self.cam_from_world.ndim == 3:
+            return self.cam_from_world.shape[0]
+        if self.K.ndim == 3:
+            return self.K.shape[0]
+        return 1
+
+    def K_at(self, frames: np.ndarray) -> np.ndarray:
+        """(len(frames),3,3) intrinsics at integer frame indices."""
+        frames = np.asarray(frames, dtype=int)
+        return self.K[frames] if self.K.ndim == 3 else np.broadcast_to(self.K, (len(frames), 3, 3))
+
+    def pose_at(self, frames: np.ndarray) -> np.ndarray:
+        """(len(frames),4,4) cam_from_world at integer frame indices."""
+        frames = np.asarray(frames, dtype=int)
+        T = self.cam_from_world
+        return T[frames] if T.ndim == 3 else np.broadcast_to(T, (len(frames), 4, 4))
+
+    def centers(self) -> np.ndarray:
+        """(F,3) camera centres in world coordinates (F = num_pose_frames)."""
+        T = self.cam_from_world.reshape(-1, 4, 4)
+        R, t = T[:, :3, :3], T[:, :3, 3]
+        return -np.einsum("nji,nj->ni", R, t)
+
+
+@dataclass(frozen=True)
+class Tracks:
+    """2D point tracks of one video."""
+
+    xy: np.ndarray  # (N,T,2) float32/64 px, undistorted, NaN where the point is not seen
+    instance: np.ndarray | None = None  # (N,) int, moving-object instance of each track
+
+    def __post_init__(self) -> None:
+        xy = np.asarray(self.xy)
+        if not np.issubdtype(xy.dtype, np.floating):
+            xy = xy.astype(np.float64)
+        object.__setattr__(self, "xy", xy)
+        _require_shape("xy", xy, (None, None, 2))
+        if np.isinf(xy).any():
+            raise ValueError("xy has inf values (use NaN for unseen points)")
+        if self.instance is not None:
+            inst = np.asarray(self.instance)
+            if not np.issubdtype(inst.dtype, np.integer):
+                raise ValueError(f"instance must be integers, got {inst.dtype}")
+            _require_shape("instance", inst, (xy.shape[0],))
+            object.__setattr__(self, "instance", inst)
+
+    @property
+    def num_tracks(self) -> int:
+        return self.xy.shape[0]
+
+    @property
+    def num_frames(self) -> int:
+        return self.xy.shape[1]
+
+
+@dataclass(frozen=True)
+class TrackPairs:
+    """Cross-view track pairs between videos a and b: rows follow the same physical point."""
+
+    a: str
+    b: str
+    index: np.ndarray  # (P,2) int, (track index in a, track index in b)
+    weight: np.ndarray | None = None  # (P,) float, optional confidence per pair
+
+    def __post_init__(self) -> None:
+        idx = np.asarray(self.index)
+        if idx.size == 0:
+            idx = idx.reshape(0, 2).astype(np.int64)
+        if not np.issubdtype(idx.dtype, np.integer):
+            raise ValueError(f"index must be integers, got {idx.dtype}")
+        _require_shape("index", idx, (None, 2))
+        object.__setattr__(self, "index", idx.astype(np.int64))
+        if self.weight is not None:
+            w = np.asarray(self.weight, dtype=np.float64)
+            _require_shape("weight", w, (idx.shape[0],))
+            if not np.all(np.isfinite(w)) or np.any(w < 0):
+                raise ValueError("weight must be finite and non-negative")
+            object.__setattr__(self, "weight", w)
+
+    @property
+    def key(self) -> tuple[str, str]:
+        return (self.a, self.b)
+
+
+@dataclass(frozen=True)
+class CueBundle:
+    """Everything Stage 1 needs: videos, cameras, tracks and cross-view track pairs."""
+
+    videos: tuple[VideoInfo, ...]
+    cameras: dict[str, CameraTrack]
+    tracks: dict[str, Tracks]
+    pairs: dict[tuple[str, str], TrackPairs]
+    gt_offsets_s: dict[str, float] | None = None  # true offsets when known (DESIGN.md convention)
+
+    def __post_init__(self) -> None:
+        names = [v.name for v in self.videos]
+        if not names:
+            raise ValueError("bundle has no videos")
+        if len(set(names)) != len(names):
+            raise ValueError(f"video names must be unique, got {names}")
+        for v in self.videos:
+            if v.name not in self.cameras:
+                raise ValueError(f"no camera for video {v.name!r}")
+            if v.name not in self.tracks:
+                raise ValueError(f"no tracks for video {v.name!r}")
+            tr, cam = self.tracks[v.name], self.cameras[v.name]
+            if tr.num_frames != v.num_frames:
+                raise ValueError(
+                    f"tracks of {v.name!r} have {tr.num_frames} frames, video has {v.num_frames}"
+                )
+            if cam.is_moving and cam.num_pose_frames != v.num_frames:
+                raise ValueError(
+                    f"camera of {v.name!r} has {cam.num_pose_frames} per-frame poses, "
+                    f"video has {v.num_frames} frames"
+                )
+        for (a, b), tp in self.pairs.items():
+            for n in (a, b):
+                if n not in names:
+                    raise ValueError(f"pair {a}__{b} names unknown video {n!r}")
+            if a == b:
+                raise ValueError(f"pair {a}__{b} pairs a video with itself")
+            for col, n in ((0, a), (1, b)):
+                if tp.index.shape[0] == 0:
+                    continue
+                lo, hi = int(tp.index[:, col].min()), int(tp.index[:, col].max())
+                nt = self.tracks[n].num_tracks
+                if lo < 0 or hi >= nt:
+                    raise ValueError(
+                        f"pair {a}__{b}: track index {hi if hi >= nt else lo} out of range "
+                        f"for {n!r} with {nt} tracks"
+                    )
+
+    @property
+    def names(self) -> list[str]:
+        return [v.name for v in self.videos]
+
+    def video(self, name: str) -> VideoInfo:
+        for v in self.videos:
+            if v.name == name:
+                return v
+        raise KeyError(f"unknown video {name!r}; known: {self.names}")
+
+    def pair(self, a: str, b: str) -> TrackPairs | None:
+        """Track pairs between a and b in that order (swapping a stored b__a file if needed)."""
+        if (a, b) in self.pairs:
+            return self.pairs[(a, b)]
+        if (b, a) in self.pairs:
+            tp = self.pairs[(b, a)]
+            return TrackPairs(a, b, tp.index[:, ::-1].copy(), tp.weight)
+        return None
+
+
+# ---- Stage 1 and Stage 2 results -------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class PairDecision:
+    """Whether a pair's landscape is trusted, with the numbers behind it."""
+
+    accepted: bool
+    reason: str  # readable, e.g. "single clear minimum" or "ambiguous: 3 minima of similar depth"
+    contrast: float  # 1 - E_best / E_baseline (0 = flat landscape, 1 = perfectly sharp)
+    second_depth_ratio: float  # depth of the 2nd minimum / depth of the best (0 = none, 1 = tie)
+    num_minima: int  # significant local minima (by prominence)
+    num_pareto_minima: int  # minima Pareto-optimal in (energy, overlap)
+    at_range_edge: bool  # best minimum lies on the border of the search range
+
+
+@dataclass(frozen=True)
+class PairLandscape:
+    """Stage 1 result for one ordered pair (a, b)."""
+
+    a: str
+    b: str
+    offsets_s: np.ndarray  # (D,) candidate Δ_ab = offset_s[b] - offset_s[a], seconds
+    energy: np.ndarray  # (D,) normalized robust energy, NaN where overlap is too small
+    support: np.ndarray  # (D,) int, number of (track pair, frame) terms behind each energy
+    minima_idx: np.ndarray  # (M,) int, indices of significant local minima, best first
+    best_offset_s: float  # sub-frame refined Δ_ab, seconds (NaN if none)
+    best_energy: float  # energy at best_offset_s
+    uncertainty_s: float  # 1-sigma of best_offset_s from the landscape curvature
+    num_track_pairs: int
+    decision: PairDecision
+    residual: str = "sampson"
+    robust_scale: float = float("nan")  # scale of the robust loss, in the residual's units
+
+
+@dataclass(frozen=True)
+class SolveIteration:
+    """One IRLS iteration of Stage 2."""
+
+    residual_s: np.ndarray  # (E,) s_b - s_a - Δ_ab per accepted pair, seconds
+    weight: np.ndarray  # (E,) Huber weight per accepted pair
+
+
+@dataclass(frozen=True)
+class SyncResult:
+    """Stage 2 result: one offset per video (None when it cannot be synchronized)."""
+
+    reference: str
+    offsets_s: dict[str, float | None]
+    uncertainty_s: dict[str, float | None]
+    unresolved_reason: dict[str, str]  # video -> why it has no offset
+    pairs: tuple[PairLandscape, ...]
+    solve_pairs: tuple[tuple[str, str], ...]  # the accepted pairs, in the order of residuals
+    iterations: tuple[SolveIteration, ...]
+    solver: str = "irls"
+    timings_s: dict[str, float] = field(default_factory=dict)
