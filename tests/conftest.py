@@ -1,0 +1,28 @@
+"""Shared test fixtures. Real data is read from ../shared/data beside the checkout (or
+$VS_INSPECT_DATA); tests that need it skip with a reason when it is absent."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy  # noqa: F401  (first: pycolmap before numpy breaks zlib, see ENVIRONMENT.md)
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+os.environ.setdefault("NUMBA_CACHE_DIR", str(REPO / ".cache" / "numba"))
+os.environ.setdefault("XDG_CONFIG_HOME", str(REPO / ".cache" / "xdg-config"))
+os.environ.setdefault("XDG_DATA_HOME", str(REPO / ".cache" / "xdg-data"))
+
+
+def shared_data_dir() -> Path:
+    return Path(os.environ.get("VS_INSPECT_DATA", REPO.parent / "shared" / "data"))
+
+
+@pytest.fixture(scope="session")
+def shared_data() -> Path:
+    d = shared_data_dir()
+    if not d.is_dir():
+        pytest.skip(f"real test data not found at {d} (set VS_INSPECT_DATA or place shared/ beside the checkout)")
+    return d
