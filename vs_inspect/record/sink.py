@@ -9,11 +9,30 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from ..types import CueBundle, PairLandscape, SyncResult
+    import numpy as np
+
+    from ..types import CameraTrack, CueBundle, PairLandscape, SyncResult, VideoInfo
 
 
 class Sink:
     """Base class: every hook is a no-op, so sinks override only what they record."""
+
+    # ---- Stage 0 (cue extraction from videos) ----
+
+    def video(self, info: VideoInfo, path: str | None) -> None:
+        """An input video (path to the file or image folder, None for synthetic input)."""
+
+    def video_frame(self, name: str, frame_index: int, image_bgr: np.ndarray) -> None:
+        """One decoded frame (H,W,3) uint8 BGR; sinks may downscale or skip."""
+
+    def dynamic_mask(self, name: str, frame_index: int, instances: np.ndarray) -> None:
+        """(H,W) int instance ids of moving regions at a frame (0 = static background)."""
+
+    def cameras(self, cameras: dict[str, CameraTrack], points_world: np.ndarray | None,
+                colors: np.ndarray | None) -> None:
+        """Cameras of all videos in one world frame, and the static 3D points (N,3) with (N,3) uint8 colours."""
+
+    # ---- Stage 1 and 2 ----
 
     def bundle(self, bundle: CueBundle) -> None:
         """Videos, cameras and tracks that Stage 1 starts from."""
