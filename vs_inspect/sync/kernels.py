@@ -46,19 +46,30 @@ def landscape_static(xs, xi, pair_s, pair_i, weight, G, k, w, kind, loss, scale,
     xs: (Ns,Ts,2) px; xi: (Ni,Ti,2) px; pair_s/pair_i: (P,) track indices; weight: (P,)
     G: (3,3); k: (D,Ts) int (-1 = outside i); w: (D,Ts).
     Returns (sum of weighted loss (D,), sum of weights (D,), count of terms (D,)).
+    Per pair, G x is precomputed for every frame in float32 and the inner loop is branch-free
+    (invalid terms are multiplied by a 0 mask), which lets LLVM vectorize it.
     """
     P = pair_s.shape[0]
     D, Ts = k.shape
     Ti = xi.shape[1]
+    kc = np.empty((D, Ts), dtype=np.int64)
+    kv = np.empty((D, Ts), dtype=np.float32)
+    w32 = np.empty((D, Ts), dtype=np.float32)
+    for d in range(D):
+        for j in range(Ts):
+            inside = k[d, j] >= 0
+            kc[d, j] = k[d, j] if inside else 0
+            kv[d, j] = 1.0 if inside else 0.0
+            w32[d, j] = w[d, j]
     acc = np.zeros((nthreads, D))
     wsum = np.zeros((nthreads, D))
-    cnt = np.zeros((nthreads, D), dtype=np.int64)
+    cnt = np.zeros((nthreads, D))
     chunk = (P + nthreads - 1) // nthreads
+    sc = np.float32(scale)
+    zero = np.float32(0.0)
     for th in nb.prange(nthreads):
-        m = np.empty((Ts, 3))
-        okm = np.empty(Ts, dtype=np.bool_)
-        g = np.empty((Ti, 3))
-        oki = np.empty(Ti, dtype=np.bool_)
+        S = np.empty((6, Ts), dtype=np.float32)  # x0 x1 m0 m1 m2 valid   (m = Gᵀ x_s)
+        I = np.empty((6, Ti), dtype=np.float32)  # y0 y1 g0 g1 g2 valid(q and q+1)   (g = G x_i)
         for p in range(th * chunk, min(P, (th + 1) * chunk)):
             a = pair_s[p]
             b = pair_i[p]
@@ -66,43 +77,56 @@ def landscape_static(xs, xi, pair_s, pair_i, weight, G, k, w, kind, loss, scale,
             for j in range(Ts):
                 x0 = xs[a, j, 0]
                 x1 = xs[a, j, 1]
-                okm[j] = not (np.isnan(x0) or np.isnan(x1))
-                # m = Gᵀ x_s
-                m[j, 0] = G[0, 0] * x0 + G[1, 0] * x1 + G[2, 0]
-                m[j, 1] = G[0, 1] * x0 + G[1, 1] * x1 + G[2, 1]
-                m[j, 2] = G[0, 2] * x0 + G[1, 2] * x1 + G[2, 2]
+                ok = not (np.isnan(x0) or np.isnan(x1))
+                if not ok:
+                    x0 = 0.0
+                    x1 = 0.0
+                S[0, j] = x0
+                S[1, j] = x1
+                S[2, j] = G[0, 0] * x0 + G[1, 0] * x1 + G[2, 0]
+                S[3, j] = G[0, 1] * x0 + G[1, 1] * x1 + G[2, 1]
+                S[4, j] = G[0, 2] * x0 + G[1, 2] * x1 + G[2, 2]
+                S[5, j] = 1.0 if ok else 0.0
             for q in range(Ti):
                 y0 = xi[b, q, 0]
                 y1 = xi[b, q, 1]
-                oki[q] = not (np.isnan(y0) or np.isnan(y1))
-                g[q, 0] = G[0, 0] * y0 + G[0, 1] * y1 + G[0, 2]
-                g[q, 1] = G[1, 0] * y0 + G[1, 1] * y1 + G[1, 2]
-                g[q, 2] = G[2, 0] * y0 + G[2, 1] * y1 + G[2, 2]
+                ok = not (np.isnan(y0) or np.isnan(y1))
+                if not ok:
+                    y0 = 0.0
+                    y1 = 0.0
+                I[0, q] = y0
+                I[1, q] = y1
+                I[2, q] = G[0, 0] * y0 + G[0, 1] * y1 + G[0, 2]
+                I[3, q] = G[1, 0] * y0 + G[1, 1] * y1 + G[1, 2]
+                I[4, q] = G[2, 0] * y0 + G[2, 1] * y1 + G[2, 2]
+                I[5, q] = 1.0 if ok else 0.0
+            for q in range(Ti - 1):
+                I[5, q] = I[5, q] * I[5, q + 1]
+            I[5, Ti - 1] = 0.0
             for d in range(D):
-                s_acc = 0.0
-                s_cnt = 0
+                s_acc = np.float32(0.0)
+                s_cnt = np.float32(0.0)
                 for j in range(Ts):
-                    kk = k[d, j]
-                    if kk < 0 or not okm[j]:
-                        continue
-                    if not (oki[kk] and oki[kk + 1]):
-                        continue
-                    ww = w[d, j]
-                    y0 = xi[b, kk, 0] + ww * (xi[b, kk + 1, 0] - xi[b, kk, 0])
-                    y1 = xi[b, kk, 1] + ww * (xi[b, kk + 1, 1] - xi[b, kk, 1])
+                    kk = kc[d, j]
+                    k1 = kk + 1 if kk + 1 < Ti else kk
+                    ww = w32[d, j]
                     # G x_i is linear in x_i, so it interpolates like x_i does.
-                    g0 = g[kk, 0] + ww * (g[kk + 1, 0] - g[kk, 0])
-                    g1 = g[kk, 1] + ww * (g[kk + 1, 1] - g[kk, 1])
-                    g2 = g[kk, 2] + ww * (g[kk + 1, 2] - g[kk, 2])
-                    num = m[j, 0] * y0 + m[j, 1] * y1 + m[j, 2]
-                    r = _residual(kind, num, m[j, 0], m[j, 1], m[j, 2], g0, g1, g2,
-                                  xs[a, j, 0], xs[a, j, 1], y0, y1)
-                    s_acc += _loss(loss, r, scale)
-                    s_cnt += 1
+                    y0 = I[0, kk] + ww * (I[0, k1] - I[0, kk])
+                    y1 = I[1, kk] + ww * (I[1, k1] - I[1, kk])
+                    g0 = I[2, kk] + ww * (I[2, k1] - I[2, kk])
+                    g1 = I[3, kk] + ww * (I[3, k1] - I[3, kk])
+                    g2 = I[4, kk] + ww * (I[4, k1] - I[4, kk])
+                    num = S[2, j] * y0 + S[3, j] * y1 + S[4, j]
+                    r = _residual(kind, num, S[2, j], S[3, j], S[4, j], g0, g1, g2,
+                                  S[0, j], S[1, j], y0, y1)
+                    v = S[5, j] * I[5, kk] * kv[d, j]
+                    # a select, not a branch: masked terms may hold 0/0 (NaN * 0 is still NaN)
+                    s_acc += _loss(loss, r, sc) if v > 0 else zero
+                    s_cnt += v
                 acc[th, d] += wp * s_acc
                 wsum[th, d] += wp * s_cnt
                 cnt[th, d] += s_cnt
-    return acc.sum(axis=0), wsum.sum(axis=0), cnt.sum(axis=0)
+    return acc.sum(axis=0), wsum.sum(axis=0), cnt.sum(axis=0).astype(np.int64)
 
 
 @nb.njit(parallel=True, fastmath=_FAST, cache=True)
