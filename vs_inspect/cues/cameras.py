@@ -1,0 +1,185 @@
+"""Cameras of all videos in one world frame: imported from a calibration, or estimated with pycolmap.
+
+Estimation: frames of every video (a few for a static camera, a subsampled sequence for a
+moving one) with moving regions masked out go into one incremental reconstruction with shared
+intrinsics per video (one image folder per video, CameraMode.PER_FOLDER). A video none of whose
+frames registers in the largest model gets no camera, with the reason.
+"""
+
+from __future__ import annotations
+
+import logging
+import shutil
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
+
+from ..types import CameraTrack
+from .config import CameraConfig
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class EstimatedCamera:
+    """A camera from the reconstruction plus the lens model to undistort tracks with."""
+
+    track: CameraTrack  # full-resolution pinhole K, cam_from_world (4,4) or (T,4,4)
+    colmap_camera: object  # pycolmap.Camera at SfM resolution (for undistortion)
+    sfm_scale: float  # SfM pixels per full-resolution pixel
+    registered_frames: np.ndarray  # (R,) int, video frames that registered
+
+
+@dataclass(frozen=True)
+class CameraEstimate:
+    cameras: dict[str, EstimatedCamera]
+    unregistered: dict[str, str]  # video -> reason
+    points_world: np.ndarray | None  # (P,3)
+    colors: np.ndarray | None  # (P,3) uint8
+    num_images: int
+    num_registered: int
+
+
+def _pose_matrix(rigid) -> np.ndarray:
+    M = np.eye(4)
+    M[:3, :4] = np.asarray(rigid.matrix())
+    return M
+
+
+def _slerp_poses(frames_known: np.ndarray, poses: np.ndarray, T: int) -> np.ndarray:
+    """(T,4,4) cam_from_world at every frame: rotation slerp and centre lerp between known frames."""
+    from scipy.spatial.transform import Rotation, Slerp
+
+    order = np.argsort(frames_known)
+    fk, P = frames_known[order], poses[order]
+    R = P[:, :3, :3]
+    C = -np.einsum("nji,nj->ni", R, P[:, :3, 3])
+    out = np.tile(np.eye(4), (T, 1, 1))
+    t = np.clip(np.arange(T), fk[0], fk[-1]).astype(float)
+    if len(fk) == 1:
+        Rt = np.repeat(R, T, axis=0)
+        Ct = np.repeat(C, T, axis=0)
+    else:
+        Rt = Slerp(fk.astype(float), Rotation.from_matrix(R))(t).as_matrix()
+        Ct = np.stack([np.interp(t, fk, C[:, i]) for i in range(3)], axis=1)
+    out[:, :3, :3] = Rt
+    out[:, :3, 3] = -np.einsum("nij,nj->ni", Rt, Ct)
+    return out
+
+
+def _mean_pose(poses: np.ndarray) -> np.ndarray:
+    """(4,4) average of static-camera poses (rotation mean, centre mean)."""
+    from scipy.spatial.transform import Rotation
+
+    R = Rotation.from_matrix(poses[:, :3, :3]).mean().as_matrix()
+    C = -np.einsum("nji,nj->ni", poses[:, :3, :3], poses[:, :3, 3]).mean(0)
+    M = np.eye(4)
+    M[:3, :3] = R
+    M[:3, 3] = -R @ C
+    return M
+
+
+def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarray], list[np.ndarray | None]]],
+                     sizes: dict[str, tuple[int, int]], num_frames: dict[str, int],
+                     moving: dict[str, bool], cfg: CameraConfig = CameraConfig(),
+                     workdir: str | None = None, seed: int = 0) -> CameraEstimate:
+    """One pycolmap reconstruction of every video's frames.
+
+    frames_by_video: name -> (frame indices (F,), BGR images at SfM resolution, static masks
+    (H,W) bool True where features may be extracted, or None). sizes: name -> full (width, height).
+    """
+    import pycolmap
+
+    tmp = Path(tempfile.mkdtemp(prefix="vs_inspect_sfm_", dir=workdir))
+    try:
+        img_dir, mask_dir = tmp / "images", tmp / "masks"
+        scales: dict[str, float] = {}
+        for name, (idx, images, masks) in frames_by_video.items():
+            (img_dir / name).mkdir(parents=True)
+            (mask_dir / name).mkdir(parents=True)
+            for k, img, m in zip(idx, images, masks):
+                fn = f"{int(k):06d}.jpg"
+                cv2.imwrite(str(img_dir / name / fn), img, [cv2.IMWRITE_JPEG_QUALITY, 95])
+                mm = np.full(img.shape[:2], 255, np.uint8) if m is None else (m.astype(np.uint8) * 255)
+                cv2.imwrite(str(mask_dir / name / (fn + ".png")), mm)
+            scales[name] = images[0].shape[1] / sizes[name][0] if images else 1.0
+        db = tmp / "database.db"
+        reader = pycolmap.ImageReaderOptions()
+        reader.camera_model = "SIMPLE_RADIAL"
+        reader.mask_path = str(mask_dir)
+        ext = pycolmap.FeatureExtractionOptions()
+        ext.sift.max_num_features = cfg.max_features
+        ext.num_threads = 2
+        pycolmap.extract_features(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER,
+                                  reader_options=reader, extraction_options=ext,
+                                  device=pycolmap.Device.cpu)
+        pycolmap.match_exhaustive(db, device=pycolmap.Device.cpu)
+        opts = pycolmap.IncrementalPipelineOptions()
+        opts.random_seed = seed
+        opts.num_threads = 2
+        opts.min_model_size = 3
+        out = tmp / "sparse"
+        out.mkdir()
+        recs = pycolmap.incremental_mapping(db, img_dir, out, opts)
+        n_images = sum(len(v[0]) for v in frames_by_video.values())
+        if not recs:
+            return CameraEstimate({}, {n: "no reconstruction: too few matches between the frames "
+                                         "of the videos (static background)" for n in frames_by_video},
+                                  None, None, n_images, 0)
+
+        def videos_in(rec):
+            return {rec.images[i].name.split("/")[0] for i in rec.reg_image_ids()}
+
+        rec = max(recs.values(), key=lambda r: (len(videos_in(r)), r.num_reg_images()))
+        cams: dict[str, EstimatedCamera] = {}
+        unreg: dict[str, str] = {}
+        per_video: dict[str, list[tuple[int, np.ndarray, object]]] = {n: [] for n in frames_by_video}
+        for iid in rec.reg_image_ids():
+            im = rec.images[iid]
+            folder, fn = im.name.split("/")
+            per_video[folder].append((int(Path(fn).stem), _pose_matrix(im.cam_from_world()),
+                                      rec.cameras[im.camera_id]))
+        for name, regs in per_video.items():
+            if not regs:
+                others = [f"{len(videos_in(r))} videos / {r.num_reg_images()} images"
+                          for r in recs.values() if name in videos_in(r) and r is not rec]
+                where = f" (it registered only in a separate model: {others[0]})" if others else ""
+                unreg[name] = (f"camera could not be registered: none of its {len(frames_by_video[name][0])} "
+                               f"frames joined the common reconstruction{where}")
+                continue
+            fk = np.array([r[0] for r in regs])
+            poses = np.stack([r[1] for r in regs])
+            cam = regs[0][2]
+            s = scales[name]
+            f, cx, cy = cam.focal_length, cam.principal_point_x, cam.principal_point_y
+            K = np.array([[f / s, 0, (cx / s) - 0.5], [0, f / s, (cy / s) - 0.5], [0, 0, 1.0]])
+            if moving[name]:
+                T_all = _slerp_poses(fk, poses, num_frames[name])
+                valid = np.zeros(num_frames[name], bool)
+                valid[fk.min():fk.max() + 1] = True
+                track = CameraTrack(K, T_all, valid)
+            else:
+                track = CameraTrack(K, _mean_pose(poses))
+            cams[name] = EstimatedCamera(track, cam, s, np.sort(fk))
+        pts = np.array([p.xyz for p in rec.points3D.values()]) if rec.num_points3D() else None
+        cols = np.array([p.color for p in rec.points3D.values()], np.uint8) if rec.num_points3D() else None
+        return CameraEstimate(cams, unreg, pts, cols, n_images, rec.num_reg_images())
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def undistort_with_colmap(cam: EstimatedCamera, xy: np.ndarray) -> np.ndarray:
+    """(...,2) full-resolution OpenCV px through the estimated lens -> pinhole px of cam.track.K."""
+    shp = xy.shape
+    flat = xy.reshape(-1, 2).astype(np.float64)
+    ok = np.isfinite(flat).all(1)
+    out = np.full_like(flat, np.nan)
+    if ok.any():
+        sfm = (flat[ok] + 0.5) * cam.sfm_scale  # COLMAP puts pixel centres at +0.5
+        norm = np.asarray(cam.colmap_camera.cam_from_img(sfm))
+        K = cam.track.K if cam.track.K.ndim == 2 else cam.track.K[0]
+        out[ok] = norm[:, :2] * [K[0, 0], K[1, 1]] + [K[0, 2], K[1, 2]]
+    return out.reshape(shp)

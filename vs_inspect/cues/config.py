@@ -1,0 +1,99 @@
+"""Settings of Stage 0 (cue extraction from videos), one docstring per field."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True)
+class MotionConfig:
+    camera_motion: str = "auto"
+    """static, moving, or auto (decided from the motion of background features between frames)."""
+    static_max_motion_px: float = 0.6
+    """auto: a camera whose background features move less than this (median, working pixels) is static."""
+    diff_threshold: float = 22.0
+    """Grey-level difference (0-255) from the background (static camera) or the motion-compensated neighbour (moving camera) that counts as moving."""
+    background_frames: int = 60
+    """Static camera: frames (evenly spread) that form the temporal-median background."""
+    neighbour_frames: int = 2
+    """Moving camera: compare frame t with t-d and t+d after compensating the camera's motion."""
+    open_px: int = 3
+    """Morphological opening (working pixels) that removes speckle."""
+    close_px: int = 15
+    """Morphological closing (working pixels) that fills holes in moving regions."""
+    min_region_fraction: float = 0.002
+    """Connected moving regions smaller than this fraction of the image are dropped."""
+    link_iou: float = 0.05
+    """A region continues an instance of the previous frame when their overlap (IoU) is at least this."""
+
+
+@dataclass(frozen=True)
+class TrackConfig:
+    max_points: int = 1500
+    """Most tracks alive at once in a video."""
+    min_distance_px: float = 6.0
+    """Least distance between seeded points (working pixels)."""
+    quality_level: float = 0.005
+    """goodFeaturesToTrack quality level."""
+    win_size: int = 21
+    """KLT window (working pixels)."""
+    pyramid_levels: int = 4
+    """KLT pyramid levels (large motion at low frame rates needs more)."""
+    fb_max_px: float = 1.0
+    """Forward-backward check: a point whose round trip misses by more than this is lost."""
+    min_length: int = 3
+    """Tracks seen in fewer frames are dropped."""
+    reseed_every: int = 1
+    """Seed new points inside moving regions every this many frames."""
+
+
+@dataclass(frozen=True)
+class MatchConfig:
+    num_keyframes: int = 12
+    """Keyframes per video (evenly spread); every keyframe of a is matched with every keyframe of b."""
+    max_features: int = 1500
+    """SIFT features per keyframe at most."""
+    ratio: float = 0.8
+    """Lowe's ratio test."""
+    mutual: bool = True
+    """Keep only mutual nearest neighbours."""
+    dynamic_only: bool = True
+    """Extract descriptors inside the (dilated) moving regions only."""
+    mask_dilate_px: int = 9
+    """Dilation of the moving regions for descriptor extraction (working pixels)."""
+    snap_px: float = 3.0
+    """A match snaps to the nearest track within this distance at that keyframe (working pixels)."""
+    min_instance_support: int = 5
+    """Matched instance pairs with fewer votes are dropped (the paper uses 100 with dense matches)."""
+    use_instances: bool = True
+    """Filter track pairs by one-to-one instance matching (Hungarian method on vote counts)."""
+    mutual_best_tracks: bool = True
+    """Keep a track pair only if each track is the other's most voted partner."""
+
+
+@dataclass(frozen=True)
+class CameraConfig:
+    static_frames: int = 4
+    """Estimated cameras: frames per static camera given to the reconstruction."""
+    moving_frames: int = 30
+    """Estimated cameras: frames per moving camera (subsampled evenly)."""
+    max_side: int = 1024
+    """Estimated cameras: frames are downscaled to at most this side for SfM."""
+    max_features: int = 4096
+    """Estimated cameras: SIFT features per frame."""
+    mask_moving: bool = True
+    """Estimated cameras: mask out moving regions before feature extraction."""
+
+
+@dataclass(frozen=True)
+class CueConfig:
+    max_side: int = 640
+    """Frames are downscaled to at most this side for masks, tracking and matching; outputs are in full-resolution pixels."""
+    motion: MotionConfig = field(default_factory=MotionConfig)
+    track: TrackConfig = field(default_factory=TrackConfig)
+    match: MatchConfig = field(default_factory=MatchConfig)
+    camera: CameraConfig = field(default_factory=CameraConfig)
+    camera_motion: dict[str, str] = field(default_factory=dict)
+    """Per-video override of static/moving (name -> 'static' | 'moving')."""
+    sink_frames: int = 8
+    """Frames per video sent to the sink (video_frame and dynamic_mask hooks)."""

@@ -1,0 +1,246 @@
+"""Stage 0: videos in, a cue bundle out (cameras, tracks inside moving regions, cross-view pairs).
+
+Each step is a pure function in its own module (motion, tracking, matching, cameras); this
+module decodes the videos, calls them in order, reports to the sink and keeps per-stage timings.
+A video that cannot be used (unreadable, no camera) is left out of the bundle with its reason
+in stats["dropped"], so that the caller can report it as not synchronized.
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import time
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from tqdm import tqdm
+
+from ..errors import InputError
+from ..record.sink import NullSink, Sink
+from ..types import CameraTrack, CueBundle, TrackPairs, Tracks, VideoInfo
+from .config import CueConfig
+from .matching import (KeyframeFeatures, extract_keyframe_features, keyframe_indices,
+                       match_tracks)
+from .motion import moving_regions
+from .tracking import track_points
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class _VideoCues:
+    info: VideoInfo
+    path: str
+    scale_xy: tuple[float, float]  # full px per working px (x, y)
+    xy_full: np.ndarray  # (N,T,2) full-resolution px, distorted
+    instance: np.ndarray  # (N,)
+    features: KeyframeFeatures
+    camera_motion: str
+    background_motion_px: float
+    moving_fraction: float
+    sfm_frames: tuple | None = None  # (indices, BGR images, static masks) for camera estimation
+
+
+def to_full_px(xy: np.ndarray, scale_xy: tuple[float, float]) -> np.ndarray:
+    """Working-resolution px -> full-resolution px (pixel centres at integers on both)."""
+    s = np.asarray(scale_xy, dtype=np.float64)
+    return (xy.astype(np.float64) + 0.5) * s - 0.5
+
+
+def _sfm_indices(T: int, moving: bool, cfg) -> np.ndarray:
+    n = cfg.camera.moving_frames if moving else cfg.camera.static_frames
+    return np.unique(np.linspace(0, T - 1, max(1, min(n, T))).round().astype(int))
+
+
+def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) -> _VideoCues:
+    from ..io.video import iter_frames, read_frames
+
+    info = src.info
+    t0 = time.perf_counter()
+    grey = []
+    sink_at = set(np.linspace(0, info.num_frames - 1, max(1, cfg.sink_frames)).round().astype(int).tolist())
+    for k, img in iter_frames(src, max_side=cfg.max_side):
+        grey.append(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY))
+        if k in sink_at:
+            sink.video_frame(info.name, k, img)
+    frames = np.stack(grey)
+    h, w = frames.shape[1:]
+    scale = (info.width / w, info.height / h)
+    timings["decode_s"] = timings.get("decode_s", 0.0) + time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    instances, mode, bg = moving_regions(frames, cfg.motion, cfg.camera_motion.get(info.name))
+    moving_fraction = float((instances > 0).mean())
+    for k in sorted(sink_at):
+        sink.dynamic_mask(info.name, k, instances[k])
+    timings["motion_s"] = timings.get("motion_s", 0.0) + time.perf_counter() - t0
+    log.info("%s: %s camera (background motion %.2f px), moving regions cover %.1f%%",
+             info.name, mode, bg, 100 * moving_fraction)
+
+    t0 = time.perf_counter()
+    xy, inst = track_points(frames, instances, cfg.track)
+    timings["tracking_s"] = timings.get("tracking_s", 0.0) + time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    kf = keyframe_indices(info.num_frames, cfg.match.num_keyframes)
+    feats = extract_keyframe_features(frames, (instances > 0) if cfg.match.dynamic_only else None,
+                                      kf, xy, cfg.match)
+    timings["features_s"] = timings.get("features_s", 0.0) + time.perf_counter() - t0
+
+    sfm = None
+    if need_sfm:
+        t0 = time.perf_counter()
+        idx = _sfm_indices(info.num_frames, mode == "moving", cfg)
+        imgs = read_frames(src, idx, max_side=cfg.camera.max_side)
+        masks = []
+        for k, im in zip(idx, imgs):
+            if cfg.camera.mask_moving:
+                m = cv2.resize((instances[k] > 0).astype(np.uint8), (im.shape[1], im.shape[0]),
+                               interpolation=cv2.INTER_NEAREST)
+                m = cv2.dilate(m, np.ones((15, 15), np.uint8))
+                masks.append(m == 0)
+            else:
+                masks.append(None)
+        sfm = (idx, imgs, masks)
+        timings["sfm_frames_s"] = timings.get("sfm_frames_s", 0.0) + time.perf_counter() - t0
+    return _VideoCues(info, str(src.path), scale, to_full_px(xy, scale), inst, feats, mode, bg,
+                      moving_fraction, sfm)
+
+
+def _import_cameras(calibration: dict, vids: dict[str, _VideoCues]) -> tuple[dict, dict, dict]:
+    """(cameras, undistorted tracks, dropped) from an imported calibration."""
+    from ..io.calibration import fit_to_video, to_camera_track, undistort_points
+
+    cams, tracks, dropped = {}, {}, {}
+    for name, v in vids.items():
+        cal = calibration.get(name)
+        if cal is None:
+            dropped[name] = "the calibration has no camera for this video"
+            continue
+        try:
+            cal = fit_to_video(cal, v.info.width, v.info.height, name=name)
+        except InputError as exc:
+            dropped[name] = str(exc)
+            continue
+        cams[name] = to_camera_track(cal)
+        xy = v.xy_full
+        flat = xy.reshape(-1, 2)
+        ok = np.isfinite(flat).all(1)
+        und = np.full_like(flat, np.nan)
+        if ok.any():
+            und[ok] = undistort_points(cal, flat[ok])
+        tracks[name] = Tracks(und.reshape(xy.shape), v.instance)
+    return cams, tracks, dropped
+
+
+def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueConfig(),
+                 sink: Sink | None = None, progress: bool = True) -> tuple[CueBundle, dict]:
+    """Cues of every video: (CueBundle of the usable videos, stats dict).
+
+    sources: VideoSource list (vs_inspect.io.video.open_video). calibration: name ->
+    CameraCalibration (vs_inspect.io.calibration.load_calibration) or None to estimate the
+    cameras with pycolmap. stats: "timings_s" per stage, "videos" per-video counts, "pairs"
+    per-pair counts, "dropped" {name: reason} for videos left out of the bundle,
+    "registered_cameras", "camera_source".
+    """
+    sink = sink or NullSink()
+    if len(sources) < 2:
+        raise InputError(f"need at least 2 videos to synchronize, got {len(sources)}")
+    names = [s.info.name for s in sources]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise InputError(f"video names must be unique, got {dup} more than once "
+                         "(rename the files or put them in differently named folders)")
+    timings: dict[str, float] = {}
+    stats: dict = {"videos": {}, "pairs": {}, "dropped": {}, "timings_s": timings,
+                   "camera_source": "calibration" if calibration is not None else "estimated"}
+    t_all = time.perf_counter()
+    vids: dict[str, _VideoCues] = {}
+    for src in tqdm(sources, desc="cues per video", unit="video", disable=not progress, leave=False):
+        sink.video(src.info, str(src.path))
+        try:
+            v = _video_cues(src, cfg, sink, calibration is None, timings)
+        except InputError as exc:
+            stats["dropped"][src.info.name] = f"could not be read: {exc}"
+            sink.stage_event("cues", f"{src.info.name}: could not be read: {exc}")
+            log.warning("%s: could not be read: %s", src.info.name, exc)
+            continue
+        vids[src.info.name] = v
+        n_tracks = v.xy_full.shape[0]
+        stats["videos"][src.info.name] = {
+            "path": v.path, "camera_motion": v.camera_motion,
+            "background_motion_px": round(v.background_motion_px, 3),
+            "moving_fraction": round(v.moving_fraction, 4), "tracks": int(n_tracks),
+            "instances": int(len(np.unique(v.instance[v.instance > 0]))),
+            "keyframe_features": int(len(v.features.frame)),
+            "snapped_features": int((v.features.track >= 0).sum()),
+        }
+        if v.moving_fraction == 0 or n_tracks == 0:
+            msg = "no moving regions found (nothing moves in this video)" if v.moving_fraction == 0 \
+                else "no point tracks inside the moving regions"
+            stats["videos"][src.info.name]["note"] = msg
+            sink.stage_event("cues", f"{src.info.name}: {msg}")
+            log.warning("%s: %s", src.info.name, msg)
+
+    t0 = time.perf_counter()
+    cameras: dict[str, CameraTrack] = {}
+    tracks: dict[str, Tracks] = {}
+    if calibration is not None:
+        cameras, tracks, dropped = _import_cameras(calibration, vids)
+        stats["dropped"].update(dropped)
+        points = colors = None
+    else:
+        cameras, tracks, points, colors = _estimate(vids, cfg, stats)
+    for name, why in stats["dropped"].items():
+        if name in vids:
+            sink.stage_event("cameras", f"{name}: {why}")
+    stats["registered_cameras"] = len(cameras)
+    if cameras:
+        sink.cameras(cameras, points, colors)
+    timings["cameras_s"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    usable = [n for n in names if n in cameras]
+    pairs: dict[tuple[str, str], TrackPairs] = {}
+    for a, b in tqdm(list(itertools.combinations(usable, 2)), desc="cross-view pairs", unit="pair",
+                     disable=not progress, leave=False):
+        tp, ps = match_tracks(a, b, vids[a].features, vids[b].features, vids[a].instance,
+                              vids[b].instance, cfg.match)
+        pairs[(a, b)] = tp
+        stats["pairs"][f"{a}__{b}"] = {"matches": ps.matches, "snapped": ps.snapped,
+                                       "instance_pairs": ps.instance_pairs, "track_pairs": ps.track_pairs}
+        log.info("%s__%s: %d matches, %d snapped, %d instance pairs, %d track pairs",
+                 a, b, ps.matches, ps.snapped, ps.instance_pairs, ps.track_pairs)
+    timings["matching_s"] = time.perf_counter() - t0
+    timings["total_s"] = time.perf_counter() - t_all
+    stats["track_pairs"] = int(sum(len(p.index) for p in pairs.values()))
+    stats["tracks"] = int(sum(t.num_tracks for t in tracks.values()))
+    if not usable:
+        reasons = "; ".join(f"{n}: {r}" for n, r in stats["dropped"].items())
+        raise InputError(f"no video could be used: {reasons}")
+    bundle = CueBundle(tuple(vids[n].info for n in usable), {n: cameras[n] for n in usable},
+                       {n: tracks[n] for n in usable}, pairs)
+    sink.stage_event("cues", "cue extraction finished", tracks=stats["tracks"],
+                     track_pairs=stats["track_pairs"], cameras=len(cameras))
+    return bundle, stats
+
+
+def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict):
+    from .cameras import estimate_cameras, undistort_with_colmap
+
+    frames = {n: v.sfm_frames for n, v in vids.items() if v.sfm_frames is not None}
+    sizes = {n: (v.info.width, v.info.height) for n, v in vids.items()}
+    est = estimate_cameras(frames, sizes, {n: v.info.num_frames for n, v in vids.items()},
+                           {n: v.camera_motion == "moving" for n, v in vids.items()}, cfg.camera)
+    stats["sfm"] = {"images": est.num_images, "registered_images": est.num_registered,
+                    "registered_frames": {n: c.registered_frames.tolist() for n, c in est.cameras.items()}}
+    stats["dropped"].update(est.unregistered)
+    for n, why in est.unregistered.items():
+        log.warning("%s: %s", n, why)
+    cameras, tracks = {}, {}
+    for n, c in est.cameras.items():
+        cameras[n] = c.track
+        tracks[n] = Tracks(undistort_with_colmap(c, vids[n].xy_full), vids[n].instance)
+    return cameras, tracks, est.points_world, est.colors

@@ -1,0 +1,94 @@
+"""Point tracks inside moving regions: pyramidal KLT with a forward-backward check, re-seeded
+with goodFeaturesToTrack inside the mask as points are lost. Pure function of arrays."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from .config import TrackConfig
+
+
+def track_points(frames: np.ndarray, instances: np.ndarray, cfg: TrackConfig = TrackConfig(),
+                 seed_mask: np.ndarray | None = None):
+    """KLT tracks of one video at working resolution.
+
+    frames: (T,H,W) uint8 grey; instances: (T,H,W) int instance ids (0 = background), seeds are
+    placed where the id is > 0 (or where seed_mask (T,H,W) bool is true when given).
+    Returns xy (N,T,2) float32 working px with NaN where unseen, and instance (N,) int32 (the id
+    under the track most often; 0 if never inside a region).
+    """
+    if frames.ndim != 3 or instances.shape != frames.shape:
+        raise ValueError(f"frames (T,H,W) and instances must match, got {frames.shape} and {instances.shape}")
+    T, H, W = frames.shape
+    lk = dict(winSize=(cfg.win_size, cfg.win_size), maxLevel=cfg.pyramid_levels,
+              criteria=(cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.01))
+    rows: list[np.ndarray] = []  # finished tracks: (T,2) each
+    active_xy = np.zeros((0, 2), np.float32)
+    active_rows: list[np.ndarray] = []
+    r = max(1, int(round(cfg.min_distance_px)))
+    for t in range(T):
+        if t > 0 and len(active_xy):
+            p0 = active_xy.reshape(-1, 1, 2)
+            p1, st, _ = cv2.calcOpticalFlowPyrLK(frames[t - 1], frames[t], p0, None, **lk)
+            pb, st2, _ = cv2.calcOpticalFlowPyrLK(frames[t], frames[t - 1], p1, None, **lk)
+            fb = np.linalg.norm((pb - p0).reshape(-1, 2), axis=1)
+            q = p1.reshape(-1, 2)
+            ok = ((st[:, 0] == 1) & (st2[:, 0] == 1) & (fb < cfg.fb_max_px)
+                  & (q[:, 0] >= 0) & (q[:, 0] <= W - 1) & (q[:, 1] >= 0) & (q[:, 1] <= H - 1))
+            keep_rows = []
+            for i in range(len(q)):
+                if ok[i]:
+                    active_rows[i][t] = q[i]
+                    keep_rows.append(active_rows[i])
+                else:
+                    rows.append(active_rows[i])
+            active_rows = keep_rows
+            active_xy = q[ok].astype(np.float32)
+        want = cfg.max_points - len(active_xy)
+        if want > 0 and (t % max(1, cfg.reseed_every) == 0):
+            region = (seed_mask[t] if seed_mask is not None else instances[t] > 0).astype(np.uint8) * 255
+            if region.any():
+                for x, y in active_xy:
+                    cv2.circle(region, (int(round(x)), int(round(y))), r, 0, -1)
+                pts = cv2.goodFeaturesToTrack(frames[t], maxCorners=want, qualityLevel=cfg.quality_level,
+                                              minDistance=cfg.min_distance_px, mask=region, blockSize=5)
+                if pts is not None and len(pts):
+                    pts = cv2.cornerSubPix(frames[t], pts.astype(np.float32), (3, 3), (-1, -1),
+                                           (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03))
+                    pts = pts.reshape(-1, 2)
+                    for p in pts:
+                        row = np.full((T, 2), np.nan, np.float32)
+                        row[t] = p
+                        active_rows.append(row)
+                    active_xy = np.concatenate([active_xy, pts.astype(np.float32)])
+    rows.extend(active_rows)
+    if not rows:
+        return np.zeros((0, T, 2), np.float32), np.zeros(0, np.int32)
+    xy = np.stack(rows)
+    seen = np.isfinite(xy[:, :, 0])
+    xy = xy[seen.sum(1) >= cfg.min_length]
+    return xy, track_instances(xy, instances)
+
+
+def track_instances(xy: np.ndarray, instances: np.ndarray) -> np.ndarray:
+    """(N,) int32: the instance id under each track in most of its frames (ignoring background)."""
+    N, T, _ = xy.shape
+    out = np.zeros(N, np.int32)
+    if N == 0:
+        return out
+    H, W = instances.shape[1:]
+    n_idx, t_idx = np.nonzero(np.isfinite(xy[:, :, 0]))
+    px = np.clip(np.round(xy[n_idx, t_idx, 0]).astype(int), 0, W - 1)
+    py = np.clip(np.round(xy[n_idx, t_idx, 1]).astype(int), 0, H - 1)
+    ids = instances[t_idx, py, px].astype(np.int64)
+    fg = ids > 0
+    if not fg.any():
+        return out
+    key = n_idx[fg].astype(np.int64) * (int(ids.max()) + 1) + ids[fg]
+    uk, counts = np.unique(key, return_counts=True)
+    tr, inst = uk // (int(ids.max()) + 1), uk % (int(ids.max()) + 1)
+    order = np.lexsort((-counts, tr))
+    first = np.r_[True, tr[order][1:] != tr[order][:-1]]
+    out[tr[order][first]] = inst[order][first]
+    return out
