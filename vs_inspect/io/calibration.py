@@ -1,0 +1,387 @@
+"""Imported camera calibration: COLMAP models, a simple JSON, and the OpenCV-style TOML of
+multi-camera mocap tools (caliscope, anipose, Pose2Sim). Cameras are mapped to videos by name,
+else by order; every problem is an InputError that says what was found and what was expected.
+
+Supported files (``load_calibration(path, video_names)``):
+
+- COLMAP model folder (``cameras.txt/images.txt`` or ``cameras.bin/images.bin``, read with
+  pycolmap). Images map to videos by name: the image name's stem or its parent folder equals the
+  video name (``cam0.jpg``, ``cam0/000001.jpg``); several images of one video must share one pose
+  (a static camera). Camera models SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV and
+  FULL_OPENCV are converted to OpenCV distortion.
+- JSON: ``{"<video name>": {"K": 3x3, "dist": [k1, k2, p1, p2, ...], "cam_from_world": 4x4,
+  "size": [width, height]}}`` (``dist`` and ``size`` optional).
+- TOML: tables with ``matrix`` (3x3), ``distortions``, ``rotation`` (3x3 matrix as caliscope
+  writes, or a Rodrigues 3-vector as anipose and Pose2Sim write; world -> camera), ``translation``
+  (world -> camera) and ``size`` ([width, height]); either top level (``[cam_0]``) or under
+  ``[cameras.N]`` (caliscope). Tables without ``matrix`` (``[metadata]``) are ignored.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import re
+import tomllib
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np  # noqa: I001  (numpy before pycolmap: see ENVIRONMENT.md)
+import cv2
+
+from ..errors import InputError
+from ..types import CameraTrack
+
+log = logging.getLogger(__name__)
+
+_DIST_LENGTHS = (0, 4, 5, 8, 12, 14)  # OpenCV accepts these numbers of distortion coefficients
+
+
+@dataclass(frozen=True)
+class CameraCalibration:
+    """One camera's intrinsics, lens distortion and pose (OpenCV conventions)."""
+
+    K: np.ndarray  # (3,3) px, at the image size `size`
+    dist: np.ndarray  # (k,) OpenCV order k1 k2 p1 p2 [k3 [k4 k5 k6 ...]], zeros if none
+    cam_from_world: np.ndarray  # (4,4), x_cam = R X + t (world units, e.g. metres)
+    size: tuple[int, int] | None  # (width, height) px the calibration was made at; None = unknown
+
+
+# ---- validation -------------------------------------------------------------------------------
+
+
+def _make(where: str, K, dist, cam_from_world, size) -> CameraCalibration:
+    """Build a CameraCalibration, raising InputError naming `where` for every bad field."""
+    try:
+        K = np.asarray(K, dtype=np.float64)
+        dist = np.asarray([] if dist is None else dist, dtype=np.float64).reshape(-1)
+        T = np.asarray(cam_from_world, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{where}: calibration values are not numbers ({exc})") from None
+    if K.shape != (3, 3):
+        raise InputError(f"{where}: K must be 3x3, got shape {K.shape}")
+    if T.shape == (3, 4):
+        T = np.vstack([T, [0, 0, 0, 1]])
+    if T.shape != (4, 4):
+        raise InputError(f"{where}: cam_from_world must be 4x4, got shape {T.shape}")
+    for name, a in (("K", K), ("distortion", dist), ("cam_from_world", T)):
+        if not np.all(np.isfinite(a)):
+            raise InputError(f"{where}: {name} has NaN or inf values")
+    if abs(np.linalg.det(K)) < 1e-9 or K[0, 0] <= 0 or K[1, 1] <= 0:
+        raise InputError(f"{where}: K is singular or has a non-positive focal length: {K.tolist()}")
+    if not np.allclose(K[2], [0, 0, 1], atol=1e-9):
+        raise InputError(f"{where}: the last row of K must be [0, 0, 1], got {K[2].tolist()}")
+    if dist.size not in _DIST_LENGTHS:
+        raise InputError(
+            f"{where}: {dist.size} distortion coefficients; OpenCV takes {_DIST_LENGTHS[1:]}"
+        )
+    if dist.size == 0:
+        dist = np.zeros(5)
+    R = T[:3, :3]
+    err = np.abs(R @ R.T - np.eye(3)).max()
+    if err > 1e-4 or np.linalg.det(R) <= 0 or not np.allclose(T[3], [0, 0, 0, 1]):
+        raise InputError(f"{where}: cam_from_world is not a rigid transform (|RRᵀ-I| = {err:.2g})")
+    if size is not None:
+        try:
+            w, h = (int(s) for s in size)
+        except (TypeError, ValueError):
+            raise InputError(f"{where}: size must be [width, height], got {size!r}") from None
+        if w < 1 or h < 1:
+            raise InputError(f"{where}: size must be positive, got {size!r}")
+        size = (w, h)
+    return CameraCalibration(K, dist, T, size)
+
+
+def _rt(R, t) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3] = R
+    T[:3, 3] = np.asarray(t, dtype=np.float64).reshape(3)
+    return T
+
+
+# ---- name matching ----------------------------------------------------------------------------
+
+
+def _tokens(name: str) -> list:
+    """Lower-case letter runs and integers: 'Cam_01' -> ['cam', 1] (so cam_01 == cam1)."""
+    return [int(t) if t.isdigit() else t for t in re.findall(r"[a-z]+|\d+", name.lower())]
+
+
+def _contains(hay: list, needle: list) -> bool:
+    n = len(needle)
+    return n > 0 and any(hay[i:i + n] == needle for i in range(len(hay) - n + 1))
+
+
+def match_names(camera_names: dict[str, list[str]], video_names: list[str], source) -> dict[str, str]:
+    """Map each video to a camera key.
+
+    camera_names: camera key -> names it is known by (section key, its `name` field, ...).
+    By name: exact, or the video name contains the camera's name as whole tokens
+    (``cam_0`` matches ``session2_cam_0`` and ``cam0`` but not ``cam_01``... unless equal as
+    numbers, ``cam_01`` == ``cam1``). If no video matches by name and the counts are equal, by
+    order. Anything else is an InputError listing both sides.
+    """
+    keys = list(camera_names)
+    listing = f"cameras in the calibration: {keys}; videos: {list(video_names)}"
+    if not video_names:
+        raise InputError(f"{source}: no videos to map the calibration to")
+    if not keys:
+        raise InputError(f"{source}: the calibration has no cameras")
+    found: dict[str, str] = {}
+    unmatched: list[str] = []
+    for v in video_names:
+        vt = _tokens(v)
+        exact = [k for k in keys if any(_tokens(n) == vt for n in camera_names[k])]
+        if len(exact) == 1:
+            found[v] = exact[0]
+            continue
+        part = [k for k in keys if any(_contains(vt, _tokens(n)) for n in camera_names[k])]
+        if len(part) > 1:  # keep the most specific (longest) names only
+            best = max(max(len(_tokens(n)) for n in camera_names[k]) for k in part)
+            part = [k for k in part if max(len(_tokens(n)) for n in camera_names[k]) == best]
+        if len(part) == 1:
+            found[v] = part[0]
+        elif len(part) > 1:
+            raise InputError(f"{source}: video {v!r} matches several cameras {part}; {listing}")
+        else:
+            unmatched.append(v)
+    if not unmatched:
+        used = list(found.values())
+        dup = sorted({k for k in used if used.count(k) > 1})
+        if dup:
+            raise InputError(f"{source}: several videos map to the same camera {dup}; {listing}")
+        extra = [k for k in keys if k not in used]
+        if extra:
+            log.info("%s: cameras %s have no video and are not used", source, extra)
+        return found
+    if not found and len(keys) == len(video_names):
+        log.warning("%s: camera names do not match the videos; mapping by order (%s)", source,
+                    ", ".join(f"{v}->{k}" for v, k in zip(video_names, keys)))
+        return dict(zip(video_names, keys))
+    if len(keys) != len(video_names):
+        raise InputError(
+            f"{source}: {len(keys)} cameras for {len(video_names)} videos and the names do not "
+            f"match (no camera for {unmatched}); {listing}"
+        )
+    raise InputError(f"{source}: no camera named like videos {unmatched}; {listing}")
+
+
+# ---- formats ----------------------------------------------------------------------------------
+
+
+def _load_json(path: Path) -> dict[str, tuple[list[str], CameraCalibration]]:
+    try:
+        data = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: not valid JSON ({exc})") from None
+    if isinstance(data, dict) and isinstance(data.get("cameras"), dict):
+        data = data["cameras"]
+    if not isinstance(data, dict) or not data:
+        raise InputError(f"{path}: expected {{\"<video name>\": {{\"K\": ..., \"cam_from_world\": ...}}}}")
+    out = {}
+    for name, entry in data.items():
+        where = f"{path}: camera {name!r}"
+        if not isinstance(entry, dict):
+            raise InputError(f"{where}: expected an object with K, dist, cam_from_world")
+        missing = [k for k in ("K", "cam_from_world") if k not in entry]
+        if missing:
+            raise InputError(f"{where}: missing {missing} (has {sorted(entry)})")
+        cal = _make(where, entry["K"], entry.get("dist"), entry["cam_from_world"], entry.get("size"))
+        out[name] = ([name], cal)
+    return out
+
+
+def _load_toml(path: Path) -> dict[str, tuple[list[str], CameraCalibration]]:
+    try:
+        data = tomllib.loads(path.read_text())
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: not valid TOML ({exc})") from None
+    tables: list[tuple[str, list[str], dict]] = []
+    if isinstance(data.get("cameras"), dict):  # caliscope: [cameras.0], [cameras.1], ...
+        for key, t in data["cameras"].items():
+            if isinstance(t, dict) and "matrix" in t:
+                tables.append((f"cam_{key}", [f"cam_{key}", f"cam{key}"], t))
+    for key, t in data.items():
+        if key != "cameras" and isinstance(t, dict) and "matrix" in t:
+            names = [key] + ([str(t["name"])] if t.get("name") is not None else [])
+            tables.append((key, names, t))
+    out = {}
+    for key, names, t in tables:
+        where = f"{path}: [{key}]"
+        if t.get("ignore") is True:
+            log.info("%s: marked ignore = true, skipped", where)
+            continue
+        if t.get("fisheye") is True:
+            raise InputError(f"{where}: fisheye cameras are not supported")
+        missing = [k for k in ("matrix", "rotation", "translation") if k not in t]
+        if missing:
+            raise InputError(f"{where}: missing {missing} (has {sorted(t)})")
+        try:
+            rot = np.asarray(t["rotation"], dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InputError(f"{where}: rotation is not numeric") from None
+        if rot.shape == (3,) or rot.shape == (3, 1) or rot.shape == (1, 3):
+            if not np.all(np.isfinite(rot)):
+                raise InputError(f"{where}: rotation has NaN or inf values")
+            R = cv2.Rodrigues(rot.reshape(3, 1))[0]  # anipose / Pose2Sim: Rodrigues vector
+        elif rot.shape == (3, 3):
+            R = rot  # caliscope: matrix
+        else:
+            raise InputError(f"{where}: rotation must be a 3x3 matrix or a Rodrigues 3-vector, "
+                             f"got shape {rot.shape}")
+        try:
+            tvec = np.asarray(t["translation"], dtype=np.float64).reshape(3)
+        except (TypeError, ValueError):
+            raise InputError(f"{where}: translation must be 3 numbers, got {t['translation']!r}") from None
+        cal = _make(where, t["matrix"], t.get("distortions"), _rt(R, tvec), t.get("size"))
+        out[key] = (names, cal)
+    if not out:
+        raise InputError(f"{path}: no camera tables (with 'matrix') found")
+    return out
+
+
+# COLMAP camera model -> (fx, fy, cx, cy, OpenCV dist) from its params
+def _colmap_intrinsics(model: str, p: np.ndarray):
+    if model == "SIMPLE_PINHOLE":
+        return p[0], p[0], p[1], p[2], np.zeros(5)
+    if model == "PINHOLE":
+        return p[0], p[1], p[2], p[3], np.zeros(5)
+    if model == "SIMPLE_RADIAL":
+        return p[0], p[0], p[1], p[2], np.array([p[3], 0, 0, 0, 0])
+    if model == "RADIAL":
+        return p[0], p[0], p[1], p[2], np.array([p[3], p[4], 0, 0, 0])
+    if model == "OPENCV":
+        return p[0], p[1], p[2], p[3], np.array([p[4], p[5], p[6], p[7], 0])
+    if model == "FULL_OPENCV":  # k1 k2 p1 p2 k3 k4 k5 k6: OpenCV's rational model order
+        return p[0], p[1], p[2], p[3], np.asarray(p[4:12])
+    return None
+
+
+def _load_colmap(path: Path, video_names: list[str]) -> dict[str, tuple[list[str], CameraCalibration]]:
+    import pycolmap  # numpy is already imported (module top): see ENVIRONMENT.md
+
+    try:
+        rec = pycolmap.Reconstruction(str(path))
+    except Exception as exc:  # noqa: BLE001 - pycolmap raises plain RuntimeError/ValueError
+        raise InputError(f"{path}: not a readable COLMAP model ({exc})") from None
+    images = sorted(rec.images.values(), key=lambda im: im.name)
+    images = [im for im in images if im.has_pose]
+    if not images:
+        raise InputError(f"{path}: COLMAP model has no registered images")
+    # group images by the video they belong to: stem of the name, or its parent folder
+    groups: dict[str, list] = {}
+    for im in images:
+        p = Path(im.name)
+        key = p.stem if p.parent == Path(".") else p.parent.name
+        groups.setdefault(key, []).append(im)
+    out = {}
+    for key, ims in groups.items():
+        where = f"{path}: image {ims[0].name!r}"
+        poses = [np.vstack([im.cam_from_world().matrix(), [0, 0, 0, 1]]) for im in ims]
+        spread = max(np.abs(P - poses[0]).max() for P in poses)
+        if spread > 1e-6 * max(1.0, np.abs(poses[0]).max()) and len(ims) > 1:
+            raise InputError(
+                f"{path}: the {len(ims)} images of {key!r} have different poses (a moving camera); "
+                f"import one image per static camera"
+            )
+        cam = ims[0].camera if ims[0].has_camera_ptr() else rec.cameras[ims[0].camera_id]
+        model = cam.model_name if hasattr(cam, "model_name") else str(cam.model).split(".")[-1]
+        intr = _colmap_intrinsics(model, np.asarray(cam.params, dtype=np.float64))
+        if intr is None:
+            raise InputError(f"{where}: COLMAP camera model {model} is not supported "
+                             f"(use PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV or FULL_OPENCV)")
+        fx, fy, cx, cy, dist = intr
+        # COLMAP puts the centre of the top-left pixel at (0.5, 0.5); OpenCV at (0, 0)
+        K = np.array([[fx, 0, cx - 0.5], [0, fy, cy - 0.5], [0, 0, 1]])
+        cal = _make(where, K, dist, poses[0], (cam.width, cam.height))
+        out[key] = ([key, Path(ims[0].name).stem], cal)
+    return out
+
+
+def read_calibration_file(path) -> dict[str, tuple[list[str], CameraCalibration]]:
+    """All cameras of a calibration file/folder: key -> (names it is known by, calibration)."""
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"{path}: no such calibration file or folder")
+    if path.is_dir():
+        has = {p.name for p in path.iterdir()}
+        if not ({"cameras.txt", "images.txt"} <= has or {"cameras.bin", "images.bin"} <= has):
+            raise InputError(f"{path}: a folder must be a COLMAP model (cameras.txt/images.txt "
+                             f"or cameras.bin/images.bin)")
+        return _load_colmap(path, [])
+    suffix = path.suffix.lower()
+    if suffix == ".json":
+        return _load_json(path)
+    if suffix == ".toml":
+        return _load_toml(path)
+    raise InputError(f"{path}: unknown calibration format (expected a COLMAP model folder, "
+                     f".json or .toml)")
+
+
+def load_calibration(path, video_names: list[str],
+                     video_sizes: dict[str, tuple[int, int]] | None = None
+                     ) -> dict[str, CameraCalibration]:
+    """One calibration per video name (see the module docstring for formats and matching).
+
+    With ``video_sizes`` ({name: (width, height)}) each calibration is fitted to its video:
+    K scaled when the video is a uniformly scaled version of the calibrated size, InputError
+    ("calibration for other cameras") when the sizes don't agree.
+    """
+    cams = read_calibration_file(path)
+    mapping = match_names({k: names for k, (names, _) in cams.items()}, list(video_names), path)
+    out = {v: cams[k][1] for v, k in mapping.items()}
+    if video_sizes:
+        out = {v: fit_to_video(c, *video_sizes[v], name=f"{path}: {v}") if v in video_sizes else c
+               for v, c in out.items()}
+    return out
+
+
+def fit_to_video(cal: CameraCalibration, width: int, height: int, name: str = "camera"
+                 ) -> CameraCalibration:
+    """The calibration at a video's resolution: unchanged, or K scaled for a uniformly resized
+    video (pixel centres kept: c' = (c + 0.5) s - 0.5). Other sizes are an InputError."""
+    if cal.size is None or cal.size == (width, height):
+        return cal if cal.size is not None else replace(cal, size=(int(width), int(height)))
+    cw, ch = cal.size
+    sx, sy = width / cw, height / ch
+    if abs(sx - sy) > 2.0 / min(cw, ch) * max(sx, sy):
+        raise InputError(
+            f"{name}: video is {width}x{height} but the calibration was made at {cw}x{ch}, "
+            f"not a uniform scale: calibration for other cameras?"
+        )
+    K = cal.K.copy()
+    K[0, 0] *= sx
+    K[0, 1] *= sx
+    K[1, 1] *= sy
+    K[0, 2] = (K[0, 2] + 0.5) * sx - 0.5
+    K[1, 2] = (K[1, 2] + 0.5) * sy - 0.5
+    log.info("%s: calibration %dx%d scaled by %.4g to the video's %dx%d", name, cw, ch, sx,
+             width, height)
+    return replace(cal, K=K, size=(int(width), int(height)))
+
+
+# ---- using a calibration ---------------------------------------------------------------------
+
+
+def undistort_points(cal: CameraCalibration, xy: np.ndarray) -> np.ndarray:
+    """(...,2) distorted px -> undistorted px with the same K; NaN stays NaN."""
+    xy = np.asarray(xy, dtype=np.float64)
+    if xy.shape[-1:] != (2,):
+        raise ValueError(f"xy must have shape (...,2), got {xy.shape}")
+    out = np.full_like(xy, np.nan)
+    flat = xy.reshape(-1, 2)
+    ok = np.all(np.isfinite(flat), axis=1)
+    if not np.any(cal.dist != 0):
+        return xy.copy()
+    if ok.any():
+        crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-12)
+        und = cv2.undistortPoints(flat[ok].reshape(-1, 1, 2), cal.K, cal.dist, R=np.eye(3),
+                                  P=cal.K, criteria=crit)
+        res = out.reshape(-1, 2)
+        res[ok] = und.reshape(-1, 2)
+    return out
+
+
+def to_camera_track(cal: CameraCalibration) -> CameraTrack:
+    """The static CameraTrack of a calibration (tracks must be undistorted with it first)."""
+    return CameraTrack(K=cal.K.copy(), cam_from_world=cal.cam_from_world.copy())
