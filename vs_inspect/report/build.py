@@ -1,0 +1,68 @@
+"""Render every figure ReportData supports into a folder, with index.html."""
+
+from __future__ import annotations
+
+import json
+import logging
+import time
+from pathlib import Path
+
+from . import figures
+from .data import ReportData
+from .html import write_index
+
+log = logging.getLogger(__name__)
+
+CAPTIONS = {
+    "scene3d": "3D scene: camera frustums coloured per video (a moving camera with its path and "
+               "frustums along it), the static reconstruction when there is one, and the moving "
+               "points triangulated at the solved offsets, coloured by global time.",
+    "landscapes": "Energy landscape E(Δ) of every pair: green frame = accepted, red frame = "
+                  "rejected (with the reason); star = best minimum, circles = other minima, solid "
+                  "line = chosen Δ, dashed black line = true Δ when known.",
+    "pair_graph": "Pair graph: videos as nodes (with their solved offsets), accepted pairs as "
+                  "solid green edges labelled with Δ, rejected pairs as dashed red edges.",
+    "timeline": "Timeline of all videos before sync (each on its own clock) and after sync "
+                "(placed on the global time axis).",
+    "epipolar": "Epipolar panel: the same frame of video a; b's matched points at t − Δ give "
+                "epipolar lines in a. At the right offset the lines pass through a's points.",
+    "mosaic": "Mosaic: the frame of every video nearest one global moment after sync.",
+}
+
+
+def available(data: ReportData) -> list[str]:
+    """The figures this data supports, in display order."""
+    keys = []
+    if data.cameras:
+        keys.append("scene3d")
+    keys += ["landscapes", "pair_graph"]
+    if data.videos:
+        keys.append("timeline")
+    if data.epipolar is not None:
+        keys.append("epipolar")
+    if data.mosaic is not None:
+        keys.append("mosaic")
+    return keys
+
+
+def render_report(data: ReportData, out_dir: str | Path) -> dict[str, Path]:
+    """Write <key>.png for every available figure, index.html and render_times.json."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths: dict[str, Path] = {}
+    times: dict[str, float] = {}
+    for key in available(data):
+        t0 = time.perf_counter()
+        p = out / f"{key}.png"
+        if key == "scene3d":
+            from .scene3d import render_scene
+            render_scene(data, p, figures.figure_size_px("scene3d", data))
+        else:
+            getattr(figures, key)(data, p)
+        times[key] = round(time.perf_counter() - t0, 3)
+        paths[key] = p
+        log.info("wrote %s (%.2f s)", p, times[key])
+    captions = {k: (paths[k].name, CAPTIONS[k]) for k in paths}
+    paths["index"] = write_index(data, captions, out / "index.html")
+    (out / "render_times.json").write_text(json.dumps(times, indent=1))
+    return paths

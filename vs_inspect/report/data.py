@@ -1,0 +1,177 @@
+"""What a report shows, as typed frozen records. The loaders (load.py, prepare.py) compute these;
+the renderers only draw them.
+
+Time convention (DESIGN.md): a frame at local time τ of video v shows global time τ + offset_s[v];
+Δ_ab = offset_s[b] - offset_s[a], so x_a(t + Δ_ab) and x_b(t) show the same moment.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class VideoClock:
+    """One video: its image size and its clock."""
+
+    name: str
+    width: int  # px
+    height: int  # px
+    num_frames: int
+    start_s: float  # local time of the first frame, seconds
+    end_s: float  # local time of the last frame, seconds
+    fps: float | None  # nominal rate, None for variable frame rate
+    path: str | None = None  # video file or image folder when it can be read, else None
+
+
+@dataclass(frozen=True)
+class CameraView:
+    """A camera's intrinsics and pose(s) in the common world frame."""
+
+    name: str
+    K: np.ndarray  # (3,3) px, or (F,3,3) for per-frame intrinsics
+    cam_from_world: np.ndarray  # (F,4,4); F = 1 for a static camera, else one per frame
+    width: int  # px
+    height: int  # px
+
+    @property
+    def is_moving(self) -> bool:
+        return self.cam_from_world.shape[0] > 1
+
+    def centers(self) -> np.ndarray:
+        """(F,3) camera centres in world coordinates."""
+        R, t = self.cam_from_world[:, :3, :3], self.cam_from_world[:, :3, 3]
+        return -np.einsum("nji,nj->ni", R, t)
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """A triangulated moving point: positions on the global time axis."""
+
+    points_world: np.ndarray  # (T,3) world units
+    time_s: np.ndarray  # (T,) global time, seconds (after sync)
+    pair: tuple[str, str]  # the pair of videos it was triangulated from
+
+
+@dataclass(frozen=True)
+class PairView:
+    """One pair's Stage 1 result, as the landscape grid and the pair graph show it."""
+
+    a: str
+    b: str
+    offsets_s: np.ndarray  # (D,) candidate Δ_ab, seconds
+    energy: np.ndarray  # (D,) normalized energy, NaN where undefined
+    minima_offsets_s: np.ndarray  # (M,) significant local minima, best first, seconds
+    minima_energy: np.ndarray  # (M,) their energy
+    accepted: bool
+    reason: str
+    chosen_offset_s: float | None  # refined Δ_ab of the pair alone (None = no minimum)
+    uncertainty_s: float | None  # 1-sigma of chosen_offset_s
+    solved_offset_s: float | None  # offset_s[b] - offset_s[a] of the global solve
+    true_offset_s: float | None  # Δ_ab from the ground truth, when known
+    num_track_pairs: int
+    contrast: float  # 1 - E_best / E_median (0 = flat)
+
+    @property
+    def key(self) -> str:
+        return f"{self.a}__{self.b}"
+
+    @property
+    def error_ms(self) -> float | None:
+        """|chosen - true| in ms when both are known."""
+        if self.chosen_offset_s is None or self.true_offset_s is None:
+            return None
+        return 1000.0 * abs(self.chosen_offset_s - self.true_offset_s)
+
+
+@dataclass(frozen=True)
+class EpipolarState:
+    """Frame f of video a with the epipolar lines of b's matched points at one candidate Δ."""
+
+    offset_s: float  # Δ_ab used, seconds
+    points_a: np.ndarray  # (N,2) px, a's track points at frame f
+    lines_a: np.ndarray  # (N,3) epipolar lines in a of b's points at τ_a - Δ (l·(x,y,1) = 0), NaN rows where b is unseen
+    points_b: np.ndarray  # (N,2) px, b's matched points at τ_a - Δ (interpolated), NaN where unseen
+    sampson_px2: np.ndarray  # (N,) Sampson error of each match, px², NaN where undefined
+    median_sampson_px2: float  # median over finite entries, px² (NaN if none)
+
+
+@dataclass(frozen=True)
+class EpipolarPanel:
+    """What the epipolar panel draws for one pair: the same frame of a at a wrong and at the chosen offset."""
+
+    a: str
+    b: str
+    frame_a: int  # frame index of video a
+    time_a_s: float  # its local time, seconds
+    width: int  # px, size of a's image
+    height: int  # px
+    wrong: EpipolarState
+    chosen: EpipolarState
+    image_bgr: np.ndarray | None = None  # (H,W,3) uint8 frame of a when the video could be read
+
+
+@dataclass(frozen=True)
+class MosaicTile:
+    """One video's frame at the mosaic's global moment."""
+
+    name: str
+    frame: int | None  # frame index shown (None: the video does not cover that moment)
+    image_bgr: np.ndarray | None  # (h,w,3) uint8, downscaled; None when not covered or not readable
+
+
+@dataclass(frozen=True)
+class Mosaic:
+    """One global moment across all videos after sync."""
+
+    time_s: float  # global time, seconds
+    tiles: tuple[MosaicTile, ...]
+
+
+@dataclass(frozen=True)
+class ReportData:
+    """Everything the report draws, already computed."""
+
+    source: str  # run folder or .rrd the data came from
+    reference: str
+    videos: tuple[VideoClock, ...]
+    offsets_s: dict[str, float | None]  # solved offsets (None = unresolved)
+    uncertainty_s: dict[str, float | None]  # 1-sigma of each offset
+    unresolved: dict[str, str]  # video -> why it has no offset
+    pairs: tuple[PairView, ...]
+    gt_offsets_s: dict[str, float] | None  # true offsets when known (same convention)
+    cameras: tuple[CameraView, ...] = ()  # empty when the recording has no cameras
+    static_points: np.ndarray | None = None  # (N,3) world, static reconstruction, None if absent
+    static_colors: np.ndarray | None = None  # (N,3) uint8 RGB
+    trajectories: tuple[Trajectory, ...] = ()
+    epipolar: EpipolarPanel | None = None
+    mosaic: Mosaic | None = None  # only when the video files can be read
+    notes: tuple[str, ...] = ()  # readable notes on what could not be shown and why
+    timings_s: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def names(self) -> list[str]:
+        return [v.name for v in self.videos]
+
+    def video(self, name: str) -> VideoClock:
+        for v in self.videos:
+            if v.name == name:
+                return v
+        raise KeyError(name)
+
+    def errors_ms(self) -> dict[str, float | None]:
+        """Per-video error after aligning the reference with the truth (empty without truth)."""
+        gt = self.gt_offsets_s
+        if not gt or self.reference not in gt:
+            return {}
+        ref = self.offsets_s.get(self.reference)
+        out: dict[str, float | None] = {}
+        for v in self.names:
+            off = self.offsets_s.get(v)
+            if v not in gt or off is None or ref is None:
+                out[v] = None
+            else:
+                out[v] = 1000.0 * abs((off - ref) - (gt[v] - gt[self.reference]))
+        return out

@@ -1,0 +1,305 @@
+"""2D report figures with matplotlib (Agg): landscapes, pair graph, timeline, epipolar panel.
+
+Each function takes ReportData (or a part of it) and an output path, draws, and writes one PNG of
+a size fixed by figure_size_px; nothing is computed here.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
+
+from .data import EpipolarPanel, PairView, ReportData  # noqa: E402
+
+DPI = 100
+ACCEPT = "#1a9850"  # green
+REJECT = "#d73027"  # red
+TRUTH = "#222222"
+ACCEPT_BG = "#eef8f0"
+REJECT_BG = "#fcecea"
+plt.rcParams.update({"font.size": 11, "axes.titlesize": 11, "axes.labelsize": 10,
+                     "xtick.labelsize": 9, "ytick.labelsize": 9, "legend.fontsize": 9})
+
+
+def video_colors(names: list[str]) -> dict[str, tuple[float, float, float]]:
+    """One stable colour per video (tab10, tab20 beyond 10 videos), shared by all figures."""
+    cmap = plt.get_cmap("tab10" if len(names) <= 10 else "tab20")
+    return {n: tuple(cmap(i % cmap.N)[:3]) for i, n in enumerate(names)}
+
+
+def landscape_grid_shape(n: int) -> tuple[int, int]:
+    cols = min(4, max(1, n))
+    return max(1, math.ceil(n / cols)), cols
+
+
+def figure_size_px(kind: str, data: ReportData) -> tuple[int, int]:
+    """(width, height) in pixels of each figure, so that tests can check what was written."""
+    if kind == "landscapes":
+        rows, cols = landscape_grid_shape(len(data.pairs))
+        return 380 * cols, 60 + 270 * rows
+    if kind == "pair_graph":
+        return 1000, 900
+    if kind == "timeline":
+        return 1300, 220 + 2 * 42 * max(1, len(data.videos))
+    if kind == "epipolar":
+        e = data.epipolar
+        aspect = e.height / e.width if e else 0.56
+        return 1600, int(round(150 + 780 * aspect))
+    if kind == "scene3d":
+        return 1600, 1000
+    if kind == "mosaic":
+        rows, cols = landscape_grid_shape(len(data.mosaic.tiles) if data.mosaic else 1)
+        return 420 * cols, 60 + 300 * rows
+    raise KeyError(kind)
+
+
+def _fig(kind: str, data: ReportData):
+    w, h = figure_size_px(kind, data)
+    return plt.figure(figsize=(w / DPI, h / DPI), dpi=DPI, layout="constrained")
+
+
+def _save(fig, path: Path) -> Path:
+    fig.savefig(path, dpi=DPI)  # no bbox_inches: the size stays what figure_size_px says
+    plt.close(fig)
+    return path
+
+
+def _fmt(x: float | None, unit: str = " s", digits: int = 3) -> str:
+    return "—" if x is None or not math.isfinite(x) else f"{x:+.{digits}f}{unit}"
+
+
+# ---- energy landscapes ----------------------------------------------------------------------
+
+
+def _landscape_axes(ax, p: PairView) -> None:
+    col = ACCEPT if p.accepted else REJECT
+    ax.set_facecolor(ACCEPT_BG if p.accepted else REJECT_BG)
+    for side in ax.spines.values():
+        side.set_edgecolor(col)
+        side.set_linewidth(2.0)
+    mark = "accepted" if p.accepted else "REJECTED"
+    ax.set_title(f"{p.a} – {p.b}   {mark}", color=col, fontweight="bold", loc="left", fontsize=11)
+    if p.offsets_s.size == 0 or not np.isfinite(p.energy).any():
+        ax.text(0.5, 0.5, "no landscape\n" + _wrap(p.reason, 40), ha="center", va="center",
+                transform=ax.transAxes, fontsize=9, color=REJECT)
+        ax.set_xticks([])
+        ax.set_yticks([])
+        return
+    ax.plot(p.offsets_s, p.energy, color="#3b4cc0" if p.accepted else "#7f7f7f", lw=1.2)
+    if p.minima_offsets_s.size:
+        ax.scatter(p.minima_offsets_s[1:], p.minima_energy[1:], s=28, facecolors="white",
+                   edgecolors="#555555", zorder=3, label="other minima")
+        ax.scatter(p.minima_offsets_s[:1], p.minima_energy[:1], s=90, marker="*", color=col,
+                   edgecolors="black", linewidths=0.5, zorder=4, label="best minimum")
+    if p.chosen_offset_s is not None:
+        ax.axvline(p.chosen_offset_s, color=col, lw=1.2, alpha=0.8)
+    if p.true_offset_s is not None:
+        ax.axvline(p.true_offset_s, color=TRUTH, lw=1.2, ls=(0, (4, 3)))
+    txt = f"Δ = {_fmt(p.chosen_offset_s)}"
+    if p.error_ms is not None:
+        txt += f"\nerror {p.error_ms:.1f} ms"
+    if not p.accepted:
+        txt += "\n" + _wrap(p.reason, 38)
+    ax.text(0.02, 0.04, txt, transform=ax.transAxes, fontsize=8.5, va="bottom", ha="left",
+            bbox=dict(boxstyle="round,pad=0.25", fc="white", ec=col, alpha=0.9))
+    ax.margins(x=0.01)
+    ax.grid(True, alpha=0.3)
+
+
+def _wrap(text: str, width: int) -> str:
+    import textwrap
+    return "\n".join(textwrap.wrap(text, width)[:3])
+
+
+def landscapes(data: ReportData, path: Path) -> Path:
+    fig = _fig("landscapes", data)
+    rows, cols = landscape_grid_shape(len(data.pairs))
+    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False)).ravel()
+    for i, ax in enumerate(axes):
+        if i >= len(data.pairs):
+            ax.axis("off")
+            continue
+        _landscape_axes(ax, data.pairs[i])
+        if i // cols == rows - 1 or i + cols >= len(data.pairs):
+            ax.set_xlabel("Δ = offset(b) − offset(a)  [s]")
+        if i % cols == 0:
+            ax.set_ylabel("energy E(Δ)")
+    handles = [Patch(fc=ACCEPT_BG, ec=ACCEPT, lw=2, label="accepted pair"),
+               Patch(fc=REJECT_BG, ec=REJECT, lw=2, label="rejected pair"),
+               Line2D([], [], marker="*", color="w", markerfacecolor=ACCEPT, markeredgecolor="k",
+                      markersize=12, label="best minimum"),
+               Line2D([], [], marker="o", color="w", markerfacecolor="white", markeredgecolor="#555",
+                      label="other minima")]
+    if data.gt_offsets_s:
+        handles.append(Line2D([], [], color=TRUTH, ls=(0, (4, 3)), label="true Δ"))
+    fig.legend(handles=handles, loc="outside upper center", ncol=len(handles), frameon=False)
+    return _save(fig, path)
+
+
+# ---- pair graph ----------------------------------------------------------------------------
+
+
+def pair_graph(data: ReportData, path: Path) -> Path:
+    fig = _fig("pair_graph", data)
+    ax = fig.add_subplot()
+    names = data.names or sorted({n for p in data.pairs for n in (p.a, p.b)})
+    colors = video_colors(names)
+    n = len(names)
+    ang = np.pi / 2 - 2 * np.pi * np.arange(n) / max(n, 1)
+    pos = {v: (np.cos(a), np.sin(a)) for v, a in zip(names, ang)}
+    for p in sorted(data.pairs, key=lambda p: p.accepted):  # accepted on top
+        (x0, y0), (x1, y1) = pos[p.a], pos[p.b]
+        if p.accepted:
+            ax.plot([x0, x1], [y0, y1], color=ACCEPT, lw=2.2, zorder=2, solid_capstyle="round")
+            label = f"{p.chosen_offset_s:+.3f} s"
+        else:
+            ax.plot([x0, x1], [y0, y1], color=REJECT, lw=2.0, ls=(0, (5, 4)), zorder=1)
+            label = "✗ rejected"
+        t = 0.3 if p.accepted else 0.5
+        ax.text(x0 + t * (x1 - x0), y0 + t * (y1 - y0), label, fontsize=8.5, ha="center",
+                va="center", color=ACCEPT if p.accepted else REJECT, zorder=5,
+                bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.85))
+    for v in names:
+        x, y = pos[v]
+        off = data.offsets_s.get(v)
+        ax.scatter([x], [y], s=1500, color=colors[v], edgecolors="black", linewidths=1.2, zorder=6)
+        ax.text(x, y, v, ha="center", va="center", fontsize=10, fontweight="bold", color="white",
+                zorder=7)
+        sub = "reference (0 s)" if v == data.reference else ("unresolved" if off is None else f"{off:+.3f} s")
+        ax.text(1.2 * x, 1.2 * y, sub, ha="center", va="center", fontsize=10, zorder=7,
+                color="black" if off is not None else REJECT)
+    ax.set_xlim(-1.45, 1.45)
+    ax.set_ylim(-1.4, 1.4)
+    ax.set_aspect("equal")
+    ax.axis("off")
+    acc = sum(p.accepted for p in data.pairs)
+    ax.set_title(f"Pair graph: {acc} accepted (solid, Δ = offset(b) − offset(a) along a→b in "
+                 f"name order, label near a), {len(data.pairs) - acc} rejected (dashed)", fontsize=11)
+    return _save(fig, path)
+
+
+# ---- timeline ------------------------------------------------------------------------------
+
+
+def timeline(data: ReportData, path: Path) -> Path:
+    fig = _fig("timeline", data)
+    before, after = fig.subplots(2, 1, sharex=True, height_ratios=[1, 1])
+    colors = video_colors(data.names)
+    n = len(data.videos)
+    gt = data.gt_offsets_s or {}
+    ref_gt = gt.get(data.reference, 0.0)
+    for i, v in enumerate(data.videos):
+        y = n - 1 - i
+        before.barh(y, v.end_s - v.start_s, left=v.start_s, color=colors[v.name], height=0.6,
+                    edgecolor="black", lw=0.6)
+        off = data.offsets_s.get(v.name)
+        if off is None:
+            after.barh(y, v.end_s - v.start_s, left=v.start_s, color="white", height=0.6,
+                       edgecolor=REJECT, hatch="//", lw=1.0)
+            after.text(v.start_s + 0.1, y, "unresolved: not placed", va="center", fontsize=9,
+                       color=REJECT)
+        else:
+            after.barh(y, v.end_s - v.start_s, left=v.start_s + off, color=colors[v.name],
+                       height=0.6, edgecolor="black", lw=0.6)
+            if v.name in gt:
+                x = gt[v.name] - ref_gt + v.start_s
+                after.plot([x, x], [y - 0.42, y + 0.42], color=TRUTH, lw=2.0)
+        rate = f"{v.fps:g} fps" if v.fps else "variable fps"
+        before.text(v.end_s + 0.1, y, f"{v.num_frames} frames, {rate}", va="center", fontsize=8.5)
+    for ax, title in ((before, "before sync: every video starts at its own local 0"),
+                      (after, "after sync: bars placed at their estimated offsets on the global "
+                              "time axis" + (" (black tick: true start)" if gt else ""))):
+        ax.set_yticks(range(n), [v.name for v in reversed(data.videos)])
+        ax.set_title(title, loc="left", fontsize=11)
+        ax.grid(True, axis="x", alpha=0.3)
+        ax.set_ylim(-0.6, n - 0.4)
+    after.set_xlabel(f"time [s]  (global axis: {data.reference} starts at 0)")
+    lo = min([v.start_s + (data.offsets_s.get(v.name) or 0.0) for v in data.videos] + [0.0])
+    hi = max([v.end_s + (data.offsets_s.get(v.name) or 0.0) for v in data.videos] + [1.0])
+    after.set_xlim(lo - 0.3, hi + 0.15 * (hi - lo) + 0.5)
+    return _save(fig, path)
+
+
+# ---- epipolar panel ------------------------------------------------------------------------
+
+
+def _epipolar_axes(ax, e: EpipolarPanel, state, title: str, good: bool) -> None:
+    W, H = e.width, e.height
+    if e.image_bgr is not None:
+        ax.imshow(e.image_bgr[..., ::-1], extent=(-0.5, W - 0.5, H - 0.5, -0.5))
+    else:
+        ax.add_patch(plt.Rectangle((-0.5, -0.5), W, H, fc="#f4f4f4", ec="#999999"))
+    cmap = plt.get_cmap("tab20")
+    for i, (p, l) in enumerate(zip(state.points_a, state.lines_a)):
+        c = cmap(i % 20)
+        if np.all(np.isfinite(l)) and (abs(l[0]) > 0 or abs(l[1]) > 0):
+            # a·x + b·y + c = 0: a point on it and its slope
+            if abs(l[1]) > 1e-12:
+                ax.axline((0.0, -l[2] / l[1]), slope=-l[0] / l[1], color=c, lw=1.4, alpha=0.9)
+            else:
+                ax.axvline(-l[2] / l[0], color=c, lw=1.4, alpha=0.9)
+        ax.scatter([p[0]], [p[1]], s=60, color=c, edgecolors="black", linewidths=0.8, zorder=4)
+    ax.set_xlim(-0.5, W - 0.5)
+    ax.set_ylim(H - 0.5, -0.5)
+    ax.set_aspect("equal")
+    col = ACCEPT if good else REJECT
+    ax.set_title(title, color=col, fontsize=11, fontweight="bold")
+    ax.set_xlabel("x [px]")
+    ax.set_ylabel("y [px]")
+    ax.text(0.01, 0.99, f"median Sampson error {state.median_sampson_px2:.3g} px²",
+            transform=ax.transAxes, va="top", ha="left", fontsize=11,
+            bbox=dict(boxstyle="round,pad=0.3", fc="white", ec=col, alpha=0.92))
+
+
+def epipolar(data: ReportData, path: Path) -> Path:
+    e = data.epipolar
+    fig = _fig("epipolar", data)
+    left, right = fig.subplots(1, 2)
+    _epipolar_axes(left, e, e.wrong, f"wrong offset Δ = {e.wrong.offset_s:+.3f} s", False)
+    _epipolar_axes(right, e, e.chosen, f"chosen offset Δ = {e.chosen.offset_s:+.3f} s", True)
+    backdrop = "video frame" if e.image_bgr is not None else "blank canvas: video not available"
+    fig.suptitle(f"{e.a} frame {e.frame_a} (t = {e.time_a_s:.3f} s; {backdrop}).  Dots: {e.a}'s "
+                 f"track points.  Lines (same colour): epipolar lines of the matched points of "
+                 f"{e.b} at t − Δ.\nAt the right Δ each line passes through its dot; matches that "
+                 f"are wrong miss at every Δ.", fontsize=11)
+    return _save(fig, path)
+
+
+# ---- mosaic of one moment --------------------------------------------------------------------
+
+
+def mosaic(data: ReportData, path: Path) -> Path:
+    m = data.mosaic
+    fig = _fig("mosaic", data)
+    rows, cols = landscape_grid_shape(len(m.tiles))
+    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False)).ravel()
+    colors = video_colors(data.names)
+    for i, ax in enumerate(axes):
+        ax.set_xticks([])
+        ax.set_yticks([])
+        if i >= len(m.tiles):
+            ax.axis("off")
+            continue
+        t = m.tiles[i]
+        if t.image_bgr is not None:
+            ax.imshow(t.image_bgr[..., ::-1])
+            ax.set_title(f"{t.name}, frame {t.frame}", fontsize=10, color=colors.get(t.name, "k"),
+                         fontweight="bold")
+        else:
+            ax.set_facecolor("#eeeeee")
+            why = "not synchronized or not recording then" if t.frame is None else "frame not readable"
+            ax.text(0.5, 0.5, f"{t.name}\n{why}", ha="center", va="center", transform=ax.transAxes,
+                    fontsize=10, color=REJECT)
+        for side in ax.spines.values():
+            side.set_edgecolor(colors.get(t.name, "k"))
+            side.set_linewidth(3)
+    fig.suptitle(f"one global moment across all videos after sync: t = {m.time_s:.3f} s", fontsize=12)
+    return _save(fig, path)

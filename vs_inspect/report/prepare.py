@@ -1,0 +1,376 @@
+"""Computations behind the report: from a result dictionary and a cue bundle to ReportData.
+
+Everything the figures show is computed here (epipolar lines, Sampson errors, triangulated
+trajectories, pair choice), so that the renderers only draw.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from typing import Any
+
+import numpy as np
+
+from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras, project
+from ..geometry.timing import frame_brackets, interpolate_intrinsics, interpolate_poses
+from ..types import CueBundle
+from .data import (CameraView, EpipolarPanel, EpipolarState, Mosaic, MosaicTile, PairView,
+                   ReportData, Trajectory, VideoClock)
+
+log = logging.getLogger(__name__)
+
+WRONG_SHIFT_S = 0.5  # the "wrong" offset of the epipolar panel is the chosen one ± this
+MAX_EPIPOLAR_MATCHES = 16  # matches drawn in the epipolar panel
+MAX_TRAJECTORIES = 300  # triangulated tracks drawn in the 3D scene
+TRAJ_PAIRS = 3  # accepted pairs (best contrast first) triangulated for the 3D scene
+MAX_REPROJ_PX = 4.0  # a triangulated sample is kept when it reprojects this close in both views
+
+
+def _f(x: Any) -> float | None:
+    return None if x is None or not math.isfinite(float(x)) else float(x)
+
+
+def _arr(values, dtype=np.float64) -> np.ndarray:
+    return np.array([np.nan if v is None else v for v in (values or [])], dtype=dtype)
+
+
+def pair_views(result: dict[str, Any], gt: dict[str, float] | None) -> tuple[PairView, ...]:
+    """PairView of every pair of result["pairs"], with the solved and the true Δ_ab."""
+    offs = result.get("offsets_s", {})
+    out = []
+    for p in result.get("pairs", []):
+        a, b = p["a"], p["b"]
+        land = p.get("landscape") or {}
+        sa, sb = offs.get(a), offs.get(b)
+        solved = sb - sa if sa is not None and sb is not None else None
+        true = gt[b] - gt[a] if gt and a in gt and b in gt else None
+        out.append(PairView(
+            a, b, _arr(land.get("offsets_s")), _arr(land.get("energy")),
+            _arr(p.get("minima_offsets_s")), _arr(p.get("minima_energy")),
+            bool(p.get("accepted")), str(p.get("reason", "")), _f(p.get("offset_s")),
+            _f(p.get("uncertainty_s")), solved, true, int(p.get("num_track_pairs", 0)),
+            float(p.get("contrast") or 0.0)))
+    return tuple(out)
+
+
+def video_clocks(bundle: CueBundle, paths: dict[str, str] | None = None) -> tuple[VideoClock, ...]:
+    paths = paths or {}
+    return tuple(VideoClock(v.name, v.width, v.height, v.num_frames, float(v.timestamps_s[0]),
+                            float(v.timestamps_s[-1]), v.fps, paths.get(v.name)) for v in bundle.videos)
+
+
+def camera_views(bundle: CueBundle) -> tuple[CameraView, ...]:
+    out = []
+    for v in bundle.videos:
+        cam = bundle.cameras[v.name]
+        T = cam.cam_from_world.reshape(-1, 4, 4)
+        if cam.valid is not None and T.shape[0] > 1:
+            T = T[cam.valid]
+        out.append(CameraView(v.name, cam.K, T, v.width, v.height))
+    return tuple(out)
+
+
+def choose_pair(pairs: tuple[PairView, ...], requested: tuple[str, str] | None) -> PairView | None:
+    """The requested pair (either order) or the accepted pair with the sharpest landscape."""
+    if requested:
+        a, b = requested
+        for p in pairs:
+            if (p.a, p.b) == (a, b) or (p.a, p.b) == (b, a):
+                return p
+        known = ", ".join(p.key for p in pairs)
+        raise ValueError(f"--pair {a} {b}: no such pair in the result (pairs: {known})")
+    ok = [p for p in pairs if p.accepted and p.chosen_offset_s is not None]
+    if not ok:
+        ok = [p for p in pairs if p.chosen_offset_s is not None]
+    return max(ok, key=lambda p: (p.contrast, p.num_track_pairs)) if ok else None
+
+
+# ---- sampling a video at another video's moments ------------------------------------------
+
+
+def _sample_b(bundle: CueBundle, b: str, rows: np.ndarray, query_s: np.ndarray):
+    """b's track rows at local times query_s (Q,): xy (len(rows),Q,2), K (Q,3,3), pose (Q,4,4).
+
+    Linear interpolation between the bracketing frames; NaN where b has no frame or no point.
+    """
+    vb, cam, xy = bundle.video(b), bundle.cameras[b], bundle.tracks[b].xy
+    k, w = frame_brackets(vb.timestamps_s, query_s)
+    ok = k >= 0
+    kc = np.clip(k, 0, max(vb.num_frames - 2, 0))
+    k1 = np.minimum(kc + 1, vb.num_frames - 1)
+    x = xy[rows]
+    out = x[:, kc] + w[None, :, None] * (x[:, k1] - x[:, kc])
+    out[:, ~ok] = np.nan
+    if cam.cam_from_world.ndim == 3:
+        pose = interpolate_poses(cam.cam_from_world, k, w)
+    else:
+        pose = np.broadcast_to(cam.cam_from_world, (len(k), 4, 4)).copy()
+        pose[~ok] = np.nan
+    K = interpolate_intrinsics(cam.K, kc, w)
+    if cam.valid is not None:
+        bad = ~(cam.valid[kc] & cam.valid[k1])
+        pose[bad] = np.nan
+        out[:, bad] = np.nan
+    return out, K, pose
+
+
+def _epipolar_state(bundle: CueBundle, a: str, b: str, rows: np.ndarray, frame: int,
+                    offset_s: float, show: np.ndarray) -> EpipolarState:
+    va = bundle.video(a)
+    t_a = float(va.timestamps_s[frame])
+    ia, ib = rows[:, 0], rows[:, 1]
+    xa = bundle.tracks[a].xy[ia, frame].astype(np.float64)  # (P,2)
+    xb, K_b, T_b = _sample_b(bundle, b, ib, np.array([t_a - offset_s]))
+    xb = xb[:, 0]
+    K_a = bundle.cameras[a].K_at(np.array([frame]))[0]
+    T_a = bundle.cameras[a].pose_at(np.array([frame]))[0]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        F = fundamental_from_cameras(K_a, T_a, K_b[0], T_b[0])
+        samp = epipolar_residual(F, xa, xb, "sampson")
+        lines = np.einsum("ij,nj->ni", F, np.concatenate([xb, np.ones((len(xb), 1))], 1))
+    fin = samp[np.isfinite(samp)]
+    return EpipolarState(float(offset_s), xa[show], lines[show], xb[show], samp[show],
+                         float(np.median(fin)) if fin.size else float("nan"))
+
+
+def epipolar_panel(bundle: CueBundle, pair: PairView, image_bgr: np.ndarray | None = None,
+                   frame: int | None = None) -> EpipolarPanel | None:
+    """The same frame of a with b's epipolar lines at a wrong and at the chosen Δ_ab."""
+    a, b = pair.a, pair.b
+    tp = bundle.pair(a, b)
+    if tp is None or len(tp.index) == 0 or pair.chosen_offset_s is None:
+        return None
+    chosen = pair.chosen_offset_s
+    lo = np.nanmin(pair.offsets_s) if pair.offsets_s.size else chosen - 1
+    hi = np.nanmax(pair.offsets_s) if pair.offsets_s.size else chosen + 1
+    wrong = chosen + WRONG_SHIFT_S if chosen + WRONG_SHIFT_S <= hi else chosen - WRONG_SHIFT_S
+    wrong = float(np.clip(wrong, lo, hi))
+    va, vb = bundle.video(a), bundle.video(b)
+    ia, ib = tp.index[:, 0], tp.index[:, 1]
+    vis_a = np.isfinite(bundle.tracks[a].xy[ia, :, 0])  # (P,Ta)
+    vis_b = np.isfinite(bundle.tracks[b].xy[ib, :, 0])
+    count = np.zeros(va.num_frames)
+    both = vis_a.copy()
+    for d in (chosen, wrong):
+        k, _ = frame_brackets(vb.timestamps_s, va.timestamps_s - d)
+        kc = np.clip(k, 0, vb.num_frames - 2)
+        seen = vis_b[:, kc] & vis_b[:, np.minimum(kc + 1, vb.num_frames - 1)] & (k >= 0)[None]
+        both &= seen
+    count = both.sum(0)
+    if frame is None:
+        if count.max() == 0:
+            return None
+        # among the frames with at least 80 % of the best count, the one nearest the middle
+        good = np.flatnonzero(count >= 0.8 * count.max())
+        frame = int(good[np.argmin(np.abs(good - va.num_frames / 2))])
+    sel = np.flatnonzero(both[:, frame])
+    show = np.arange(len(sel))
+    if len(sel) > MAX_EPIPOLAR_MATCHES:
+        show = np.linspace(0, len(sel) - 1, MAX_EPIPOLAR_MATCHES).round().astype(int)
+    rows = tp.index[sel]
+    states = [_epipolar_state(bundle, a, b, rows, frame, d, show) for d in (wrong, chosen)]
+    if image_bgr is not None and image_bgr.shape[:2] != (va.height, va.width):
+        log.warning("frame of %s is %s, bundle says %dx%d: drawing on a blank canvas",
+                    a, image_bgr.shape[:2], va.width, va.height)
+        image_bgr = None
+    return EpipolarPanel(a, b, frame, float(va.timestamps_s[frame]), va.width, va.height,
+                         states[0], states[1], image_bgr)
+
+
+# ---- triangulation of moving points after sync --------------------------------------------
+
+
+def _triangulate(P_a: np.ndarray, P_b: np.ndarray, xa: np.ndarray, xb: np.ndarray) -> np.ndarray:
+    """Linear (DLT) triangulation, vectorized: P (...,3,4), x (...,2) -> X (...,3)."""
+    rows = np.stack([
+        xa[..., 0:1] * P_a[..., 2, :] - P_a[..., 0, :],
+        xa[..., 1:2] * P_a[..., 2, :] - P_a[..., 1, :],
+        xb[..., 0:1] * P_b[..., 2, :] - P_b[..., 0, :],
+        xb[..., 1:2] * P_b[..., 2, :] - P_b[..., 1, :],
+    ], -2)
+    _, _, vt = np.linalg.svd(rows)
+    X = vt[..., -1, :]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return X[..., :3] / X[..., 3:4]
+
+
+def triangulate_pair(bundle: CueBundle, a: str, b: str, offset_a_s: float, offset_b_s: float,
+                     max_tracks: int) -> list[Trajectory]:
+    """Trajectories of the matched tracks of (a, b), b sampled at a's frames after sync."""
+    tp = bundle.pair(a, b)
+    if tp is None or len(tp.index) == 0:
+        return []
+    va, ca = bundle.video(a), bundle.cameras[a]
+    rows = tp.index
+    if len(rows) > 4 * max_tracks:
+        rows = rows[np.linspace(0, len(rows) - 1, 4 * max_tracks).round().astype(int)]
+    ta = va.timestamps_s
+    xb, K_b, T_b = _sample_b(bundle, b, rows[:, 1], ta + offset_a_s - offset_b_s)  # (P,Ta,2)
+    xa = bundle.tracks[a].xy[rows[:, 0]].astype(np.float64)  # (P,Ta,2)
+    frames = np.arange(va.num_frames)
+    P_a = ca.K_at(frames) @ ca.pose_at(frames)[:, :3, :]  # (Ta,3,4)
+    P_b = K_b @ T_b[:, :3, :]
+    ok = np.isfinite(xa[..., 0]) & np.isfinite(xb[..., 0]) & np.isfinite(P_b[None, :, 0, 0])
+    X = np.full(xa.shape[:2] + (3,), np.nan)
+    pi, fi = np.nonzero(ok)
+    if len(pi) == 0:
+        return []
+    Xs = _triangulate(P_a[fi], P_b[fi], xa[pi, fi], xb[pi, fi])
+    with np.errstate(invalid="ignore"):
+        ra = np.linalg.norm(project(ca.K_at(fi), ca.pose_at(fi), Xs) - xa[pi, fi], axis=-1)
+        rb = np.linalg.norm(project(K_b[fi], T_b[fi], Xs) - xb[pi, fi], axis=-1)
+    good = (ra < MAX_REPROJ_PX) & (rb < MAX_REPROJ_PX)
+    X[pi[good], fi[good]] = Xs[good]
+    out = []
+    g = ta + offset_a_s
+    for p in range(len(rows)):
+        for seg in _segments(X[p]):
+            out.append(Trajectory(X[p, seg], g[seg], (a, b)))
+    return out
+
+
+def _segments(X: np.ndarray, min_len: int = 5) -> list[np.ndarray]:
+    """Runs of consecutive finite samples of (T,3), split where one step jumps more than 8 x the
+    median step (a wrong match or a near-parallel pair of rays); runs shorter than min_len dropped."""
+    ok = np.isfinite(X[:, 0])
+    idx = np.flatnonzero(ok)
+    if len(idx) < min_len:
+        return []
+    step = np.linalg.norm(np.diff(X[idx], axis=0), axis=1)
+    med = np.median(step) if len(step) else 0.0
+    cut = (np.diff(idx) > 1) | (step > 8.0 * med + 1e-12)
+    runs = np.split(idx, np.flatnonzero(cut) + 1)
+    return [r for r in runs if len(r) >= min_len]
+
+
+def trajectories(bundle: CueBundle, pairs: tuple[PairView, ...], offsets_s: dict[str, float | None],
+                 cameras: tuple[CameraView, ...]) -> tuple[Trajectory, ...]:
+    """Triangulate the best accepted pairs; drop far-away points (wrong matches, near-parallel rays)."""
+    ok = [p for p in pairs if p.accepted and offsets_s.get(p.a) is not None
+          and offsets_s.get(p.b) is not None]
+    ok.sort(key=lambda p: (-p.contrast, p.key))
+    per = max(1, MAX_TRAJECTORIES // max(1, min(TRAJ_PAIRS, len(ok))))
+    out: list[Trajectory] = []
+    for p in ok[:TRAJ_PAIRS]:
+        out += triangulate_pair(bundle, p.a, p.b, offsets_s[p.a], offsets_s[p.b], per)[:per]
+    if not out:
+        return ()
+    # keep what lies inside the region the cameras look at: within 1.5 x the cameras' radius
+    centers = np.concatenate([c.centers() for c in cameras]) if cameras else np.zeros((1, 3))
+    allpts = np.concatenate([t.points_world for t in out])
+    mid = np.median(allpts, axis=0)
+    radius = 1.5 * np.max(np.linalg.norm(centers - centers.mean(0), axis=1)) if len(centers) > 1 else \
+        5.0 * np.median(np.linalg.norm(allpts - mid, axis=1))
+    kept = []
+    for t in out:
+        m = np.linalg.norm(t.points_world - mid, axis=1) < radius
+        if m.sum() >= 5:
+            kept.append(Trajectory(t.points_world[m], t.time_s[m], t.pair))
+    return tuple(kept)
+
+
+def mosaic_moment(bundle: CueBundle, offsets_s: dict[str, float | None]) -> tuple[float, dict[str, int | None]]:
+    """A global moment seen by as many synchronized videos as possible (the middle of the common
+    span), and each video's nearest frame there (None: not covered or unresolved)."""
+    spans = {v.name: (v.timestamps_s[0] + offsets_s[v.name], v.timestamps_s[-1] + offsets_s[v.name])
+             for v in bundle.videos if offsets_s.get(v.name) is not None}
+    if not spans:
+        return float("nan"), {v.name: None for v in bundle.videos}
+    lo, hi = max(s[0] for s in spans.values()), min(s[1] for s in spans.values())
+    if hi < lo:  # no moment common to all: the one covered by most videos
+        grid = np.linspace(min(s[0] for s in spans.values()), max(s[1] for s in spans.values()), 400)
+        cover = sum(((grid >= a) & (grid <= b)).astype(int) for a, b in spans.values())
+        best = grid[cover == cover.max()]
+        g = float(np.median(best))
+    else:
+        g = 0.5 * (lo + hi)
+    frames: dict[str, int | None] = {}
+    for v in bundle.videos:
+        off = offsets_s.get(v.name)
+        if off is None or not (spans[v.name][0] <= g <= spans[v.name][1]):
+            frames[v.name] = None
+            continue
+        frames[v.name] = int(np.argmin(np.abs(v.timestamps_s + off - g)))
+    return g, frames
+
+
+def _downscale(img: np.ndarray, max_width: int = 480) -> np.ndarray:
+    import cv2
+    h, w = img.shape[:2]
+    if w <= max_width:
+        return img
+    return cv2.resize(img, (max_width, int(round(h * max_width / w))), interpolation=cv2.INTER_AREA)
+
+
+def build_report_data(result: dict[str, Any], bundle: CueBundle | None, *, source: str,
+                      gt: dict[str, float] | None = None, video_paths: dict[str, str] | None = None,
+                      pair: tuple[str, str] | None = None, frame_reader=None,
+                      static_points: np.ndarray | None = None,
+                      static_colors: np.ndarray | None = None) -> ReportData:
+    """ReportData from a result dictionary and (when available) the cue bundle behind it.
+
+    frame_reader(path, frame_index) -> (H,W,3) uint8 BGR or None reads video a's frame for the
+    epipolar panel when a video path is known.
+    """
+    notes: list[str] = []
+    if gt is None:
+        gt = result.get("gt_offsets_s") or (bundle.gt_offsets_s if bundle is not None else None)
+    pairs = pair_views(result, gt)
+    offsets = {k: (None if v is None else float(v)) for k, v in result["offsets_s"].items()}
+    unc = {k: (None if v is None else float(v)) for k, v in (result.get("uncertainty_s") or {}).items()}
+    videos: tuple[VideoClock, ...] = ()
+    cameras: tuple[CameraView, ...] = ()
+    trajs: tuple[Trajectory, ...] = ()
+    panel = None
+    if bundle is None:
+        notes.append("no cue bundle: no timeline, 3D scene or epipolar panel (only landscapes, "
+                     "pair graph and numbers)")
+    else:
+        videos = video_clocks(bundle, video_paths)
+        cameras = camera_views(bundle)
+        trajs = trajectories(bundle, pairs, offsets, cameras)
+        if not trajs:
+            notes.append("no triangulated trajectories (no accepted pair with solved offsets "
+                         "gave consistent points)")
+        chosen = choose_pair(pairs, pair)
+        if chosen is None:
+            notes.append("epipolar panel: no pair has a minimum")
+        else:
+            image = None
+            path = (video_paths or {}).get(chosen.a)
+            panel = epipolar_panel(bundle, chosen)
+            if panel is not None and path and frame_reader is not None:
+                try:
+                    image = frame_reader(path, panel.frame_a)
+                except Exception as exc:  # a missing or unreadable video only loses the backdrop
+                    notes.append(f"could not read frame {panel.frame_a} of {path}: {exc}")
+                if image is not None:
+                    panel = epipolar_panel(bundle, chosen, image, panel.frame_a)
+            if panel is None:
+                notes.append(f"epipolar panel: pair {chosen.key} has no matched points visible "
+                             "at both offsets")
+    mosaic = None
+    if bundle is not None and video_paths and frame_reader is not None:
+        g, frames = mosaic_moment(bundle, offsets)
+        tiles = []
+        for v in bundle.videos:
+            k, img = frames[v.name], None
+            if k is not None and v.name in video_paths:
+                try:
+                    img = _downscale(frame_reader(video_paths[v.name], k))
+                except Exception as exc:
+                    notes.append(f"mosaic: could not read frame {k} of {video_paths[v.name]}: {exc}")
+            tiles.append(MosaicTile(v.name, k, img))
+        if any(t.image_bgr is not None for t in tiles):
+            mosaic = Mosaic(g, tuple(tiles))
+    if mosaic is None:
+        notes.append("no mosaic of one moment across all videos: the video files are not "
+                     "available (a cue bundle or a recording alone has no frames)")
+    if static_points is None:
+        notes.append("no static reconstruction in the input (cue bundles carry cameras and "
+                     "tracks only)")
+    return ReportData(source, result["reference"], videos, offsets, unc,
+                      dict(result.get("unresolved") or {}), pairs, gt, cameras, static_points,
+                      static_colors, trajs, panel, mosaic, tuple(notes),
+                      {k: float(v) for k, v in (result.get("timings_s") or {}).items()})

@@ -1,0 +1,107 @@
+"""The 3D scene, rendered off-screen with pyvista (EGL): camera frustums coloured per video (the
+path of a moving camera), the static reconstruction, and triangulated trajectories coloured by time.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .data import CameraView, ReportData
+
+os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")  # before vtk is imported
+
+FRUSTUMS_PER_MOVING_CAMERA = 5
+
+
+def _frustum_lines(K: np.ndarray, cam_from_world: np.ndarray, w: int, h: int, depth: float):
+    """(5,3) apex + 4 image corners at `depth` in world coordinates, and the line segments."""
+    Kinv = np.linalg.inv(K)
+    corners = np.array([[0, 0, 1], [w, 0, 1], [w, h, 1], [0, h, 1]], float)
+    rays = corners @ Kinv.T
+    rays = rays / rays[:, 2:3] * depth
+    R, t = cam_from_world[:3, :3], cam_from_world[:3, 3]
+    world = (rays - t) @ R  # R^T (x - t)
+    apex = -R.T @ t
+    pts = np.vstack([apex, world])
+    segs = [(0, 1), (0, 2), (0, 3), (0, 4), (1, 2), (2, 3), (3, 4), (4, 1)]
+    return pts, segs
+
+
+def _scene_scale(data: ReportData) -> float:
+    c = np.concatenate([cam.centers() for cam in data.cameras]) if data.cameras else np.zeros((1, 3))
+    ext = np.ptp(c, axis=0).max() if len(c) > 1 else 1.0
+    return float(ext) if ext > 0 else 1.0
+
+
+def _camera_mesh(pv, cam: CameraView, depth: float):
+    F = cam.cam_from_world.shape[0]
+    idx = [0] if F == 1 else np.unique(np.linspace(0, F - 1, FRUSTUMS_PER_MOVING_CAMERA).round().astype(int))
+    pts_all, lines = [], []
+    for j, f in enumerate(idx):
+        K = cam.K if cam.K.ndim == 2 else cam.K[min(f, len(cam.K) - 1)]
+        pts, segs = _frustum_lines(K, cam.cam_from_world[f], cam.width, cam.height, depth)
+        base = 5 * j
+        pts_all.append(pts)
+        for s0, s1 in segs:
+            lines += [2, base + s0, base + s1]
+    return pv.PolyData(np.vstack(pts_all), lines=np.array(lines))
+
+
+def render_scene(data: ReportData, path: Path, size: tuple[int, int]) -> Path:
+    import pyvista as pv
+
+    from .figures import video_colors
+
+    colors = video_colors(data.names or [c.name for c in data.cameras])
+    scale = _scene_scale(data)
+    pl = pv.Plotter(off_screen=True, window_size=list(size))
+    pl.set_background("white")
+    centers_all = []
+    for cam in data.cameras:
+        col = colors.get(cam.name, (0.3, 0.3, 0.3))
+        pl.add_mesh(_camera_mesh(pv, cam, 0.08 * scale), color=col, line_width=3)
+        C = cam.centers()
+        centers_all.append(C)
+        if cam.is_moving:
+            pl.add_mesh(pv.lines_from_points(C), color=col, line_width=5)
+        pl.add_point_labels(C.mean(0, keepdims=True) + np.array([0, 0, 0.07 * scale]), [cam.name], font_size=22,
+                            text_color=col, shape=None, show_points=False, bold=True,
+                            always_visible=True)
+    if data.static_points is not None and len(data.static_points):
+        cloud = pv.PolyData(np.asarray(data.static_points, float))
+        if data.static_colors is not None:
+            cloud["rgb"] = np.asarray(data.static_colors, np.uint8)
+            pl.add_mesh(cloud, scalars="rgb", rgb=True, point_size=3, render_points_as_spheres=False)
+        else:
+            pl.add_mesh(cloud, color="#888888", point_size=3)
+    if data.trajectories:
+        pts = np.concatenate([t.points_world for t in data.trajectories])
+        times = np.concatenate([t.time_s for t in data.trajectories])
+        lines, base = [], 0
+        for t in data.trajectories:
+            n = len(t.points_world)
+            lines += [n] + list(range(base, base + n))
+            base += n
+        poly = pv.PolyData(pts, lines=np.array(lines))
+        poly["global time [s]"] = times
+        pl.add_mesh(poly, scalars="global time [s]", cmap="viridis", line_width=2.5,
+                    scalar_bar_args=dict(title="global time [s]", title_font_size=22,
+                                         label_font_size=18, color="black", vertical=True,
+                                         position_x=0.88, position_y=0.25, width=0.06, height=0.5,
+                                         fmt="%.1f"))
+    # an oblique view from above, fitted to everything drawn
+    pl.view_vector((0.55, -0.75, 0.75), viewup=(0.0, 0.0, 1.0))
+    pl.reset_camera()
+    pl.camera.zoom(1.3)
+    n_traj = len(data.trajectories)
+    title = f"3D scene: {len(data.cameras)} cameras (moving ones with their path), " \
+            f"{n_traj} triangulated trajectories coloured by time"
+    if data.static_points is None:
+        title += "; no static reconstruction in the input"
+    pl.add_text(title, position="upper_left", font_size=11, color="black")
+    pl.screenshot(str(path))
+    pl.close()
+    return path
