@@ -1,5 +1,10 @@
-"""Sinks that stages report to: NullSink (nothing) and, with rerun, RerunSink (.rrd file)."""
+"""Sinks that stages report to: NullSink (nothing) and, with rerun, RerunSink (.rrd file).
 
+RerunSink lives in record.rerun_sink (imported on demand: it pulls in rerun); read_recording in
+record.read reads a recording back.
+"""
+
+from .options import RecordOptions
 from .sink import NullSink, Sink
 
-__all__ = ["NullSink", "Sink"]
+__all__ = ["NullSink", "RecordOptions", "Sink"]

@@ -46,8 +46,23 @@ class Sink:
     def stage_event(self, stage: str, message: str, **numbers: Any) -> None:
         """A readable note from any stage (e.g. a camera that could not be registered)."""
 
+    def run_summary(self, result_dict: dict[str, Any]) -> None:
+        """The complete result dictionary of a run (result.json content, with config and inputs)."""
+
     def close(self) -> None:
         """Flush and finish the recording."""
+
+    def abort(self) -> None:
+        """Stop after a failure: leave nothing that looks like a complete recording."""
+
+    def __enter__(self) -> "Sink":
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()
 
 
 class NullSink(Sink):

@@ -1,0 +1,704 @@
+"""RerunSink: every stage's hooks written to an explicit rr.RecordingStream saved to an .rrd file.
+
+The entity tree is documented in README.md ("Recordings"). The file is written under a hidden
+temporary name next to the target and renamed on close(), so a file with the final name is always
+complete; abort() (or leaving a `with` block by an exception) deletes the temporary file.
+
+Frames, masks and tracks are kept (JPEG-compressed) until the offsets are known, then logged once
+with both the per-video `frame` timeline and the global `time` timeline (seconds, after sync).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import os
+import re
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import rerun as rr
+from tqdm import tqdm
+
+from .. import __version__
+from ..io.result import result_to_dict
+from ..types import CameraTrack, CueBundle, PairLandscape, SyncResult, VideoInfo
+from .derived import epipolar_sweep, triangulate_pair
+from .options import RecordOptions
+from .sink import Sink
+
+log = logging.getLogger(__name__)
+
+RECORDING_FORMAT = "vs-inspect-recording"
+RECORDING_VERSION = 1
+META_RESULT = "meta/result_json"
+META_RECORDING = "meta/recording_json"
+META_CONFIG = "meta/config_json"
+
+# colours (RGB): accepted / rejected / truth / instances
+GREEN, RED, GREY, BLUE, ORANGE = (40, 180, 80), (220, 50, 50), (150, 150, 150), (60, 120, 230), (240, 150, 30)
+PALETTE = np.array([(230, 25, 75), (60, 180, 75), (255, 225, 25), (0, 130, 200), (245, 130, 48),
+                    (145, 30, 180), (70, 240, 240), (240, 50, 230), (210, 245, 60), (250, 190, 212),
+                    (0, 128, 128), (220, 190, 255), (170, 110, 40), (128, 0, 0)], dtype=np.uint8)
+H264_LIKE = {"h264", "av1"}
+
+
+def entity_name(name: str) -> str:
+    """A video name as one entity-path part (letters, digits, - and _ kept; others become _)."""
+    return re.sub(r"[^A-Za-z0-9_\-]", "_", name) or "_"
+
+
+def pair_path(a: str, b: str) -> str:
+    return f"pairs/{entity_name(a)}__{entity_name(b)}"
+
+
+def instance_colors(instance: np.ndarray) -> np.ndarray:
+    inst = np.asarray(instance, dtype=np.int64)
+    out = PALETTE[np.mod(inst, len(PALETTE))].copy()
+    out[inst < 0] = GREY
+    return out
+
+
+def _num(x: Any) -> float | None:
+    return None if x is None or not math.isfinite(float(x)) else float(x)
+
+
+def _fmt(x: Any, unit: str = "", prec: int = 4) -> str:
+    v = _num(x)
+    return "n/a" if v is None else f"{v:+.{prec}f}{unit}"
+
+
+def _video_codec(path: str) -> str | None:
+    try:
+        import av
+        with av.open(str(path)) as c:
+            return c.streams.video[0].codec_context.name
+    except Exception:  # noqa: BLE001 - any failure: not embeddable, fall back to JPEG frames
+        return None
+
+
+class _VideoBuffer:
+    """What one video contributed before the offsets were known."""
+
+    def __init__(self, info: VideoInfo, path: str | None):
+        self.info = info
+        self.path = path
+        self.asset = False  # frames come from an rr.AssetVideo
+        self.asset_timestamps_ns: np.ndarray | None = None
+        self.jpeg: dict[int, bytes] = {}
+        self.image_size: tuple[int, int] | None = None  # (w, h) of logged images
+        self.masks: dict[int, np.ndarray] = {}
+
+
+class RerunSink(Sink):
+    """Writes a vs_inspect recording. Use as a context manager or call close()/abort()."""
+
+    def __init__(self, path: str | os.PathLike, application_id: str = "vs_inspect",
+                 options: RecordOptions | None = None, recording_id: str | None = None,
+                 progress: bool = True):
+        self.path = Path(path)
+        self.options = options or RecordOptions()
+        self.progress = progress
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".partial", dir=self.path.parent)
+        os.close(fd)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; the finished file gets normal rights
+        self._tmp = Path(tmp)
+        self._t0 = time.perf_counter()
+        self.rec = rr.RecordingStream(application_id, recording_id=recording_id or f"vs_inspect-{self.path.stem}",
+                                      send_properties=True)
+        self.rec.save(str(self._tmp))
+        self._closed = False
+        self._videos: dict[str, _VideoBuffer] = {}
+        self._world_cameras: dict[str, CameraTrack] | None = None
+        self._bundle: CueBundle | None = None
+        self._result: SyncResult | None = None
+        self._summary: dict[str, Any] | None = None
+        self._config: dict[str, Any] | None = None
+        self._flushed_videos = False
+        self._pairs_logged: list[str] = []
+        self._events = 0
+        self.stats: dict[str, float] = {}
+        self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+
+    # ---- context manager ----
+
+    def __enter__(self) -> "RerunSink":
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()
+
+    # ---- Stage 0 hooks ----
+
+    def video(self, info: VideoInfo, path: str | None) -> None:
+        buf = self._videos.setdefault(info.name, _VideoBuffer(info, path))
+        buf.info, buf.path = info, path
+        o = self.options
+        if o.frames and o.video_assets and path and Path(path).is_file() \
+                and _video_codec(path) in H264_LIKE:
+            try:
+                asset = rr.AssetVideo(path=path)
+                ts = np.sort(asset.read_frame_timestamps_nanos())
+                if len(ts) >= info.num_frames:
+                    self.rec.log(f"videos/{entity_name(info.name)}/video", asset, static=True)
+                    buf.asset, buf.asset_timestamps_ns = True, ts[: info.num_frames]
+                    buf.image_size = (info.width, info.height)
+            except Exception as exc:  # noqa: BLE001 - rerun could not parse it: use JPEG frames
+                log.info("%s: not embedded as a video asset (%s); logging JPEG frames", info.name, exc)
+
+    def video_frame(self, name: str, frame_index: int, image_bgr: np.ndarray) -> None:
+        import cv2
+        buf = self._videos.get(name)
+        if not self.options.frames or buf is None or buf.asset:
+            return
+        img = np.asarray(image_bgr)
+        h, w = img.shape[:2]
+        mw = self.options.max_image_width_px
+        if mw and w > mw:
+            img = cv2.resize(img, (mw, max(1, round(h * mw / w))), interpolation=cv2.INTER_AREA)
+        ok, data = cv2.imencode(".jpg", img, [cv2.IMWRITE_JPEG_QUALITY, int(self.options.jpeg_quality)])
+        if ok:
+            buf.jpeg[int(frame_index)] = data.tobytes()
+            buf.image_size = (img.shape[1], img.shape[0])
+
+    def dynamic_mask(self, name: str, frame_index: int, instances: np.ndarray) -> None:
+        import cv2
+        buf = self._videos.get(name)
+        if not self.options.masks or buf is None:
+            return
+        m = np.asarray(instances)
+        h, w = m.shape[:2]
+        mw = self.options.max_mask_width_px
+        m = m.astype(np.uint16 if m.max(initial=0) > 255 else np.uint8)
+        if mw and w > mw:
+            m = cv2.resize(m, (mw, max(1, round(h * mw / w))), interpolation=cv2.INTER_NEAREST)
+        buf.masks[int(frame_index)] = m
+
+    def cameras(self, cameras: dict[str, CameraTrack], points_world: np.ndarray | None,
+                colors: np.ndarray | None) -> None:
+        self._world_cameras = dict(cameras)
+        if points_world is not None and len(points_world):
+            pts = np.asarray(points_world, dtype=np.float32)
+            cols = np.asarray(colors, dtype=np.uint8) if colors is not None else None
+            self.rec.log("world/points", rr.Points3D(pts, colors=cols, radii=rr.Radius.ui_points(1.5)),
+                         static=True)
+
+    # ---- Stage 1 and 2 hooks ----
+
+    def bundle(self, bundle: CueBundle) -> None:
+        self._bundle = bundle
+        for v in bundle.videos:
+            buf = self._videos.setdefault(v.name, _VideoBuffer(v, None))
+            buf.info = v
+        self.rec.log("meta/videos_json", rr.TextDocument(json.dumps({
+            "videos": [{"name": v.name, "entity": entity_name(v.name), "width": v.width,
+                        "height": v.height, "num_frames": v.num_frames, "fps": v.fps,
+                        "duration_s": v.duration_s} for v in bundle.videos],
+            "gt_offsets_s": bundle.gt_offsets_s}), media_type="text/plain"), static=True)
+        self._log_cameras_static(bundle)
+
+    def pair_landscape(self, landscape: PairLandscape, bundle: CueBundle, energy_fn: Any) -> None:
+        self._log_landscape(landscape, bundle)
+        self._log_decision(landscape, bundle)
+        if self.options.epipolar_offsets:
+            self._log_epipolar(landscape, bundle)
+
+    def sync_result(self, result: SyncResult, bundle: CueBundle) -> None:
+        self._result, self._bundle = result, bundle
+        self._log_graph(result)
+        self._log_solve(result)
+        self._log_offsets(result, bundle)
+        self._flush_videos(result.offsets_s)
+        if self.options.trajectories:
+            self._log_trajectories(result, bundle)
+
+    def stage_event(self, stage: str, message: str, **numbers: Any) -> None:
+        self._events += 1
+        extra = ", ".join(f"{k}={v}" for k, v in numbers.items())
+        self.rec.reset_time()
+        self.rec.set_time("event", sequence=self._events)
+        self.rec.log(f"log/{entity_name(stage)}", rr.TextLog(f"{message}" + (f" ({extra})" if extra else ""),
+                                                             level=rr.TextLogLevel.INFO))
+        self.rec.reset_time()
+
+    def run_summary(self, result_dict: dict[str, Any]) -> None:
+        self._summary = result_dict
+        if "config" in result_dict:
+            self._config = result_dict["config"]
+
+    # ---- finishing ----
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        try:
+            if not self._flushed_videos:
+                self._flush_videos({})
+            data = self._summary
+            if data is None and self._result is not None:
+                data = result_to_dict(self._result, {"gt_offsets_s": self._bundle.gt_offsets_s}
+                                      if self._bundle is not None and self._bundle.gt_offsets_s else None)
+            if data is not None:
+                self.rec.log(META_RESULT, rr.TextDocument(json.dumps(data, default=_json_default),
+                                                          media_type="text/plain"), static=True)
+            if self._config is not None:
+                self.rec.log(META_CONFIG, rr.TextDocument(json.dumps(self._config, default=_json_default),
+                                                          media_type="text/plain"), static=True)
+            from dataclasses import asdict
+            self.rec.log(META_RECORDING, rr.TextDocument(json.dumps({
+                "format": RECORDING_FORMAT, "version": RECORDING_VERSION,
+                "vs_inspect_version": __version__, "rerun_version": rr.__version__,
+                "has_result": data is not None, "options": asdict(self.options),
+                "pairs": self._pairs_logged}), media_type="text/plain"), static=True)
+            self.rec.send_blueprint(self._blueprint(), make_active=True, make_default=True)
+            self.rec.flush()
+            self.rec.disconnect()
+            os.replace(self._tmp, self.path)
+            self._closed = True
+            self.stats = {"write_s": time.perf_counter() - self._t0,
+                          "size_mb": self.path.stat().st_size / 1e6}
+            log.info("wrote %s (%.1f MB, %.1f s)", self.path, self.stats["size_mb"], self.stats["write_s"])
+        except BaseException:
+            self.abort()
+            raise
+
+    def abort(self) -> None:
+        """Stop writing and delete the temporary file; nothing that looks complete is left."""
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            self.rec.disconnect()
+        finally:
+            self._tmp.unlink(missing_ok=True)
+
+    # ---- internals: cameras ----
+
+    def _scene_scale(self, cams: dict[str, CameraTrack]) -> float:
+        C = np.concatenate([c.centers() for c in cams.values()])
+        C = C[np.isfinite(C).all(1)]
+        if len(C) < 2:
+            return 1.0
+        d = np.linalg.norm(C - np.median(C, axis=0), axis=1)
+        return float(np.median(d)) or 1.0
+
+    def _log_cameras_static(self, bundle: CueBundle) -> None:
+        cams = self._world_cameras or bundle.cameras
+        dist = 0.08 * self._scene_scale(cams)
+        for v in bundle.videos:
+            cam = cams.get(v.name)
+            if cam is None:
+                continue
+            base = f"world/cameras/{entity_name(v.name)}"
+            K0 = cam.K if cam.K.ndim == 2 else cam.K[0]
+            self.rec.log(base, rr.Pinhole(image_from_camera=K0, resolution=[v.width, v.height],
+                                          camera_xyz=rr.ViewCoordinates.RDF, image_plane_distance=dist),
+                         static=True)
+            if not cam.is_moving:
+                T = cam.cam_from_world
+                self.rec.log(base, rr.Transform3D(translation=T[:3, 3], mat3x3=T[:3, :3],
+                                                  relation=rr.TransformRelation.ChildFromParent), static=True)
+            else:
+                C = cam.centers()
+                self.rec.log(f"world/camera_paths/{entity_name(v.name)}",
+                             rr.LineStrips3D([C.astype(np.float32)], colors=[ORANGE]), static=True)
+
+    def _log_moving_cameras(self, offsets: dict[str, float | None]) -> None:
+        cams = self._world_cameras or (self._bundle.cameras if self._bundle else {})
+        for name, buf in self._videos.items():
+            cam = cams.get(name)
+            if cam is None or not cam.is_moving:
+                continue
+            n = cam.num_pose_frames
+            frames = np.arange(n)
+            T = cam.pose_at(frames)
+            idx = self._indexes(buf.info, frames, offsets.get(name))
+            self.rec.send_columns(f"world/cameras/{entity_name(name)}", idx,
+                                  rr.Transform3D.columns(translation=T[:, :3, 3], mat3x3=T[:, :3, :3],
+                                                         relation=[rr.TransformRelation.ChildFromParent] * n))
+            if cam.K.ndim == 3:
+                self.rec.send_columns(f"world/cameras/{entity_name(name)}", idx,
+                                      rr.Pinhole.columns(image_from_camera=cam.K))
+
+    # ---- internals: videos ----
+
+    @staticmethod
+    def _indexes(info: VideoInfo, frames: np.ndarray, offset_s: float | None) -> list:
+        idx = [rr.TimeColumn("frame", sequence=np.asarray(frames, dtype=np.int64))]
+        if offset_s is not None and math.isfinite(offset_s):
+            idx.append(rr.TimeColumn("time", duration=info.timestamps_s[frames] + offset_s))
+        return idx
+
+    def _flush_videos(self, offsets: dict[str, float | None]) -> None:
+        self._flushed_videos = True
+        o = self.options
+        total = sum(len(b.jpeg) + len(b.masks) for b in self._videos.values())
+        bar = tqdm(total=total, desc="recording frames", unit="frame", leave=False,
+                   disable=not self.progress or total < 50)
+        for name, buf in self._videos.items():
+            info, ent = buf.info, f"videos/{entity_name(name)}"
+            off = offsets.get(name)
+            self.rec.log(ent, rr.TextDocument(f"{name}: {info.width}x{info.height}, {info.num_frames} frames, "
+                                              f"{info.duration_s:.2f} s, offset_s = {_fmt(off)}"), static=True)
+            # image border in full-resolution pixels, so a view without frames still has extent
+            W, H = info.width, info.height
+            self.rec.log(f"{ent}/border", rr.LineStrips2D([[[0, 0], [W, 0], [W, H], [0, H], [0, 0]]],
+                                                          colors=[GREY]), static=True)
+            if buf.asset and buf.asset_timestamps_ns is not None:
+                frames = np.arange(len(buf.asset_timestamps_ns))
+                self.rec.send_columns(f"{ent}/video", self._indexes(info, frames, off),
+                                      rr.VideoFrameReference.columns_nanos(buf.asset_timestamps_ns))
+            if buf.jpeg:
+                w, h = buf.image_size
+                self.rec.log(f"{ent}/image", rr.Transform3D(scale=[W / w, H / h, 1.0]), static=True)
+                frames = np.array(sorted(buf.jpeg), dtype=np.int64)
+                for s in range(0, len(frames), 64):
+                    fr = frames[s:s + 64]
+                    self.rec.send_columns(f"{ent}/image", self._indexes(info, fr, off),
+                                          rr.EncodedImage.columns(blob=[buf.jpeg[int(k)] for k in fr],
+                                                                  media_type=["image/jpeg"] * len(fr)))
+                    bar.update(len(fr))
+            if buf.masks:
+                frames = np.array(sorted(buf.masks), dtype=np.int64)
+                mh, mw = buf.masks[int(frames[0])].shape[:2]
+                self.rec.log(f"{ent}/mask", rr.Transform3D(scale=[W / mw, H / mh, 1.0]), static=True)
+                for k in frames:
+                    self.rec.reset_time()
+                    self.rec.set_time("frame", sequence=int(k))
+                    if off is not None and math.isfinite(off):
+                        self.rec.set_time("time", duration=float(info.timestamps_s[k] + off))
+                    self.rec.log(f"{ent}/mask", rr.SegmentationImage(buf.masks[int(k)], opacity=0.4))
+                    bar.update(1)
+                self.rec.reset_time()
+            self._log_tracks(name, info, off)
+            buf.jpeg.clear()
+            buf.masks.clear()
+        bar.close()
+        self._log_moving_cameras(offsets)
+
+    def _log_tracks(self, name: str, info: VideoInfo, off: float | None) -> None:
+        n_max = self.options.max_tracks_per_video
+        if self._bundle is None or n_max == 0 or name not in self._bundle.tracks:
+            return
+        tr = self._bundle.tracks[name]
+        xy = tr.xy
+        if xy.shape[0] == 0:
+            return
+        rows = np.arange(xy.shape[0])
+        if n_max > 0 and len(rows) > n_max:
+            used = np.zeros(len(rows), bool)
+            for (a, b), tp in self._bundle.pairs.items():
+                if a == name:
+                    used[tp.index[:, 0]] = True
+                elif b == name:
+                    used[tp.index[:, 1]] = True
+            rng = np.random.default_rng(0)
+            pri = np.flatnonzero(used)
+            rest = np.flatnonzero(~used)
+            pick = rng.permutation(pri)[:n_max]
+            if len(pick) < n_max:
+                pick = np.concatenate([pick, rng.permutation(rest)[: n_max - len(pick)]])
+            rows = np.sort(pick)
+        sub = xy[rows]  # (N,T,2)
+        seen = np.isfinite(sub[..., 0]) & np.isfinite(sub[..., 1])  # (N,T)
+        frames = np.flatnonzero(seen.any(0))
+        if len(frames) == 0:
+            return
+        inst = tr.instance[rows] if tr.instance is not None else np.full(len(rows), -1)
+        cols = instance_colors(inst)
+        pos, col, lengths = [], [], []
+        for k in frames:
+            m = seen[:, k]
+            pos.append(sub[m, k])
+            col.append(cols[m])
+            lengths.append(int(m.sum()))
+        self.rec.send_columns(
+            f"videos/{entity_name(name)}/tracks", self._indexes(info, frames, off),
+            rr.Points2D.columns(positions=np.concatenate(pos).astype(np.float32),
+                                colors=np.concatenate(col)).partition(lengths))
+        self.rec.log(f"videos/{entity_name(name)}/tracks", rr.Points2D.from_fields(radii=[2.0]), static=True)
+
+    # ---- internals: pairs ----
+
+    def _log_landscape(self, land: PairLandscape, bundle: CueBundle) -> None:
+        base = f"{pair_path(land.a, land.b)}/landscape"
+        self._pairs_logged.append(f"{land.a}__{land.b}")
+        ms = np.round(np.asarray(land.offsets_s) * 1000.0).astype(np.int64)
+        e = np.asarray(land.energy, dtype=np.float64)
+        ok = np.isfinite(e)
+        color = GREEN if land.decision.accepted else RED
+        self.rec.log(f"{base}/energy", rr.SeriesLines(colors=[color], names=["E(Δ)"], widths=[1.5]), static=True)
+        if ok.any():
+            self.rec.send_columns(f"{base}/energy", [rr.TimeColumn("offset_ms", sequence=ms[ok])],
+                                  rr.Scalars.columns(scalars=e[ok]))
+        mi = np.asarray(land.minima_idx, dtype=np.int64)
+        self.rec.log(f"{base}/minima", rr.SeriesPoints(colors=[BLUE], names=["minima"], markers=["circle"],
+                                                       marker_sizes=[4.0]), static=True)
+        if len(mi):
+            self.rec.send_columns(f"{base}/minima", [rr.TimeColumn("offset_ms", sequence=ms[mi])],
+                                  rr.Scalars.columns(scalars=e[mi]))
+        if math.isfinite(land.best_offset_s) and math.isfinite(land.best_energy):
+            self.rec.log(f"{base}/chosen", rr.SeriesPoints(colors=[color], names=["chosen"],
+                                                           markers=["diamond"], marker_sizes=[7.0]), static=True)
+            self.rec.send_columns(f"{base}/chosen", [rr.TimeColumn("offset_ms",
+                                                                   sequence=[round(land.best_offset_s * 1000)])],
+                                  rr.Scalars.columns(scalars=[land.best_energy]))
+        gt = bundle.gt_offsets_s
+        if gt and land.a in gt and land.b in gt and ok.any():
+            true = gt[land.b] - gt[land.a]
+            e_true = float(np.interp(true, np.asarray(land.offsets_s)[ok], e[ok]))
+            self.rec.log(f"{base}/truth", rr.SeriesPoints(colors=[ORANGE], names=["true Δ"],
+                                                          markers=["cross"], marker_sizes=[7.0]), static=True)
+            self.rec.send_columns(f"{base}/truth", [rr.TimeColumn("offset_ms", sequence=[round(true * 1000)])],
+                                  rr.Scalars.columns(scalars=[e_true]))
+
+    def _log_decision(self, land: PairLandscape, bundle: CueBundle) -> None:
+        d = land.decision
+        verdict = "ACCEPTED" if d.accepted else "REJECTED"
+        gt = bundle.gt_offsets_s
+        true = (gt[land.b] - gt[land.a]) if gt and land.a in gt and land.b in gt else None
+        minima = ", ".join(f"{land.offsets_s[i]:+.4f} s (E={land.energy[i]:.4g})" for i in land.minima_idx[:6])
+        rows = [("chosen Δ_ab", f"{_fmt(land.best_offset_s, ' s')} ± {_fmt(land.uncertainty_s, ' s')}"),
+                ("true Δ_ab", _fmt(true, " s") if true is not None else "unknown"),
+                ("best energy", f"{land.best_energy:.6g}"),
+                ("contrast", f"{d.contrast:.3f}"),
+                ("2nd minimum depth ratio", f"{d.second_depth_ratio:.3f}"),
+                ("significant minima", str(d.num_minima)),
+                ("Pareto minima", str(d.num_pareto_minima)),
+                ("at search range edge", str(d.at_range_edge)),
+                ("track pairs", str(land.num_track_pairs)),
+                ("residual", land.residual),
+                ("robust scale", f"{land.robust_scale:.4g}")]
+        md = (f"## {land.a} → {land.b}: {verdict}\n\n**reason:** {d.reason}\n\n| | |\n|---|---|\n"
+              + "\n".join(f"| {k} | {v} |" for k, v in rows)
+              + f"\n\n**minima (best first):** {minima or 'none'}\n")
+        self.rec.log(f"{pair_path(land.a, land.b)}/decision", rr.TextDocument(md, media_type=rr.MediaType.MARKDOWN),
+                     static=True)
+        self.rec.reset_time()
+        self._events += 1
+        self.rec.set_time("event", sequence=self._events)
+        self.rec.log("log/decisions", rr.TextLog(
+            f"{land.a}__{land.b} {verdict.lower()} Δ={_fmt(land.best_offset_s, ' s')}: {d.reason}",
+            level=rr.TextLogLevel.INFO if d.accepted else rr.TextLogLevel.WARN))
+        self.rec.reset_time()
+
+    def _sweep_offsets(self, land: PairLandscape) -> np.ndarray:
+        off = np.asarray(land.offsets_s)
+        n = self.options.epipolar_offsets
+        if n < 0 or len(off) <= n:
+            return off
+        pick = set(np.linspace(0, len(off) - 1, max(2, n // 2)).round().astype(int).tolist())
+        pick |= {int(i) for i in land.minima_idx[:5]}
+        if math.isfinite(land.best_offset_s):
+            c = int(np.argmin(np.abs(off - land.best_offset_s)))
+            half = max(1, (n - len(pick)) // 2)
+            pick |= set(range(max(0, c - half), min(len(off), c + half + 1)))
+        out = off[sorted(pick)]
+        if math.isfinite(land.best_offset_s):
+            out = np.unique(np.concatenate([out, [land.best_offset_s]]))
+        return out
+
+    def _log_epipolar(self, land: PairLandscape, bundle: CueBundle) -> None:
+        offsets = self._sweep_offsets(land)
+        sw = epipolar_sweep(bundle, land.a, land.b, offsets, land.best_offset_s, self.options.epipolar_lines)
+        if sw is None:
+            return
+        base = f"{pair_path(land.a, land.b)}/epipolar"
+        va = bundle.video(land.a)
+        W, H = va.width, va.height
+        self.rec.log(base, rr.TextDocument(
+            f"frame {sw.frame_a} of {land.a} (τ = {sw.time_a_s:.3f} s). Lines: epipolar lines of "
+            f"{land.b}'s paired points at τ − Δ; points: {land.a}'s points. Scrub `offset_ms`: lines pass "
+            f"through the points only near the right Δ (chosen {_fmt(land.best_offset_s, ' s')})."),
+            static=True)
+        self.rec.log(f"{base}/border", rr.LineStrips2D([[[0, 0], [W, 0], [W, H], [0, H], [0, 0]]],
+                                                       colors=[GREY]), static=True)
+        buf = self._videos.get(land.a)
+        if buf is not None and sw.frame_a in buf.jpeg:
+            w, h = buf.image_size
+            self.rec.log(f"{base}/image", rr.Transform3D(scale=[W / w, H / h, 1.0]), static=True)
+            self.rec.log(f"{base}/image", rr.EncodedImage(contents=buf.jpeg[sw.frame_a],
+                                                          media_type="image/jpeg"), static=True)
+        elif buf is not None and buf.asset and buf.asset_timestamps_ns is not None:
+            self.rec.log(f"{base}/image", rr.VideoFrameReference(
+                nanoseconds=int(buf.asset_timestamps_ns[sw.frame_a]),
+                video_reference=f"videos/{entity_name(land.a)}/video"), static=True)
+        ms = np.round(sw.offsets_s * 1000).astype(np.int64)
+        cols_inst = instance_colors(sw.instance)
+        lines_pos, lines_col, line_len, pt_col = [], [], [], []
+        med = np.full(len(ms), np.nan)
+        for d in range(len(ms)):
+            seg = sw.segments[d]
+            ok = np.isfinite(seg).all((1, 2))
+            dist = sw.distance_px[d]
+            good = np.where(dist < 3.0, 1, 0)
+            c = np.where(good[:, None] == 1, np.array(GREEN), np.array(RED)).astype(np.uint8)
+            c[~np.isfinite(dist)] = GREY
+            lines_pos.append(seg[ok].reshape(-1, 2))
+            lines_col.append(cols_inst[ok])
+            line_len.append(int(ok.sum()))
+            pt_col.append(c)
+            if np.isfinite(dist).any():
+                med[d] = float(np.nanmedian(dist))
+        # Each row: a list of 2-point strips -> partition LineStrips2D by strip count per offset.
+        strips = [s for d in range(len(ms)) for s in lines_pos[d].reshape(-1, 2, 2)]
+        tcol = [rr.TimeColumn("offset_ms", sequence=ms)]
+        if strips:
+            self.rec.send_columns(f"{base}/lines", tcol,
+                                  rr.LineStrips2D.columns(strips=strips,
+                                                          colors=np.concatenate(lines_col)).partition(line_len))
+        self.rec.send_columns(f"{base}/points_a", tcol,
+                              rr.Points2D.columns(positions=np.tile(sw.points_a.astype(np.float32), (len(ms), 1)),
+                                                  colors=np.concatenate(pt_col)).partition([len(sw.points_a)] * len(ms)))
+        self.rec.log(f"{base}/points_a", rr.Points2D.from_fields(radii=[4.0]), static=True)
+        okm = np.isfinite(med)
+        if okm.any():
+            self.rec.log(f"{base}/median_distance_px", rr.SeriesLines(names=["median point-line distance (px)"],
+                                                                      colors=[BLUE]), static=True)
+            self.rec.send_columns(f"{base}/median_distance_px", [rr.TimeColumn("offset_ms", sequence=ms[okm])],
+                                  rr.Scalars.columns(scalars=med[okm]))
+
+    # ---- internals: Stage 2 ----
+
+    def _log_graph(self, result: SyncResult) -> None:
+        names = list(result.offsets_s)
+        n = len(names)
+        ang = 2 * np.pi * np.arange(n) / max(n, 1)
+        pos = {v: (300 * math.cos(a), 300 * math.sin(a)) for v, a in zip(names, ang)}
+        ids, labels, cols, radii, P = [], [], [], [], []
+        for v in names:
+            off = result.offsets_s[v]
+            ids.append(v)
+            labels.append(f"{v}\n{_fmt(off, ' s')}" if off is not None else f"{v}\nunresolved")
+            cols.append(BLUE if off is not None else GREY)
+            radii.append(18.0)
+            P.append(pos[v])
+        edges = []
+        for p in result.pairs:
+            mid = f"{p.a}__{p.b}"
+            acc = p.decision.accepted
+            ids.append(mid)
+            labels.append(f"Δ={_fmt(p.best_offset_s, ' s', 3)}" if acc else f"✗ {p.decision.reason[:40]}")
+            cols.append(GREEN if acc else RED)
+            radii.append(5.0)
+            pa, pb = pos.get(p.a, (0, 0)), pos.get(p.b, (0, 0))
+            P.append(((pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2))
+            edges += [(p.a, mid), (mid, p.b)]
+        self.rec.log("sync/graph", rr.GraphNodes(ids, labels=labels, colors=cols, radii=radii, positions=P,
+                                                 show_labels=True), static=True)
+        self.rec.log("sync/graph", rr.GraphEdges(edges, graph_type=rr.GraphType.Undirected), static=True)
+
+    def _log_solve(self, result: SyncResult) -> None:
+        if not result.iterations:
+            return
+        its = np.arange(len(result.iterations), dtype=np.int64)
+        R = np.array([it.residual_s for it in result.iterations], dtype=float) * 1000.0  # (I,E)
+        Wt = np.array([it.weight for it in result.iterations], dtype=float)
+        for e, (a, b) in enumerate(result.solve_pairs):
+            key = f"{entity_name(a)}__{entity_name(b)}"
+            tcol = [rr.TimeColumn("iteration", sequence=its)]
+            self.rec.send_columns(f"sync/solve/residual_ms/{key}", tcol, rr.Scalars.columns(scalars=R[:, e]))
+            self.rec.send_columns(f"sync/solve/weight/{key}", tcol, rr.Scalars.columns(scalars=Wt[:, e]))
+
+    def _log_offsets(self, result: SyncResult, bundle: CueBundle) -> None:
+        gt = bundle.gt_offsets_s
+        rows = []
+        ref_true = gt.get(result.reference, 0.0) if gt else 0.0
+        for v, off in result.offsets_s.items():
+            u = result.uncertainty_s.get(v)
+            t = (gt[v] - ref_true) if gt and v in gt else None
+            err = f"{1000 * abs(off - t):.1f}" if off is not None and t is not None else "-"
+            rows.append(f"| {v} | {_fmt(off)} | {_fmt(u, '', 4) if u is not None else '-'} | "
+                        f"{_fmt(t) if t is not None else '-'} | {err} | "
+                        f"{result.unresolved_reason.get(v, '') if off is None else ''} |")
+        md = (f"## Offsets (reference {result.reference}, solver {result.solver})\n\n"
+              "| video | offset_s | ± s | true_s | error_ms | note |\n|---|---|---|---|---|---|\n" + "\n".join(rows))
+        self.rec.log("sync/offsets", rr.TextDocument(md, media_type=rr.MediaType.MARKDOWN), static=True)
+
+    def _log_trajectories(self, result: SyncResult, bundle: CueBundle) -> None:
+        o = self.options
+        acc = [p for p in result.pairs if p.decision.accepted
+               and result.offsets_s.get(p.a) is not None and result.offsets_s.get(p.b) is not None]
+        acc.sort(key=lambda p: -p.decision.contrast)
+        for p in tqdm(acc[: o.max_trajectory_video_pairs], desc="triangulating", unit="pair",
+                      leave=False, disable=not self.progress):
+            tj = triangulate_pair(bundle, p.a, p.b, result.offsets_s[p.a], result.offsets_s[p.b],
+                                  o.max_trajectory_pairs)
+            if tj is None:
+                continue
+            X = tj.points_world  # (P,T,3)
+            ok = np.isfinite(X).all(-1)
+            if not ok.any():
+                continue
+            key = f"world/trajectories/{entity_name(p.a)}__{entity_name(p.b)}"
+            strips, scol = [], []
+            cols = instance_colors(tj.instance)
+            for i in range(X.shape[0]):
+                # split each track at gaps into contiguous runs
+                m = ok[i]
+                edges = np.flatnonzero(np.diff(np.concatenate([[0], m.astype(int), [0]])))
+                for s, e in zip(edges[::2], edges[1::2]):
+                    if e - s >= 2:
+                        strips.append(X[i, s:e].astype(np.float32))
+                        scol.append(cols[i])
+            if strips:
+                self.rec.log(key, rr.LineStrips3D(strips, colors=np.array(scol), radii=rr.Radius.ui_points(1.0)),
+                             static=True)
+            frames = np.flatnonzero(ok.any(0))
+            lengths = [int(ok[:, k].sum()) for k in frames]
+            pos = np.concatenate([X[ok[:, k], k] for k in frames]).astype(np.float32)
+            pc = np.concatenate([cols[ok[:, k]] for k in frames])
+            self.rec.send_columns(f"{key}/points", [rr.TimeColumn("time", duration=tj.time_s[frames])],
+                                  rr.Points3D.columns(positions=pos, colors=pc).partition(lengths))
+            self.rec.log(f"{key}/points", rr.Points3D.from_fields(radii=[rr.Radius.ui_points(4.0)]), static=True)
+
+    # ---- blueprint ----
+
+    def _blueprint(self):
+        import rerun.blueprint as rrb
+        names = list(self._videos) or (self._bundle.names if self._bundle else [])
+        video_views = [rrb.Spatial2DView(origin=f"videos/{entity_name(v)}", name=v) for v in names[:8]]
+        pairs = self._pairs_logged
+        first = pairs[0] if pairs else None
+        if self._result is not None and self._result.pairs:
+            best = sorted(self._result.pairs, key=lambda p: (not p.decision.accepted, -p.decision.contrast))[0]
+            first = f"{best.a}__{best.b}"
+        left = rrb.Vertical(
+            rrb.Grid(*video_views, name="videos") if video_views else rrb.TextDocumentView(origin="videos"),
+            rrb.Spatial3DView(origin="world", name="3D"),
+            row_shares=[1, 1])
+        pair_views = []
+        if first:
+            a, b = first.split("__", 1)
+            pp = pair_path(a, b)
+            pair_views = [rrb.TimeSeriesView(origin=f"{pp}/landscape", name=f"landscape {first}"),
+                          rrb.Spatial2DView(origin=f"{pp}/epipolar", name=f"epipolar {first} (scrub offset_ms)")]
+        right = rrb.Vertical(
+            *pair_views,
+            rrb.Tabs(rrb.TextLogView(origin="log", name="decision log"),
+                     rrb.TextDocumentView(origin="sync/offsets", name="offsets"),
+                     rrb.GraphView(origin="sync/graph", name="pair graph"),
+                     rrb.TimeSeriesView(origin="sync/solve", name="IRLS solve"),
+                     rrb.TimeSeriesView(origin="pairs", name="all landscapes")),
+        )
+        return rrb.Blueprint(rrb.Horizontal(left, right, column_shares=[3, 2]), collapse_panels=False)
+
+
+def _json_default(o):
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(f"cannot write {type(o).__name__} to JSON")
