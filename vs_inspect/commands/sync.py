@@ -12,6 +12,7 @@ from ..io.result import result_to_dict, write_json_atomic
 from ..sync.config import config_to_dict
 from ..sync.run import sync_bundle
 from ._common import add_sync_options, offsets_table, sync_config_from_args
+from ._record import add_record_options, describe, open_sink
 
 
 def register(sub) -> None:
@@ -24,6 +25,9 @@ def register(sub) -> None:
     p.add_argument("--out", type=Path, required=True, help="output folder for result.json")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     add_sync_options(p)
+    add_record_options(p)
+    from .cues import add_cue_options
+    add_cue_options(p)
     p.set_defaults(func=run)
 
 
@@ -34,16 +38,20 @@ def run(args: argparse.Namespace) -> int:
     if not args.bundle:
         if not args.videos:
             raise InputError("nothing to synchronize: give --bundle DIR or video files")
-        raise InputError("synchronizing video files needs the cue extraction stage, which this "
-                         "build does not have yet; extract cues elsewhere and pass --bundle")
+        from .cues import sync_videos
+        return sync_videos(args, cfg)
     t0 = time.perf_counter()
     bundle = read_bundle(args.bundle)
-    result = sync_bundle(bundle, cfg, progress=not args.no_progress)
-    data = result_to_dict(result, {"config": config_to_dict(cfg), "input": {"bundle": str(args.bundle)}})
-    data["timings_s"]["total_s"] = round(time.perf_counter() - t0, 4)
-    if bundle.gt_offsets_s:
-        data["gt_offsets_s"] = bundle.gt_offsets_s
-    path = write_json_atomic(data, Path(args.out) / "result.json")
+    with open_sink(args, args.out, progress=not args.no_progress) as sink:
+        result = sync_bundle(bundle, cfg, sink=sink, progress=not args.no_progress)
+        data = result_to_dict(result, {"config": config_to_dict(cfg), "input": {"bundle": str(args.bundle)}})
+        data["timings_s"]["total_s"] = round(time.perf_counter() - t0, 4)
+        if bundle.gt_offsets_s:
+            data["gt_offsets_s"] = bundle.gt_offsets_s
+        sink.run_summary(data)
+        path = write_json_atomic(data, Path(args.out) / "result.json")
+    if describe(sink):
+        print(describe(sink))
     print(offsets_table(result.offsets_s, result.uncertainty_s, bundle.gt_offsets_s,
                         result.reference, result.unresolved_reason))
     acc = sum(p.decision.accepted for p in result.pairs)

@@ -9,8 +9,8 @@ from dataclasses import dataclass, field
 class MotionConfig:
     camera_motion: str = "auto"
     """static, moving, or auto (decided from the motion of background features between frames)."""
-    static_max_motion_px: float = 0.6
-    """auto: a camera whose background features move less than this (median, working pixels) is static."""
+    static_max_motion_px: float = 0.5
+    """auto: a camera whose slower features (30th percentile of displacements, working pixels) move less than this is static."""
     diff_threshold: float = 22.0
     """Grey-level difference (0-255) from the background (static camera) or the motion-compensated neighbour (moving camera) that counts as moving."""
     background_frames: int = 60

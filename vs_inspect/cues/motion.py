@@ -33,10 +33,10 @@ def _sparse_flow(a: np.ndarray, b: np.ndarray, max_corners: int = 400):
 
 
 def background_motion(frames: np.ndarray, samples: int = 8, gap: int = 1) -> float:
-    """Median displacement (px) of background features between frames t and t+gap.
+    """Typical displacement (px) of background features between frames t and t+gap.
 
-    The per-pair statistic is the median over all tracked corners, which a moving object
-    covering less than half of the corners cannot move; the result is the median over pairs.
+    The per-pair statistic is the 30th percentile over all tracked corners, which a moving
+    object covering less than 70% of the corners cannot move; the result is the median over pairs.
     """
     _check_frames(frames)
     T = frames.shape[0]
@@ -47,7 +47,7 @@ def background_motion(frames: np.ndarray, samples: int = 8, gap: int = 1) -> flo
     for t in starts:
         p, q = _sparse_flow(frames[t], frames[t + gap])
         if len(p) >= 8:
-            meds.append(float(np.median(np.linalg.norm(q - p, axis=1))))
+            meds.append(float(np.percentile(np.linalg.norm(q - p, axis=1), 30)))
     return float(np.median(meds)) if meds else 0.0
 
 

@@ -1,0 +1,189 @@
+"""Benchmarks of Stage 0 on real videos (cues -> sync), printed as tables.
+
+    # caliscope: cut random numbers of leading frames, with the calibration or estimated cameras
+    PYTHONPATH=. python examples/bench_stage0.py caliscope --trials 5 [--estimate]
+    # VisualSync web clips: error in frames per scene (true offsets from the file names)
+    PYTHONPATH=. python examples/bench_stage0.py visualsync [--scenes blenderbox pan160906]
+    # speed: 4 videos x ~10 s x 720p at 30 fps (caliscope upsampled by frame blending)
+    PYTHONPATH=. python examples/bench_stage0.py speed
+
+Truth for caliscope: frame k of cam_N.mp4 is row k of that camera in timestamps.csv; a clip cut
+by c frames starts at frame_time[c], so offset_s[v] = frame_time_v[c_v] - frame_time_ref[c_ref]
+(DESIGN.md: the global time of the clip's local time 0). Clips are re-encoded at the nominal
+6 fps (constant rate), as a user's cut would be.
+VisualSync: clip <scene>_<cam>_<start>_<end>_<k>.mp4 shows common-timeline frames start, start+1,
+... at 10 fps, so offset_s = start / 10 (relative to the reference clip).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import logging
+import re
+import statistics
+import sys
+import tempfile
+import time
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np  # noqa: F401  (before pycolmap)
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from vs_inspect.cues import CueConfig, extract_cues  # noqa: E402
+from vs_inspect.io.calibration import load_calibration  # noqa: E402
+from vs_inspect.io.video import VideoWriter, iter_frames, open_video  # noqa: E402
+from vs_inspect.sync.run import sync_bundle  # noqa: E402
+
+DATA = REPO.parent / "shared" / "data"
+
+
+def frame_times(root: Path) -> dict[str, list[float]]:
+    rows = defaultdict(list)
+    with open(root / "calibration" / "extrinsic" / "timestamps.csv") as f:
+        for r in csv.DictReader(f):
+            rows[f"cam_{int(r['cam_id'])}"].append((int(r["sync_index"]), float(r["frame_time"])))
+    return {k: [t for _, t in sorted(v)] for k, v in rows.items()}
+
+
+def write_cut(src_path: Path, dest: Path, cut: int, last: int | None = None) -> None:
+    src = open_video(src_path)
+    with VideoWriter(dest, src.info.width, src.info.height, src.info.fps or 6.0, crf=16) as w:
+        for k, img in iter_frames(src):
+            if k >= cut and (last is None or k < last):
+                w.write(img)
+
+
+def run(paths, calib, cfg=CueConfig()):
+    srcs = [open_video(p) for p in paths]
+    names = [s.info.name for s in srcs]
+    cal = load_calibration(calib, names, {s.info.name: (s.info.width, s.info.height) for s in srcs}) \
+        if calib else None
+    t0 = time.perf_counter()
+    bundle, stats = extract_cues(srcs, cal, cfg, progress=False)
+    t1 = time.perf_counter()
+    res = sync_bundle(bundle, progress=False)
+    t2 = time.perf_counter()
+    return res, stats, t1 - t0, t2 - t1
+
+
+def errors_ms(res, truth: dict[str, float]) -> dict[str, float | None]:
+    ref = res.reference
+    out = {}
+    for v, t in truth.items():
+        if v == ref:
+            continue
+        est = res.offsets_s.get(v)
+        out[v] = None if est is None else 1000 * abs((est - res.offsets_s[ref]) - (t - truth[ref]))
+    return out
+
+
+def bench_caliscope(args) -> None:
+    root = DATA / "caliscope_post_optimization"
+    ft = frame_times(root)
+    rng = np.random.default_rng(args.seed)
+    all_err, rows = [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        for trial in range(args.trials):
+            cuts = {f"cam_{i}": int(c) for i, c in enumerate(rng.integers(0, args.max_cut + 1, 4))}
+            if trial == 0 and args.first_zero:
+                cuts = {k: 0 for k in cuts}
+            d = Path(tmp) / f"t{trial}"
+            paths = []
+            for name, c in cuts.items():
+                p = d / f"{name}.mp4"
+                write_cut(root / "calibration" / "extrinsic" / f"{name}.mp4", p, c)
+                paths.append(p)
+            truth = {n: ft[n][c] for n, c in cuts.items()}
+            res, stats, tc, ts = run(paths, None if args.estimate else root / "camera_array.toml")
+            err = errors_ms(res, truth)
+            vals = [e if e is not None else float("inf") for e in err.values()]
+            all_err += vals
+            rows.append((trial, cuts, err, tc, ts, stats.get("registered_cameras"), stats.get("dropped")))
+            print(f"trial {trial}: cuts {cuts}  err_ms {{{', '.join(f'{k}: ' + ('null' if v is None else f'{v:.1f}') for k, v in err.items())}}}"
+                  f"  cues {tc:.1f}s sync {ts:.1f}s  cameras {stats.get('registered_cameras')} dropped {stats.get('dropped')}",
+                  flush=True)
+    med = statistics.median(all_err)
+    within = sum(e <= 1000 / 6 for e in all_err) / len(all_err)
+    mode = "estimated cameras" if args.estimate else "calibration"
+    print(f"\ncaliscope ({mode}), {args.trials} trials, {len(all_err)} video offsets: median error "
+          f"{med:.1f} ms ({med / (1000 / 6):.2f} frames), mean {np.mean([e for e in all_err if np.isfinite(e)]):.1f} ms, "
+          f"max {max(all_err):.1f} ms, within 1 frame {100 * within:.0f}%")
+
+
+def bench_visualsync(args) -> None:
+    root = DATA / "visualsync_clips"
+    pat = re.compile(r"_(\d+)_(\d+)_(\d+)$")
+    for scene in args.scenes:
+        paths = sorted((root / scene).glob("*.mp4"))
+        truth = {}
+        for p in paths:
+            m = pat.search(p.stem)
+            truth[p.stem] = int(m.group(1)) / 10.0
+        res, stats, tc, ts = run(paths, None)
+        err = errors_ms(res, truth)
+        fr = {k: (None if v is None else round(v / 100.0, 2)) for k, v in err.items()}
+        print(f"{scene}: error in frames {fr}  cues {tc:.1f}s sync {ts:.1f}s  "
+              f"cameras {stats.get('registered_cameras')}/{len(paths)} dropped {stats.get('dropped')} "
+              f"pairs {[(p.a[-12:], p.b[-12:], p.decision.accepted, p.num_track_pairs) for p in res.pairs]}",
+              flush=True)
+
+
+def bench_speed(args) -> None:
+    import cv2
+
+    root = DATA / "caliscope_post_optimization"
+    with tempfile.TemporaryDirectory() as tmp:
+        paths = []
+        for i in range(4):
+            src = open_video(root / "calibration" / "extrinsic" / f"cam_{i}.mp4")
+            frames = [img for _, img in iter_frames(src)]
+            p = Path(tmp) / f"cam_{i}.mp4"
+            with VideoWriter(p, src.info.width, src.info.height, 30.0, crf=20) as w:
+                for k in range(args.seconds * 30):
+                    x = k / 5.0
+                    j = min(int(x), len(frames) - 2)
+                    a = x - j
+                    w.write(cv2.addWeighted(frames[j], 1 - a, frames[j + 1], a, 0))
+            paths.append(p)
+        for calib, label in ((root / "camera_array.toml", "calibration"), (None, "estimated")):
+            if label == "estimated" and not args.estimate:
+                continue
+            res, stats, tc, ts = run(paths, calib)
+            print(f"\nspeed ({label}): 4 videos x {args.seconds} s x 1280x720 @ 30 fps")
+            print(f"{'stage':<16}{'seconds':>10}")
+            for k, v in stats["timings_s"].items():
+                print(f"{k:<16}{v:>10.2f}")
+            for k, v in res.timings_s.items():
+                print(f"{k:<16}{v:>10.2f}")
+            print(f"{'cues+sync':<16}{tc + ts:>10.2f}")
+            print(json.dumps({"tracks": stats["tracks"], "track_pairs": stats["track_pairs"],
+                              "registered_cameras": stats["registered_cameras"]}))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = ap.add_subparsers(dest="what", required=True)
+    c = sub.add_parser("caliscope")
+    c.add_argument("--trials", type=int, default=5)
+    c.add_argument("--max-cut", type=int, default=12)
+    c.add_argument("--seed", type=int, default=0)
+    c.add_argument("--estimate", action="store_true", help="estimate cameras instead of the calibration")
+    c.add_argument("--first-zero", action="store_true", help="trial 0 without cuts")
+    v = sub.add_parser("visualsync")
+    v.add_argument("--scenes", nargs="+", default=["blenderbox", "pan160906", "sequence69", "fencing1"])
+    s = sub.add_parser("speed")
+    s.add_argument("--seconds", type=int, default=10)
+    s.add_argument("--estimate", action="store_true")
+    ap.add_argument("-v", action="store_true")
+    args = ap.parse_args()
+    logging.basicConfig(level=logging.INFO if args.v else logging.WARNING)
+    {"caliscope": bench_caliscope, "visualsync": bench_visualsync, "speed": bench_speed}[args.what](args)
+
+
+if __name__ == "__main__":
+    main()
