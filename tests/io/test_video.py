@@ -183,3 +183,29 @@ def test_real_caliscope_videos(shared_data):
     assert src.info.fps == pytest.approx(6.0, rel=0.05)
     img = read_frames(src, [56], max_side=640)[0]
     assert img.shape == (360, 640, 3)
+
+
+@pytest.mark.parametrize("ext,codec", [("avi", "mpeg4"), ("mkv", "libx264"), ("webm", "libvpx-vp9"),
+                                       ("mov", "mjpeg")])
+def test_other_containers(tmp_path, ext, codec):
+    import av
+    if codec not in av.codecs_available:
+        pytest.skip(f"{codec} encoder not in this PyAV build")
+    p = tmp_path / f"clip.{ext}"
+    with av.open(str(p), "w") as c:
+        s = c.add_stream(codec, rate=12)
+        s.width, s.height = 64, 48
+        s.pix_fmt = "yuvj420p" if codec == "mjpeg" else "yuv420p"
+        for k in range(15):
+            f = av.VideoFrame.from_ndarray(frame_image(k, 64, 48), format="bgr24")
+            for pk in s.encode(f):
+                c.mux(pk)
+        for pk in s.encode(None):
+            c.mux(pk)
+    src = open_video(p)
+    assert (src.info.num_frames, src.info.width, src.info.height) == (15, 64, 48)
+    assert src.info.fps == pytest.approx(12.0)
+    np.testing.assert_allclose(src.info.timestamps_s, np.arange(15) / 12.0, atol=1e-3)
+    frames = dict(iter_frames(src))
+    assert sorted(frames) == list(range(15))
+    np.testing.assert_array_equal(read_frames(src, [11])[0], frames[11])

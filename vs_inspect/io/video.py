@@ -166,6 +166,11 @@ def open_video(path, fps: float | None = None, name: str | None = None) -> Video
         raise InputError(f"{path}: no frame could be decoded (corrupt or unsupported stream)")
     if first_frame is not None:
         width, height = first_frame.width, first_frame.height
+        rotation = getattr(first_frame, "rotation", 0) or 0
+        if rotation:
+            log.warning("%s: the file asks players to rotate frames by %d°; vs_inspect works on "
+                        "the frames as stored (%dx%d), calibrations must match that orientation",
+                        path, rotation, width, height)
 
     reliable = (
         all(p is not None for p in pkt_pts)
