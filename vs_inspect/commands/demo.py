@@ -11,6 +11,7 @@ from ..synth.cues import CueSceneConfig, make_cue_scene
 from ..sync.config import SyncConfig
 from ..sync.run import sync_bundle
 from ._common import offsets_table
+from ._record import add_record_options, describe, open_sink
 
 
 def register(sub) -> None:
@@ -19,6 +20,7 @@ def register(sub) -> None:
                                    "synchronizes it and prints estimated against true offsets.",
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--out", type=Path, default=Path("out/demo"), help="output folder")
+    add_record_options(p)
     p.set_defaults(func=run)
 
 
@@ -32,13 +34,17 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(f"demo input: cached scene in {bundle_dir}")
     bundle = read_bundle(bundle_dir)
-    result = sync_bundle(bundle, SyncConfig())
-    data = result_to_dict(result, {"gt_offsets_s": bundle.gt_offsets_s})
-    path = write_json_atomic(data, out / "result.json")
+    with open_sink(args, out) as sink:
+        result = sync_bundle(bundle, SyncConfig(), sink=sink)
+        data = result_to_dict(result, {"gt_offsets_s": bundle.gt_offsets_s})
+        sink.run_summary(data)
+        path = write_json_atomic(data, out / "result.json")
     print(offsets_table(result.offsets_s, result.uncertainty_s, bundle.gt_offsets_s,
                         result.reference, result.unresolved_reason))
     for p in result.pairs:
         if not p.decision.accepted:
             print(f"rejected {p.a}__{p.b}: {p.decision.reason}")
     print(f"wrote {path}")
+    if describe(sink):
+        print(describe(sink))
     return 0

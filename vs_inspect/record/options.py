@@ -34,6 +34,9 @@ class RecordOptions:
     max_trajectory_video_pairs: int = 12
     """Accepted video pairs whose trajectories are triangulated (best contrast first)."""
 
+    embed_bundle: bool = True
+    """Embed the cue bundle (zip) at meta/cue_bundle, so a report can be made from the .rrd alone."""
+
     @staticmethod
     def minimal() -> "RecordOptions":
         """Decisions, landscapes, graph, solve and cameras only: no frames, tracks or 3D tracks."""

@@ -38,6 +38,7 @@ RECORDING_VERSION = 1
 META_RESULT = "meta/result_json"
 META_RECORDING = "meta/recording_json"
 META_CONFIG = "meta/config_json"
+META_BUNDLE = "meta/cue_bundle"  # the cue bundle folder as a zip (component `zip`, uint8)
 
 # colours (RGB): accepted / rejected / truth / instances
 GREEN, RED, GREY, BLUE, ORANGE = (40, 180, 80), (220, 50, 50), (150, 150, 150), (60, 120, 230), (240, 150, 30)
@@ -79,6 +80,20 @@ def _video_codec(path: str) -> str | None:
             return c.streams.video[0].codec_context.name
     except Exception:  # noqa: BLE001 - any failure: not embeddable, fall back to JPEG frames
         return None
+
+
+def _timed(fn):
+    """Adds the wall time of a hook to self.hook_s (the cost of recording, without the stages)."""
+    import functools
+
+    @functools.wraps(fn)
+    def wrapper(self, *args, **kwargs):
+        t = time.perf_counter()
+        try:
+            return fn(self, *args, **kwargs)
+        finally:
+            self.hook_s += time.perf_counter() - t
+    return wrapper
 
 
 class _VideoBuffer:
@@ -124,6 +139,7 @@ class RerunSink(Sink):
         self._flushed_videos = False
         self._pairs_logged: list[str] = []
         self._events = 0
+        self.hook_s = 0.0
         self.stats: dict[str, float] = {}
         self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
 
@@ -140,6 +156,7 @@ class RerunSink(Sink):
 
     # ---- Stage 0 hooks ----
 
+    @_timed
     def video(self, info: VideoInfo, path: str | None) -> None:
         buf = self._videos.setdefault(info.name, _VideoBuffer(info, path))
         buf.info, buf.path = info, path
@@ -156,6 +173,7 @@ class RerunSink(Sink):
             except Exception as exc:  # noqa: BLE001 - rerun could not parse it: use JPEG frames
                 log.info("%s: not embedded as a video asset (%s); logging JPEG frames", info.name, exc)
 
+    @_timed
     def video_frame(self, name: str, frame_index: int, image_bgr: np.ndarray) -> None:
         import cv2
         buf = self._videos.get(name)
@@ -171,6 +189,7 @@ class RerunSink(Sink):
             buf.jpeg[int(frame_index)] = data.tobytes()
             buf.image_size = (img.shape[1], img.shape[0])
 
+    @_timed
     def dynamic_mask(self, name: str, frame_index: int, instances: np.ndarray) -> None:
         import cv2
         buf = self._videos.get(name)
@@ -184,6 +203,7 @@ class RerunSink(Sink):
             m = cv2.resize(m, (mw, max(1, round(h * mw / w))), interpolation=cv2.INTER_NEAREST)
         buf.masks[int(frame_index)] = m
 
+    @_timed
     def cameras(self, cameras: dict[str, CameraTrack], points_world: np.ndarray | None,
                 colors: np.ndarray | None) -> None:
         self._world_cameras = dict(cameras)
@@ -195,6 +215,7 @@ class RerunSink(Sink):
 
     # ---- Stage 1 and 2 hooks ----
 
+    @_timed
     def bundle(self, bundle: CueBundle) -> None:
         self._bundle = bundle
         for v in bundle.videos:
@@ -205,14 +226,20 @@ class RerunSink(Sink):
                         "height": v.height, "num_frames": v.num_frames, "fps": v.fps,
                         "duration_s": v.duration_s} for v in bundle.videos],
             "gt_offsets_s": bundle.gt_offsets_s}), media_type="text/plain"), static=True)
+        if self.options.embed_bundle:
+            from ..io.bundle_zip import bundle_to_zip_bytes
+            raw = bundle_to_zip_bytes(bundle)
+            self.rec.log(META_BUNDLE, rr.AnyValues(zip=np.frombuffer(raw, dtype=np.uint8)), static=True)
         self._log_cameras_static(bundle)
 
+    @_timed
     def pair_landscape(self, landscape: PairLandscape, bundle: CueBundle, energy_fn: Any) -> None:
         self._log_landscape(landscape, bundle)
         self._log_decision(landscape, bundle)
         if self.options.epipolar_offsets:
             self._log_epipolar(landscape, bundle)
 
+    @_timed
     def sync_result(self, result: SyncResult, bundle: CueBundle) -> None:
         self._result, self._bundle = result, bundle
         self._log_graph(result)
@@ -222,6 +249,7 @@ class RerunSink(Sink):
         if self.options.trajectories:
             self._log_trajectories(result, bundle)
 
+    @_timed
     def stage_event(self, stage: str, message: str, **numbers: Any) -> None:
         self._events += 1
         extra = ", ".join(f"{k}={v}" for k, v in numbers.items())
@@ -231,6 +259,7 @@ class RerunSink(Sink):
                                                              level=rr.TextLogLevel.INFO))
         self.rec.reset_time()
 
+    @_timed
     def run_summary(self, result_dict: dict[str, Any]) -> None:
         self._summary = result_dict
         if "config" in result_dict:
@@ -241,6 +270,7 @@ class RerunSink(Sink):
     def close(self) -> None:
         if self._closed:
             return
+        t_close = time.perf_counter()
         try:
             if not self._flushed_videos:
                 self._flush_videos({})
@@ -265,9 +295,11 @@ class RerunSink(Sink):
             self.rec.disconnect()
             os.replace(self._tmp, self.path)
             self._closed = True
-            self.stats = {"write_s": time.perf_counter() - self._t0,
+            self.stats = {"write_s": self.hook_s + time.perf_counter() - t_close,
+                          "open_s": time.perf_counter() - self._t0,
                           "size_mb": self.path.stat().st_size / 1e6}
-            log.info("wrote %s (%.1f MB, %.1f s)", self.path, self.stats["size_mb"], self.stats["write_s"])
+            log.info("wrote %s (%.1f MB, %.1f s of logging)", self.path, self.stats["size_mb"],
+                     self.stats["write_s"])
         except BaseException:
             self.abort()
             raise

@@ -1,0 +1,61 @@
+"""Recording options shared by `sync` and `demo`: --rrd PATH, --no-rrd and how much to log."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..record.options import RecordOptions
+from ..record.sink import NullSink, Sink
+
+
+def add_record_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("recording (rerun .rrd)")
+    g.add_argument("--rrd", type=Path, default=None, metavar="PATH",
+                   help="write the recording here (default: recordings/<name of --out>.rrd)")
+    g.add_argument("--no-rrd", action="store_true", help="write no recording")
+    g.add_argument("--rrd-minimal", action="store_true",
+                   help="log only decisions, landscapes, graph, solve, cameras and the result "
+                        "(no frames, tracks, epipolar views or 3D trajectories)")
+    g.add_argument("--rrd-all-offsets", action="store_true",
+                   help="epipolar view at every candidate offset (default: " +
+                        f"{RecordOptions().epipolar_offsets} per pair)")
+    g.add_argument("--rrd-full-frames", action="store_true",
+                   help="full-resolution frames and masks (default: frames at most "
+                        f"{RecordOptions().max_image_width_px} px wide)")
+    g.add_argument("--rrd-all-tracks", action="store_true",
+                   help="every track, epipolar line and triangulated track pair (default: "
+                        f"{RecordOptions().max_tracks_per_video} tracks per video)")
+
+
+def record_options(args: argparse.Namespace) -> RecordOptions:
+    base = RecordOptions.minimal() if args.rrd_minimal else RecordOptions()
+    return base.with_flags(all_offsets=args.rrd_all_offsets, full_frames=args.rrd_full_frames,
+                           all_tracks=args.rrd_all_tracks)
+
+
+def rrd_path(args: argparse.Namespace, out: Path) -> Path | None:
+    if args.no_rrd:
+        return None
+    return Path(args.rrd) if args.rrd else Path("recordings") / f"{Path(out).resolve().name}.rrd"
+
+
+def open_sink(args: argparse.Namespace, out: Path, progress: bool = True) -> Sink:
+    """A RerunSink writing to --rrd (or the default), or a NullSink with --no-rrd.
+
+    Use it as a context manager: the .rrd appears only when the block ends without an error.
+    """
+    path = rrd_path(args, out)
+    if path is None:
+        return NullSink()
+    from ..record.rerun_sink import RerunSink
+    return RerunSink(path, options=record_options(args), progress=progress)
+
+
+def describe(sink: Sink) -> str | None:
+    """One line about the written recording (None for NullSink)."""
+    stats = getattr(sink, "stats", None)
+    if not stats:
+        return None
+    return (f"recording: {sink.path} ({stats['size_mb']:.1f} MB; {stats['write_s']:.1f} s spent logging "
+            f"during a {stats['open_s']:.1f} s run)")
