@@ -26,6 +26,8 @@ def register(sub) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     add_sync_options(p)
     add_record_options(p)
+    from .cues import add_cue_options
+    add_cue_options(p)
     p.set_defaults(func=run)
 
 
@@ -36,8 +38,8 @@ def run(args: argparse.Namespace) -> int:
     if not args.bundle:
         if not args.videos:
             raise InputError("nothing to synchronize: give --bundle DIR or video files")
-        raise InputError("synchronizing video files needs the cue extraction stage, which this "
-                         "build does not have yet; extract cues elsewhere and pass --bundle")
+        from .cues import sync_videos
+        return sync_videos(args, cfg)
     t0 = time.perf_counter()
     bundle = read_bundle(args.bundle)
     with open_sink(args, args.out, progress=not args.no_progress) as sink:
