@@ -1,0 +1,239 @@
+"""The accuracy benchmark: vs_inspect, its ablations (the paper's Tables 2 and 3) and two
+classical peers on the same data in the same run, with the paper's metrics, time per stage and
+peak memory.
+
+A run is a list of dataset plans; each plan produces rows keyed by (dataset, method, variant).
+Every row is a pure function of its dataset and settings (fixed seeds), so a quick run's rows
+equal the same rows of a full run. Failures become rows with an error, never dropped.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import time
+import tracemalloc
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..baselines.motion_xcorr import sync_motion_xcorr
+from ..baselines.ransac_inlier import sync_ransac_inlier
+from ..eval.metrics import evaluate_offsets, pair_auc
+from ..geometry.epipolar import RESIDUALS
+from ..sync.config import DecisionConfig, LandscapeConfig, PairSelection, SolveConfig, SyncConfig
+from ..sync.decision import decide
+from ..sync.pairs import select_pairs
+from ..sync.run import sync_bundle
+from ..sync.solve import PairMeasurement, solve_offsets
+from ..types import CueBundle, PairLandscape
+from .datasets import BenchData
+
+log = logging.getLogger(__name__)
+
+PAIR_MODES = ("rst", "0.5", "0.8")  # 1.0 = all pairs = the default run
+
+
+@dataclass(frozen=True)
+class Row:
+    """One method/variant on one dataset."""
+
+    dataset: str  # e.g. "cue/default/s0"
+    group: str  # e.g. "cue/default"
+    method: str  # vs_inspect | motion-xcorr | ransac-inlier
+    variant: str  # "default", "residual=cosine", "solver=ls", "filter=off", "pairs=rst/seed=2", ...
+    a100: float  # %
+    a500: float  # %
+    delta_mean_ms: float
+    delta_med_ms: float
+    delta_med_frames: float  # δ_med in frames of the dataset's typical frame interval
+    unresolved: int  # videos without an offset (their pairs count as wrong in A@)
+    videos: int
+    stage0_s: float = float("nan")  # cue extraction (video datasets only)
+    stage1_s: float = float("nan")  # pair landscapes / pair scores (NaN = reused from the default run)
+    stage2_s: float = float("nan")  # global solve
+    peak_mb: float = float("nan")  # peak traced Python/numpy memory of the run (tracemalloc)
+    error: str = ""  # the failure, when the run failed
+
+    @property
+    def key(self) -> tuple[str, str, str]:
+        return (self.dataset, self.method, self.variant)
+
+    def accuracy(self) -> tuple:
+        """The numbers that must be identical between runs (no timings)."""
+        return (self.a100, self.a500, self.delta_mean_ms, self.delta_med_ms, self.unresolved, self.error)
+
+
+@dataclass(frozen=True)
+class PlanOptions:
+    residuals: tuple[str, ...] = RESIDUALS  # residual ablation (sampson is the default run)
+    true_cameras: bool = True  # also run with the exact cameras when the dataset has them
+    pair_seeds: tuple[int, ...] = (0, 1, 2, 3, 4)
+    peers: bool = True
+
+
+@dataclass
+class Meter:
+    """Wall time and peak traced memory of a block."""
+
+    seconds: float = 0.0
+    peak_mb: float = float("nan")
+    _t: float = field(default=0.0, repr=False)
+
+    def __enter__(self) -> Meter:
+        tracemalloc.start()
+        self._t = time.perf_counter()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.seconds = time.perf_counter() - self._t
+        self.peak_mb = tracemalloc.get_traced_memory()[1] / 1e6
+        tracemalloc.stop()
+
+
+def _fix(x: float) -> float:
+    return float(x) if x is not None and math.isfinite(x) else float("nan")
+
+
+def score(data: BenchData, offsets_s: dict, method: str, variant: str, **extra) -> Row:
+    truth = data.bundle.gt_offsets_s
+    est = {v: offsets_s.get(v) for v in truth}  # a video missing from the result is unresolved
+    ref = data.bundle.names[0]
+    m = evaluate_offsets(est, truth, ref)
+    fi = data.frame_interval_s
+    return Row(data.name, data.group, method, variant, round(m.a100, 6), round(m.a500, 6),
+               round(_fix(m.delta_mean_ms), 6), round(_fix(m.delta_med_ms), 6),
+               round(_fix(m.delta_med_ms) / (1000.0 * fi), 4) if math.isfinite(fi) else float("nan"),
+               m.num_unresolved, len(truth), **extra)
+
+
+def failed(data: BenchData, method: str, variant: str, exc: BaseException, **extra) -> Row:
+    n = len(data.bundle.gt_offsets_s) if data.bundle is not None else int(data.notes.get("videos", 0))
+    log.warning("%s %s %s failed: %s", data.name, method, variant, exc)
+    return Row(data.name, data.group, method, variant, 0.0, 0.0, float("nan"), float("nan"),
+               float("nan"), n, n, error=f"{type(exc).__name__}: {exc}"[:200], **extra)
+
+
+# ---- Stage 2 from given landscapes (ablations that keep Stage 1) ------------------------------
+
+
+def stage2(bundle: CueBundle, lands: list[PairLandscape], solve: SolveConfig) -> dict:
+    """Per-video offsets from landscapes, exactly as sync_bundle's Stage 2 (tested equal)."""
+    names = bundle.names
+    reference = solve.reference or names[0]
+    fin = [v.frame_interval_s for v in bundle.videos if math.isfinite(v.frame_interval_s)]
+    slowest = max(fin) if fin else 0.1
+    delta = solve.huber_delta_s or 0.5 * slowest
+    meas = []
+    for land in lands:
+        if land.decision.accepted and math.isfinite(land.best_offset_s):
+            step = land.offsets_s[1] - land.offsets_s[0] if len(land.offsets_s) > 1 else slowest
+            floor = step / math.sqrt(12.0)
+            sigma = land.uncertainty_s if math.isfinite(land.uncertainty_s) else floor
+            meas.append(PairMeasurement(land.a, land.b, land.best_offset_s, max(sigma, 1e-6)))
+    return solve_offsets(names, reference, meas, solve.solver, delta, solve.max_iterations).offsets_s
+
+
+def without_filter(lands: list[PairLandscape]) -> list[PairLandscape]:
+    """The same landscapes decided with the spurious-pair filter off (best minimum unchanged)."""
+    off = DecisionConfig(enabled=False)
+    out = []
+    for land in lands:
+        d, _ = decide(land.energy, land.support, land.offsets_s, land.num_track_pairs, off)
+        out.append(dataclasses.replace(land, decision=d))
+    return out
+
+
+def stage1_pairwise(data: BenchData, lands: list[PairLandscape]) -> tuple[float, float]:
+    """A@100, A@500 of the Stage 1 pair offsets themselves (every pair of videos; a pair without a
+    minimum counts as wrong), before the global solve."""
+    truth = data.bundle.gt_offsets_s
+    by = {(p.a, p.b): p.best_offset_s for p in lands}
+    names = list(truth)
+    err = []
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            d = by.get((a, b), float("nan"))
+            err.append(1000 * abs(d - (truth[b] - truth[a])) if math.isfinite(d) else math.inf)
+    e = np.array(err)
+    return round(pair_auc(e, 100.0), 6), round(pair_auc(e, 500.0), 6)
+
+
+# ---- one dataset ------------------------------------------------------------------------------
+
+
+def run_dataset(data: BenchData, opts: PlanOptions, stage0_s: float = float("nan")) -> list[Row]:
+    rows: list[Row] = []
+    bundle = data.bundle
+    base_cfg = SyncConfig()
+    try:
+        with Meter() as m:
+            res = sync_bundle(bundle, base_cfg, progress=False)
+        rows.append(score(data, res.offsets_s, "vs_inspect", "default", stage0_s=stage0_s,
+                          stage1_s=res.timings_s.get("stage1_s", m.seconds),
+                          stage2_s=res.timings_s.get("stage2_s", float("nan")), peak_mb=m.peak_mb))
+        lands = list(res.pairs)
+    except Exception as exc:  # noqa: BLE001  (a failure is a result)
+        rows.append(failed(data, "vs_inspect", "default", exc, stage0_s=stage0_s))
+        lands = None
+
+    if lands is not None:
+        # Stage 2 ablations on the same landscapes.
+        t = time.perf_counter()
+        rows.append(score(data, stage2(bundle, lands, SolveConfig(solver="ls")), "vs_inspect",
+                          "solver=ls", stage2_s=time.perf_counter() - t))
+        t = time.perf_counter()
+        rows.append(score(data, stage2(bundle, without_filter(lands), SolveConfig()), "vs_inspect",
+                          "filter=off", stage2_s=time.perf_counter() - t))
+        a100, a500 = stage1_pairwise(data, lands)
+        rows.append(Row(data.name, data.group, "vs_inspect", "stage1-only", a100, a500, float("nan"),
+                        float("nan"), float("nan"), 0, len(bundle.gt_offsets_s)))
+        has = {k for k, v in bundle.pairs.items() if len(v.index)}
+        by = {(p.a, p.b): p for p in lands}
+        for mode in PAIR_MODES:
+            for seed in opts.pair_seeds:
+                sel = PairSelection.parse(mode, seed)
+                chosen = select_pairs(bundle.names, has, sel)
+                t = time.perf_counter()
+                offs = stage2(bundle, [by[p] for p in chosen], SolveConfig())
+                rows.append(score(data, offs, "vs_inspect", f"pairs={mode}/seed={seed}",
+                                  stage2_s=time.perf_counter() - t))
+
+    # Stage 1 ablations: other residuals, exact cameras.
+    for r in opts.residuals:
+        if r == base_cfg.landscape.residual:
+            continue
+        cfg = SyncConfig(landscape=LandscapeConfig(residual=r))
+        try:
+            with Meter() as m:
+                res = sync_bundle(bundle, cfg, progress=False)
+            rows.append(score(data, res.offsets_s, "vs_inspect", f"residual={r}",
+                              stage1_s=res.timings_s["stage1_s"], stage2_s=res.timings_s["stage2_s"],
+                              peak_mb=m.peak_mb))
+        except Exception as exc:  # noqa: BLE001
+            rows.append(failed(data, "vs_inspect", f"residual={r}", exc))
+    if opts.true_cameras and data.true_cameras is not None:
+        try:
+            exact = dataclasses.replace(bundle, cameras=dict(data.true_cameras))
+            with Meter() as m:
+                res = sync_bundle(exact, base_cfg, progress=False)
+            rows.append(score(data, res.offsets_s, "vs_inspect", "cameras=true",
+                              stage1_s=res.timings_s["stage1_s"], stage2_s=res.timings_s["stage2_s"],
+                              peak_mb=m.peak_mb))
+        except Exception as exc:  # noqa: BLE001
+            rows.append(failed(data, "vs_inspect", "cameras=true", exc))
+
+    if opts.peers:
+        signals = data.notes.get("motion_signals")
+        for method, fn in (("motion-xcorr", lambda: sync_motion_xcorr(bundle, signals=signals)),
+                           ("ransac-inlier", lambda: sync_ransac_inlier(bundle))):
+            try:
+                with Meter() as m:
+                    pr = fn()
+                rows.append(score(data, pr.offsets_s, method, "default", stage0_s=stage0_s,
+                                  stage1_s=pr.timings_s["stage1_s"], stage2_s=pr.timings_s["stage2_s"],
+                                  peak_mb=m.peak_mb))
+            except Exception as exc:  # noqa: BLE001
+                rows.append(failed(data, method, "default", exc, stage0_s=stage0_s))
+    return rows

@@ -1,0 +1,74 @@
+"""Video datasets of the benchmark: the VisualSync clips through the video pipeline (Stage 0 =
+vs_inspect.cues.extract_cues with estimated cameras, no calibration).
+
+Clip <scene>_<cam>_<start>_<end>_<k>.mp4 shows frames start, start+1, ... of one common timeline
+at 10 fps, so the true offset_s of a clip is start / 10 (DESIGN.md convention).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from .datasets import BenchData
+
+CLIP_FPS = 10.0
+CLIP_SCENES = ("blenderbox", "pan160906", "sequence69", "fencing1")
+_CLIP = re.compile(r"_(\d+)_(\d+)_(\d+)$")
+
+
+def video_pipeline_available() -> bool:
+    try:
+        from ..cues import extract_cues  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def clip_truth(paths: list[Path]) -> dict[str, float]:
+    truth = {}
+    for p in paths:
+        m = _CLIP.search(p.stem)
+        if not m:
+            raise InputError(f"{p.name}: not a VisualSync clip name (<scene>_<cam>_<start>_<end>_<k>.mp4)")
+        truth[p.stem] = int(m.group(1)) / CLIP_FPS
+    return truth
+
+
+def frame_motion_signal(src, max_side: int = 320) -> tuple[np.ndarray, np.ndarray]:
+    """Mean absolute grey-level difference of consecutive frames per second (peer 1 on video)."""
+    import cv2
+
+    from ..baselines.motion_xcorr import motion_signal_from_frames
+    from ..io.video import iter_frames
+
+    frames = (cv2.cvtColor(img, cv2.COLOR_BGR2GRAY) for _, img in iter_frames(src, max_side=max_side))
+    return motion_signal_from_frames(frames, src.info.timestamps_s)
+
+
+def clip_scene(root: Path, scene: str) -> tuple[BenchData, float]:
+    """(BenchData of the extracted cue bundle with the clips' true offsets, Stage 0 seconds).
+
+    Videos that Stage 0 drops stay in the truth, so every method counts them as unresolved.
+    """
+    from ..cues import CueConfig, extract_cues
+    from ..io.video import open_video
+
+    paths = sorted((Path(root) / scene).glob("*.mp4"))
+    if len(paths) < 2:
+        raise InputError(f"{root / scene}: fewer than 2 clips")
+    truth = clip_truth(paths)
+    srcs = [open_video(p) for p in paths]
+    t0 = time.perf_counter()
+    bundle, stats = extract_cues(srcs, None, CueConfig(), progress=False)
+    stage0 = time.perf_counter() - t0
+    signals = {s.info.name: frame_motion_signal(s) for s in srcs if s.info.name in bundle.names}
+    bundle = dataclasses.replace(bundle, gt_offsets_s=truth)
+    return BenchData(f"clips/{scene}", "clips", bundle, None, 1.0 / CLIP_FPS,
+                     {"motion_signals": signals, "dropped": stats.get("dropped", {}),
+                      "stage0_timings_s": stats.get("timings_s", {})}), stage0

@@ -1,0 +1,52 @@
+"""vs-inspect bench: accuracy and speed of vs_inspect, its ablations and two classical peers."""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+from ..bench.runner import full_plan, quick_plan, timed_run, to_text, write_outputs
+
+
+def _default_data() -> Path:
+    here = Path(__file__).resolve().parents[2]
+    return Path(os.environ.get("VS_INSPECT_DATA", here.parent / "shared" / "data"))
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "bench", help="benchmark vs_inspect, its ablations and two classical peers (writes BENCHMARKS.md)",
+        description="Runs vs_inspect (with the paper's ablations: residual, solver, spurious-pair "
+                    "filter, pairs used, true vs estimated cameras) and two classical peers "
+                    "(motion-signal cross-correlation, RANSAC-inlier criterion) on the same data: "
+                    "cue-level synthetic scenes, the caliscope session with cut leading frames and "
+                    "the VisualSync clips, and prints the tables. --quick runs a small subset "
+                    "(a few minutes at most); the full run writes BENCHMARKS.md.",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--quick", action="store_true", help="small subset (1 synthetic scene, 1 caliscope cut)")
+    p.add_argument("--out", type=Path, default=None,
+                   help="markdown file to write (default: BENCHMARKS.md for the full run, none for --quick)")
+    p.add_argument("--json", type=Path, default=None, help="also write every row as JSON here")
+    p.add_argument("--data", type=Path, default=None,
+                   help="folder with the real data (default: $VS_INSPECT_DATA or ../shared/data)")
+    p.add_argument("--only", default=None, metavar="PREFIX",
+                   help="run only the datasets whose name starts with PREFIX (e.g. cue/easy, caliscope, clips)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    plan = quick_plan() if args.quick else full_plan()
+    if args.only:
+        plan = [d for d in plan if d.name.startswith(args.only)]
+    out = args.out if args.out is not None else (None if args.quick else Path("BENCHMARKS.md"))
+    rows, skipped, wall = timed_run(plan, args.data or _default_data(), not args.no_progress)
+    print(to_text(rows, skipped))
+    for s in skipped:
+        print(f"{s.name}: {s.why}")
+    cmd = "vs-inspect bench" + (" --quick" if args.quick else "") + (f" --only {args.only}" if args.only else "")
+    write_outputs(rows, skipped, wall, cmd, out, args.json)
+    print(f"{len(rows)} runs on {len({r.dataset for r in rows})} datasets in {wall:.0f} s"
+          + (f"; wrote {out}" if out else ""))
+    return 0
