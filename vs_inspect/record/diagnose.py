@@ -106,7 +106,13 @@ def find_suspects(result: dict[str, Any], videos: dict[str, Any] | None = None) 
         else:
             extra = (f"; its minimum {c.offset_s:+.4f} s is {c.disagreement_ms:.0f} ms from the solution"
                      if c.disagreement_ms is not None else "")
-            msg = (f"{key}: rejected ({c.reason}){extra} while {c.a} and {c.b} agree elsewhere: "
-                   f"this pair's cross-view matches are likely wrong")
+            why = c.reason.lower()
+            if "edge" in why:
+                cause = "the true offset may lie outside its search range, or its matches are wrong"
+            elif "ambiguous" in why:
+                cause = "repetitive motion or wrong matches make two offsets look alike"
+            else:
+                cause = "this pair's cross-view matches are likely wrong"
+            msg = f"{key}: rejected ({c.reason}){extra} while {c.a} and {c.b} agree elsewhere: {cause}"
         out.append(Suspect("pair", key, msg))
     return out
