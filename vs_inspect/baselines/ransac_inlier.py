@@ -82,7 +82,7 @@ def ransac_inlier_count(x_a: np.ndarray, x_b: np.ndarray, threshold_px: float, m
 
 
 def ransac_inlier_landscape(bundle: CueBundle, a: str, b: str, cfg: LandscapeConfig = LandscapeConfig(),
-                            threshold_px: float = 2.0, max_fit: int = 500, max_iters: int = 500,
+                            threshold_px: float = 2.0, max_fit: int = 300, max_iters: int = 300,
                             min_correspondences: int = 30, seed: int = 0) -> PeerPair:
     """Inlier count per candidate Δ_ab on a grid with the coarser frame interval as step."""
     va, vb = bundle.video(a), bundle.video(b)

@@ -27,7 +27,7 @@ from .videos import CLIP_SCENES, clip_scene, video_pipeline_available
 
 log = logging.getLogger(__name__)
 
-CUE_SEEDS = (0, 1, 2)
+CUE_SEEDS = (0, 1)
 CALISCOPE_CUTS = 5
 DISCUSSION_MARK = "<!-- discussion: text below this line is kept when the benchmark rewrites this file -->"
 
@@ -39,8 +39,8 @@ class DatasetPlan:
 
 
 def full_plan() -> list[DatasetPlan]:
-    plan = [DatasetPlan(f"cue/{d}/s{s}", PlanOptions()) for d in DIFFICULTIES for s in CUE_SEEDS]
-    plan += [DatasetPlan(f"caliscope/cut{i}", PlanOptions()) for i in range(CALISCOPE_CUTS)]
+    plan = [DatasetPlan(f"caliscope/cut{i}", PlanOptions()) for i in range(CALISCOPE_CUTS)]
+    plan += [DatasetPlan(f"cue/{d}/s{s}", PlanOptions()) for s in CUE_SEEDS for d in DIFFICULTIES]
     plan += [DatasetPlan(f"clips/{s}", PlanOptions()) for s in CLIP_SCENES]
     return plan
 
@@ -57,12 +57,16 @@ class Skipped:
     why: str
 
 
-def run_plan(plan: list[DatasetPlan], data_root: Path, progress: bool = True
-             ) -> tuple[list[Row], list[Skipped]]:
+def run_plan(plan: list[DatasetPlan], data_root: Path, progress: bool = True,
+             after_each=None) -> tuple[list[Row], list[Skipped]]:
+    """Run every dataset of the plan; after_each(rows, skipped) is called after each one (e.g. to
+    save partial results of a long run)."""
     rows: list[Row] = []
     skipped: list[Skipped] = []
     session = None
     for dp in tqdm(plan, desc="benchmark datasets", unit="dataset", disable=not progress):
+        if after_each is not None and (rows or skipped):
+            after_each(rows, skipped)
         kind = dp.name.split("/")[0]
         if kind == "cue":
             _, diff, seed = dp.name.split("/")
@@ -256,6 +260,10 @@ def machine() -> dict:
     except Exception:  # noqa: BLE001
         pass
     try:
+        info["load_average_1_5_15min"] = " / ".join(f"{x:.1f}" for x in os.getloadavg())
+    except OSError:
+        pass
+    try:
         with open("/proc/cpuinfo") as fh:
             for line in fh:
                 if line.startswith("model name"):
@@ -279,8 +287,8 @@ def to_text(rows: list[Row], skipped: list[Skipped]) -> str:
 
 
 def to_markdown(rows: list[Row], skipped: list[Skipped], wall_s: float, command: str,
-                keep: str = "") -> str:
-    m = machine()
+                keep: str = "", machine_info: dict | None = None) -> str:
+    m = machine_info or machine()
     head = [
         "# Benchmarks", "",
         f"Written by `{command}` on {_dt.datetime.now(_dt.timezone.utc).strftime('%Y-%m-%d %H:%M UTC')}, "
@@ -296,7 +304,7 @@ def to_markdown(rows: list[Row], skipped: list[Skipped], wall_s: float, command:
         "Data: `cue/<level>` = cue-level synthetic scenes (vs_inspect.synth.cues, 5 cameras of which 2 "
         "hand-held, 1 variable-rate, 1 pair without matches and 1 pair with only wrong matches; easy = 0.3 px "
         "noise, 10 % wrong pairs, 0.1° pose error; default = 0.8 px, 25 %, 0.5°; hard = 1.5 px, 35 %, 1°; "
-        "seeds 0-2); `caliscope` = real ChArUco corners of 4 webcams read from xy.csv, undistorted with the "
+        "seeds 0 and 1); `caliscope` = real ChArUco corners of 4 webcams read from xy.csv, undistorted with the "
         "session's calibration, per-frame timestamps, offsets made by cutting 0-12 leading frames (5 random "
         "cuts); `clips` = the VisualSync web clips through the video pipeline (estimated cameras).", "",
         "Peers: `motion-xcorr` = one motion scalar per frame (mean track speed for cue data, mean absolute "
@@ -316,18 +324,26 @@ def to_markdown(rows: list[Row], skipped: list[Skipped], wall_s: float, command:
     return text + keep
 
 
-def rows_to_json(rows: list[Row], skipped: list[Skipped]) -> dict:
+def rows_to_json(rows: list[Row], skipped: list[Skipped], wall_s: float = float("nan"),
+                 command: str = "", machine_info: dict | None = None, plan: list[str] | None = None) -> dict:
     def clean(d):
         return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in d.items()}
     return {"rows": [clean(asdict(r)) for r in rows], "skipped": [asdict(s) for s in skipped],
-            "machine": machine()}
+            "machine": machine_info or machine(), "wall_s": wall_s, "command": command,
+            "plan": list(plan or [])}
 
 
-def rows_from_json(d: dict) -> list[Row]:
-    return [Row(**{k: (float("nan") if v is None else v) for k, v in r.items()}) for r in d["rows"]]
+def rows_from_json(d: dict) -> tuple[list[Row], list[Skipped]]:
+    rows = [Row(**{k: (float("nan") if v is None else v) for k, v in r.items()}) for r in d["rows"]]
+    skipped = [Skipped(**s) for s in d.get("skipped", [])]
+    done = {r.dataset for r in rows} | {s.name for s in skipped}
+    skipped += [Skipped(n, "not run: the run stopped before this dataset (time budget)")
+                for n in d.get("plan", []) if n not in done]
+    return rows, skipped
 
 
-def write_outputs(rows, skipped, wall_s, command, out: Path | None, json_out: Path | None) -> None:
+def write_outputs(rows, skipped, wall_s, command, out: Path | None, json_out: Path | None,
+                  machine_info: dict | None = None) -> None:
     from ..io.result import write_json_atomic
     if out is not None:
         keep = ""
@@ -336,15 +352,15 @@ def write_outputs(rows, skipped, wall_s, command, out: Path | None, json_out: Pa
             if DISCUSSION_MARK in old:
                 keep = old.split(DISCUSSION_MARK, 1)[1].lstrip("\n")
         tmp = out.with_suffix(out.suffix + ".tmp")
-        tmp.write_text(to_markdown(rows, skipped, wall_s, command, keep))
+        tmp.write_text(to_markdown(rows, skipped, wall_s, command, keep, machine_info))
         os.replace(tmp, out)
     if json_out is not None:
-        write_json_atomic(rows_to_json(rows, skipped), json_out)
+        write_json_atomic(rows_to_json(rows, skipped, wall_s, command, machine_info), json_out)
 
 
-def timed_run(plan, data_root, progress=True):
+def timed_run(plan, data_root, progress=True, after_each=None):
     t = time.perf_counter()
-    rows, skipped = run_plan(plan, data_root, progress)
+    rows, skipped = run_plan(plan, data_root, progress, after_each)
     return rows, skipped, time.perf_counter() - t
 
 

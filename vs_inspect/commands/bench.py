@@ -3,10 +3,16 @@
 from __future__ import annotations
 
 import argparse
+import json
 import os
 from pathlib import Path
 
-from ..bench.runner import full_plan, quick_plan, timed_run, to_text, write_outputs
+import time
+
+from ..bench.runner import (full_plan, machine, quick_plan, rows_from_json, rows_to_json, timed_run,
+                            to_text, write_outputs)
+from ..errors import InputError
+from ..io.result import write_json_atomic
 
 
 def _default_data() -> Path:
@@ -31,22 +37,53 @@ def register(sub) -> None:
     p.add_argument("--data", type=Path, default=None,
                    help="folder with the real data (default: $VS_INSPECT_DATA or ../shared/data)")
     p.add_argument("--only", default=None, metavar="PREFIX",
-                   help="run only the datasets whose name starts with PREFIX (e.g. cue/easy, caliscope, clips)")
+                   help="run only the datasets whose name starts with PREFIX (comma-separated list; e.g. cue/easy, caliscope, clips)")
+    p.add_argument("--skip", default=None, metavar="PREFIX",
+                   help="leave out the datasets whose name starts with PREFIX")
+    p.add_argument("--from-json", type=Path, nargs="+", default=None, metavar="JSON",
+                   help="do not run: write the tables of previous runs' --json files (rows concatenated)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.from_json is not None:
+        rows, skipped, walls, cmds, info = [], [], [], [], None
+        for f in args.from_json:
+            if not f.is_file():
+                raise InputError(f"{f} not found")
+            d = json.loads(f.read_text())
+            r, s = rows_from_json(d)
+            rows += r
+            skipped += s
+            walls.append(d.get("wall_s") or float("nan"))
+            cmds.append(d.get("command", "vs-inspect bench"))
+            info = info or d.get("machine")
+        print(to_text(rows, skipped))
+        cmd = " and, in parallel, ".join(f"{c} --json {f.name}" for c, f in zip(cmds, args.from_json))
+        write_outputs(rows, skipped, max(walls), cmd, args.out, None, info)
+        return 0
     plan = quick_plan() if args.quick else full_plan()
     if args.only:
-        plan = [d for d in plan if d.name.startswith(args.only)]
+        plan = [d for d in plan if d.name.startswith(tuple(args.only.split(",")))]
+    if args.skip:
+        plan = [d for d in plan if not d.name.startswith(tuple(args.skip.split(",")))]
     out = args.out if args.out is not None else (None if args.quick else Path("BENCHMARKS.md"))
-    rows, skipped, wall = timed_run(plan, args.data or _default_data(), not args.no_progress)
+    cmd = "vs-inspect bench" + (" --quick" if args.quick else "") + (f" --only {args.only}" if args.only else "") \
+        + (f" --skip {args.skip}" if args.skip else "")
+    info = machine()
+    t0 = time.perf_counter()
+
+    def save_partial(rows, skipped):  # a long run keeps what it has measured so far
+        if args.json is not None:
+            write_json_atomic(rows_to_json(rows, skipped, time.perf_counter() - t0, cmd + " (partial)", info,
+                                           [d.name for d in plan]), args.json)
+
+    rows, skipped, wall = timed_run(plan, args.data or _default_data(), not args.no_progress, save_partial)
     print(to_text(rows, skipped))
     for s in skipped:
         print(f"{s.name}: {s.why}")
-    cmd = "vs-inspect bench" + (" --quick" if args.quick else "") + (f" --only {args.only}" if args.only else "")
-    write_outputs(rows, skipped, wall, cmd, out, args.json)
+    write_outputs(rows, skipped, wall, cmd, out, args.json, info)
     print(f"{len(rows)} runs on {len({r.dataset for r in rows})} datasets in {wall:.0f} s"
           + (f"; wrote {out}" if out else ""))
     return 0
