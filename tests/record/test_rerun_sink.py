@@ -1,0 +1,251 @@
+"""RerunSink end to end: a synthetic run with planted failures is recorded to a real .rrd, verified
+by the rerun CLI, read back (RrdReader) and compared with result.json; `vs-inspect inspect` must
+name the planted failures from the recording alone."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from vs_inspect.cli import main
+from vs_inspect.io.result import result_to_dict, write_json_atomic
+from vs_inspect.record.options import RecordOptions
+from vs_inspect.record.read import read_recording
+from vs_inspect.record.rerun_sink import RerunSink, entity_name
+from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
+from vs_inspect.sync.config import SyncConfig
+from vs_inspect.sync.run import sync_bundle
+from vs_inspect.types import CameraTrack
+
+RERUN = Path(sys.executable).parent / "rerun"
+WRONG_POSE_CAMERA = "cam2"
+
+
+def rerun_verify(path: Path, tmp: Path) -> subprocess.CompletedProcess:
+    env = dict(os.environ, XDG_CONFIG_HOME=str(tmp / "xdg-config"), XDG_DATA_HOME=str(tmp / "xdg-data"))
+    return subprocess.run([str(RERUN), "rrd", "verify", str(path)], capture_output=True, text=True,
+                          env=env, timeout=120)
+
+
+def chunk_entities(path: Path) -> set[str]:
+    import rerun.chunk as rrc
+    return {c.entity_path.lstrip("/") for c in rrc.RrdReader(str(path)).stream().to_chunks()}
+
+
+@pytest.fixture(scope="module")
+def planted_run(tmp_path_factory):
+    """5 cameras (one moving), one pair with all-wrong matches, and a wrong pose planted on cam2."""
+    tmp = tmp_path_factory.mktemp("planted")
+    scene = make_cue_scene(CueSceneConfig(cameras=5, moving=1, variable_rate=0, seconds=5.0,
+                                          points_per_object=15, pairs_per_view_pair=120,
+                                          no_match_pairs=0, all_wrong_pair=True, seed=3))
+    b = scene.bundle
+    cam = b.cameras[WRONG_POSE_CAMERA]
+    T = cam.cam_from_world.copy()
+    R = Rotation.from_euler("xyz", [8, -6, 5], degrees=True).as_matrix()
+    T[:3, :3] = R @ T[:3, :3]
+    T[:3, 3] = R @ T[:3, 3] + np.array([0.5, 0.2, 0.0])
+    bundle = dataclasses.replace(b, cameras={**b.cameras, WRONG_POSE_CAMERA: CameraTrack(cam.K, T)})
+    path = tmp / "recordings" / "planted.rrd"
+    with RerunSink(path, progress=False) as sink:
+        result = sync_bundle(bundle, SyncConfig(), sink=sink, progress=False)
+        data = result_to_dict(result, {"gt_offsets_s": bundle.gt_offsets_s, "config": {"test": True}})
+        sink.run_summary(data)
+        write_json_atomic(data, tmp / "out" / "result.json")
+    return {"path": path, "result": result, "json": tmp / "out" / "result.json", "scene": scene,
+            "bundle": bundle, "stats": sink.stats, "tmp": tmp}
+
+
+def test_recording_is_complete_and_verifies(planted_run):
+    path = planted_run["path"]
+    assert path.is_file()
+    assert [p.name for p in path.parent.iterdir()] == [path.name]  # no temporary file left
+    proc = rerun_verify(path, planted_run["tmp"])
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    ents = chunk_entities(path)
+    a, b = planted_run["result"].pairs[0].a, planted_run["result"].pairs[0].b
+    for e in ("meta/result_json", "meta/recording_json", "meta/cue_bundle", "sync/graph", "sync/offsets",
+              f"pairs/{a}__{b}/landscape/energy", f"pairs/{a}__{b}/decision",
+              f"pairs/{a}__{b}/epipolar/lines", f"world/cameras/{WRONG_POSE_CAMERA}",
+              "videos/cam0/tracks", "log/decisions"):
+        assert e in ents, e
+    assert any(e.startswith("world/trajectories/") for e in ents)
+    assert any(e.startswith("sync/solve/residual_ms/") for e in ents)
+
+
+def test_readback_equals_result_json(planted_run):
+    rec = read_recording(planted_run["path"])
+    on_disk = json.loads(planted_run["json"].read_text())
+    assert rec.result == on_disk  # the complete result dictionary, exactly
+    assert rec.meta["format"] == "vs-inspect-recording"
+    assert rec.config == {"test": True}
+    assert {v["name"] for v in rec.videos["videos"]} == set(on_disk["offsets_s"])
+    for p in on_disk["pairs"]:
+        key = f"{entity_name(p['a'])}__{entity_name(p['b'])}"
+        # decision text: verdict and reason
+        md = rec.decisions[key]
+        assert ("ACCEPTED" if p["accepted"] else "REJECTED") in md
+        assert p["reason"] in md
+        series = rec.landscapes.get(key, {})
+        land = p["landscape"]
+        finite = [(o, e) for o, e in zip(land["offsets_s"], land["energy"]) if e is not None]
+        if not finite:
+            assert "energy" not in series
+            continue
+        # the logged landscape is the landscape of result.json (offsets on whole ms)
+        np.testing.assert_array_equal(series["energy"].offset_ms, [round(o * 1000) for o, _ in finite])
+        np.testing.assert_allclose(series["energy"].value, [e for _, e in finite], rtol=0, atol=0)
+        # minima: same offsets (ms) and energies as result.json
+        want = sorted(zip([round(o * 1000) for o in p["minima_offsets_s"]], p["minima_energy"]))
+        got = list(zip(series["minima"].offset_ms.tolist(), series["minima"].value.tolist()))
+        assert got == want
+        if p["offset_s"] is not None and p["best_energy"] is not None:
+            assert series["chosen"].offset_ms.tolist() == [round(p["offset_s"] * 1000)]
+            assert series["chosen"].value.tolist() == [p["best_energy"]]
+        assert "truth" in series  # the ground truth is known in this scene
+    # solve iterations: residuals and weights per accepted pair
+    its = on_disk["solve"]["iterations"]
+    for e, (a, b) in enumerate(on_disk["solve"]["pairs"]):
+        key = f"{entity_name(a)}__{entity_name(b)}"
+        np.testing.assert_allclose(rec.solve["residual_ms"][key], [1000 * it["residual_s"][e] for it in its])
+        np.testing.assert_allclose(rec.solve["weight"][key], [it["weight"][e] for it in its])
+
+
+def test_inspect_names_planted_failures(planted_run, capsys):
+    # the recording alone: copy it somewhere else first (as if sent from another machine)
+    other = planted_run["tmp"] / "elsewhere" / "sent.rrd"
+    other.parent.mkdir()
+    shutil.copy(planted_run["path"], other)
+    assert main(["inspect", str(other)]) == 0
+    out = capsys.readouterr().out
+    suspects = out.split("suspects:")[1]
+    a, b = planted_run["scene"].all_wrong_pair
+    assert f"{a}__{b}" in suspects  # the pair whose matches are all wrong
+    assert f"{WRONG_POSE_CAMERA}:" in suspects and "camera pose" in suspects  # the wrong pose
+    for name, off in planted_run["result"].offsets_s.items():
+        assert name in out
+        if off is not None:
+            assert f"{off:+.4f}" in out
+    for p in planted_run["result"].pairs:
+        assert p.decision.reason in out
+
+
+def test_inspect_pair_prints_minima(planted_run, capsys):
+    p = next(p for p in planted_run["result"].pairs if len(p.minima_idx) >= 1)
+    assert main(["inspect", str(planted_run["path"]), "--pair", p.b, p.a]) == 0
+    out = capsys.readouterr().out.split(f"pair {p.a} → {p.b}")[1]
+    assert "the negative" in out
+    for i in p.minima_idx:
+        assert f"Δ = {p.offsets_s[i]:+.4f} s" in out
+    assert main(["inspect", str(planted_run["path"]), "--pair", "cam0", "nope"]) == 2
+
+
+def test_inspect_rejects_bad_files(planted_run, tmp_path, capsys):
+    import rerun as rr
+    trunc = tmp_path / "trunc.rrd"
+    trunc.write_bytes(planted_run["path"].read_bytes()[:50_000])
+    garbage = tmp_path / "garbage.rrd"
+    garbage.write_text("not a recording")
+    foreign = tmp_path / "foreign.rrd"
+    rec = rr.RecordingStream("someone_else")
+    rec.save(str(foreign))
+    rec.log("points", rr.Points2D([[1, 2]]), static=True)
+    rec.flush()
+    rec.disconnect()
+    for f, what in ((tmp_path / "missing.rrd", "no such recording"), (trunc, "not a readable"),
+                    (garbage, "not a readable"), (foreign, "not a vs_inspect recording")):
+        assert main(["inspect", str(f)]) == 2
+        err = capsys.readouterr().err
+        assert what in err and "Traceback" not in err
+
+
+def test_abort_on_exception_leaves_nothing(tmp_path):
+    scene = make_cue_scene(CueSceneConfig(cameras=2, moving=0, variable_rate=0, seconds=3.0,
+                                          points_per_object=5, no_match_pairs=0, all_wrong_pair=False))
+    target = tmp_path / "rec" / "x.rrd"
+    with pytest.raises(RuntimeError):
+        with RerunSink(target, progress=False) as sink:
+            sink.bundle(scene.bundle)
+            raise RuntimeError("stage failed")
+    assert not target.exists()
+    assert list(target.parent.iterdir()) == []
+
+
+def _write_h264(path: Path, frames: list[np.ndarray], fps: int) -> None:
+    import av
+    with av.open(str(path), "w") as c:
+        s = c.add_stream("libx264", rate=fps)
+        s.width, s.height, s.pix_fmt = frames[0].shape[1], frames[0].shape[0], "yuv420p"
+        for f in frames:
+            for pkt in s.encode(av.VideoFrame.from_ndarray(f, format="bgr24")):
+                c.mux(pkt)
+        for pkt in s.encode():
+            c.mux(pkt)
+
+
+def test_frames_masks_and_video_asset(tmp_path):
+    """Real video files decoded by real decoders: H.264 is embedded as an AssetVideo with frame
+    references, an MJPG file is logged as downscaled JPEG frames, masks as segmentation images."""
+    import cv2
+    scene = make_cue_scene(CueSceneConfig(cameras=2, moving=0, variable_rate=0, seconds=2.0,
+                                          points_per_object=5, no_match_pairs=0, all_wrong_pair=False,
+                                          fps_choices=(10.0,)))
+    b = scene.bundle
+    paths = {}
+    rng = np.random.default_rng(0)
+    for v in b.videos:
+        frames = []
+        for k in range(v.num_frames):
+            img = np.full((v.height // 4, v.width // 4, 3), 40, np.uint8)
+            cv2.circle(img, (20 + 5 * k, 40), 12, (0, 200, 255), -1)
+            img[:8, :8] = rng.integers(0, 255, (8, 8, 3))
+            frames.append(cv2.resize(img, (v.width, v.height)))
+        if v.name == "cam0":
+            paths[v.name] = tmp_path / "cam0.mp4"
+            _write_h264(paths[v.name], frames, int(v.fps))
+        else:
+            paths[v.name] = tmp_path / "cam1.avi"
+            w = cv2.VideoWriter(str(paths[v.name]), cv2.VideoWriter_fourcc(*"MJPG"), v.fps, (v.width, v.height))
+            for f in frames:
+                w.write(f)
+            w.release()
+    out = tmp_path / "frames.rrd"
+    with RerunSink(out, options=RecordOptions(max_image_width_px=320), progress=False) as sink:
+        for v in b.videos:
+            sink.video(v, str(paths[v.name]))
+            cap = cv2.VideoCapture(str(paths[v.name]))
+            k = 0
+            while True:
+                ok, img = cap.read()
+                if not ok:
+                    break
+                sink.video_frame(v.name, k, img)
+                mask = (cv2.cvtColor(img, cv2.COLOR_BGR2GRAY) > 100).astype(np.int32)
+                sink.dynamic_mask(v.name, k, mask)
+                k += 1
+            assert k == v.num_frames
+        result = sync_bundle(b, SyncConfig(), sink=sink, progress=False)
+    assert rerun_verify(out, tmp_path).returncode == 0
+    ents = chunk_entities(out)
+    assert "videos/cam0/video" in ents  # H.264 embedded as a video asset
+    assert "videos/cam1/image" in ents and "videos/cam0/image" not in ents  # MJPG -> JPEG frames
+    assert {"videos/cam0/mask", "videos/cam1/mask"} <= ents
+    import rerun.chunk as rrc
+    store = rrc.RrdReader(str(out)).stream().collect()
+    tab = store.reader("frame", contents="/videos/cam1/image").to_arrow_table()
+    assert tab.num_rows == b.video("cam1").num_frames
+    if result.offsets_s.get("cam1") is not None:  # synchronized: frames also on the global time axis
+        assert "time" in store.reader("time", contents="/videos/cam1/image").to_arrow_table().column_names
+    blob = [c for c in tab.column_names if c.endswith("EncodedImage:blob")][0]
+    jpg = np.asarray(tab.column(blob)[0].as_py()[0], dtype=np.uint8)
+    img = cv2.imdecode(jpg, cv2.IMREAD_COLOR)
+    assert img.shape[1] == 320  # downscaled to the configured width
