@@ -204,8 +204,9 @@ def timeline(data: ReportData, path: Path) -> Path:
         if off is None:
             after.barh(y, v.end_s - v.start_s, left=v.start_s, color="white", height=0.6,
                        edgecolor=REJECT, hatch="//", lw=1.0)
-            after.text(v.start_s + 0.1, y, "unresolved: not placed", va="center", fontsize=9,
-                       color=REJECT)
+            after.text(v.start_s + 0.1, y, "unresolved: not placed", va="center", fontsize=9.5,
+                       color=REJECT, fontweight="bold",
+                       bbox=dict(boxstyle="round,pad=0.2", fc="white", ec="none"))
         else:
             after.barh(y, v.end_s - v.start_s, left=v.start_s + off, color=colors[v.name],
                        height=0.6, edgecolor="black", lw=0.6)

@@ -1,0 +1,123 @@
+"""The report from a run folder and from the .rrd alone: every image produced, of the expected
+size, not blank, and the same images and numbers from both sources."""
+
+from __future__ import annotations
+
+import re
+from html import escape as html_escape
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from vs_inspect.io.bundle import write_bundle
+from vs_inspect.io.result import result_to_dict, write_json_atomic
+from vs_inspect.report.build import available, render_report
+from vs_inspect.report.figures import figure_size_px
+from vs_inspect.report.load import load
+from vs_inspect.sync.config import SyncConfig
+from vs_inspect.sync.run import sync_bundle
+from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
+
+REPO = Path(__file__).resolve().parents[2]
+SCENE = CueSceneConfig(cameras=4, moving=1, variable_rate=1, seconds=5.0, points_per_object=15,
+                       pairs_per_view_pair=150, seed=3)
+EXPECTED = {"scene3d", "landscapes", "pair_graph", "timeline", "epipolar"}  # no videos: no mosaic
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    """A run folder (result.json + bundle/) and the .rrd written by RerunSink during the same sync."""
+    from vs_inspect.record.rerun_sink import RerunSink
+
+    root = tmp_path_factory.mktemp("report")
+    scene = make_cue_scene(SCENE)
+    bundle_dir = write_bundle(scene.bundle, root / "run" / "bundle")
+    rrd = root / "run.rrd"
+    with RerunSink(rrd, progress=False) as sink:
+        result = sync_bundle(scene.bundle, SyncConfig(), sink=sink, progress=False)
+    data = result_to_dict(result, {"gt_offsets_s": scene.bundle.gt_offsets_s,
+                                   "input": {"bundle": str(bundle_dir)}})
+    write_json_atomic(data, root / "run" / "result.json")
+    return root / "run", rrd, scene
+
+
+def _pixels(path: Path) -> np.ndarray:
+    import matplotlib.image as mpimg
+    return mpimg.imread(path)
+
+
+def _check_images(out: Path, data) -> set[str]:
+    pngs = {p.stem for p in out.glob("*.png")}
+    assert pngs == set(available(data))
+    for key in pngs:
+        img = _pixels(out / f"{key}.png")
+        h, w = img.shape[:2]
+        assert (w, h) == figure_size_px(key, data), key
+        rgb = (img[..., :3].reshape(-1, 3) * 255).astype(np.uint32)
+        packed = (rgb[:, 0] << 16) | (rgb[:, 1] << 8) | rgb[:, 2]
+        # not blank: many colours, and a good share of pixels differ from the background
+        assert len(np.unique(packed[::7])) > 50, key
+        assert (packed != packed[0]).mean() > 0.01, key
+    return pngs
+
+
+def _numbers(html: str) -> list[str]:
+    body = re.sub(r"<p class='source'>.*?</p>", "", html)
+    return re.findall(r"[-+]?\d+\.?\d*", body)
+
+
+@pytest.fixture(scope="module")
+def reports(run, tmp_path_factory):
+    """The report rendered from the run folder (library call) and from the .rrd alone (the CLI)."""
+    from vs_inspect.cli import main as cli
+
+    run_dir, rrd, _ = run
+    out = tmp_path_factory.mktemp("reports")
+    from_run = load(run_dir)
+    render_report(from_run, out / "run")
+    assert cli(["report", str(rrd), "--out", str(out / "rrd")]) == 0
+    return from_run, out / "run", load(rrd), out / "rrd"
+
+
+def test_report_from_run_folder(reports):
+    data, out, _, _ = reports
+    assert _check_images(out, data) == EXPECTED
+    html = (out / "index.html").read_text()
+    # the numbers behind the figures: every solved offset and every pair's decision
+    for v, off in data.offsets_s.items():
+        assert (f"{off:+.4f}" if off is not None else "—") in html
+    for p in data.pairs:
+        assert html_escape(p.reason) in html
+    assert html.count("class='rej'") == sum(not p.accepted for p in data.pairs) > 0
+    assert html.count("class='acc'") == sum(p.accepted for p in data.pairs) > 0
+    assert "error [ms]" in html  # the truth is known
+    # the epipolar panel tells the right offset from a wrong one
+    e = data.epipolar
+    assert e.chosen.median_sampson_px2 < 0.1 * e.wrong.median_sampson_px2
+    assert len(data.trajectories) > 0
+
+
+def test_report_from_rrd_alone_matches_run_folder(reports):
+    from_run, run_out, from_rrd, rrd_out = reports
+    assert _check_images(rrd_out, from_rrd) == _check_images(run_out, from_run) == EXPECTED
+    a, b = (run_out / "index.html").read_text(), (rrd_out / "index.html").read_text()
+    assert len(_numbers(a)) > 50
+    assert _numbers(a) == _numbers(b)
+    assert from_rrd.offsets_s == from_run.offsets_s
+    assert [p.key for p in from_rrd.pairs] == [p.key for p in from_run.pairs]
+
+
+def test_pair_choice_and_bad_input(run, tmp_path, capsys):
+    from vs_inspect.cli import main as cli
+
+    run_dir, rrd, _ = run
+    data = load(rrd, pair=("cam3", "cam0"))  # either order names the stored pair
+    assert (data.epipolar.a, data.epipolar.b) == ("cam0", "cam3")
+    assert cli(["report", str(tmp_path / "nope"), "--out", str(tmp_path / "x")]) == 2
+    assert "nope" in capsys.readouterr().err
+    assert cli(["report", str(run_dir), "--out", str(tmp_path / "y"), "--pair", "cam0", "camX"]) == 2
+    assert "camX" in capsys.readouterr().err
+    (tmp_path / "junk.rrd").write_bytes(b"not a recording")
+    assert cli(["report", str(tmp_path / "junk.rrd"), "--out", str(tmp_path / "z")]) == 2
+    assert "junk.rrd" in capsys.readouterr().err
