@@ -272,7 +272,7 @@ class PairDecision:
     accepted: bool
     reason: str  # readable, e.g. "single clear minimum" or "ambiguous: 3 minima of similar depth"
     contrast: float  # 1 - E_best / E_baseline (0 = flat landscape, 1 = perfectly sharp)
-    second_depth_ratio: float  # depth of the 2nd minimum / depth of the best (0 = none, 1 = tie)
+    second_depth_ratio: float  # prominence of the strongest rival minimum / the best's (0 = none, 1 = tie)
     num_minima: int  # significant local minima (by prominence)
     num_pareto_minima: int  # minima Pareto-optimal in (energy, overlap)
     at_range_edge: bool  # best minimum lies on the border of the search range

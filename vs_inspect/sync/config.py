@@ -50,9 +50,11 @@ class DecisionConfig:
     min_contrast: float = 0.3
     """Reject when the best energy is less than this fraction below the landscape's median (flat landscape)."""
     max_second_ratio: float = 0.7
-    """Reject when another minimum is at least this deep relative to the best (depth below the median)."""
+    """Reject when another minimum (with comparable overlap) is at least this prominent relative to the best."""
     max_minima: int = 2
-    """Reject when more local minima than this are at least half as deep as the best (the paper uses 2)."""
+    """Reject when more local minima than this are at least half as prominent as the best (the paper uses 2)."""
+    min_rival_support: float = 0.5
+    """Another minimum competes with the best only if its overlap (term count) is at least this fraction of the best's."""
     min_prominence: float = 0.1
     """A local minimum counts only with a prominence of this fraction of the best depth."""
     reject_range_edge: bool = True

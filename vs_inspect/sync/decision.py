@@ -15,21 +15,27 @@ from ..types import PairDecision
 from .config import DecisionConfig
 
 
-def local_minima(energy: np.ndarray, min_prominence: float) -> np.ndarray:
-    """Indices of local minima (edges included) with at least that prominence, best first."""
+def local_minima(energy: np.ndarray, min_prominence: float) -> tuple[np.ndarray, np.ndarray]:
+    """Local minima (edges included) with at least that prominence: (indices, prominences), best first.
+
+    Prominence is how far a minimum dips below the higher ground that separates it from any
+    deeper minimum (scipy's peak prominence of -E). The walls beyond the range are at the
+    landscape's maximum, so the global minimum's prominence is the whole range of E.
+    """
     e = np.asarray(energy, dtype=np.float64)
     finite = np.isfinite(e)
     if not finite.any():
-        return np.zeros(0, dtype=np.int64)
-    # Pad with +inf-like walls so that minima on the border of the range count too.
-    top = np.nanmax(e) + 1.0
+        return np.zeros(0, dtype=np.int64), np.zeros(0)
+    top = float(np.nanmax(e))
     filled = np.where(finite, e, top)
     padded = np.concatenate([[top], filled, [top]])
-    idx, _ = find_peaks(-padded, prominence=max(min_prominence, 1e-15))
+    idx, props = find_peaks(-padded, prominence=max(min_prominence, 1e-15), plateau_size=(1, None))
+    prom = props["prominences"]
     idx = idx - 1
     if len(idx) == 0:
-        idx = np.array([int(np.nanargmin(e))])
-    return idx[np.argsort(filled[idx], kind="stable")].astype(np.int64)
+        return np.array([int(np.nanargmin(e))]), np.array([0.0])
+    order = np.argsort(filled[idx], kind="stable")
+    return idx[order].astype(np.int64), prom[order]
 
 
 def pareto_minima(energy: np.ndarray, support: np.ndarray, minima: np.ndarray) -> np.ndarray:
@@ -56,18 +62,28 @@ def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_t
     e_best = float(np.nanmin(energy))
     e_base = float(np.nanmedian(energy))
     depth = e_base - e_best
-    minima = local_minima(energy, cfg.min_prominence * depth if depth > 0 else 0.0)
+    e_range = float(np.nanmax(energy)) - e_best
+    minima, prom = local_minima(energy, cfg.min_prominence * e_range)
     best = int(minima[0])
     contrast = depth / e_base if e_base > 0 else 0.0
-    depths = np.array([e_base - energy[m] for m in minima])
-    second = float(max(depths[1], 0.0) / depth) if len(minima) > 1 and depth > 0 else 0.0
-    significant = int(np.sum(depths >= 0.5 * depth)) if depth > 0 else len(minima)
+    # Rivals are compared by prominence (their own dip), not by depth below a global level, so a
+    # trend in the landscape (energy drifting with the overlap) does not make a shallow dip look
+    # deep. A minimum resting on much less overlap than the best is a weaker rival: its energy
+    # is a mean over fewer terms and dips by chance (dominated in energy and overlap).
+    keep = [i for i in range(1, len(minima))
+            if support[minima[i]] >= cfg.min_rival_support * support[best]]
+    rivals = minima[keep]
+    rival_prom = prom[keep]
+    best_prom = prom[0] if prom[0] > 0 else 1e-300
+    second = float(rival_prom.max() / best_prom) if len(rivals) else 0.0
+    significant = 1 + int(np.sum(rival_prom >= 0.5 * best_prom))
+    first_rival = rivals[int(np.argmax(rival_prom))] if len(rivals) else best
     pareto = pareto_minima(energy, support, minima)
     edge = best in (0, len(energy) - 1) or not (finite[max(best - 1, 0)] and finite[min(best + 1, len(energy) - 1)])
     nums = dict(contrast=float(contrast), second_depth_ratio=second, num_minima=significant,
                 num_pareto_minima=len(pareto), at_range_edge=bool(edge))
 
-    accepted, reason = True, f"single clear minimum (contrast {contrast:.2f}, 2nd/1st depth {second:.2f})"
+    accepted, reason = True, f"single clear minimum (contrast {contrast:.2f}, rival/best prominence {second:.2f})"
     if not cfg.enabled:
         reason = "accepted without checks (spurious-pair filter off)"
     elif contrast < cfg.min_contrast:
@@ -76,8 +92,8 @@ def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_t
                   f"(< {100 * cfg.min_contrast:.0f}%): wrong matches, wrong poses or no shared motion")
     elif second >= cfg.max_second_ratio:
         accepted = False
-        reason = (f"ambiguous: a second minimum at {offsets_s[minima[1]]:+.3f} s is {100 * second:.0f}% "
-                  f"as deep as the best at {offsets_s[best]:+.3f} s")
+        reason = (f"ambiguous: another minimum at {offsets_s[first_rival]:+.3f} s is {100 * second:.0f}% "
+                  f"as prominent as the best at {offsets_s[best]:+.3f} s")
     elif significant > cfg.max_minima:
         accepted = False
         reason = f"ambiguous: {significant} minima at least half as deep as the best (> {cfg.max_minima})"

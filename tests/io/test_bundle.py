@@ -1,0 +1,113 @@
+"""Cue bundle v1: round trip, and one clear message + exit code 2 for each malformed case."""
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from vs_inspect.cli import main
+from vs_inspect.errors import BundleError
+from vs_inspect.io.bundle import read_bundle, write_bundle
+from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
+
+
+@pytest.fixture(scope="module")
+def good_bundle(tmp_path_factory):
+    scene = make_cue_scene(CueSceneConfig(cameras=3, moving=1, variable_rate=1, seconds=3.0,
+                                          pairs_per_view_pair=60, no_match_pairs=0,
+                                          all_wrong_pair=False, seed=2))
+    return write_bundle(scene.bundle, tmp_path_factory.mktemp("b") / "bundle"), scene
+
+
+def test_round_trip_is_exact(good_bundle):
+    path, scene = good_bundle
+    b = read_bundle(path)
+    assert b.names == scene.bundle.names
+    for v, w in zip(b.videos, scene.bundle.videos):
+        assert np.array_equal(v.timestamps_s, w.timestamps_s) and v.fps == w.fps
+    for n in b.names:
+        assert np.array_equal(b.tracks[n].xy, scene.bundle.tracks[n].xy, equal_nan=True)
+        assert np.array_equal(b.cameras[n].cam_from_world, scene.bundle.cameras[n].cam_from_world)
+    assert set(b.pairs) == set(scene.bundle.pairs)
+    assert b.gt_offsets_s == scene.bundle.gt_offsets_s
+    meta = json.loads((path / "bundle.json").read_text())
+    assert meta["format"] == "vs-inspect-cues" and meta["version"] == 1
+    vfr = [v for v in meta["videos"] if "timestamps_s" in v]
+    assert len(vfr) == 1 and "fps" not in vfr[0]
+
+
+def test_writer_refuses_to_overwrite_and_leaves_no_partial(good_bundle, tmp_path):
+    path, scene = good_bundle
+    with pytest.raises(FileExistsError):
+        write_bundle(scene.bundle, path)
+    assert not [p for p in path.parent.iterdir() if ".partial-" in p.name]
+
+
+def corrupt(src, dst, edit):
+    shutil.copytree(src, dst)
+    edit(dst)
+    return dst
+
+
+def set_json(key_path, value):
+    def edit(d):
+        meta = json.loads((d / "bundle.json").read_text())
+        obj = meta
+        for k in key_path[:-1]:
+            obj = obj[k]
+        obj[key_path[-1]] = value
+        (d / "bundle.json").write_text(json.dumps(meta))
+    return edit
+
+
+def set_npz(rel, **arrays):
+    def edit(d):
+        with np.load(d / rel) as z:
+            data = {k: z[k] for k in z.files}
+        data.update(arrays)
+        np.savez(d / rel, **data)
+    return edit
+
+
+K_NAN = np.array([[np.nan, 0, 1], [0, 1, 1], [0, 0, 1]])
+K_SINGULAR = np.array([[1.0, 0, 1], [0, 0, 1], [0, 0, 1]])
+
+CASES = {
+    "missing camera file": (lambda d: (d / "cameras" / "cam1.npz").unlink(), "cameras/cam1.npz", "missing file"),
+    "missing bundle.json": (lambda d: (d / "bundle.json").unlink(), "bundle.json", "missing file"),
+    "tracks wrong shape": (set_npz("tracks/cam0.npz", xy=np.zeros((5, 7, 3))), "tracks/cam0.npz", "shape"),
+    "tracks wrong frame count": (set_npz("tracks/cam0.npz", xy=np.zeros((5, 7, 2)), instance=np.zeros(5, int)), "tracks/cam0.npz", "frames"),
+    "K with NaN": (set_npz("cameras/cam0.npz", K=K_NAN), "cameras/cam0.npz", "NaN"),
+    "singular K": (set_npz("cameras/cam0.npz", K=K_SINGULAR), "cameras/cam0.npz", "singular"),
+    "pose not a rotation": (set_npz("cameras/cam0.npz", cam_from_world=np.diag([2.0, 1, 1, 1])),
+                            "cameras/cam0.npz", "not a rotation"),
+    "non-increasing timestamps": (set_json(["videos", 1, "timestamps_s", 3], -1.0), "bundle.json", "strictly increasing"),
+    "pair index out of range": (set_npz("pairs/cam0__cam1.npz", index=np.array([[0, 10**6]])),
+                                "pairs/cam0__cam1.npz", "out of range"),
+    "pair file names unknown video": (lambda d: shutil.copy(d / "pairs" / "cam0__cam1.npz", d / "pairs" / "cam0__zz9.npz"),
+                                      "pairs/cam0__zz9.npz", "known videos"),
+    "empty bundle": (set_json(["videos"], []), "bundle.json", "empty bundle"),
+    "wrong format": (set_json(["format"], "something"), "bundle.json", "format"),
+    "bad fps": (set_json(["videos", 0, "fps"], -3), "bundle.json", "fps"),
+    "corrupt npz": (lambda d: (d / "tracks" / "cam2.npz").write_bytes(b"not a zip"), "tracks/cam2.npz", "readable"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_malformed_bundle_gets_one_clear_message_and_exit_2(case, good_bundle, tmp_path, capsys):
+    edit, where, what = CASES[case]
+    bad = corrupt(good_bundle[0], tmp_path / "bad", edit)
+    with pytest.raises(BundleError) as info:
+        read_bundle(bad)
+    assert where in str(info.value).replace("\\", "/") and what in str(info.value)
+    out_dir = tmp_path / "out"
+    assert main(["sync", "--bundle", str(bad), "--out", str(out_dir), "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and where in err[0] and "Traceback" not in err[0]
+    assert not (out_dir / "result.json").exists()
+
+
+def test_not_a_folder(tmp_path, capsys):
+    assert main(["sync", "--bundle", str(tmp_path / "nope"), "--out", str(tmp_path / "o")]) == 2
+    assert "not a folder" in capsys.readouterr().err

@@ -1,0 +1,108 @@
+import numpy as np
+import pytest
+
+from vs_inspect.sync.config import DecisionConfig, PairSelection
+from vs_inspect.sync.decision import decide, local_minima
+from vs_inspect.sync.pairs import select_pairs
+from vs_inspect.sync.solve import PairMeasurement, huber_weights, solve_offsets
+
+OFFS = np.linspace(-1, 1, 201)
+
+
+def bowl(center, depth=1.0, width=0.05):
+    return depth * np.exp(-((OFFS - center) / width) ** 2)
+
+
+def test_single_clear_minimum_is_accepted():
+    e = 1.0 - bowl(0.3, 0.8)
+    dec, minima = decide(e, np.full(201, 1000), OFFS, 100, DecisionConfig())
+    assert dec.accepted and OFFS[minima[0]] == pytest.approx(0.3)
+    assert dec.contrast == pytest.approx(0.8, abs=0.01)
+
+
+def test_two_equal_minima_are_ambiguous():
+    e = 1.0 - bowl(-0.5, 0.8) - bowl(0.5, 0.78)
+    dec, _ = decide(e, np.full(201, 1000), OFFS, 100, DecisionConfig())
+    assert not dec.accepted and dec.reason.startswith("ambiguous")
+    assert dec.second_depth_ratio == pytest.approx(0.78 / 0.8, abs=0.02)
+
+
+def test_flat_landscape_is_rejected():
+    rng = np.random.default_rng(0)
+    e = 1.0 + 0.02 * rng.normal(size=201)
+    dec, _ = decide(e, np.full(201, 1000), OFFS, 100, DecisionConfig())
+    assert not dec.accepted and dec.reason.startswith("flat")
+
+
+def test_minimum_at_the_range_edge_is_rejected_and_filter_off_accepts():
+    e = 1.0 - 0.8 * np.clip(-OFFS, 0, None)  # decreasing to the left border
+    dec, _ = decide(e, np.full(201, 1000), OFFS, 100, DecisionConfig())
+    assert not dec.accepted and "edge" in dec.reason and dec.at_range_edge
+    dec_off, _ = decide(e, np.full(201, 1000), OFFS, 100, DecisionConfig(enabled=False))
+    assert dec_off.accepted
+
+
+def test_too_few_track_pairs():
+    dec, _ = decide(1.0 - bowl(0.0), np.full(201, 10), OFFS, 3, DecisionConfig())
+    assert not dec.accepted and "too few track pairs" in dec.reason
+
+
+def test_local_minima_include_edges_and_sort_by_energy():
+    e = np.array([0.1, 0.5, 0.9, 0.3, 0.9, 0.2])
+    idx, prom = local_minima(e, 0.05)
+    assert idx.tolist() == [0, 5, 3]
+    assert np.allclose(prom, [0.8, 0.7, 0.6])
+
+
+def test_huber_weights():
+    assert np.allclose(huber_weights(np.array([0.0, 0.05, -0.2]), 0.1), [1.0, 1.0, 0.5])
+
+
+def m(a, b, x, s=0.01):
+    return PairMeasurement(a, b, x, s)
+
+
+def test_irls_downweights_an_outlier_that_ls_follows():
+    truth = {"v0": 0.0, "v1": 1.0, "v2": -0.5, "v3": 2.0}
+    meas = [m(a, b, truth[b] - truth[a]) for a, b in
+            [("v0", "v1"), ("v0", "v2"), ("v0", "v3"), ("v1", "v2"), ("v1", "v3"), ("v2", "v3")]]
+    meas[5] = m("v2", "v3", truth["v3"] - truth["v2"] + 1.5)  # a wrong pair
+    names = list(truth)
+    irls = solve_offsets(names, "v0", meas, "irls", 0.02)
+    ls = solve_offsets(names, "v0", meas, "ls")
+    err_irls = max(abs(irls.offsets_s[v] - truth[v]) for v in names)
+    err_ls = max(abs(ls.offsets_s[v] - truth[v]) for v in names)
+    assert err_irls < 0.02 and err_ls > 0.1  # Huber keeps a small pull of size ~delta
+    assert irls.iterations[-1].weight[5] < 0.05
+    assert all(u is not None and u >= 0 for u in irls.uncertainty_s.values())
+
+
+def test_unconnected_video_gets_null_and_a_reason():
+    out = solve_offsets(["a", "b", "c"], "a", [m("a", "b", 0.4)])
+    assert out.offsets_s == {"a": 0.0, "b": pytest.approx(0.4), "c": None}
+    assert "not connected" in out.unresolved_reason["c"]
+
+
+def test_reference_must_be_a_video():
+    with pytest.raises(ValueError, match="reference"):
+        solve_offsets(["a", "b"], "zz", [])
+
+
+def test_pair_selection_modes():
+    names = [f"v{i}" for i in range(8)]
+    allp = select_pairs(names, set(), PairSelection("all"))
+    assert len(allp) == 28
+    matched = set(allp)
+    rst = select_pairs(names, matched, PairSelection("rst", seed=1))
+    assert len(rst) == 7  # a spanning tree
+    from scipy.sparse.csgraph import connected_components
+    from scipy.sparse import coo_matrix
+    idx = {n: i for i, n in enumerate(names)}
+    g = coo_matrix((np.ones(7), ([idx[a] for a, _ in rst], [idx[b] for _, b in rst])), shape=(8, 8))
+    assert connected_components(g, directed=False)[0] == 1
+    half = select_pairs(names, matched, PairSelection("fraction", 0.5, seed=1))
+    assert len(half) == 14 and set(rst) <= set(half) | set(rst)
+    assert select_pairs(names, matched, PairSelection("rst", seed=1)) == rst  # deterministic
+    assert PairSelection.parse("0.8").fraction == 0.8
+    with pytest.raises(ValueError):
+        PairSelection.parse("2")
