@@ -96,7 +96,7 @@ def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_t
                   f"as prominent as the best at {offsets_s[best]:+.3f} s")
     elif significant > cfg.max_minima:
         accepted = False
-        reason = f"ambiguous: {significant} minima at least half as deep as the best (> {cfg.max_minima})"
+        reason = f"ambiguous: {significant} minima at least half as prominent as the best (> {cfg.max_minima})"
     elif edge and cfg.reject_range_edge:
         accepted = False
         reason = (f"best minimum at the edge of the search range ({offsets_s[best]:+.3f} s): "
