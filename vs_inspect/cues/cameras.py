@@ -113,14 +113,22 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
         ext = pycolmap.FeatureExtractionOptions()
         ext.sift.max_num_features = cfg.max_features
         ext.num_threads = 2
+        few = sum(len(v[0]) for v in frames_by_video.values()) <= 16
+        ext.sift.estimate_affine_shape = few  # wide baselines between few views: affine + DSP SIFT
+        ext.sift.domain_size_pooling = few
         pycolmap.extract_features(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER,
                                   reader_options=reader, extraction_options=ext,
                                   device=pycolmap.Device.cpu)
-        pycolmap.match_exhaustive(db, device=pycolmap.Device.cpu)
+        mopt = pycolmap.FeatureMatchingOptions()
+        mopt.guided_matching = True
+        pycolmap.match_exhaustive(db, matching_options=mopt, device=pycolmap.Device.cpu)
         opts = pycolmap.IncrementalPipelineOptions()
         opts.random_seed = seed
         opts.num_threads = 2
-        opts.min_model_size = 3
+        opts.min_model_size = 2
+        opts.mapper.init_min_num_inliers = cfg.min_inliers
+        opts.mapper.abs_pose_min_num_inliers = max(10, cfg.min_inliers // 2)
+        opts.mapper.init_min_tri_angle = 4.0
         out = tmp / "sparse"
         out.mkdir()
         recs = pycolmap.incremental_mapping(db, img_dir, out, opts)

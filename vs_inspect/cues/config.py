@@ -43,6 +43,8 @@ class TrackConfig:
     """Forward-backward check: a point whose round trip misses by more than this is lost."""
     min_length: int = 3
     """Tracks seen in fewer frames are dropped."""
+    seed_erode_px: int = 5
+    """Seeds are placed at least about half this far inside a moving region (erosion size, working pixels)."""
     reseed_every: int = 1
     """Seed new points inside moving regions every this many frames."""
 
@@ -73,14 +75,16 @@ class MatchConfig:
 
 @dataclass(frozen=True)
 class CameraConfig:
-    static_frames: int = 4
-    """Estimated cameras: frames per static camera given to the reconstruction."""
+    static_frames: int = 9
+    """Estimated cameras: frames of a static camera whose temporal median (the background) is its one image in the reconstruction."""
     moving_frames: int = 30
     """Estimated cameras: frames per moving camera (subsampled evenly)."""
-    max_side: int = 1024
+    max_side: int = 1280
     """Estimated cameras: frames are downscaled to at most this side for SfM."""
     max_features: int = 4096
     """Estimated cameras: SIFT features per frame."""
+    min_inliers: int = 30
+    """Estimated cameras: inlier matches needed to start the reconstruction (half that to add an image)."""
     mask_moving: bool = True
     """Estimated cameras: mask out moving regions before feature extraction."""
 

@@ -103,6 +103,13 @@ def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) 
                 masks.append(m == 0)
             else:
                 masks.append(None)
+        if mode == "static" and len(imgs) > 1:
+            # one image of a static camera: the temporal median shows the background without the
+            # moving objects; pixels that move in most sampled frames stay masked
+            imgs = [np.median(np.stack(imgs), axis=0).astype(np.uint8)]
+            if cfg.camera.mask_moving:
+                masks = [np.mean([~m for m in masks], axis=0) < 0.5]
+            idx = idx[:1]
         sfm = (idx, imgs, masks)
         timings["sfm_frames_s"] = timings.get("sfm_frames_s", 0.0) + time.perf_counter() - t0
     return _VideoCues(info, str(src.path), scale, to_full_px(xy, scale), inst, feats, mode, bg,

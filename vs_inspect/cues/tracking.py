@@ -48,6 +48,8 @@ def track_points(frames: np.ndarray, instances: np.ndarray, cfg: TrackConfig = T
         want = cfg.max_points - len(active_xy)
         if want > 0 and (t % max(1, cfg.reseed_every) == 0):
             region = (seed_mask[t] if seed_mask is not None else instances[t] > 0).astype(np.uint8) * 255
+            if cfg.seed_erode_px > 1:  # corners on an object's outline straddle the background
+                region = cv2.erode(region, np.ones((cfg.seed_erode_px, cfg.seed_erode_px), np.uint8))
             if region.any():
                 for x, y in active_xy:
                     cv2.circle(region, (int(round(x)), int(round(y))), r, 0, -1)
