@@ -89,9 +89,14 @@ class EpipolarSweep:
 
 
 def epipolar_sweep(bundle: CueBundle, a: str, b: str, offsets_s: np.ndarray, best_offset_s: float,
-                   max_lines: int, seed: int = 0) -> EpipolarSweep | None:
+                   max_lines: int, seed: int = 0,
+                   prefer_frames: set[int] | None = None) -> EpipolarSweep | None:
     """Pick a frame of a with many paired tracks visible (at the chosen offset when known), and
-    compute for each offset the epipolar lines in a of b's paired points at τ_a − Δ."""
+    compute for each offset the epipolar lines in a of b's paired points at τ_a − Δ.
+
+    prefer_frames: frames of a that have an image; the best of them is taken when it shows at
+    least half as many paired tracks as the best frame overall.
+    """
     tp = bundle.pair(a, b)
     if tp is None or len(tp.index) == 0 or len(offsets_s) == 0:
         return None
@@ -106,6 +111,10 @@ def epipolar_sweep(bundle: CueBundle, a: str, b: str, offsets_s: np.ndarray, bes
     if score.max() <= 0:
         return None
     k = int(np.argmax(score))
+    if prefer_frames:
+        cand = np.array(sorted(f for f in prefer_frames if 0 <= f < len(score)), dtype=int)
+        if len(cand) and score[cand].max() >= 0.5 * score[k]:
+            k = int(cand[np.argmax(score[cand])])
     tau = float(va.timestamps_s[k])
     rows = np.flatnonzero(seen_a[:, k])
     if len(rows) > max_lines:

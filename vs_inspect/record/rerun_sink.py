@@ -141,7 +141,6 @@ class RerunSink(Sink):
         self._events = 0
         self.hook_s = 0.0
         self.stats: dict[str, float] = {}
-        self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
 
     # ---- context manager ----
 
@@ -358,9 +357,6 @@ class RerunSink(Sink):
             self.rec.send_columns(f"world/cameras/{entity_name(name)}", idx,
                                   rr.Transform3D.columns(translation=T[:, :3, 3], mat3x3=T[:, :3, :3],
                                                          relation=[rr.TransformRelation.ChildFromParent] * n))
-            if cam.K.ndim == 3:
-                self.rec.send_columns(f"world/cameras/{entity_name(name)}", idx,
-                                      rr.Pinhole.columns(image_from_camera=cam.K))
 
     # ---- internals: videos ----
 
@@ -542,7 +538,9 @@ class RerunSink(Sink):
 
     def _log_epipolar(self, land: PairLandscape, bundle: CueBundle) -> None:
         offsets = self._sweep_offsets(land)
-        sw = epipolar_sweep(bundle, land.a, land.b, offsets, land.best_offset_s, self.options.epipolar_lines)
+        buf = self._videos.get(land.a)
+        sw = epipolar_sweep(bundle, land.a, land.b, offsets, land.best_offset_s, self.options.epipolar_lines,
+                            prefer_frames=set(buf.jpeg) if buf is not None else None)
         if sw is None:
             return
         base = f"{pair_path(land.a, land.b)}/epipolar"
@@ -555,7 +553,6 @@ class RerunSink(Sink):
             static=True)
         self.rec.log(f"{base}/border", rr.LineStrips2D([[[0, 0], [W, 0], [W, H], [0, H], [0, 0]]],
                                                        colors=[GREY]), static=True)
-        buf = self._videos.get(land.a)
         if buf is not None and sw.frame_a in buf.jpeg:
             w, h = buf.image_size
             self.rec.log(f"{base}/image", rr.Transform3D(scale=[W / w, H / h, 1.0]), static=True)
