@@ -120,7 +120,7 @@ def main() -> int:
     t_b = max((float(vb.timestamps_s[k]) for k in ok_b[::3]), key=wrong_error)
     x_b = sample(xb_all[ib:ib + 1], vb.timestamps_s, t_b)[0]
     line = F_ab @ np.array([x_b[0], x_b[1], 1.0])
-    fig, axes = plt.subplots(1, 3, figsize=(18, 5), dpi=100, layout="constrained")
+    fig, axes = plt.subplots(1, 3, figsize=(18, 4.4), dpi=100, layout="constrained")
     for ax, d in zip(axes, trials):
         x_a = sample(xa_all[ia:ia + 1], va.timestamps_s, t_b + d)[0]
         err = float(epipolar_residual(F_ab, x_a, x_b, "sampson"))

@@ -121,3 +121,62 @@ def test_pair_choice_and_bad_input(run, tmp_path, capsys):
     (tmp_path / "junk.rrd").write_bytes(b"not a recording")
     assert cli(["report", str(tmp_path / "junk.rrd"), "--out", str(tmp_path / "z")]) == 2
     assert "junk.rrd" in capsys.readouterr().err
+
+
+VIDEO_SCENE = CueSceneConfig(cameras=3, moving=0, variable_rate=0, seconds=3.0, max_offset_s=1.0,
+                             points_per_object=10, pairs_per_view_pair=120, no_match_pairs=0,
+                             all_wrong_pair=False, fps_choices=(25.0,), seed=5)
+
+
+def _write_videos(bundle, folder: Path) -> dict[str, str]:
+    """Real H.264 files, one per camera: each frame shows the camera's track points as dots."""
+    import cv2
+
+    from vs_inspect.io.video import VideoWriter
+
+    paths = {}
+    for v in bundle.videos:
+        xy = bundle.tracks[v.name].xy
+        path = folder / f"{v.name}.mp4"
+        with VideoWriter(path, v.width, v.height, v.fps, crf=30, preset="ultrafast") as w:
+            for k in range(v.num_frames):
+                img = np.full((v.height, v.width, 3), 90, np.uint8)
+                cv2.putText(img, f"{v.name} frame {k}", (20, 60), cv2.FONT_HERSHEY_SIMPLEX, 1.5,
+                            (255, 255, 255), 3)
+                for x, y in xy[:, k][np.isfinite(xy[:, k, 0])]:
+                    cv2.circle(img, (int(x), int(y)), 6, (40, 200, 255), -1)
+                w.write(img)
+        paths[v.name] = str(path)
+    return paths
+
+
+def test_report_with_videos_has_mosaic_and_real_frames(tmp_path):
+    """With the video files named in result.json, the epipolar panel draws on the real frame and
+    the mosaic shows one global moment across all videos; the .rrd with embedded video assets
+    gives the same images."""
+    from vs_inspect.record.rerun_sink import RerunSink
+
+    scene = make_cue_scene(VIDEO_SCENE)
+    videos = _write_videos(scene.bundle, tmp_path)
+    bundle_dir = write_bundle(scene.bundle, tmp_path / "run" / "bundle")
+    rrd = tmp_path / "run.rrd"
+    with RerunSink(rrd, progress=False) as sink:
+        for v in scene.bundle.videos:
+            sink.video(v, videos[v.name])
+        result = sync_bundle(scene.bundle, SyncConfig(), sink=sink, progress=False)
+    write_json_atomic(result_to_dict(result, {"gt_offsets_s": scene.bundle.gt_offsets_s,
+                                              "input": {"bundle": str(bundle_dir), "videos": videos}}),
+                      tmp_path / "run" / "result.json")
+    data = load(tmp_path / "run")
+    assert data.mosaic is not None and data.epipolar.image_bgr is not None
+    assert all(t.image_bgr is not None for t in data.mosaic.tiles)  # offsets within ±1 s of 3 s videos
+    render_report(data, tmp_path / "out")
+    assert _check_images(tmp_path / "out", data) == EXPECTED | {"mosaic"}
+    # each tile is the frame nearest the moment: its local time + offset is within half a frame
+    for t in data.mosaic.tiles:
+        v = data.video(t.name)
+        assert abs(t.frame / v.fps + data.offsets_s[t.name] - data.mosaic.time_s) <= 0.5 / v.fps + 1e-9
+    from_rrd = load(rrd)
+    render_report(from_rrd, tmp_path / "out_rrd")
+    assert _check_images(tmp_path / "out_rrd", from_rrd) == EXPECTED | {"mosaic"}
+    assert np.abs(from_rrd.epipolar.image_bgr.astype(int) - data.epipolar.image_bgr.astype(int)).mean() < 2

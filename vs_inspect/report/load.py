@@ -28,7 +28,15 @@ RESULT_ENTITY = "meta/result_json"
 BUNDLE_ENTITY = "meta/cue_bundle"
 
 
-def _frame_reader(path: str, index: int) -> np.ndarray | None:
+def _entity(name: str) -> str:
+    try:
+        from ..record.rerun_sink import entity_name
+        return entity_name(name)
+    except ImportError:
+        return name
+
+
+def _frame_reader(path: str, index: int, exact: bool = True) -> np.ndarray | None:
     from ..io.video import open_video, read_frames
     return read_frames(open_video(path), [index])[0]
 
@@ -99,6 +107,15 @@ def _last_row(column) -> Any:
     return None
 
 
+def _blob_bytes(row) -> bytes:
+    """The bytes of one row of a (possibly nested) list<uint8> column."""
+    import pyarrow as pa
+    vals = row.values
+    while pa.types.is_list(vals.type) or pa.types.is_large_list(vals.type):
+        vals = vals.flatten()
+    return vals.to_numpy(zero_copy_only=False).astype(np.uint8).tobytes()
+
+
 def read_rrd_entities(path: Path, wanted: dict[str, str]) -> dict[str, Any]:
     """{key: last logged value} of the given {key: "entity:component"}, read with RrdReader."""
     import rerun.chunk as rc
@@ -124,6 +141,84 @@ def read_rrd_entities(path: Path, wanted: dict[str, str]) -> dict[str, Any]:
     return out
 
 
+class RrdFrames:
+    """Frames a recording carries: embedded H.264/AV1 assets (exact frames, decoded with PyAV) or
+    downscaled JPEG frames (only the frames Stage 0 logged; the nearest one is used)."""
+
+    def __init__(self, assets: dict[str, bytes], jpegs: dict[str, dict[int, bytes]],
+                 sizes: dict[str, tuple[int, int]]):
+        self.assets, self.jpegs, self.sizes = assets, jpegs, sizes
+        self._tmp: dict[str, str] = {}
+        self._dir = None
+
+    def names(self) -> list[str]:
+        return sorted(set(self.assets) | set(self.jpegs))
+
+    def read(self, name: str, index: int, exact: bool = True) -> np.ndarray | None:
+        """(H,W,3) uint8 BGR at full size of frame `index`, or None when the recording lacks it."""
+        import cv2
+        if name in self.assets:
+            from ..io.video import open_video, read_frames
+            if name not in self._tmp:
+                import tempfile
+                if self._dir is None:
+                    self._dir = tempfile.TemporaryDirectory(prefix="vs-inspect-rrd-frames-")
+                p = Path(self._dir.name) / f"{len(self._tmp)}.mp4"
+                p.write_bytes(self.assets[name])
+                self._tmp[name] = str(p)
+            return read_frames(open_video(self._tmp[name]), [index])[0]
+        frames = self.jpegs.get(name) or {}
+        if not frames:
+            return None
+        if index in frames:
+            k = index
+        elif exact:
+            return None
+        else:
+            keys = np.array(sorted(frames))
+            k = int(keys[np.argmin(np.abs(keys - index))])
+            gap = np.median(np.diff(keys)) if len(keys) > 1 else 1
+            if abs(k - index) > max(1, gap / 2):
+                return None
+        img = cv2.imdecode(np.frombuffer(frames[k], np.uint8), cv2.IMREAD_COLOR)
+        W, H = self.sizes.get(name, (img.shape[1], img.shape[0]))
+        if (img.shape[1], img.shape[0]) != (W, H):
+            img = cv2.resize(img, (W, H), interpolation=cv2.INTER_LINEAR)
+        return img
+
+
+def read_rrd_frames(path: Path, videos: list[dict[str, Any]]) -> RrdFrames:
+    """The frames under videos/<entity>/video (asset) and videos/<entity>/image (JPEG, `frame` timeline)."""
+    import rerun.chunk as rc
+
+    by_ent = {f"videos/{v.get('entity', v['name'])}": v for v in videos}
+    assets: dict[str, bytes] = {}
+    jpegs: dict[str, dict[int, bytes]] = {}
+    for ch in rc.RrdReader(str(path)).stream().to_chunks():
+        ent = str(ch.entity_path).lstrip("/")
+        base, _, leaf = ent.rpartition("/")
+        if base not in by_ent or leaf not in ("video", "image"):
+            continue
+        name = by_ent[base]["name"]
+        rb = ch.to_record_batch()
+        cols = rb.schema.names
+        if leaf == "video":
+            col = next((c for c in cols if c.endswith("AssetVideo:blob")), None)
+            row = _last_row(rb.column(col)) if col else None
+            if row is not None:
+                assets[name] = _blob_bytes(row)
+        else:
+            col = next((c for c in cols if c.endswith("EncodedImage:blob")), None)
+            if col is None or "frame" not in cols:
+                continue
+            fr, blobs = rb.column("frame"), rb.column(col)
+            for i in range(len(fr)):
+                if fr[i].is_valid and blobs[i].is_valid:
+                    jpegs.setdefault(name, {})[int(fr[i].as_py())] = _blob_bytes(blobs[i])
+    sizes = {v["name"]: (int(v["width"]), int(v["height"])) for v in videos}
+    return RrdFrames(assets, jpegs, sizes)
+
+
 def load_rrd(path: str | os.PathLike, pair: tuple[str, str] | None = None) -> ReportData:
     """ReportData from a recording alone (no run folder, no videos, no recompute)."""
     from ..io.bundle_zip import bundle_from_zip_bytes
@@ -143,13 +238,28 @@ def load_rrd(path: str | os.PathLike, pair: tuple[str, str] | None = None) -> Re
         raise InputError(f"{path}: {RESULT_ENTITY} is not valid JSON ({exc})") from None
     bundle = None
     if "bundle" in got:
-        raw = got["bundle"].values.to_numpy(zero_copy_only=False).astype(np.uint8).tobytes()
+        raw = _blob_bytes(got["bundle"])
         bundle = bundle_from_zip_bytes(raw, f"{path}:{BUNDLE_ENTITY}")
     else:
         log.warning("%s: no %s in the recording: 3D scene, timeline and epipolar panel are missing",
                     path, BUNDLE_ENTITY)
+    frames = None
+    if bundle is not None:
+        try:
+            frames = read_rrd_frames(path, [{"name": v.name, "entity": _entity(v.name),
+                                             "width": v.width, "height": v.height}
+                                            for v in bundle.videos])
+        except Exception as exc:  # frames are a backdrop: without them the figures still work
+            log.warning("%s: could not read video frames (%s)", path, exc)
+    reader = None
+    video_paths = None
+    if frames is not None and frames.names():
+        video_paths = {n: f"rrd:{n}" for n in frames.names()}
+
+        def reader(p: str, index: int, exact: bool = True):
+            return frames.read(p[4:], index, exact)
     data = build_report_data(result, bundle, source=str(path), gt=result.get("gt_offsets_s"),
-                             pair=pair)
+                             pair=pair, video_paths=video_paths, frame_reader=reader)
     if bundle is None:
         from dataclasses import replace
         data = replace(data, notes=data.notes + (f"the recording has no {BUNDLE_ENTITY}",))

@@ -358,7 +358,8 @@ def build_report_data(result: dict[str, Any], bundle: CueBundle | None, *, sourc
             k, img = frames[v.name], None
             if k is not None and v.name in video_paths:
                 try:
-                    img = _downscale(frame_reader(video_paths[v.name], k))
+                    img = frame_reader(video_paths[v.name], k, exact=False)
+                    img = _downscale(img) if img is not None else None
                 except Exception as exc:
                     notes.append(f"mosaic: could not read frame {k} of {video_paths[v.name]}: {exc}")
             tiles.append(MosaicTile(v.name, k, img))
