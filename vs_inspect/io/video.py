@@ -10,6 +10,7 @@ is raised as :class:`vs_inspect.errors.InputError` naming the file.
 
 from __future__ import annotations
 
+import bisect
 import logging
 import os
 import re
@@ -45,6 +46,7 @@ class VideoSource:
     # frames are numbered by decode order (no usable PTS) or for image folders
     _pts: tuple[int, ...] | None = None
     _images: tuple[Path, ...] | None = None  # sorted image files of an image folder
+    _keyframes: tuple[int, ...] | None = None  # frame indices of keyframes (seek targets)
 
     @property
     def is_image_folder(self) -> bool:
@@ -133,6 +135,7 @@ def open_video(path, fps: float | None = None, name: str | None = None) -> Video
         container_duration_s = container.duration / 1e6 if container.duration else None
         rate = _nominal_rate(stream)
         pkt_pts: list[int | None] = []
+        key_pts: set[int] = set()
         first_frame = None
         try:
             for packet in container.demux(stream):
@@ -146,6 +149,8 @@ def open_video(path, fps: float | None = None, name: str | None = None) -> Video
                         f"{path}: truncated or corrupt video stream (bad packet at byte {packet.pos})"
                     )
                 pkt_pts.append(packet.pts)
+                if packet.is_keyframe and packet.pts is not None:
+                    key_pts.add(packet.pts)
                 if first_frame is None:
                     frames = packet.decode()
                     if frames:
@@ -234,7 +239,11 @@ def open_video(path, fps: float | None = None, name: str | None = None) -> Video
         info = VideoInfo(vname, int(width), int(height), n, ts, info_fps)
     except ValueError as exc:
         raise InputError(f"{path}: {exc}") from None
-    return VideoSource(path, info, tuple(int(p) for p in pts_list) if have_pts else None, None)
+    keyframes = None
+    if have_pts and key_pts:
+        keyframes = tuple(k for k, p in enumerate(pts_list) if p in key_pts)
+    return VideoSource(path, info, tuple(int(p) for p in pts_list) if have_pts else None, None,
+                       keyframes)
 
 
 # ---- reading frames --------------------------------------------------------------------------
@@ -359,6 +368,15 @@ def read_frames(src: VideoSource, indices: Sequence[int], max_side: int | None =
 _SEEK_GAP = 48  # decode forward instead of seeking when the next wanted frame is this close
 
 
+def _should_seek(src: VideoSource, k: int, target: int) -> bool:
+    """From frame k, is seeking to `target` quicker than decoding on? Yes when a keyframe lies
+    after k and at or before target (with unknown keyframes: when target is far)."""
+    if src._keyframes:
+        j = bisect.bisect_right(src._keyframes, target) - 1
+        return j >= 0 and src._keyframes[j] > k
+    return target - k > _SEEK_GAP
+
+
 def _read_by_seeking(src: VideoSource, wanted: list[int], max_side: int | None
                      ) -> dict[int, np.ndarray]:
     got: dict[int, np.ndarray] = {}
@@ -369,33 +387,33 @@ def _read_by_seeking(src: VideoSource, wanted: list[int], max_side: int | None
             stream.thread_type = "AUTO"
             i = 0
             while i < len(wanted):
-                target = wanted[i]
-                container.seek(src._pts[target], stream=stream, backward=True, any_frame=False)
-                last = -1
+                i_before = i
+                container.seek(src._pts[wanted[i]], stream=stream, backward=True, any_frame=False)
+                first = True
                 for frame in container.decode(stream):
                     k = index_of.get(frame.pts)
                     if k is None:
                         continue
-                    if last < 0 and k > target:
-                        break  # seek landed after the target: fall back below
-                    last = k
+                    if first and k > wanted[i]:
+                        break  # the seek landed after the target: sequential pass below
+                    first = False
+                    if k < wanted[i]:
+                        continue  # decoding from the keyframe towards the target
                     while i < len(wanted) and wanted[i] < k:
-                        i += 1  # skipped (should not happen); reported as missing by caller
+                        i += 1  # not seen in order (damaged stream): left to the pass below
                     if i < len(wanted) and wanted[i] == k:
                         got[k] = _finish(frame.to_ndarray(format="bgr24"), max_side)
                         i += 1
-                    if i >= len(wanted) or wanted[i] - k > _SEEK_GAP:
-                        break
-                else:
-                    i = len(wanted) if last < 0 else i
-                    break
-                if last < 0:
-                    break
+                    if i >= len(wanted) or _should_seek(src, k, wanted[i]):
+                        break  # done, or seeking is quicker than decoding on: seek again
+                if i == i_before:
+                    break  # no progress from this seek: sequential pass below
     except _AV_ERRORS as exc:
         raise InputError(f"{src.path}: corrupt or truncated video stream ({exc})") from None
     rest = [w for w in wanted if w not in got]
     if rest:
         # seeking failed for some frames (files with a poor index): one sequential pass
+        log.debug("%s: %d frames not reached by seeking; decoding sequentially", src.path, len(rest))
         rset = set(rest)
         for k, img in iter_frames(src, 1, max_side):
             if k in rset:
