@@ -209,3 +209,15 @@ def test_other_containers(tmp_path, ext, codec):
     frames = dict(iter_frames(src))
     assert sorted(frames) == list(range(15))
     np.testing.assert_array_equal(read_frames(src, [11])[0], frames[11])
+
+
+@pytest.mark.timeout(60)
+def test_read_frames_far_from_keyframe(tmp_path):
+    """A target far after its keyframe (long GOP) is reached by decoding on, not by re-seeking."""
+    p = write_clip(tmp_path / "long.mp4", n=130, fps=30.0)
+    src = open_video(p)
+    assert src.info.num_frames == 130
+    full = dict(iter_frames(src))
+    wanted = [120, 3, 64, 65, 129]
+    for i, img in zip(wanted, read_frames(src, wanted)):
+        np.testing.assert_array_equal(img, full[i])
