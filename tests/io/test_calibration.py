@@ -4,6 +4,8 @@ COLMAP text and binary models written by pycolmap, name mapping and the errors."
 from __future__ import annotations
 
 import json
+import os
+from pathlib import Path
 
 import numpy as np  # noqa: I001  (before pycolmap)
 import cv2
@@ -16,18 +18,41 @@ from vs_inspect.io.calibration import (fit_to_video, load_calibration, to_camera
 NAMES = ["cam_0", "cam_1", "cam_2", "cam_3"]
 
 
-@pytest.fixture(scope="module")
-def caliscope(shared_data):
-    path = shared_data / "caliscope_post_optimization" / "camera_array.toml"
-    return path, load_calibration(path, NAMES)
-
-
 def _fmt(a) -> str:
     return json.dumps(np.asarray(a).tolist())
 
 
-def test_caliscope_toml(caliscope):
-    path, cals = caliscope
+def _write_caliscope_style(path):
+    """Four cameras in caliscope's [cameras.N] layout (for when the real file is absent)."""
+    from vs_inspect.geometry.epipolar import look_at
+    rng = np.random.default_rng(1)
+    lines = []
+    for i in range(4):
+        ang = np.pi / 2 * i + 0.3
+        T = look_at(np.array([1.2 * np.cos(ang), 1.2 * np.sin(ang), 0.4]), np.zeros(3))
+        K = [[rng.uniform(600, 900), 0, 640 + rng.uniform(-20, 20)],
+             [0, rng.uniform(600, 900), 360 + rng.uniform(-20, 20)], [0, 0, 1]]
+        dist = [[-0.33, 0.046, -0.004, 0.004, 0.066], [0.18, -0.26, 0.003, 0.002, 0.12]][i % 2]
+        lines += [f"[cameras.{i}]", f"cam_id = {i}", "size = [1280, 720]", f"matrix = {_fmt(K)}",
+                  f"distortions = {_fmt(dist)}", f"translation = {_fmt(T[:3, 3])}",
+                  f"rotation = {_fmt(T[:3, :3])}", ""]
+    path.write_text("\n".join(lines))
+    return path
+
+
+@pytest.fixture(scope="module")
+def caliscope(tmp_path_factory):
+    """The real caliscope camera_array.toml when ../shared/data is there, else one in its format."""
+    root = Path(os.environ.get("VS_INSPECT_DATA", Path(__file__).resolve().parents[3] / "shared" / "data"))
+    path = root / "caliscope_post_optimization" / "camera_array.toml"
+    if not path.is_file():
+        path = _write_caliscope_style(tmp_path_factory.mktemp("cal") / "camera_array.toml")
+    return path, load_calibration(path, NAMES)
+
+
+def test_caliscope_toml(shared_data):
+    path = shared_data / "caliscope_post_optimization" / "camera_array.toml"
+    cals = load_calibration(path, NAMES)
     assert list(cals) == NAMES
     text = path.read_text()
     c0 = cals["cam_0"]
@@ -202,3 +227,16 @@ def test_colmap_text_and_binary(tmp_path):
     (tmp_path / "empty").mkdir()
     with pytest.raises(InputError, match="COLMAP model"):
         load_calibration(tmp_path / "empty", ["x"])
+
+
+def test_undistort_outside_model_is_nan(tmp_path):
+    """r_d = r (1 - 0.6 r²) peaks at r_d = 0.497: farther distorted radii have no preimage."""
+    entry = {"K": [[300, 0, 640], [0, 300, 360], [0, 0, 1]], "dist": [-0.6, 0, 0, 0, 0],
+             "cam_from_world": np.eye(4).tolist()}
+    (tmp_path / "c.json").write_text(json.dumps({"v": entry}))
+    cal = load_calibration(tmp_path / "c.json", ["v"])["v"]
+    xy = np.array([[640.0 + 0.45 * 300, 360.0], [640.0 + 0.55 * 300, 360.0], [0.0, 0.0]])
+    und = undistort_points(cal, xy)
+    assert np.isfinite(und[0]).all() and np.isnan(und[1:]).all()
+    r = (und[0, 0] - 640) / 300  # the preimage really distorts back to 0.45
+    assert r * (1 - 0.6 * r * r) == pytest.approx(0.45, abs=1e-9)

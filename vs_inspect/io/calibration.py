@@ -363,22 +363,39 @@ def fit_to_video(cal: CameraCalibration, width: int, height: int, name: str = "c
 # ---- using a calibration ---------------------------------------------------------------------
 
 
+UNDISTORT_ITERATIONS = 500  # strong barrel distortion converges slowly near the corners
+UNDISTORT_CHECK_PX = 0.05  # re-distorted point must land this close to the input, else NaN
+
+
 def undistort_points(cal: CameraCalibration, xy: np.ndarray) -> np.ndarray:
-    """(...,2) distorted px -> undistorted px with the same K; NaN stays NaN."""
+    """(...,2) distorted px -> undistorted px with the same K; NaN stays NaN.
+
+    OpenCV's iterative inversion is run to convergence (its default 5 iterations leave errors
+    of tenths of a pixel at the corners of a wide-angle webcam). Points where the lens model
+    cannot be inverted (outside its valid region, the re-distorted point misses the input by
+    more than UNDISTORT_CHECK_PX) become NaN.
+    """
     xy = np.asarray(xy, dtype=np.float64)
     if xy.shape[-1:] != (2,):
         raise ValueError(f"xy must have shape (...,2), got {xy.shape}")
+    if not np.any(cal.dist != 0):
+        return xy.copy()
     out = np.full_like(xy, np.nan)
     flat = xy.reshape(-1, 2)
     ok = np.all(np.isfinite(flat), axis=1)
-    if not np.any(cal.dist != 0):
-        return xy.copy()
     if ok.any():
-        crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-12)
+        crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, UNDISTORT_ITERATIONS, 1e-10)
         und = cv2.undistortPoints(flat[ok].reshape(-1, 1, 2), cal.K, cal.dist, R=np.eye(3),
-                                  P=cal.K, criteria=crit)
-        res = out.reshape(-1, 2)
-        res[ok] = und.reshape(-1, 2)
+                                  P=cal.K, criteria=crit).reshape(-1, 2)
+        Kinv = np.linalg.inv(cal.K)
+        rays = np.c_[und, np.ones(len(und))] @ Kinv.T
+        back = cv2.projectPoints(rays, np.zeros(3), np.zeros(3), cal.K, cal.dist)[0].reshape(-1, 2)
+        miss = np.linalg.norm(back - flat[ok], axis=1) > UNDISTORT_CHECK_PX
+        if miss.any():
+            log.debug("undistort_points: %d of %d points outside the lens model's valid region",
+                      int(miss.sum()), len(miss))
+            und[miss] = np.nan
+        out.reshape(-1, 2)[ok] = und
     return out
 
 
