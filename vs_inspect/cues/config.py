@@ -85,6 +85,8 @@ class CameraConfig:
     """Estimated cameras: SIFT features per frame."""
     min_inliers: int = 30
     """Estimated cameras: inlier matches needed to start the reconstruction (half that to add an image)."""
+    fallback_from_tracks: bool = True
+    """When the background reconstruction registers fewer than two cameras, build static cameras from the moving points' two-view geometry (cues/pairwise.py)."""
     mask_moving: bool = True
     """Estimated cameras: mask out moving regions before feature extraction."""
 

@@ -192,6 +192,18 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
             log.warning("%s: %s", src.info.name, msg)
 
     t0 = time.perf_counter()
+    all_pairs: dict[tuple[str, str], TrackPairs] = {}
+    for a, b in tqdm(list(itertools.combinations([n for n in names if n in vids], 2)), desc="cross-view pairs", unit="pair",
+                     disable=not progress, leave=False):
+        tp, ps = match_tracks(a, b, vids[a].features, vids[b].features, vids[a].instance,
+                              vids[b].instance, cfg.match)
+        all_pairs[(a, b)] = tp
+        stats["pairs"][f"{a}__{b}"] = {"matches": ps.matches, "snapped": ps.snapped,
+                                       "instance_pairs": ps.instance_pairs, "track_pairs": ps.track_pairs}
+        log.info("%s__%s: %d matches, %d snapped, %d instance pairs, %d track pairs",
+                 a, b, ps.matches, ps.snapped, ps.instance_pairs, ps.track_pairs)
+    timings["matching_s"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
     cameras: dict[str, CameraTrack] = {}
     tracks: dict[str, Tracks] = {}
     if calibration is not None:
@@ -199,7 +211,7 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
         stats["dropped"].update(dropped)
         points = colors = None
     else:
-        cameras, tracks, points, colors = _estimate(vids, cfg, stats)
+        cameras, tracks, points, colors = _estimate(vids, cfg, stats, all_pairs)
     for name, why in stats["dropped"].items():
         if name in vids:
             sink.stage_event("cameras", f"{name}: {why}")
@@ -208,19 +220,8 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
         sink.cameras(cameras, points, colors)
     timings["cameras_s"] = time.perf_counter() - t0
 
-    t0 = time.perf_counter()
     usable = [n for n in names if n in cameras]
-    pairs: dict[tuple[str, str], TrackPairs] = {}
-    for a, b in tqdm(list(itertools.combinations(usable, 2)), desc="cross-view pairs", unit="pair",
-                     disable=not progress, leave=False):
-        tp, ps = match_tracks(a, b, vids[a].features, vids[b].features, vids[a].instance,
-                              vids[b].instance, cfg.match)
-        pairs[(a, b)] = tp
-        stats["pairs"][f"{a}__{b}"] = {"matches": ps.matches, "snapped": ps.snapped,
-                                       "instance_pairs": ps.instance_pairs, "track_pairs": ps.track_pairs}
-        log.info("%s__%s: %d matches, %d snapped, %d instance pairs, %d track pairs",
-                 a, b, ps.matches, ps.snapped, ps.instance_pairs, ps.track_pairs)
-    timings["matching_s"] = time.perf_counter() - t0
+    pairs = {k: v for k, v in all_pairs.items() if k[0] in cameras and k[1] in cameras}
     timings["total_s"] = time.perf_counter() - t_all
     stats["track_pairs"] = int(sum(len(p.index) for p in pairs.values()))
     stats["tracks"] = int(sum(t.num_tracks for t in tracks.values()))
@@ -234,8 +235,9 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
     return bundle, stats
 
 
-def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict):
+def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: dict):
     from .cameras import estimate_cameras, undistort_with_colmap
+    from .pairwise import cameras_from_tracks
 
     frames = {n: v.sfm_frames for n, v in vids.items() if v.sfm_frames is not None}
     sizes = {n: (v.info.width, v.info.height) for n, v in vids.items()}
@@ -243,6 +245,22 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict):
                            {n: v.camera_motion == "moving" for n, v in vids.items()}, cfg.camera)
     stats["sfm"] = {"images": est.num_images, "registered_images": est.num_registered,
                     "registered_frames": {n: c.registered_frames.tolist() for n, c in est.cameras.items()}}
+    if len(est.cameras) < 2 and cfg.camera.fallback_from_tracks:
+        # the background did not reconstruct: cameras from the moving points (static cameras)
+        ref = max(vids, key=lambda n: sum(len(p.index) for k, p in pairs.items() if n in k))
+        cams, reasons, details = cameras_from_tracks(
+            ref, {n: v.info for n, v in vids.items()}, {n: v.xy_full for n, v in vids.items()},
+            pairs, {n: v.camera_motion == "moving" for n, v in vids.items()})
+        stats["sfm"]["fallback"] = {"reference": ref, "pairs": details,
+                                    "why": f"the background reconstruction registered {len(est.cameras)} camera(s)"}
+        log.warning("background SfM registered %d camera(s); cameras from the moving points: %d",
+                    len(est.cameras), len(cams))
+        if len(cams) >= 2:
+            stats["camera_source"] = "estimated from moving points (two-view geometry)"
+            stats["dropped"].update(reasons)
+            for n, why in reasons.items():
+                log.warning("%s: %s", n, why)
+            return cams, {n: Tracks(vids[n].xy_full, vids[n].instance) for n in cams}, None, None
     stats["dropped"].update(est.unregistered)
     for n, why in est.unregistered.items():
         log.warning("%s: %s", n, why)
