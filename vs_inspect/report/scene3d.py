@@ -67,7 +67,7 @@ def render_scene(data: ReportData, path: Path, size: tuple[int, int]) -> Path:
         centers_all.append(C)
         if cam.is_moving:
             pl.add_mesh(pv.lines_from_points(C), color=col, line_width=5)
-        pl.add_point_labels(C[:1] + np.array([0, 0, 0.13 * scale]), [cam.name], font_size=22,
+        pl.add_point_labels(C[:1] + np.array([0, 0, (0.15 if cam.is_moving else 0.06) * scale]), [cam.name], font_size=22,
                             text_color=col, shape=None, show_points=False, bold=True,
                             always_visible=True)
     if data.static_points is not None and len(data.static_points):
@@ -88,9 +88,9 @@ def render_scene(data: ReportData, path: Path, size: tuple[int, int]) -> Path:
         poly = pv.PolyData(pts, lines=np.array(lines))
         poly["global time [s]"] = times
         pl.add_mesh(poly, scalars="global time [s]", cmap="viridis", line_width=3.5,
-                    scalar_bar_args=dict(title="global time [s]", title_font_size=22,
+                    scalar_bar_args=dict(title="time [s]", title_font_size=22,
                                          label_font_size=18, color="black", vertical=True,
-                                         position_x=0.88, position_y=0.25, width=0.06, height=0.5,
+                                         position_x=0.9, position_y=0.25, width=0.05, height=0.5,
                                          fmt="%.1f"))
     # an oblique view from above, fitted to everything drawn
     pl.view_vector((0.55, -0.75, 0.75), viewup=(0.0, 0.0, 1.0))
