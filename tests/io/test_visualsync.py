@@ -156,3 +156,25 @@ def test_bad_layouts(scene, layout, tmp_path):
         import_visualsync(root, ImportConfig(fps=FPS))
     with pytest.raises(InputError, match="no video folders"):
         import_visualsync(tmp_path, ImportConfig(fps=FPS))
+
+
+def test_import_with_calibration_instead_of_vggt(scene, layout, tmp_path):
+    import json
+
+    from vs_inspect.io.calibration import load_calibration, undistort_points
+    b = scene.bundle
+    cal = {v.name: {"K": b.cameras[v.name].K_at([0])[0].tolist(),
+                    "dist": [0.05, -0.01, 0.0, 0.0, 0.0] if v.name == "cam0" else [],
+                    "cam_from_world": b.cameras[v.name].pose_at([0])[0].tolist(),
+                    "size": [v.width, v.height]} for v in b.videos}
+    (tmp_path / "cal.json").write_text(json.dumps(cal))
+    out = tmp_path / "bundle"
+    assert main(["import-visualsync", str(layout), "--out", str(out), "--fps", str(FPS),
+                 "--calib", str(tmp_path / "cal.json")]) == 0
+    got = read_bundle(out)
+    assert not any(c.is_moving for c in got.cameras.values())
+    cals = load_calibration(tmp_path / "cal.json", b.names)
+    want = undistort_points(cals["cam0"], b.tracks["cam0"].xy)
+    np.testing.assert_allclose(got.tracks["cam0"].xy, want, atol=1e-3)
+    assert np.nanmax(np.abs(want - b.tracks["cam0"].xy)) > 1.0  # the distortion was removed
+    np.testing.assert_allclose(got.tracks["cam2"].xy, b.tracks["cam2"].xy, atol=1e-3)

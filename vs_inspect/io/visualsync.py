@@ -302,31 +302,37 @@ def import_visualsync(folder, cfg: ImportConfig = ImportConfig(), calibration=No
         name = vdir.name
         tr = read_cotracker(vdir / TRACKS_FILE, cfg.visibility_threshold)
         T = tr.num_frames
-        if calibration is not None:
-            from .calibration import to_camera_track, undistort_points
-            if name not in calibration:
-                raise InputError(f"no calibration for video {name!r}")
-            cal = calibration[name]
-            tr = Tracks(undistort_points(cal, tr.xy), tr.instance)
-            cam = to_camera_track(cal)
-        else:
-            cam_path = vdir / CAMERAS_FILE
-            if not cam_path.is_file():
-                raise InputError(f"{cam_path}: missing (VGGT cameras), and no calibration given")
-            cam = read_vggt_cameras(cam_path, T, cfg)
         vfile = _video_file(vdir)
+        info = None
         if vfile is not None:
             info = open_video(vfile, name=name).info
             if info.num_frames != T:
                 raise InputError(f"{vfile}: video has {info.num_frames} frames but "
                                  f"{vdir / TRACKS_FILE} tracks {T}")
+        elif cfg.fps is None:
+            raise InputError(f"{vdir}: no video file to take frame times from; give --fps")
+        if calibration is not None:
+            from .calibration import fit_to_video, to_camera_track, undistort_points
+            if name not in calibration:
+                raise InputError(f"no calibration for video {name!r}")
+            cal = calibration[name]
+            if info is not None:
+                cal = fit_to_video(cal, info.width, info.height, name=f"{vfile}")
+            tr = Tracks(undistort_points(cal, tr.xy), tr.instance)
+            cam = to_camera_track(cal)
+            size = cal.size
         else:
-            if cfg.fps is None:
-                raise InputError(f"{vdir}: no video file to take frame times from; give --fps")
-            K0 = cam.K if cam.K.ndim == 2 else cam.K[0]
-            w, h = int(round(2 * (K0[0, 2] + 0.5))), int(round(2 * (K0[1, 2] + 0.5)))
+            cam_path = vdir / CAMERAS_FILE
+            if not cam_path.is_file():
+                raise InputError(f"{cam_path}: missing (VGGT cameras), and no calibration given")
+            cam = read_vggt_cameras(cam_path, T, cfg)
+            size = None
+        if info is None:
+            if size is None:  # the principal point is the best guess of the image centre
+                K0 = cam.K if cam.K.ndim == 2 else cam.K[0]
+                size = (int(round(2 * (K0[0, 2] + 0.5))), int(round(2 * (K0[1, 2] + 0.5))))
             try:
-                info = VideoInfo.constant_rate(name, max(w, 1), max(h, 1), T, cfg.fps)
+                info = VideoInfo.constant_rate(name, max(size[0], 1), max(size[1], 1), T, cfg.fps)
             except ValueError as exc:
                 raise InputError(f"{vdir}: {exc}") from None
         videos.append(info)
