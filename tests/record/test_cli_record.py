@@ -1,0 +1,33 @@
+"""`vs-inspect sync --bundle` writes recordings/<out name>.rrd by default, --rrd PATH elsewhere,
+nothing with --no-rrd; the recording's result equals result.json."""
+
+from __future__ import annotations
+
+import json
+
+from vs_inspect.cli import main
+from vs_inspect.io.bundle import write_bundle
+from vs_inspect.record.read import read_recording
+from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
+
+
+def test_sync_records_by_default_and_not_with_no_rrd(tmp_path, monkeypatch, capsys):
+    scene = make_cue_scene(CueSceneConfig(cameras=3, moving=0, variable_rate=0, seconds=4.0,
+                                          points_per_object=10, pairs_per_view_pair=80,
+                                          no_match_pairs=0, all_wrong_pair=False, seed=2))
+    bdir = write_bundle(scene.bundle, tmp_path / "bundle")
+    monkeypatch.chdir(tmp_path)
+    assert main(["sync", "--bundle", str(bdir), "--out", "out/run7", "--no-progress",
+                 "--rrd-minimal"]) == 0
+    rrd = tmp_path / "recordings" / "run7.rrd"
+    assert rrd.is_file()
+    assert f"recording: recordings/run7.rrd" in capsys.readouterr().out
+    rec = read_recording(rrd)
+    on_disk = json.loads((tmp_path / "out" / "run7" / "result.json").read_text())
+    assert rec.result == on_disk
+    assert rec.config == on_disk["config"]
+    assert rec.meta["options"]["frames"] is False  # --rrd-minimal
+
+    assert main(["sync", "--bundle", str(bdir), "--out", "out/run8", "--no-progress", "--no-rrd"]) == 0
+    assert not (tmp_path / "recordings" / "run8.rrd").exists()
+    assert sorted(p.name for p in (tmp_path / "recordings").iterdir()) == ["run7.rrd"]
