@@ -580,9 +580,9 @@ class RerunSink(Sink):
             if np.isfinite(dist).any():
                 med[d] = float(np.nanmedian(dist))
         # Each row: a list of 2-point strips -> partition LineStrips2D by strip count per offset.
-        strips = [s for d in range(len(ms)) for s in lines_pos[d].reshape(-1, 2, 2)]
+        strips = np.concatenate(lines_pos).reshape(-1, 2, 2).astype(np.float32)  # (S,2,2): 2-point strips
         tcol = [rr.TimeColumn("offset_ms", sequence=ms)]
-        if strips:
+        if len(strips):
             self.rec.send_columns(f"{base}/lines", tcol,
                                   rr.LineStrips2D.columns(strips=strips,
                                                           colors=np.concatenate(lines_col)).partition(line_len))
