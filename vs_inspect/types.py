@@ -276,6 +276,8 @@ class PairDecision:
     num_minima: int  # significant local minima (by prominence)
     num_pareto_minima: int  # minima Pareto-optimal in (energy, overlap)
     at_range_edge: bool  # best minimum lies on the border of the search range
+    inlier_fraction: float = float("nan")  # share of terms at the best offset within inlier_tau_px
+    inlier_tau_px: float = float("nan")  # Sampson distance counted as an inlier, px
 
 
 @dataclass(frozen=True)

@@ -33,6 +33,8 @@ def pair_to_dict(p: PairLandscape, with_landscape: bool = True) -> dict[str, Any
         "num_minima": d.num_minima,
         "num_pareto_minima": d.num_pareto_minima,
         "at_range_edge": d.at_range_edge,
+        "inlier_fraction": _num(d.inlier_fraction),
+        "inlier_tau_px": _num(d.inlier_tau_px),
         "num_track_pairs": p.num_track_pairs,
         "residual": p.residual,
         "robust_scale": _num(p.robust_scale),

@@ -57,6 +57,10 @@ class DecisionConfig:
     """Another minimum competes with the best only if its overlap (term count) is at least this fraction of the best's."""
     min_prominence: float = 0.1
     """A local minimum counts only with a prominence of this fraction of the best depth."""
+    min_inlier_fraction: float = 0.45
+    """Reject when fewer observations than this lie within inlier_px_fraction of the image diagonal of their epipolar line at the best offset (all-wrong matches, wrong poses)."""
+    inlier_px_fraction: float = 0.01
+    """Inlier distance for that check, as a fraction of the larger image diagonal (1 % = 14.7 px at 1280x720)."""
     reject_range_edge: bool = True
     """Reject when the best minimum lies on the border of the search range."""
 

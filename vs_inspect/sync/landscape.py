@@ -137,8 +137,11 @@ class PairEnergy:
         e[cnt < self.cfg.min_terms] = np.nan
         return e, cnt
 
-    def residuals(self, offset_s: float, max_pairs: int | None = None) -> np.ndarray:
-        """(P',Ts) residuals of every term at one offset (NaN where undefined); for scale and plots."""
+    def residuals(self, offset_s: float, max_pairs: int | None = None,
+                  kind: str | None = None) -> np.ndarray:
+        """(P',Ts) residuals of every term at one offset (NaN where undefined); for scale and plots.
+
+        kind overrides the configured residual (e.g. Sampson for the inlier check)."""
         sel = np.arange(len(self.pair_s))
         if max_pairs is not None and len(sel) > max_pairs:
             sel = np.linspace(0, len(sel) - 1, max_pairs).round().astype(int)
@@ -155,7 +158,7 @@ class PairEnergy:
         else:
             G = self.G_static
         with np.errstate(invalid="ignore", divide="ignore"):
-            return epipolar_residual(G, x, y, self.cfg.residual)
+            return epipolar_residual(G, x, y, kind or self.cfg.residual)
 
     def auto_scale(self, offsets_s: np.ndarray) -> float:
         """Truncation level: 9 x the smallest per-offset median residual, on a subsample.

@@ -13,7 +13,7 @@ from ..errors import InputError
 from ..record.sink import NullSink, Sink
 from ..types import CueBundle, PairDecision, PairLandscape, SyncResult, TrackPairs
 from .config import SyncConfig
-from .decision import decide
+from .decision import check_inliers, decide
 from .landscape import PairInput, compute_landscape, curvature_uncertainty, refine_minimum
 from .pairs import select_pairs
 from .solve import PairMeasurement, solve_offsets
@@ -32,6 +32,13 @@ def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig):
         best_idx = int(minima[0])
         best, best_e = refine_minimum(pe, raw, best_idx)
         sigma = curvature_uncertainty(raw, best_idx, best_e, len(tp.index))
+        va, vb = bundle.video(a), bundle.video(b)
+        tau_px = cfg.decision.inlier_px_fraction * max(np.hypot(va.width, va.height),
+                                                       np.hypot(vb.width, vb.height))
+        r = pe.residuals(best, kind="sampson")
+        r = r[np.isfinite(r)]
+        inliers = float(np.mean(np.sqrt(r) < tau_px)) if r.size else float("nan")
+        decision = check_inliers(decision, inliers, tau_px, cfg.decision)
     if len(tp.index) == 0 and not decision.accepted:
         decision = PairDecision(False, "no cross-view track pairs (the views share no matched motion)",
                                 0.0, 0.0, 0, 0, False)
