@@ -19,7 +19,7 @@ from scipy.spatial.transform import Rotation
 from vs_inspect.cli import main
 from vs_inspect.io.result import result_to_dict, write_json_atomic
 from vs_inspect.record.options import RecordOptions
-from vs_inspect.record.read import read_recording
+from vs_inspect.record.read import read_recording, read_static_points
 from vs_inspect.record.rerun_sink import RerunSink, entity_name
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
 from vs_inspect.sync.config import SyncConfig
@@ -79,6 +79,8 @@ def test_recording_is_complete_and_verifies(planted_run):
               "videos/cam0/tracks", "log/decisions"):
         assert e in ents, e
     assert any(e.startswith("world/trajectories/") for e in ents)
+    pts, _ = read_static_points(path)
+    assert pts.shape == (0, 3)  # a cue bundle has no static reconstruction
     assert any(e.startswith("sync/solve/residual_ms/") for e in ents)
 
 
@@ -249,3 +251,8 @@ def test_frames_masks_and_video_asset(tmp_path):
     jpg = np.asarray(tab.column(blob)[0].as_py()[0], dtype=np.uint8)
     img = cv2.imdecode(jpg, cv2.IMREAD_COLOR)
     assert img.shape[1] == 320  # downscaled to the configured width
+    from vs_inspect.record.read import read_video_frames
+    frames = read_video_frames(out, "cam1")
+    assert sorted(frames) == list(range(b.video("cam1").num_frames))
+    assert all(f.shape[1] == 320 for f in frames.values())
+    assert read_video_frames(out, "cam0") == {}  # an embedded video asset, not JPEG frames

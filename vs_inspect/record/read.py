@@ -125,3 +125,52 @@ def read_recording(path: str | Path, with_structure: bool = True) -> Recording:
         raise InputError(f"{path}: not a vs_inspect recording (format {rec.meta.get('format')!r})")
     rec.decisions = {k.split("/")[1]: v for k, v in texts.items() if k.startswith("pairs/")}
     return rec
+
+
+def _entity_rows(path: Path, entity: str) -> list:
+    """Record batches of one entity (InputError if the file cannot be read)."""
+    import rerun.chunk as rrc
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            chunks = rrc.RrdReader(str(path)).stream().filter(content=[f"/{entity}"]).to_chunks()
+    except Exception as exc:  # noqa: BLE001
+        raise InputError(f"{path}: not a readable .rrd recording ({exc})") from None
+    return [c.to_record_batch() for c in chunks if c.entity_path.lstrip("/") == entity]
+
+
+def read_video_frames(path: str | Path, video: str) -> dict[int, np.ndarray]:
+    """{frame index: BGR image} of the JPEG frames logged at videos/<video>/image.
+
+    Images are as logged (downscaled by default): multiply pixel coordinates by
+    video width / image width to get full-resolution pixels. Empty when the video was logged as an
+    embedded video asset or without frames.
+    """
+    import cv2
+
+    from .rerun_sink import entity_name
+    out: dict[int, np.ndarray] = {}
+    for rb in _entity_rows(Path(path), f"videos/{entity_name(video)}/image"):
+        frames, blobs = _column(rb, "frame"), _column(rb, "EncodedImage:blob")
+        for k, blob in zip(frames, blobs):
+            if k is None or not blob:
+                continue
+            data = np.asarray(blob[0] if isinstance(blob[0], list) else blob, dtype=np.uint8)
+            img = cv2.imdecode(data, cv2.IMREAD_COLOR)
+            if img is not None:
+                out[int(k)] = img
+    return out
+
+
+def read_static_points(path: str | Path) -> tuple[np.ndarray, np.ndarray | None]:
+    """(N,3) static 3D points of the reconstruction at world/points and their (N,3) uint8 colours."""
+    pts, cols = np.zeros((0, 3)), None
+    for rb in _entity_rows(Path(path), "world/points"):
+        p = _column(rb, "Points3D:positions")
+        if p and p[-1]:
+            pts = np.asarray(p[-1], dtype=float)
+        c = _column(rb, "Points3D:colors")
+        if c and c[-1]:
+            rgba = np.asarray(c[-1], dtype=np.uint32)
+            cols = np.stack([(rgba >> 24) & 255, (rgba >> 16) & 255, (rgba >> 8) & 255], -1).astype(np.uint8)
+    return pts, cols
