@@ -19,7 +19,8 @@ CAPTIONS = {
                "points triangulated at the solved offsets, coloured by global time.",
     "landscapes": "Energy landscape E(Δ) of every pair: green frame = accepted, red frame = "
                   "rejected (with the reason); star = best minimum, circles = other minima, solid "
-                  "line = chosen Δ, dashed black line = true Δ when known.",
+                  "line = chosen Δ, orange triangle = Δ implied by the global solve, dashed black line = "
+                  "true Δ when known.",
     "pair_graph": "Pair graph: videos as nodes (with their solved offsets), accepted pairs as "
                   "solid green edges labelled with Δ, rejected pairs as dashed red edges.",
     "timeline": "Timeline of all videos before sync (each on its own clock) and after sync "

@@ -79,6 +79,13 @@ class PairView:
         return f"{self.a}__{self.b}"
 
     @property
+    def disagreement_ms(self) -> float | None:
+        """|chosen - solved| in ms: how far the global solve moved this pair (None if unknown)."""
+        if self.chosen_offset_s is None or self.solved_offset_s is None:
+            return None
+        return 1000.0 * abs(self.chosen_offset_s - self.solved_offset_s)
+
+    @property
     def error_ms(self) -> float | None:
         """|chosen - true| in ms when both are known."""
         if self.chosen_offset_s is None or self.true_offset_s is None:

@@ -23,6 +23,7 @@ DPI = 100
 ACCEPT = "#1a9850"  # green
 REJECT = "#d73027"  # red
 TRUTH = "#222222"
+SOLVED = "#ff9900"  # orange: Δ implied by the global solve
 ACCEPT_BG = "#eef8f0"
 REJECT_BG = "#fcecea"
 plt.rcParams.update({"font.size": 11, "axes.titlesize": 11, "axes.labelsize": 10,
@@ -56,9 +57,15 @@ def figure_size_px(kind: str, data: ReportData) -> tuple[int, int]:
     if kind == "scene3d":
         return 1600, 1000
     if kind == "mosaic":
-        rows, cols = landscape_grid_shape(len(data.mosaic.tiles) if data.mosaic else 1)
-        return 420 * cols, 60 + 300 * rows
+        rows, cols = _mosaic_grid(len(data.mosaic.tiles) if data.mosaic else 1)
+        return 480 * cols, 70 + 320 * rows
     raise KeyError(kind)
+
+
+def _mosaic_grid(n: int) -> tuple[int, int]:
+    """The grid of the exported mosaic video (report/mosaic.py), so both look alike."""
+    from .mosaic import grid_shape
+    return grid_shape(max(1, n))
 
 
 def _fig(kind: str, data: ReportData):
@@ -103,9 +110,14 @@ def _landscape_axes(ax, p: PairView) -> None:
         ax.axvline(p.chosen_offset_s, color=col, lw=1.2, alpha=0.8)
     if p.true_offset_s is not None:
         ax.axvline(p.true_offset_s, color=TRUTH, lw=1.2, ls=(0, (4, 3)))
+    if p.solved_offset_s is not None:
+        ax.plot([p.solved_offset_s], [0.0], marker="^", ms=10, color=SOLVED, mec="black", mew=0.6,
+                transform=ax.get_xaxis_transform(), clip_on=False, zorder=5)
     txt = f"Δ = {_fmt(p.chosen_offset_s)}"
     if p.error_ms is not None:
         txt += f"\nerror {p.error_ms:.1f} ms"
+    if p.disagreement_ms is not None and p.disagreement_ms > 100.0:
+        txt += f"\n{p.disagreement_ms:.0f} ms off the global solve"
     if not p.accepted:
         txt += "\n" + _wrap(p.reason, 38)
     ax.text(0.02, 0.04, txt, transform=ax.transAxes, fontsize=8.5, va="bottom", ha="left",
@@ -138,6 +150,8 @@ def landscapes(data: ReportData, path: Path) -> Path:
                       markersize=12, label="best minimum"),
                Line2D([], [], marker="o", color="w", markerfacecolor="white", markeredgecolor="#555",
                       label="other minima")]
+    handles.append(Line2D([], [], marker="^", color="w", markerfacecolor=SOLVED,
+                          markeredgecolor="k", markersize=10, label="Δ of the global solve"))
     if data.gt_offsets_s:
         handles.append(Line2D([], [], color=TRUTH, ls=(0, (4, 3)), label="true Δ"))
     fig.legend(handles=handles, loc="outside upper center", ncol=len(handles), frameon=False)
@@ -280,7 +294,7 @@ def epipolar(data: ReportData, path: Path) -> Path:
 def mosaic(data: ReportData, path: Path) -> Path:
     m = data.mosaic
     fig = _fig("mosaic", data)
-    rows, cols = landscape_grid_shape(len(m.tiles))
+    rows, cols = _mosaic_grid(len(m.tiles))
     axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False)).ravel()
     colors = video_colors(data.names)
     for i, ax in enumerate(axes):

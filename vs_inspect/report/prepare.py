@@ -25,6 +25,7 @@ MAX_EPIPOLAR_MATCHES = 16  # matches drawn in the epipolar panel
 MAX_TRAJECTORIES = 300  # triangulated tracks drawn in the 3D scene
 TRAJ_PAIRS = 3  # accepted pairs (best contrast first) triangulated for the 3D scene
 MAX_REPROJ_PX = 4.0  # a triangulated sample is kept when it reprojects this close in both views
+MIN_RAY_ANGLE_DEG = 3.0  # ... and when its two viewing rays meet at least at this angle
 
 
 def _f(x: Any) -> float | None:
@@ -220,7 +221,14 @@ def triangulate_pair(bundle: CueBundle, a: str, b: str, offset_a_s: float, offse
     with np.errstate(invalid="ignore"):
         ra = np.linalg.norm(project(ca.K_at(fi), ca.pose_at(fi), Xs) - xa[pi, fi], axis=-1)
         rb = np.linalg.norm(project(K_b[fi], T_b[fi], Xs) - xb[pi, fi], axis=-1)
-    good = (ra < MAX_REPROJ_PX) & (rb < MAX_REPROJ_PX)
+    # the angle between the two viewing rays: near-parallel rays fix no depth
+    C_a = -np.einsum("nji,nj->ni", ca.pose_at(fi)[:, :3, :3], ca.pose_at(fi)[:, :3, 3])
+    C_b = -np.einsum("nji,nj->ni", T_b[fi, :3, :3], T_b[fi, :3, 3])
+    u, v = Xs - C_a, Xs - C_b
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cos = np.einsum("ni,ni->n", u, v) / (np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1))
+    angle_deg = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+    good = (ra < MAX_REPROJ_PX) & (rb < MAX_REPROJ_PX) & (angle_deg > MIN_RAY_ANGLE_DEG)
     X[pi[good], fi[good]] = Xs[good]
     out = []
     g = ta + offset_a_s

@@ -97,8 +97,10 @@ def render_scene(data: ReportData, path: Path, size: tuple[int, int]) -> Path:
     pl.reset_camera()
     pl.camera.zoom(1.3)
     n_traj = len(data.trajectories)
-    title = f"3D scene: {len(data.cameras)} cameras (moving ones with their path), " \
-            f"{n_traj} triangulated trajectories coloured by time"
+    n_moving = sum(c.is_moving for c in data.cameras)
+    title = f"3D scene: {len(data.cameras)} cameras" + \
+            (f" ({n_moving} moving, with their path)" if n_moving else "") + \
+            f", {n_traj} trajectories triangulated at the solved offsets, coloured by global time"
     if data.static_points is None:
         title += "; no static reconstruction in the input"
     pl.add_text(title, position="upper_left", font_size=14, color="black")
