@@ -149,20 +149,22 @@ def link_instances(masks: np.ndarray, cfg: MotionConfig) -> np.ndarray:
     prev = None
     for t in range(T):
         n, lab = cv2.connectedComponents(masks[t].astype(np.uint8), connectivity=8)
-        cur = np.zeros_like(lab, dtype=np.int32)
+        lab = lab.astype(np.int64)
+        cur_ids = np.zeros(n, np.int64)
+        area = np.bincount(lab.ravel(), minlength=n)
+        links: dict[int, list[int]] = {}
+        if prev is not None and n > 1:
+            both = (lab > 0) & (prev > 0)
+            if both.any():
+                m = int(prev.max()) + 1
+                key, cnt = np.unique(lab[both] * m + prev[both], return_counts=True)
+                prev_area = np.bincount(prev.ravel(), minlength=m)
+                for k, c in zip(key.tolist(), cnt.tolist()):
+                    ci, pi = divmod(k, m)
+                    if c / (area[ci] + prev_area[pi] - c) >= cfg.link_iou:
+                        links.setdefault(ci, []).append(pi)
         for c in range(1, n):
-            region = lab == c
-            ids = []
-            if prev is not None:
-                under = prev[region]
-                under = under[under > 0]
-                if under.size:
-                    cand, counts = np.unique(under, return_counts=True)
-                    area = region.sum()
-                    for cid, cnt in zip(cand, counts):
-                        union = area + (prev == cid).sum() - cnt
-                        if cnt / union >= cfg.link_iou:
-                            ids.append(int(cid))
+            ids = links.get(c, [])
             if ids:
                 root = find(ids[0])
                 for other in ids[1:]:
@@ -170,10 +172,11 @@ def link_instances(masks: np.ndarray, cfg: MotionConfig) -> np.ndarray:
                     if r != root:
                         parent[max(r, root)] = min(r, root)
                         root = min(r, root)
-                cur[region] = root
+                cur_ids[c] = root
             else:
                 parent.append(len(parent))
-                cur[region] = len(parent) - 1
+                cur_ids[c] = len(parent) - 1
+        cur = cur_ids[lab]
         labels[t] = cur
         prev = cur
     roots = np.array([find(i) for i in range(len(parent))], np.int32)

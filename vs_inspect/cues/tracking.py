@@ -23,10 +23,12 @@ def track_points(frames: np.ndarray, instances: np.ndarray, cfg: TrackConfig = T
     T, H, W = frames.shape
     lk = dict(winSize=(cfg.win_size, cfg.win_size), maxLevel=cfg.pyramid_levels,
               criteria=(cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.01))
-    rows: list[np.ndarray] = []  # finished tracks: (T,2) each
+    store = np.full((max(64, 2 * cfg.max_points), T, 2), np.nan, np.float32)  # grows as needed
+    n_rows = 0
     active_xy = np.zeros((0, 2), np.float32)
-    active_rows: list[np.ndarray] = []
+    active_id = np.zeros(0, np.int64)
     r = max(1, int(round(cfg.min_distance_px)))
+    disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
     for t in range(T):
         if t > 0 and len(active_xy):
             p0 = active_xy.reshape(-1, 1, 2)
@@ -36,38 +38,36 @@ def track_points(frames: np.ndarray, instances: np.ndarray, cfg: TrackConfig = T
             q = p1.reshape(-1, 2)
             ok = ((st[:, 0] == 1) & (st2[:, 0] == 1) & (fb < cfg.fb_max_px)
                   & (q[:, 0] >= 0) & (q[:, 0] <= W - 1) & (q[:, 1] >= 0) & (q[:, 1] <= H - 1))
-            keep_rows = []
-            for i in range(len(q)):
-                if ok[i]:
-                    active_rows[i][t] = q[i]
-                    keep_rows.append(active_rows[i])
-                else:
-                    rows.append(active_rows[i])
-            active_rows = keep_rows
-            active_xy = q[ok].astype(np.float32)
+            active_xy, active_id = q[ok].astype(np.float32), active_id[ok]
+            store[active_id, t] = active_xy
         want = cfg.max_points - len(active_xy)
         if want > 0 and (t % max(1, cfg.reseed_every) == 0):
             region = (seed_mask[t] if seed_mask is not None else instances[t] > 0).astype(np.uint8) * 255
             if cfg.seed_erode_px > 1:  # corners on an object's outline straddle the background
                 region = cv2.erode(region, np.ones((cfg.seed_erode_px, cfg.seed_erode_px), np.uint8))
             if region.any():
-                for x, y in active_xy:
-                    cv2.circle(region, (int(round(x)), int(round(y))), r, 0, -1)
+                if len(active_xy):
+                    taken = np.zeros_like(region)
+                    ij = np.clip(np.round(active_xy).astype(int), 0, [W - 1, H - 1])
+                    taken[ij[:, 1], ij[:, 0]] = 255
+                    region[cv2.dilate(taken, disk) > 0] = 0
                 pts = cv2.goodFeaturesToTrack(frames[t], maxCorners=want, qualityLevel=cfg.quality_level,
                                               minDistance=cfg.min_distance_px, mask=region, blockSize=5)
                 if pts is not None and len(pts):
                     pts = cv2.cornerSubPix(frames[t], pts.astype(np.float32), (3, 3), (-1, -1),
                                            (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03))
-                    pts = pts.reshape(-1, 2)
-                    for p in pts:
-                        row = np.full((T, 2), np.nan, np.float32)
-                        row[t] = p
-                        active_rows.append(row)
-                    active_xy = np.concatenate([active_xy, pts.astype(np.float32)])
-    rows.extend(active_rows)
-    if not rows:
+                    pts = pts.reshape(-1, 2).astype(np.float32)
+                    if n_rows + len(pts) > len(store):
+                        grow = np.full((max(len(store), len(pts)), T, 2), np.nan, np.float32)
+                        store = np.concatenate([store, grow])
+                    ids = np.arange(n_rows, n_rows + len(pts))
+                    n_rows += len(pts)
+                    store[ids, t] = pts
+                    active_xy = np.concatenate([active_xy, pts])
+                    active_id = np.concatenate([active_id, ids])
+    if n_rows == 0:
         return np.zeros((0, T, 2), np.float32), np.zeros(0, np.int32)
-    xy = np.stack(rows)
+    xy = store[:n_rows]
     seen = np.isfinite(xy[:, :, 0])
     xy = xy[seen.sum(1) >= cfg.min_length]
     return xy, track_instances(xy, instances)
