@@ -139,6 +139,7 @@ class RerunSink(Sink):
         self._flushed_videos = False
         self._pairs_logged: list[str] = []
         self._events = 0
+        self._cams_logged: set[str] = set()
         self.hook_s = 0.0
         self.stats: dict[str, float] = {}
 
@@ -206,6 +207,7 @@ class RerunSink(Sink):
     def cameras(self, cameras: dict[str, CameraTrack], points_world: np.ndarray | None,
                 colors: np.ndarray | None) -> None:
         self._world_cameras = dict(cameras)
+        self._log_cameras_static(cameras, [b.info for b in self._videos.values()])
         if points_world is not None and len(points_world):
             pts = np.asarray(points_world, dtype=np.float32)
             cols = np.asarray(colors, dtype=np.uint8) if colors is not None else None
@@ -229,7 +231,7 @@ class RerunSink(Sink):
             from ..io.bundle_zip import bundle_to_zip_bytes
             raw = bundle_to_zip_bytes(bundle)
             self.rec.log(META_BUNDLE, rr.AnyValues(zip=np.frombuffer(raw, dtype=np.uint8)), static=True)
-        self._log_cameras_static(bundle)
+        self._log_cameras_static(self._world_cameras or bundle.cameras, list(bundle.videos))
 
     @_timed
     def pair_landscape(self, landscape: PairLandscape, bundle: CueBundle, energy_fn: Any) -> None:
@@ -323,13 +325,16 @@ class RerunSink(Sink):
         d = np.linalg.norm(C - np.median(C, axis=0), axis=1)
         return float(np.median(d)) or 1.0
 
-    def _log_cameras_static(self, bundle: CueBundle) -> None:
-        cams = self._world_cameras or bundle.cameras
+    def _log_cameras_static(self, cams: dict[str, CameraTrack], videos: list[VideoInfo]) -> None:
+        """Pinhole and (static) pose of each camera, once per camera."""
+        if not cams:
+            return
         dist = 0.08 * self._scene_scale(cams)
-        for v in bundle.videos:
+        for v in videos:
             cam = cams.get(v.name)
-            if cam is None:
+            if cam is None or v.name in self._cams_logged:
                 continue
+            self._cams_logged.add(v.name)
             base = f"world/cameras/{entity_name(v.name)}"
             K0 = cam.K if cam.K.ndim == 2 else cam.K[0]
             self.rec.log(base, rr.Pinhole(image_from_camera=K0, resolution=[v.width, v.height],
