@@ -126,8 +126,8 @@ class RerunSink(Sink):
         os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; the finished file gets normal rights
         self._tmp = Path(tmp)
         self._t0 = time.perf_counter()
-        self.rec = rr.RecordingStream(application_id, recording_id=recording_id or f"vs_inspect-{self.path.stem}",
-                                      send_properties=True)
+        # a fresh recording id per run (unless given), so two runs opened together do not merge
+        self.rec = rr.RecordingStream(application_id, recording_id=recording_id, send_properties=True)
         self.rec.save(str(self._tmp))
         self._closed = False
         self._videos: dict[str, _VideoBuffer] = {}
