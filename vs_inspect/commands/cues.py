@@ -131,27 +131,34 @@ def sync_videos(args: argparse.Namespace, sync_cfg) -> int:
     from ..sync.run import sync_bundle
     from ._common import offsets_table
 
+    from ._record import describe, open_sink
+
     t0 = time.perf_counter()
     out = Path(args.out)
-    bundle, stats, inputs = extract_from_args(args)
-    bundle_dir = out / "cues"
-    write_bundle(bundle, bundle_dir, overwrite=True)
-    t1 = time.perf_counter()
-    result = sync_bundle(bundle, sync_cfg, progress=not args.no_progress)
-    data = result_to_dict(result, {"config": config_to_dict(sync_cfg),
-                                   "input": {"videos": inputs, "bundle": str(bundle_dir)}})
-    for name, why in stats["dropped"].items():
-        data["offsets_s"][name] = None
-        data["uncertainty_s"][name] = None
-        data["unresolved"][name] = why
-    timings = {f"stage0_{k}": round(v, 4) for k, v in stats["timings_s"].items()}
-    timings["stage0_with_io_s"] = round(t1 - t0, 4)
-    data["timings_s"] = {**timings, **data["timings_s"], "total_s": round(time.perf_counter() - t0, 4)}
-    data["cues"] = {k: stats[k] for k in ("camera_source", "registered_cameras", "tracks",
-                                          "track_pairs", "videos", "pairs", "dropped") if k in stats}
-    if "sfm" in stats:
-        data["cues"]["sfm"] = stats["sfm"]
-    path = write_json_atomic(data, out / "result.json")
+    with open_sink(args, out, progress=not args.no_progress) as sink:
+        bundle, stats, inputs = extract_from_args(args, sink=sink)
+        bundle_dir = out / "cues"
+        write_bundle(bundle, bundle_dir, overwrite=True)
+        t1 = time.perf_counter()
+        result = sync_bundle(bundle, sync_cfg, sink=sink, progress=not args.no_progress)
+        data = result_to_dict(result, {"config": config_to_dict(sync_cfg),
+                                       "input": {"videos": inputs, "bundle": str(bundle_dir)}})
+        for name, why in stats["dropped"].items():
+            data["offsets_s"][name] = None
+            data["uncertainty_s"][name] = None
+            data["unresolved"][name] = why
+        timings = {f"stage0_{k}": round(v, 4) for k, v in stats["timings_s"].items()}
+        timings["stage0_with_io_s"] = round(t1 - t0, 4)
+        data["timings_s"] = {**timings, **data["timings_s"], "total_s": round(time.perf_counter() - t0, 4)}
+        data["cues"] = {k: stats[k] for k in ("camera_source", "registered_cameras", "tracks",
+                                              "track_pairs", "videos", "pairs", "dropped") if k in stats}
+        if "sfm" in stats:
+            data["cues"]["sfm"] = stats["sfm"]
+        if hasattr(sink, "run_summary"):
+            sink.run_summary(data)
+        path = write_json_atomic(data, out / "result.json")
+    if describe(sink):
+        print(describe(sink))
     offs = {n: data["offsets_s"].get(n) for n in inputs}
     unc = {n: data["uncertainty_s"].get(n) for n in inputs}
     print(offsets_table(offs, unc, None, result.reference, data["unresolved"]))

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 from pathlib import Path
 
@@ -40,9 +39,6 @@ def run(args: argparse.Namespace) -> int:
         if not args.videos:
             raise InputError("nothing to synchronize: give --bundle DIR or video files")
         from .cues import sync_videos
-        if not args.no_rrd:
-            print("note: no recording written for video input yet; for one, run `vs-inspect cues "
-                  "VIDEOS --out B` then `vs-inspect sync --bundle B`", file=sys.stderr)
         return sync_videos(args, cfg)
     t0 = time.perf_counter()
     bundle = read_bundle(args.bundle)

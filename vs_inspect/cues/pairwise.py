@@ -68,7 +68,8 @@ def _focal_from_F(F: np.ndarray, ca: np.ndarray, cb: np.ndarray, size: float) ->
 
 
 def search_pair(xy_r, info_r, xy_v, info_v, index, min_corr: int = 40, thresh_px: float = 2.0,
-                max_corr: int = 2000, seed: int = 0) -> PairGeometry | None:
+                max_corr: int = 2000, seed: int = 0,
+                min_share_of_max: float = 0.35) -> PairGeometry | None:
     """Best coarse offset and F between r and v from their track pairs."""
     if len(index) < 8:
         return None
@@ -76,7 +77,7 @@ def search_pair(xy_r, info_r, xy_v, info_v, index, min_corr: int = 40, thresh_px
     lo = info_r.timestamps_s[0] - info_v.timestamps_s[-1]
     hi = info_r.timestamps_s[-1] - info_v.timestamps_s[0]
     rng = np.random.default_rng(seed)
-    best = None
+    cands = []
     for d in np.arange(lo, hi + step / 2, step):
         A, B, _ = aligned_correspondences(xy_r, info_r, xy_v, info_v, index, d)
         if len(A) < min_corr:
@@ -88,13 +89,12 @@ def search_pair(xy_r, info_r, xy_v, info_v, index, min_corr: int = 40, thresh_px
                                         thresh_px, 0.999, 2000)
         if F is None or F.shape != (3, 3):
             continue
-        share = float(inl.mean())
-        score = share * np.sqrt(min(len(A), 400))
-        if best is None or score > best[0]:
-            best = (score, d, F, share, len(A))
-    if best is None:
+        cands.append((float(inl.mean()), d, F, len(A)))
+    if not cands:
         return None
-    _, d, F, share, n = best
+    # a few correspondences fit any F: only offsets with a good part of the largest overlap count
+    n_max = max(c[3] for c in cands)
+    share, d, F, n = max((c for c in cands if c[3] >= min_share_of_max * n_max), key=lambda c: c[0])
     ca = np.array([(info_r.width - 1) / 2, (info_r.height - 1) / 2])
     cb = np.array([(info_v.width - 1) / 2, (info_v.height - 1) / 2])
     f = _focal_from_F(F, ca, cb, float(max(info_r.width, info_r.height, info_v.width, info_v.height)))
