@@ -374,8 +374,8 @@ def build_report_data(result: dict[str, Any], bundle: CueBundle | None, *, sourc
         if any(t.image_bgr is not None for t in tiles):
             mosaic = Mosaic(g, tuple(tiles))
     if mosaic is None:
-        notes.append("no mosaic of one moment across all videos: the video files are not "
-                     "available (a cue bundle or a recording alone has no frames)")
+        notes.append("no mosaic of one moment across all videos: no video frames (result.json "
+                     "lists no readable input.videos, or the recording carries no frames)")
     if static_points is None:
         notes.append("no static reconstruction in the input (cue bundles carry cameras and "
                      "tracks only)")
