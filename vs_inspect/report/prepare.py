@@ -14,6 +14,7 @@ import numpy as np
 
 from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras, project
 from ..geometry.timing import frame_brackets, interpolate_intrinsics, interpolate_poses
+from ..geometry.triangulate import triangulate_dlt
 from ..types import CueBundle
 from .data import (CameraView, EpipolarPanel, EpipolarState, Mosaic, MosaicTile, PairView,
                    ReportData, Trajectory, VideoClock)
@@ -182,20 +183,6 @@ def epipolar_panel(bundle: CueBundle, pair: PairView, image_bgr: np.ndarray | No
 # ---- triangulation of moving points after sync --------------------------------------------
 
 
-def _triangulate(P_a: np.ndarray, P_b: np.ndarray, xa: np.ndarray, xb: np.ndarray) -> np.ndarray:
-    """Linear (DLT) triangulation, vectorized: P (...,3,4), x (...,2) -> X (...,3)."""
-    rows = np.stack([
-        xa[..., 0:1] * P_a[..., 2, :] - P_a[..., 0, :],
-        xa[..., 1:2] * P_a[..., 2, :] - P_a[..., 1, :],
-        xb[..., 0:1] * P_b[..., 2, :] - P_b[..., 0, :],
-        xb[..., 1:2] * P_b[..., 2, :] - P_b[..., 1, :],
-    ], -2)
-    _, _, vt = np.linalg.svd(rows)
-    X = vt[..., -1, :]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return X[..., :3] / X[..., 3:4]
-
-
 def triangulate_pair(bundle: CueBundle, a: str, b: str, offset_a_s: float, offset_b_s: float,
                      max_tracks: int) -> list[Trajectory]:
     """Trajectories of the matched tracks of (a, b), b sampled at a's frames after sync."""
@@ -217,7 +204,7 @@ def triangulate_pair(bundle: CueBundle, a: str, b: str, offset_a_s: float, offse
     pi, fi = np.nonzero(ok)
     if len(pi) == 0:
         return []
-    Xs = _triangulate(P_a[fi], P_b[fi], xa[pi, fi], xb[pi, fi])
+    Xs = triangulate_dlt(P_a[fi], P_b[fi], xa[pi, fi], xb[pi, fi])
     with np.errstate(invalid="ignore"):
         ra = np.linalg.norm(project(ca.K_at(fi), ca.pose_at(fi), Xs) - xa[pi, fi], axis=-1)
         rb = np.linalg.norm(project(K_b[fi], T_b[fi], Xs) - xb[pi, fi], axis=-1)
