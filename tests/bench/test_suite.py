@@ -80,3 +80,23 @@ def test_caliscope_bundle_from_real_corners(shared_data):
     res = sync_bundle(b, SyncConfig(), progress=False)
     err = [abs(res.offsets_s[v] - b.gt_offsets_s[v]) for v in b.names if res.offsets_s[v] is not None]
     assert np.median(err) < 1 / 6  # under one frame
+
+
+def test_stage0_failure_is_a_failure_row_but_the_motion_peer_still_runs():
+    from vs_inspect.bench.suite import stage0_failed
+    from vs_inspect.errors import InputError
+    from vs_inspect.types import VideoInfo
+
+    truth = {"a": 0.0, "b": 0.7}
+    infos = [VideoInfo.constant_rate(n, 320, 240, 80, 10.0) for n in truth]
+    rng = np.random.default_rng(0)
+    g = np.arange(-2, 12, 0.1)
+    f = rng.uniform(0, 1, len(g))
+    signals = {v.name: (v.timestamps_s, np.interp(v.timestamps_s + truth[v.name], g, f)) for v in infos}
+    data = BenchData("clips/x", "clips", None, None, 0.1,
+                     {"truth": truth, "videos_info": infos, "motion_signals": signals})
+    rows = stage0_failed(data, InputError("no video could be used"), 12.0)
+    assert [r.method for r in rows] == ["vs_inspect", "motion-xcorr", "ransac-inlier"]
+    assert rows[0].error.startswith("InputError") and rows[0].unresolved == 2 and rows[0].a100 == 0.0
+    assert rows[2].error and not rows[1].error
+    assert rows[1].delta_med_ms < 1e-6 and rows[1].unresolved == 0  # exact shift of 7 frames

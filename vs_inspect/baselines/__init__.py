@@ -9,9 +9,10 @@ Both end in the same Stage 2 solver as vs_inspect (vs_inspect.sync.solve.solve_o
 """
 
 from .common import PeerPair, PeerResult, solve_peer
-from .motion_xcorr import motion_signal_from_frames, motion_signal_from_tracks, sync_motion_xcorr, xcorr_offset
+from .motion_xcorr import (motion_signal_from_frames, motion_signal_from_tracks, sync_motion_xcorr,
+                           sync_motion_xcorr_videos, xcorr_offset)
 from .ransac_inlier import ransac_inlier_landscape, sync_ransac_inlier
 
 __all__ = ["PeerPair", "PeerResult", "solve_peer", "motion_signal_from_frames",
-           "motion_signal_from_tracks", "sync_motion_xcorr", "xcorr_offset",
+           "motion_signal_from_tracks", "sync_motion_xcorr", "sync_motion_xcorr_videos", "xcorr_offset",
            "ransac_inlier_landscape", "sync_ransac_inlier"]

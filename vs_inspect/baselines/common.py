@@ -8,7 +8,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..sync.solve import PairMeasurement, solve_offsets
-from ..types import CueBundle
+from collections.abc import Sequence
+
+from ..types import VideoInfo
 
 
 @dataclass(frozen=True)
@@ -42,13 +44,13 @@ def best_of(offsets_s: np.ndarray, score: np.ndarray) -> float:
     return float(offsets_s[int(np.nanargmax(score))])
 
 
-def solve_peer(bundle: CueBundle, pairs: list[PeerPair], reference: str | None = None,
+def solve_peer(videos: Sequence[VideoInfo], pairs: list[PeerPair], reference: str | None = None,
                solver: str = "irls") -> tuple[dict, dict]:
     """Stage 2 exactly as vs_inspect runs it: every pair with an offset is a measurement with the
     grid's own resolution as sigma; Huber threshold = half the coarsest frame interval."""
-    names = bundle.names
+    names = [v.name for v in videos]
     reference = reference or names[0]
-    intervals = [v.frame_interval_s for v in bundle.videos if math.isfinite(v.frame_interval_s)]
+    intervals = [v.frame_interval_s for v in videos if math.isfinite(v.frame_interval_s)]
     slowest = max(intervals) if intervals else 0.1
     meas = []
     for p in pairs:

@@ -94,18 +94,29 @@ def xcorr_offset(t_a: np.ndarray, s_a: np.ndarray, t_b: np.ndarray, s_b: np.ndar
 
 def sync_motion_xcorr(bundle: CueBundle, cfg: LandscapeConfig = LandscapeConfig(),
                       reference: str | None = None, signals: dict | None = None) -> PeerResult:
-    """Cross-correlate every pair of videos over vs_inspect's search grid, then Stage 2.
+    """Cross-correlate every pair of videos of a cue bundle, then Stage 2.
 
     signals: optional {name: (times_s, signal)} (e.g. from decoded frames); default = the mean
     track speed of each video's tracks.
     """
     t0 = time.perf_counter()
-    names = bundle.names
     if signals is None:
-        signals = {n: motion_signal_from_tracks(bundle.video(n), bundle.tracks[n]) for n in names}
+        signals = {n: motion_signal_from_tracks(bundle.video(n), bundle.tracks[n]) for n in bundle.names}
+    t_signals = time.perf_counter() - t0
+    res = sync_motion_xcorr_videos(list(bundle.videos), signals, cfg, reference)
+    res.timings_s["stage1_s"] += t_signals  # the signals are part of this peer's Stage 1
+    return res
+
+
+def sync_motion_xcorr_videos(videos: list[VideoInfo], signals: dict, cfg: LandscapeConfig = LandscapeConfig(),
+                             reference: str | None = None) -> PeerResult:
+    """The peer on videos alone (no cameras, no tracks): {name: (times_s, signal)} per video."""
+    t0 = time.perf_counter()
+    names = [v.name for v in videos]
+    by = {v.name: v for v in videos}
     pairs = []
     for a, b in itertools.combinations(names, 2):
-        va, vb = bundle.video(a), bundle.video(b)
+        va, vb = by[a], by[b]
         offsets = search_offsets(va, vb, cfg)
         rate = 1.0 / min(va.frame_interval_s, vb.frame_interval_s)
         score = xcorr_offset(*signals[a], *signals[b], offsets, rate, cfg.min_overlap_s)
@@ -114,7 +125,7 @@ def sync_motion_xcorr(bundle: CueBundle, cfg: LandscapeConfig = LandscapeConfig(
                               "" if np.isfinite(best) else "no lag with enough overlap and motion"))
     t1 = time.perf_counter()
     ref = reference or names[0]
-    offsets, reasons = solve_peer(bundle, pairs, ref)
+    offsets, reasons = solve_peer(videos, pairs, ref)
     t2 = time.perf_counter()
     return PeerResult("motion-xcorr", ref, offsets, tuple(pairs), reasons,
                       {"stage1_s": t1 - t0, "stage2_s": t2 - t1})

@@ -115,7 +115,7 @@ def sync_ransac_inlier(bundle: CueBundle, cfg: LandscapeConfig = LandscapeConfig
              for a, b in select_pairs(names, has, PairSelection())]
     t1 = time.perf_counter()
     ref = reference or names[0]
-    offsets, reasons = solve_peer(bundle, pairs, ref)
+    offsets, reasons = solve_peer(bundle.videos, pairs, ref)
     t2 = time.perf_counter()
     return PeerResult("ransac-inlier", ref, offsets, tuple(pairs), reasons,
                       {"stage1_s": t1 - t0, "stage2_s": t2 - t1})

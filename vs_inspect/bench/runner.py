@@ -22,7 +22,7 @@ from tqdm import tqdm
 
 from .. import __version__
 from .datasets import CALISCOPE, DIFFICULTIES, caliscope_cuts, cue_scene, load_caliscope
-from .suite import PlanOptions, Row, failed, run_dataset
+from .suite import PlanOptions, Row, failed, run_dataset, stage0_failed
 from .videos import CLIP_SCENES, clip_scene, video_pipeline_available
 
 log = logging.getLogger(__name__)
@@ -89,13 +89,16 @@ def run_plan(plan: list[DatasetPlan], data_root: Path, progress: bool = True,
                 skipped.append(Skipped(dp.name, f"not run: {root / scene} not found"))
                 continue
             try:
-                data, stage0 = clip_scene(root, scene)
-            except Exception as exc:  # noqa: BLE001  (Stage 0 failing is a result too)
+                data, stage0, error = clip_scene(root, scene)
+            except Exception as exc:  # noqa: BLE001  (unreadable clips are a result too)
                 from .datasets import BenchData
                 n = len(list((root / scene).glob("*.mp4")))
                 dummy = BenchData(dp.name, "clips", None, None, 0.1, {"videos": n})
                 for method in ("vs_inspect", "motion-xcorr", "ransac-inlier"):
                     rows.append(failed(dummy, method, "default", exc))
+                continue
+            if error is not None:
+                rows += stage0_failed(data, error, stage0)
                 continue
             rows += run_dataset(data, dp.opts, stage0_s=stage0)
         else:

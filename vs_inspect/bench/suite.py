@@ -97,9 +97,12 @@ def _fix(x: float) -> float:
 
 
 def score(data: BenchData, offsets_s: dict, method: str, variant: str, **extra) -> Row:
-    truth = data.bundle.gt_offsets_s
+    if data.bundle is not None:
+        truth, ref = data.bundle.gt_offsets_s, data.bundle.names[0]
+    else:  # Stage 0 failed: only methods that need no cue bundle have a result
+        truth = data.notes["truth"]
+        ref = next(iter(truth))
     est = {v: offsets_s.get(v) for v in truth}  # a video missing from the result is unresolved
-    ref = data.bundle.names[0]
     m = evaluate_offsets(est, truth, ref)
     fi = data.frame_interval_s
     return Row(data.name, data.group, method, variant, round(m.a100, 6), round(m.a500, 6),
@@ -108,8 +111,27 @@ def score(data: BenchData, offsets_s: dict, method: str, variant: str, **extra) 
                m.num_unresolved, len(truth), **extra)
 
 
+def stage0_failed(data: BenchData, exc: BaseException, stage0_s: float) -> list[Row]:
+    """Stage 0 (cue extraction) failed: vs_inspect and the RANSAC peer (which needs the tracks
+    and track pairs) fail with it; the motion peer runs on the decoded frames alone."""
+    from ..baselines.motion_xcorr import sync_motion_xcorr_videos
+
+    rows = [failed(data, m, "default", exc, stage0_s=stage0_s) for m in ("vs_inspect", "ransac-inlier")]
+    try:
+        with Meter() as m:
+            pr = sync_motion_xcorr_videos(list(data.notes["videos_info"]), data.notes["motion_signals"])
+        rows.insert(1, score(data, pr.offsets_s, "motion-xcorr", "default", stage1_s=pr.timings_s["stage1_s"],
+                             stage2_s=pr.timings_s["stage2_s"], peak_mb=m.peak_mb))
+    except Exception as exc2:  # noqa: BLE001
+        rows.insert(1, failed(data, "motion-xcorr", "default", exc2))
+    return rows
+
+
 def failed(data: BenchData, method: str, variant: str, exc: BaseException, **extra) -> Row:
-    n = len(data.bundle.gt_offsets_s) if data.bundle is not None else int(data.notes.get("videos", 0))
+    if data.bundle is not None:
+        n = len(data.bundle.gt_offsets_s)
+    else:
+        n = len(data.notes["truth"]) if "truth" in data.notes else int(data.notes.get("videos", 0))
     log.warning("%s %s %s failed: %s", data.name, method, variant, exc)
     return Row(data.name, data.group, method, variant, 0.0, 0.0, float("nan"), float("nan"),
                float("nan"), n, n, error=f"{type(exc).__name__}: {exc}"[:200], **extra)

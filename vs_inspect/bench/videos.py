@@ -51,10 +51,13 @@ def frame_motion_signal(src, max_side: int = 320) -> tuple[np.ndarray, np.ndarra
     return motion_signal_from_frames(frames, src.info.timestamps_s)
 
 
-def clip_scene(root: Path, scene: str) -> tuple[BenchData, float]:
-    """(BenchData of the extracted cue bundle with the clips' true offsets, Stage 0 seconds).
+def clip_scene(root: Path, scene: str) -> tuple[BenchData, float, BaseException | None]:
+    """(BenchData, Stage 0 seconds, Stage 0 error or None) of one scene of clips.
 
-    Videos that Stage 0 drops stay in the truth, so every method counts them as unresolved.
+    The motion signals of the peer are computed from the decoded frames first, so that the peer
+    runs even when Stage 0 fails (it needs no cameras). On success data.bundle is the extracted
+    cue bundle with the clips' true offsets; videos that Stage 0 drops stay in the truth, so every
+    method counts them as unresolved. On failure data.bundle is None.
     """
     from ..cues import CueConfig, extract_cues
     from ..io.video import open_video
@@ -64,11 +67,17 @@ def clip_scene(root: Path, scene: str) -> tuple[BenchData, float]:
         raise InputError(f"{root / scene}: fewer than 2 clips")
     truth = clip_truth(paths)
     srcs = [open_video(p) for p in paths]
+    signals = {s.info.name: frame_motion_signal(s) for s in srcs}
+    notes = {"motion_signals": signals, "truth": truth, "videos_info": [s.info for s in srcs],
+             "videos": len(srcs)}
     t0 = time.perf_counter()
-    bundle, stats = extract_cues(srcs, None, CueConfig(), progress=False)
+    try:
+        bundle, stats = extract_cues(srcs, None, CueConfig(), progress=False)
+    except Exception as exc:  # noqa: BLE001  (Stage 0 failing is a result)
+        return BenchData(f"clips/{scene}", "clips", None, None, 1.0 / CLIP_FPS, notes), \
+            time.perf_counter() - t0, exc
     stage0 = time.perf_counter() - t0
-    signals = {s.info.name: frame_motion_signal(s) for s in srcs if s.info.name in bundle.names}
+    notes.update(dropped=stats.get("dropped", {}), stage0_timings_s=stats.get("timings_s", {}))
+    notes["motion_signals"] = {n: signals[n] for n in bundle.names}
     bundle = dataclasses.replace(bundle, gt_offsets_s=truth)
-    return BenchData(f"clips/{scene}", "clips", bundle, None, 1.0 / CLIP_FPS,
-                     {"motion_signals": signals, "dropped": stats.get("dropped", {}),
-                      "stage0_timings_s": stats.get("timings_s", {})}), stage0
+    return BenchData(f"clips/{scene}", "clips", bundle, None, 1.0 / CLIP_FPS, notes), stage0, None

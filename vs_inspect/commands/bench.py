@@ -49,18 +49,19 @@ def register(sub) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.from_json is not None:
         rows, skipped, walls, cmds, info = [], [], [], [], None
-        for f in args.from_json:
+        for f in args.from_json:  # a dataset in a later file replaces its rows from earlier files
             if not f.is_file():
                 raise InputError(f"{f} not found")
             d = json.loads(f.read_text())
             r, s = rows_from_json(d)
-            rows += r
-            skipped += s
+            again = {x.dataset for x in r} | {x.name for x in s}
+            rows = [x for x in rows if x.dataset not in again] + r
+            skipped = [x for x in skipped if x.name not in again] + s
             walls.append(d.get("wall_s") or float("nan"))
             cmds.append(d.get("command", "vs-inspect bench"))
             info = info or d.get("machine")
         print(to_text(rows, skipped))
-        cmd = " and, in parallel, ".join(f"{c} --json {f.name}" for c, f in zip(cmds, args.from_json))
+        cmd = "; ".join(f"{c} --json {f.name}" for c, f in zip(cmds, args.from_json))
         write_outputs(rows, skipped, max(walls), cmd, args.out, None, info)
         return 0
     plan = quick_plan() if args.quick else full_plan()
