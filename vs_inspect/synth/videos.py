@@ -22,6 +22,8 @@ from __future__ import annotations
 import json
 import logging
 import time
+from collections import deque
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict
 from pathlib import Path
 
@@ -75,7 +77,10 @@ def render_camera(renderer, scene: Scene, cam: CameraSpec, path: Path, crf: int 
     xy_all, depth_all = observe_points(scene.world, cam, g, poses)
     dt = np.diff(cam.timestamps_s).min() if cam.num_frames > 1 else 1 / 30
     fps = cam.fps or float(1.0 / np.median(np.diff(cam.timestamps_s)))
-    with VideoWriter(path, cam.width, cam.height, fps, crf=crf) as writer:
+    # frames are encoded on a worker thread (libx264 runs without the GIL) while the next renders
+    with VideoWriter(path, cam.width, cam.height, fps, crf=crf) as writer, \
+            ThreadPoolExecutor(max_workers=1) as pool:
+        pending: deque = deque()
         for k in tqdm(range(cam.num_frames), desc=f"render {cam.name}", unit="frame",
                       disable=not progress, leave=False):
             rgb, dmap = renderer.render(g[k], cam.K, poses[k], depth=True)
@@ -92,8 +97,12 @@ def render_camera(renderer, scene: Scene, cam: CameraSpec, path: Path, crf: int 
                 rgb = (acc / n + 0.5).astype(np.uint8)
             vis = visible(xy_all[:, k], depth_all[:, k], dmap)
             xy_all[~vis, k] = np.nan
-            writer.write(np.ascontiguousarray(apply_look(rgb, cam)[:, :, ::-1]),
-                         time_s=float(cam.timestamps_s[k]))
+            bgr = np.ascontiguousarray(apply_look(rgb, cam)[:, :, ::-1])
+            pending.append(pool.submit(writer.write, bgr, float(cam.timestamps_s[k])))
+            while len(pending) > 4:
+                pending.popleft().result()
+        while pending:
+            pending.popleft().result()
     return xy_all, poses
 
 

@@ -589,7 +589,7 @@ class Scene:
 
 
 def _intrinsics(rng: np.random.Generator, W: int, H: int) -> np.ndarray:
-    fx = W * rng.uniform(0.75, 1.0)
+    fx = W * rng.uniform(0.85, 1.15)
     fy = fx * rng.uniform(0.96, 1.04)
     cx = (W - 1) / 2 + W * rng.uniform(-0.03, 0.03)
     cy = (H - 1) / 2 + H * rng.uniform(-0.03, 0.03)
