@@ -17,6 +17,8 @@ class RecordOptions:
     """JPEG quality of logged frames (1-100)."""
     video_assets: bool = True
     """Embed H.264/AV1 input files as rr.AssetVideo (exact frames, small) instead of JPEGs."""
+    max_asset_mb: float = 60.0
+    """Larger input files are logged as JPEG frames instead of being embedded whole."""
     masks: bool = True
     """Log moving-region masks (downscaled, nearest neighbour)."""
     max_mask_width_px: int = 320

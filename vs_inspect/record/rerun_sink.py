@@ -162,7 +162,7 @@ class RerunSink(Sink):
         buf.info, buf.path = info, path
         o = self.options
         if o.frames and o.video_assets and path and Path(path).is_file() \
-                and _video_codec(path) in H264_LIKE:
+                and Path(path).stat().st_size <= o.max_asset_mb * 1e6 and _video_codec(path) in H264_LIKE:
             try:
                 asset = rr.AssetVideo(path=path)
                 ts = np.sort(asset.read_frame_timestamps_nanos())
