@@ -4,6 +4,7 @@ $VS_INSPECT_DATA); tests that need it skip with a reason when it is absent."""
 from __future__ import annotations
 
 import os
+import tempfile
 from pathlib import Path
 
 import numpy  # noqa: F401  (first: pycolmap before numpy breaks zlib, see ENVIRONMENT.md)
@@ -14,6 +15,8 @@ os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 os.environ.setdefault("NUMBA_CACHE_DIR", str(REPO / ".cache" / "numba"))
 os.environ.setdefault("XDG_CONFIG_HOME", str(REPO / ".cache" / "xdg-config"))
 os.environ.setdefault("XDG_DATA_HOME", str(REPO / ".cache" / "xdg-data"))
+# sync/demo write recordings/<run>.rrd by default; keep the tests' ones out of the checkout
+os.environ.setdefault("VS_INSPECT_RECORDINGS", tempfile.mkdtemp(prefix="vs-inspect-test-recordings-"))
 
 
 def shared_data_dir() -> Path:

@@ -4,6 +4,7 @@ nothing with --no-rrd; the recording's result equals result.json."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 from vs_inspect.cli import main
 from vs_inspect.io.bundle import write_bundle
@@ -17,6 +18,7 @@ def test_sync_records_by_default_and_not_with_no_rrd(tmp_path, monkeypatch, caps
                                           no_match_pairs=0, all_wrong_pair=False, seed=2))
     bdir = write_bundle(scene.bundle, tmp_path / "bundle")
     monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("VS_INSPECT_RECORDINGS", raising=False)  # the default: ./recordings
     assert main(["sync", "--bundle", str(bdir), "--out", "out/run7", "--no-progress",
                  "--rrd-minimal"]) == 0
     rrd = tmp_path / "recordings" / "run7.rrd"
@@ -31,3 +33,14 @@ def test_sync_records_by_default_and_not_with_no_rrd(tmp_path, monkeypatch, caps
     assert main(["sync", "--bundle", str(bdir), "--out", "out/run8", "--no-progress", "--no-rrd"]) == 0
     assert not (tmp_path / "recordings" / "run8.rrd").exists()
     assert sorted(p.name for p in (tmp_path / "recordings").iterdir()) == ["run7.rrd"]
+
+
+def test_recordings_folder_from_environment(tmp_path, monkeypatch):
+    import argparse
+
+    from vs_inspect.commands._record import rrd_path
+    args = argparse.Namespace(no_rrd=False, rrd=None)
+    monkeypatch.setenv("VS_INSPECT_RECORDINGS", str(tmp_path / "recs"))
+    assert rrd_path(args, tmp_path / "out" / "run3") == tmp_path / "recs" / "run3.rrd"
+    assert rrd_path(argparse.Namespace(no_rrd=False, rrd="x/y.rrd"), tmp_path) == Path("x/y.rrd")
+    assert rrd_path(argparse.Namespace(no_rrd=True, rrd="x/y.rrd"), tmp_path) is None

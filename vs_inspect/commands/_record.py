@@ -3,16 +3,20 @@
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 
 from ..record.options import RecordOptions
 from ..record.sink import NullSink, Sink
 
+RECORDINGS_ENV = "VS_INSPECT_RECORDINGS"  # folder of default recordings (default: ./recordings)
+
 
 def add_record_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("recording (rerun .rrd)")
     g.add_argument("--rrd", type=Path, default=None, metavar="PATH",
-                   help="write the recording here (default: recordings/<name of --out>.rrd)")
+                   help="write the recording here (default: recordings/<name of --out>.rrd, or "
+                        f"${RECORDINGS_ENV}/<name of --out>.rrd when that variable is set)")
     g.add_argument("--no-rrd", action="store_true", help="write no recording")
     g.add_argument("--rrd-minimal", action="store_true",
                    help="log only decisions, landscapes, graph, solve, cameras and the result "
@@ -37,7 +41,9 @@ def record_options(args: argparse.Namespace) -> RecordOptions:
 def rrd_path(args: argparse.Namespace, out: Path) -> Path | None:
     if args.no_rrd:
         return None
-    return Path(args.rrd) if args.rrd else Path("recordings") / f"{Path(out).resolve().name}.rrd"
+    if args.rrd:
+        return Path(args.rrd)
+    return Path(os.environ.get(RECORDINGS_ENV) or "recordings") / f"{Path(out).resolve().name}.rrd"
 
 
 def open_sink(args: argparse.Namespace, out: Path, progress: bool = True) -> Sink:
