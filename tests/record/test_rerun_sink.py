@@ -239,6 +239,7 @@ def test_frames_masks_and_video_asset(tmp_path):
     assert rerun_verify(out, tmp_path).returncode == 0
     ents = chunk_entities(out)
     assert "videos/cam0/video" in ents  # H.264 embedded as a video asset
+    assert "world/cameras/cam0/image" in ents  # its frames on the 3D image plane (references)
     assert "videos/cam1/image" in ents and "videos/cam0/image" not in ents  # MJPG -> JPEG frames
     assert {"videos/cam0/mask", "videos/cam1/mask"} <= ents
     import rerun.chunk as rrc

@@ -391,6 +391,13 @@ class RerunSink(Sink):
                 frames = np.arange(len(buf.asset_timestamps_ns))
                 self.rec.send_columns(f"{ent}/video", self._indexes(info, frames, off),
                                       rr.VideoFrameReference.columns_nanos(buf.asset_timestamps_ns))
+                if name in self._cams_logged:
+                    # the same frames on the camera's image plane in 3D: references only, no copy
+                    self.rec.log(f"world/cameras/{entity_name(name)}/image",
+                                 rr.VideoFrameReference.from_fields(video_reference=f"{ent}/video"), static=True)
+                    self.rec.send_columns(f"world/cameras/{entity_name(name)}/image",
+                                          self._indexes(info, frames, off),
+                                          rr.VideoFrameReference.columns_nanos(buf.asset_timestamps_ns))
             if buf.jpeg:
                 w, h = buf.image_size
                 self.rec.log(f"{ent}/image", rr.Transform3D(scale=[W / w, H / h, 1.0]), static=True)
