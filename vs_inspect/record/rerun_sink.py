@@ -128,7 +128,11 @@ class RerunSink(Sink):
         self._t0 = time.perf_counter()
         # a fresh recording id per run (unless given), so two runs opened together do not merge
         self.rec = rr.RecordingStream(application_id, recording_id=recording_id, send_properties=True)
-        self.rec.save(str(self._tmp))
+        try:
+            self.rec.save(str(self._tmp))
+        except BaseException:
+            self._tmp.unlink(missing_ok=True)
+            raise
         self._closed = False
         self._videos: dict[str, _VideoBuffer] = {}
         self._world_cameras: dict[str, CameraTrack] | None = None
