@@ -35,6 +35,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from vs_inspect.cues import CueConfig, extract_cues  # noqa: E402
+from vs_inspect.errors import InputError  # noqa: E402
 from vs_inspect.io.calibration import load_calibration  # noqa: E402
 from vs_inspect.io.video import VideoWriter, iter_frames, open_video  # noqa: E402
 from vs_inspect.sync.run import sync_bundle  # noqa: E402
@@ -124,7 +125,11 @@ def bench_visualsync(args) -> None:
         for p in paths:
             m = pat.search(p.stem)
             truth[p.stem] = int(m.group(1)) / 10.0
-        res, stats, tc, ts = run(paths, None)
+        try:
+            res, stats, tc, ts = run(paths, None)
+        except InputError as exc:
+            print(f"{scene}: no result: {exc}", flush=True)
+            continue
         err = errors_ms(res, truth)
         fr = {k: (None if v is None else round(v / 100.0, 2)) for k, v in err.items()}
         print(f"{scene}: error in frames {fr}  cues {tc:.1f}s sync {ts:.1f}s  "

@@ -93,7 +93,7 @@ def register(sub) -> None:
                        description="Stage 0 on real videos: moving regions, KLT tracks inside them, "
                                    "cross-view track pairs from keyframe SIFT matches, and cameras "
                                    "(imported with --calib or estimated with pycolmap). Writes a cue "
-                                   "bundle folder (DESIGN.md, format v1) and cues_stats.json beside it.",
+                                   "bundle folder (DESIGN.md, format v1) with cues_stats.json (timings, counts, left-out videos) in it.",
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("videos", nargs="+", type=Path, help="video files or image folders")
     p.add_argument("--out", type=Path, required=True, help="bundle folder to write")
