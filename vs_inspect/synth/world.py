@@ -657,10 +657,13 @@ def make_scene(cfg: SceneConfig = SceneConfig()) -> Scene:
         ts = _timestamps(rng, seconds, fps, variable)
         K = _intrinsics(rng, W, H)
         angle = base_angle + 2 * np.pi * i / max(1, cfg.cameras) + rng.uniform(-0.25, 0.25)
-        if i >= cfg.cameras:  # little motion: looks from near the action out at a wall corner
+        if i >= cfg.cameras:  # little motion: the action sits at the image border
             role = "little_motion"
-            C = np.array([3.5 * np.cos(angle), 3.5 * np.sin(angle), rng.uniform(1.4, 2.0)])
-            target = C * np.array([2.6, 2.6, 0.0]) + np.array([0, 0, 1.2])
+            C = np.array([9.0 * np.cos(angle), 9.0 * np.sin(angle), rng.uniform(1.5, 2.0)])
+            to_action = np.array([0.0, 0.0, 1.0]) - C
+            half_fov = np.arctan(W / 2 / K[0, 0])
+            turn = rng.choice([-1, 1]) * 1.15 * half_fov  # centre of the action just off the image
+            target = C + _rot((0, 0, 1), np.array([turn]))[0] @ to_action
             pose, moving = _static_pose(C, target), False
         elif i in moving_idx:
             role = "handheld"
