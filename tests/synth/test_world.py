@@ -114,3 +114,17 @@ def _check_box_silhouettes(world, cam, g, cam_from_world, rgb, checked):
         assert xs.min() >= np.ceil(lo_x - 1e-6) and xs.max() <= np.floor(hi_x + 1e-6), (b.name, lo_x, hi_x, xs.min(), xs.max())
         assert ys.min() >= np.ceil(lo_y - 1e-6) and ys.max() <= np.floor(hi_y + 1e-6), (b.name, lo_y, hi_y, ys.min(), ys.max())
         checked["boxes"] = checked.get("boxes", 0) + 1
+
+
+def test_little_motion_camera_sees_the_action_only_at_the_border():
+    s = make_scene(SceneConfig(cameras=3, moving=0, seconds=2.0, little_motion=1, seed=2))
+    seen = {}
+    for cam in s.cameras:
+        T = cam.cam_from_world()
+        xy, _ = observe_points(s.world, cam, cam.global_times_s, T)
+        seen[cam.role] = seen.get(cam.role, []) + [np.isfinite(xy[..., 0]).mean()]
+        if cam.role == "little_motion":
+            x = xy[..., 0][np.isfinite(xy[..., 0])]
+            # what it sees lies in the outer third of the image
+            assert np.median(np.abs(x - cam.width / 2)) > cam.width / 6
+    assert 0 < seen["little_motion"][0] < 0.8 * min(seen["static"])
