@@ -85,3 +85,19 @@ def test_demo_second_run_uses_cache(demo_run, capsys):
     assert "error_ms" in text
     assert mp4.stat().st_mtime_ns == before
     assert (out / "result.json").is_file()
+
+
+def test_demo_rerenders_when_the_scene_settings_change(demo_run, capsys, tmp_path):
+    import shutil
+
+    from vs_inspect.commands.demo import ensure_scene
+    out, _ = demo_run
+    copy = tmp_path / "scene"
+    shutil.copytree(out / "scene", copy)
+    assert ensure_scene(copy, TINY, progress=False) is False  # same settings: cached
+    other = SceneConfig(**{**TINY.__dict__, "seconds": 1.0, "cameras": 2, "moving": 0})
+    assert ensure_scene(copy, other, progress=False) is True
+    assert "rendered with other settings" in capsys.readouterr().out
+    assert json.loads((copy / "scene.json").read_text())["config"]["cameras"] == 2
+    assert not (copy / "cam2.mp4").exists()  # the old scene's third video is gone
+    assert (copy / "cam1.mp4").exists()

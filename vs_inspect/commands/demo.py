@@ -9,7 +9,9 @@ exact track pairs) and says so; run_demo() is the place to plug the video pipeli
 from __future__ import annotations
 
 import argparse
+import json
 import time
+from dataclasses import asdict
 from pathlib import Path
 
 from ..io.bundle import read_bundle
@@ -45,8 +47,14 @@ def ensure_scene(folder: Path, config: SceneConfig = DEMO_SCENE, rerender: bool 
                  progress: bool = True) -> bool:
     """Render the scene into folder unless a finished one is there. Returns True if it rendered."""
     if is_complete(folder) and not rerender:
-        print(f"demo input: cached rendered scene in {folder}")
-        return False
+        try:
+            cached = json.loads((folder / "scene.json").read_text()).get("config")
+        except (OSError, ValueError):
+            cached = None
+        if cached == json.loads(json.dumps(asdict(config))):
+            print(f"demo input: cached rendered scene in {folder}")
+            return False
+        print(f"demo input: the scene in {folder} was rendered with other settings; rendering again")
     c = config
     print(f"demo input: rendering the default scene into {folder} ({c.cameras} cameras, {c.moving} "
           f"hand-held, {c.seconds:g} s, {c.width}x{c.height}, "

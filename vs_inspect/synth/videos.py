@@ -180,6 +180,18 @@ def scene_dict(scene: Scene, timings: dict) -> dict:
             "objects": list(scene.world.object_names), "timings_s": timings}
 
 
+def _remove_stale_videos(out: Path, keep: set[str]) -> None:
+    """Delete the videos a previous scene.json in out lists that the new scene does not have."""
+    try:
+        old = json.loads((out / "scene.json").read_text())["cameras"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return
+    for cam in old:
+        name = cam.get("file") if isinstance(cam, dict) else None
+        if isinstance(name, str) and name not in keep and "/" not in name and name.endswith(".mp4"):
+            (out / name).unlink(missing_ok=True)
+
+
 def render_scene(scene: Scene, out: Path, crf: int = 20, progress: bool = True) -> dict:
     """Render every camera and write the videos and all ground truth to out. Returns timings."""
     from .render import SceneRenderer  # VTK only when rendering
@@ -187,6 +199,7 @@ def render_scene(scene: Scene, out: Path, crf: int = 20, progress: bool = True) 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / COMPLETE).unlink(missing_ok=True)
+    _remove_stale_videos(out, {f"{c.name}.mp4" for c in scene.cameras})
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
     first = scene.cameras[0]
