@@ -34,7 +34,7 @@ import numpy as np  # noqa: F401  (before pycolmap)
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from vs_inspect.cues import CueConfig, extract_cues  # noqa: E402
+from vs_inspect.cues import CueConfig, MatchConfig, extract_cues  # noqa: E402
 from vs_inspect.errors import InputError  # noqa: E402
 from vs_inspect.io.calibration import load_calibration  # noqa: E402
 from vs_inspect.io.video import VideoWriter, iter_frames, open_video  # noqa: E402
@@ -100,7 +100,8 @@ def bench_caliscope(args) -> None:
                 write_cut(root / "calibration" / "extrinsic" / f"{name}.mp4", p, c)
                 paths.append(p)
             truth = {n: ft[n][c] for n, c in cuts.items()}
-            res, stats, tc, ts = run(paths, None if args.estimate else root / "camera_array.toml")
+            cfg = CueConfig(max_side=args.max_side, match=MatchConfig(num_keyframes=args.keyframes))
+            res, stats, tc, ts = run(paths, None if args.estimate else root / "camera_array.toml", cfg)
             err = errors_ms(res, truth)
             vals = [e if e is not None else float("inf") for e in err.values()]
             all_err += vals
@@ -181,6 +182,8 @@ def main() -> None:
     c.add_argument("--max-cut", type=int, default=12)
     c.add_argument("--seed", type=int, default=0)
     c.add_argument("--estimate", action="store_true", help="estimate cameras instead of the calibration")
+    c.add_argument("--keyframes", type=int, default=MatchConfig.num_keyframes)
+    c.add_argument("--max-side", type=int, default=CueConfig.max_side)
     c.add_argument("--first-zero", action="store_true", help="trial 0 without cuts")
     v = sub.add_parser("visualsync")
     v.add_argument("--scenes", nargs="+", default=["blenderbox", "pan160906", "sequence69", "fencing1"])
