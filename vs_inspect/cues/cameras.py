@@ -124,7 +124,9 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
         pycolmap.match_exhaustive(db, matching_options=mopt, device=pycolmap.Device.cpu)
         opts = pycolmap.IncrementalPipelineOptions()
         opts.random_seed = seed
-        opts.num_threads = 2
+        # one thread: COLMAP's multi-threaded mapping registered different cameras from run to
+        # run on the same input; the same input must give the same offsets.
+        opts.num_threads = 1
         opts.min_model_size = 2
         opts.mapper.init_min_num_inliers = cfg.min_inliers
         opts.mapper.abs_pose_min_num_inliers = max(10, cfg.min_inliers // 2)
