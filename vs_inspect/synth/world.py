@@ -226,6 +226,26 @@ def ball_texture(rng: np.random.Generator, colours, size: int = 512) -> np.ndarr
     return img
 
 
+def add_marks(img: np.ndarray, rng: np.random.Generator, n: int) -> np.ndarray:
+    """A copy of img with n random small dots, rings and strokes: unique local features, so that
+    repeated patterns (stripes, the same tile on every face) still match unambiguously."""
+    out = img.copy()
+    h, w = out.shape[:2]
+    r_max = max(3, min(h, w) // 24)
+    for _ in range(n):
+        c = (int(rng.integers(0, w)), int(rng.integers(0, h)))
+        col = tuple(int(v) for v in rng.integers(0, 256, 3))
+        kind = rng.integers(0, 3)
+        if kind == 0:
+            cv2.circle(out, c, int(rng.integers(2, r_max)), col, -1, cv2.LINE_AA)
+        elif kind == 1:
+            cv2.circle(out, c, int(rng.integers(3, r_max + 2)), col, 2, cv2.LINE_AA)
+        else:
+            d = rng.integers(-r_max, r_max + 1, 2)
+            cv2.line(out, c, (c[0] + int(d[0]), c[1] + int(d[1])), col, 2, cv2.LINE_AA)
+    return out
+
+
 # ---- bodies -----------------------------------------------------------------------------------
 
 
@@ -474,8 +494,11 @@ def make_world(seed: int = 0, points_per_object: int = 60) -> World:
     rng = np.random.default_rng(seed)
     bodies = static_set(rng)
     objects = ["walking_figure", "bouncing_ball", "thrown_ball", "spinning_box"]
-    bodies += walking_figure(rng, 0)
-    bodies += [bouncing_ball(rng, 1), thrown_ball(rng, 2), spinning_box(rng, 3)]
+    moving = walking_figure(rng, 0) + [bouncing_ball(rng, 1), thrown_ball(rng, 2), spinning_box(rng, 3)]
+    for b in moving:  # unique marks on every moving body (its texture alone may repeat)
+        area_px = b.texture.shape[0] * b.texture.shape[1]
+        object.__setattr__(b, "texture", add_marks(b.texture, rng, max(40, area_px // 2500)))
+    bodies += moving
     pts, nrm, owner = [], [], []
     for inst in range(len(objects)):
         idx = [i for i, b in enumerate(bodies) if b.instance == inst]
