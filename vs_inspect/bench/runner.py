@@ -206,7 +206,8 @@ def tables(rows: list[Row], skipped: list[Skipped]) -> list[tuple[str, str]]:
     out.append(("Input settings, spurious-pair filter, stages (the paper's Table 2 on this data; "
                 "pairs: mean ± std over datasets × 5 pair seeds)", _md(["data", "setting"] + METRIC_HEAD, body)))
     body = [[r.dataset, r.method, r.variant, _f(r.a100), _f(r.a500), _f(r.delta_mean_ms), _f(r.delta_med_ms),
-             _f(r.delta_med_frames, 2), f"{r.unresolved}/{r.videos}", _f(r.stage0_s, 2), _f(r.stage1_s, 2),
+             _f(r.delta_med_frames, 2), "–" if r.variant == "stage1-only" else f"{r.unresolved}/{r.videos}",
+             _f(r.stage0_s, 2), _f(r.stage1_s, 2),
              _f(r.stage2_s, 3), _f(r.peak_mb, 1), r.error or ""] for r in rows]
     out.append(("Every run", _md(["dataset", "method", "variant", "A@100", "A@500", "δ_mean ms", "δ_med ms",
                                   "δ_med fr", "unresolved", "st0 s", "st1 s", "st2 s", "peak MB", "error"], body)))
@@ -261,6 +262,15 @@ def machine() -> dict:
         import numba
         info["numba_threads"] = numba.get_num_threads()
     except Exception:  # noqa: BLE001
+        pass
+    try:
+        import subprocess
+        repo = Path(__file__).resolve().parents[2]
+        head = subprocess.run(["git", "-C", str(repo), "rev-parse", "--short", "HEAD"], capture_output=True,
+                              text=True, timeout=10).stdout.strip()
+        if head:
+            info["git_commit"] = head
+    except Exception:  # noqa: BLE001  (not a git checkout)
         pass
     try:
         info["load_average_1_5_15min"] = " / ".join(f"{x:.1f}" for x in os.getloadavg())
