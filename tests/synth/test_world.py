@@ -159,3 +159,18 @@ def test_motion_blur_smears_moving_objects_only(tmp_path):
     assert near_moving.any() and (~near_moving).any()
     assert diff[~near_moving].mean() < 2.0  # static set: only compression noise
     assert diff[moving].mean() > 2 * diff[~near_moving].mean() + 1.5  # measured 5.1 vs 0.9
+
+
+def test_arc_option_spreads_cameras_over_the_arc():
+    s = make_scene(SceneConfig(cameras=4, moving=1, seconds=1.0, arc_deg=60.0, seed=0))
+    ang = []
+    for cam in s.cameras:
+        T = cam.cam_from_world()
+        T = T[0] if T.ndim == 3 else T
+        C = -T[:3, :3].T @ T[:3, 3]
+        ang.append(np.arctan2(C[1], C[0]))
+    ang = np.unwrap(np.array(ang))
+    spread = np.rad2deg(ang.max() - ang.min())
+    assert 40 < spread < 80, spread
+    with pytest.raises(ValueError, match="arc_deg"):
+        SceneConfig(arc_deg=0.0)

@@ -39,6 +39,8 @@ def register(sub) -> None:
     p.add_argument("--exposure", action="store_true", help="different exposure and white balance per camera")
     p.add_argument("--points-per-object", type=int, default=d.points_per_object,
                    help="tracked surface points per moving object (true cue bundle)")
+    p.add_argument("--arc-deg", type=float, default=d.arc_deg,
+                   help="spread the cameras over an arc of this many degrees (360 = all around)")
     p.add_argument("--crf", type=int, default=20, help="H.264 quality (lower = better, larger)")
     p.add_argument("--overwrite", action="store_true", help="write into a folder with a finished scene")
     p.add_argument("--benchmark", action="store_true",
@@ -55,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
                       width=args.width, height=args.height, fps=args.fps or None,
                       max_offset_s=args.max_offset_s, variable_rate=args.variable_rate,
                       little_motion=args.little_motion, motion_blur=args.motion_blur,
-                      exposure=args.exposure, points_per_object=args.points_per_object,
+                      exposure=args.exposure, points_per_object=args.points_per_object, arc_deg=args.arc_deg,
                       seed=args.seed)
     scene = make_scene(cfg)
     t = render_scene(scene, out, crf=args.crf, progress=not args.no_progress)

@@ -579,6 +579,8 @@ class SceneConfig:
     """Give the cameras different exposure and white balance."""
     points_per_object: int = 60
     """Surface points tracked on each moving object (the true cue bundle)."""
+    arc_deg: float = 360.0
+    """Cameras stand around the scene evenly (360) or spread over an arc of this many degrees."""
     seed: int = 0
     """Seed of everything random."""
 
@@ -591,6 +593,8 @@ class SceneConfig:
             raise ValueError(f"seconds must be positive, got {self.seconds}")
         if self.width < 16 or self.height < 16:
             raise ValueError(f"image size must be at least 16x16, got {self.width}x{self.height}")
+        if not 0 < self.arc_deg <= 360:
+            raise ValueError(f"arc_deg must be in (0, 360], got {self.arc_deg}")
         if self.fps is not None and not 1 <= self.fps <= 240:
             raise ValueError(f"fps must be in [1, 240], got {self.fps}")
 
@@ -679,7 +683,11 @@ def make_scene(cfg: SceneConfig = SceneConfig()) -> Scene:
         variable = i in vfr_idx
         ts = _timestamps(rng, seconds, fps, variable)
         K = _intrinsics(rng, W, H)
-        angle = base_angle + 2 * np.pi * i / max(1, cfg.cameras) + rng.uniform(-0.25, 0.25)
+        if cfg.arc_deg >= 360:
+            angle = base_angle + 2 * np.pi * i / max(1, cfg.cameras) + rng.uniform(-0.25, 0.25)
+        else:  # cameras spread over an arc: narrower baselines, easier cross-view matching
+            step = np.deg2rad(cfg.arc_deg) / max(1, cfg.cameras - 1)
+            angle = base_angle + step * (i % cfg.cameras) + rng.uniform(-0.15, 0.15) * step
         if i >= cfg.cameras:  # little motion: the action sits at the image border
             role = "little_motion"
             C = np.array([9.0 * np.cos(angle), 9.0 * np.sin(angle), rng.uniform(1.5, 2.0)])
