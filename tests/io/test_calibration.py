@@ -292,3 +292,33 @@ def test_real_corners_sync_with_imported_calibration(shared_data):
     assert np.abs(err).max() <= frame_ms / 2, err
     raw = errors_ms(undistort=False)
     assert np.median(np.abs(raw)) > np.median(np.abs(err)), (raw, err)
+
+
+def test_json_per_frame_poses_of_a_moving_camera(tmp_path):
+    """A hand-held camera's cam_from_world may be a list of 4x4, one per frame."""
+    import json
+
+    import numpy as np
+
+    from vs_inspect.geometry.epipolar import look_at
+    from vs_inspect.io.calibration import load_calibration, to_camera_track
+
+    poses = [look_at([5.0, 0.1 * k, 1.5], [0, 0, 1]).tolist() for k in range(6)]
+    K = [[500.0, 0, 320], [0, 480, 240], [0, 0, 1]]
+    path = tmp_path / "calibration.json"
+    path.write_text(json.dumps({"static": {"K": K, "cam_from_world": poses[0]},
+                                "handheld": {"K": K, "cam_from_world": poses}}))
+    cal = load_calibration(path, ["static", "handheld"])
+    assert cal["static"].cam_from_world.shape == (4, 4)
+    assert cal["handheld"].cam_from_world.shape == (6, 4, 4)
+    track = to_camera_track(cal["handheld"])
+    assert track.is_moving and track.num_pose_frames == 6
+    bad = [p for p in poses]
+    bad[3] = np.diag([2.0, 1, 1, 1]).tolist()
+    path.write_text(json.dumps({"static": {"K": K, "cam_from_world": poses[0]},
+                                "handheld": {"K": K, "cam_from_world": bad}}))
+    import pytest
+
+    from vs_inspect.errors import InputError
+    with pytest.raises(InputError, match="handheld"):
+        load_calibration(path, ["static", "handheld"])

@@ -131,6 +131,10 @@ def _import_cameras(calibration: dict, vids: dict[str, _VideoCues]) -> tuple[dic
         except InputError as exc:
             dropped[name] = str(exc)
             continue
+        if cal.cam_from_world.ndim == 3 and len(cal.cam_from_world) != v.info.num_frames:
+            dropped[name] = (f"the calibration has {len(cal.cam_from_world)} per-frame poses but the "
+                             f"video has {v.info.num_frames} frames")
+            continue
         cams[name] = to_camera_track(cal)
         xy = v.xy_full
         flat = xy.reshape(-1, 2)

@@ -43,7 +43,7 @@ class CameraCalibration:
 
     K: np.ndarray  # (3,3) px, at the image size `size`
     dist: np.ndarray  # (k,) OpenCV order k1 k2 p1 p2 [k3 [k4 k5 k6 ...]], zeros if none
-    cam_from_world: np.ndarray  # (4,4), x_cam = R X + t (world units, e.g. metres)
+    cam_from_world: np.ndarray  # (4,4) or (T,4,4) per frame (moving camera), x_cam = R X + t
     size: tuple[int, int] | None  # (width, height) px the calibration was made at; None = unknown
 
 
@@ -60,10 +60,12 @@ def _make(where: str, K, dist, cam_from_world, size) -> CameraCalibration:
         raise InputError(f"{where}: calibration values are not numbers ({exc})") from None
     if K.shape != (3, 3):
         raise InputError(f"{where}: K must be 3x3, got shape {K.shape}")
-    if T.shape == (3, 4):
-        T = np.vstack([T, [0, 0, 0, 1]])
-    if T.shape != (4, 4):
-        raise InputError(f"{where}: cam_from_world must be 4x4, got shape {T.shape}")
+    if T.shape[-2:] == (3, 4):
+        bottom = np.broadcast_to([0.0, 0, 0, 1], T.shape[:-2] + (1, 4))
+        T = np.concatenate([T, bottom], axis=-2)
+    if T.shape[-2:] != (4, 4) or T.ndim not in (2, 3) or (T.ndim == 3 and len(T) == 0):
+        raise InputError(f"{where}: cam_from_world must be 4x4 or a list of 4x4 (one per frame), "
+                         f"got shape {T.shape}")
     for name, a in (("K", K), ("distortion", dist), ("cam_from_world", T)):
         if not np.all(np.isfinite(a)):
             raise InputError(f"{where}: {name} has NaN or inf values")
@@ -77,9 +79,9 @@ def _make(where: str, K, dist, cam_from_world, size) -> CameraCalibration:
         )
     if dist.size == 0:
         dist = np.zeros(5)
-    R = T[:3, :3]
-    err = np.abs(R @ R.T - np.eye(3)).max()
-    if err > 1e-4 or np.linalg.det(R) <= 0 or not np.allclose(T[3], [0, 0, 0, 1]):
+    R = T[..., :3, :3]
+    err = np.abs(R @ np.swapaxes(R, -1, -2) - np.eye(3)).max()
+    if err > 1e-4 or np.any(np.linalg.det(R) <= 0) or not np.allclose(T[..., 3, :], [0, 0, 0, 1]):
         raise InputError(f"{where}: cam_from_world is not a rigid transform (|RRᵀ-I| = {err:.2g})")
     if size is not None:
         try:
