@@ -248,7 +248,16 @@ def run_dataset(data: BenchData, opts: PlanOptions, stage0_s: float = float("nan
 
     if opts.peers:
         signals = data.notes.get("motion_signals")
-        for method, fn in (("motion-xcorr", lambda: sync_motion_xcorr(bundle, signals=signals)),
+        every_video = data.notes.get("videos_info")  # decoded videos: the motion peer needs no cameras,
+        # so it runs on every video, also those that Stage 0 left out of the bundle
+
+        def motion():
+            if every_video is not None:
+                from ..baselines.motion_xcorr import sync_motion_xcorr_videos
+                return sync_motion_xcorr_videos(list(every_video), signals, reference=bundle.names[0])
+            return sync_motion_xcorr(bundle, signals=signals)
+
+        for method, fn in (("motion-xcorr", motion),
                            ("ransac-inlier", lambda: sync_ransac_inlier(bundle))):
             try:
                 with Meter() as m:

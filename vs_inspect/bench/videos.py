@@ -78,6 +78,5 @@ def clip_scene(root: Path, scene: str) -> tuple[BenchData, float, BaseException 
             time.perf_counter() - t0, exc
     stage0 = time.perf_counter() - t0
     notes.update(dropped=stats.get("dropped", {}), stage0_timings_s=stats.get("timings_s", {}))
-    notes["motion_signals"] = {n: signals[n] for n in bundle.names}
     bundle = dataclasses.replace(bundle, gt_offsets_s=truth)
     return BenchData(f"clips/{scene}", "clips", bundle, None, 1.0 / CLIP_FPS, notes), stage0, None
