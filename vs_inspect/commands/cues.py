@@ -120,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
     return 0 if len(bundle.videos) >= 2 else 2
 
 
-def sync_videos(args: argparse.Namespace, sync_cfg) -> int:
+def sync_videos(args: argparse.Namespace, sync_cfg, truth: dict | None = None) -> int:
     """`vs-inspect sync VIDEOS... --out OUT`: Stage 0, the bundle in OUT/cues, Stage 1+2, OUT/result.json.
 
     Videos that could not be used (unreadable, no camera) appear in result.json with a null
@@ -161,7 +161,9 @@ def sync_videos(args: argparse.Namespace, sync_cfg) -> int:
         print(describe(sink))
     offs = {n: data["offsets_s"].get(n) for n in inputs}
     unc = {n: data["uncertainty_s"].get(n) for n in inputs}
-    print(offsets_table(offs, unc, None, result.reference, data["unresolved"]))
+    if truth:
+        data_truth = {n: truth[n] for n in inputs if n in truth}
+    print(offsets_table(offs, unc, data_truth if truth else None, result.reference, data["unresolved"]))
     acc = sum(p.decision.accepted for p in result.pairs)
     print(f"pairs: {acc} accepted, {len(result.pairs) - acc} rejected; wrote {path}")
     resolved = sum(v is not None for v in offs.values())

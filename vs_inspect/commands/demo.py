@@ -37,6 +37,8 @@ def register(sub) -> None:
                                    "offsets with the error in ms.",
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--out", type=Path, default=Path("out/demo"), help="output folder")
+    p.add_argument("--true-cues-only", action="store_true",
+                   help="skip the run of the rendered videos through Stage 0 (OUT/videos)")
     p.add_argument("--rerender", action="store_true", help="render the scene again even if cached")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     add_record_options(p)
@@ -71,14 +73,14 @@ def run_demo(out: Path, config: SceneConfig = DEMO_SCENE, sync_config: SyncConfi
              sink: Sink | None = None, rerender: bool = False, progress: bool = True) -> dict:
     """Render (or reuse) the scene in out/scene, synchronize it, write out/result.json.
 
-    Returns the result dictionary (as written). The video pipeline is not used yet: the scene's
-    true cue bundle goes to Stage 1 + 2.
+    Returns the result dictionary (as written). This is the scene's true cue bundle through
+    Stage 1 + 2; run_video_pipeline sends the rendered videos through the whole pipeline.
     """
     out = Path(out)
     scene_dir = out / "scene"
     ensure_scene(scene_dir, config, rerender, progress)
-    print("video pipeline not used yet: synchronizing the scene's true cues "
-          f"({scene_dir / 'bundle'})")
+    print(f"Stage 1 + 2 on the scene's true cues ({scene_dir / 'bundle'}): separates the "
+          "solver's errors from Stage 0's")
     t0 = time.perf_counter()
     bundle = read_bundle(scene_dir / "bundle")
     sink = sink or NullSink()
@@ -97,10 +99,29 @@ def run_demo(out: Path, config: SceneConfig = DEMO_SCENE, sync_config: SyncConfi
     return data
 
 
+def run_video_pipeline(out: Path, scene_dir: Path, progress: bool = True) -> int:
+    """The rendered videos through the whole pipeline, exactly as a user's videos would go
+    (`vs-inspect sync cam*.mp4 --calib calibration.json`), printed against the truth."""
+    from ..cli import build_parser
+    from ._common import sync_config_from_args
+    from .cues import sync_videos
+
+    videos = sorted(str(p) for p in scene_dir.glob("cam*.mp4"))
+    argv = ["sync", *videos, "--calib", str(scene_dir / "calibration.json"),
+            "--out", str(out), "--no-rrd"] + ([] if progress else ["--no-progress"])
+    args = build_parser().parse_args(argv)
+    truth = json.loads((scene_dir / "gt.json").read_text())["offsets_s"]
+    print("\n== the rendered videos through the whole pipeline (Stage 0 + 1 + 2), as "
+          f"`vs-inspect sync cam*.mp4 --calib calibration.json --out {out}` ==")
+    return sync_videos(args, sync_config_from_args(args), truth=truth)
+
+
 def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     with open_sink(args, out, progress=not args.no_progress) as sink:
         run_demo(out, sink=sink, rerender=args.rerender, progress=not args.no_progress)
     if describe(sink):
         print(describe(sink))
+    if not args.true_cues_only:
+        run_video_pipeline(out / "videos", out / "scene", progress=not args.no_progress)
     return 0
