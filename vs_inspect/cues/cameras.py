@@ -112,7 +112,7 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
         reader.mask_path = str(mask_dir)
         ext = pycolmap.FeatureExtractionOptions()
         ext.sift.max_num_features = cfg.max_features
-        ext.num_threads = 2
+        ext.num_threads = 1
         few = sum(len(v[0]) for v in frames_by_video.values()) <= 16
         ext.sift.estimate_affine_shape = few  # wide baselines between few views: affine + DSP SIFT
         ext.sift.domain_size_pooling = few
@@ -121,11 +121,13 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
                                   device=pycolmap.Device.cpu)
         mopt = pycolmap.FeatureMatchingOptions()
         mopt.guided_matching = True
+        mopt.num_threads = 1
+        pycolmap.set_random_seed(seed)  # COLMAP's RANSAC in matching and mapping
         pycolmap.match_exhaustive(db, matching_options=mopt, device=pycolmap.Device.cpu)
         opts = pycolmap.IncrementalPipelineOptions()
         opts.random_seed = seed
-        # one thread: COLMAP's multi-threaded mapping registered different cameras from run to
-        # run on the same input; the same input must give the same offsets.
+        # one thread everywhere and a fixed seed: with several threads COLMAP registered
+        # different cameras from run to run on the same input; same input, same offsets.
         opts.num_threads = 1
         opts.min_model_size = 2
         opts.mapper.init_min_num_inliers = cfg.min_inliers
