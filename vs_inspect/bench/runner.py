@@ -23,7 +23,8 @@ from tqdm import tqdm
 from .. import __version__
 from .datasets import CALISCOPE, DIFFICULTIES, caliscope_cuts, cue_scene, load_caliscope
 from .suite import PlanOptions, Row, failed, run_dataset, stage0_failed
-from .videos import CLIP_SCENES, clip_scene, video_pipeline_available
+from .videos import (CLIP_SCENES, RENDERED_SCENES, clip_scene, rendered_scene,
+                     video_pipeline_available)
 
 log = logging.getLogger(__name__)
 
@@ -34,7 +35,7 @@ DISCUSSION_MARK = "<!-- discussion: text below this line is kept when the benchm
 
 @dataclass(frozen=True)
 class DatasetPlan:
-    name: str  # cue/<difficulty>/s<seed> | caliscope/cut<i> | clips/<scene>
+    name: str  # cue/<difficulty>/s<seed> | caliscope/cut<i> | clips/<scene> | rendered/s<seed>
     opts: PlanOptions
 
 
@@ -42,6 +43,7 @@ def full_plan() -> list[DatasetPlan]:
     plan = [DatasetPlan(f"caliscope/cut{i}", PlanOptions()) for i in range(CALISCOPE_CUTS)]
     plan += [DatasetPlan(f"cue/{d}/s{s}", PlanOptions()) for s in CUE_SEEDS for d in DIFFICULTIES]
     plan += [DatasetPlan(f"clips/{s}", PlanOptions()) for s in CLIP_SCENES]
+    plan += [DatasetPlan(f"rendered/s{s}", PlanOptions()) for s in RENDERED_SCENES]
     return plan
 
 
@@ -97,6 +99,15 @@ def run_plan(plan: list[DatasetPlan], data_root: Path, progress: bool = True,
                 for method in ("vs_inspect", "motion-xcorr", "ransac-inlier"):
                     rows.append(failed(dummy, method, "default", exc))
                 continue
+            if error is not None:
+                rows += stage0_failed(data, error, stage0)
+                continue
+            rows += run_dataset(data, dp.opts, stage0_s=stage0)
+        elif kind == "rendered":
+            import tempfile
+            seed = int(dp.name.split("/s")[1])
+            with tempfile.TemporaryDirectory(prefix="vs_bench_render_") as tmp:
+                data, stage0, error = rendered_scene(seed, Path(tmp))
             if error is not None:
                 rows += stage0_failed(data, error, stage0)
                 continue
@@ -319,7 +330,7 @@ def to_markdown(rows: list[Row], skipped: list[Skipped], wall_s: float, command:
         "noise, 10 % wrong pairs, 0.1° pose error; default = 0.8 px, 25 %, 0.5°; hard = 1.5 px, 35 %, 1°; "
         "seeds 0 and 1); `caliscope` = real ChArUco corners of 4 webcams read from xy.csv, undistorted with the "
         "session's calibration, per-frame timestamps, offsets made by cutting 0-12 leading frames (5 random "
-        "cuts); `clips` = the VisualSync web clips through the video pipeline (estimated cameras).", "",
+        "cuts); `clips` = the VisualSync web clips through the video pipeline (estimated cameras); `rendered` = a rendered scene of vs_inspect.synth (3 static + 1 hand-held camera, 5 s, 480x360, mixed frame rates, one variable-rate video) through the video pipeline with its exact calibration (so its GT-camera rows equal the default).", "",
         "Peers: `motion-xcorr` = one motion scalar per frame (mean track speed for cue data, mean absolute "
         "frame difference for video) cross-correlated over vs_inspect's search range; `ransac-inlier` = "
         "RANSAC F inlier count per candidate offset (frame-step grid, 2 px threshold, fixed seed). Both use "

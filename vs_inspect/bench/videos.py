@@ -80,3 +80,47 @@ def clip_scene(root: Path, scene: str) -> tuple[BenchData, float, BaseException 
     notes.update(dropped=stats.get("dropped", {}), stage0_timings_s=stats.get("timings_s", {}))
     bundle = dataclasses.replace(bundle, gt_offsets_s=truth)
     return BenchData(f"clips/{scene}", "clips", bundle, None, 1.0 / CLIP_FPS, notes), stage0, None
+
+
+RENDERED_SCENES = (0,)
+
+
+def rendered_scene(seed: int, workdir: Path) -> tuple[BenchData, float, BaseException | None]:
+    """A rendered multi-camera scene (vs_inspect.synth) through Stage 0 with its calibration,
+    as a user with calibrated cameras would run it: (BenchData, Stage 0 s, error or None).
+
+    3 static cameras + 1 hand-held, 5 s, 480x360, mixed frame rates, one variable-rate video.
+    The exact cameras are kept for the GT-camera rows; the true cues are not used here.
+    """
+    import json
+
+    from ..cues import CueConfig, extract_cues
+    from ..io.calibration import load_calibration, to_camera_track
+    from ..io.video import open_video
+    from ..synth.videos import render_scene
+    from ..synth.world import SceneConfig, make_scene
+
+    cfg = SceneConfig(cameras=4, moving=1, seconds=5.0, width=480, height=360, fps=None,
+                      variable_rate=1, seed=seed)
+    folder = Path(workdir) / f"rendered_s{seed}"
+    render_scene(make_scene(cfg), folder, progress=False)
+    truth = json.loads((folder / "gt.json").read_text())["offsets_s"]
+    paths = sorted(folder.glob("cam*.mp4"))
+    srcs = [open_video(p) for p in paths]
+    names = [s.info.name for s in srcs]
+    calib = load_calibration(folder / "calibration.json", names)
+    signals = {s.info.name: frame_motion_signal(s) for s in srcs}
+    notes = {"motion_signals": signals, "truth": truth, "videos_info": [s.info for s in srcs],
+             "videos": len(srcs)}
+    interval = 1.0 / 30.0
+    name = f"rendered/s{seed}"
+    t0 = time.perf_counter()
+    try:
+        bundle, stats = extract_cues(srcs, calib, CueConfig(), progress=False)
+    except Exception as exc:  # noqa: BLE001  (Stage 0 failing is a result)
+        return BenchData(name, "rendered", None, None, interval, notes), time.perf_counter() - t0, exc
+    stage0 = time.perf_counter() - t0
+    notes.update(dropped=stats.get("dropped", {}), stage0_timings_s=stats.get("timings_s", {}))
+    bundle = dataclasses.replace(bundle, gt_offsets_s=truth)
+    exact = {n: to_camera_track(c) for n, c in calib.items() if n in bundle.cameras}
+    return BenchData(name, "rendered", bundle, exact, interval, notes), stage0, None
