@@ -18,7 +18,6 @@ VisualSync: clip <scene>_<cam>_<start>_<end>_<k>.mp4 shows common-timeline frame
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import logging
 import re
@@ -26,7 +25,6 @@ import statistics
 import sys
 import tempfile
 import time
-from collections import defaultdict
 from pathlib import Path
 
 import numpy as np  # noqa: F401  (before pycolmap)
@@ -34,6 +32,7 @@ import numpy as np  # noqa: F401  (before pycolmap)
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
+from vs_inspect.bench.datasets import read_caliscope_frame_times  # noqa: E402
 from vs_inspect.cues import CueConfig, MatchConfig, extract_cues  # noqa: E402
 from vs_inspect.errors import InputError  # noqa: E402
 from vs_inspect.io.calibration import load_calibration  # noqa: E402
@@ -41,14 +40,6 @@ from vs_inspect.io.video import VideoWriter, iter_frames, open_video  # noqa: E4
 from vs_inspect.sync.run import sync_bundle  # noqa: E402
 
 DATA = REPO.parent / "shared" / "data"
-
-
-def frame_times(root: Path) -> dict[str, list[float]]:
-    rows = defaultdict(list)
-    with open(root / "calibration" / "extrinsic" / "timestamps.csv") as f:
-        for r in csv.DictReader(f):
-            rows[f"cam_{int(r['cam_id'])}"].append((int(r["sync_index"]), float(r["frame_time"])))
-    return {k: [t for _, t in sorted(v)] for k, v in rows.items()}
 
 
 def write_cut(src_path: Path, dest: Path, cut: int, last: int | None = None) -> None:
@@ -85,7 +76,7 @@ def errors_ms(res, truth: dict[str, float]) -> dict[str, float | None]:
 
 def bench_caliscope(args) -> None:
     root = DATA / "caliscope_post_optimization"
-    ft = frame_times(root)
+    ft = read_caliscope_frame_times(root)
     rng = np.random.default_rng(args.seed)
     all_err, rows = [], []
     with tempfile.TemporaryDirectory() as tmp:

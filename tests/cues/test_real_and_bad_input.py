@@ -7,28 +7,19 @@ calibration, and checks the error against the capture times in timestamps.csv.
 
 from __future__ import annotations
 
-import csv
 import json
-from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from vs_inspect.bench.datasets import read_caliscope_frame_times
 from vs_inspect.cli import main
 from vs_inspect.io.video import VideoWriter, iter_frames, open_video
 
 from .scenes import blob_sequence
 
 QUARTER_FRAME_S = 0.25 / 6.0  # the brief's bound with calibration: 1/4 frame at 6 fps (42 ms)
-
-
-def _frame_times(root: Path) -> dict[str, list[float]]:
-    rows = defaultdict(list)
-    with open(root / "calibration" / "extrinsic" / "timestamps.csv") as f:
-        for r in csv.DictReader(f):
-            rows[f"cam_{int(r['cam_id'])}"].append((int(r["sync_index"]), float(r["frame_time"])))
-    return {k: [t for _, t in sorted(v)] for k, v in rows.items()}
 
 
 def _cut(src_path: Path, dest: Path, cut: int, freeze: bool = False) -> None:
@@ -71,7 +62,7 @@ def caliscope(shared_data):
 def test_caliscope_three_cameras_with_calibration(caliscope, tmp_path):
     """Cuts of 3, 0 and 7 frames: median error <= 1/4 frame against the capture times."""
     cuts = {"cam_0": 3, "cam_2": 0, "cam_3": 7}
-    ft = _frame_times(caliscope)
+    ft = read_caliscope_frame_times(caliscope)
     paths = []
     for name, c in cuts.items():
         p = tmp_path / "clips" / f"{name}.mp4"

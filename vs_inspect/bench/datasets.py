@@ -72,6 +72,24 @@ class CaliscopeSession:
     size: dict[str, tuple[int, int]]  # (width, height)
 
 
+def read_caliscope_timestamps(root: Path) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """{cam_id: (sync_index (T,), frame_time_s (T,))} in sync order; frame k of cam_N.mp4 is row k."""
+    times: dict[int, list[tuple[int, float]]] = {}
+    with open(Path(root) / "calibration" / "extrinsic" / "timestamps.csv", newline="") as fh:
+        for row in csv.DictReader(fh):
+            times.setdefault(int(row["cam_id"]), []).append((int(row["sync_index"]), float(row["frame_time"])))
+    out = {}
+    for c, v in sorted(times.items()):
+        v = sorted(v)
+        out[c] = (np.array([si for si, _ in v]), np.array([t for _, t in v]))
+    return out
+
+
+def read_caliscope_frame_times(root: Path) -> dict[str, np.ndarray]:
+    """{"cam_N": frame_time_s of each frame of cam_N.mp4, in order}."""
+    return {f"cam_{c}": t for c, (_, t) in read_caliscope_timestamps(root).items()}
+
+
 def load_caliscope(root: Path) -> CaliscopeSession:
     """Read camera_array.toml, timestamps.csv and xy.csv of the session folder."""
     root = Path(root)
@@ -80,12 +98,9 @@ def load_caliscope(root: Path) -> CaliscopeSession:
         if not f.is_file():
             raise InputError(f"caliscope session incomplete: {f} not found")
     arr = tomllib.loads((root / "camera_array.toml").read_text())["cameras"]
-    times: dict[int, list[tuple[int, float]]] = {}
-    with open(ext / "timestamps.csv", newline="") as fh:
-        for row in csv.DictReader(fh):
-            times.setdefault(int(row["cam_id"]), []).append((int(row["sync_index"]), float(row["frame_time"])))
-    cam_ids = sorted(times)
-    frame_of = {c: {si: k for k, (si, _) in enumerate(sorted(times[c]))} for c in cam_ids}
+    stamps = read_caliscope_timestamps(root)
+    cam_ids = sorted(stamps)
+    frame_of = {c: {int(si): k for k, si in enumerate(stamps[c][0])} for c in cam_ids}
     rows = []
     with open(ext / "xy.csv", newline="") as fh:
         for row in csv.DictReader(fh):
@@ -105,7 +120,7 @@ def load_caliscope(root: Path) -> CaliscopeSession:
         T[:3, 3] = np.array(spec["translation"], dtype=np.float64)
         cams[name] = CameraTrack(K, T)
         size[name] = (int(spec["size"][0]), int(spec["size"][1]))
-        ft[name] = np.array([t for _, t in sorted(times[c])])
+        ft[name] = stamps[c][1]
         raw = np.full((len(keys), len(ft[name]), 2), np.nan)
         for cc, si, o, k, x, y in rows:
             if cc == c and si in frame_of[c]:

@@ -351,12 +351,7 @@ def read_frames(src: VideoSource, indices: Sequence[int], max_side: int | None =
     got: dict[int, np.ndarray] = {}
     if src._pts is None:
         # no PTS to seek by: one sequential pass
-        wset = set(wanted)
-        for k, img in iter_frames(src, 1, max_side):
-            if k in wset:
-                got[k] = img
-            if k >= wanted[-1]:
-                break
+        got = _read_sequentially(src, wanted, max_side)
     else:
         got = _read_by_seeking(src, wanted, max_side)
     missing = [i for i in wanted if i not in got]
@@ -414,12 +409,18 @@ def _read_by_seeking(src: VideoSource, wanted: list[int], max_side: int | None
     if rest:
         # seeking failed for some frames (files with a poor index): one sequential pass
         log.debug("%s: %d frames not reached by seeking; decoding sequentially", src.path, len(rest))
-        rset = set(rest)
-        for k, img in iter_frames(src, 1, max_side):
-            if k in rset:
-                got[k] = img
-            if k >= rest[-1]:
-                break
+        got.update(_read_sequentially(src, rest, max_side))
+    return got
+
+
+def _read_sequentially(src: VideoSource, wanted: list[int], max_side: int | None) -> dict[int, np.ndarray]:
+    """Frames of the sorted indices `wanted`, by decoding from the start up to the last one."""
+    wset, got = set(wanted), {}
+    for k, img in iter_frames(src, 1, max_side):
+        if k in wset:
+            got[k] = img
+        if k >= wanted[-1]:
+            break
     return got
 
 

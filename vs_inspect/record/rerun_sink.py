@@ -147,17 +147,6 @@ class RerunSink(Sink):
         self.hook_s = 0.0
         self.stats: dict[str, float] = {}
 
-    # ---- context manager ----
-
-    def __enter__(self) -> "RerunSink":
-        return self
-
-    def __exit__(self, exc_type, exc, tb) -> None:
-        if exc_type is None:
-            self.close()
-        else:
-            self.abort()
-
     # ---- Stage 0 hooks ----
 
     @_timed
