@@ -74,6 +74,30 @@ class MatchConfig:
 
 
 @dataclass(frozen=True)
+class GeometricPairConfig:
+    enabled: bool = True
+    """Add track pairs found by epipolar consistency (static cameras with known geometry)."""
+    tau_diag: float = 0.004
+    """Sampson distance (fraction of the image diagonal, at least 2 px) below which a moment fits."""
+    min_frames: int = 8
+    """Common moments a candidate needs at an offset."""
+    min_inlier_share: float = 0.8
+    """Share of those moments that must fit."""
+    max_band_share: float = 0.08
+    """A pair consistent at more than this share of the offsets is uninformative and dropped."""
+    min_sweep_tau: float = 4.0
+    """A candidate track must sweep at least this many tau across the epipolar lines (motion along them fits any offset)."""
+    max_tracks: int = 300
+    """Longest tracks per video taken as candidates (cost grows with the product)."""
+    max_rate_hz: float = 15.0
+    """b's frames are read at about this rate at most (every 2nd frame at 30 fps); 0 = all frames."""
+    peaks: int = 3
+    """Vote-histogram peaks whose supporters are kept."""
+    peak_halfwidth: int = 2
+    """Grid steps either side of a peak that count as supporting it."""
+
+
+@dataclass(frozen=True)
 class CameraConfig:
     static_frames: int = 9
     """Estimated cameras: frames of a static camera whose temporal median (the background) is its one image in the reconstruction."""
@@ -98,6 +122,7 @@ class CueConfig:
     motion: MotionConfig = field(default_factory=MotionConfig)
     track: TrackConfig = field(default_factory=TrackConfig)
     match: MatchConfig = field(default_factory=MatchConfig)
+    geometric: GeometricPairConfig = field(default_factory=GeometricPairConfig)
     camera: CameraConfig = field(default_factory=CameraConfig)
     camera_motion: dict[str, str] = field(default_factory=dict)
     """Per-video override of static/moving (name -> 'static' | 'moving')."""

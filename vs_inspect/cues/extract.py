@@ -226,6 +226,10 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
 
     usable = [n for n in names if n in cameras]
     pairs = {k: v for k, v in all_pairs.items() if k[0] in cameras and k[1] in cameras}
+    if cfg.geometric.enabled:
+        t0 = time.perf_counter()
+        pairs = _add_geometric_pairs(pairs, cameras, tracks, vids, cfg, stats, sink, progress)
+        timings["geometric_pairs_s"] = time.perf_counter() - t0
     timings["total_s"] = time.perf_counter() - t_all
     stats["track_pairs"] = int(sum(len(p.index) for p in pairs.values()))
     stats["tracks"] = int(sum(t.num_tracks for t in tracks.values()))
@@ -237,6 +241,34 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
     sink.stage_event("cues", "cue extraction finished", tracks=stats["tracks"],
                      track_pairs=stats["track_pairs"], cameras=len(cameras))
     return bundle, stats
+
+
+def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
+                         stats: dict, sink: Sink, progress: bool) -> dict:
+    """Descriptor pairs plus epipolar-consistency pairs for every pair of static known cameras."""
+    from .geometric_pairs import geometric_pairs
+
+    out = dict(pairs)
+    todo = [k for k in pairs if not cameras[k[0]].is_moving and not cameras[k[1]].is_moving]
+    for a, b in tqdm(todo, desc="geometric pairs", unit="pair", disable=not progress, leave=False):
+        gp, gs = geometric_pairs(a, b, vids[a].info, vids[b].info, cameras[a], cameras[b],
+                                 tracks[a].xy, tracks[b].xy, cfg.geometric)
+        tp = pairs[(a, b)]
+        w_desc = tp.weight if tp.weight is not None else np.ones(len(tp.index))
+        have = {tuple(x) for x in tp.index.tolist()}
+        new = np.array([x for x in gp.index.tolist() if tuple(x) not in have], np.int64).reshape(-1, 2)
+        out[(a, b)] = TrackPairs(a, b, np.concatenate([tp.index, new]),
+                                 np.concatenate([w_desc, np.ones(len(new))]))
+        info = {"geometric_candidates": gs.candidates, "geometric_informative": gs.informative,
+                "geometric_pairs": gs.kept, "geometric_new": int(len(new)),
+                "geometric_peaks_s": [round(p, 4) for p in gs.peaks_s],
+                "geometric_peak_votes": list(gs.peak_votes)}
+        stats["pairs"].setdefault(f"{a}__{b}", {}).update(info)
+        sink.stage_event("cues", f"{a}__{b}: {gs.kept} track pairs from epipolar consistency "
+                         f"(vote peaks at {', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s)")
+        log.info("%s__%s: %d geometric track pairs (%d new), peaks %s votes %s", a, b, gs.kept,
+                 len(new), gs.peaks_s, gs.peak_votes)
+    return out
 
 
 def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: dict):

@@ -1,0 +1,98 @@
+"""Track pairs from epipolar consistency: two static cameras, points moving in 3D."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from vs_inspect.cues.geometric_pairs import epipolar_sweep, geometric_pairs
+from vs_inspect.geometry.epipolar import fundamental_from_cameras, look_at, project
+from vs_inspect.types import CameraTrack, VideoInfo
+
+K = np.array([[500.0, 0, 320], [0, 500.0, 240], [0, 0, 1]])
+FPS = 25.0
+
+
+def _scene(offset_s: float, seed: int = 0, points: int = 40, distractors: int = 40):
+    """Cameras a and b, tracks of the same 3D points (b's order shuffled) plus unrelated tracks.
+
+    Global time of a's frame k is k/FPS; of b's frame k is k/FPS + offset_s (DESIGN.md)."""
+    rng = np.random.default_rng(seed)
+    cam_a = CameraTrack(K, look_at([6.0, 0.0, 1.5], [0, 0, 1]))
+    cam_b = CameraTrack(K, look_at([0.0, 6.0, 2.5], [0, 0, 1]))
+    T = 100
+    t_glob = np.arange(T + 80) / FPS - 40 / FPS  # global times covering both videos
+
+    def trajectories(n):
+        start = rng.uniform([-1, -1, 0.3], [1, 1, 1.7], (n, 3))
+        vel = rng.normal(0, 0.6, (n, 3))
+        freq = rng.uniform(0.5, 1.5, (n, 1))
+        phase = rng.uniform(0, 6.3, (n, 1))
+        wobble = 0.4 * np.sin(freq * t_glob[None, :] * 6.28 + phase)[..., None] * rng.normal(0, 1, (n, 1, 3))
+        return start[:, None, :] + vel[:, None, :] * t_glob[None, :, None] * 0.5 + wobble
+
+    X = trajectories(points)
+    X_other = trajectories(distractors)
+
+    def view(cam, Xs, shift_s):
+        idx = np.rint((np.arange(T) / FPS + shift_s - t_glob[0]) * FPS).astype(int)
+        return project(cam.K, cam.cam_from_world, Xs[:, idx])
+
+    xy_a = np.concatenate([view(cam_a, X, 0.0), view(cam_a, X_other[: distractors // 2], 0.0)])
+    perm = rng.permutation(points)
+    xy_b = np.concatenate([view(cam_b, X, offset_s)[perm],
+                           view(cam_b, X_other[distractors // 2:], offset_s)])
+    xy_a += rng.normal(0, 0.3, xy_a.shape)
+    xy_b += rng.normal(0, 0.3, xy_b.shape)
+    # tracks are seen for a part of the video only
+    for xy in (xy_a, xy_b):
+        for n in range(len(xy)):
+            s = rng.integers(0, T // 2)
+            xy[n, :s] = np.nan
+            xy[n, s + rng.integers(25, T // 2):] = np.nan
+    truth = {int(np.nonzero(perm == i)[0][0]): i for i in range(points)}  # b index -> a index
+    ts = np.arange(T) / FPS
+    info_a = VideoInfo("a", 640, 480, T, ts, FPS)
+    info_b = VideoInfo("b", 640, 480, T, ts, FPS)
+    return info_a, info_b, cam_a, cam_b, xy_a, xy_b, {v: k for k, v in truth.items()}
+
+
+@pytest.mark.parametrize("offset_s", [-0.6, 0.0, 0.84])
+def test_pairs_are_the_same_points_and_the_top_peak_is_the_offset(offset_s):
+    info_a, info_b, cam_a, cam_b, xy_a, xy_b, a_to_b = _scene(offset_s)
+    tp, st = geometric_pairs("a", "b", info_a, info_b, cam_a, cam_b, xy_a, xy_b)
+    # Δ_ab = offset_b - offset_a; a's time is b's time + Δ
+    assert st.peaks_s[0] == pytest.approx(offset_s, abs=1.5 / FPS)
+    correct = sum(a_to_b.get(int(i)) == int(j) for i, j in tp.index)
+    assert correct >= 25, (correct, len(tp.index))
+    # the top peak's supporters are nearly all right (other peaks carry the rest)
+    assert st.peak_votes[0] > 2 * max(st.peak_votes[1:] + (0,))
+
+
+def test_moving_camera_is_refused_and_no_motion_gives_nothing():
+    info_a, info_b, cam_a, cam_b, xy_a, xy_b, _ = _scene(0.0)
+    moving = CameraTrack(K, np.repeat(cam_b.cam_from_world[None], info_b.num_frames, 0))
+    with pytest.raises(ValueError, match="two static cameras"):
+        geometric_pairs("a", "b", info_a, info_b, cam_a, moving, xy_a, xy_b)
+    still_a = np.repeat(np.nanmedian(xy_a, axis=1, keepdims=True), info_a.num_frames, 1)
+    still_b = np.repeat(np.nanmedian(xy_b, axis=1, keepdims=True), info_b.num_frames, 1)
+    tp, st = geometric_pairs("a", "b", info_a, info_b, cam_a, cam_b, still_a, still_b)
+    assert len(tp.index) == 0 and st.candidates == 0
+
+
+def test_sweep_counts_motion_across_epipolar_lines_only():
+    cam_a = CameraTrack(K, look_at([6.0, 0.0, 1.5], [0, 0, 1]))
+    cam_b = CameraTrack(K, look_at([0.0, 6.0, 2.5], [0, 0, 1]))
+    F = fundamental_from_cameras(cam_a.K, cam_a.cam_from_world, cam_b.K, cam_b.cam_from_world)
+    e_b = np.linalg.svd(F)[2][-1]  # F e_b = 0
+    x0 = np.array([300.0, 200.0])
+    toward = (e_b[:2] / e_b[2]) - x0
+    toward /= np.linalg.norm(toward)
+    across = np.array([-toward[1], toward[0]])
+    steps = np.linspace(0, 30, 20)[:, None]
+    along_track = x0 + steps * toward
+    across_track = x0 + steps * across
+    sweep = epipolar_sweep(np.stack([along_track, across_track]), e_b)
+    assert sweep[0] < 0.5
+    assert sweep[1] == pytest.approx(30, abs=1.0)
+

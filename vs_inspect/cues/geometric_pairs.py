@@ -1,0 +1,265 @@
+"""Cross-view track pairs from known epipolar geometry, without descriptors.
+
+Between two static cameras whose cameras are known (imported or estimated), a track of a and a
+track of b are the same physical point only if, at some offset Δ, b's point lies on the
+epipolar line of a's point at (nearly) every common moment. Descriptors rarely match small
+moving objects across wide baselines; a trajectory that crosses the epipolar lines of many
+frames is a much stronger signature. So every candidate (i, j) is checked at every offset on a
+half-frame grid:
+
+- consistent at Δ: at least `min_frames` common moments and at least `min_inlier_share` of
+  them with a Sampson distance below `tau_px`;
+- informative: consistent at only a narrow band of offsets (points moving along the epipolar
+  lines fit every Δ and say nothing);
+- each informative pair votes for its best offset; the few highest peaks of the vote histogram
+  are kept (not only the highest: Stage 1 compares them with all their supporters), and at each
+  peak a track keeps only its mutually best partner.
+
+Stage 1 then searches the offset again with these pairs and the descriptor pairs together; a
+peak with few supporters becomes a rival minimum, which the decision stage weighs honestly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba as nb
+import numpy as np
+
+from ..geometry.epipolar import fundamental_from_cameras
+from ..geometry.timing import frame_brackets
+from ..types import CameraTrack, TrackPairs, VideoInfo
+from .config import GeometricPairConfig
+
+
+@dataclass(frozen=True)
+class GeometricPairStats:
+    candidates: int  # track pairs checked
+    informative: int  # consistent at a narrow band of offsets
+    kept: int  # pairs output
+    peaks_s: tuple[float, ...]  # Δ_ab of the kept peaks, seconds
+    peak_votes: tuple[int, ...]  # informative pairs voting for each kept peak
+
+
+@nb.njit(inline="always")
+def _sampson(xa, i, kk, ww, G, l0, l1, l2):
+    """Sampson distance² (px²) of a's point interpolated at (kk, ww) and b's point with line l = G x_b."""
+    a0 = xa[i, kk, 0] + ww * (xa[i, kk + 1, 0] - xa[i, kk, 0])
+    a1 = xa[i, kk, 1] + ww * (xa[i, kk + 1, 1] - xa[i, kk, 1])
+    m0 = G[0, 0] * a0 + G[1, 0] * a1 + G[2, 0]  # line in b: Gᵀ x_a
+    m1 = G[0, 1] * a0 + G[1, 1] * a1 + G[2, 1]
+    num = a0 * l0 + a1 * l1 + l2
+    return num * num / (m0 * m0 + m1 * m1 + l0 * l0 + l1 * l1)  # NaN where a is not seen
+
+
+@nb.njit(parallel=True, cache=True)
+def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_share, max_band,
+                 min_sweep, qstep):
+    """Per candidate: number of consistent offsets, best offset index, its mean Sampson (px²).
+
+    xa (Na,Ta,2) is interpolated at τ_b + Δ_d via (k, w) (D,Tb); xb (Nb,Tb,2) read at its frames.
+    G (3,3) with x_aᵀ G x_b = 0; e_b (3,) epipole in b. The fitting moments must spread at least
+    min_sweep px across b's epipolar lines. Candidates consistent at more than max_band offsets
+    get best -1. Only every qstep-th frame of b is read (frame counts are of those).
+    """
+    C = cand_a.shape[0]
+    D, Tb = k.shape
+    n_cons = np.zeros(C, np.int64)
+    best = np.full(C, -1, np.int64)
+    best_res = np.full(C, np.inf)
+    Ta = xa.shape[1]
+    for c in nb.prange(C):
+        i = cand_a[c]
+        j = cand_b[c]
+        lb0 = np.empty(Tb)  # line in a of b's point: G x_b
+        lb1 = np.empty(Tb)
+        lb2 = np.empty(Tb)
+        okb = np.empty(Tb, np.bool_)
+        q0, q1, nvb = Tb, -1, 0
+        for q in range(Tb):
+            y0 = xb[j, q, 0]
+            y1 = xb[j, q, 1]
+            okb[q] = q % qstep == 0 and not (np.isnan(y0) or np.isnan(y1))
+            if okb[q]:
+                q0 = min(q0, q)
+                q1 = q
+                nvb += 1
+            lb0[q] = G[0, 0] * y0 + G[0, 1] * y1 + G[0, 2]
+            lb1[q] = G[1, 0] * y0 + G[1, 1] * y1 + G[1, 2]
+            lb2[q] = G[2, 0] * y0 + G[2, 1] * y1 + G[2, 2]
+        ka0, ka1 = Ta, -1  # a's seen span (interpolation needs frames k and k+1)
+        for kk in range(Ta):
+            if not np.isnan(xa[i, kk, 0]):
+                ka0 = min(ka0, kk)
+                ka1 = kk
+        if nvb < min_frames or ka1 - ka0 < min_frames - 1:
+            continue
+        max_miss = (1.0 - min_share) * nvb  # more misses than this can never reach the share
+        for d in range(D):
+            # k[d] increases with q: skip offsets whose mapped span misses a's span
+            if (k[d, q1] >= 0 and k[d, q1] < ka0) or k[d, q0] >= ka1:
+                continue
+            # a few probe moments first: a wrong pair rarely fits more than one of them
+            known = 0
+            missed = 0
+            for m in range(1, 7):
+                q = q0 + ((q1 - q0) * m // 7) // qstep * qstep
+                kk = k[d, q]
+                if not okb[q] or kk < ka0 or kk >= ka1:
+                    continue
+                r = _sampson(xa, i, kk, w[d, q], G, lb0[q], lb1[q], lb2[q])
+                if np.isnan(r):
+                    continue
+                known += 1
+                if r >= 2.25 * tau2:
+                    missed += 1
+            if missed > 1:
+                continue
+            n = 0
+            fit = 0
+            acc = 0.0
+            r0 = 0.0  # reference epipolar line in b through the first fitting point
+            r1 = 0.0
+            r2 = 0.0
+            lo = np.inf
+            hi = -np.inf
+            for q in range(q0, q1 + 1, qstep):
+                kk = k[d, q]
+                if kk < ka0 or kk >= ka1 or not okb[q]:
+                    continue
+                r = _sampson(xa, i, kk, w[d, q], G, lb0[q], lb1[q], lb2[q])
+                if np.isnan(r):
+                    continue
+                n += 1
+                if r >= tau2:
+                    if n - fit > max_miss:
+                        break
+                    continue
+                if fit == 0:
+                    y0 = xb[j, q, 0]
+                    y1 = xb[j, q, 1]
+                    r0 = y1 * e_b[2] - e_b[1]
+                    r1 = e_b[0] - y0 * e_b[2]
+                    r2 = y0 * e_b[1] - y1 * e_b[0]
+                    nn = np.sqrt(r0 * r0 + r1 * r1)
+                    if nn > 0:
+                        r0 /= nn
+                        r1 /= nn
+                        r2 /= nn
+                fit += 1
+                acc += r
+                s = r0 * xb[j, q, 0] + r1 * xb[j, q, 1] + r2
+                lo = min(lo, s)
+                hi = max(hi, s)
+            if n >= min_frames and fit >= min_share * n and hi - lo >= min_sweep:
+                n_cons[c] += 1
+                mean = acc / fit
+                if mean < best_res[c]:
+                    best_res[c] = mean
+                    best[c] = d
+        if n_cons[c] > max_band:
+            best[c] = -1
+    return n_cons, best, best_res
+
+
+def epipolar_sweep(xy: np.ndarray, epipole: np.ndarray) -> np.ndarray:
+    """(N,) px: extent of each track across the epipolar lines (perpendicular to the line through
+    its median position and the epipole). xy (N,T,2); epipole (3,) homogeneous (may be at infinity)."""
+    with np.errstate(invalid="ignore"):
+        med = np.nanmedian(xy, axis=1)  # (N,2)
+    line = np.cross(np.concatenate([med, np.ones((len(med), 1))], 1), epipole[None, :])
+    line /= np.maximum(np.linalg.norm(line[:, :2], axis=1, keepdims=True), 1e-12)
+    dist = np.einsum("ntk,nk->nt", xy, line[:, :2]) + line[:, 2:3]
+    with np.errstate(invalid="ignore"):
+        return np.nan_to_num(np.nanmax(dist, 1) - np.nanmin(dist, 1), nan=0.0)
+
+
+def _candidates(xy: np.ndarray, max_tracks: int, min_frames: int, sweep: np.ndarray,
+                min_sweep: float) -> np.ndarray:
+    """Indices of the longest tracks seen at least min_frames that sweep across the lines."""
+    length = np.isfinite(xy[..., 0]).sum(1)
+    idx = np.nonzero((length >= min_frames) & (sweep >= min_sweep))[0]
+    if len(idx) > max_tracks:
+        idx = idx[np.argsort(-length[idx], kind="stable")[:max_tracks]]
+    return np.sort(idx)
+
+
+def _peaks(votes: np.ndarray, count: int, halfwidth: int) -> list[int]:
+    """Indices of the highest peaks of a vote histogram, at least 2*halfwidth+1 apart."""
+    smooth = np.convolve(votes, np.ones(2 * halfwidth + 1), mode="same")
+    out: list[int] = []
+    for d in np.argsort(-smooth, kind="stable"):
+        if smooth[d] <= 0 or len(out) >= count:
+            break
+        if all(abs(int(d) - p) > 2 * halfwidth for p in out):
+            out.append(int(d))
+    return out
+
+
+def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a: CameraTrack,
+                    cam_b: CameraTrack, xy_a: np.ndarray, xy_b: np.ndarray,
+                    cfg: GeometricPairConfig = GeometricPairConfig(), around_s: float | None = None
+                    ) -> tuple[TrackPairs, GeometricPairStats]:
+    """Track pairs between static cameras a and b from epipolar consistency over time.
+
+    around_s: keep the supporters of this Δ_ab (e.g. a first synchronization) instead of the
+    vote peaks.
+
+    xy_a (Na,Ta,2), xy_b (Nb,Tb,2): undistorted px in the cameras' pinhole models.
+    """
+    empty = TrackPairs(a, b, np.zeros((0, 2), np.int64), np.zeros(0))
+    if cam_a.is_moving or cam_b.is_moving:
+        raise ValueError("geometric_pairs needs two static cameras")
+    G = fundamental_from_cameras(cam_a.K, cam_a.cam_from_world, cam_b.K, cam_b.cam_from_world)
+    diag = float(np.hypot(info_b.width, info_b.height))
+    tau = max(2.0, cfg.tau_diag * diag)
+    _, _, vt = np.linalg.svd(G)
+    e_a = np.linalg.svd(G.T)[2][-1]  # G x_b = 0 at e_b, Gᵀ x_a = 0 at e_a
+    e_b = vt[-1]
+    ia = _candidates(xy_a, cfg.max_tracks, cfg.min_frames, epipolar_sweep(xy_a, e_a),
+                     cfg.min_sweep_tau * tau)
+    ib = _candidates(xy_b, cfg.max_tracks, cfg.min_frames, epipolar_sweep(xy_b, e_b),
+                     cfg.min_sweep_tau * tau)
+    e_b = e_b / np.linalg.norm(e_b)
+    if not len(ia) or not len(ib):
+        return empty, GeometricPairStats(0, 0, 0, (), ())
+    step = 0.5 * min(info_a.frame_interval_s, info_b.frame_interval_s)
+    ta, tb = info_a.timestamps_s, info_b.timestamps_s
+    lo, hi = ta[0] - tb[-1], ta[-1] - tb[0]
+    offsets = np.arange(np.ceil(lo / step), np.floor(hi / step) + 1) * step
+    k, w = frame_brackets(ta, tb[None, :] + offsets[:, None])
+    qstep = max(1, int(1.0 / (info_b.frame_interval_s * cfg.max_rate_hz))) if cfg.max_rate_hz > 0 else 1
+    cand_a = np.repeat(ia, len(ib))
+    cand_b = np.tile(ib, len(ia))
+    n_cons, best, res = _consistency(np.ascontiguousarray(xy_a, np.float64),
+                                     np.ascontiguousarray(xy_b, np.float64), cand_a, cand_b,
+                                     np.ascontiguousarray(G), e_b, np.ascontiguousarray(k),
+                                     np.ascontiguousarray(w), tau * tau, cfg.min_frames,
+                                     cfg.min_inlier_share,
+                                     max(1, int(cfg.max_band_share * len(offsets))),
+                                     cfg.min_sweep_tau * tau, qstep)
+    informative = best >= 0
+    votes = np.bincount(best[informative], minlength=len(offsets)).astype(float)
+    peaks = _peaks(votes, cfg.peaks, cfg.peak_halfwidth) if around_s is None else \
+        [int(np.argmin(np.abs(offsets - around_s)))]
+    keep_a, keep_b, peak_votes = [], [], []
+    for p in peaks:
+        near = informative & (np.abs(best - p) <= cfg.peak_halfwidth)
+        peak_votes.append(int(near.sum()))
+        sel = np.nonzero(near)[0]
+        # one partner per track at this peak, greedily by lowest mean residual
+        sel = sel[np.argsort(res[sel], kind="stable")]
+        used_a: set[int] = set()
+        used_b: set[int] = set()
+        for c in sel:
+            if cand_a[c] in used_a or cand_b[c] in used_b:
+                continue
+            used_a.add(int(cand_a[c]))
+            used_b.add(int(cand_b[c]))
+            keep_a.append(int(cand_a[c]))
+            keep_b.append(int(cand_b[c]))
+    index = np.unique(np.stack([np.array(keep_a, np.int64), np.array(keep_b, np.int64)], 1), axis=0) \
+        if keep_a else np.zeros((0, 2), np.int64)
+    stats = GeometricPairStats(len(cand_a), int(informative.sum()), len(index),
+                               tuple(float(offsets[p]) for p in peaks), tuple(peak_votes))
+    return TrackPairs(a, b, index, np.ones(len(index))), stats
