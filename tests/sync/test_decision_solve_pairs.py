@@ -27,6 +27,19 @@ def test_two_equal_minima_are_ambiguous():
     assert dec.second_depth_ratio == pytest.approx(0.78 / 0.8, abs=0.02)
 
 
+def test_lowest_minimum_on_little_overlap_yields_to_a_better_supported_one():
+    """A periodic motion matched again near the end of the range: the lowest dip rests on less
+    than half the overlap of an almost equally deep one, which becomes the best."""
+    e = 1.0 - bowl(-0.8, 0.8) - bowl(0.1, 0.78)
+    support = np.round(2000 * (1 - np.abs(OFFS))).astype(int)  # overlap shrinks toward the edges
+    dec, minima = decide(e, support, OFFS, 100, DecisionConfig())
+    assert dec.accepted and OFFS[minima[0]] == pytest.approx(0.1)
+    assert "-0.800 s" in dec.reason and "overlap" in dec.reason
+    # with equal overlap the same landscape stays ambiguous
+    dec_flat, _ = decide(e, np.full(201, 1000), OFFS, 100, DecisionConfig())
+    assert not dec_flat.accepted and dec_flat.reason.startswith("ambiguous")
+
+
 def test_flat_landscape_is_rejected():
     rng = np.random.default_rng(0)
     e = 1.0 + 0.02 * rng.normal(size=201)

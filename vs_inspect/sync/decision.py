@@ -84,6 +84,19 @@ def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_t
     depth = e_base - e_best
     e_range = float(np.nanmax(energy)) - e_best
     minima, prom = local_minima(energy, cfg.min_prominence * e_range)
+    # The lowest minimum may itself rest on much less overlap than another nearly as prominent
+    # (e.g. a periodic motion matched again near the end of the range): by the rule below it is
+    # then the weaker of the two, so the better supported minimum becomes the best.
+    weaker_lowest = None
+    for i in range(1, len(minima)):
+        if prom[i] >= cfg.max_second_ratio * prom[0] \
+                and support[minima[0]] < cfg.min_rival_support * support[minima[i]]:
+            weaker_lowest = int(minima[0])
+            order = [i] + [j for j in range(len(minima)) if j != i]
+            minima, prom = minima[order], prom[order]
+            e_best = float(energy[minima[0]])
+            depth = e_base - e_best
+            break
     best = int(minima[0])
     contrast = depth / e_base if e_base > 0 else 0.0
     # Rivals are compared by prominence (their own dip), not by depth below a global level, so a
@@ -104,6 +117,9 @@ def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_t
                 num_pareto_minima=len(pareto), at_range_edge=bool(edge))
 
     accepted, reason = True, f"single clear minimum (contrast {contrast:.2f}, rival/best prominence {second:.2f})"
+    if weaker_lowest is not None:
+        reason += (f"; the lowest energy, at {offsets_s[weaker_lowest]:+.3f} s, rests on "
+                   f"{100 * support[weaker_lowest] / support[best]:.0f}% of this minimum's overlap")
     if not cfg.enabled:
         reason = "accepted without checks (spurious-pair filter off)"
     elif contrast < cfg.min_contrast:
