@@ -85,12 +85,13 @@ def clip_scene(root: Path, scene: str) -> tuple[BenchData, float, BaseException 
 RENDERED_SCENES = (0,)
 
 
-def rendered_scene(seed: int, workdir: Path) -> tuple[BenchData, float, BaseException | None]:
+def rendered_scene(seed: int, workdir: Path, cue_config=None) -> tuple[BenchData, float, BaseException | None]:
     """A rendered multi-camera scene (vs_inspect.synth) through Stage 0 with its calibration,
     as a user with calibrated cameras would run it: (BenchData, Stage 0 s, error or None).
 
     3 static cameras + 1 hand-held, 5 s, 480x360, mixed frame rates, one variable-rate video.
     The exact cameras are kept for the GT-camera rows; the true cues are not used here.
+    cue_config: Stage 0 settings (CueConfig(); None = defaults).
     """
     import json
 
@@ -116,7 +117,7 @@ def rendered_scene(seed: int, workdir: Path) -> tuple[BenchData, float, BaseExce
     name = f"rendered/s{seed}"
     t0 = time.perf_counter()
     try:
-        bundle, stats = extract_cues(srcs, calib, CueConfig(), progress=False)
+        bundle, stats = extract_cues(srcs, calib, cue_config or CueConfig(), progress=False)
     except Exception as exc:  # noqa: BLE001  (Stage 0 failing is a result)
         return BenchData(name, "rendered", None, None, interval, notes), time.perf_counter() - t0, exc
     stage0 = time.perf_counter() - t0
