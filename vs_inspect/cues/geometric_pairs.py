@@ -7,13 +7,15 @@ moving objects across wide baselines; a trajectory that crosses the epipolar lin
 frames is a much stronger signature. So every candidate (i, j) is checked at every offset on a
 half-frame grid:
 
-- consistent at Δ: at least `min_frames` common moments and at least `min_inlier_share` of
-  them with a Sampson distance below `tau_px`;
+- consistent at Δ: at least `min_frames` common moments, at least `min_inlier_share` of them
+  with a Sampson distance below tau, and the fitting moments spread across the epipolar lines
+  (a point moving along its line fits any offset); six probe moments are tried first, so a
+  wrong candidate costs a few evaluations per offset;
 - informative: consistent at only a narrow band of offsets (points moving along the epipolar
   lines fit every Δ and say nothing);
 - each informative pair votes for its best offset; the few highest peaks of the vote histogram
   are kept (not only the highest: Stage 1 compares them with all their supporters), and at each
-  peak a track keeps only its mutually best partner.
+  peak a track keeps one partner (greedily by lowest residual).
 
 Stage 1 then searches the offset again with these pairs and the descriptor pairs together; a
 peak with few supporters becomes a rival minimum, which the decision stage weighs honestly.
@@ -198,12 +200,9 @@ def _peaks(votes: np.ndarray, count: int, halfwidth: int) -> list[int]:
 
 def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a: CameraTrack,
                     cam_b: CameraTrack, xy_a: np.ndarray, xy_b: np.ndarray,
-                    cfg: GeometricPairConfig = GeometricPairConfig(), around_s: float | None = None
+                    cfg: GeometricPairConfig = GeometricPairConfig()
                     ) -> tuple[TrackPairs, GeometricPairStats]:
     """Track pairs between static cameras a and b from epipolar consistency over time.
-
-    around_s: keep the supporters of this Δ_ab (e.g. a first synchronization) instead of the
-    vote peaks.
 
     xy_a (Na,Ta,2), xy_b (Nb,Tb,2): undistorted px in the cameras' pinhole models.
     """
@@ -240,8 +239,7 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
                                      cfg.min_sweep_tau * tau, qstep)
     informative = best >= 0
     votes = np.bincount(best[informative], minlength=len(offsets)).astype(float)
-    peaks = _peaks(votes, cfg.peaks, cfg.peak_halfwidth) if around_s is None else \
-        [int(np.argmin(np.abs(offsets - around_s)))]
+    peaks = _peaks(votes, cfg.peaks, cfg.peak_halfwidth)
     keep_a, keep_b, peak_votes = [], [], []
     for p in peaks:
         near = informative & (np.abs(best - p) <= cfg.peak_halfwidth)
