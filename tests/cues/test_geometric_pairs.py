@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vs_inspect.cues.geometric_pairs import epipolar_sweep, geometric_pairs
+from vs_inspect.cues.geometric_pairs import consistent_peaks, epipolar_sweep, geometric_pairs
 from vs_inspect.geometry.epipolar import fundamental_from_cameras, look_at, project
 from vs_inspect.types import CameraTrack, VideoInfo
 
@@ -96,3 +96,17 @@ def test_sweep_counts_motion_across_epipolar_lines_only():
     assert sweep[0] < 0.5
     assert sweep[1] == pytest.approx(30, abs=1.0)
 
+
+
+def test_consistent_peaks_close_every_triangle():
+    # true offsets: a 0, b 0.5, c -0.3; the top peak of b__c is wrong (a repeated motion)
+    peaks = {("a", "b"): ((0.5, 1.9), (40, 30)),
+             ("a", "c"): ((-0.3, 0.8), (35, 33)),
+             ("b", "c"): ((2.0, -0.8), (50, 20))}
+    assert consistent_peaks(peaks, 0.05) == {("a", "b"): 0, ("a", "c"): 0, ("b", "c"): 1}
+    # two cameras: no triangle, nothing to choose
+    assert consistent_peaks({("a", "b"): ((0.5, 1.9), (40, 30))}, 0.05) is None
+    # no combination closes: None (every peak's supporters are kept)
+    bad = dict(peaks)
+    bad[("b", "c")] = ((2.0, 3.0), (50, 20))
+    assert consistent_peaks(bad, 0.05) is None

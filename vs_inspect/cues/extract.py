@@ -245,29 +245,44 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
 
 def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
                          stats: dict, sink: Sink, progress: bool) -> dict:
-    """Descriptor pairs plus epipolar-consistency pairs for every pair of static known cameras."""
-    from .geometric_pairs import geometric_pairs
+    """Descriptor pairs plus epipolar-consistency pairs for every pair of static known cameras.
 
-    out = dict(pairs)
+    With three or more static cameras, the vote peaks whose offsets close every triangle
+    (Δ_ab + Δ_bc ≈ Δ_ac) are chosen and only their supporters kept; else every kept peak's.
+    """
+    from .geometric_pairs import consistent_peaks, geometric_pairs
+
     todo = [k for k in pairs if not cameras[k[0]].is_moving and not cameras[k[1]].is_moving]
+    found = {}
     for a, b in tqdm(todo, desc="geometric pairs", unit="pair", disable=not progress, leave=False):
-        gp, gs = geometric_pairs(a, b, vids[a].info, vids[b].info, cameras[a], cameras[b],
-                                 tracks[a].xy, tracks[b].xy, cfg.geometric)
+        found[(a, b)] = geometric_pairs(a, b, vids[a].info, vids[b].info, cameras[a], cameras[b],
+                                        tracks[a].xy, tracks[b].xy, cfg.geometric)
+    coarsest = max((vids[n].info.frame_interval_s for k in found for n in k), default=0.0)
+    chosen = consistent_peaks({k: (gs.peaks_s, gs.peak_votes) for k, (_, gs) in found.items()},
+                              1.5 * coarsest)
+    out = dict(pairs)
+    for (a, b), (gp, gs) in found.items():
+        index = gp.index
+        if chosen is not None and (a, b) in chosen:
+            index = index[gs.pair_peak == chosen[(a, b)]]
         tp = pairs[(a, b)]
         w_desc = tp.weight if tp.weight is not None else np.ones(len(tp.index))
         have = {tuple(x) for x in tp.index.tolist()}
-        new = np.array([x for x in gp.index.tolist() if tuple(x) not in have], np.int64).reshape(-1, 2)
+        new = np.array([x for x in index.tolist() if tuple(x) not in have], np.int64).reshape(-1, 2)
         out[(a, b)] = TrackPairs(a, b, np.concatenate([tp.index, new]),
                                  np.concatenate([w_desc, np.ones(len(new))]))
         info = {"geometric_candidates": gs.candidates, "geometric_informative": gs.informative,
-                "geometric_pairs": gs.kept, "geometric_new": int(len(new)),
+                "geometric_pairs": int(len(index)), "geometric_new": int(len(new)),
                 "geometric_peaks_s": [round(p, 4) for p in gs.peaks_s],
-                "geometric_peak_votes": list(gs.peak_votes)}
+                "geometric_peak_votes": list(gs.peak_votes),
+                "geometric_chosen_peak_s": (round(gs.peaks_s[chosen[(a, b)]], 4)
+                                            if chosen is not None and (a, b) in chosen else None)}
         stats["pairs"].setdefault(f"{a}__{b}", {}).update(info)
-        sink.stage_event("cues", f"{a}__{b}: {gs.kept} track pairs from epipolar consistency "
-                         f"(vote peaks at {', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s)")
-        log.info("%s__%s: %d geometric track pairs (%d new), peaks %s votes %s", a, b, gs.kept,
-                 len(new), gs.peaks_s, gs.peak_votes)
+        which = (f"peak {gs.peaks_s[chosen[(a, b)]]:+.3f} s chosen: the peaks of all static pairs close every triangle"
+                 if info["geometric_chosen_peak_s"] is not None else
+                 f"vote peaks at {', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s")
+        sink.stage_event("cues", f"{a}__{b}: {len(index)} track pairs from epipolar consistency ({which})")
+        log.info("%s__%s: %d geometric track pairs (%d new), %s", a, b, len(index), len(new), which)
     return out
 
 

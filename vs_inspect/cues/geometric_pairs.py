@@ -23,6 +23,7 @@ peak with few supporters becomes a rival minimum, which the decision stage weigh
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numba as nb
@@ -41,6 +42,7 @@ class GeometricPairStats:
     kept: int  # pairs output
     peaks_s: tuple[float, ...]  # Δ_ab of the kept peaks, seconds
     peak_votes: tuple[int, ...]  # informative pairs voting for each kept peak
+    pair_peak: np.ndarray | None = None  # (P,) int, which kept peak each output pair supports
 
 
 @nb.njit(inline="always")
@@ -240,8 +242,8 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
     informative = best >= 0
     votes = np.bincount(best[informative], minlength=len(offsets)).astype(float)
     peaks = _peaks(votes, cfg.peaks, cfg.peak_halfwidth)
-    keep_a, keep_b, peak_votes = [], [], []
-    for p in peaks:
+    keep_a, keep_b, keep_p, peak_votes = [], [], [], []
+    for pi, p in enumerate(peaks):
         near = informative & (np.abs(best - p) <= cfg.peak_halfwidth)
         peak_votes.append(int(near.sum()))
         sel = np.nonzero(near)[0]
@@ -256,8 +258,43 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
             used_b.add(int(cand_b[c]))
             keep_a.append(int(cand_a[c]))
             keep_b.append(int(cand_b[c]))
-    index = np.unique(np.stack([np.array(keep_a, np.int64), np.array(keep_b, np.int64)], 1), axis=0) \
+            keep_p.append(pi)
+    index = np.stack([np.array(keep_a, np.int64), np.array(keep_b, np.int64)], 1) \
         if keep_a else np.zeros((0, 2), np.int64)
+    # a track pair supporting two peaks is kept once, with the first (highest) peak
+    index, first = np.unique(index, axis=0, return_index=True)
     stats = GeometricPairStats(len(cand_a), int(informative.sum()), len(index),
-                               tuple(float(offsets[p]) for p in peaks), tuple(peak_votes))
+                               tuple(float(offsets[p]) for p in peaks), tuple(peak_votes),
+                               np.array(keep_p, np.int64)[first])
     return TrackPairs(a, b, index, np.ones(len(index))), stats
+
+
+def consistent_peaks(peaks: dict[tuple[str, str], tuple[tuple[float, ...], tuple[int, ...]]],
+                     tol_s: float, max_pairs: int = 10) -> dict[tuple[str, str], int] | None:
+    """One vote peak per camera pair such that every triangle closes, Δ_ab + Δ_bc ≈ Δ_ac.
+
+    peaks: (a, b) -> (peak offsets Δ_ab in s, votes), names in a fixed order within each key.
+    Returns the choice with the most votes in total, or None when no choice closes every
+    triangle, when no triangle exists (fewer than three cameras), or when there are more than
+    max_pairs camera pairs (the search tries every combination).
+    """
+    keys = [k for k in peaks if len(peaks[k][0])]
+    if len(keys) > max_pairs:
+        return None
+
+    def delta(ch, u, v):
+        return peaks[(u, v)][0][ch[(u, v)]] if (u, v) in ch else -peaks[(v, u)][0][ch[(v, u)]]
+
+    names = sorted({n for k in keys for n in k})
+    triangles = [t for t in itertools.combinations(names, 3)
+                 if all((u, v) in keys or (v, u) in keys for u, v in itertools.combinations(t, 2))]
+    if not triangles:
+        return None
+    best, best_votes = None, -1
+    for choice in itertools.product(*[range(len(peaks[k][0])) for k in keys]):
+        ch = dict(zip(keys, choice))
+        if all(abs(delta(ch, a, b) + delta(ch, b, c) - delta(ch, a, c)) <= tol_s for a, b, c in triangles):
+            votes = sum(peaks[k][1][ch[k]] for k in keys)
+            if votes > best_votes:
+                best, best_votes = ch, votes
+    return best
