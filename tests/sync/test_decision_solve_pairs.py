@@ -35,6 +35,9 @@ def test_lowest_minimum_on_little_overlap_yields_to_a_better_supported_one():
     dec, minima = decide(e, support, OFFS, 100, DecisionConfig())
     assert dec.accepted and OFFS[minima[0]] == pytest.approx(0.1)
     assert "-0.800 s" in dec.reason and "overlap" in dec.reason
+    # the filter-off ablation keeps the lowest energy
+    _, minima_off = decide(e, support, OFFS, 100, DecisionConfig(enabled=False))
+    assert OFFS[minima_off[0]] == pytest.approx(-0.8)
     # with equal overlap the same landscape stays ambiguous
     dec_flat, _ = decide(e, np.full(201, 1000), OFFS, 100, DecisionConfig())
     assert not dec_flat.accepted and dec_flat.reason.startswith("ambiguous")

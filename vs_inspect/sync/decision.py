@@ -88,7 +88,7 @@ def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_t
     # (e.g. a periodic motion matched again near the end of the range): by the rule below it is
     # then the weaker of the two, so the better supported minimum becomes the best.
     weaker_lowest = None
-    for i in range(1, len(minima)):
+    for i in range(1, len(minima) if cfg.enabled else 1):
         if prom[i] >= cfg.max_second_ratio * prom[0] \
                 and support[minima[0]] < cfg.min_rival_support * support[minima[i]]:
             weaker_lowest = int(minima[0])
