@@ -103,10 +103,10 @@ def test_consistent_peaks_close_every_triangle():
     peaks = {("a", "b"): ((0.5, 1.9), (40, 30)),
              ("a", "c"): ((-0.3, 0.8), (35, 33)),
              ("b", "c"): ((2.0, -0.8), (50, 20))}
-    assert consistent_peaks(peaks, 0.05) == {("a", "b"): 0, ("a", "c"): 0, ("b", "c"): 1}
+    assert consistent_peaks(peaks, 0.05) == ({("a", "b"): 0, ("a", "c"): 0, ("b", "c"): 1}, "chosen")
     # two cameras: no triangle, nothing to choose
-    assert consistent_peaks({("a", "b"): ((0.5, 1.9), (40, 30))}, 0.05) is None
-    # no combination closes: None (every peak's supporters are kept)
+    assert consistent_peaks({("a", "b"): ((0.5, 1.9), (40, 30))}, 0.05) == (None, "no triangle")
+    # no combination closes: some peaks are wrong
     bad = dict(peaks)
     bad[("b", "c")] = ((2.0, 3.0), (50, 20))
-    assert consistent_peaks(bad, 0.05) is None
+    assert consistent_peaks(bad, 0.05) == (None, "inconsistent")

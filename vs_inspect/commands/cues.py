@@ -151,7 +151,8 @@ def sync_videos(args: argparse.Namespace, sync_cfg, truth: dict | None = None) -
         timings["stage0_with_io_s"] = round(t1 - t0, 4)
         data["timings_s"] = {**timings, **data["timings_s"], "total_s": round(time.perf_counter() - t0, 4)}
         data["cues"] = {k: stats[k] for k in ("camera_source", "registered_cameras", "tracks",
-                                              "track_pairs", "videos", "pairs", "dropped") if k in stats}
+                                              "track_pairs", "geometric_peaks", "videos", "pairs",
+                                              "dropped") if k in stats}
         if "sfm" in stats:
             data["cues"]["sfm"] = stats["sfm"]
         if hasattr(sink, "run_summary"):

@@ -248,7 +248,10 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     """Descriptor pairs plus epipolar-consistency pairs for every pair of static known cameras.
 
     With three or more static cameras, the vote peaks whose offsets close every triangle
-    (Δ_ab + Δ_bc ≈ Δ_ac) are chosen and only their supporters kept; else every kept peak's.
+    (Δ_ab + Δ_bc ≈ Δ_ac) are chosen and only their supporters kept. When no choice closes the
+    triangles, the peaks of at least one pair are all wrong and Stage 1 could not tell (the
+    pairs were picked to agree with them), so no geometric pair is added. With two static
+    cameras (no triangle) every kept peak's supporters are added.
     """
     from .geometric_pairs import consistent_peaks, geometric_pairs
 
@@ -258,13 +261,21 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
         found[(a, b)] = geometric_pairs(a, b, vids[a].info, vids[b].info, cameras[a], cameras[b],
                                         tracks[a].xy, tracks[b].xy, cfg.geometric)
     coarsest = max((vids[n].info.frame_interval_s for k in found for n in k), default=0.0)
-    chosen = consistent_peaks({k: (gs.peaks_s, gs.peak_votes) for k, (_, gs) in found.items()},
-                              1.5 * coarsest)
+    chosen, status = consistent_peaks({k: (gs.peaks_s, gs.peak_votes) for k, (_, gs) in found.items()},
+                                      1.5 * coarsest)
+    stats["geometric_peaks"] = status
+    if status == "inconsistent":
+        msg = ("geometric track pairs not used: the vote peaks of the static camera pairs do not "
+               "close the triangles (Δ_ab + Δ_bc ≠ Δ_ac), so some peaks are wrong")
+        sink.stage_event("cues", msg)
+        log.warning(msg)
     out = dict(pairs)
     for (a, b), (gp, gs) in found.items():
         index = gp.index
         if chosen is not None and (a, b) in chosen:
             index = index[gs.pair_peak == chosen[(a, b)]]
+        elif status == "inconsistent":
+            index = index[:0]
         tp = pairs[(a, b)]
         w_desc = tp.weight if tp.weight is not None else np.ones(len(tp.index))
         have = {tuple(x) for x in tp.index.tolist()}

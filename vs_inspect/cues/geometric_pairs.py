@@ -270,17 +270,18 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
 
 
 def consistent_peaks(peaks: dict[tuple[str, str], tuple[tuple[float, ...], tuple[int, ...]]],
-                     tol_s: float, max_pairs: int = 10) -> dict[tuple[str, str], int] | None:
+                     tol_s: float, max_pairs: int = 10
+                     ) -> tuple[dict[tuple[str, str], int] | None, str]:
     """One vote peak per camera pair such that every triangle closes, Δ_ab + Δ_bc ≈ Δ_ac.
 
     peaks: (a, b) -> (peak offsets Δ_ab in s, votes), names in a fixed order within each key.
-    Returns the choice with the most votes in total, or None when no choice closes every
-    triangle, when no triangle exists (fewer than three cameras), or when there are more than
-    max_pairs camera pairs (the search tries every combination).
+    Returns (choice with the most votes in total, "chosen"), or (None, why): "no triangle"
+    (fewer than three cameras with peaks), "too many pairs" (the search tries every
+    combination), or "inconsistent" (no choice closes every triangle).
     """
     keys = [k for k in peaks if len(peaks[k][0])]
     if len(keys) > max_pairs:
-        return None
+        return None, "too many pairs"
 
     def delta(ch, u, v):
         return peaks[(u, v)][0][ch[(u, v)]] if (u, v) in ch else -peaks[(v, u)][0][ch[(v, u)]]
@@ -289,7 +290,7 @@ def consistent_peaks(peaks: dict[tuple[str, str], tuple[tuple[float, ...], tuple
     triangles = [t for t in itertools.combinations(names, 3)
                  if all((u, v) in keys or (v, u) in keys for u, v in itertools.combinations(t, 2))]
     if not triangles:
-        return None
+        return None, "no triangle"
     best, best_votes = None, -1
     for choice in itertools.product(*[range(len(peaks[k][0])) for k in keys]):
         ch = dict(zip(keys, choice))
@@ -297,4 +298,4 @@ def consistent_peaks(peaks: dict[tuple[str, str], tuple[tuple[float, ...], tuple
             votes = sum(peaks[k][1][ch[k]] for k in keys)
             if votes > best_votes:
                 best, best_votes = ch, votes
-    return best
+    return (best, "chosen") if best is not None else (None, "inconsistent")
