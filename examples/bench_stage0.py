@@ -76,6 +76,10 @@ def errors_ms(res, truth: dict[str, float]) -> dict[str, float | None]:
     return out
 
 
+def format_ms(err: dict[str, float | None]) -> str:
+    return "{" + ", ".join(f"{k}: " + ("null" if v is None else f"{v:.1f}") for k, v in err.items()) + "}"
+
+
 def bench_caliscope(args) -> None:
     root = DATA / "caliscope_post_optimization"
     ft = read_caliscope_frame_times(root)
@@ -99,7 +103,7 @@ def bench_caliscope(args) -> None:
             vals = [e if e is not None else float("inf") for e in err.values()]
             all_err += vals
             rows.append((trial, cuts, err, tc, ts, stats.get("registered_cameras"), stats.get("dropped")))
-            print(f"trial {trial}: cuts {cuts}  err_ms {{{', '.join(f'{k}: ' + ('null' if v is None else f'{v:.1f}') for k, v in err.items())}}}"
+            print(f"trial {trial}: cuts {cuts}  err_ms {format_ms(err)}"
                   f"  cues {tc:.1f}s sync {ts:.1f}s  cameras {stats.get('registered_cameras')} dropped {stats.get('dropped')}",
                   flush=True)
     med = statistics.median(all_err)
@@ -185,14 +189,11 @@ def bench_rendered(args) -> None:
                 b = data.bundle
                 t0 = time.perf_counter()
                 res = sync_bundle(b, progress=False)
-                truth, ref = b.gt_offsets_s, res.reference
-                err_ms = {n: None if o is None else 1000 * abs((o - res.offsets_s[ref]) - (truth[n] - truth[ref]))
-                          for n, o in res.offsets_s.items() if n != ref}
+                err_ms = errors_ms(res, b.gt_offsets_s)
                 static = {n: e for n, e in err_ms.items() if not b.cameras[n].is_moving}
                 moving = {n: e for n, e in err_ms.items() if b.cameras[n].is_moving}
                 rows[label].extend(static.values())
-                fmt = lambda d: ", ".join(f"{n}: {'null' if e is None else f'{e:.1f}'}" for n, e in d.items())  # noqa: E731
-                print(f"seed {seed} {label}: static {{{fmt(static)}}} moving {{{fmt(moving)}}} "
+                print(f"seed {seed} {label}: static {format_ms(static)} moving {format_ms(moving)} "
                       f"stage0 {s0:.1f}s sync {time.perf_counter() - t0:.1f}s", flush=True)
     print()
     for label, errs in rows.items():

@@ -91,7 +91,8 @@ def extract_from_args(args: argparse.Namespace, sink=None):
 def register(sub) -> None:
     p = sub.add_parser("cues", help="extract cues from videos into a cue bundle",
                        description="Stage 0 on real videos: moving regions, KLT tracks inside them, "
-                                   "cross-view track pairs from keyframe SIFT matches, and cameras "
+                                   "cross-view track pairs from keyframe SIFT matches and, between static "
+                                   "cameras, from epipolar consistency over time, and cameras "
                                    "(imported with --calib or estimated with pycolmap). Writes a cue "
                                    "bundle folder (DESIGN.md, format v1) with cues_stats.json (timings, counts, left-out videos) in it.",
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)

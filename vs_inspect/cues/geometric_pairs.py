@@ -104,7 +104,6 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
             if (k[d, q1] >= 0 and k[d, q1] < ka0) or k[d, q0] >= ka1:
                 continue
             # a few probe moments first: a wrong pair rarely fits more than one of them
-            known = 0
             missed = 0
             for m in range(1, 7):
                 q = q0 + ((q1 - q0) * m // 7) // qstep * qstep
@@ -112,10 +111,7 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
                 if not okb[q] or kk < ka0 or kk >= ka1:
                     continue
                 r = _sampson(xa, i, kk, w[d, q], G, lb0[q], lb1[q], lb2[q])
-                if np.isnan(r):
-                    continue
-                known += 1
-                if r >= 2.25 * tau2:
+                if r >= 2.25 * tau2:  # False for NaN (a not seen there)
                     missed += 1
             if missed > 1:
                 continue
@@ -214,14 +210,12 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
     G = fundamental_from_cameras(cam_a.K, cam_a.cam_from_world, cam_b.K, cam_b.cam_from_world)
     diag = float(np.hypot(info_b.width, info_b.height))
     tau = max(2.0, cfg.tau_diag * diag)
-    _, _, vt = np.linalg.svd(G)
-    e_a = np.linalg.svd(G.T)[2][-1]  # G x_b = 0 at e_b, Gᵀ x_a = 0 at e_a
-    e_b = vt[-1]
+    u, _, vt = np.linalg.svd(G)
+    e_a, e_b = u[:, -1], vt[-1]  # unit null vectors: Gᵀ e_a = 0, G e_b = 0
     ia = _candidates(xy_a, cfg.max_tracks, cfg.min_frames, epipolar_sweep(xy_a, e_a),
                      cfg.min_sweep_tau * tau)
     ib = _candidates(xy_b, cfg.max_tracks, cfg.min_frames, epipolar_sweep(xy_b, e_b),
                      cfg.min_sweep_tau * tau)
-    e_b = e_b / np.linalg.norm(e_b)
     if not len(ia) or not len(ib):
         return empty, GeometricPairStats(0, 0, 0, (), ())
     step = 0.5 * min(info_a.frame_interval_s, info_b.frame_interval_s)
@@ -232,13 +226,13 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
     qstep = max(1, int(1.0 / (info_b.frame_interval_s * cfg.max_rate_hz))) if cfg.max_rate_hz > 0 else 1
     cand_a = np.repeat(ia, len(ib))
     cand_b = np.tile(ib, len(ia))
-    n_cons, best, res = _consistency(np.ascontiguousarray(xy_a, np.float64),
-                                     np.ascontiguousarray(xy_b, np.float64), cand_a, cand_b,
-                                     np.ascontiguousarray(G), e_b, np.ascontiguousarray(k),
-                                     np.ascontiguousarray(w), tau * tau, cfg.min_frames,
-                                     cfg.min_inlier_share,
-                                     max(1, int(cfg.max_band_share * len(offsets))),
-                                     cfg.min_sweep_tau * tau, qstep)
+    _, best, res = _consistency(np.ascontiguousarray(xy_a, np.float64),
+                                np.ascontiguousarray(xy_b, np.float64), cand_a, cand_b,
+                                np.ascontiguousarray(G), e_b, np.ascontiguousarray(k),
+                                np.ascontiguousarray(w), tau * tau, cfg.min_frames,
+                                cfg.min_inlier_share,
+                                max(1, int(cfg.max_band_share * len(offsets))),
+                                cfg.min_sweep_tau * tau, qstep)
     informative = best >= 0
     votes = np.bincount(best[informative], minlength=len(offsets)).astype(float)
     peaks = _peaks(votes, cfg.peaks, cfg.peak_halfwidth)
