@@ -37,7 +37,9 @@ sys.path.insert(0, str(REPO))
 from vs_inspect.bench.datasets import read_caliscope_frame_times  # noqa: E402
 from vs_inspect.cues import CueConfig, MatchConfig, extract_cues  # noqa: E402
 from vs_inspect.errors import InputError  # noqa: E402
+from vs_inspect.commands.calibrate_board import estimate_from_board, rig_to_json  # noqa: E402
 from vs_inspect.io.calibration import load_calibration  # noqa: E402
+from vs_inspect.io.result import write_json_atomic  # noqa: E402
 from vs_inspect.io.video import VideoWriter, iter_frames, open_video  # noqa: E402
 from vs_inspect.sync.run import sync_bundle  # noqa: E402
 
@@ -98,7 +100,17 @@ def bench_caliscope(args) -> None:
                 paths.append(p)
             truth = {n: ft[n][c] for n, c in cuts.items()}
             cfg = CueConfig(max_side=args.max_side, match=MatchConfig(num_keyframes=args.keyframes))
-            res, stats, tc, ts = run(paths, None if args.estimate else root / "camera_array.toml", cfg)
+            calib, tb = (None if args.estimate else root / "camera_array.toml"), 0.0
+            if args.board:
+                # cameras estimated from the ChArUco board in the cut videos (no timestamps used)
+                rig, tb = estimate_from_board([open_video(p) for p in paths], root / "charuco.toml",
+                                              progress=False)
+                calib = write_json_atomic(rig_to_json(rig), d / "board_calibration.json")
+                print(f"  board: {len(rig.cameras)} cameras in {tb:.1f} s, coarse offsets "
+                      + ", ".join(f"{n} {1000 * (rp.offset_s - (truth[n] - truth[a])):+.0f} ms off"
+                                  for n, (a, rp) in rig.links.items()), flush=True)
+            res, stats, tc, ts = run(paths, calib, cfg)
+            tc += tb
             err = errors_ms(res, truth)
             vals = [e if e is not None else float("inf") for e in err.values()]
             all_err += vals
@@ -108,7 +120,8 @@ def bench_caliscope(args) -> None:
                   flush=True)
     med = statistics.median(all_err)
     within = sum(e <= 1000 / 6 for e in all_err) / len(all_err)
-    mode = "estimated cameras" if args.estimate else "calibration"
+    mode = "cameras from the ChArUco board" if args.board else \
+        "estimated cameras" if args.estimate else "calibration"
     print(f"\ncaliscope ({mode}), {args.trials} trials, {len(all_err)} video offsets: median error "
           f"{med:.1f} ms ({med / (1000 / 6):.2f} frames), mean {np.mean([e for e in all_err if np.isfinite(e)]):.1f} ms, "
           f"max {max(all_err):.1f} ms, within 1 frame {100 * within:.0f}%")
@@ -211,6 +224,8 @@ def main() -> None:
     c.add_argument("--max-cut", type=int, default=12)
     c.add_argument("--seed", type=int, default=0)
     c.add_argument("--estimate", action="store_true", help="estimate cameras instead of the calibration")
+    c.add_argument("--board", action="store_true",
+                   help="cameras from the ChArUco board in the videos (vs-inspect calibrate-board)")
     c.add_argument("--keyframes", type=int, default=MatchConfig.num_keyframes)
     c.add_argument("--max-side", type=int, default=CueConfig.max_side)
     c.add_argument("--first-zero", action="store_true", help="trial 0 without cuts")

@@ -1,0 +1,102 @@
+"""vs-inspect calibrate-board: cameras of a rig from a ChArUco board waved in unsynchronized videos."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import time
+from pathlib import Path
+
+from tqdm import tqdm
+
+from ..errors import InputError
+
+log = logging.getLogger(__name__)
+
+
+def read_board(board_path: Path):
+    from ..io.board import load_board
+
+    try:
+        return load_board(board_path)
+    except ValueError as exc:  # BoardSpec's own checks
+        raise InputError(f"{board_path}: {exc}") from None
+
+
+def estimate_from_board(sources: list, board_path: Path, progress: bool = True):
+    """Detect the board in every video and estimate the rig: (RigEstimate, seconds)."""
+    from ..cues.board import BoardDetector, detect_frames, estimate_rig
+    from ..io.video import iter_frames
+
+    spec = read_board(board_path)
+    t0 = time.perf_counter()
+    detector = BoardDetector(spec)
+    detections = {}
+    for src in tqdm(sources, desc="board corners", unit="video", disable=not progress, leave=False):
+        detections[src.info.name] = detect_frames(iter_frames(src), detector)
+    rig = estimate_rig([s.info for s in sources], detections, spec)
+    for name, why in rig.unregistered.items():
+        log.warning("%s: no camera from the board: %s", name, why)
+    return rig, time.perf_counter() - t0
+
+
+def rig_to_json(rig) -> dict:
+    """The simple calibration JSON (io/calibration.py) plus how each camera was placed."""
+    cams = {n: {"K": c.K.tolist(), "dist": c.dist.tolist(), "cam_from_world": c.cam_from_world.tolist(),
+                "size": list(c.size)} for n, c in rig.cameras.items()}
+    board = {n: {"views": rig.intrinsics[n].views, "rms_px": round(rig.intrinsics[n].rms_px, 4)}
+             for n in rig.intrinsics}
+    for n, (a, rp) in rig.links.items():
+        board[n].update(placed_from=a, coarse_offset_s=round(rp.offset_s, 4),
+                        median_reprojection_px=round(rp.median_px, 3), pairings=rp.pairings,
+                        inliers=rp.inliers)
+    return {"cameras": cams, "board": board, "unregistered": dict(rig.unregistered),
+            "world": "the first camera's frame, metres"}
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "calibrate-board", help="estimate the cameras of a rig from a ChArUco board in its videos",
+        description="Cameras from a ChArUco board waved in front of the rig, without synchronized "
+                    "frames: intrinsics per camera (OpenCV calibrateCamera), then for each pair the "
+                    "time offset at which the board poses of both videos agree and the relative pose "
+                    "there (least median reprojection error, refined by stereoCalibrate). Writes the "
+                    "calibration JSON that --calib reads (the first video's camera is the world frame).",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("videos", nargs="+", type=Path, help="video files or image folders")
+    p.add_argument("--board", type=Path, required=True,
+                   help="board description: caliscope charuco.toml (columns, rows, dictionary, "
+                        "aruco_scale, square_size_override_cm or board size and units, inverted)")
+    p.add_argument("--out", type=Path, required=True, help="calibration JSON to write")
+    p.add_argument("--fps", type=float, default=None, help="frame rate of image folders")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..io.result import write_json_atomic
+    from .cues import open_sources
+
+    if len(args.videos) < 2:
+        raise InputError(f"need at least 2 videos of the rig, got {len(args.videos)}")
+    read_board(args.board)  # a bad board file fails before any decoding
+    sources, _, dropped = open_sources(args.videos, args.fps)
+    if len(sources) < 2:
+        raise InputError("fewer than 2 readable videos (" +
+                         "; ".join(f"{n}: {r}" for n, r in dropped.items()) + ")")
+    rig, seconds = estimate_from_board(sources, args.board, progress=not args.no_progress)
+    if len(rig.cameras) < 2:
+        why = "; ".join(f"{n}: {r}" for n, r in {**dropped, **rig.unregistered}.items())
+        raise InputError(f"the board placed fewer than 2 cameras ({why})")
+    data = rig_to_json(rig)
+    data["unregistered"].update(dropped)
+    path = write_json_atomic(data, args.out)
+    print(f"wrote {path}: {len(rig.cameras)} cameras in {seconds:.1f} s")
+    for n, info in data["board"].items():
+        where = (f"placed from {info['placed_from']} at coarse offset {info['coarse_offset_s']:+.3f} s, "
+                 f"median board error {info['median_reprojection_px']:.2f} px"
+                 if "placed_from" in info else ("world frame" if n in rig.cameras else "not placed"))
+        print(f"  {n}: {info['views']} board views, calibration RMS {info['rms_px']:.2f} px; {where}")
+    for n, why in data["unregistered"].items():
+        print(f"  {n}: no camera: {why}")
+    return 0
