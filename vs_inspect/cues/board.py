@@ -8,12 +8,12 @@ needs synchronized frames. Here the time offset is searched instead:
 - intrinsics per camera: `cv2.calibrateCamera` on its own board views (k1, k2; no tangential
   terms: a 12-corner board does not constrain more);
 - board pose per frame: `cv2.solvePnP`;
-- relative pose of b to a: at every candidate offset Δ (on the finer frame grid), each frame of b
-  is paired with a's frame at τ_b + Δ; every pairing proposes T_b←a = P_b P_a⁻¹ and the
-  proposal that most pairings fit (MSAC: each pairing adds cap - min(error, cap), error = mean
-  reprojection of the board into b) wins, the Δ with the highest such score is kept, and the pose
-  is refined by `cv2.stereoCalibrate` on the pairings that fit (within cap). At a wrong Δ the
-  board has moved between the paired frames, so only its still moments fit.
+- relative pose of b to a: at every candidate offset Δ (half a frame apart, then an eighth around
+  the best), each frame of b is paired with a's board pose interpolated at τ_b + Δ; every
+  pairing proposes T_b←a = P_b P_a⁻¹ and the proposal that most pairings fit (MSAC: each
+  pairing adds cap - min(error, cap), error = mean reprojection of the board into b) wins, the Δ with the highest such score is kept, and the pose
+  is refined by scipy's least_squares (soft-L1) on the pairings that fit (within cap). At a wrong
+  Δ the board has moved between the paired frames, so only its still moments fit.
 - cameras are chained from the first video (its camera is the world frame, metres) through the
   pairs with the highest score.
 
@@ -29,6 +29,10 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from scipy.optimize import least_squares
+from scipy.spatial.transform import Rotation
+
+from ..geometry.timing import frame_brackets, interpolate_poses
 from ..io.calibration import CameraCalibration
 from ..types import VideoInfo
 
@@ -154,87 +158,97 @@ def board_poses(det: BoardDetections, spec: BoardSpec, intr: Intrinsics,
     return poses, valid
 
 
-def _pairings(ta: np.ndarray, tb: np.ndarray, delta_s: float, interval_a: float,
-              valid_a: np.ndarray, valid_b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Frames (i of a, j of b) with a's frame within half a frame of τ_b[j] + Δ, board in both."""
-    want = tb + delta_s
-    i = np.clip(np.searchsorted(ta, want), 1, len(ta) - 1)
-    i = np.where(np.abs(ta[i - 1] - want) < np.abs(ta[i] - want), i - 1, i)
-    ok = (np.abs(ta[i] - want) <= 0.5 * interval_a + 1e-9) & valid_b & valid_a[i]
-    j = np.nonzero(ok)[0]
-    return i[j], j
-
-
 def _reprojection_px(b_from_a: np.ndarray, pose_a: np.ndarray, corners: np.ndarray,
-                     ids_b: np.ndarray, xy_b: np.ndarray, intr_b: Intrinsics) -> float:
-    """Mean px error of b's detected corners against the board seen by a, moved into b."""
+                     ids_b: np.ndarray, xy_b: np.ndarray, intr_b: Intrinsics) -> np.ndarray:
+    """(M,) px errors of b's detected corners against the board posed by a, moved into b."""
     T = b_from_a @ pose_a
     rvec = cv2.Rodrigues(T[:3, :3])[0]
     proj, _ = cv2.projectPoints(corners[ids_b], rvec, T[:3, 3], intr_b.K, intr_b.dist)
-    return float(np.mean(np.linalg.norm(proj.reshape(-1, 2) - xy_b, axis=1)))
+    return np.linalg.norm(proj.reshape(-1, 2) - xy_b, axis=1)
+
+
+def _poses_at(poses: np.ndarray, valid: np.ndarray, timestamps_s: np.ndarray,
+              query_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Board poses interpolated at query times (slerp / lerp between the two frames around each)
+    and whether both frames had the board."""
+    k, w = frame_brackets(timestamps_s, query_s)
+    kc = np.clip(k, 0, len(valid) - 2)
+    ok = (k >= 0) & valid[kc] & valid[kc + 1]
+    return interpolate_poses(poses, np.where(ok, k, -1), w), ok
+
+
+def _fit_at(delta_s: float, pa, va, info_a: VideoInfo, pb, vb, info_b: VideoInfo,
+            det_b: BoardDetections, intr_b: Intrinsics, corners: np.ndarray, cap_px: float):
+    """Best proposal at one Δ: (MSAC support, b_from_a, b's frames, a's poses there, errors)."""
+    pose_a, ok = _poses_at(pa, va, info_a.timestamps_s, info_b.timestamps_s + delta_s)
+    fb = np.nonzero(ok & vb)[0]
+    if not len(fb):
+        return None
+    proposals = pb[fb] @ np.linalg.inv(pose_a[fb])  # (P,4,4) b_from_a per pairing
+    err = np.array([[_reprojection_px(Tp, pose_a[j], corners, det_b.ids[j], det_b.xy[j], intr_b).mean()
+                     for j in fb] for Tp in proposals])  # (proposal, pairing)
+    # MSAC: a pairing that fits adds up to cap_px; at a wrong Δ only the moments when the board
+    # stood still fit (a median would accept a Δ where it stood still half of the time)
+    support = np.sum(cap_px - np.minimum(err, cap_px), axis=1)
+    k = int(np.argmax(support))
+    return float(support[k]), proposals[k], fb, pose_a[fb], err[k]
 
 
 def relative_pose(info_a: VideoInfo, det_a: BoardDetections, intr_a: Intrinsics,
                   info_b: VideoInfo, det_b: BoardDetections, intr_b: Intrinsics,
                   spec: BoardSpec, min_pairings: int = 4, cap_px: float = 10.0
                   ) -> RelativePose | None:
-    """b's pose relative to a and the coarse offset at which the board poses agree; None when
-    no offset has at least min_pairings frame pairings that show the board in both videos and fit."""
+    """b's pose relative to a and the offset at which the board poses agree; None when no offset
+    has at least min_pairings frames of b, with the board in both videos, that fit one pose.
+
+    a's board pose is interpolated at b's frame times + Δ, so Δ is found below a frame: first on
+    a half-frame grid, then on an eighth of a frame around the best."""
     corners = spec.corners_m()
     pa, va = board_poses(det_a, spec, intr_a)
     pb, vb = board_poses(det_b, spec, intr_b)
     ta, tb = info_a.timestamps_s, info_b.timestamps_s
-    step = min(info_a.frame_interval_s, info_b.frame_interval_s)
-    offsets = np.arange(np.ceil((ta[0] - tb[-1]) / step), np.floor((ta[-1] - tb[0]) / step) + 1) * step
-    best = None
-    for d in offsets:
-        fa, fb = _pairings(ta, tb, float(d), info_a.frame_interval_s, va, vb)
-        if len(fa) < min_pairings:
-            continue
-        proposals = pb[fb] @ np.linalg.inv(pa[fa])  # (P,4,4) b_from_a per pairing
-        err = np.array([[_reprojection_px(Tp, pa[i], corners, det_b.ids[j], det_b.xy[j], intr_b)
-                         for i, j in zip(fa, fb)] for Tp in proposals])  # (proposal, pairing)
-        # MSAC score: a pairing that fits adds up to cap_px; at a wrong Δ only the moments
-        # when the board stood still fit (a median would accept Δ where it stood still half the time)
-        support = np.sum(cap_px - np.minimum(err, cap_px), axis=1)
-        k = int(np.argmax(support))
-        if best is None or support[k] > best[0]:
-            best = (float(support[k]), float(d), proposals[k], fa, fb, err[k])
+    step = 0.5 * min(info_a.frame_interval_s, info_b.frame_interval_s)
+    coarse = np.arange(np.ceil((ta[0] - tb[-1]) / step), np.floor((ta[-1] - tb[0]) / step) + 1) * step
+    best, best_d = None, 0.0
+    for grid in (coarse, None):
+        if grid is None:
+            if best is None:
+                return None
+            grid = best_d + np.arange(-4, 5) * step / 4
+        for d in grid:
+            fit = _fit_at(float(d), pa, va, info_a, pb, vb, info_b, det_b, intr_b, corners, cap_px)
+            if fit is not None and np.sum(fit[4] <= cap_px) >= min_pairings \
+                    and (best is None or fit[0] > best[0]):
+                best, best_d = fit, float(d)
     if best is None:
         return None
-    support, d, T, fa, fb, err = best
+    support, T, fb, pose_a, err = best
     keep = err <= cap_px
-    if keep.sum() < min_pairings:
-        return None
-    T = _refine(T, fa[keep], fb[keep], det_a, intr_a, det_b, intr_b, corners, info_a, info_b)
-    return RelativePose(T, d, float(np.median(err)), len(fa), int(keep.sum()), support)
+    T = _refine(T, pose_a[keep], fb[keep], det_b, intr_b, corners)
+    return RelativePose(T, best_d, float(np.median(err)), len(fb), int(keep.sum()), support)
 
 
-def _refine(T: np.ndarray, fa: np.ndarray, fb: np.ndarray, det_a: BoardDetections,
-            intr_a: Intrinsics, det_b: BoardDetections, intr_b: Intrinsics, corners: np.ndarray,
-            info_a: VideoInfo, info_b: VideoInfo) -> np.ndarray:
-    """Stereo calibration with fixed intrinsics on the paired frames (their common corners)."""
-    obj, img_a, img_b = [], [], []
-    for i, j in zip(fa, fb):
-        common, ia, ib = np.intersect1d(det_a.ids[i], det_b.ids[j], return_indices=True)
-        if len(common) >= 6:
-            obj.append(corners[common].astype(np.float32))
-            img_a.append(det_a.xy[i][ia].astype(np.float32))
-            img_b.append(det_b.xy[j][ib].astype(np.float32))
-    if len(obj) < 2:
-        return T
-    size = (max(info_a.width, info_b.width), max(info_a.height, info_b.height))
-    try:
-        out = cv2.stereoCalibrate(obj, img_a, img_b, intr_a.K, intr_a.dist, intr_b.K, intr_b.dist,
-                                  size, T[:3, :3].copy(), T[:3, 3].reshape(3, 1).copy(),
-                                  flags=cv2.CALIB_FIX_INTRINSIC)
-    except cv2.error as exc:
-        log.warning("stereo refinement failed, keeping the median pose: %s", exc)
-        return T
-    R, t = out[5], out[6]
+def _refine(T: np.ndarray, pose_a: np.ndarray, fb: np.ndarray, det_b: BoardDetections,
+            intr_b: Intrinsics, corners: np.ndarray) -> np.ndarray:
+    """b_from_a minimizing the reprojection of the board (posed by a) into b's detected corners,
+    with a soft-L1 loss (scipy least_squares) over the pairings that fit."""
+    def residuals(x):
+        Tx = np.eye(4)
+        Tx[:3, :3] = Rotation.from_rotvec(x[:3]).as_matrix()
+        Tx[:3, 3] = x[3:]
+        out = []
+        for P, j in zip(pose_a, fb):
+            M = Tx @ P
+            proj, _ = cv2.projectPoints(corners[det_b.ids[j]], cv2.Rodrigues(M[:3, :3])[0],
+                                        M[:3, 3], intr_b.K, intr_b.dist)
+            out.append((proj.reshape(-1, 2) - det_b.xy[j]).ravel())
+        return np.concatenate(out)
+
+    x0 = np.concatenate([Rotation.from_matrix(T[:3, :3]).as_rotvec(), T[:3, 3]])
+    sol = least_squares(residuals, x0, loss="soft_l1", f_scale=2.0)
     refined = np.eye(4)
-    refined[:3, :3] = R
-    refined[:3, 3] = t.ravel()
+    refined[:3, :3] = Rotation.from_rotvec(sol.x[:3]).as_matrix()
+    refined[:3, 3] = sol.x[3:]
     return refined
 
 
