@@ -1,6 +1,6 @@
 """Cameras from a ChArUco calibration board seen in unsynchronized videos (a lab rig).
 
-A rig filmed while someone waves a board (the usual calibration session of caliscope, anipose
+A rig of static cameras filmed while someone waves a board (the usual calibration session of caliscope, anipose
 or Pose2Sim) has its cameras in the videos themselves, but the usual extrinsic calibration
 needs synchronized frames. Here the time offset is searched instead:
 
@@ -28,7 +28,6 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
@@ -262,7 +261,8 @@ class RigEstimate:
 
 def estimate_rig(infos: list[VideoInfo], detections: dict[str, BoardDetections],
                  spec: BoardSpec) -> RigEstimate:
-    """Every camera's calibration from the board; the first video's camera is the world frame.
+    """Every (static) camera's calibration from the board; the camera of the first video with
+    enough board views is the world frame.
 
     A camera joins through the placed camera whose pairings fit best (highest MSAC score).
     """
