@@ -14,21 +14,13 @@ from ..errors import InputError
 log = logging.getLogger(__name__)
 
 
-def read_board(board_path: Path):
-    from ..io.board import load_board
-
-    try:
-        return load_board(board_path)
-    except ValueError as exc:  # BoardSpec's own checks
-        raise InputError(f"{board_path}: {exc}") from None
-
-
 def estimate_from_board(sources: list, board_path: Path, progress: bool = True):
     """Detect the board in every video and estimate the rig: (RigEstimate, seconds)."""
     from ..cues.board import BoardDetector, detect_frames, estimate_rig
+    from ..io.board import load_board
     from ..io.video import iter_frames
 
-    spec = read_board(board_path)
+    spec = load_board(board_path)
     t0 = time.perf_counter()
     detector = BoardDetector(spec)
     detections = {}
@@ -51,7 +43,7 @@ def rig_to_json(rig) -> dict:
                         median_reprojection_px=round(rp.median_px, 3), pairings=rp.pairings,
                         inliers=rp.inliers)
     return {"cameras": cams, "board": board, "unregistered": dict(rig.unregistered),
-            "world": "the first camera's frame, metres"}
+            "world": "the frame of the first placed camera, metres"}
 
 
 def register(sub) -> None:
@@ -60,8 +52,9 @@ def register(sub) -> None:
         description="Cameras from a ChArUco board waved in front of the rig, without synchronized "
                     "frames: intrinsics per camera (OpenCV calibrateCamera), then for each pair the "
                     "time offset at which the board poses of both videos agree and the relative pose "
-                    "there (least median reprojection error, refined by stereoCalibrate). Writes the "
-                    "calibration JSON that --calib reads (the first video's camera is the world frame).",
+                    "there (the pose most frame pairings fit, MSAC, refined by scipy least_squares). "
+                    "Writes the calibration JSON that --calib reads (the first placed camera is the "
+                    "world frame). For static cameras.",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("videos", nargs="+", type=Path, help="video files or image folders")
     p.add_argument("--board", type=Path, required=True,
@@ -74,12 +67,13 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..io.board import load_board
     from ..io.result import write_json_atomic
     from .cues import open_sources
 
     if len(args.videos) < 2:
         raise InputError(f"need at least 2 videos of the rig, got {len(args.videos)}")
-    read_board(args.board)  # a bad board file fails before any decoding
+    load_board(args.board)  # a bad board file fails before any decoding
     sources, _, dropped = open_sources(args.videos, args.fps)
     if len(sources) < 2:
         raise InputError("fewer than 2 readable videos (" +
