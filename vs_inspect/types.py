@@ -10,6 +10,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .geometry.epipolar import camera_centers
+
 
 def _require_shape(name: str, array: np.ndarray, shape: tuple) -> None:
     """Raise ValueError unless array matches shape (None = any length)."""
@@ -129,9 +131,7 @@ class CameraTrack:
 
     def centers(self) -> np.ndarray:
         """(F,3) camera centres in world coordinates (F = num_pose_frames)."""
-        T = self.cam_from_world.reshape(-1, 4, 4)
-        R, t = T[:, :3, :3], T[:, :3, 3]
-        return -np.einsum("nji,nj->ni", R, t)
+        return camera_centers(self.cam_from_world.reshape(-1, 4, 4))
 
 
 @dataclass(frozen=True)

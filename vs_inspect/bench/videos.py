@@ -51,35 +51,40 @@ def frame_motion_signal(src, max_side: int = 320) -> tuple[np.ndarray, np.ndarra
     return motion_signal_from_frames(frames, src.info.timestamps_s)
 
 
-def clip_scene(root: Path, scene: str) -> tuple[BenchData, float, BaseException | None]:
-    """(BenchData, Stage 0 seconds, Stage 0 error or None) of one scene of clips.
+def _through_stage0(name: str, group: str, srcs: list, calibration, truth: dict[str, float],
+                    frame_interval_s: float, cue_config=None
+                    ) -> tuple[BenchData, float, BaseException | None]:
+    """Motion signals of the peer (from the decoded frames, so that it runs even when Stage 0
+    fails), then Stage 0: (BenchData, Stage 0 seconds, Stage 0 error or None).
 
-    The motion signals of the peer are computed from the decoded frames first, so that the peer
-    runs even when Stage 0 fails (it needs no cameras). On success data.bundle is the extracted
-    cue bundle with the clips' true offsets; videos that Stage 0 drops stay in the truth, so every
-    method counts them as unresolved. On failure data.bundle is None.
-    """
+    On success data.bundle is the extracted cue bundle with the true offsets (videos that Stage 0
+    drops stay in the truth, so every method counts them as unresolved); on failure it is None."""
     from ..cues import CueConfig, extract_cues
-    from ..io.video import open_video
 
-    paths = sorted((Path(root) / scene).glob("*.mp4"))
-    if len(paths) < 2:
-        raise InputError(f"{root / scene}: fewer than 2 clips")
-    truth = clip_truth(paths)
-    srcs = [open_video(p) for p in paths]
     signals = {s.info.name: frame_motion_signal(s) for s in srcs}
     notes = {"motion_signals": signals, "truth": truth, "videos_info": [s.info for s in srcs],
              "videos": len(srcs)}
     t0 = time.perf_counter()
     try:
-        bundle, stats = extract_cues(srcs, None, CueConfig(), progress=False)
+        bundle, stats = extract_cues(srcs, calibration, cue_config or CueConfig(), progress=False)
     except Exception as exc:  # noqa: BLE001  (Stage 0 failing is a result)
-        return BenchData(f"clips/{scene}", "clips", None, None, 1.0 / CLIP_FPS, notes), \
-            time.perf_counter() - t0, exc
+        return BenchData(name, group, None, None, frame_interval_s, notes), time.perf_counter() - t0, exc
     stage0 = time.perf_counter() - t0
     notes.update(dropped=stats.get("dropped", {}), stage0_timings_s=stats.get("timings_s", {}))
     bundle = dataclasses.replace(bundle, gt_offsets_s=truth)
-    return BenchData(f"clips/{scene}", "clips", bundle, None, 1.0 / CLIP_FPS, notes), stage0, None
+    return BenchData(name, group, bundle, None, frame_interval_s, notes), stage0, None
+
+
+def clip_scene(root: Path, scene: str) -> tuple[BenchData, float, BaseException | None]:
+    """(BenchData, Stage 0 seconds, Stage 0 error or None) of one scene of clips (estimated cameras)."""
+    from ..io.video import open_video
+
+    paths = sorted((root / scene).glob("*.mp4"))
+    if len(paths) < 2:
+        raise InputError(f"{root / scene}: fewer than 2 clips")
+    truth = clip_truth(paths)
+    srcs = [open_video(p) for p in paths]
+    return _through_stage0(f"clips/{scene}", "clips", srcs, None, truth, 1.0 / CLIP_FPS)
 
 
 RENDERED_SCENES = (0,)
@@ -90,38 +95,28 @@ def rendered_scene(seed: int, workdir: Path, cue_config=None) -> tuple[BenchData
     as a user with calibrated cameras would run it: (BenchData, Stage 0 s, error or None).
 
     3 static cameras + 1 hand-held, 5 s, 480x360, mixed frame rates, one variable-rate video.
-    The exact cameras are kept for the GT-camera rows; the true cues are not used here.
-    cue_config: Stage 0 settings (CueConfig(); None = defaults).
+    The scene is rendered into workdir/rendered_s<seed> unless a finished rendering of the same
+    settings is there. The exact cameras are kept for the GT-camera rows; the true cues are not
+    used here. cue_config: Stage 0 settings (CueConfig(); None = defaults).
     """
     import json
 
-    from ..cues import CueConfig, extract_cues
     from ..io.calibration import load_calibration, to_camera_track
     from ..io.video import open_video
-    from ..synth.videos import render_scene
+    from ..synth.videos import render_scene, rendered_with
     from ..synth.world import SceneConfig, make_scene
 
     cfg = SceneConfig(cameras=4, moving=1, seconds=5.0, width=480, height=360, fps=None,
                       variable_rate=1, seed=seed)
     folder = Path(workdir) / f"rendered_s{seed}"
-    render_scene(make_scene(cfg), folder, progress=False)
+    if not rendered_with(folder, cfg):
+        render_scene(make_scene(cfg), folder, progress=False)
     truth = json.loads((folder / "gt.json").read_text())["offsets_s"]
-    paths = sorted(folder.glob("cam*.mp4"))
-    srcs = [open_video(p) for p in paths]
-    names = [s.info.name for s in srcs]
-    calib = load_calibration(folder / "calibration.json", names)
-    signals = {s.info.name: frame_motion_signal(s) for s in srcs}
-    notes = {"motion_signals": signals, "truth": truth, "videos_info": [s.info for s in srcs],
-             "videos": len(srcs)}
-    interval = 1.0 / 30.0
-    name = f"rendered/s{seed}"
-    t0 = time.perf_counter()
-    try:
-        bundle, stats = extract_cues(srcs, calib, cue_config or CueConfig(), progress=False)
-    except Exception as exc:  # noqa: BLE001  (Stage 0 failing is a result)
-        return BenchData(name, "rendered", None, None, interval, notes), time.perf_counter() - t0, exc
-    stage0 = time.perf_counter() - t0
-    notes.update(dropped=stats.get("dropped", {}), stage0_timings_s=stats.get("timings_s", {}))
-    bundle = dataclasses.replace(bundle, gt_offsets_s=truth)
-    exact = {n: to_camera_track(c) for n, c in calib.items() if n in bundle.cameras}
-    return BenchData(name, "rendered", bundle, exact, interval, notes), stage0, None
+    srcs = [open_video(p) for p in sorted(folder.glob("cam*.mp4"))]
+    calib = load_calibration(folder / "calibration.json", [s.info.name for s in srcs])
+    data, stage0, error = _through_stage0(f"rendered/s{seed}", "rendered", srcs, calib, truth,
+                                          1.0 / 30.0, cue_config)
+    if error is None:
+        exact = {n: to_camera_track(c) for n, c in calib.items() if n in data.bundle.cameras}
+        data = dataclasses.replace(data, true_cameras=exact)
+    return data, stage0, error

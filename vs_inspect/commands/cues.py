@@ -131,7 +131,6 @@ def sync_videos(args: argparse.Namespace, sync_cfg, truth: dict | None = None) -
     from ..sync.config import config_to_dict
     from ..sync.run import sync_bundle
     from ._common import offsets_table
-
     from ._record import describe, open_sink
 
     t0 = time.perf_counter()
@@ -156,16 +155,14 @@ def sync_videos(args: argparse.Namespace, sync_cfg, truth: dict | None = None) -
                                               "dropped") if k in stats}
         if "sfm" in stats:
             data["cues"]["sfm"] = stats["sfm"]
-        if hasattr(sink, "run_summary"):
-            sink.run_summary(data)
+        sink.run_summary(data)
         path = write_json_atomic(data, out / "result.json")
     if describe(sink):
         print(describe(sink))
     offs = {n: data["offsets_s"].get(n) for n in inputs}
     unc = {n: data["uncertainty_s"].get(n) for n in inputs}
-    if truth:
-        data_truth = {n: truth[n] for n in inputs if n in truth}
-    print(offsets_table(offs, unc, data_truth if truth else None, result.reference, data["unresolved"]))
+    shown_truth = {n: truth[n] for n in inputs if n in truth} if truth else None
+    print(offsets_table(offs, unc, shown_truth, result.reference, data["unresolved"]))
     acc = sum(p.decision.accepted for p in result.pairs)
     print(f"pairs: {acc} accepted, {len(result.pairs) - acc} rejected; wrote {path}")
     resolved = sum(v is not None for v in offs.values())

@@ -1,9 +1,10 @@
 """vs-inspect demo: the main job on the built-in default input, offsets printed next to the truth.
 
 The input is a rendered multi-camera scene (vs_inspect.synth: videos plus exact ground truth),
-rendered once into OUT/scene and reused by later runs. Until the video pipeline is connected
-here, the demo synchronizes the scene's TRUE cue bundle (exact cameras, projected surface points,
-exact track pairs) and says so; run_demo() is the place to plug the video pipeline in.
+rendered once into OUT/scene and reused by later runs. run_demo() synchronizes the scene's TRUE
+cue bundle (exact cameras, projected surface points, exact track pairs), which separates the
+solver's errors from Stage 0's; run_video_pipeline() then sends the rendered videos through the
+whole pipeline with their calibration (skipped with --true-cues-only).
 """
 
 from __future__ import annotations
@@ -11,13 +12,12 @@ from __future__ import annotations
 import argparse
 import json
 import time
-from dataclasses import asdict
 from pathlib import Path
 
 from ..io.bundle import read_bundle
 from ..io.result import result_to_dict, write_json_atomic
 from ..record.sink import NullSink, Sink
-from ..synth.videos import is_complete, render_scene
+from ..synth.videos import is_complete, render_scene, rendered_with
 from ..synth.world import SceneConfig, make_scene
 from ..sync.config import SyncConfig
 from ..sync.run import sync_bundle
@@ -48,14 +48,10 @@ def register(sub) -> None:
 def ensure_scene(folder: Path, config: SceneConfig = DEMO_SCENE, rerender: bool = False,
                  progress: bool = True) -> bool:
     """Render the scene into folder unless a finished one is there. Returns True if it rendered."""
+    if not rerender and rendered_with(folder, config):
+        print(f"demo input: cached rendered scene in {folder}")
+        return False
     if is_complete(folder) and not rerender:
-        try:
-            cached = json.loads((folder / "scene.json").read_text()).get("config")
-        except (OSError, ValueError):
-            cached = None
-        if cached == json.loads(json.dumps(asdict(config))):
-            print(f"demo input: cached rendered scene in {folder}")
-            return False
         print(f"demo input: the scene in {folder} was rendered with other settings; rendering again")
     c = config
     print(f"demo input: rendering the default scene into {folder} ({c.cameras} cameras, {c.moving} "

@@ -157,13 +157,27 @@ def board_poses(det: BoardDetections, spec: BoardSpec, intr: Intrinsics,
     return poses, valid
 
 
-def _reprojection_px(b_from_a: np.ndarray, pose_a: np.ndarray, corners: np.ndarray,
-                     ids_b: np.ndarray, xy_b: np.ndarray, intr_b: Intrinsics) -> np.ndarray:
-    """(M,) px errors of b's detected corners against the board posed by a, moved into b."""
+@dataclass(frozen=True)
+class BoardView:
+    """One video's board observations with its intrinsics and per-frame board poses."""
+
+    info: VideoInfo
+    det: BoardDetections
+    intr: Intrinsics
+    poses: np.ndarray  # (T,4,4) cam_from_board, metres
+    valid: np.ndarray  # (T,) bool, pose known
+
+
+def board_view(info: VideoInfo, det: BoardDetections, intr: Intrinsics, spec: BoardSpec) -> BoardView:
+    return BoardView(info, det, intr, *board_poses(det, spec, intr))
+
+
+def _board_in_b(b_from_a: np.ndarray, pose_a: np.ndarray, corners: np.ndarray,
+                intr_b: Intrinsics) -> np.ndarray:
+    """(M,2) px: board corners (M,3) posed by a (cam_from_board), moved into b and projected."""
     T = b_from_a @ pose_a
-    rvec = cv2.Rodrigues(T[:3, :3])[0]
-    proj, _ = cv2.projectPoints(corners[ids_b], rvec, T[:3, 3], intr_b.K, intr_b.dist)
-    return np.linalg.norm(proj.reshape(-1, 2) - xy_b, axis=1)
+    proj, _ = cv2.projectPoints(corners, cv2.Rodrigues(T[:3, :3])[0], T[:3, 3], intr_b.K, intr_b.dist)
+    return proj.reshape(-1, 2)
 
 
 def _poses_at(poses: np.ndarray, valid: np.ndarray, timestamps_s: np.ndarray,
@@ -176,16 +190,16 @@ def _poses_at(poses: np.ndarray, valid: np.ndarray, timestamps_s: np.ndarray,
     return interpolate_poses(poses, np.where(ok, k, -1), w), ok
 
 
-def _fit_at(delta_s: float, pa, va, info_a: VideoInfo, pb, vb, info_b: VideoInfo,
-            det_b: BoardDetections, intr_b: Intrinsics, corners: np.ndarray, cap_px: float):
+def _fit_at(delta_s: float, a: BoardView, b: BoardView, corners: np.ndarray, cap_px: float):
     """Best proposal at one Δ: (MSAC support, b_from_a, b's frames, a's poses there, errors)."""
-    pose_a, ok = _poses_at(pa, va, info_a.timestamps_s, info_b.timestamps_s + delta_s)
-    fb = np.nonzero(ok & vb)[0]
+    pose_a, ok = _poses_at(a.poses, a.valid, a.info.timestamps_s, b.info.timestamps_s + delta_s)
+    fb = np.nonzero(ok & b.valid)[0]
     if not len(fb):
         return None
-    proposals = pb[fb] @ np.linalg.inv(pose_a[fb])  # (P,4,4) b_from_a per pairing
-    err = np.array([[_reprojection_px(Tp, pose_a[j], corners, det_b.ids[j], det_b.xy[j], intr_b).mean()
-                     for j in fb] for Tp in proposals])  # (proposal, pairing)
+    proposals = b.poses[fb] @ np.linalg.inv(pose_a[fb])  # (P,4,4) b_from_a per pairing
+    err = np.array([[np.linalg.norm(_board_in_b(Tp, pose_a[j], corners[b.det.ids[j]], b.intr)
+                                    - b.det.xy[j], axis=1).mean()
+                     for j in fb] for Tp in proposals])  # (proposal, pairing) mean px error
     # MSAC: a pairing that fits adds up to cap_px; at a wrong Δ only the moments when the board
     # stood still fit (a median would accept a Δ where it stood still half of the time)
     support = np.sum(cap_px - np.minimum(err, cap_px), axis=1)
@@ -193,20 +207,16 @@ def _fit_at(delta_s: float, pa, va, info_a: VideoInfo, pb, vb, info_b: VideoInfo
     return float(support[k]), proposals[k], fb, pose_a[fb], err[k]
 
 
-def relative_pose(info_a: VideoInfo, det_a: BoardDetections, intr_a: Intrinsics,
-                  info_b: VideoInfo, det_b: BoardDetections, intr_b: Intrinsics,
-                  spec: BoardSpec, min_pairings: int = 4, cap_px: float = 10.0
-                  ) -> RelativePose | None:
+def relative_pose(a: BoardView, b: BoardView, spec: BoardSpec, min_pairings: int = 4,
+                  cap_px: float = 10.0) -> RelativePose | None:
     """b's pose relative to a and the offset at which the board poses agree; None when no offset
     has at least min_pairings frames of b, with the board in both videos, that fit one pose.
 
     a's board pose is interpolated at b's frame times + Δ, so Δ is found below a frame: first on
     a half-frame grid, then on an eighth of a frame around the best."""
     corners = spec.corners_m()
-    pa, va = board_poses(det_a, spec, intr_a)
-    pb, vb = board_poses(det_b, spec, intr_b)
-    ta, tb = info_a.timestamps_s, info_b.timestamps_s
-    step = 0.5 * min(info_a.frame_interval_s, info_b.frame_interval_s)
+    ta, tb = a.info.timestamps_s, b.info.timestamps_s
+    step = 0.5 * min(a.info.frame_interval_s, b.info.frame_interval_s)
     coarse = np.arange(np.ceil((ta[0] - tb[-1]) / step), np.floor((ta[-1] - tb[0]) / step) + 1) * step
     best, best_d = None, 0.0
     for grid in (coarse, None):
@@ -215,7 +225,7 @@ def relative_pose(info_a: VideoInfo, det_a: BoardDetections, intr_a: Intrinsics,
                 return None
             grid = best_d + np.arange(-4, 5) * step / 4
         for d in grid:
-            fit = _fit_at(float(d), pa, va, info_a, pb, vb, info_b, det_b, intr_b, corners, cap_px)
+            fit = _fit_at(float(d), a, b, corners, cap_px)
             if fit is not None and np.sum(fit[4] <= cap_px) >= min_pairings \
                     and (best is None or fit[0] > best[0]):
                 best, best_d = fit, float(d)
@@ -223,25 +233,20 @@ def relative_pose(info_a: VideoInfo, det_a: BoardDetections, intr_a: Intrinsics,
         return None
     support, T, fb, pose_a, err = best
     keep = err <= cap_px
-    T = _refine(T, pose_a[keep], fb[keep], det_b, intr_b, corners)
+    T = _refine(T, pose_a[keep], fb[keep], b, corners)
     return RelativePose(T, best_d, float(np.median(err)), len(fb), int(keep.sum()), support)
 
 
-def _refine(T: np.ndarray, pose_a: np.ndarray, fb: np.ndarray, det_b: BoardDetections,
-            intr_b: Intrinsics, corners: np.ndarray) -> np.ndarray:
+def _refine(T: np.ndarray, pose_a: np.ndarray, fb: np.ndarray, b: BoardView,
+            corners: np.ndarray) -> np.ndarray:
     """b_from_a minimizing the reprojection of the board (posed by a) into b's detected corners,
     with a soft-L1 loss (scipy least_squares) over the pairings that fit."""
     def residuals(x):
         Tx = np.eye(4)
         Tx[:3, :3] = Rotation.from_rotvec(x[:3]).as_matrix()
         Tx[:3, 3] = x[3:]
-        out = []
-        for P, j in zip(pose_a, fb):
-            M = Tx @ P
-            proj, _ = cv2.projectPoints(corners[det_b.ids[j]], cv2.Rodrigues(M[:3, :3])[0],
-                                        M[:3, 3], intr_b.K, intr_b.dist)
-            out.append((proj.reshape(-1, 2) - det_b.xy[j]).ravel())
-        return np.concatenate(out)
+        return np.concatenate([(_board_in_b(Tx, P, corners[b.det.ids[j]], b.intr) - b.det.xy[j]).ravel()
+                               for P, j in zip(pose_a, fb)])
 
     x0 = np.concatenate([Rotation.from_matrix(T[:3, :3]).as_rotvec(), T[:3, 3]])
     sol = least_squares(residuals, x0, loss="soft_l1", f_scale=2.0)
@@ -268,7 +273,6 @@ def estimate_rig(infos: list[VideoInfo], detections: dict[str, BoardDetections],
     """
     intr: dict[str, Intrinsics] = {}
     why: dict[str, str] = {}
-    by_name = {v.name: v for v in infos}
     for v in infos:
         got = calibrate_intrinsics(detections[v.name], spec, (v.width, v.height))
         if got is None:
@@ -276,9 +280,11 @@ def estimate_rig(infos: list[VideoInfo], detections: dict[str, BoardDetections],
             why[v.name] = f"the board is seen in {n} frames (at least 5 with 6 corners needed)"
         else:
             intr[v.name] = got
+    views = {v.name: board_view(v, detections[v.name], intr[v.name], spec)
+             for v in infos if v.name in intr}  # board poses once per camera
     placed: dict[str, np.ndarray] = {}
     links: dict[str, tuple[str, RelativePose]] = {}
-    order = [v.name for v in infos if v.name in intr]
+    order = list(views)
     if order:
         placed[order[0]] = np.eye(4)
     cache: dict[tuple[str, str], RelativePose | None] = {}
@@ -289,8 +295,7 @@ def estimate_rig(infos: list[VideoInfo], detections: dict[str, BoardDetections],
                 continue
             for a in placed:
                 if (a, b) not in cache:
-                    cache[(a, b)] = relative_pose(by_name[a], detections[a], intr[a], by_name[b],
-                                                  detections[b], intr[b], spec)
+                    cache[(a, b)] = relative_pose(views[a], views[b], spec)
                 rp = cache[(a, b)]
                 if rp is not None and (best is None or rp.support > best[2].support):
                     best = (a, b, rp)
@@ -303,6 +308,6 @@ def estimate_rig(infos: list[VideoInfo], detections: dict[str, BoardDetections],
         if b not in placed:
             why[b] = ("at no offset do 4 frames showing the board to it and to a placed camera "
                       "agree on one relative pose")
-    cams = {n: CameraCalibration(intr[n].K, intr[n].dist, placed[n], (by_name[n].width, by_name[n].height))
+    cams = {n: CameraCalibration(intr[n].K, intr[n].dist, placed[n], (views[n].info.width, views[n].info.height))
             for n in order if n in placed}
     return RigEstimate(cams, intr, links, why)

@@ -17,6 +17,7 @@ from pathlib import Path
 import cv2
 import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
 
+from ..geometry.epipolar import camera_centers
 from ..types import CameraTrack
 from .config import CameraConfig
 
@@ -56,7 +57,7 @@ def _slerp_poses(frames_known: np.ndarray, poses: np.ndarray, T: int) -> np.ndar
     order = np.argsort(frames_known)
     fk, P = frames_known[order], poses[order]
     R = P[:, :3, :3]
-    C = -np.einsum("nji,nj->ni", R, P[:, :3, 3])
+    C = camera_centers(P)
     out = np.tile(np.eye(4), (T, 1, 1))
     t = np.clip(np.arange(T), fk[0], fk[-1]).astype(float)
     if len(fk) == 1:
@@ -75,7 +76,7 @@ def _mean_pose(poses: np.ndarray) -> np.ndarray:
     from scipy.spatial.transform import Rotation
 
     R = Rotation.from_matrix(poses[:, :3, :3]).mean().as_matrix()
-    C = -np.einsum("nji,nj->ni", poses[:, :3, :3], poses[:, :3, 3]).mean(0)
+    C = camera_centers(poses).mean(0)
     M = np.eye(4)
     M[:3, :3] = R
     M[:3, 3] = -R @ C

@@ -274,9 +274,10 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
         log.warning(msg)
     out = dict(pairs)
     for (a, b), (gp, gs) in found.items():
+        pick = chosen.get((a, b)) if chosen is not None else None  # index of the chosen peak
         index = gp.index
-        if chosen is not None and (a, b) in chosen:
-            index = index[gs.pair_peak == chosen[(a, b)]]
+        if pick is not None:
+            index = index[gs.pair_peak == pick]
         elif status == "inconsistent":
             index = index[:0]
         tp = pairs[(a, b)]
@@ -289,11 +290,10 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
                 "geometric_pairs": int(len(index)), "geometric_new": int(len(new)),
                 "geometric_peaks_s": [round(p, 4) for p in gs.peaks_s],
                 "geometric_peak_votes": list(gs.peak_votes),
-                "geometric_chosen_peak_s": (round(gs.peaks_s[chosen[(a, b)]], 4)
-                                            if chosen is not None and (a, b) in chosen else None)}
+                "geometric_chosen_peak_s": round(gs.peaks_s[pick], 4) if pick is not None else None}
         stats["pairs"].setdefault(f"{a}__{b}", {}).update(info)
-        which = (f"peak {gs.peaks_s[chosen[(a, b)]]:+.3f} s chosen: the peaks of all static pairs close every triangle"
-                 if info["geometric_chosen_peak_s"] is not None else
+        which = (f"peak {gs.peaks_s[pick]:+.3f} s chosen: the peaks of all static pairs close every triangle"
+                 if pick is not None else
                  f"vote peaks at {', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s")
         sink.stage_event("cues", f"{a}__{b}: {len(index)} track pairs from epipolar consistency ({which})")
         log.info("%s__%s: %d geometric track pairs (%d new), %s", a, b, len(index), len(new), which)

@@ -22,6 +22,12 @@ def skew(v: np.ndarray) -> np.ndarray:
     ], -2)
 
 
+def camera_centers(cam_from_world: np.ndarray) -> np.ndarray:
+    """(...,3) camera centres in world coordinates, C = -Rᵀ t, of (...,4,4) cam_from_world."""
+    T = np.asarray(cam_from_world, dtype=np.float64)
+    return -np.einsum("...ji,...j->...i", T[..., :3, :3], T[..., :3, 3])
+
+
 def relative_pose(a_from_world: np.ndarray, b_from_world: np.ndarray) -> np.ndarray:
     """(...,4,4) a_from_b = a_from_world · inverse(b_from_world)."""
     R_b, t_b = b_from_world[..., :3, :3], b_from_world[..., :3, 3]

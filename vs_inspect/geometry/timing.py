@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
+from .epipolar import camera_centers
+
 
 def frame_brackets(timestamps_s: np.ndarray, query_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """For each query time, the frame k with t[k] <= q < t[k+1] and the weight w in [0,1).
@@ -45,7 +47,7 @@ def interpolate_poses(cam_from_world: np.ndarray, k: np.ndarray, w: np.ndarray) 
         # Slerp over frame index as the "time" axis, then evaluate at k + w.
         slerp = Slerp(np.arange(len(T), dtype=np.float64), R) if len(T) > 1 else None
         Rq = slerp(np.clip(k0 + ww, 0, len(T) - 1)).as_matrix() if slerp else T[k0, :3, :3]
-        C = -np.einsum("nji,nj->ni", T[:, :3, :3], T[:, :3, 3])
+        C = camera_centers(T)
         Cq = (1 - ww)[:, None] * C[k0] + ww[:, None] * C[k1]
         out[ok] = 0.0
         out[ok, :3, :3] = Rq

@@ -11,6 +11,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..geometry.epipolar import camera_centers
+
 
 @dataclass(frozen=True)
 class VideoClock:
@@ -42,8 +44,7 @@ class CameraView:
 
     def centers(self) -> np.ndarray:
         """(F,3) camera centres in world coordinates."""
-        R, t = self.cam_from_world[:, :3, :3], self.cam_from_world[:, :3, 3]
-        return -np.einsum("nji,nj->ni", R, t)
+        return camera_centers(self.cam_from_world)
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras, project
+from ..geometry.epipolar import camera_centers, epipolar_residual, fundamental_from_cameras, project
 from ..geometry.timing import frame_brackets, interpolate_intrinsics, interpolate_poses
 from ..geometry.triangulate import triangulate_dlt
 from ..types import CueBundle
@@ -209,9 +209,7 @@ def triangulate_pair(bundle: CueBundle, a: str, b: str, offset_a_s: float, offse
         ra = np.linalg.norm(project(ca.K_at(fi), ca.pose_at(fi), Xs) - xa[pi, fi], axis=-1)
         rb = np.linalg.norm(project(K_b[fi], T_b[fi], Xs) - xb[pi, fi], axis=-1)
     # the angle between the two viewing rays: near-parallel rays fix no depth
-    C_a = -np.einsum("nji,nj->ni", ca.pose_at(fi)[:, :3, :3], ca.pose_at(fi)[:, :3, 3])
-    C_b = -np.einsum("nji,nj->ni", T_b[fi, :3, :3], T_b[fi, :3, 3])
-    u, v = Xs - C_a, Xs - C_b
+    u, v = Xs - camera_centers(ca.pose_at(fi)), Xs - camera_centers(T_b[fi])
     with np.errstate(invalid="ignore", divide="ignore"):
         cos = np.einsum("ni,ni->n", u, v) / (np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1))
     angle_deg = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))

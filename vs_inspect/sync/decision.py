@@ -81,7 +81,6 @@ def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_t
         return PairDecision(False, why, 0.0, 0.0, 0, 0, False), np.zeros(0, dtype=np.int64)
     e_best = float(np.nanmin(energy))
     e_base = float(np.nanmedian(energy))
-    depth = e_base - e_best
     e_range = float(np.nanmax(energy)) - e_best
     minima, prom = local_minima(energy, cfg.min_prominence * e_range)
     # The lowest minimum may itself rest on much less overlap than another nearly as prominent
@@ -94,10 +93,9 @@ def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_t
             weaker_lowest = int(minima[0])
             order = [i] + [j for j in range(len(minima)) if j != i]
             minima, prom = minima[order], prom[order]
-            e_best = float(energy[minima[0]])
-            depth = e_base - e_best
             break
     best = int(minima[0])
+    depth = e_base - float(energy[best])
     contrast = depth / e_base if e_base > 0 else 0.0
     # Rivals are compared by prominence (their own dip), not by depth below a global level, so a
     # trend in the landscape (energy drifting with the overlap) does not make a shallow dip look

@@ -23,6 +23,7 @@ import pyvista as pv  # noqa: E402
 import vtk  # noqa: E402
 from vtk.util.numpy_support import vtk_to_numpy  # noqa: E402
 
+from ..geometry.epipolar import camera_centers  # noqa: E402
 from .world import Mesh, World  # noqa: E402
 
 log = logging.getLogger(__name__)
@@ -139,8 +140,7 @@ class SceneRenderer:
             actor.SetUserMatrix(_vtk_matrix(T))
 
     def set_camera(self, K: np.ndarray, cam_from_world: np.ndarray) -> None:
-        R, t = cam_from_world[:3, :3], cam_from_world[:3, 3]
-        C = -R.T @ t
+        R, C = cam_from_world[:3, :3], camera_centers(cam_from_world)
         cam = self.camera
         cam.SetPosition(*C)
         cam.SetFocalPoint(*(C + R[2]))

@@ -49,6 +49,17 @@ def is_complete(folder: Path) -> bool:
     return (Path(folder) / COMPLETE).is_file()
 
 
+def rendered_with(folder: Path, config) -> bool:
+    """Whether folder holds a finished scene rendered with this SceneConfig (so it can be reused)."""
+    if not is_complete(folder):
+        return False
+    try:
+        cached = json.loads((Path(folder) / "scene.json").read_text()).get("config")
+    except (OSError, ValueError):
+        return False
+    return cached == json.loads(json.dumps(asdict(config)))
+
+
 def apply_look(rgb: np.ndarray, cam: CameraSpec) -> np.ndarray:
     """Exposure gain and white balance in linear light (gamma 2.2), back to uint8."""
     if cam.exposure_gain == 1.0 and cam.white_balance == (1.0, 1.0, 1.0):
@@ -85,15 +96,15 @@ def render_camera(renderer, scene: Scene, cam: CameraSpec, path: Path, crf: int 
                       disable=not progress, leave=False):
             rgb, dmap = renderer.render(g[k], cam.K, poses[k], depth=True)
             if cam.motion_blur_frac > 0:
-                acc = rgb.astype(np.float32)
+                acc, n = rgb.astype(np.float32), 1
                 shutter = cam.motion_blur_frac * dt
                 for s in np.linspace(-0.5, 0.5, BLUR_SAMPLES):
-                    if s == 0:
+                    if s == 0:  # the frame's own moment is already rendered
                         continue
                     gs = g[k] + s * shutter
                     T = cam.pose_fn(np.array([gs]))[0]
                     acc += renderer.render(gs, cam.K, T, depth=False)[0]
-                n = BLUR_SAMPLES if BLUR_SAMPLES % 2 else BLUR_SAMPLES + 1
+                    n += 1
                 rgb = (acc / n + 0.5).astype(np.uint8)
             vis = visible(xy_all[:, k], depth_all[:, k], dmap)
             xy_all[~vis, k] = np.nan

@@ -28,7 +28,7 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..geometry.epipolar import look_at, project
+from ..geometry.epipolar import camera_centers, look_at, project
 
 PoseFn = Callable[[np.ndarray], np.ndarray]  # (G,) global times s -> (G,4,4) world_from_body
 
@@ -105,10 +105,16 @@ def plane_mesh(corner: np.ndarray, u_vec: np.ndarray, v_vec: np.ndarray) -> Mesh
                 np.array([(0, 0), (1, 0), (1, 1), (0, 1)], dtype=np.float64), np.tile(n, (4, 1)))
 
 
+def triangle_areas(mesh: Mesh) -> np.ndarray:
+    """(F,) area of each face, m²."""
+    tri = mesh.points[mesh.faces]  # (F,3,3)
+    return 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+
+
 def sample_surface(mesh: Mesh, n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     """n points uniformly by area on the mesh: ((n,3) body-frame points, (n,3) unit normals)."""
     tri = mesh.points[mesh.faces]  # (F,3,3)
-    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    area = triangle_areas(mesh)
     f = rng.choice(len(area), size=n, p=area / area.sum())
     r1, r2 = rng.random(n), rng.random(n)
     s = np.sqrt(r1)
@@ -502,7 +508,7 @@ def make_world(seed: int = 0, points_per_object: int = 60) -> World:
     pts, nrm, owner = [], [], []
     for inst in range(len(objects)):
         idx = [i for i, b in enumerate(bodies) if b.instance == inst]
-        area = np.array([_area(bodies[i].mesh) for i in idx])
+        area = np.array([triangle_areas(bodies[i].mesh).sum() for i in idx])
         counts = np.maximum(3, np.round(points_per_object * area / area.sum())).astype(int)
         for i, n in zip(idx, counts):
             p, q = sample_surface(bodies[i].mesh, int(n), rng)
@@ -511,11 +517,6 @@ def make_world(seed: int = 0, points_per_object: int = 60) -> World:
             owner += [i] * int(n)
     return World(tuple(bodies), tuple(objects), np.concatenate(pts), np.concatenate(nrm),
                  np.asarray(owner, dtype=np.int64))
-
-
-def _area(mesh: Mesh) -> float:
-    tri = mesh.points[mesh.faces]
-    return float(0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum())
 
 
 # ---- cameras ----------------------------------------------------------------------------------
@@ -729,9 +730,7 @@ def observe_points(world: World, cam: CameraSpec, g: np.ndarray, cam_from_world:
     xy = project(cam.K[None, None], T[None], X)
     Xc = np.einsum("gij,mgj->mgi", T[:, :3, :3], X) + T[None, :, :3, 3]
     depth = Xc[..., 2]
-    R = T[:, :3, :3]
-    C = -np.einsum("gji,gj->gi", R, T[:, :3, 3])  # (G,3) camera centres
-    facing = np.einsum("mgi,mgi->mg", N, C[None] - X) > 0.0
+    facing = np.einsum("mgi,mgi->mg", N, camera_centers(T)[None] - X) > 0.0
     inside = (xy[..., 0] >= -0.5) & (xy[..., 0] <= cam.width - 0.5) & \
              (xy[..., 1] >= -0.5) & (xy[..., 1] <= cam.height - 0.5)
     ok = inside & facing & (depth > 0.05)
