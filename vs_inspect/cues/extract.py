@@ -308,7 +308,7 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
     sizes = {n: (v.info.width, v.info.height) for n, v in vids.items()}
     est = estimate_cameras(frames, sizes, {n: v.info.num_frames for n, v in vids.items()},
                            {n: v.camera_motion == "moving" for n, v in vids.items()}, cfg.camera)
-    stats["sfm"] = {"images": est.num_images, "registered_images": est.num_registered,
+    stats["sfm"] = {"features": est.features, "images": est.num_images, "registered_images": est.num_registered,
                     "registered_frames": {n: c.registered_frames.tolist() for n, c in est.cameras.items()}}
     if len(est.cameras) < 2 and cfg.camera.fallback_from_tracks:
         # the background did not reconstruct: cameras from the moving points (static cameras)

@@ -24,6 +24,7 @@ peak with few supporters becomes a rival minimum, which the decision stage weigh
 from __future__ import annotations
 
 import itertools
+import warnings
 from dataclasses import dataclass
 
 import numba as nb
@@ -165,12 +166,14 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
 def epipolar_sweep(xy: np.ndarray, epipole: np.ndarray) -> np.ndarray:
     """(N,) px: extent of each track across the epipolar lines (perpendicular to the line through
     its median position and the epipole). xy (N,T,2); epipole (3,) homogeneous (may be at infinity)."""
-    with np.errstate(invalid="ignore"):
+    with warnings.catch_warnings():  # tracks never seen give NaN, on purpose
+        warnings.simplefilter("ignore", RuntimeWarning)
         med = np.nanmedian(xy, axis=1)  # (N,2)
     line = np.cross(np.concatenate([med, np.ones((len(med), 1))], 1), epipole[None, :])
     line /= np.maximum(np.linalg.norm(line[:, :2], axis=1, keepdims=True), 1e-12)
     dist = np.einsum("ntk,nk->nt", xy, line[:, :2]) + line[:, 2:3]
-    with np.errstate(invalid="ignore"):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
         return np.nan_to_num(np.nanmax(dist, 1) - np.nanmin(dist, 1), nan=0.0)
 
 
