@@ -222,7 +222,8 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
                  sorted(rec.images[i].num_points3D for i in rec.reg_image_ids()))
         cams: dict[str, EstimatedCamera] = {}
         unreg: dict[str, str] = {}
-        per_video: dict[str, list[tuple[int, np.ndarray, object]]] = {n: [] for n in frames_by_video}
+        # video -> [(frame, cam_from_world (4,4), pycolmap camera, 3D points seen)]
+        per_video: dict[str, list[tuple[int, np.ndarray, object, int]]] = {n: [] for n in frames_by_video}
         for iid in rec.reg_image_ids():
             im = rec.images[iid]
             folder, fn = im.name.split("/")
