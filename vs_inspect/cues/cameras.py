@@ -18,6 +18,7 @@ import cv2
 import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
 
 from ..geometry.epipolar import camera_centers
+from ..geometry.timing import frame_brackets, interpolate_poses
 from ..types import CameraTrack
 from .config import CameraConfig
 from .learned import xfeat_available
@@ -53,24 +54,12 @@ def _pose_matrix(rigid) -> np.ndarray:
 
 
 def _slerp_poses(frames_known: np.ndarray, poses: np.ndarray, T: int) -> np.ndarray:
-    """(T,4,4) cam_from_world at every frame: rotation slerp and centre lerp between known frames."""
-    from scipy.spatial.transform import Rotation, Slerp
-
+    """(T,4,4) cam_from_world at every frame: rotation slerp and centre lerp between known frames
+    (held constant before the first and after the last)."""
     order = np.argsort(frames_known)
-    fk, P = frames_known[order], poses[order]
-    R = P[:, :3, :3]
-    C = camera_centers(P)
-    out = np.tile(np.eye(4), (T, 1, 1))
-    t = np.clip(np.arange(T), fk[0], fk[-1]).astype(float)
-    if len(fk) == 1:
-        Rt = np.repeat(R, T, axis=0)
-        Ct = np.repeat(C, T, axis=0)
-    else:
-        Rt = Slerp(fk.astype(float), Rotation.from_matrix(R))(t).as_matrix()
-        Ct = np.stack([np.interp(t, fk, C[:, i]) for i in range(3)], axis=1)
-    out[:, :3, :3] = Rt
-    out[:, :3, 3] = -np.einsum("nij,nj->ni", Rt, Ct)
-    return out
+    fk = frames_known[order].astype(float)
+    k, w = frame_brackets(fk, np.clip(np.arange(T), fk[0], fk[-1]))
+    return interpolate_poses(poses[order], k, w)
 
 
 def _mean_pose(poses: np.ndarray) -> np.ndarray:
@@ -116,7 +105,19 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
     return est
 
 
-def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool) -> None:
+def _verification(seed: int):
+    """COLMAP's two-view geometric verification with a seeded RANSAC.
+
+    Its RANSAC runs in worker threads that set_random_seed does not reach: unseeded, repeated runs
+    registered 0 or 3 cameras on the same input (sequence69)."""
+    import pycolmap
+
+    verify = pycolmap.TwoViewGeometryOptions()
+    verify.ransac.random_seed = seed
+    return verify
+
+
+def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool, seed: int) -> None:
     """COLMAP's SIFT features and exhaustive matching with geometric verification."""
     import pycolmap
 
@@ -131,7 +132,8 @@ def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool
     mopt = pycolmap.FeatureMatchingOptions()
     mopt.guided_matching = True
     mopt.num_threads = 1
-    pycolmap.match_exhaustive(db, matching_options=mopt, device=pycolmap.Device.cpu)
+    pycolmap.match_exhaustive(db, matching_options=mopt, verification_options=_verification(seed),
+                              device=pycolmap.Device.cpu)
 
 
 def _xfeat_database(db: Path, img_dir: Path, mask_dir: Path, reader, cfg: CameraConfig, seed: int) -> None:
@@ -166,11 +168,7 @@ def _xfeat_database(db: Path, img_dir: Path, mask_dir: Path, reader, cfg: Camera
         database.close()
     pairs = db.parent / "pairs.txt"
     pairs.write_text("\n".join(lines) + "\n")
-    verify = pycolmap.TwoViewGeometryOptions()
-    # its RANSAC runs in worker threads that set_random_seed does not reach: without a seed of
-    # its own, repeated runs registered 0 or 3 cameras on the same input (sequence69)
-    verify.ransac.random_seed = seed
-    pycolmap.verify_matches(db, pairs, options=verify)
+    pycolmap.verify_matches(db, pairs, options=_verification(seed))
 
 
 def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg: CameraConfig,
@@ -199,7 +197,7 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
         if features == "xfeat":
             _xfeat_database(db, img_dir, mask_dir, reader, cfg, seed)
         else:
-            _sift_database(db, img_dir, reader, cfg, few=n_images <= 16)
+            _sift_database(db, img_dir, reader, cfg, few=n_images <= 16, seed=seed)
         opts = pycolmap.IncrementalPipelineOptions()
         opts.random_seed = seed
         # one thread everywhere and a fixed seed: with several threads COLMAP registered
