@@ -61,11 +61,9 @@ class XFeatMatcher:
 
     def match(self, a: Features, b: Features) -> np.ndarray:
         """(M,2) uint32 indices (into a, into b) of mutual nearest neighbours above min_cossim."""
-        if not len(a.keypoints) or not len(b.keypoints):
-            return np.zeros((0, 2), np.uint32)
-        sim = a.descriptors @ b.descriptors.T
-        ab = sim.argmax(1)
-        ba = sim.argmax(0)
-        ia = np.arange(len(ab))
-        keep = (ba[ab] == ia) & (sim[ia, ab] > self.min_cossim)
-        return np.stack([ia[keep], ab[keep]], 1).astype(np.uint32)
+        from .matching import match_descriptors
+
+        # ratio 1: no ratio test, only the mutual check; the cosine floor replaces it
+        m = match_descriptors(a.descriptors, b.descriptors, ratio=1.0, mutual=True)
+        cossim = np.einsum("ij,ij->i", a.descriptors[m[:, 0]], b.descriptors[m[:, 1]])
+        return m[cossim > self.min_cossim].astype(np.uint32)
