@@ -35,8 +35,8 @@ class TrackConfig:
     """Least distance between seeded points (working pixels)."""
     quality_level: float = 0.005
     """goodFeaturesToTrack quality level."""
-    win_size: int = 21
-    """KLT window (working pixels)."""
+    win_size: int = 9
+    """KLT window (working pixels); larger windows at an object's outline take in more static background, which holds the point back (README, tracks)."""
     pyramid_levels: int = 4
     """KLT pyramid levels (large motion at low frame rates needs more)."""
     fb_max_px: float = 1.0
@@ -47,6 +47,10 @@ class TrackConfig:
     """Seeds are placed at least about half this far inside a moving region (erosion size, working pixels)."""
     reseed_every: int = 1
     """Seed new points inside moving regions every this many frames."""
+    anchor_refine: bool = True
+    """Refine each new position by KLT against the point's anchor frame (stops frame-to-frame drift)."""
+    anchor_max_px: float = 2.0
+    """A refinement that moves the point by more than this (working pixels) is refused and the point re-anchored."""
 
 
 @dataclass(frozen=True)
