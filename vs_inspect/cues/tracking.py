@@ -48,10 +48,10 @@ def track_points(frames: np.ndarray, instances: np.ndarray, cfg: TrackConfig = T
             pb, st2, _ = cv2.calcOpticalFlowPyrLK(frames[t], frames[t - 1], p1, None, **lk)
             fb = np.linalg.norm((pb - p0).reshape(-1, 2), axis=1)
             q = p1.reshape(-1, 2).copy()
-            ok = ((st[:, 0] == 1) & (st2[:, 0] == 1) & (fb < cfg.fb_max_px)
-                  & (q[:, 0] >= 0) & (q[:, 0] <= W - 1) & (q[:, 1] >= 0) & (q[:, 1] <= H - 1))
+            ok = (st[:, 0] == 1) & (st2[:, 0] == 1) & (fb < cfg.fb_max_px)
             if cfg.anchor_refine:
                 _refine_on_anchors(frames, t, q, ok, anchor_t, anchor_xy, lk_anchor, cfg)
+            ok &= (q[:, 0] >= 0) & (q[:, 0] <= W - 1) & (q[:, 1] >= 0) & (q[:, 1] <= H - 1)
             active_xy, active_id = q[ok].astype(np.float32), active_id[ok]
             anchor_t, anchor_xy = anchor_t[ok], anchor_xy[ok]
             store[active_id, t] = active_xy
