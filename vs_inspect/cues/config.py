@@ -36,7 +36,7 @@ class TrackConfig:
     quality_level: float = 0.005
     """goodFeaturesToTrack quality level."""
     win_size: int = 9
-    """KLT window (working pixels); larger windows at an object's outline take in more static background, which holds the point back (README, tracks)."""
+    """KLT window (working pixels); larger windows lost more of a point's motion at object outlines on the rendered scenes (README, tracks)."""
     pyramid_levels: int = 4
     """KLT pyramid levels (large motion at low frame rates needs more)."""
     fb_max_px: float = 1.0
@@ -77,6 +77,10 @@ class MatchConfig:
     """Filter track pairs by one-to-one instance matching (Hungarian method on vote counts)."""
     mutual_best_tracks: bool = True
     """Keep a track pair only if each track is the other's most voted partner."""
+
+    def __post_init__(self) -> None:
+        if self.descriptor not in ("sift", "xfeat"):
+            raise ValueError(f"unknown keyframe descriptor {self.descriptor!r}: use sift or xfeat")
 
 
 @dataclass(frozen=True)
@@ -123,6 +127,10 @@ class CameraConfig:
     """When the background reconstruction registers fewer than two cameras, build static cameras from the moving points' two-view geometry (cues/pairwise.py)."""
     mask_moving: bool = True
     """Estimated cameras: mask out moving regions before feature extraction."""
+
+    def __post_init__(self) -> None:
+        if self.features not in ("sift", "xfeat", "auto"):
+            raise ValueError(f"unknown camera features {self.features!r}: use sift, xfeat or auto")
 
 
 @dataclass(frozen=True)

@@ -45,8 +45,6 @@ def extract_keyframe_features(frames: np.ndarray, masks: np.ndarray | None, keyf
 
     frames (T,H,W) uint8; masks (T,H,W) bool or None; track_xy (N,T,2) working px.
     """
-    if cfg.descriptor not in ("sift", "xfeat"):
-        raise ValueError(f"unknown keyframe descriptor {cfg.descriptor!r}: use sift or xfeat")
     detect = _xfeat_detector(cfg) if cfg.descriptor == "xfeat" else _sift_detector(cfg)
     kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (max(1, cfg.mask_dilate_px),) * 2)
     fr, xys, descs, trk = [], [], [], []

@@ -5,8 +5,9 @@ Frame-to-frame KLT drifts: on the rendered scenes, points tracked from their tru
 about 12 % of their motion (21 px window), so a track slid backwards over its object and looked
 late by a growing fraction of its age. Each new position is therefore refined against the
 point's appearance in an anchor frame (where it was seeded, renewed when the refinement fails),
-which keeps the error from adding up frame after frame. A small window (9 px) takes in less
-of the static background at an object's outline, which is what holds the point back."""
+which keeps the error from adding up frame after frame. A smaller window (9 px) lost less: part
+of the loss is the static background inside the window at an object's outline (blanking the
+background halved it), the rest was not traced."""
 
 from __future__ import annotations
 
@@ -47,7 +48,7 @@ def track_points(frames: np.ndarray, instances: np.ndarray, cfg: TrackConfig = T
             p1, st, _ = cv2.calcOpticalFlowPyrLK(frames[t - 1], frames[t], p0, None, **lk)
             pb, st2, _ = cv2.calcOpticalFlowPyrLK(frames[t], frames[t - 1], p1, None, **lk)
             fb = np.linalg.norm((pb - p0).reshape(-1, 2), axis=1)
-            q = p1.reshape(-1, 2).copy()
+            q = p1.reshape(-1, 2)
             ok = (st[:, 0] == 1) & (st2[:, 0] == 1) & (fb < cfg.fb_max_px)
             if cfg.anchor_refine:
                 _refine_on_anchors(frames, t, q, ok, anchor_t, anchor_xy, lk_anchor, cfg)
@@ -98,7 +99,7 @@ def _refine_on_anchors(frames: np.ndarray, t: int, q: np.ndarray, ok: np.ndarray
     for s in np.unique(anchor_t[ok]):
         g = np.nonzero(ok & (anchor_t == s))[0]
         p, st, _ = cv2.calcOpticalFlowPyrLK(frames[s], frames[t], anchor_xy[g].reshape(-1, 1, 2),
-                                            q[g].reshape(-1, 1, 2).copy(), **lk_anchor)
+                                            q[g].reshape(-1, 1, 2), **lk_anchor)
         p = p.reshape(-1, 2)
         good = (st[:, 0] == 1) & (np.linalg.norm(p - q[g], axis=1) < cfg.anchor_max_px)
         q[g[good]] = p[good]
