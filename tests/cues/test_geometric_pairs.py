@@ -110,3 +110,19 @@ def test_consistent_peaks_close_every_triangle():
     bad = dict(peaks)
     bad[("b", "c")] = ((2.0, 3.0), (50, 20))
     assert consistent_peaks(bad, 0.05) == (None, "inconsistent")
+
+
+def test_consistent_peaks_near_tie_decided_by_closure():
+    # the peaks of rendered seed 1 (true Δ: a-b -0.740, a-c 0.472, b-c 1.211): a__b's top peak
+    # has 81 votes against 78 for the right one; both close within 0.12 s, the right one by 17 ms
+    # against 58 ms
+    peaks = {("a", "b"): ((-0.675, -0.75, -0.6333), (81, 78, 73)),
+             ("a", "c"): ((0.4833, 0.4417, 0.5417), (166, 141, 124)),
+             ("b", "c"): ((1.2167, 1.3, 1.1333), (225, 160, 154))}
+    chosen, status = consistent_peaks(peaks, 0.12)
+    assert status == "chosen"
+    assert chosen == {("a", "b"): 1, ("a", "c"): 0, ("b", "c"): 0}
+    # a clear vote lead is not overturned by a better closure
+    clear = dict(peaks)
+    clear[("a", "b")] = ((-0.675, -0.75, -0.6333), (160, 78, 73))
+    assert consistent_peaks(clear, 0.12)[0][("a", "b")] == 0

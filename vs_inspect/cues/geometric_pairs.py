@@ -272,9 +272,12 @@ def consistent_peaks(peaks: dict[tuple[str, str], tuple[tuple[float, ...], tuple
     """One vote peak per camera pair such that every triangle closes, Δ_ab + Δ_bc ≈ Δ_ac.
 
     peaks: (a, b) -> (peak offsets Δ_ab in s, votes), names in a fixed order within each key.
-    Returns (choice with the most votes in total, "chosen"), or (None, why): "no triangle"
-    (fewer than three cameras with peaks), "too many pairs" (the search tries every
-    combination), or "inconsistent" (no choice closes every triangle).
+    A choice must close every triangle within tol_s. Among those, the one with the least cost
+    Σ_pairs ((v_top - v) / √v_top)² + Σ_triangles (closure / (tol_s / 3))² wins: vote counts
+    vary like Poisson counts, so peaks a few √v apart are near-ties that the closure decides
+    (each peak is located to about a frame, tol_s is about three). Returns (choice, "chosen"), or
+    (None, why): "no triangle" (fewer than three cameras with peaks), "too many pairs" (the
+    search tries every combination), or "inconsistent" (no choice closes every triangle).
     """
     keys = [k for k in peaks if len(peaks[k][0])]
     if len(keys) > max_pairs:
@@ -288,11 +291,15 @@ def consistent_peaks(peaks: dict[tuple[str, str], tuple[tuple[float, ...], tuple
                  if all((u, v) in keys or (v, u) in keys for u, v in itertools.combinations(t, 2))]
     if not triangles:
         return None, "no triangle"
-    best, best_votes = None, -1
+    top = {k: max(peaks[k][1]) for k in keys}
+    sigma_s = tol_s / 3.0
+    best, best_cost = None, np.inf
     for choice in itertools.product(*[range(len(peaks[k][0])) for k in keys]):
         ch = dict(zip(keys, choice))
-        if all(abs(delta(ch, a, b) + delta(ch, b, c) - delta(ch, a, c)) <= tol_s for a, b, c in triangles):
-            votes = sum(peaks[k][1][ch[k]] for k in keys)
-            if votes > best_votes:
-                best, best_votes = ch, votes
+        closure = np.array([delta(ch, a, b) + delta(ch, b, c) - delta(ch, a, c) for a, b, c in triangles])
+        if np.all(np.abs(closure) <= tol_s):
+            cost = sum(((top[k] - peaks[k][1][ch[k]]) / np.sqrt(max(top[k], 1))) ** 2 for k in keys)
+            cost += float(np.sum((closure / sigma_s) ** 2)) if sigma_s > 0 else 0.0
+            if cost < best_cost:
+                best, best_cost = ch, cost
     return (best, "chosen") if best is not None else (None, "inconsistent")
