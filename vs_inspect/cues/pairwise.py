@@ -85,8 +85,11 @@ def search_pair(xy_r, info_r, xy_v, info_v, index, min_corr: int = 40, thresh_px
         if len(A) > max_corr:
             sel = rng.choice(len(A), max_corr, replace=False)
             A, B = A[sel], B[sel]
-        F, inl = cv2.findFundamentalMat(A.astype(np.float64), B.astype(np.float64), cv2.USAC_MAGSAC,
-                                        thresh_px, 0.999, 2000)
+        try:
+            F, inl = cv2.findFundamentalMat(A.astype(np.float64), B.astype(np.float64), cv2.USAC_MAGSAC,
+                                            thresh_px, 0.999, 2000)
+        except cv2.error:  # OpenCV 5's USAC asserts on some degenerate samples instead of failing softly
+            continue
         if F is None or F.shape != (3, 3):
             continue
         cands.append((float(inl.mean()), d, F, len(A)))
