@@ -103,6 +103,31 @@ def test_anchor_refinement_stops_klt_drift():
     assert np.median(drift(TrackConfig(max_points=200, min_distance_px=4))) < 0.2
 
 
+def test_points_left_on_the_background_are_dropped():
+    """Seeds on the background (a loose first mask) stay put while the object moves away: outside
+    every moving region they are dropped, while the points on the object keep their tracks."""
+    frames, truth, offs = blob_sequence(T=30, velocity=(3.0, 1.5))
+    inst = truth.astype(np.int16)
+    inst[0] = cv2.dilate(truth[0].astype(np.uint8), np.ones((41, 41), np.uint8))  # blob + 20 px of background
+
+    def tracks(cfg: TrackConfig) -> tuple[int, int]:
+        """(tracks of 10+ frames that stay put, tracks of 25+ frames that move with the blob)"""
+        xy, _ = track_points(frames, inst, cfg)
+        seen = np.isfinite(xy[:, :, 0])
+        first, last = seen.argmax(1), xy.shape[1] - 1 - seen[:, ::-1].argmax(1)
+        n = np.arange(len(xy))
+        moved = np.linalg.norm(xy[n, last] - xy[n, first], axis=1)
+        return int(((last - first >= 10) & (moved < 1.0)).sum()), int(((last - first >= 25) & (moved > 50)).sum())
+
+    seeds_once = dict(max_points=300, min_distance_px=4, reseed_every=1000)  # seeds at frame 0 only
+    kept_static, kept_moving = tracks(TrackConfig(**seeds_once))  # the default keeps them
+    static, moving = tracks(TrackConfig(max_frames_outside=1, **seeds_once))
+    # measured: 83 static and 44 moving tracks without the rule, 0 and 44 with it
+    assert kept_static >= 10  # the rule is what removes them
+    assert static == 0
+    assert moving >= 10 and moving >= 0.8 * kept_moving
+
+
 def test_match_descriptors_ratio_and_mutual():
     rng = np.random.default_rng(0)
     a = rng.normal(size=(50, 128)).astype(np.float32)

@@ -51,6 +51,10 @@ class TrackConfig:
     """Refine each new position by KLT against the point's anchor frame (stops frame-to-frame drift)."""
     anchor_max_px: float = 2.0
     """A refinement that moves the point by more than this (working pixels) is refused and the point re-anchored."""
+    max_frames_outside: int = -1
+    """A point outside every moving region (grown by region_margin_px) for more than this many frames in a row is dropped (left behind on the background); -1 (default) keeps it: 1 cut the background points' share from 21 % to 7 % on a rendered scene but lost accuracy elsewhere (README, tracks)."""
+    region_margin_px: float = 3.0
+    """Moving regions are grown by this much (working pixels) for that test (their outlines are rough)."""
 
 
 @dataclass(frozen=True)
