@@ -37,7 +37,7 @@ import numpy as np  # noqa: F401  (before pycolmap)
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from vs_inspect.bench.datasets import read_caliscope_frame_times  # noqa: E402
+from vs_inspect.bench.datasets import corner_sync_bias_s, load_caliscope, read_caliscope_frame_times  # noqa: E402
 from vs_inspect.cues import CueConfig, MatchConfig, extract_cues  # noqa: E402
 from vs_inspect.cues.config import CameraConfig, TrackConfig  # noqa: E402
 from vs_inspect.errors import InputError  # noqa: E402
@@ -59,9 +59,10 @@ def write_cut(src_path: Path, dest: Path, cut: int, last: int | None = None) -> 
 
 
 def track_config(args) -> TrackConfig:
-    """The tracks asked for on the command line (--klt-window, --anchor-max-px, --no-anchor)."""
+    """The tracks asked for on the command line (--klt-window, --anchor-max-px, --no-anchor,
+    --drop-outside)."""
     return TrackConfig(win_size=args.klt_window, anchor_refine=not args.no_anchor,
-                       anchor_max_px=args.anchor_max_px)
+                       anchor_max_px=args.anchor_max_px, max_frames_outside=args.drop_outside)
 
 
 def run(paths, calib, cfg=CueConfig()):
@@ -96,7 +97,10 @@ def bench_caliscope(args) -> None:
     root = DATA / "caliscope_post_optimization"
     ft = read_caliscope_frame_times(root)
     rng = np.random.default_rng(args.seed)
-    all_err, rows = [], []
+    all_err, all_err_corner, rows = [], [], []
+    bias = corner_sync_bias_s(load_caliscope(root))
+    print("corner synchronization vs host timestamps (uncut): "
+          + ", ".join(f"{n} {1000 * b:+.1f} ms" for n, b in bias.items()), flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         for trial in range(args.trials):
             cuts = {f"cam_{i}": int(c) for i, c in enumerate(rng.integers(0, args.max_cut + 1, 4))}
@@ -126,6 +130,8 @@ def bench_caliscope(args) -> None:
             err = errors_ms(res, truth)
             vals = [e if e is not None else float("inf") for e in err.values()]
             all_err += vals
+            err_corner = errors_ms(res, {n: t + bias.get(n, 0.0) for n, t in truth.items()})
+            all_err_corner += [e if e is not None else float("inf") for e in err_corner.values()]
             rows.append((trial, cuts, err, tc, ts, stats.get("registered_cameras"), stats.get("dropped")))
             print(f"trial {trial}: cuts {cuts}  err_ms {format_ms(err)}"
                   f"  cues {tc:.1f}s sync {ts:.1f}s  cameras {stats.get('registered_cameras')} dropped {stats.get('dropped')}",
@@ -137,6 +143,9 @@ def bench_caliscope(args) -> None:
     print(f"\ncaliscope ({mode}), {args.trials} trials, {len(all_err)} video offsets: median error "
           f"{med:.1f} ms ({med / (1000 / 6):.2f} frames), mean {np.mean([e for e in all_err if np.isfinite(e)]):.1f} ms, "
           f"max {max(all_err):.1f} ms, within 1 frame {100 * within:.0f}%")
+    med_c = statistics.median(all_err_corner)
+    print(f"  against the corners' own synchronization instead of the timestamps: median error "
+          f"{med_c:.1f} ms ({med_c / (1000 / 6):.2f} frames), max {max(all_err_corner):.1f} ms")
 
 
 def bench_visualsync(args) -> None:
@@ -266,6 +275,8 @@ def main() -> None:
                        help="largest correction the anchor refinement may make (working px)")
         p.add_argument("--no-anchor", action="store_true",
                        help="frame-to-frame KLT only (the tracks before the anchor refinement)")
+        p.add_argument("--drop-outside", type=int, default=TrackConfig.max_frames_outside, metavar="N",
+                       help="drop a point after N frames in a row outside every moving region (-1: keep it)")
     ap.add_argument("-v", action="store_true")
     args = ap.parse_args()
     logging.basicConfig(level=logging.INFO if args.v else logging.WARNING)

@@ -17,20 +17,16 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from vs_inspect.bench.datasets import CALISCOPE, caliscope_cut, load_caliscope  # noqa: E402
-from vs_inspect.sync.run import sync_bundle  # noqa: E402
+from vs_inspect.bench.datasets import CALISCOPE, corner_sync_bias_s, load_caliscope  # noqa: E402
 
 D = REPO.parent / "shared" / "data" / CALISCOPE
 
 
 def main() -> None:
     session = load_caliscope(D)
-    bundle = caliscope_cut(session, {}, "caliscope/uncut").bundle  # the corners as tracks, no cut
-    res = sync_bundle(bundle, progress=False)
-    truth, ref = bundle.gt_offsets_s, res.reference
-    for n in session.names[1:]:
-        err = ((res.offsets_s[n] - res.offsets_s[ref]) - (truth[n] - truth[ref])) * 1000
-        print(f"{n}: offset {res.offsets_s[n]:+.4f} s, error {abs(err):.1f} ms")
+    for n, bias in corner_sync_bias_s(session).items():
+        if n != session.names[0]:
+            print(f"{n}: error {abs(bias) * 1000:.1f} ms ({bias * 1000:+.1f} ms against frame_time)")
 
 
 if __name__ == "__main__":

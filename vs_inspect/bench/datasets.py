@@ -163,6 +163,20 @@ def caliscope_cut(session: CaliscopeSession, cuts: dict[str, int], name: str) ->
     return BenchData(name, "caliscope", bundle, None, fi, {"cuts": dict(cuts)})
 
 
+def corner_sync_bias_s(session: CaliscopeSession) -> dict[str, float]:
+    """Per camera: the offset that Stage 1 finds from the session's ChArUco corners (perfect
+    cross-view tracks) on the uncut videos, minus the offset of the recorded frame times (s,
+    against the reference). A camera whose frames reach the host earlier or later than the
+    others shows up here whatever the cues."""
+    from ..sync.run import sync_bundle
+
+    bundle = caliscope_cut(session, {}, "caliscope/uncut").bundle
+    res = sync_bundle(bundle, progress=False)
+    truth, ref = bundle.gt_offsets_s, res.reference
+    return {n: (res.offsets_s[n] - res.offsets_s[ref]) - (truth[n] - truth[ref])
+            for n in session.names if res.offsets_s.get(n) is not None}
+
+
 def caliscope_cuts(session: CaliscopeSession, num: int, max_cut: int = 12, seed: int = 0) -> list[BenchData]:
     """num bundles with random leading cuts in [0, max_cut] frames per camera (seeded; cut set i
     is the same whatever num is)."""
