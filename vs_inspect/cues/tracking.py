@@ -10,8 +10,9 @@ of the loss is the static background inside the window at an object's outline (b
 background halved it), the rest was not traced.
 
 A point that the object has left behind (stuck on the background at an outline, or seeded in a
-loose region) sits outside every moving region: it is dropped after max_frames_outside frames
-there, so it does not enter cross-view pairs as if it still moved with the object."""
+loose region) sits outside every moving region. With max_frames_outside >= 0 it is dropped after
+that many frames there; the default keeps it, because dropping such points did not make the
+offsets consistently better (README, tracks)."""
 
 from __future__ import annotations
 
