@@ -8,7 +8,7 @@ import numpy as np
 
 import vs_inspect.cues.pairwise as pairwise
 from vs_inspect.geometry.epipolar import look_at, project
-from vs_inspect.types import VideoInfo
+from vs_inspect.types import TrackPairs, VideoInfo
 
 FOCAL_PX = 500.0
 TRUE_OFFSET_S = 0.8  # Δ_rv = offset_v - offset_r
@@ -65,3 +65,56 @@ def test_search_pair_survives_opencv_raising(monkeypatch):
     g = pairwise.search_pair(xy_r, info_r, xy_v, info_v, index)
     assert calls["n"] > 3
     assert g is not None and g.inlier_share > 0.5
+
+
+RING_STARTS_S = (0.0, 0.3, 0.7, 1.1)  # start of each video on the common clock
+
+
+def ring_of_views(focals=(450.0, 520.0, 600.0, 680.0), frames: int = 80, fps: float = 10.0):
+    """Four static cameras about 90° apart around moving points (a rig like caliscope's), each
+    with its own focal and start time: (names, infos, xy, pairs, cameras)."""
+    rng = np.random.default_rng(5)
+    n = 60
+    centre = rng.uniform(-0.6, 0.6, (n, 1, 3))
+    amp = rng.uniform(0.2, 0.5, (n, 1, 3))
+    freq = rng.uniform(0.5, 2.0, (n, 1, 3))
+    phase = rng.uniform(0, 2 * np.pi, (n, 1, 3))
+    names = [f"c{i}" for i in range(4)]
+    infos, xy, cams = {}, {}, {}
+    for i, name in enumerate(names):
+        ang = i * np.pi / 2 + 0.2 * i
+        pose = look_at(np.array([4 * np.cos(ang), 4 * np.sin(ang), 1.0 + 0.4 * i]),
+                       np.array([0.2 * i - 0.3, 0.1 * i, 0.1 * i]))
+        K = np.array([[focals[i], 0, 319.5], [0, focals[i], 239.5], [0, 0, 1]])
+        infos[name] = VideoInfo.constant_rate(name, 640, 480, frames, fps)
+        g = infos[name].timestamps_s + RING_STARTS_S[i]
+        xy[name] = project(K, pose, centre + amp * np.sin(freq * g[None, :, None] + phase))
+        cams[name] = (K, pose)
+    index = np.stack([np.arange(n), np.arange(n)], 1)
+    pairs = {(a, b): TrackPairs(a, b, index) for ia, a in enumerate(names) for b in names[ia + 1:]}
+    return names, infos, xy, pairs, cams
+
+
+def test_joint_fit_recovers_the_focals_that_single_pairs_cannot():
+    """Per pair, a focal from F is ill-posed when the optical axes nearly meet; fitted to all six
+    pairs at once, every camera's focal comes back and the track pairs fit to a fraction of a px."""
+    names, infos, xy, pairs, truth = ring_of_views()
+    moving = {n: False for n in names}
+    cams, reasons, details = pairwise.cameras_from_tracks("c0", infos, xy, pairs, moving)
+    assert not reasons and set(cams) == set(names)
+    for i, v in enumerate(names[1:], 1):  # coarse offsets Δ_0v = start_v - start_0, on the 0.1 s grid
+        assert abs(details[v]["coarse_offset_s"] - RING_STARTS_S[i]) < 1e-6
+    fit = details["joint_fit"]
+    assert fit["median_px_after"] < 0.1 < fit["median_px_before"]
+    for n in names:
+        assert abs(cams[n].K[0, 0] / truth[n][0][0, 0] - 1) < 0.03, (n, cams[n].K[0, 0])
+    # relative rotations as the true ones (the reconstruction is in c0's frame, up to scale)
+    for n in names[1:]:
+        R_true = truth[n][1][:3, :3] @ truth["c0"][1][:3, :3].T
+        R = cams[n].cam_from_world[:3, :3]
+        assert np.degrees(np.arccos(np.clip((np.trace(R @ R_true.T) - 1) / 2, -1, 1))) < 1.0
+    coarse = {v: details[v]["coarse_offset_s"] for v in names[1:]}
+    fitted_px, n_pairs = pairwise.epipolar_fit_px(cams, infos, xy, pairs, coarse)
+    assert n_pairs == 6 and fitted_px < 0.1
+    unrefined, _, _ = pairwise.cameras_from_tracks("c0", infos, xy, pairs, moving, refine=False)
+    assert pairwise.epipolar_fit_px(unrefined, infos, xy, pairs, coarse)[0] > 10 * fitted_px

@@ -34,6 +34,7 @@ class EstimatedCamera:
     colmap_camera: object  # pycolmap.Camera at SfM resolution (for undistortion)
     sfm_scale: float  # SfM pixels per full-resolution pixel
     registered_frames: np.ndarray  # (R,) int, video frames that registered
+    points_seen: int = 0  # 3D points seen by its best-registered image
 
 
 @dataclass(frozen=True)
@@ -258,7 +259,7 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
                 track = CameraTrack(K, T_all, valid)
             else:
                 track = CameraTrack(K, _mean_pose(poses))
-            cams[name] = EstimatedCamera(track, cam, s, np.sort(fk))
+            cams[name] = EstimatedCamera(track, cam, s, np.sort(fk), int(seen))
         pts = np.array([p.xyz for p in rec.points3D.values()]) if rec.num_points3D() else None
         cols = np.array([p.color for p in rec.points3D.values()], np.uint8) if rec.num_points3D() else None
         return CameraEstimate(cams, unreg, pts, cols, n_images, rec.num_reg_images(), features)

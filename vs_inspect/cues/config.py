@@ -128,7 +128,7 @@ class CameraConfig:
     min_inliers: int = 30
     """Estimated cameras: inlier matches needed to start the reconstruction (half that to add an image); a camera whose images each see fewer 3D points is left out as not trusted."""
     fallback_from_tracks: bool = True
-    """When the background reconstruction registers fewer than two cameras, build static cameras from the moving points' two-view geometry (cues/pairwise.py)."""
+    """Build static cameras from the moving points' two-view geometry (cues/pairwise.py: per-pair F at the best coarse offset, then one focal per camera and every pose fitted to all pairs at once) when the background reconstruction registers fewer than two cameras, and compare them with a weak one (a static camera left out, or fewer than 2 × min_inliers points per image): the set that leaves the smaller median epipolar distance on the moving points is used."""
     mask_moving: bool = True
     """Estimated cameras: mask out moving regions before feature extraction."""
 

@@ -302,7 +302,7 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
 
 def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: dict):
     from .cameras import estimate_cameras, undistort_with_colmap
-    from .pairwise import cameras_from_tracks
+    from .pairwise import cameras_from_tracks, epipolar_fit_px
 
     frames = {n: v.sfm_frames for n, v in vids.items() if v.sfm_frames is not None}
     sizes = {n: (v.info.width, v.info.height) for n, v in vids.items()}
@@ -310,17 +310,34 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
                            {n: v.camera_motion == "moving" for n, v in vids.items()}, cfg.camera)
     stats["sfm"] = {"features": est.features, "images": est.num_images, "registered_images": est.num_registered,
                     "registered_frames": {n: c.registered_frames.tolist() for n, c in est.cameras.items()}}
-    if len(est.cameras) < 2 and cfg.camera.fallback_from_tracks:
-        # the background did not reconstruct: cameras from the moving points (static cameras)
+    static = [n for n, v in vids.items() if v.camera_motion != "moving"]
+    # a model resting on few points per image, or missing a static camera, is checked against the
+    # moving points (caliscope's 90° views: XFeat models on 28-43 points per image had focals of
+    # 8000-12000 px and poses 20-44° off, yet passed the points threshold)
+    weak = len(est.cameras) < 2 or any(n not in est.cameras for n in static) or \
+        min(c.points_seen for c in est.cameras.values()) < 2 * cfg.camera.min_inliers
+    if weak and cfg.camera.fallback_from_tracks and len(static) >= 2:
         ref = max(vids, key=lambda n: sum(len(p.index) for k, p in pairs.items() if n in k))
+        infos = {n: v.info for n, v in vids.items()}
+        xy = {n: v.xy_full for n, v in vids.items()}
         cams, reasons, details = cameras_from_tracks(
-            ref, {n: v.info for n, v in vids.items()}, {n: v.xy_full for n, v in vids.items()},
-            pairs, {n: v.camera_motion == "moving" for n, v in vids.items()})
-        stats["sfm"]["fallback"] = {"reference": ref, "pairs": details,
-                                    "why": f"the background reconstruction registered {len(est.cameras)} camera(s)"}
-        log.warning("background SfM registered %d camera(s); cameras from the moving points: %d",
-                    len(est.cameras), len(cams))
-        if len(cams) >= 2:
+            ref, infos, xy, pairs, {n: v.camera_motion == "moving" for n, v in vids.items()})
+        use, why = len(cams) >= 2, f"the background reconstruction registered {len(est.cameras)} camera(s)"
+        if use and len(est.cameras) >= 2:
+            # both: keep the one whose cameras explain the moving points better, on the pairs of
+            # the background model's static cameras (tracks undistorted with its lens)
+            coarse = {n: d["coarse_offset_s"] for n, d in details.items() if "coarse_offset_s" in d} | {ref: 0.0}
+            sfm_static = {n: c.track for n, c in est.cameras.items() if n in static}
+            sfm_px, n_sfm = epipolar_fit_px(sfm_static, infos, {n: undistort_with_colmap(est.cameras[n], xy[n])
+                                                                  for n in sfm_static}, pairs, coarse)
+            fb_px, n_fb = epipolar_fit_px({n: c for n, c in cams.items() if n in sfm_static}, infos, xy, pairs, coarse)
+            use = len(cams) >= len(est.cameras) and n_fb >= n_sfm and fb_px < sfm_px
+            why = (f"the background reconstruction rests on few points (fewest {min(c.points_seen for c in est.cameras.values())} "
+                   f"per image) or left a static camera out; on the moving points its cameras leave a median "
+                   f"epipolar distance of {sfm_px:.1f} px, the moving points' own cameras {fb_px:.1f} px")
+        stats["sfm"]["fallback"] = {"reference": ref, "pairs": details, "why": why, "used": bool(use)}
+        log.warning("%s; cameras from the moving points: %d (%s)", why, len(cams), "used" if use else "not used")
+        if use:
             stats["camera_source"] = "estimated from moving points (two-view geometry)"
             stats["dropped"].update(reasons)
             for n, why in reasons.items():

@@ -6,8 +6,11 @@ track pairs (x_r(t + Δ), x_v(t)) give the most consistent fundamental matrix (R
 share, as in unsynchronized two-view geometry), self-calibrate one focal length per pair (the f
 that makes K_vᵀ F K_r closest to an essential matrix, principal points at the image centres),
 decompose into a relative pose, and fix the scale of every pair from points triangulated on the
-reference's tracks. Pure functions of arrays; the coarse offsets found here are only used to
-build the cameras, Stage 1 searches the offsets again.
+reference's tracks. With three or more cameras, one focal per camera and every pose are then
+fitted to the track pairs of all camera pairs at once (scipy least squares, soft-L1 loss),
+started from the per-pair focals and from a few shared guesses: one pair's focal is ill-posed
+when the optical axes nearly meet, as they do around a scene. Pure functions of arrays; the
+coarse offsets found here are only used to build the cameras, Stage 1 searches the offsets again.
 """
 
 from __future__ import annotations
@@ -17,7 +20,10 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+from scipy.optimize import least_squares
+from scipy.spatial.transform import Rotation
 
+from ..geometry.epipolar import fundamental_from_cameras
 from ..types import CameraTrack, TrackPairs, VideoInfo
 
 log = logging.getLogger(__name__)
@@ -69,7 +75,7 @@ def _focal_from_F(F: np.ndarray, ca: np.ndarray, cb: np.ndarray, size: float) ->
 
 def search_pair(xy_r, info_r, xy_v, info_v, index, min_corr: int = 40, thresh_px: float = 2.0,
                 max_corr: int = 2000, seed: int = 0,
-                min_share_of_max: float = 0.35) -> PairGeometry | None:
+                min_share_of_max: float = 0.5) -> PairGeometry | None:
     """Best coarse offset and F between r and v from their track pairs."""
     if len(index) < 8:
         return None
@@ -95,7 +101,8 @@ def search_pair(xy_r, info_r, xy_v, info_v, index, min_corr: int = 40, thresh_px
         cands.append((float(inl.mean()), d, F, len(A)))
     if not cands:
         return None
-    # a few correspondences fit any F: only offsets with a good part of the largest overlap count
+    # a few correspondences fit any F: only offsets with at least half the largest overlap count
+    # (at a third, caliscope's pairs peaked at wrong offsets on 360-530 correspondences)
     n_max = max(c[3] for c in cands)
     share, d, F, n = max((c for c in cands if c[3] >= min_share_of_max * n_max), key=lambda c: c[0])
     ca = np.array([(info_r.width - 1) / 2, (info_r.height - 1) / 2])
@@ -105,13 +112,19 @@ def search_pair(xy_r, info_r, xy_v, info_v, index, min_corr: int = 40, thresh_px
 
 
 def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.ndarray],
-                        pairs: dict[tuple[str, str], TrackPairs], moving: dict[str, bool]
+                        pairs: dict[tuple[str, str], TrackPairs], moving: dict[str, bool],
+                        refine: bool = True, min_inlier_share: float = 0.2
                         ) -> tuple[dict[str, CameraTrack], dict[str, str], dict[str, dict]]:
-    """Static cameras in the reference's camera frame: (cameras, unregistered reasons, details)."""
+    """Static cameras in the reference's camera frame: (cameras, unregistered reasons, details).
+
+    A camera needs min_inlier_share of its correspondences with the reference within 2 px of the
+    best F (caliscope's right offsets had 0.26-0.55, with 0.15-0.2 at wrong offsets).
+    refine: with three or more cameras, fit every focal and pose to all pairs at once
+    (refine_cameras; details["joint_fit"] says how well)."""
     cams: dict[str, CameraTrack] = {}
     reasons: dict[str, str] = {}
     details: dict[str, dict] = {}
-    geo: dict[str, tuple] = {}
+    found: dict[str, tuple] = {}  # name -> (PairGeometry, aligned correspondences with ref)
     info_r = infos[ref]
     for v in infos:
         if v == ref:
@@ -128,13 +141,51 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
                           f"{0 if idx is None else len(idx)} track pairs with {ref}")
             continue
         g = search_pair(xy[ref], info_r, xy[v], infos[v], idx)
-        if g is None or g.inlier_share < 0.3:
+        if g is None or g.inlier_share < min_inlier_share:
             reasons[v] = ("camera could not be registered: no consistent two-view geometry from the "
                           f"moving points shared with {ref}")
             continue
-        A, B, keys = aligned_correspondences(xy[ref], info_r, xy[v], infos[v], idx, g.offset_s)
-        Ka = np.array([[g.focal_px, 0, (info_r.width - 1) / 2], [0, g.focal_px, (info_r.height - 1) / 2], [0, 0, 1]])
-        Kb = np.array([[g.focal_px, 0, (infos[v].width - 1) / 2], [0, g.focal_px, (infos[v].height - 1) / 2], [0, 0, 1]])
+        found[v] = (g, aligned_correspondences(xy[ref], info_r, xy[v], infos[v], idx, g.offset_s))
+        details[v] = {"coarse_offset_s": round(g.offset_s, 4), "inlier_share": round(g.inlier_share, 3),
+                      "correspondences": g.num_correspondences, "focal_px": round(g.focal_px, 1)}
+    if not found:
+        return {}, reasons, details
+    cams, with_scale = _cameras_at(ref, infos, found, {v: g.focal_px for v, (g, _) in found.items()})
+    for v in found:
+        details[v]["scale_from_shared_points"] = with_scale[v]
+    if refine and len(cams) >= 3:
+        # the joint fit is not convex: start it from the per-pair focals and from shared guesses
+        size = float(np.median([max(i.width, i.height) for i in infos.values()]))
+        coarse = {v: g.offset_s for v, (g, _) in found.items()}
+        best = None
+        for start in ["per pair"] + list(FOCAL_STARTS):
+            init = cams if start == "per pair" else \
+                _cameras_at(ref, infos, found, {v: start * size for v in found})[0]
+            fitted, fit = refine_cameras(init, ref, infos, xy, pairs, coarse)
+            if "cost" in fit and (best is None or fit["cost"] < best[1]["cost"]):
+                best = (fitted, fit | {"start": start if start == "per pair" else f"{start} x image size"})
+        if best is not None:
+            cams = best[0]
+            details["joint_fit"] = best[1]
+    return cams, reasons, details
+
+
+FOCAL_STARTS = (0.5, 0.8, 1.2, 2.0)  # shared focal guesses (image sizes) that start the joint fit
+
+
+def _cameras_at(ref: str, infos: dict[str, VideoInfo], found: dict[str, tuple], focal_px: dict[str, float]
+                ) -> tuple[dict[str, CameraTrack], dict[str, bool]]:
+    """Cameras from each pair's F with the reference, given one focal per pair (shared by both
+    cameras of the pair), in a common scale from points triangulated on the same reference
+    observation: ({name: camera}, {name: whether its scale came from shared points})."""
+    info_r = infos[ref]
+
+    def K(info, f):
+        return np.array([[f, 0, (info.width - 1) / 2], [0, f, (info.height - 1) / 2], [0, 0, 1]])
+
+    geo = {}
+    for v, (g, (A, B, keys)) in found.items():
+        Ka, Kb = K(info_r, focal_px[v]), K(infos[v], focal_px[v])
         E = Kb.T @ g.F @ Ka
         na = cv2.undistortPoints(A.reshape(-1, 1, 2).astype(np.float64), Ka, None).reshape(-1, 2)
         nb = cv2.undistortPoints(B.reshape(-1, 1, 2).astype(np.float64), Kb, None).reshape(-1, 2)
@@ -144,31 +195,130 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
         X = cv2.triangulatePoints(P0, P1, na.T, nb.T)
         X = (X[:3] / X[3]).T
         front = (X[:, 2] > 0) & ((X @ R.T + t.reshape(1, 3))[:, 2] > 0)
-        geo[v] = (R, t.reshape(3), g, keys[front], X[front], Ka, Kb)
-        details[v] = {"coarse_offset_s": round(g.offset_s, 4), "inlier_share": round(g.inlier_share, 3),
-                      "correspondences": g.num_correspondences, "focal_px": round(g.focal_px, 1)}
-    if not geo:
-        return cams, reasons, details
+        geo[v] = (R, t.reshape(3), keys[front], X[front], Kb)
     # common scale: points triangulated from different pairs on the same reference observation
-    order = sorted(geo, key=lambda v: -len(geo[v][3]))
-    scale = {order[0]: 1.0}
+    order = sorted(geo, key=lambda v: -len(geo[v][2]))
+    scale, with_scale = {order[0]: 1.0}, {order[0]: False}
     for v in order[1:]:
-        kv, Xv = geo[v][3], geo[v][4]
+        kv, Xv = geo[v][2], geo[v][3]
         ratios = []
         for u in scale:
-            ku, Xu = geo[u][3], geo[u][4]
+            ku, Xu = geo[u][2], geo[u][3]
             common, iu, iv = np.intersect1d(ku, kv, return_indices=True)
             if len(common) >= 5:
                 ratios.append(np.median(np.linalg.norm(Xu[iu], axis=1) / np.maximum(np.linalg.norm(Xv[iv], axis=1), 1e-9)) * scale[u])
         scale[v] = float(np.median(ratios)) if ratios else 1.0
-        details[v]["scale_from_shared_points"] = bool(ratios)
-    Kr = None
-    for v, (R, t, g, _, _, Ka, Kb) in geo.items():
+        with_scale[v] = bool(ratios)
+    cams = {}
+    for v, (R, t, _, _, Kb) in geo.items():
         T = np.eye(4)
         T[:3, :3], T[:3, 3] = R, t * scale[v]
         cams[v] = CameraTrack(Kb, T)
-        Kr = Ka if Kr is None else Kr
-    f_ref = float(np.median([geo[v][2].focal_px for v in geo]))
-    Kr = np.array([[f_ref, 0, (info_r.width - 1) / 2], [0, f_ref, (info_r.height - 1) / 2], [0, 0, 1]])
-    cams[ref] = CameraTrack(Kr, np.eye(4))
-    return cams, reasons, details
+    cams[ref] = CameraTrack(K(info_r, float(np.median(list(focal_px.values())))), np.eye(4))
+    return cams, with_scale
+
+
+def _signed_sampson(F_ab: np.ndarray, h_a: np.ndarray, h_b: np.ndarray) -> np.ndarray:
+    """(P,) signed Sampson distance (px) of x_aᵀ F_ab x_b = 0, homogeneous h_a, h_b (P,3): smooth
+    at zero, for least squares."""
+    Fb, Fta = h_b @ F_ab.T, h_a @ F_ab
+    num = np.sum(h_a * Fb, axis=1)
+    return num / np.sqrt(Fb[:, 0] ** 2 + Fb[:, 1] ** 2 + Fta[:, 0] ** 2 + Fta[:, 1] ** 2 + 1e-300)
+
+
+def _pair_data(cams, infos, xy, pairs, coarse_offset_s, max_per_pair, seed):
+    """[(a, b, x_a (P,3), x_b (P,3) homogeneous)] of every pair of cams, aligned at Δ_ab = Δ_rb − Δ_ra."""
+    rng = np.random.default_rng(seed)
+    data = []
+    for (a, b), tp in sorted(pairs.items()):
+        if a not in cams or b not in cams or len(tp.index) < 8:
+            continue
+        d_ab = coarse_offset_s.get(b, 0.0) - coarse_offset_s.get(a, 0.0)
+        A, B, _ = aligned_correspondences(xy[a], infos[a], xy[b], infos[b], tp.index, d_ab)
+        if len(A) < 40:
+            continue
+        if len(A) > max_per_pair:
+            sel = rng.choice(len(A), max_per_pair, replace=False)
+            A, B = A[sel], B[sel]
+        data.append((a, b, np.c_[A, np.ones(len(A))], np.c_[B, np.ones(len(B))]))
+    return data
+
+
+def epipolar_fit_px(cams: dict[str, CameraTrack], infos: dict[str, VideoInfo], xy: dict[str, np.ndarray],
+                    pairs: dict[tuple[str, str], TrackPairs], coarse_offset_s: dict[str, float],
+                    max_per_pair: int = 400, seed: int = 0) -> tuple[float, int]:
+    """(median |Sampson distance| px, number of pairs) of the track pairs of every pair of static
+    cams at the coarse offsets: how well a set of cameras explains the moving points."""
+    data = _pair_data(cams, infos, xy, pairs, coarse_offset_s, max_per_pair, seed)
+    if not data:
+        return float("nan"), 0
+    r = np.concatenate([_signed_sampson(fundamental_from_cameras(cams[a].K, cams[a].cam_from_world,
+                                                                 cams[b].K, cams[b].cam_from_world), A, B)
+                        for a, b, A, B in data])
+    return float(np.median(np.abs(r))), len(data)
+
+
+def refine_cameras(cams: dict[str, CameraTrack], ref: str, infos: dict[str, VideoInfo],
+                   xy: dict[str, np.ndarray], pairs: dict[tuple[str, str], TrackPairs],
+                   coarse_offset_s: dict[str, float], max_per_pair: int = 150, loss_scale_px: float = 2.0,
+                   seed: int = 0) -> tuple[dict[str, CameraTrack], dict]:
+    """One focal per camera and every pose, fitted to the track pairs of every camera pair at once.
+
+    A focal length from one fundamental matrix is ill-posed when the optical axes nearly meet
+    (cameras around a scene, the usual rig), so the per-pair focals of cameras_from_tracks can
+    be far off; the pairs between non-reference cameras constrain them together. Each pair's
+    correspondences are taken at the offset implied by the coarse offsets to the reference
+    (Δ_ab = Δ_rb − Δ_ra) and the signed Sampson distances minimized with scipy's soft-L1 loss
+    (scale loss_scale_px). The reference stays at the origin; the scale is fixed by the first
+    other camera's distance. Returns (cameras, {"cost" (scipy's, robust), "median_px_before",
+    "median_px_after", "pairs", "focal_px"}).
+    """
+    names = [ref] + sorted(n for n in cams if n != ref)
+    data = [(names.index(a), names.index(b), A, B)
+            for a, b, A, B in _pair_data(cams, infos, xy, pairs, coarse_offset_s, max_per_pair, seed)]
+    if len(data) < 2:
+        return cams, {"pairs": len(data)}
+    pp = [np.array([(infos[n].width - 1) / 2, (infos[n].height - 1) / 2]) for n in names]
+    T0 = [np.asarray(cams[n].cam_from_world, float) for n in names]
+    scale = float(np.linalg.norm(T0[1][:3, 3])) or 1.0
+    x0 = [np.log(cams[n].K[0, 0]) for n in names]
+    for T in T0[1:]:
+        x0 += list(Rotation.from_matrix(T[:3, :3]).as_rotvec()) + list(T[:3, 3] / scale)
+
+    def unpack(x):
+        Ks, Ts = [], [np.eye(4)]
+        for i, n in enumerate(names):
+            f = np.exp(x[i])
+            Ks.append(np.array([[f, 0, pp[i][0]], [0, f, pp[i][1]], [0, 0, 1.0]]))
+        for j in range(len(names) - 1):
+            p = x[len(names) + 6 * j: len(names) + 6 * j + 6]
+            T = np.eye(4)
+            T[:3, :3], T[:3, 3] = Rotation.from_rotvec(p[:3]).as_matrix(), p[3:]
+            Ts.append(T)
+        return Ks, Ts
+
+    ia, ib = np.array([d[0] for d in data]), np.array([d[1] for d in data])
+
+    def residuals(x):
+        Ks, Ts = unpack(x)
+        Ks, Ts = np.stack(Ks), np.stack(Ts)
+        F = fundamental_from_cameras(Ks[ia], Ts[ia], Ks[ib], Ts[ib])  # all pairs at once
+        out = [_signed_sampson(F[k], A, B) for k, (_, _, A, B) in enumerate(data)]
+        out.append(np.array([10.0 * (np.linalg.norm(Ts[1][:3, 3]) - 1.0)]))  # scale gauge
+        return np.concatenate(out)
+
+    x0 = np.array(x0)
+    # focal within the range the per-pair self-calibration searches (0.3-5 image sizes)
+    size = [float(max(infos[n].width, infos[n].height)) for n in names]
+    lo = np.r_[np.log(0.3 * np.array(size)), np.full(len(x0) - len(names), -np.inf)]
+    hi = np.r_[np.log(5.0 * np.array(size)), np.full(len(x0) - len(names), np.inf)]
+    x0 = np.clip(x0, lo + 1e-9, hi - 1e-9)
+    r0 = residuals(x0)[:-1]
+    sol = least_squares(residuals, x0, bounds=(lo, hi), loss="soft_l1", f_scale=loss_scale_px,
+                        x_scale="jac", ftol=1e-6, max_nfev=100)
+    r1 = residuals(sol.x)[:-1]
+    Ks, Ts = unpack(sol.x)
+    out = {n: CameraTrack(Ks[i], Ts[i]) for i, n in enumerate(names)}
+    return out, {"cost": float(sol.cost), "median_px_before": round(float(np.median(np.abs(r0))), 3),
+                 "median_px_after": round(float(np.median(np.abs(r1))), 3), "pairs": len(data),
+                 "focal_px": {n: round(float(Ks[i][0, 0]), 1) for i, n in enumerate(names)}}
