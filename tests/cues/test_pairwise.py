@@ -118,3 +118,21 @@ def test_joint_fit_recovers_the_focals_that_single_pairs_cannot():
     assert n_pairs == 6 and fitted_px < 0.1
     unrefined, _, _ = pairwise.cameras_from_tracks("c0", infos, xy, pairs, moving, refine=False)
     assert pairwise.epipolar_fit_px(unrefined, infos, xy, pairs, coarse)[0] > 10 * fitted_px
+
+
+def test_cameras_that_leave_the_track_pairs_off_their_lines_are_not_returned():
+    """The joint fit must bring the median track pair within the tolerance (a fraction of the
+    image diagonal); on 0.5 px noise it leaves about 0.3 px, so a tolerance below that refuses
+    every camera with the reason, and the default accepts them."""
+    names, infos, xy, pairs, _ = ring_of_views()
+    rng = np.random.default_rng(0)
+    noisy = {n: v + rng.normal(0, 0.5, v.shape) for n, v in xy.items()}
+    moving = {n: False for n in names}
+    cams, reasons, details = pairwise.cameras_from_tracks("c0", infos, noisy, pairs, moving)
+    assert set(cams) == set(names) and not reasons
+    left = details["joint_fit"]["median_px_after"]
+    assert 0.05 < left < 1.0
+    strict = 0.5 * left / np.hypot(640, 480)
+    cams, reasons, _ = pairwise.cameras_from_tracks("c0", infos, noisy, pairs, moving, max_median_fraction=strict)
+    assert cams == {} and set(reasons) == set(names)
+    assert all("from the epipolar lines" in why for why in reasons.values())

@@ -8,6 +8,7 @@ in stats["dropped"], so that the caller can report it as not synchronized.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import logging
 import time
@@ -343,6 +344,10 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
             for n, why in reasons.items():
                 log.warning("%s: %s", n, why)
             return cams, {n: Tracks(vids[n].xy_full, vids[n].instance) for n in cams}, None, None
+        if len(est.cameras) < 2:  # neither worked: say why for both
+            est = dataclasses.replace(est, unregistered={
+                n: (f"{why}; from the moving points: {reasons[n].removeprefix('camera could not be registered: ')}"
+                    if n in reasons else why) for n, why in est.unregistered.items()})
     stats["dropped"].update(est.unregistered)
     for n, why in est.unregistered.items():
         log.warning("%s: %s", n, why)

@@ -7,7 +7,7 @@ share, as in unsynchronized two-view geometry), self-calibrate one focal length 
 that makes K_vᵀ F K_r closest to an essential matrix, principal points at the image centres),
 decompose into a relative pose, and fix the scale of every pair from points triangulated on the
 reference's tracks. With three or more cameras, one focal per camera and every pose are then
-fitted to the track pairs of all camera pairs at once (scipy least squares, soft-L1 loss),
+fitted to the track pairs of all camera pairs at once (scipy least squares, Cauchy loss),
 started from the per-pair focals and from a few shared guesses: one pair's focal is ill-posed
 when the optical axes nearly meet, as they do around a scene. Pure functions of arrays; the
 coarse offsets found here are only used to build the cameras, Stage 1 searches the offsets again.
@@ -113,14 +113,16 @@ def search_pair(xy_r, info_r, xy_v, info_v, index, min_corr: int = 40, thresh_px
 
 def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.ndarray],
                         pairs: dict[tuple[str, str], TrackPairs], moving: dict[str, bool],
-                        refine: bool = True, min_inlier_share: float = 0.2
+                        refine: bool = True, min_inlier_share: float = 0.2, max_median_fraction: float = 0.01
                         ) -> tuple[dict[str, CameraTrack], dict[str, str], dict[str, dict]]:
     """Static cameras in the reference's camera frame: (cameras, unregistered reasons, details).
 
     A camera needs min_inlier_share of its correspondences with the reference within 2 px of the
     best F (caliscope's right offsets had 0.26-0.55, with 0.15-0.2 at wrong offsets).
     refine: with three or more cameras, fit every focal and pose to all pairs at once
-    (refine_cameras; details["joint_fit"] says how well)."""
+    (refine_cameras; details["joint_fit"] says how well); when the fit leaves the median track
+    pair farther than max_median_fraction of the image diagonal from its epipolar line (Stage 1's
+    inlier tolerance), no camera is returned."""
     cams: dict[str, CameraTrack] = {}
     reasons: dict[str, str] = {}
     details: dict[str, dict] = {}
@@ -167,6 +169,14 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
         if best is not None:
             cams = best[0]
             details["joint_fit"] = best[1]
+            tol_px = max_median_fraction * max(np.hypot(i.width, i.height) for i in infos.values())
+            if best[1]["median_px_after"] > tol_px:
+                # most track pairs are off their epipolar lines at the coarse offsets: the offsets
+                # or the pairs are wrong (pan160906: 14.7 px, where caliscope's fits leave 3-5 px)
+                why = (f"camera could not be registered: the cameras fitted to the moving points leave half "
+                       f"their track pairs more than {best[1]['median_px_after']:.1f} px from the epipolar "
+                       f"lines (tolerance {tol_px:.1f} px, {100 * max_median_fraction:g} % of the diagonal)")
+                return {}, reasons | {n: why for n in cams}, details
     return cams, reasons, details
 
 
@@ -268,7 +278,7 @@ def refine_cameras(cams: dict[str, CameraTrack], ref: str, infos: dict[str, Vide
     (cameras around a scene, the usual rig), so the per-pair focals of cameras_from_tracks can
     be far off; the pairs between non-reference cameras constrain them together. Each pair's
     correspondences are taken at the offset implied by the coarse offsets to the reference
-    (Δ_ab = Δ_rb − Δ_ra) and the signed Sampson distances minimized with scipy's soft-L1 loss
+    (Δ_ab = Δ_rb − Δ_ra) and the signed Sampson distances minimized with scipy's Cauchy loss
     (scale loss_scale_px). The reference stays at the origin; the scale is fixed by the first
     other camera's distance. Returns (cameras, {"cost" (scipy's, robust), "median_px_before",
     "median_px_after", "pairs", "focal_px"}).
@@ -314,7 +324,10 @@ def refine_cameras(cams: dict[str, CameraTrack], ref: str, infos: dict[str, Vide
     hi = np.r_[np.log(5.0 * np.array(size)), np.full(len(x0) - len(names), np.inf)]
     x0 = np.clip(x0, lo + 1e-9, hi - 1e-9)
     r0 = residuals(x0)[:-1]
-    sol = least_squares(residuals, x0, bounds=(lo, hi), loss="soft_l1", f_scale=loss_scale_px,
+    # Cauchy, not soft-L1: half or more of the track pairs can be wrong matches (caliscope's cam_3
+    # pairs: 26 % inliers); soft-L1 let them pull cam_3's focal to a bound (384 or 6400 px) and
+    # left 4 of 18 offsets of 6 cuts over a frame off, Cauchy none (focals mostly 2-18 % off)
+    sol = least_squares(residuals, x0, bounds=(lo, hi), loss="cauchy", f_scale=loss_scale_px,
                         x_scale="jac", ftol=1e-6, max_nfev=100)
     r1 = residuals(sol.x)[:-1]
     Ks, Ts = unpack(sol.x)
