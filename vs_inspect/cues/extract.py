@@ -313,8 +313,8 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
                     "registered_frames": {n: c.registered_frames.tolist() for n, c in est.cameras.items()}}
     static = [n for n, v in vids.items() if v.camera_motion != "moving"]
     # a model resting on few points per image, or missing a static camera, is checked against the
-    # moving points (caliscope's 90° views: XFeat models on 28-43 points per image had focals of
-    # 8000-12000 px and poses 20-44° off, yet passed the points threshold)
+    # moving points (caliscope's 90° views: XFeat models on 34-49 points per image had focals of
+    # 240-12168 px against calibrated 640-904 and rotations 9-44° off, yet passed the threshold)
     weak = len(est.cameras) < 2 or any(n not in est.cameras for n in static) or \
         min(c.points_seen for c in est.cameras.values()) < 2 * cfg.camera.min_inliers
     if weak and cfg.camera.fallback_from_tracks and len(static) >= 2:
@@ -323,7 +323,10 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
         xy = {n: v.xy_full for n, v in vids.items()}
         cams, reasons, details = cameras_from_tracks(
             ref, infos, xy, pairs, {n: v.camera_motion == "moving" for n, v in vids.items()})
-        use, why = len(cams) >= 2, f"the background reconstruction registered {len(est.cameras)} camera(s)"
+        why = (f"the background reconstruction registered {len(est.cameras)} camera(s)" if len(est.cameras) < 2 else
+               f"the background reconstruction rests on few points (fewest "
+               f"{min(c.points_seen for c in est.cameras.values())} per image) or left a static camera out")
+        use = len(cams) >= 2
         if use and len(est.cameras) >= 2:
             # both: keep the one whose cameras explain the moving points better, on the pairs of
             # the background model's static cameras (tracks undistorted with its lens)
@@ -333,9 +336,8 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
                                                                   for n in sfm_static}, pairs, coarse)
             fb_px, n_fb = epipolar_fit_px({n: c for n, c in cams.items() if n in sfm_static}, infos, xy, pairs, coarse)
             use = len(cams) >= len(est.cameras) and n_fb >= n_sfm and fb_px < sfm_px
-            why = (f"the background reconstruction rests on few points (fewest {min(c.points_seen for c in est.cameras.values())} "
-                   f"per image) or left a static camera out; on the moving points its cameras leave a median "
-                   f"epipolar distance of {sfm_px:.1f} px, the moving points' own cameras {fb_px:.1f} px")
+            why += (f"; on the moving points its cameras leave a median epipolar distance of {sfm_px:.1f} px, "
+                    f"the moving points' own cameras {fb_px:.1f} px")
         stats["sfm"]["fallback"] = {"reference": ref, "pairs": details, "why": why, "used": bool(use)}
         log.warning("%s; cameras from the moving points: %d (%s)", why, len(cams), "used" if use else "not used")
         if use:
