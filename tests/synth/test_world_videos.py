@@ -53,7 +53,6 @@ def test_scene_files_and_clocks(demo_run):
     assert np.isfinite(tr["points_world"]).all()
 
 
-
 def test_rendering_again_gives_the_same_files(demo_run, tmp_path):
     """Same scene settings, same bytes: renderer, look and encoder are deterministic (the
     rendered benchmarks rely on it to compare settings on fresh renderings)."""
@@ -67,6 +66,7 @@ def test_rendering_again_gives_the_same_files(demo_run, tmp_path):
     for name in videos:
         assert (tmp_path / "again" / name).read_bytes() == (out / "scene" / name).read_bytes(), name
     assert (tmp_path / "again" / "gt.json").read_text() == (out / "scene" / "gt.json").read_text()
+
 
 def test_true_bundle_recovers_offsets(demo_run, tmp_path):
     out, data = demo_run

@@ -315,8 +315,9 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
     # a model resting on few points per image, or missing a static camera, is checked against the
     # moving points (caliscope's 90° views: XFeat models on 34-49 points per image had focals of
     # 240-12168 px against calibrated 640-904 and rotations 9-44° off, yet passed the threshold)
+    fewest = min((c.points_seen for c in est.cameras.values()), default=0)
     weak = len(est.cameras) < 2 or any(n not in est.cameras for n in static) or \
-        min(c.points_seen for c in est.cameras.values()) < 2 * cfg.camera.min_inliers
+        fewest < 2 * cfg.camera.min_inliers
     if weak and cfg.camera.fallback_from_tracks and len(static) >= 2:
         ref = max(vids, key=lambda n: sum(len(p.index) for k, p in pairs.items() if n in k))
         infos = {n: v.info for n, v in vids.items()}
@@ -324,8 +325,8 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
         cams, reasons, details = cameras_from_tracks(
             ref, infos, xy, pairs, {n: v.camera_motion == "moving" for n, v in vids.items()})
         why = (f"the background reconstruction registered {len(est.cameras)} camera(s)" if len(est.cameras) < 2 else
-               f"the background reconstruction rests on few points (fewest "
-               f"{min(c.points_seen for c in est.cameras.values())} per image) or left a static camera out")
+               f"the background reconstruction rests on few points (fewest {fewest} per image) or left a "
+               f"static camera out")
         use = len(cams) >= 2
         if use and len(est.cameras) >= 2:
             # both: keep the one whose cameras explain the moving points better, on the pairs of
@@ -343,13 +344,13 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
         if use:
             stats["camera_source"] = "estimated from moving points (two-view geometry)"
             stats["dropped"].update(reasons)
-            for n, why in reasons.items():
-                log.warning("%s: %s", n, why)
+            for n, reason in reasons.items():
+                log.warning("%s: %s", n, reason)
             return cams, {n: Tracks(vids[n].xy_full, vids[n].instance) for n in cams}, None, None
         if len(est.cameras) < 2:  # neither worked: say why for both
             est = dataclasses.replace(est, unregistered={
-                n: (f"{why}; from the moving points: {reasons[n].removeprefix('camera could not be registered: ')}"
-                    if n in reasons else why) for n, why in est.unregistered.items()})
+                n: (f"{sfm_why}; from the moving points: {reasons[n].removeprefix('camera could not be registered: ')}"
+                    if n in reasons else sfm_why) for n, sfm_why in est.unregistered.items()})
     stats["dropped"].update(est.unregistered)
     for n, why in est.unregistered.items():
         log.warning("%s: %s", n, why)

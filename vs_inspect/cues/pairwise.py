@@ -23,7 +23,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from ..geometry.epipolar import fundamental_from_cameras
+from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
 from ..types import CameraTrack, TrackPairs, VideoInfo
 
 log = logging.getLogger(__name__)
@@ -229,8 +229,8 @@ def _cameras_at(ref: str, infos: dict[str, VideoInfo], found: dict[str, tuple], 
 
 
 def _signed_sampson(F_ab: np.ndarray, h_a: np.ndarray, h_b: np.ndarray) -> np.ndarray:
-    """(P,) signed Sampson distance (px) of x_aᵀ F_ab x_b = 0, homogeneous h_a, h_b (P,3): smooth
-    at zero, for least squares."""
+    """(P,) signed Sampson distance (px) of x_aᵀ F_ab x_b = 0, homogeneous h_a, h_b (P,3): the
+    signed root of geometry.epipolar's "sampson" residual, smooth at zero for least squares."""
     Fb, Fta = h_b @ F_ab.T, h_a @ F_ab
     num = np.sum(h_a * Fb, axis=1)
     return num / np.sqrt(Fb[:, 0] ** 2 + Fb[:, 1] ** 2 + Fta[:, 0] ** 2 + Fta[:, 1] ** 2 + 1e-300)
@@ -262,10 +262,10 @@ def epipolar_fit_px(cams: dict[str, CameraTrack], infos: dict[str, VideoInfo], x
     data = _pair_data(cams, infos, xy, pairs, coarse_offset_s, max_per_pair, seed)
     if not data:
         return float("nan"), 0
-    r = np.concatenate([_signed_sampson(fundamental_from_cameras(cams[a].K, cams[a].cam_from_world,
-                                                                 cams[b].K, cams[b].cam_from_world), A, B)
-                        for a, b, A, B in data])
-    return float(np.median(np.abs(r))), len(data)
+    r2 = np.concatenate([epipolar_residual(fundamental_from_cameras(cams[a].K, cams[a].cam_from_world,
+                                                                    cams[b].K, cams[b].cam_from_world),
+                                           A[:, :2], B[:, :2], "sampson") for a, b, A, B in data])
+    return float(np.median(np.sqrt(r2))), len(data)
 
 
 def refine_cameras(cams: dict[str, CameraTrack], ref: str, infos: dict[str, VideoInfo],
@@ -326,7 +326,7 @@ def refine_cameras(cams: dict[str, CameraTrack], ref: str, infos: dict[str, Vide
     r0 = residuals(x0)[:-1]
     # Cauchy, not soft-L1: half or more of the track pairs can be wrong matches (caliscope's cam_3
     # pairs: 26 % inliers); soft-L1 let them pull cam_3's focal to a bound (384 or 6400 px) and
-    # left 4 of 18 offsets of 6 cuts over a frame off, Cauchy none (focals mostly 2-18 % off)
+    # left 4 of 18 offsets of 6 cuts over a frame off, Cauchy none
     sol = least_squares(residuals, x0, bounds=(lo, hi), loss="cauchy", f_scale=loss_scale_px,
                         x_scale="jac", ftol=1e-6, max_nfev=100)
     r1 = residuals(sol.x)[:-1]
