@@ -134,8 +134,9 @@ def test_calibration_for_other_cameras(tmp_path, capsys):
 
 
 def test_videos_that_never_see_the_same_thing(tmp_path):
-    """Different textures on the moving objects: no descriptor pairs; the pairs that epipolar
-    consistency finds by chance do not agree on an offset, so b is null with the pair's reason."""
+    """Different textures on the moving objects: at most a few chance descriptor pairs (0 or 2,
+    depending on the encoder's settings; Stage 1 needs 8); the pairs that epipolar consistency
+    finds by chance do not agree on an offset, so b is null with the pair's reason."""
     a, b = tmp_path / "a.mp4", tmp_path / "b.mp4"
     _write_synthetic(a, 1)
     _write_synthetic(b, 2)
@@ -145,5 +146,5 @@ def test_videos_that_never_see_the_same_thing(tmp_path):
     assert main(["sync", str(a), str(b), "--calib", str(cal), "--out", str(out), "--no-progress"]) == 2
     res = json.loads((out / "result.json").read_text())
     assert res["offsets_s"]["b"] is None and "b" in res["unresolved"]
-    assert res["cues"]["pairs"]["a__b"]["track_pairs"] == 0  # descriptor pairs
+    assert res["cues"]["pairs"]["a__b"]["track_pairs"] < 8  # descriptor pairs
     assert "a__b: " in res["unresolved"]["b"]
