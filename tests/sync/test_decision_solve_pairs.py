@@ -93,6 +93,33 @@ def test_irls_downweights_an_outlier_that_ls_follows():
     assert all(u is not None and u >= 0 for u in irls.uncertainty_s.values())
 
 
+def test_video_between_contradicting_pairs_gets_null_not_a_compromise():
+    # the caliscope case: a, b, e agree; c is tied to them only by two pairs 3 s apart and came
+    # out between them (2 s off the truth); d hangs on c alone
+    names = ["a", "b", "c", "d", "e"]
+    meas = [m("a", "b", 0.5), m("a", "e", 1.0), m("b", "e", 0.5),
+            m("a", "c", -5.0), m("b", "c", -2.5), m("c", "d", 0.2)]
+    out = solve_offsets(names, "a", meas, "irls", 0.05)
+    assert out.offsets_s["a"] == 0.0
+    assert out.offsets_s["b"] == pytest.approx(0.5) and out.offsets_s["e"] == pytest.approx(1.0)
+    assert out.offsets_s["c"] is None and out.offsets_s["d"] is None
+    assert "contradict each other" in out.unresolved_reason["c"]
+    assert "a__c" in out.unresolved_reason["c"] and "b__c" in out.unresolved_reason["c"]
+    assert "only through c" in out.unresolved_reason["d"]
+    assert out.pairs == (("a", "b"), ("a", "e"), ("b", "e"))  # the kept solve: agreeing pairs only
+    # plain least squares (the ablation) keeps its compromise
+    ls = solve_offsets(names, "a", meas, "ls")
+    assert ls.offsets_s["c"] is not None and not ls.unresolved_reason
+
+
+def test_agreeing_pairs_with_noise_are_not_a_contradiction():
+    truth = {"a": 0.0, "b": 0.3, "c": -1.0}
+    meas = [m("a", "b", 0.3 + 0.04), m("a", "c", -1.0 - 0.05), m("b", "c", -1.3 + 0.06)]
+    out = solve_offsets(list(truth), "a", meas, "irls", 0.05)
+    assert not out.unresolved_reason
+    assert all(abs(out.offsets_s[v] - truth[v]) < 0.1 for v in truth)
+
+
 def test_unconnected_video_gets_null_and_a_reason():
     out = solve_offsets(["a", "b", "c"], "a", [m("a", "b", 0.4)])
     assert out.offsets_s == {"a": 0.0, "b": pytest.approx(0.4), "c": None}

@@ -2,6 +2,11 @@
 
 Minimizes Σ ρ(s_b - s_a - Δ_ab) with s_reference = 0, over the videos connected to the
 reference through accepted pairs. Others get no offset and a reason, never a guess.
+
+With IRLS, a video whose solved offset lies far (more than conflict_factor Huber thresholds)
+from every one of its accepted pairs is a compromise between pairs that contradict each other,
+not a measurement (two pairs 3.8 s apart put a caliscope camera 2 s off the truth, between
+them): it gets no offset and a reason naming the pairs, and the solve is repeated without them.
 """
 
 from __future__ import annotations
@@ -40,21 +45,66 @@ def huber_weights(residual: np.ndarray, delta: float) -> np.ndarray:
 
 def solve_offsets(names: list[str], reference: str, measurements: list[PairMeasurement],
                   solver: str = "irls", huber_delta_s: float = 0.05,
-                  max_iterations: int = 50) -> SolveOutput:
+                  max_iterations: int = 50, conflict_factor: float = 3.0) -> SolveOutput:
     if reference not in names:
         raise ValueError(f"reference {reference!r} is not a video; known: {names}")
+    out, used = _solve(names, reference, measurements, solver, huber_delta_s, max_iterations)
+    if solver != "irls":
+        return out
+    tol = conflict_factor * huber_delta_s
+    reasons: dict[str, str] = {}
+    while out.iterations:
+        res = out.iterations[-1].residual_s
+        # a bridge (a pair whose removal splits the graph) always fits exactly: it is no evidence
+        loop = ~_bridges(names, used)
+        mine = {v: [(m, r) for m, r, ok in zip(used, res, loop) if ok and v in (m.a, m.b)] for v in names}
+        torn = [v for v in names if v != reference and out.offsets_s[v] is not None and mine[v]
+                and all(abs(r) > tol for _, r in mine[v])]
+        if not torn:
+            break
+        for v in torn:
+            said = "; ".join(f"{m.a}__{m.b} Δ {m.offset_s:+.3f} s, off by {r:+.3f} s" for m, r in mine[v])
+            reasons[v] = (f"its accepted pairs contradict each other: the joint solution is more than "
+                          f"{1000 * tol:.0f} ms from every one of them ({said})")
+        before = out.offsets_s
+        keep = [m for m in used if m.a not in torn and m.b not in torn]
+        out, used = _solve(names, reference, keep, solver, huber_delta_s, max_iterations)
+        for v in names:
+            if v not in torn and v not in reasons and before[v] is not None and out.offsets_s[v] is None:
+                reasons[v] = (f"connected to the reference only through {', '.join(torn)}, whose pairs "
+                              f"contradict each other")
+    if not reasons:
+        return out
+    return SolveOutput(out.offsets_s, out.uncertainty_s, {**out.unresolved_reason, **reasons},
+                       out.iterations, out.pairs)
+
+
+def _components(names: list[str], measurements: list[PairMeasurement]) -> np.ndarray:
+    """(V,) connected-component label of each video in the graph of the measurements."""
     pos = {n: i for i, n in enumerate(names)}
-    n = len(names)
+    if not measurements:
+        return np.arange(len(names))
+    g = coo_matrix((np.ones(len(measurements)),
+                    ([pos[m.a] for m in measurements], [pos[m.b] for m in measurements])),
+                   shape=(len(names), len(names)))
+    return connected_components(g, directed=False)[1]
+
+
+def _bridges(names: list[str], measurements: list[PairMeasurement]) -> np.ndarray:
+    """(E,) bool: removing this measurement splits its component (a handful of videos: brute force)."""
+    n_before = len(np.unique(_components(names, measurements)))
+    return np.array([len(np.unique(_components(names, measurements[:i] + measurements[i + 1:]))) > n_before
+                     for i in range(len(measurements))], bool)
+
+
+def _solve(names: list[str], reference: str, measurements: list[PairMeasurement], solver: str,
+           huber_delta_s: float, max_iterations: int) -> tuple[SolveOutput, list[PairMeasurement]]:
+    """(solution, the measurements it used, in residual order)."""
+    pos = {n: i for i, n in enumerate(names)}
     offsets: dict[str, float | None] = {v: None for v in names}
     unc: dict[str, float | None] = {v: None for v in names}
     reasons: dict[str, str] = {}
-    if measurements:
-        g = coo_matrix((np.ones(len(measurements)),
-                        ([pos[m.a] for m in measurements], [pos[m.b] for m in measurements])),
-                       shape=(n, n))
-        _, label = connected_components(g, directed=False)
-    else:
-        label = np.arange(n)
+    label = _components(names, measurements)
     comp = {v for v in names if label[pos[v]] == label[pos[reference]]}
     for v in names:
         if v not in comp:
@@ -64,7 +114,7 @@ def solve_offsets(names: list[str], reference: str, measurements: list[PairMeasu
     used = [m for m in measurements if m.a in comp and m.b in comp]
     unknown = [v for v in names if v in comp and v != reference]
     if not unknown or not used:
-        return SolveOutput(offsets, unc, reasons, (), tuple((m.a, m.b) for m in used))
+        return SolveOutput(offsets, unc, reasons, (), tuple((m.a, m.b) for m in used)), used
     col = {v: i for i, v in enumerate(unknown)}
     A = np.zeros((len(used), len(unknown)))
     for r, m in enumerate(used):
@@ -100,4 +150,4 @@ def solve_offsets(names: list[str], reference: str, measurements: list[PairMeasu
     for v, i in col.items():
         offsets[v] = float(x[i])
         unc[v] = float(np.sqrt(max(var[i], 0.0)))
-    return SolveOutput(offsets, unc, reasons, tuple(iters), tuple((m.a, m.b) for m in used))
+    return SolveOutput(offsets, unc, reasons, tuple(iters), tuple((m.a, m.b) for m in used)), used
