@@ -199,8 +199,13 @@ def bench_speed(args) -> None:
         for calib, label in ((root / "camera_array.toml", "calibration"), (None, "estimated")):
             if label == "estimated" and not args.estimate:
                 continue
-            c0 = time.process_time()
-            res, stats, tc, ts = run(paths, calib)
+            c0, t0 = time.process_time(), time.perf_counter()
+            try:
+                res, stats, tc, ts = run(paths, calib)
+            except InputError as exc:  # no video got a camera: a result too, like sync's exit 2
+                print(f"\nspeed ({label}): no result after {time.perf_counter() - t0:.1f} s "
+                      f"(CPU {time.process_time() - c0:.1f} s): {exc}")
+                continue
             cpu = time.process_time() - c0
             print(f"\nspeed ({label}): 4 videos x {args.seconds} s x 1280x720 @ 30 fps")
             print(f"{'stage':<16}{'seconds':>10}")
