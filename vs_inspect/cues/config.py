@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from .learned import MATCHERS
+
 
 @dataclass(frozen=True)
 class MotionConfig:
@@ -137,8 +139,8 @@ class CameraConfig:
     def __post_init__(self) -> None:
         if self.features not in ("sift", "xfeat", "auto"):
             raise ValueError(f"unknown camera features {self.features!r}: use sift, xfeat or auto")
-        if self.xfeat_matcher not in ("mnn", "lighterglue"):
-            raise ValueError(f"unknown XFeat matcher {self.xfeat_matcher!r}: use mnn or lighterglue")
+        if self.xfeat_matcher not in MATCHERS:
+            raise ValueError(f"unknown XFeat matcher {self.xfeat_matcher!r}: use {' or '.join(MATCHERS)}")
 
 
 @dataclass(frozen=True)
