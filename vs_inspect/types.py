@@ -7,6 +7,7 @@ naming what they received; the bundle reader turns those into BundleError with t
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -320,3 +321,81 @@ class SyncResult:
     iterations: tuple[SolveIteration, ...]
     solver: str = "irls"
     timings_s: dict[str, float] = field(default_factory=dict)
+
+
+# ---- a whole run (Stage 0 + 1 + 2), as written to result.json --------------------------------
+
+
+@dataclass(frozen=True)
+class RunInputs:
+    """What a run was given, as result.json's "input" records it (paths as the user gave them)."""
+
+    bundle: str | None = None  # cue bundle folder read or written by the run
+    videos: dict[str, str] = field(default_factory=dict)  # video name -> file or image folder
+    scene: str | None = None  # rendered scene folder (demo)
+    cues: str | None = None  # where the cues came from when not Stage 0 (e.g. "true cue bundle")
+    fps: float | None = None  # --fps given for image folders, frames per second
+
+
+@dataclass(frozen=True)
+class VideoCueStats:
+    """Stage 0's counts for one video."""
+
+    path: str
+    camera_motion: str  # "static" | "moving"
+    background_motion_px: float  # median background motion between sampled frames, px
+    moving_fraction: float  # share of pixels in moving regions, 0..1
+    tracks: int
+    instances: int  # moving regions (connected instances) found
+    keyframe_features: int
+    snapped_features: int  # keyframe features snapped to a track
+    note: str | None = None  # why the video gives no cues (no moving regions, no tracks)
+
+
+@dataclass(frozen=True)
+class CueStats:
+    """What Stage 0 found and how long it took, for result.json's "cues" and the recording."""
+
+    camera_source: str  # "calibration" | "estimated" | "estimated from moving points (...)"
+    registered_cameras: int
+    tracks: int
+    track_pairs: int
+    videos: dict[str, VideoCueStats]
+    pairs: dict[str, dict[str, Any]]  # "a__b" -> counts (matches, snapped, geometric_*), JSON values
+    dropped: dict[str, str]  # video -> why it was left out of the bundle
+    timings_s: dict[str, float]  # per Stage 0 step, seconds
+    geometric_peaks: str | None = None  # "consistent" | "inconsistent" | ... (None: not run)
+    sfm: dict[str, Any] | None = None  # estimated cameras' diagnostics, JSON values (None: calibrated)
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """A whole run: one offset per input video (None with a reason), and how it was reached.
+
+    offsets_s covers every input video, including those Stage 0 left out (None, reason in
+    unresolved). pairs, solve_pairs and iterations are Stage 1 and Stage 2's (SyncResult).
+    """
+
+    reference: str
+    offsets_s: dict[str, float | None]  # video -> offset_s (DESIGN.md convention), seconds
+    uncertainty_s: dict[str, float | None]  # video -> 1-sigma of offset_s, seconds
+    unresolved: dict[str, str]  # video -> why it has no offset
+    pairs: tuple[PairLandscape, ...]
+    solver: str  # "irls" | "ls"
+    solve_pairs: tuple[tuple[str, str], ...]  # the accepted pairs, in the order of residuals
+    iterations: tuple[SolveIteration, ...]
+    timings_s: dict[str, float]  # per stage, seconds ("total_s" for the whole run)
+    inputs: RunInputs = field(default_factory=RunInputs)
+    config: dict[str, Any] | None = None  # the run's config as saved (pipeline.RunConfig.to_dict)
+    cues: CueStats | None = None  # None when the run started from a cue bundle
+    gt_offsets_s: dict[str, float] | None = None  # true offsets when known (bundle gt.json, --gt)
+
+    @property
+    def resolved(self) -> list[str]:
+        return [v for v, off in self.offsets_s.items() if off is not None]
+
+    def pair(self, a: str, b: str) -> PairLandscape | None:
+        for p in self.pairs:
+            if (p.a, p.b) == (a, b):
+                return p
+        return None

@@ -36,6 +36,26 @@ def pair_auc(errors_ms: np.ndarray, threshold_ms: float) -> float:
     return float(100.0 * area.mean())
 
 
+def offset_errors_ms(estimated_s: dict[str, float | None], true_s: dict[str, float],
+                     reference: str) -> dict[str, float | None]:
+    """|error| in ms of every video in both dicts, after aligning the reference with the truth.
+
+    The one definition of "error against the truth" (tables, report, recording, benchmarks):
+    (offset_v - offset_ref) - (true_v - true_ref). None where a video or the reference is
+    unresolved; the reference itself gets 0.0 when resolved.
+    """
+    ref_est, ref_true = estimated_s.get(reference), true_s.get(reference)
+    out: dict[str, float | None] = {}
+    for v, est in estimated_s.items():
+        if v not in true_s:
+            continue
+        if est is None or ref_est is None or ref_true is None:
+            out[v] = None
+        else:
+            out[v] = 1000.0 * abs((est - ref_est) - (true_s[v] - ref_true))
+    return out
+
+
 def evaluate_offsets(estimated_s: dict[str, float | None], true_s: dict[str, float],
                      reference: str) -> SyncMetrics:
     missing = sorted(set(true_s) - set(estimated_s))
@@ -50,15 +70,8 @@ def evaluate_offsets(estimated_s: dict[str, float | None], true_s: dict[str, flo
         else:
             pair_err.append(1000.0 * abs((eb - ea) - (true_s[b] - true_s[a])))
     ref_est = estimated_s.get(reference)
-    per_video: dict[str, float | None] = {}
-    for v in names:
-        if v == reference:
-            continue
-        ev = estimated_s[v]
-        if ev is None or ref_est is None:
-            per_video[v] = None
-        else:
-            per_video[v] = 1000.0 * abs((ev - ref_est) - (true_s[v] - true_s[reference]))
+    errors = offset_errors_ms({v: estimated_s[v] for v in names}, true_s, reference)
+    per_video = {v: errors[v] for v in names if v != reference}
     errs = np.array([e for e in per_video.values() if e is not None])
     return SyncMetrics(
         pair_auc(np.array(pair_err), 100.0), pair_auc(np.array(pair_err), 500.0),

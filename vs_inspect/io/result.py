@@ -2,17 +2,19 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..errors import InputError
-from ..types import PairLandscape, SyncResult
+from .atomic import write_json_atomic  # noqa: F401  (re-exported for older imports)
+from ..types import (CueStats, PairDecision, PairLandscape, RunInputs, RunResult, SolveIteration,
+                     SyncResult, VideoCueStats)
 
 
 def _num(x: float) -> float | None:
@@ -71,29 +73,6 @@ def result_to_dict(result: SyncResult, extra: dict[str, Any] | None = None) -> d
     return out
 
 
-def write_json_atomic(data: dict[str, Any], path: str | os.PathLike) -> Path:
-    """Write JSON to a temporary sibling, then rename: no half-written file is ever visible."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as f:
-            json.dump(data, f, indent=1, default=_default)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
-
-
-def _default(o):
-    if isinstance(o, np.generic):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    raise TypeError(f"cannot write {type(o).__name__} to JSON")
-
-
 def read_result(path: str | os.PathLike) -> dict[str, Any]:
     path = Path(path)
     if path.is_dir():
@@ -107,3 +86,150 @@ def read_result(path: str | os.PathLike) -> dict[str, Any]:
     if not isinstance(data, dict) or not isinstance(data.get("offsets_s"), dict) or "reference" not in data:
         raise InputError(f"{path}: not a vs-inspect result (needs 'reference' and 'offsets_s')")
     return data
+
+
+# ---- RunResult <-> result.json (format unchanged: version 1) -----------------------------------
+
+
+def _opt_float(x: Any, what: str) -> float | None:
+    if x is None:
+        return None
+    if isinstance(x, bool) or not isinstance(x, (int, float)):
+        raise InputError(f"{what} must be a number or null, got {type(x).__name__}")
+    return float(x)
+
+
+def cue_stats_to_dict(c: CueStats) -> dict[str, Any]:
+    out: dict[str, Any] = {
+        "camera_source": c.camera_source, "registered_cameras": c.registered_cameras,
+        "tracks": c.tracks, "track_pairs": c.track_pairs,
+        "videos": {n: {k: v for k, v in dataclasses.asdict(s).items() if not (k == "note" and v is None)}
+                   for n, s in c.videos.items()},
+        "pairs": c.pairs, "dropped": c.dropped}
+    if c.geometric_peaks is not None:
+        out["geometric_peaks"] = c.geometric_peaks
+    if c.sfm is not None:
+        out["sfm"] = c.sfm
+    return out
+
+
+def cue_stats_from_dict(d: dict[str, Any], timings_s: dict[str, float] | None = None) -> CueStats:
+    names = {f.name for f in dataclasses.fields(VideoCueStats)}
+    videos = {n: VideoCueStats(**{k: v for k, v in s.items() if k in names})
+              for n, s in (d.get("videos") or {}).items()}
+    return CueStats(str(d.get("camera_source", "")), int(d.get("registered_cameras", 0)),
+                    int(d.get("tracks", 0)), int(d.get("track_pairs", 0)), videos,
+                    dict(d.get("pairs") or {}), dict(d.get("dropped") or {}),
+                    dict(timings_s or {}), d.get("geometric_peaks"), d.get("sfm"))
+
+
+def run_result_to_dict(r: RunResult) -> dict[str, Any]:
+    """result.json's dictionary (DESIGN.md): the keys of format version 1, in the same places."""
+    out: dict[str, Any] = {
+        "format": "vs-inspect-result", "version": 1,
+        "reference": r.reference,
+        "offsets_s": {k: _num(v) if v is not None else None for k, v in r.offsets_s.items()},
+        "uncertainty_s": {k: _num(v) if v is not None else None for k, v in r.uncertainty_s.items()},
+        "unresolved": dict(r.unresolved),
+        "pairs": [pair_to_dict(p) for p in r.pairs],
+        "solve": {
+            "solver": r.solver,
+            "pairs": [list(p) for p in r.solve_pairs],
+            "iterations": [{"residual_s": [float(x) for x in it.residual_s],
+                            "weight": [float(w) for w in it.weight]} for it in r.iterations],
+        },
+        "timings_s": {k: round(v, 4) for k, v in r.timings_s.items()},
+    }
+    if r.config is not None:
+        out["config"] = r.config
+    inp = {k: v for k, v in dataclasses.asdict(r.inputs).items() if v not in (None, {})}
+    if inp:
+        out["input"] = inp
+    if r.gt_offsets_s is not None:
+        out["gt_offsets_s"] = dict(r.gt_offsets_s)
+    if r.cues is not None:
+        out["cues"] = cue_stats_to_dict(r.cues)
+    return out
+
+
+def _pair_from_dict(p: dict[str, Any]) -> PairLandscape:
+    land = p.get("landscape") or {}
+    offsets = np.asarray(land.get("offsets_s", []), dtype=np.float64)
+    energy = np.asarray([np.nan if e is None else e for e in land.get("energy", [])], dtype=np.float64)
+    support = np.asarray(land.get("support", []), dtype=np.int64)
+    minima = [float(m) for m in p.get("minima_offsets_s", [])]
+    idx = np.array([int(np.argmin(np.abs(offsets - m))) for m in minima] if offsets.size else [],
+                   dtype=np.int64)
+    nan = float("nan")
+
+    def f(key: str) -> float:
+        v = _opt_float(p.get(key), f"pairs[].{key}")
+        return nan if v is None else v
+
+    decision = PairDecision(bool(p["accepted"]), str(p.get("reason", "")), f("contrast"),
+                            f("second_depth_ratio"), int(p.get("num_minima", 0)),
+                            int(p.get("num_pareto_minima", 0)), bool(p.get("at_range_edge", False)),
+                            f("inlier_fraction"), f("inlier_tau_px"))
+    return PairLandscape(str(p["a"]), str(p["b"]), offsets, energy, support, idx, f("offset_s"),
+                         f("best_energy"), f("uncertainty_s"), int(p.get("num_track_pairs", 0)),
+                         decision, str(p.get("residual", "sampson")), f("robust_scale"))
+
+
+def run_result_from_dict(d: dict[str, Any], source: str = "result") -> RunResult:
+    """The RunResult of a result.json dictionary; InputError naming the source when malformed."""
+    try:
+        if not isinstance(d, dict) or not isinstance(d.get("offsets_s"), dict) or "reference" not in d:
+            raise InputError("not a vs-inspect result (needs 'reference' and 'offsets_s')")
+        offsets = {str(k): _opt_float(v, f"offsets_s[{k!r}]") for k, v in d["offsets_s"].items()}
+        unc = {str(k): _opt_float(v, f"uncertainty_s[{k!r}]")
+               for k, v in (d.get("uncertainty_s") or {}).items()}
+        solve = d.get("solve") or {}
+        iters = tuple(SolveIteration(np.asarray(it.get("residual_s", []), dtype=np.float64),
+                                     np.asarray(it.get("weight", []), dtype=np.float64))
+                      for it in solve.get("iterations", []))
+        timings = {str(k): float(v) for k, v in (d.get("timings_s") or {}).items()}
+        inp = d.get("input") or {}
+        vids = inp.get("videos") or {}
+        if isinstance(vids, list):  # older runs listed the videos in bundle order
+            vids = {Path(str(v.get("path", v)) if isinstance(v, dict) else str(v)).stem:
+                    str(v.get("path")) if isinstance(v, dict) else str(v) for v in vids}
+        inputs = RunInputs(inp.get("bundle"), {str(k): str(v) for k, v in vids.items()},
+                           inp.get("scene"), inp.get("cues"), _opt_float(inp.get("fps"), "input.fps"))
+        cues = None
+        if isinstance(d.get("cues"), dict):
+            cues = cue_stats_from_dict(d["cues"], {k.removeprefix("stage0_"): v for k, v in timings.items()
+                                                   if k.startswith("stage0_")})
+        gt = d.get("gt_offsets_s")
+        return RunResult(str(d["reference"]), offsets, unc, {str(k): str(v) for k, v in
+                                                             (d.get("unresolved") or {}).items()},
+                         tuple(_pair_from_dict(p) for p in d.get("pairs", [])),
+                         str(solve.get("solver", "irls")),
+                         tuple(tuple(p) for p in solve.get("pairs", [])), iters, timings, inputs,
+                         d.get("config"), cues,
+                         {str(k): float(v) for k, v in gt.items()} if isinstance(gt, dict) else None)
+    except InputError as exc:
+        raise InputError(f"{source}: {exc}") from None
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise InputError(f"{source}: malformed result ({type(exc).__name__}: {exc})") from None
+
+
+def write_run_result(r: RunResult, path: str | os.PathLike) -> Path:
+    """result.json written atomically (a folder gets result.json inside)."""
+    path = Path(path)
+    if path.is_dir():
+        path = path / "result.json"
+    return write_json_atomic(run_result_to_dict(r), path)
+
+
+def read_run_result(path: str | os.PathLike) -> RunResult:
+    """A result.json (or a run folder holding one) as a RunResult."""
+    path = Path(path)
+    if path.is_dir():
+        path = path / "result.json"
+    try:
+        data = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise InputError(f"{path}: missing file") from None
+    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
+        raise InputError(f"{path}: not valid JSON ({exc})") from None
+    return run_result_from_dict(data, str(path))
