@@ -108,7 +108,7 @@ def _verification(seed: int):
     """COLMAP's two-view geometric verification with a seeded RANSAC.
 
     Its RANSAC runs in worker threads that set_random_seed does not reach: unseeded, repeated runs
-    registered 0 or 3 cameras on the same input (sequence69)."""
+    on one input registered different numbers of cameras."""
     import pycolmap
 
     verify = pycolmap.TwoViewGeometryOptions()
@@ -242,8 +242,8 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
                 continue
             seen = max(r[3] for r in regs)
             if seen < cfg.min_inliers:
-                # a pose resting on a handful of points is a guess (on pan160906 and sequence69
-                # such models were wrong): leave the camera out, the fallback may do better
+                # a pose resting on a handful of points is a guess: leave the camera out, the
+                # fallback from the moving points may do better
                 unreg[name] = (f"camera registered on only {seen} 3D points (fewer than {cfg.min_inliers}): "
                                f"not trusted")
                 continue

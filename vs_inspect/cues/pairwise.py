@@ -102,7 +102,6 @@ def search_pair(xy_r, info_r, xy_v, info_v, index, min_corr: int = 40, thresh_px
     if not cands:
         return None
     # a few correspondences fit any F: only offsets with at least half the largest overlap count
-    # (at a third, caliscope's pairs peaked at wrong offsets on 360-530 correspondences)
     n_max = max(c[3] for c in cands)
     share, d, F, n = max((c for c in cands if c[3] >= min_share_of_max * n_max), key=lambda c: c[0])
     ca = np.array([(info_r.width - 1) / 2, (info_r.height - 1) / 2])
@@ -118,7 +117,7 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
     """Static cameras in the reference's camera frame: (cameras, unregistered reasons, details).
 
     A camera needs min_inlier_share of its correspondences with the reference within 2 px of the
-    best F (caliscope's right offsets had 0.26-0.55, with 0.15-0.2 at wrong offsets).
+    best F (right offsets score higher than wrong ones; the measured shares are in BENCHMARKS.md).
     refine: with three or more cameras, fit every focal and pose to all pairs at once
     (refine_cameras; details["joint_fit"] says how well); when the fit leaves the median track
     pair farther than max_median_fraction of the image diagonal from its epipolar line (Stage 1's
@@ -172,7 +171,7 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
             tol_px = max_median_fraction * max(np.hypot(i.width, i.height) for i in infos.values())
             if best[1]["median_px_after"] > tol_px:
                 # most track pairs are off their epipolar lines at the coarse offsets: the offsets
-                # or the pairs are wrong (pan160906: 14.7 px, where caliscope's fits leave 3-5 px)
+                # or the pairs are wrong, and cameras fitted to them would be too
                 why = (f"camera could not be registered: the cameras fitted to the moving points leave half "
                        f"their track pairs more than {best[1]['median_px_after']:.1f} px from the epipolar "
                        f"lines (tolerance {tol_px:.1f} px, {100 * max_median_fraction:g} % of the diagonal)")
@@ -324,9 +323,8 @@ def refine_cameras(cams: dict[str, CameraTrack], ref: str, infos: dict[str, Vide
     hi = np.r_[np.log(5.0 * np.array(size)), np.full(len(x0) - len(names), np.inf)]
     x0 = np.clip(x0, lo + 1e-9, hi - 1e-9)
     r0 = residuals(x0)[:-1]
-    # Cauchy, not soft-L1: half or more of the track pairs can be wrong matches (caliscope's cam_3
-    # pairs: 26 % inliers); soft-L1 let them pull cam_3's focal to a bound (384 or 6400 px) and
-    # left 4 of 18 offsets of 6 cuts over a frame off, Cauchy none
+    # Cauchy, not soft-L1: half or more of the track pairs can be wrong matches, and soft-L1's
+    # linear tail lets them pull a focal to its bound
     sol = least_squares(residuals, x0, bounds=(lo, hi), loss="cauchy", f_scale=loss_scale_px,
                         x_scale="jac", ftol=1e-6, max_nfev=100)
     r1 = residuals(sol.x)[:-1]

@@ -1,18 +1,16 @@
 """Point tracks inside moving regions: pyramidal KLT with a forward-backward check, re-seeded
 with goodFeaturesToTrack inside the mask as points are lost. Pure function of arrays.
 
-Frame-to-frame KLT drifts: on the rendered scenes, points tracked from their true positions lost
-about 12 % of their motion (21 px window), so a track slid backwards over its object and looked
-late by a growing fraction of its age. Each new position is therefore refined against the
-point's appearance in an anchor frame (where it was seeded, renewed when the refinement fails),
-which keeps the error from adding up frame after frame. A smaller window (9 px) lost less: part
-of the loss is the static background inside the window at an object's outline (blanking the
-background halved it), the rest was not traced.
+Frame-to-frame KLT drifts: a track loses part of its motion each frame, slides backwards over
+its object and looks late by a growing fraction of its age, which biases the offset. Each new
+position is therefore refined against the point's appearance in an anchor frame (where it was
+seeded, renewed when the refinement fails), which keeps the error from adding up frame after
+frame (measured in BENCHMARKS.md, "Measurements behind defaults").
 
 A point that the object has left behind (stuck on the background at an outline, or seeded in a
 loose region) sits outside every moving region. With max_frames_outside >= 0 it is dropped after
 that many frames there; the default keeps it, because dropping such points did not make the
-offsets consistently better (README, tracks)."""
+offsets consistently better (BENCHMARKS.md)."""
 
 from __future__ import annotations
 

@@ -5,8 +5,8 @@ reference through accepted pairs. Others get no offset and a reason, never a gue
 
 With IRLS, a video whose solved offset lies far (more than conflict_factor Huber thresholds)
 from every one of its accepted pairs is a compromise between pairs that contradict each other,
-not a measurement (two pairs 3.8 s apart put a caliscope camera 2 s off the truth, between
-them): it gets no offset and a reason naming the pairs, and the solve is repeated without them.
+not a measurement: it gets no offset and a reason naming the pairs, and the solve is repeated
+without them (the case that motivated it is in BENCHMARKS.md, "Measurements behind defaults").
 """
 
 from __future__ import annotations
