@@ -147,3 +147,29 @@ def look_at(center: np.ndarray, target: np.ndarray, up=(0.0, 0.0, 1.0)) -> np.nd
     T[:3, :3] = R
     T[:3, 3] = -R @ center
     return T
+
+
+def clip_lines(lines: np.ndarray, width: int, height: int) -> np.ndarray:
+    """(...,2,2) end points of lines a·x + b·y + c = 0 (...,3) inside [0,W-1]x[0,H-1]; NaN if outside."""
+    l = check_shape("lines", np.asarray(lines, float), (3,))
+    a, b, c = l[..., 0], l[..., 1], l[..., 2]
+    W, H = width - 1.0, height - 1.0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cand = np.stack([
+            np.stack([np.zeros_like(a), -c / b], -1),  # x = 0
+            np.stack([np.full_like(a, W), -(c + a * W) / b], -1),  # x = W
+            np.stack([-c / a, np.zeros_like(a)], -1),  # y = 0
+            np.stack([-(c + b * H) / a, np.full_like(a, H)], -1),  # y = H
+        ], -2)  # (...,4,2)
+    eps = 1e-6
+    inside = np.isfinite(cand).all(-1) & (cand[..., 0] >= -eps) & (cand[..., 0] <= W + eps) \
+        & (cand[..., 1] >= -eps) & (cand[..., 1] <= H + eps)
+    out = np.full(l.shape[:-1] + (2, 2), np.nan)
+    flat_c, flat_in, flat_o = cand.reshape(-1, 4, 2), inside.reshape(-1, 4), out.reshape(-1, 2, 2)
+    for i in np.flatnonzero(flat_in.sum(1) >= 2):
+        pts = flat_c[i, flat_in[i]]
+        d = np.linalg.norm(pts[:, None] - pts[None], axis=-1)
+        j, k = np.unravel_index(np.argmax(d), d.shape)
+        if d[j, k] > 1e-6:
+            flat_o[i] = pts[[j, k]]
+    return out

@@ -36,9 +36,9 @@ class VideoAtTimes:
     """A video's track points and camera at Q local times."""
 
     xy: np.ndarray  # (N,Q,2) px, NaN where the point is not seen in both frames or the camera is invalid
-    K: np.ndarray  # (Q,3,3) px, NaN where not valid
-    cam_from_world: np.ndarray  # (Q,4,4), NaN where not valid
-    valid: np.ndarray  # (Q,) bool: the camera is known at that time
+    K: np.ndarray | None  # (Q,3,3) px, NaN where not valid; None when no camera was given
+    cam_from_world: np.ndarray | None  # (Q,4,4), NaN where not valid; None when no camera was given
+    valid: np.ndarray  # (Q,) bool: inside the video (and the camera, when given, is known)
 
 
 def camera_between_frames(camera: CameraTrack, k: np.ndarray, w: np.ndarray) -> CameraAtTimes:
@@ -69,6 +69,22 @@ def camera_between_frames(camera: CameraTrack, k: np.ndarray, w: np.ndarray) -> 
     return CameraAtTimes(K, T, valid)
 
 
+def camera_at_frames(camera: CameraTrack, frames: np.ndarray) -> CameraAtTimes:
+    """The camera at integer frame indices (any shape S), exactly as stored: the energy's
+    sampled video, read at its own frames. Frames out of range are an error."""
+    frames = np.asarray(frames)
+    if not np.issubdtype(frames.dtype, np.integer):
+        raise ValueError(f"frames must be integers, got {frames.dtype}")
+    flat = frames.ravel()
+    K = np.array(camera.K_at(flat), dtype=np.float64).reshape(frames.shape + (3, 3))
+    T = np.array(camera.pose_at(flat), dtype=np.float64).reshape(frames.shape + (4, 4))
+    valid = np.ones(frames.shape, bool) if camera.valid is None else \
+        camera.valid[np.minimum(frames, len(camera.valid) - 1)]
+    T[~valid] = np.nan
+    K[~valid] = np.nan
+    return CameraAtTimes(K, T, valid)
+
+
 def tracks_between_frames(xy: np.ndarray, k: np.ndarray, w: np.ndarray,
                           rows: np.ndarray | None = None) -> np.ndarray:
     """(N,*S,2) px: track points xy (N,T,2) (or its rows) at brackets (k, w) of shape S.
@@ -90,17 +106,18 @@ def tracks_between_frames(xy: np.ndarray, k: np.ndarray, w: np.ndarray,
     return out
 
 
-def sample_video(timestamps_s: np.ndarray, camera: CameraTrack, xy: np.ndarray | None,
+def sample_video(timestamps_s: np.ndarray, camera: CameraTrack | None, xy: np.ndarray | None,
                  query_s: np.ndarray, rows: np.ndarray | None = None) -> VideoAtTimes:
     """Track points and camera of one video at local times query_s (Q,).
 
     timestamps_s (T,): the video's frame times (VideoInfo.timestamps_s); xy (N,T,2) px, its
-    tracks (Tracks.xy; None: camera only, xy comes out (0,Q,2)); rows: the track rows wanted.
-    Points are NaN where the camera is not valid too, so that they go only with a known camera.
+    tracks (Tracks.xy; None: camera only, xy comes out (0,Q,2)); rows: the track rows wanted;
+    camera None: tracks only. Points are NaN where the camera is not valid too, so that they go
+    only with a known camera.
     """
     q = check_shape("query_s", np.asarray(query_s, dtype=np.float64), (None,), batched=False)
     k, w = frame_brackets(timestamps_s, q)
-    cam = camera_between_frames(camera, k, w)
+    cam = camera_between_frames(camera, k, w) if camera is not None else CameraAtTimes(None, None, k >= 0)
     if xy is None:
         pts = np.zeros((0, len(q), 2))
     else:

@@ -16,7 +16,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
-from ..geometry.sampling import camera_between_frames, tracks_between_frames
+from ..geometry.sampling import camera_at_frames, camera_between_frames, tracks_between_frames
 from ..geometry.timing import frame_brackets
 from ..types import CameraTrack, TrackPairs, Tracks, VideoInfo
 from . import kernels
@@ -91,18 +91,15 @@ class PairEnergy:
     def _G_moving(self, k: np.ndarray, w: np.ndarray) -> np.ndarray:
         """(D,Ts,3,3) G between s at its frame j and i at its interpolated moment."""
         D, Ts = k.shape
-        s_cam = self.s.camera
-        j = np.broadcast_to(np.arange(Ts), (D, Ts))
-        K_s = s_cam.K_at(j.ravel()).reshape(D, Ts, 3, 3)
-        T_s = s_cam.pose_at(j.ravel()).reshape(D, Ts, 4, 4) if s_cam.is_moving else \
-            np.broadcast_to(s_cam.cam_from_world, (D, Ts, 4, 4))
+        cam_s = camera_at_frames(self.s.camera, np.broadcast_to(np.arange(Ts), (D, Ts)))
         cam_i = camera_between_frames(self.i.camera, k, w)
-        invalid = ~cam_i.valid
-        if s_cam.valid is not None:
-            invalid |= ~s_cam.valid[j]
+        invalid = ~(cam_s.valid & cam_i.valid)
         # placeholders keep the batched inverse finite; their G is discarded below
-        T_i = np.where(invalid[..., None, None], np.eye(4), cam_i.cam_from_world)
-        K_i = np.where(invalid[..., None, None], np.eye(3), cam_i.K)
+        eye3, eye4 = np.eye(3), np.eye(4)
+        K_s = np.where(invalid[..., None, None], eye3, cam_s.K)
+        T_s = np.where(invalid[..., None, None], eye4, cam_s.cam_from_world)
+        K_i = np.where(invalid[..., None, None], eye3, cam_i.K)
+        T_i = np.where(invalid[..., None, None], eye4, cam_i.cam_from_world)
         with np.errstate(invalid="ignore", divide="ignore"):
             G = fundamental_from_cameras(K_s, T_s, K_i, T_i)
         G[invalid] = np.nan
