@@ -2,20 +2,13 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from vs_inspect.analysis.epipolar_sweep import epipolar_sweep
-from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
 
 
-def test_epipolar_sweep_lines_meet_points_only_at_true_offset():
-    scene = make_cue_scene(CueSceneConfig(cameras=3, moving=1, variable_rate=1, seconds=4.0,
-                                          points_per_object=10, noise_px=0.0, wrong_fraction=0.0,
-                                          pose_error_deg=0.0, no_match_pairs=0, all_wrong_pair=False,
-                                          seed=5))
-    bundle = dataclasses.replace(scene.bundle, cameras=scene.true_cameras)
+def test_epipolar_sweep_lines_meet_points_only_at_true_offset(clean_bundle):
+    bundle = clean_bundle
     gt = bundle.gt_offsets_s
     for a, b in (("cam0", "cam1"), ("cam0", "cam2")):  # static-static(vfr), static-moving
         true = gt[b] - gt[a]

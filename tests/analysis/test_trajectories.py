@@ -3,25 +3,14 @@ break; the recording and the report get the same segments from run_trajectories.
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from vs_inspect.analysis.trajectories import (MIN_SEGMENT_SAMPLES, run_trajectories, split_segments,
                                               triangulate_pair)
-from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
 
 
-def clean_scene():
-    scene = make_cue_scene(CueSceneConfig(cameras=3, moving=1, variable_rate=1, seconds=4.0,
-                                          points_per_object=10, noise_px=0.0, wrong_fraction=0.0,
-                                          pose_error_deg=0.0, no_match_pairs=0, all_wrong_pair=False,
-                                          seed=5))
-    return dataclasses.replace(scene.bundle, cameras=scene.true_cameras), scene
-
-
-def test_trajectories_reproject_at_true_offsets_and_break_at_wrong_ones():
-    bundle, _ = clean_scene()
+def test_trajectories_reproject_at_true_offsets_and_break_at_wrong_ones(clean_bundle):
+    bundle = clean_bundle
     gt = bundle.gt_offsets_s
     good = triangulate_pair(bundle, "cam0", "cam1", gt["cam0"], gt["cam1"], max_tracks=60)
     assert good.reprojection_px < 0.5
@@ -34,8 +23,8 @@ def test_trajectories_reproject_at_true_offsets_and_break_at_wrong_ones():
     assert kept_bad < 0.7 * kept_good  # a wrong offset makes rays miss: many points are dropped
 
 
-def test_every_finite_point_lies_in_exactly_one_segment():
-    bundle, _ = clean_scene()
+def test_every_finite_point_lies_in_exactly_one_segment(clean_bundle):
+    bundle = clean_bundle
     gt = bundle.gt_offsets_s
     tj = triangulate_pair(bundle, "cam0", "cam2", gt["cam0"], gt["cam2"], max_tracks=40)  # moving cam2
     covered = np.zeros(tj.points_world.shape[:2], int)
@@ -58,8 +47,8 @@ def test_split_segments_cuts_at_gaps_and_jumps_and_drops_short_runs():
     assert np.isnan(Y[0, :7]).all() and np.isfinite(Y[0, 7:]).all()
 
 
-def test_run_trajectories_orders_by_contrast_and_skips_unsolved():
-    bundle, _ = clean_scene()
+def test_run_trajectories_orders_by_contrast_and_skips_unsolved(clean_bundle):
+    bundle = clean_bundle
     gt = dict(bundle.gt_offsets_s)
     accepted = [("cam0", "cam1", 0.2), ("cam0", "cam2", 0.9), ("cam1", "cam2", 0.5)]
     out = run_trajectories(bundle, accepted, gt, max_video_pairs=2, max_tracks=30)

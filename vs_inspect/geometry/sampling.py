@@ -41,16 +41,20 @@ class VideoAtTimes:
     valid: np.ndarray  # (Q,) bool: inside the video (and the camera, when given, is known)
 
 
+def _brackets(k: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    k, w = np.asarray(k), np.asarray(w, dtype=np.float64)
+    if k.shape != w.shape:
+        raise ValueError(f"k and w must have the same shape, got {k.shape} and {w.shape}")
+    return k, w
+
+
 def camera_between_frames(camera: CameraTrack, k: np.ndarray, w: np.ndarray) -> CameraAtTimes:
     """The camera at brackets (k, w) from frame_brackets (k == -1: outside the video).
 
     For callers that reuse one set of brackets many times (the energy landscape); others call
     sample_video.
     """
-    k = np.asarray(k)
-    w = np.asarray(w, dtype=np.float64)
-    if k.shape != w.shape:
-        raise ValueError(f"k and w must have the same shape, got {k.shape} and {w.shape}")
+    k, w = _brackets(k, w)
     valid = k >= 0
     if camera.valid is not None:
         n = len(camera.valid)
@@ -71,17 +75,23 @@ def camera_between_frames(camera: CameraTrack, k: np.ndarray, w: np.ndarray) -> 
 
 def camera_at_frames(camera: CameraTrack, frames: np.ndarray) -> CameraAtTimes:
     """The camera at integer frame indices (any shape S), exactly as stored: the energy's
-    sampled video, read at its own frames. Frames out of range are an error."""
+    sampled video, read at its own frames. Frames out of range are an error.
+
+    When every frame is valid, K and cam_from_world may be read-only views (no copy).
+    """
     frames = np.asarray(frames)
     if not np.issubdtype(frames.dtype, np.integer):
         raise ValueError(f"frames must be integers, got {frames.dtype}")
     flat = frames.ravel()
-    K = np.array(camera.K_at(flat), dtype=np.float64).reshape(frames.shape + (3, 3))
-    T = np.array(camera.pose_at(flat), dtype=np.float64).reshape(frames.shape + (4, 4))
-    valid = np.ones(frames.shape, bool) if camera.valid is None else \
-        camera.valid[np.minimum(frames, len(camera.valid) - 1)]
-    T[~valid] = np.nan
-    K[~valid] = np.nan
+    K = camera.K_at(flat).reshape(frames.shape + (3, 3))
+    T = camera.pose_at(flat).reshape(frames.shape + (4, 4))
+    if camera.valid is None:
+        return CameraAtTimes(K, T, np.ones(frames.shape, bool))
+    valid = camera.valid[np.minimum(frames, len(camera.valid) - 1)]
+    if not valid.all():
+        K, T = np.array(K), np.array(T)
+        T[~valid] = np.nan
+        K[~valid] = np.nan
     return CameraAtTimes(K, T, valid)
 
 
@@ -92,10 +102,7 @@ def tracks_between_frames(xy: np.ndarray, k: np.ndarray, w: np.ndarray,
     Linear between frames k and k+1; NaN outside the video or where either frame misses the point.
     """
     xy = check_shape("xy", xy, (None, None, 2), batched=False)
-    k = np.asarray(k)
-    w = np.asarray(w, dtype=np.float64)
-    if k.shape != w.shape:
-        raise ValueError(f"k and w must have the same shape, got {k.shape} and {w.shape}")
+    k, w = _brackets(k, w)
     x = np.asarray(xy if rows is None else xy[rows], dtype=np.float64)
     T = x.shape[1]
     kc = np.clip(k, 0, max(T - 2, 0))

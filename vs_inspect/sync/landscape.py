@@ -94,12 +94,12 @@ class PairEnergy:
         cam_s = camera_at_frames(self.s.camera, np.broadcast_to(np.arange(Ts), (D, Ts)))
         cam_i = camera_between_frames(self.i.camera, k, w)
         invalid = ~(cam_s.valid & cam_i.valid)
-        # placeholders keep the batched inverse finite; their G is discarded below
-        eye3, eye4 = np.eye(3), np.eye(4)
-        K_s = np.where(invalid[..., None, None], eye3, cam_s.K)
-        T_s = np.where(invalid[..., None, None], eye4, cam_s.cam_from_world)
-        K_i = np.where(invalid[..., None, None], eye3, cam_i.K)
-        T_i = np.where(invalid[..., None, None], eye4, cam_i.cam_from_world)
+        # K is inverted: a placeholder keeps the batched inverse finite (NaN poses just give NaN);
+        # the G of invalid terms is discarded below
+        K_s, T_s, T_i = cam_s.K, cam_s.cam_from_world, cam_i.cam_from_world
+        K_i = np.where(invalid[..., None, None], np.eye(3), cam_i.K)
+        if not cam_s.valid.all():
+            K_s = np.where(invalid[..., None, None], np.eye(3), K_s)
         with np.errstate(invalid="ignore", divide="ignore"):
             G = fundamental_from_cameras(K_s, T_s, K_i, T_i)
         G[invalid] = np.nan
