@@ -23,7 +23,7 @@ log = logging.getLogger(__name__)
 
 WRONG_SHIFT_S = 0.5  # the "wrong" offset of the epipolar panel is the chosen one ± this
 MAX_EPIPOLAR_MATCHES = 16  # matches drawn in the epipolar panel
-MAX_TRAJECTORIES = 300  # triangulated track pairs drawn in the 3D scene
+MAX_TRAJECTORIES = 300  # trajectory segments drawn in the 3D scene
 TRAJ_PAIRS = 3  # accepted pairs (best contrast first) triangulated for the 3D scene
 
 
@@ -153,14 +153,14 @@ def epipolar_panel(bundle: CueBundle, pair: PairView, image_bgr: np.ndarray | No
 
 def trajectories(bundle: CueBundle, pairs: tuple[PairView, ...],
                  offsets_s: dict[str, float | None]) -> tuple[Trajectory, ...]:
-    """The run's trajectories of the best accepted pairs, one Trajectory per segment."""
+    """The run's trajectories of the best accepted pairs, one Trajectory per segment, at most
+    MAX_TRAJECTORIES in all (4 track pairs triangulated per segment drawn: many are dropped)."""
     accepted = [(p.a, p.b, p.contrast) for p in pairs if p.accepted]
     per = max(1, MAX_TRAJECTORIES // max(1, min(TRAJ_PAIRS, len(accepted))))
     out = []
-    for tj in run_trajectories(bundle, accepted, offsets_s, TRAJ_PAIRS, per):
-        for sg in tj.segments:
-            out.append(Trajectory(tj.points_world[sg.track, sg.start:sg.stop],
-                                  tj.time_s[sg.start:sg.stop], (tj.a, tj.b)))
+    for tj in run_trajectories(bundle, accepted, offsets_s, TRAJ_PAIRS, 4 * per):
+        out += [Trajectory(tj.points_world[sg.track, sg.start:sg.stop], tj.time_s[sg.start:sg.stop],
+                           (tj.a, tj.b)) for sg in tj.segments[:per]]
     return tuple(out)
 
 
