@@ -41,7 +41,7 @@ from vs_inspect.bench.videos import CLIP_FPS, clip_truth
 from vs_inspect.cues.config import MotionConfig
 from vs_inspect.cues.learned import XFeatMatcher, xfeat_available
 from vs_inspect.cues.motion import moving_regions
-from vs_inspect.geometry.epipolar import epipolar_residual
+from vs_inspect.geometry.epipolar import epipolar_lines, epipolar_residual, line_distance
 from vs_inspect.io.video import iter_frames, open_video
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "visualsync_clips" / "pan160906"
@@ -69,10 +69,9 @@ def head_distances(F: np.ndarray, cam_a: str, cam_b: str) -> tuple[np.ndarray, n
         if cam_a not in heads or cam_b not in heads:
             continue
         for who, xa in heads[cam_a].items():
-            line = F @ np.array([*xa, 1.0])
-            line /= np.hypot(line[0], line[1])
+            line = epipolar_lines(F, np.array(xa, float))  # in b: OpenCV's F maps a to b
             for whom, xb in heads[cam_b].items():
-                (same if whom == who else other).append(abs(line @ np.array([*xb, 1.0])))
+                (same if whom == who else other).append(float(line_distance(line, np.array(xb, float))))
     return np.array(same), np.array(other)
 
 

@@ -32,7 +32,9 @@ import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from vs_inspect.geometry.epipolar import epipolar_residual, fundamental_from_cameras  # noqa: E402
+from vs_inspect.geometry.epipolar import (epipolar_lines, epipolar_residual,  # noqa: E402
+                                          fundamental_from_cameras)
+from vs_inspect.geometry.sampling import sample_video  # noqa: E402
 from vs_inspect.io.bundle import write_bundle  # noqa: E402
 from vs_inspect.io.result import result_to_dict, write_json_atomic  # noqa: E402
 from vs_inspect.report.build import render_report  # noqa: E402
@@ -48,12 +50,8 @@ SCENE = CueSceneConfig(cameras=2, moving=0, variable_rate=0, seconds=6.0, max_of
 
 
 def sample(xy: np.ndarray, ts: np.ndarray, q: float) -> np.ndarray:
-    """(N,2) track points at local time q (linear between frames, NaN outside)."""
-    k = np.searchsorted(ts, q) - 1
-    if k < 0 or k >= len(ts) - 1:
-        return np.full((xy.shape[0], 2), np.nan)
-    w = (q - ts[k]) / (ts[k + 1] - ts[k])
-    return xy[:, k] + w * (xy[:, k + 1] - xy[:, k])
+    """(N,2) track points at local time q, read as the energy reads them (geometry.sampling)."""
+    return sample_video(ts, None, xy, np.array([q])).xy[:, 0]
 
 
 def main() -> int:
@@ -119,7 +117,7 @@ def main() -> int:
     ok_b = np.flatnonzero(np.isfinite(xb_all[ib, :, 0]))
     t_b = max((float(vb.timestamps_s[k]) for k in ok_b[::3]), key=wrong_error)
     x_b = sample(xb_all[ib:ib + 1], vb.timestamps_s, t_b)[0]
-    line = F_ab @ np.array([x_b[0], x_b[1], 1.0])
+    line = epipolar_lines(F_ab, x_b)
     fig, axes = plt.subplots(1, 3, figsize=(18, 4.4), dpi=100, layout="constrained")
     for ax, d in zip(axes, trials):
         x_a = sample(xa_all[ia:ia + 1], va.timestamps_s, t_b + d)[0]

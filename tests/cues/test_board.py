@@ -11,8 +11,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from vs_inspect.cli import main
-from vs_inspect.cues.board import (BoardDetections, BoardDetector, BoardSpec, detect_frames,
-                                   estimate_rig)
+from vs_inspect.cues.board import (BoardDetections, BoardDetector, BoardSpec, board_view,
+                                   calibrate_intrinsics, detect_frames, estimate_rig,
+                                   pose_between_board_views)
 from vs_inspect.errors import InputError
 from vs_inspect.io.board import load_board
 from vs_inspect.types import VideoInfo
@@ -75,6 +76,20 @@ def test_rig_from_a_board_recovers_offset_pose_and_focal(two_cameras):
     for name in "ab":
         assert rig.cameras[name].K[0, 0] == pytest.approx(700.0, rel=0.02)
         assert rig.intrinsics[name].rms_px < 1.0
+
+
+def test_pose_between_board_views_direction_and_offset(two_cameras):
+    det_a, det_b, b_from_a, delta_true, n = two_cameras
+    views = {name: board_view(_info(name, n), det, calibrate_intrinsics(det, SPEC, (W, H)), SPEC)
+             for name, det in (("a", det_a), ("b", det_b))}
+    ab = pose_between_board_views(views["a"], views["b"], SPEC)
+    assert ab.offset_s == pytest.approx(delta_true, abs=1e-6)
+    assert np.linalg.norm(ab.b_from_a[:3, 3] - b_from_a[:3, 3]) < 0.01  # metres
+    assert ab.inliers >= 4 and ab.inliers <= ab.pairings
+    # the other way round: a from b, and the offset changes sign
+    ba = pose_between_board_views(views["b"], views["a"], SPEC)
+    assert ba.offset_s == pytest.approx(-delta_true, abs=1e-6)
+    assert np.linalg.norm(ba.b_from_a[:3, 3] - np.linalg.inv(b_from_a)[:3, 3]) < 0.01
 
 
 def test_board_shown_to_one_camera_only_is_named(two_cameras):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vs_inspect.cues.geometric_pairs import consistent_peaks, epipolar_sweep, geometric_pairs
+from vs_inspect.cues.geometric_pairs import consistent_peaks, epipolar_extent, geometric_pairs
 from vs_inspect.geometry.epipolar import fundamental_from_cameras, look_at, project
 from vs_inspect.types import CameraTrack, VideoInfo
 
@@ -92,7 +92,7 @@ def test_sweep_counts_motion_across_epipolar_lines_only():
     steps = np.linspace(0, 30, 20)[:, None]
     along_track = x0 + steps * toward
     across_track = x0 + steps * across
-    sweep = epipolar_sweep(np.stack([along_track, across_track]), e_b)
+    sweep = epipolar_extent(np.stack([along_track, across_track]), e_b)
     assert sweep[0] < 0.5
     assert sweep[1] == pytest.approx(30, abs=1.0)
 

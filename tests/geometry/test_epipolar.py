@@ -2,7 +2,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from vs_inspect.geometry.epipolar import (epipolar_residual, fundamental_from_cameras, look_at,
+from vs_inspect.geometry.epipolar import (clip_lines, epipolar_lines, epipolar_residual,
+                                          fundamental_from_cameras, line_distance, look_at,
                                           project, relative_pose, skew)
 
 
@@ -83,8 +84,7 @@ def test_sampson_approximates_squared_point_to_line_distance(asymmetric_two_view
     K_a, T_a, K_b, T_b, x_a, x_b = asymmetric_two_view
     F = fundamental_from_cameras(K_a, T_a, K_b, T_b)
     x_a_noisy = x_a + np.array([0.0, 2.0])  # 2 px off in a only
-    l_a = np.einsum("ij,nj->ni", F, np.c_[x_b, np.ones(len(x_b))])
-    dist2 = (np.sum(l_a[:, :2] * x_a_noisy, 1) + l_a[:, 2]) ** 2 / np.sum(l_a[:, :2] ** 2, 1)
+    dist2 = line_distance(epipolar_lines(F, x_b), x_a_noisy) ** 2
     samp = epipolar_residual(F, x_a_noisy, x_b, "sampson")
     sym = epipolar_residual(F, x_a_noisy, x_b, "symmetric")
     assert np.all(samp <= dist2 + 1e-9)  # a lower bound of the one-sided distance here
@@ -107,3 +107,56 @@ def test_project_marks_points_behind_camera_nan():
     K = np.eye(3)
     xy = project(K, np.eye(4), np.array([[0, 0, 2.0], [0, 0, -2.0]]))
     assert np.allclose(xy[0], [0, 0]) and np.isnan(xy[1]).all()
+
+
+def test_epipolar_lines_of_b_pass_through_a_and_not_the_other_way(asymmetric_two_view):
+    K_a, T_a, K_b, T_b, x_a, x_b = asymmetric_two_view
+    F_ab = fundamental_from_cameras(K_a, T_a, K_b, T_b)
+    l_a = epipolar_lines(F_ab, x_b)  # (N,3) in a
+    assert l_a.shape == (len(x_b), 3)
+    assert np.max(line_distance(l_a, x_a)) < 1e-9
+    assert np.median(line_distance(epipolar_lines(F_ab, x_a), x_b)) > 1.0  # wrong direction
+    # lines in b of a's points: the transpose
+    assert np.max(line_distance(epipolar_lines(F_ab.T, x_a), x_b)) < 1e-9
+    # broadcast: one F per offset against points (D,L,2)
+    F_many = np.stack([F_ab, F_ab.T])
+    got = epipolar_lines(F_many[:, None], np.stack([x_b, x_a]))
+    np.testing.assert_allclose(got[0], l_a)
+
+
+def test_line_distance_exact_values():
+    # the line y = 2 (0·x + 1·y - 2 = 0, scaled by 3) and the point (5, 6): 4 px
+    assert line_distance(np.array([0.0, 3.0, -6.0]), np.array([5.0, 6.0])) == pytest.approx(4.0)
+    # x - y = 0 and (0, 2): √2
+    assert line_distance(np.array([1.0, -1.0, 0.0]), np.array([0.0, 2.0])) == pytest.approx(np.sqrt(2))
+
+
+def test_clip_lines_to_image():
+    # horizontal line y = 100 and diagonal x = y in a 640x480 image; a line outside the image
+    seg = clip_lines(np.array([[0.0, 1.0, -100.0], [1.0, -1.0, 0.0], [0.0, 1.0, 1000.0]]), 640, 480)
+    np.testing.assert_allclose(sorted(seg[0, :, 0]), [0, 639])
+    np.testing.assert_allclose(seg[0, :, 1], [100, 100])
+    np.testing.assert_allclose(sorted(seg[1, :, 0]), [0, 479])
+    assert np.isnan(seg[2]).all()
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: epipolar_lines(np.eye(4)[:3], np.zeros(2)), r"F_ab must be \(\.\.\.,3,3\), got \(3, 4\)"),
+    (lambda: epipolar_lines(np.eye(3), np.zeros((5, 3))), r"x_b must be \(\.\.\.,2\), got \(5, 3\)"),
+    (lambda: epipolar_residual(np.eye(3)[:2], np.zeros(2), np.zeros(2)),
+     r"F_ab must be \(\.\.\.,3,3\), got \(2, 3\)"),
+    (lambda: epipolar_residual(np.eye(3), np.zeros(3), np.zeros(2)), r"x_a must be \(\.\.\.,2\), got \(3,\)"),
+    (lambda: fundamental_from_cameras(np.eye(3), np.eye(4), np.eye(4), np.eye(4)),
+     r"K_b must be \(\.\.\.,3,3\), got \(4, 4\)"),
+    (lambda: fundamental_from_cameras(np.eye(3), np.eye(3), np.eye(3), np.eye(4)),
+     r"a_from_world must be \(\.\.\.,4,4\), got \(3, 3\)"),
+    (lambda: relative_pose(np.eye(4), np.eye(4)[:3]), r"b_from_world must be \(\.\.\.,4,4\), got \(3, 4\)"),
+    (lambda: skew(np.zeros(4)), r"v must be \(\.\.\.,3\), got \(4,\)"),
+    (lambda: project(np.eye(3), np.eye(4), np.zeros((7, 2))), r"X must be \(\.\.\.,3\), got \(7, 2\)"),
+    (lambda: line_distance(np.zeros(2), np.zeros(2)), r"lines must be \(\.\.\.,3\), got \(2,\)"),
+    (lambda: clip_lines(np.zeros((4, 2)), 640, 480), r"lines must be \(\.\.\.,3\), got \(4, 2\)"),
+    (lambda: look_at(np.zeros(2), np.ones(3)), r"center must be \(3,\), got \(2,\)"),
+])
+def test_shape_errors_name_the_shape_received(call, message):
+    with pytest.raises(ValueError, match=message):
+        call()

@@ -1,6 +1,8 @@
 import numpy as np
 import pytest
 
+from vs_inspect.geometry.epipolar import fundamental_from_cameras
+from vs_inspect.geometry.sampling import sample_video, tracks_between_frames
 from vs_inspect.sync.config import LandscapeConfig, SyncConfig
 from vs_inspect.sync.landscape import PairEnergy, PairInput, search_offsets
 from vs_inspect.sync.reference import reference_energy
@@ -74,3 +76,29 @@ def test_no_track_pairs_is_rejected_with_a_reason(scene):
     land, _ = pair_landscape(empty, "cam0", "cam1", SyncConfig())
     assert not land.decision.accepted
     assert "track pairs" in land.decision.reason
+
+
+@pytest.mark.parametrize("a,b", [("cam0", "cam1"), ("cam0", "cam2"), ("cam2", "cam0")])
+def test_the_energy_reads_videos_as_geometry_sampling_does(scene, a, b):
+    """The interpolated video's points and camera in the energy are those of sample_video."""
+    bundle = scene.bundle
+    side = {n: PairInput(bundle.video(n), bundle.cameras[n], bundle.tracks[n]) for n in (a, b)}
+    pe = PairEnergy(side[a], side[b], bundle.pair(a, b), LandscapeConfig())
+    off = truth(scene, a, b) + 0.013
+    q = pe.s.video.timestamps_s + pe.sign * off  # the interpolated video's local times
+    got = sample_video(pe.i.video.timestamps_s, pe.i.camera, pe.xi, q, rows=pe.pair_i)
+    k, w = pe._brackets(np.array([off]))
+    inner = tracks_between_frames(pe.xi, k[0], w[0], pe.pair_i)
+    fin = np.isfinite(got.xy)
+    assert fin.any()
+    np.testing.assert_array_equal(got.xy[fin], inner[fin])
+    np.testing.assert_array_equal(np.isfinite(inner[:, got.valid]), fin[:, got.valid])
+    if pe.moving:  # G of the energy is F between s at its frames and i as sampled
+        G = pe._G_moving(k, w)[0]
+        s_cam = pe.s.camera
+        F = fundamental_from_cameras(s_cam.K_at(np.arange(len(q))), s_cam.pose_at(np.arange(len(q))),
+                                     got.K, got.cam_from_world)
+        ok = np.isfinite(G[:, 0, 0])
+        assert ok.any()
+        np.testing.assert_array_equal(ok, got.valid & (s_cam.valid if s_cam.valid is not None else True))
+        np.testing.assert_array_equal(G[ok], F[ok])

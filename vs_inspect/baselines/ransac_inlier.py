@@ -19,7 +19,8 @@ import time
 import cv2
 import numpy as np
 
-from ..geometry.timing import frame_brackets
+from ..geometry.epipolar import epipolar_lines
+from ..geometry.sampling import sample_video
 from ..sync.config import LandscapeConfig
 from ..sync.pairs import select_pairs
 from ..sync.config import PairSelection
@@ -37,18 +38,16 @@ def shifted_correspondences(bundle: CueBundle, a: str, b: str, tp: TrackPairs,
     va, vb = bundle.video(a), bundle.video(b)
     sample_is_a = va.frame_interval_s > vb.frame_interval_s
     vs, vi = (va, vb) if sample_is_a else (vb, va)
-    xs_all = bundle.tracks[vs.name].xy
-    xi_all = bundle.tracks[vi.name].xy
     ps, pi = (tp.index[:, 0], tp.index[:, 1]) if sample_is_a else (tp.index[:, 1], tp.index[:, 0])
     sign = -1.0 if sample_is_a else 1.0
-    k, w = frame_brackets(vi.timestamps_s, vs.timestamps_s + sign * offset_s)
-    ok = k >= 0
+    # no cameras: this criterion fits its own F, so only the points are read
+    at_i = sample_video(vi.timestamps_s, None, bundle.tracks[vi.name].xy,
+                        vs.timestamps_s + sign * offset_s, rows=pi)
+    ok = at_i.valid
     if not ok.any() or len(ps) == 0:
         return np.zeros((0, 2)), np.zeros((0, 2))
-    kk, ww = k[ok], w[ok]
-    xs = np.asarray(xs_all[ps][:, ok], dtype=np.float64)  # (P,T',2)
-    xi = np.asarray(xi_all[pi], dtype=np.float64)
-    xi = xi[:, kk] + ww[None, :, None] * (xi[:, kk + 1] - xi[:, kk])
+    xs = np.asarray(bundle.tracks[vs.name].xy[ps][:, ok], dtype=np.float64)  # (P,T',2)
+    xi = at_i.xy[:, ok]
     good = np.isfinite(xs).all(-1) & np.isfinite(xi).all(-1)
     xs, xi = xs[good], xi[good]
     return (xs, xi) if sample_is_a else (xi, xs)
@@ -56,11 +55,9 @@ def shifted_correspondences(bundle: CueBundle, a: str, b: str, tp: TrackPairs,
 
 def epipolar_distance_sq(F: np.ndarray, x1: np.ndarray, x2: np.ndarray) -> np.ndarray:
     """OpenCV's RANSAC error for x2ᵀ F x1 = 0: max of the squared point-to-line distances (px²)."""
-    h1 = np.concatenate([x1, np.ones((len(x1), 1))], 1)
-    h2 = np.concatenate([x2, np.ones((len(x2), 1))], 1)
-    l2 = h1 @ F.T  # lines in image 2
-    l1 = h2 @ F  # lines in image 1
-    num = np.einsum("ij,ij->i", h2, l2) ** 2
+    l2 = epipolar_lines(F, x1)  # lines in image 2 (F maps 1 to 2 here)
+    l1 = epipolar_lines(F.T, x2)  # lines in image 1
+    num = (l2[:, 0] * x2[:, 0] + l2[:, 1] * x2[:, 1] + l2[:, 2]) ** 2
     d2 = num / np.maximum(l2[:, 0] ** 2 + l2[:, 1] ** 2, 1e-300)
     d1 = num / np.maximum(l1[:, 0] ** 2 + l1[:, 1] ** 2, 1e-300)
     return np.maximum(d1, d2)

@@ -31,9 +31,9 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from ..geometry.timing import frame_brackets, interpolate_poses
+from ..geometry.sampling import sample_video
 from ..io.calibration import CameraCalibration
-from ..types import VideoInfo
+from ..types import CameraTrack, VideoInfo
 
 log = logging.getLogger(__name__)
 
@@ -108,7 +108,7 @@ class Intrinsics:
 
 
 @dataclass(frozen=True)
-class RelativePose:
+class BoardViewsPose:
     b_from_a: np.ndarray  # (4,4) x_b = T x_a, metres
     offset_s: float  # coarse Δ_ab at which the board poses agree
     median_px: float  # median reprojection error of the board into b at that Δ, px
@@ -180,19 +180,17 @@ def _board_in_b(b_from_a: np.ndarray, pose_a: np.ndarray, corners: np.ndarray,
     return proj.reshape(-1, 2)
 
 
-def _poses_at(poses: np.ndarray, valid: np.ndarray, timestamps_s: np.ndarray,
-              query_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Board poses interpolated at query times (slerp / lerp between the two frames around each)
-    and whether both frames had the board."""
-    k, w = frame_brackets(timestamps_s, query_s)
-    kc = np.clip(k, 0, len(valid) - 2)
-    ok = (k >= 0) & valid[kc] & valid[kc + 1]
-    return interpolate_poses(poses, np.where(ok, k, -1), w), ok
+def _poses_at(view: BoardView, query_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """cam_from_board (Q,4,4) at local times query_s (Q,), between the two frames around each,
+    and whether both frames had the board (the board is the world of this camera track)."""
+    at = sample_video(view.info.timestamps_s, CameraTrack(view.intr.K, view.poses, view.valid), None,
+                      query_s)
+    return at.cam_from_world, at.valid
 
 
 def _fit_at(delta_s: float, a: BoardView, b: BoardView, corners: np.ndarray, cap_px: float):
     """Best proposal at one Δ: (MSAC support, b_from_a, b's frames, a's poses there, errors)."""
-    pose_a, ok = _poses_at(a.poses, a.valid, a.info.timestamps_s, b.info.timestamps_s + delta_s)
+    pose_a, ok = _poses_at(a, b.info.timestamps_s + delta_s)
     fb = np.nonzero(ok & b.valid)[0]
     if not len(fb):
         return None
@@ -207,9 +205,9 @@ def _fit_at(delta_s: float, a: BoardView, b: BoardView, corners: np.ndarray, cap
     return float(support[k]), proposals[k], fb, pose_a[fb], err[k]
 
 
-def relative_pose(a: BoardView, b: BoardView, spec: BoardSpec, min_pairings: int = 4,
-                  cap_px: float = 10.0) -> RelativePose | None:
-    """b's pose relative to a and the offset at which the board poses agree; None when no offset
+def pose_between_board_views(a: BoardView, b: BoardView, spec: BoardSpec, min_pairings: int = 4,
+                             cap_px: float = 10.0) -> BoardViewsPose | None:
+    """Estimates b's pose relative to a from the board seen by both, and the offset at which the board poses agree; None when no offset
     has at least min_pairings frames of b, with the board in both videos, that fit one pose.
 
     a's board pose is interpolated at b's frame times + Δ, so Δ is found below a frame: first on
@@ -234,7 +232,7 @@ def relative_pose(a: BoardView, b: BoardView, spec: BoardSpec, min_pairings: int
     support, T, fb, pose_a, err = best
     keep = err <= cap_px
     T = _refine(T, pose_a[keep], fb[keep], b, corners)
-    return RelativePose(T, best_d, float(np.median(err)), len(fb), int(keep.sum()), support)
+    return BoardViewsPose(T, best_d, float(np.median(err)), len(fb), int(keep.sum()), support)
 
 
 def _refine(T: np.ndarray, pose_a: np.ndarray, fb: np.ndarray, b: BoardView,
@@ -260,7 +258,7 @@ def _refine(T: np.ndarray, pose_a: np.ndarray, fb: np.ndarray, b: BoardView,
 class RigEstimate:
     cameras: dict[str, CameraCalibration]  # name -> intrinsics and cam_from_world (world = first camera)
     intrinsics: dict[str, Intrinsics]
-    links: dict[str, tuple[str, RelativePose]]  # name -> (the camera it was placed from, the pose)
+    links: dict[str, tuple[str, BoardViewsPose]]  # name -> (the camera it was placed from, the pose)
     unregistered: dict[str, str]  # name -> why it has no camera
 
 
@@ -283,11 +281,11 @@ def estimate_rig(infos: list[VideoInfo], detections: dict[str, BoardDetections],
     views = {v.name: board_view(v, detections[v.name], intr[v.name], spec)
              for v in infos if v.name in intr}  # board poses once per camera
     placed: dict[str, np.ndarray] = {}
-    links: dict[str, tuple[str, RelativePose]] = {}
+    links: dict[str, tuple[str, BoardViewsPose]] = {}
     order = list(views)
     if order:
         placed[order[0]] = np.eye(4)
-    cache: dict[tuple[str, str], RelativePose | None] = {}
+    cache: dict[tuple[str, str], BoardViewsPose | None] = {}
     while True:
         best = None
         for b in order:
@@ -295,7 +293,7 @@ def estimate_rig(infos: list[VideoInfo], detections: dict[str, BoardDetections],
                 continue
             for a in placed:
                 if (a, b) not in cache:
-                    cache[(a, b)] = relative_pose(views[a], views[b], spec)
+                    cache[(a, b)] = pose_between_board_views(views[a], views[b], spec)
                 rp = cache[(a, b)]
                 if rp is not None and (best is None or rp.support > best[2].support):
                     best = (a, b, rp)

@@ -163,7 +163,7 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
     return n_cons, best, best_res
 
 
-def epipolar_sweep(xy: np.ndarray, epipole: np.ndarray) -> np.ndarray:
+def epipolar_extent(xy: np.ndarray, epipole: np.ndarray) -> np.ndarray:
     """(N,) px: extent of each track across the epipolar lines (perpendicular to the line through
     its median position and the epipole). xy (N,T,2); epipole (3,) homogeneous (may be at infinity)."""
     with warnings.catch_warnings():  # tracks never seen give NaN, on purpose
@@ -215,9 +215,9 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
     tau = max(2.0, cfg.tau_diag * diag)
     u, _, vt = np.linalg.svd(G)
     e_a, e_b = u[:, -1], vt[-1]  # unit null vectors: Gᵀ e_a = 0, G e_b = 0
-    ia = _candidates(xy_a, cfg.max_tracks, cfg.min_frames, epipolar_sweep(xy_a, e_a),
+    ia = _candidates(xy_a, cfg.max_tracks, cfg.min_frames, epipolar_extent(xy_a, e_a),
                      cfg.min_sweep_tau * tau)
-    ib = _candidates(xy_b, cfg.max_tracks, cfg.min_frames, epipolar_sweep(xy_b, e_b),
+    ib = _candidates(xy_b, cfg.max_tracks, cfg.min_frames, epipolar_extent(xy_b, e_b),
                      cfg.min_sweep_tau * tau)
     if not len(ia) or not len(ib):
         return empty, GeometricPairStats(0, 0, 0, (), ())

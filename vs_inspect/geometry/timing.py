@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
+from ._shapes import check_shape
 from .epipolar import camera_centers
 
 
@@ -14,7 +15,9 @@ def frame_brackets(timestamps_s: np.ndarray, query_s: np.ndarray) -> tuple[np.nd
     Returns (k, w) with k = -1 where q lies outside [t[0], t[-1]]. A query equal to the last
     timestamp maps to (T-2, 1.0) so that it still uses two frames.
     """
-    t = np.asarray(timestamps_s, dtype=np.float64)
+    t = check_shape("timestamps_s", np.asarray(timestamps_s, dtype=np.float64), (None,), batched=False)
+    if len(t) == 0:
+        raise ValueError("timestamps_s must have at least one frame, got (0,)")
     q = np.asarray(query_s, dtype=np.float64)
     if len(t) < 2:
         k = np.where(np.isclose(q, t[0], atol=1e-9), 0, -1)
@@ -34,7 +37,10 @@ def interpolate_poses(cam_from_world: np.ndarray, k: np.ndarray, w: np.ndarray) 
 
     cam_from_world: (T,4,4). Entries with k == -1 come out as NaN.
     """
-    T = np.asarray(cam_from_world, dtype=np.float64)
+    T = check_shape("cam_from_world", np.asarray(cam_from_world, dtype=np.float64), (None, 4, 4),
+                    batched=False)
+    if np.shape(w) != np.shape(k):
+        raise ValueError(f"k and w must have the same shape, got {np.shape(k)} and {np.shape(w)}")
     shape = np.shape(k)
     k = np.asarray(k).ravel()
     w = np.asarray(w, dtype=np.float64).ravel()
@@ -58,7 +64,9 @@ def interpolate_poses(cam_from_world: np.ndarray, k: np.ndarray, w: np.ndarray) 
 
 def interpolate_intrinsics(K: np.ndarray, k: np.ndarray, w: np.ndarray) -> np.ndarray:
     """(...,3,3) intrinsics between frames k and k+1 (K (3,3) is returned broadcast)."""
-    K = np.asarray(K, dtype=np.float64)
+    K = check_shape("K", np.asarray(K, dtype=np.float64), (3, 3))
+    if K.ndim > 3:
+        raise ValueError(f"K must be (3,3) or (T,3,3), got {K.shape}")
     if K.ndim == 2:
         return np.broadcast_to(K, np.shape(k) + (3, 3)).copy()
     kc = np.clip(k, 0, len(K) - 1)

@@ -27,7 +27,8 @@ from tqdm import tqdm
 from .. import __version__
 from ..io.result import result_to_dict
 from ..types import CameraTrack, CueBundle, PairLandscape, SyncResult, VideoInfo
-from .derived import epipolar_sweep, triangulate_pair
+from ..analysis.epipolar_sweep import epipolar_sweep
+from ..analysis.trajectories import run_trajectories
 from .options import RecordOptions
 from .sink import Sink
 
@@ -661,30 +662,15 @@ class RerunSink(Sink):
 
     def _log_trajectories(self, result: SyncResult, bundle: CueBundle) -> None:
         o = self.options
-        acc = [p for p in result.pairs if p.decision.accepted
-               and result.offsets_s.get(p.a) is not None and result.offsets_s.get(p.b) is not None]
-        acc.sort(key=lambda p: -p.decision.contrast)
-        for p in tqdm(acc[: o.max_trajectory_video_pairs], desc="triangulating", unit="pair",
-                      leave=False, disable=not self.progress):
-            tj = triangulate_pair(bundle, p.a, p.b, result.offsets_s[p.a], result.offsets_s[p.b],
-                                  o.max_trajectory_pairs)
-            if tj is None:
-                continue
+        accepted = [(p.a, p.b, p.decision.contrast) for p in result.pairs if p.decision.accepted]
+        for tj in run_trajectories(bundle, accepted, result.offsets_s, o.max_trajectory_video_pairs,
+                                   o.max_trajectory_pairs):
             X = tj.points_world  # (P,T,3)
             ok = np.isfinite(X).all(-1)
-            if not ok.any():
-                continue
-            key = f"world/trajectories/{entity_name(p.a)}__{entity_name(p.b)}"
-            strips, scol = [], []
+            key = f"world/trajectories/{entity_name(tj.a)}__{entity_name(tj.b)}"
             cols = instance_colors(tj.instance)
-            for i in range(X.shape[0]):
-                # split each track at gaps into contiguous runs
-                m = ok[i]
-                edges = np.flatnonzero(np.diff(np.concatenate([[0], m.astype(int), [0]])))
-                for s, e in zip(edges[::2], edges[1::2]):
-                    if e - s >= 2:
-                        strips.append(X[i, s:e].astype(np.float32))
-                        scol.append(cols[i])
+            strips = [X[sg.track, sg.start:sg.stop].astype(np.float32) for sg in tj.segments]
+            scol = [cols[sg.track] for sg in tj.segments]
             if strips:
                 self.rec.log(key, rr.LineStrips3D(strips, colors=np.array(scol), radii=rr.Radius.ui_points(1.0)),
                              static=True)

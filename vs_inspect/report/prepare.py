@@ -12,9 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from ..geometry.epipolar import camera_centers, epipolar_residual, fundamental_from_cameras, project
-from ..geometry.timing import frame_brackets, interpolate_intrinsics, interpolate_poses
-from ..geometry.triangulate import triangulate_dlt
+from ..analysis.trajectories import run_trajectories
+from ..geometry.epipolar import epipolar_lines, epipolar_residual, fundamental_from_cameras
+from ..geometry.sampling import camera_at_frames, sample_video
 from ..types import CueBundle
 from .data import (CameraView, EpipolarPanel, EpipolarState, Mosaic, MosaicTile, PairView,
                    ReportData, Trajectory, VideoClock)
@@ -23,10 +23,8 @@ log = logging.getLogger(__name__)
 
 WRONG_SHIFT_S = 0.5  # the "wrong" offset of the epipolar panel is the chosen one ± this
 MAX_EPIPOLAR_MATCHES = 16  # matches drawn in the epipolar panel
-MAX_TRAJECTORIES = 300  # triangulated tracks drawn in the 3D scene
+MAX_TRAJECTORIES = 300  # trajectory segments drawn in the 3D scene
 TRAJ_PAIRS = 3  # accepted pairs (best contrast first) triangulated for the 3D scene
-MAX_REPROJ_PX = 4.0  # a triangulated sample is kept when it reprojects this close in both views
-MIN_RAY_ANGLE_DEG = 3.0  # ... and when its two viewing rays meet at least at this angle
 
 
 def _f(x: Any) -> float | None:
@@ -88,49 +86,22 @@ def choose_pair(pairs: tuple[PairView, ...], requested: tuple[str, str] | None) 
     return max(ok, key=lambda p: (p.contrast, p.num_track_pairs)) if ok else None
 
 
-# ---- sampling a video at another video's moments ------------------------------------------
-
-
-def _sample_b(bundle: CueBundle, b: str, rows: np.ndarray, query_s: np.ndarray):
-    """b's track rows at local times query_s (Q,): xy (len(rows),Q,2), K (Q,3,3), pose (Q,4,4).
-
-    Linear interpolation between the bracketing frames; NaN where b has no frame or no point.
-    """
-    vb, cam, xy = bundle.video(b), bundle.cameras[b], bundle.tracks[b].xy
-    k, w = frame_brackets(vb.timestamps_s, query_s)
-    ok = k >= 0
-    kc = np.clip(k, 0, max(vb.num_frames - 2, 0))
-    k1 = np.minimum(kc + 1, vb.num_frames - 1)
-    x = xy[rows]
-    out = x[:, kc] + w[None, :, None] * (x[:, k1] - x[:, kc])
-    out[:, ~ok] = np.nan
-    if cam.cam_from_world.ndim == 3:
-        pose = interpolate_poses(cam.cam_from_world, k, w)
-    else:
-        pose = np.broadcast_to(cam.cam_from_world, (len(k), 4, 4)).copy()
-        pose[~ok] = np.nan
-    K = interpolate_intrinsics(cam.K, kc, w)
-    if cam.valid is not None:
-        bad = ~(cam.valid[kc] & cam.valid[k1])
-        pose[bad] = np.nan
-        out[:, bad] = np.nan
-    return out, K, pose
+# ---- the epipolar panel -------------------------------------------------------------------
 
 
 def _epipolar_state(bundle: CueBundle, a: str, b: str, rows: np.ndarray, frame: int,
                     offset_s: float, show: np.ndarray) -> EpipolarState:
-    va = bundle.video(a)
+    va, vb = bundle.video(a), bundle.video(b)
     t_a = float(va.timestamps_s[frame])
-    ia, ib = rows[:, 0], rows[:, 1]
-    xa = bundle.tracks[a].xy[ia, frame].astype(np.float64)  # (P,2)
-    xb, K_b, T_b = _sample_b(bundle, b, ib, np.array([t_a - offset_s]))
-    xb = xb[:, 0]
-    K_a = bundle.cameras[a].K_at(np.array([frame]))[0]
-    T_a = bundle.cameras[a].pose_at(np.array([frame]))[0]
+    xa = bundle.tracks[a].xy[rows[:, 0], frame].astype(np.float64)  # (P,2)
+    at_a = camera_at_frames(bundle.cameras[a], np.array([frame]))
+    at_b = sample_video(vb.timestamps_s, bundle.cameras[b], bundle.tracks[b].xy,
+                        np.array([t_a - offset_s]), rows=rows[:, 1])
+    xb = at_b.xy[:, 0]
     with np.errstate(invalid="ignore", divide="ignore"):
-        F = fundamental_from_cameras(K_a, T_a, K_b[0], T_b[0])
+        F = fundamental_from_cameras(at_a.K[0], at_a.cam_from_world[0], at_b.K[0], at_b.cam_from_world[0])
         samp = epipolar_residual(F, xa, xb, "sampson")
-        lines = np.einsum("ij,nj->ni", F, np.concatenate([xb, np.ones((len(xb), 1))], 1))
+    lines = epipolar_lines(F, xb)
     fin = samp[np.isfinite(samp)]
     return EpipolarState(float(offset_s), xa[show], lines[show], xb[show], samp[show],
                          float(np.median(fin)) if fin.size else float("nan"))
@@ -150,15 +121,12 @@ def epipolar_panel(bundle: CueBundle, pair: PairView, image_bgr: np.ndarray | No
     wrong = float(np.clip(wrong, lo, hi))
     va, vb = bundle.video(a), bundle.video(b)
     ia, ib = tp.index[:, 0], tp.index[:, 1]
-    vis_a = np.isfinite(bundle.tracks[a].xy[ia, :, 0])  # (P,Ta)
-    vis_b = np.isfinite(bundle.tracks[b].xy[ib, :, 0])
-    count = np.zeros(va.num_frames)
-    both = vis_a.copy()
-    for d in (chosen, wrong):
-        k, _ = frame_brackets(vb.timestamps_s, va.timestamps_s - d)
-        kc = np.clip(k, 0, vb.num_frames - 2)
-        seen = vis_b[:, kc] & vis_b[:, np.minimum(kc + 1, vb.num_frames - 1)] & (k >= 0)[None]
-        both &= seen
+    valid_a = camera_at_frames(bundle.cameras[a], np.arange(va.num_frames)).valid
+    both = np.isfinite(bundle.tracks[a].xy[ia, :, 0]) & valid_a[None]  # (P,Ta)
+    for d in (chosen, wrong):  # b's points as the energy reads them at τ_a − Δ
+        at_b = sample_video(vb.timestamps_s, bundle.cameras[b], bundle.tracks[b].xy,
+                            va.timestamps_s - d, rows=ib)
+        both &= np.isfinite(at_b.xy[..., 0])
     count = both.sum(0)
     if frame is None:
         if count.max() == 0:
@@ -180,87 +148,20 @@ def epipolar_panel(bundle: CueBundle, pair: PairView, image_bgr: np.ndarray | No
                          states[0], states[1], image_bgr)
 
 
-# ---- triangulation of moving points after sync --------------------------------------------
+# ---- triangulated trajectories (analysis.trajectories, as the recording shows them) --------
 
 
-def triangulate_pair(bundle: CueBundle, a: str, b: str, offset_a_s: float, offset_b_s: float,
-                     max_tracks: int) -> list[Trajectory]:
-    """Trajectories of the matched tracks of (a, b), b sampled at a's frames after sync."""
-    tp = bundle.pair(a, b)
-    if tp is None or len(tp.index) == 0:
-        return []
-    va, ca = bundle.video(a), bundle.cameras[a]
-    rows = tp.index
-    if len(rows) > 4 * max_tracks:
-        rows = rows[np.linspace(0, len(rows) - 1, 4 * max_tracks).round().astype(int)]
-    ta = va.timestamps_s
-    xb, K_b, T_b = _sample_b(bundle, b, rows[:, 1], ta + offset_a_s - offset_b_s)  # (P,Ta,2)
-    xa = bundle.tracks[a].xy[rows[:, 0]].astype(np.float64)  # (P,Ta,2)
-    frames = np.arange(va.num_frames)
-    P_a = ca.K_at(frames) @ ca.pose_at(frames)[:, :3, :]  # (Ta,3,4)
-    P_b = K_b @ T_b[:, :3, :]
-    ok = np.isfinite(xa[..., 0]) & np.isfinite(xb[..., 0]) & np.isfinite(P_b[None, :, 0, 0])
-    X = np.full(xa.shape[:2] + (3,), np.nan)
-    pi, fi = np.nonzero(ok)
-    if len(pi) == 0:
-        return []
-    Xs = triangulate_dlt(P_a[fi], P_b[fi], xa[pi, fi], xb[pi, fi])
-    with np.errstate(invalid="ignore"):
-        ra = np.linalg.norm(project(ca.K_at(fi), ca.pose_at(fi), Xs) - xa[pi, fi], axis=-1)
-        rb = np.linalg.norm(project(K_b[fi], T_b[fi], Xs) - xb[pi, fi], axis=-1)
-    # the angle between the two viewing rays: near-parallel rays fix no depth
-    u, v = Xs - camera_centers(ca.pose_at(fi)), Xs - camera_centers(T_b[fi])
-    with np.errstate(invalid="ignore", divide="ignore"):
-        cos = np.einsum("ni,ni->n", u, v) / (np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1))
-    angle_deg = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
-    good = (ra < MAX_REPROJ_PX) & (rb < MAX_REPROJ_PX) & (angle_deg > MIN_RAY_ANGLE_DEG)
-    X[pi[good], fi[good]] = Xs[good]
+def trajectories(bundle: CueBundle, pairs: tuple[PairView, ...],
+                 offsets_s: dict[str, float | None]) -> tuple[Trajectory, ...]:
+    """The run's trajectories of the best accepted pairs, one Trajectory per segment, at most
+    MAX_TRAJECTORIES in all (4 track pairs triangulated per segment drawn: many are dropped)."""
+    accepted = [(p.a, p.b, p.contrast) for p in pairs if p.accepted]
+    per = max(1, MAX_TRAJECTORIES // max(1, min(TRAJ_PAIRS, len(accepted))))
     out = []
-    g = ta + offset_a_s
-    for p in range(len(rows)):
-        for seg in _segments(X[p]):
-            out.append(Trajectory(X[p, seg], g[seg], (a, b)))
-    return out
-
-
-def _segments(X: np.ndarray, min_len: int = 5) -> list[np.ndarray]:
-    """Runs of consecutive finite samples of (T,3), split where one step jumps more than 8 x the
-    median step (a wrong match or a near-parallel pair of rays); runs shorter than min_len dropped."""
-    ok = np.isfinite(X[:, 0])
-    idx = np.flatnonzero(ok)
-    if len(idx) < min_len:
-        return []
-    step = np.linalg.norm(np.diff(X[idx], axis=0), axis=1)
-    med = np.median(step) if len(step) else 0.0
-    cut = (np.diff(idx) > 1) | (step > 8.0 * med + 1e-12)
-    runs = np.split(idx, np.flatnonzero(cut) + 1)
-    return [r for r in runs if len(r) >= min_len]
-
-
-def trajectories(bundle: CueBundle, pairs: tuple[PairView, ...], offsets_s: dict[str, float | None],
-                 cameras: tuple[CameraView, ...]) -> tuple[Trajectory, ...]:
-    """Triangulate the best accepted pairs; drop far-away points (wrong matches, near-parallel rays)."""
-    ok = [p for p in pairs if p.accepted and offsets_s.get(p.a) is not None
-          and offsets_s.get(p.b) is not None]
-    ok.sort(key=lambda p: (-p.contrast, p.key))
-    per = max(1, MAX_TRAJECTORIES // max(1, min(TRAJ_PAIRS, len(ok))))
-    out: list[Trajectory] = []
-    for p in ok[:TRAJ_PAIRS]:
-        out += triangulate_pair(bundle, p.a, p.b, offsets_s[p.a], offsets_s[p.b], per)[:per]
-    if not out:
-        return ()
-    # keep what lies inside the region the cameras look at: within 1.5 x the cameras' radius
-    centers = np.concatenate([c.centers() for c in cameras]) if cameras else np.zeros((1, 3))
-    allpts = np.concatenate([t.points_world for t in out])
-    mid = np.median(allpts, axis=0)
-    radius = 1.5 * np.max(np.linalg.norm(centers - centers.mean(0), axis=1)) if len(centers) > 1 else \
-        5.0 * np.median(np.linalg.norm(allpts - mid, axis=1))
-    kept = []
-    for t in out:
-        m = np.linalg.norm(t.points_world - mid, axis=1) < radius
-        if m.sum() >= 5:
-            kept.append(Trajectory(t.points_world[m], t.time_s[m], t.pair))
-    return tuple(kept)
+    for tj in run_trajectories(bundle, accepted, offsets_s, TRAJ_PAIRS, 4 * per):
+        out += [Trajectory(tj.points_world[sg.track, sg.start:sg.stop], tj.time_s[sg.start:sg.stop],
+                           (tj.a, tj.b)) for sg in tj.segments[:per]]
+    return tuple(out)
 
 
 def mosaic_moment(bundle: CueBundle, offsets_s: dict[str, float | None]) -> tuple[float, dict[str, int | None]]:
@@ -322,7 +223,7 @@ def build_report_data(result: dict[str, Any], bundle: CueBundle | None, *, sourc
     else:
         videos = video_clocks(bundle, video_paths)
         cameras = camera_views(bundle)
-        trajs = trajectories(bundle, pairs, offsets, cameras)
+        trajs = trajectories(bundle, pairs, offsets)
         if not trajs:
             notes.append("no triangulated trajectories (no accepted pair with solved offsets "
                          "gave consistent points)")

@@ -16,7 +16,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
-from ..geometry.timing import frame_brackets, interpolate_intrinsics, interpolate_poses
+from ..geometry.sampling import camera_at_frames, camera_between_frames, tracks_between_frames
+from ..geometry.timing import frame_brackets
 from ..types import CameraTrack, TrackPairs, Tracks, VideoInfo
 from . import kernels
 from .config import LandscapeConfig
@@ -90,26 +91,15 @@ class PairEnergy:
     def _G_moving(self, k: np.ndarray, w: np.ndarray) -> np.ndarray:
         """(D,Ts,3,3) G between s at its frame j and i at its interpolated moment."""
         D, Ts = k.shape
-        s_cam, i_cam = self.s.camera, self.i.camera
-        j = np.broadcast_to(np.arange(Ts), (D, Ts))
-        K_s = s_cam.K_at(j.ravel()).reshape(D, Ts, 3, 3)
-        T_s = s_cam.pose_at(j.ravel()).reshape(D, Ts, 4, 4) if s_cam.is_moving else \
-            np.broadcast_to(s_cam.cam_from_world, (D, Ts, 4, 4))
-        if i_cam.cam_from_world.ndim == 3:
-            T_i = interpolate_poses(i_cam.cam_from_world, k, w)
-        else:
-            T_i = np.broadcast_to(i_cam.cam_from_world, (D, Ts, 4, 4))
-        K_i = interpolate_intrinsics(i_cam.K, k, w)
-        invalid = k < 0
-        for cam, frames in ((s_cam, j), (i_cam, None)):
-            if cam.valid is None:
-                continue
-            if frames is not None:
-                invalid |= ~cam.valid[frames]
-            else:
-                kc = np.clip(k, 0, len(cam.valid) - 2)
-                invalid |= ~(cam.valid[kc] & cam.valid[kc + 1])
-        T_i = np.where(invalid[..., None, None], np.eye(4), T_i)
+        cam_s = camera_at_frames(self.s.camera, np.broadcast_to(np.arange(Ts), (D, Ts)))
+        cam_i = camera_between_frames(self.i.camera, k, w)
+        invalid = ~(cam_s.valid & cam_i.valid)
+        # K is inverted: a placeholder keeps the batched inverse finite (NaN poses just give NaN);
+        # the G of invalid terms is discarded below
+        K_s, T_s, T_i = cam_s.K, cam_s.cam_from_world, cam_i.cam_from_world
+        K_i = np.where(invalid[..., None, None], np.eye(3), cam_i.K)
+        if not cam_s.valid.all():
+            K_s = np.where(invalid[..., None, None], np.eye(3), K_s)
         with np.errstate(invalid="ignore", divide="ignore"):
             G = fundamental_from_cameras(K_s, T_s, K_i, T_i)
         G[invalid] = np.nan
@@ -147,11 +137,7 @@ class PairEnergy:
             sel = np.linspace(0, len(sel) - 1, max_pairs).round().astype(int)
         k, w = self._brackets(np.array([offset_s]))
         k, w = k[0], w[0]
-        ok = k >= 0
-        kc = np.clip(k, 0, self.xi.shape[1] - 2)
-        xi = self.xi[self.pair_i[sel]]
-        y = xi[:, kc] + w[None, :, None] * (xi[:, kc + 1] - xi[:, kc])
-        y[:, ~ok] = np.nan
+        y = tracks_between_frames(self.xi, k, w, self.pair_i[sel])
         x = self.xs[self.pair_s[sel]]
         if self.moving:
             G = self._G_moving(k[None], w[None])[0]

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..geometry.epipolar import epipolar_residual
+from ..geometry.sampling import tracks_between_frames
 from .landscape import PairEnergy
 
 
@@ -17,14 +18,10 @@ def reference_energy(pe: PairEnergy, offsets_s: np.ndarray, scale: float) -> tup
     out = np.full(len(offsets_s), np.nan)
     support = np.zeros(len(offsets_s), dtype=np.int64)
     xs = pe.xs[pe.pair_s]  # (P,Ts,2)
-    xi_all = pe.xi[pe.pair_i]  # (P,Ti,2)
     for d, off in enumerate(offsets_s):
         k, w = pe._brackets(np.array([off]))
         k, w = k[0], w[0]
-        ok = k >= 0
-        kc = np.clip(k, 0, pe.xi.shape[1] - 2)
-        y = xi_all[:, kc] + w[None, :, None] * (xi_all[:, kc + 1] - xi_all[:, kc])
-        y[:, ~ok] = np.nan
+        y = tracks_between_frames(pe.xi, k, w, pe.pair_i)  # (P,Ts,2)
         G = pe._G_moving(k[None], w[None])[0] if pe.moving else pe.G_static
         with np.errstate(invalid="ignore", divide="ignore"):
             r = epipolar_residual(G, xs, y, pe.cfg.residual)

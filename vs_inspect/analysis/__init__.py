@@ -1,0 +1,1 @@
+"""Derived views of a run: triangulated trajectories, epipolar sweeps."""
