@@ -20,7 +20,7 @@ from ..io.bundle import read_bundle, read_gt
 from ..io.result import read_result
 from ..types import CueBundle
 from .data import ReportData
-from .prepare import build_report_data
+from ..analysis.report_data import build_report_data
 
 log = logging.getLogger(__name__)
 

@@ -16,7 +16,7 @@ from ..geometry.epipolar import camera_centers, epipolar_residual, fundamental_f
 from ..geometry.timing import frame_brackets, interpolate_intrinsics, interpolate_poses
 from ..geometry.triangulate import triangulate_dlt
 from ..types import CueBundle
-from .data import (CameraView, EpipolarPanel, EpipolarState, Mosaic, MosaicTile, PairView,
+from ..report.data import (CameraView, EpipolarPanel, EpipolarState, Mosaic, MosaicTile, PairView,
                    ReportData, Trajectory, VideoClock)
 
 log = logging.getLogger(__name__)
