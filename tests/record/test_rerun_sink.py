@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from vs_inspect.analysis.record_views import record_frame, record_mask
 from vs_inspect.cli import main
 from vs_inspect.io.recording import pair_key, read_recording, read_static_points, read_video_frames
 from vs_inspect.io.result import run_result_to_dict, write_run_result
@@ -236,9 +237,9 @@ def test_frames_masks_and_video_asset(tmp_path):
                 ok, img = cap.read()
                 if not ok:
                     break
-                sink.video_frame(v.name, k, img)
+                sink.video_frame(v.name, k, record_frame(img, sink.options))
                 mask = (cv2.cvtColor(img, cv2.COLOR_BGR2GRAY) > 100).astype(np.int32)
-                sink.dynamic_mask(v.name, k, mask)
+                sink.dynamic_mask(v.name, k, record_mask(mask, sink.options))
                 k += 1
             assert k == v.num_frames
         result = sync_bundle(b, SyncConfig(), sink=sink, progress=False)
@@ -282,10 +283,11 @@ def test_real_videos_recording_verifies(shared_data, tmp_path):
             sink.video(s.info, str(s.path))
             prev = None
             for k, img in iter_frames(s):
-                sink.video_frame(s.info.name, k, img)
+                sink.video_frame(s.info.name, k, record_frame(img, sink.options))
                 grey = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
                 if prev is not None:
-                    sink.dynamic_mask(s.info.name, k, (cv2.absdiff(grey, prev) > 25).astype(np.int32))
+                    moving = (cv2.absdiff(grey, prev) > 25).astype(np.int32)
+                    sink.dynamic_mask(s.info.name, k, record_mask(moving, sink.options))
                 prev = grey
         sink.cameras(cams, None, None)
     assert rerun_verify(out, tmp_path).returncode == 0

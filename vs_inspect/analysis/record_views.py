@@ -51,6 +51,31 @@ class RunRecordView:
     trajectories: tuple[Trajectories, ...]  # accepted pairs triangulated at the solved offsets
 
 
+def record_frame(image_bgr: np.ndarray, options: RecordOptions) -> np.ndarray:
+    """(h,w,3) uint8 BGR: the frame as the recording keeps it, at most options.max_image_width_px
+    wide (area-averaged; 0 = full resolution)."""
+    import cv2
+    img = np.asarray(image_bgr)
+    h, w = img.shape[:2]
+    mw = options.max_image_width_px
+    if mw and w > mw:
+        img = cv2.resize(img, (mw, max(1, round(h * mw / w))), interpolation=cv2.INTER_AREA)
+    return img
+
+
+def record_mask(instances: np.ndarray, options: RecordOptions) -> np.ndarray:
+    """(h,w) uint8 (uint16 beyond 255 instances) instance ids as the recording keeps them, at most
+    options.max_mask_width_px wide (nearest neighbour, so that ids stay ids; 0 = full resolution)."""
+    import cv2
+    m = np.asarray(instances)
+    h, w = m.shape[:2]
+    m = m.astype(np.uint16 if m.max(initial=0) > 255 else np.uint8)
+    mw = options.max_mask_width_px
+    if mw and w > mw:
+        m = cv2.resize(m, (mw, max(1, round(h * mw / w))), interpolation=cv2.INTER_NEAREST)
+    return m
+
+
 def sweep_offsets(land: PairLandscape, max_offsets: int) -> np.ndarray:
     """(D,) candidate offsets of the pair's epipolar view: all when max_offsets < 0 or enough,
     else an even spread, the best minima and a dense run around the chosen Δ (plus the chosen Δ)."""

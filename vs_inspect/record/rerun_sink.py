@@ -168,15 +168,12 @@ class RerunSink(Sink):
 
     @_timed
     def video_frame(self, name: str, frame_index: int, image_bgr: np.ndarray) -> None:
+        """Kept as given (analysis.record_views.record_frame sizes it), JPEG-encoded."""
         import cv2
         buf = self._videos.get(name)
         if not self.options.frames or buf is None or buf.asset:
             return
         img = np.asarray(image_bgr)
-        h, w = img.shape[:2]
-        mw = self.options.max_image_width_px
-        if mw and w > mw:
-            img = cv2.resize(img, (mw, max(1, round(h * mw / w))), interpolation=cv2.INTER_AREA)
         ok, data = cv2.imencode(".jpg", img, [cv2.IMWRITE_JPEG_QUALITY, int(self.options.jpeg_quality)])
         if ok:
             buf.jpeg[int(frame_index)] = data.tobytes()
@@ -184,17 +181,11 @@ class RerunSink(Sink):
 
     @_timed
     def dynamic_mask(self, name: str, frame_index: int, instances: np.ndarray) -> None:
-        import cv2
+        """Kept as given (analysis.record_views.record_mask sizes it and picks its integer type)."""
         buf = self._videos.get(name)
         if not self.options.masks or buf is None:
             return
-        m = np.asarray(instances)
-        h, w = m.shape[:2]
-        mw = self.options.max_mask_width_px
-        m = m.astype(np.uint16 if m.max(initial=0) > 255 else np.uint8)
-        if mw and w > mw:
-            m = cv2.resize(m, (mw, max(1, round(h * mw / w))), interpolation=cv2.INTER_NEAREST)
-        buf.masks[int(frame_index)] = m
+        buf.masks[int(frame_index)] = np.asarray(instances)
 
     @_timed
     def cameras(self, cameras: dict[str, CameraTrack], points_world: np.ndarray | None,

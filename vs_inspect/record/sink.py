@@ -33,10 +33,11 @@ class Sink:
         """An input video (path to the file or image folder, None for synthetic input)."""
 
     def video_frame(self, name: str, frame_index: int, image_bgr: np.ndarray) -> None:
-        """One decoded frame (H,W,3) uint8 BGR; sinks may downscale or skip."""
+        """One frame (h,w,3) uint8 BGR as the recording keeps it (analysis.record_views.record_frame)."""
 
     def dynamic_mask(self, name: str, frame_index: int, instances: np.ndarray) -> None:
-        """(H,W) int instance ids of moving regions at a frame (0 = static background)."""
+        """(h,w) uint8/uint16 instance ids of moving regions at a frame (0 = static background), as
+        the recording keeps them (analysis.record_views.record_mask)."""
 
     def cameras(self, cameras: dict[str, CameraTrack], points_world: np.ndarray | None,
                 colors: np.ndarray | None) -> None:
