@@ -106,14 +106,19 @@ def test_metadata_only_and_embedded_bundle(recorded):
     assert frames.read(b.names[0], 0) is None
 
 
-def test_no_result_and_bad_files(recorded, tmp_path):
+def test_no_result_and_bad_files(recorded, tmp_path, capsys):
+    """InputError from the reader, and `vs-inspect inspect` turns it into one line (exit 2)."""
     import rerun as rr
+
+    from vs_inspect.cli import main
     path, b, _, _ = recorded
     early = tmp_path / "early.rrd"
     with RerunSink(early, options=RecordOptions.minimal(), progress=False) as sink:
         sink.bundle(b)
     rec = read_recording(early)
     assert rec.result is None and rec.meta["has_result"] is False
+    assert main(["inspect", str(early)]) == 2
+    assert "the recording has no result" in capsys.readouterr().err
     trunc = tmp_path / "trunc.rrd"
     trunc.write_bytes(path.read_bytes()[:20_000])
     garbage = tmp_path / "garbage.rrd"
@@ -128,3 +133,6 @@ def test_no_result_and_bad_files(recorded, tmp_path):
                     (garbage, "not a readable"), (foreign, "not a vs_inspect recording")):
         with pytest.raises(InputError, match=what):
             read_recording(f)
+        assert main(["inspect", str(f)]) == 2
+        err = capsys.readouterr().err
+        assert what in err and "Traceback" not in err
