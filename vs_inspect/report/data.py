@@ -92,7 +92,9 @@ class PairView:
         """|chosen - true| in ms when both are known."""
         if self.chosen_offset_s is None or self.true_offset_s is None:
             return None
-        return 1000.0 * abs(self.chosen_offset_s - self.true_offset_s)
+        # Δ_ab is b's offset when a's is 0: the per-video error of b against the truth
+        return offset_errors_ms({self.a: 0.0, self.b: self.chosen_offset_s},
+                                {self.a: 0.0, self.b: self.true_offset_s}, self.a)[self.b]
 
 
 @dataclass(frozen=True)
