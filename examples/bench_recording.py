@@ -28,7 +28,8 @@ import numpy as np  # noqa: F401  (before pycolmap)
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from vs_inspect.io.result import result_to_dict  # noqa: E402
+from vs_inspect.analysis.record_views import record_frame, record_mask  # noqa: E402
+from vs_inspect.io.result import result_to_dict, run_result_from_dict  # noqa: E402
 from vs_inspect.record.options import RecordOptions  # noqa: E402
 from vs_inspect.record.rerun_sink import RerunSink  # noqa: E402
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene  # noqa: E402
@@ -62,7 +63,7 @@ def bench_demo(out: Path) -> None:
         with RerunSink(out / f"{case.split()[0]}-{len(list(out.iterdir()))}.rrd", options=opts,
                        progress=False) as sink:
             r = sync_bundle(bundle, SyncConfig(), sink=sink, progress=False)
-            sink.run_summary(result_to_dict(r, {"gt_offsets_s": bundle.gt_offsets_s}))
+            sink.run_summary(run_result_from_dict(result_to_dict(r, {"gt_offsets_s": bundle.gt_offsets_s})))
         report(case, sink, time.perf_counter() - t)
 
 
@@ -95,12 +96,13 @@ def bench_budget(out: Path, full_frames: bool = False) -> None:
             for k in range(min(v.num_frames, 300)):
                 img = real[(vi * 57 + k) % len(real)]
                 img = np.roll(img, 3 * k, axis=1)  # make consecutive frames differ
-                sink.video_frame(v.name, k, img)
+                sink.video_frame(v.name, k, record_frame(img, opts))
                 grey = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
-                sink.dynamic_mask(v.name, k, (grey > 160).astype(np.int32) * (1 + (k // 50) % 3))
+                mask = (grey > 160).astype(np.int32) * (1 + (k // 50) % 3)
+                sink.dynamic_mask(v.name, k, record_mask(mask, opts))
                 n_frames += 1
         r = sync_bundle(b, SyncConfig(), sink=sink, progress=False)
-        sink.run_summary(result_to_dict(r, {"gt_offsets_s": b.gt_offsets_s}))
+        sink.run_summary(run_result_from_dict(result_to_dict(r, {"gt_offsets_s": b.gt_offsets_s})))
     report(f"4 x 10 s x 30 fps 720p, {n_frames} frames+masks" + (" (full)" if full_frames else ""),
            sink, time.perf_counter() - t)
 
@@ -118,7 +120,8 @@ def bench_caliscope(out: Path) -> None:
         with RerunSink(out / f"caliscope-{cfg.sink_frames}.rrd", progress=False) as sink:
             bundle, stats = extract_cues(sources, calib, cfg, sink=sink, progress=False)
             r = sync_bundle(bundle, SyncConfig(), sink=sink, progress=False)
-            sink.run_summary(result_to_dict(r, {"input": {"videos": {s.info.name: str(s.path) for s in sources}}}))
+            videos = {s.info.name: str(s.path) for s in sources}
+            sink.run_summary(run_result_from_dict(result_to_dict(r, {"input": {"videos": videos}})))
         report(case, sink, time.perf_counter() - t)
 
 

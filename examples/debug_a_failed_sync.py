@@ -33,9 +33,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from scipy.spatial.transform import Rotation  # noqa: E402
 
+from vs_inspect.analysis.report_data import report_data_from_recording  # noqa: E402
 from vs_inspect.report import figures  # noqa: E402
 from vs_inspect.report.build import render_report  # noqa: E402
-from vs_inspect.report.load import load_rrd  # noqa: E402
 from vs_inspect.sync.config import SyncConfig  # noqa: E402
 from vs_inspect.sync.run import sync_bundle  # noqa: E402
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene  # noqa: E402
@@ -100,14 +100,14 @@ def main() -> int:
     print("$ vs-inspect inspect", rrd)
     print(inspect_text)
 
-    data = load_rrd(rrd)
+    data = report_data_from_recording(rrd)
     paths = render_report(data, out / "report")
     # the epipolar panel of a pair with the wrong pose: lines miss at the chosen offset too
     partner = next(p for p in data.pairs if WRONG_POSE in (p.a, p.b) and BLIND not in (p.a, p.b)
                    and set((p.a, p.b)) != set(ALL_WRONG))
-    posed = load_rrd(rrd, pair=(partner.a, partner.b))
+    posed = report_data_from_recording(rrd, pair=(partner.a, partner.b))
     wp_png = figures.epipolar(posed, out / "report" / "epipolar_wrong_pose.png")
-    allwrong = load_rrd(rrd, pair=ALL_WRONG)
+    allwrong = report_data_from_recording(rrd, pair=ALL_WRONG)
     aw_png = figures.epipolar(allwrong, out / "report" / "epipolar_all_wrong.png") \
         if allwrong.epipolar is not None else None
 

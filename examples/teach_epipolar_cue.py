@@ -32,13 +32,13 @@ import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from vs_inspect.analysis.report_data import report_data_from_run  # noqa: E402
 from vs_inspect.geometry.epipolar import (epipolar_lines, epipolar_residual,  # noqa: E402
                                           fundamental_from_cameras)
 from vs_inspect.geometry.sampling import sample_video  # noqa: E402
 from vs_inspect.io.bundle import write_bundle  # noqa: E402
 from vs_inspect.io.result import result_to_dict, write_json_atomic  # noqa: E402
 from vs_inspect.report.build import render_report  # noqa: E402
-from vs_inspect.report.load import load_run  # noqa: E402
 from vs_inspect.sync.config import SyncConfig  # noqa: E402
 from vs_inspect.sync.run import sync_bundle  # noqa: E402
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene  # noqa: E402
@@ -136,8 +136,8 @@ def main() -> int:
         ax.set_xlabel("x [px]")
         ax.set_ylabel("y [px]")
         ax.legend(loc="best", fontsize=8.5, framealpha=0.9)
-    fig.suptitle(f"Step 2. The cue: x_a(t + Δ)ᵀ F x_b(t) = 0 holds only when Δ is the true offset "
-                 f"(the point lies on the line)", fontsize=12)
+    fig.suptitle("Step 2. The cue: x_a(t + Δ)ᵀ F x_b(t) = 0 holds only when Δ is the true offset "
+                 "(the point lies on the line)", fontsize=12)
     fig.savefig(out / "step2_cue.png")
     plt.close(fig)
 
@@ -174,7 +174,7 @@ def main() -> int:
     bdir = write_bundle(bundle, run / "bundle", overwrite=True)
     write_json_atomic(result_to_dict(result, {"gt_offsets_s": bundle.gt_offsets_s,
                                               "input": {"bundle": str(bdir)}}), run / "result.json")
-    render_report(load_run(run), out / "report")
+    render_report(report_data_from_run(run), out / "report")
     print(f"found Δ_ab = {land.best_offset_s:+.4f} s, true {true_delta:+.4f} s, error "
           f"{1000 * abs(land.best_offset_s - true_delta):.1f} ms ({land.decision.reason})")
     print(f"figures: {out}/step1_geometry.png step2_cue.png step3_search.png report/index.html")

@@ -1,6 +1,5 @@
 """The benchmark's shortcuts equal the real pipeline, and the caliscope bundle is built right."""
 
-import dataclasses
 
 import numpy as np
 import pytest

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from vs_inspect.geometry.sampling import (camera_at_frames, camera_between_frames, sample_video,
+from vs_inspect.geometry.sampling import (camera_at_frames, sample_video,
                                           tracks_between_frames)
 from vs_inspect.geometry.timing import frame_brackets
 from vs_inspect.types import CameraTrack

@@ -8,7 +8,8 @@ from pathlib import Path
 
 from vs_inspect.cli import main
 from vs_inspect.io.bundle import write_bundle
-from vs_inspect.record.read import read_recording
+from vs_inspect.io.recording import read_recording
+from vs_inspect.io.result import run_result_to_dict
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
 
 
@@ -23,10 +24,10 @@ def test_sync_records_by_default_and_not_with_no_rrd(tmp_path, monkeypatch, caps
                  "--rrd-minimal"]) == 0
     rrd = tmp_path / "recordings" / "run7.rrd"
     assert rrd.is_file()
-    assert f"recording: recordings/run7.rrd" in capsys.readouterr().out
+    assert "recording: recordings/run7.rrd" in capsys.readouterr().out
     rec = read_recording(rrd)
     on_disk = json.loads((tmp_path / "out" / "run7" / "result.json").read_text())
-    assert rec.result == on_disk
+    assert run_result_to_dict(rec.result) == on_disk
     assert rec.config == on_disk["config"]
     assert rec.meta["options"]["frames"] is False  # --rrd-minimal
 

@@ -10,11 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from vs_inspect.analysis.report_data import load_report_data
 from vs_inspect.io.bundle import write_bundle
 from vs_inspect.io.result import result_to_dict, write_json_atomic
 from vs_inspect.report.build import available, render_report
 from vs_inspect.report.figures import figure_size_px
-from vs_inspect.report.load import load
 from vs_inspect.sync.config import SyncConfig
 from vs_inspect.sync.run import sync_bundle
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
@@ -74,10 +74,10 @@ def reports(run, tmp_path_factory):
 
     run_dir, rrd, _ = run
     out = tmp_path_factory.mktemp("reports")
-    from_run = load(run_dir)
+    from_run = load_report_data(run_dir)
     render_report(from_run, out / "run")
     assert cli(["report", str(rrd), "--out", str(out / "rrd")]) == 0
-    return from_run, out / "run", load(rrd), out / "rrd"
+    return from_run, out / "run", load_report_data(rrd), out / "rrd"
 
 
 def test_report_from_run_folder(reports):
@@ -112,7 +112,7 @@ def test_pair_choice_and_bad_input(run, tmp_path, capsys):
     from vs_inspect.cli import main as cli
 
     run_dir, rrd, _ = run
-    data = load(rrd, pair=("cam3", "cam0"))  # either order names the stored pair
+    data = load_report_data(rrd, pair=("cam3", "cam0"))  # either order names the stored pair
     assert (data.epipolar.a, data.epipolar.b) == ("cam0", "cam3")
     assert cli(["report", str(tmp_path / "nope"), "--out", str(tmp_path / "x")]) == 2
     assert "nope" in capsys.readouterr().err
@@ -167,7 +167,7 @@ def test_report_with_videos_has_mosaic_and_real_frames(tmp_path):
     write_json_atomic(result_to_dict(result, {"gt_offsets_s": scene.bundle.gt_offsets_s,
                                               "input": {"bundle": str(bundle_dir), "videos": videos}}),
                       tmp_path / "run" / "result.json")
-    data = load(tmp_path / "run")
+    data = load_report_data(tmp_path / "run")
     assert data.mosaic is not None and data.epipolar.image_bgr is not None
     assert all(t.image_bgr is not None for t in data.mosaic.tiles)  # offsets within ±1 s of 3 s videos
     render_report(data, tmp_path / "out")
@@ -176,7 +176,7 @@ def test_report_with_videos_has_mosaic_and_real_frames(tmp_path):
     for t in data.mosaic.tiles:
         v = data.video(t.name)
         assert abs(t.frame / v.fps + data.offsets_s[t.name] - data.mosaic.time_s) <= 0.5 / v.fps + 1e-9
-    from_rrd = load(rrd)
+    from_rrd = load_report_data(rrd)
     render_report(from_rrd, tmp_path / "out_rrd")
     assert _check_images(tmp_path / "out_rrd", from_rrd) == EXPECTED | {"mosaic"}
     assert np.abs(from_rrd.epipolar.image_bgr.astype(int) - data.epipolar.image_bgr.astype(int)).mean() < 2

@@ -135,7 +135,7 @@ def sync_videos(args: argparse.Namespace, sync_cfg, truth: dict | None = None) -
     Videos that could not be used (unreadable, no camera) appear in result.json with a null
     offset and their reason. Exit code 0 when at least two videos got offsets, else 2.
     """
-    from ..io.result import result_to_dict, write_json_atomic
+    from ..io.result import result_to_dict, run_result_from_dict, write_json_atomic
     from ..sync.config import config_to_dict
     from ..sync.run import sync_bundle
     from ._common import offsets_table
@@ -163,7 +163,7 @@ def sync_videos(args: argparse.Namespace, sync_cfg, truth: dict | None = None) -
                                               "dropped") if k in stats}
         if "sfm" in stats:
             data["cues"]["sfm"] = stats["sfm"]
-        sink.run_summary(data)
+        sink.run_summary(run_result_from_dict(data))
         path = write_json_atomic(data, out / "result.json")
     if describe(sink):
         print(describe(sink))

@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 
 from ..io.bundle import read_bundle
-from ..io.result import result_to_dict, write_json_atomic
+from ..io.result import result_to_dict, run_result_from_dict, write_json_atomic
 from ..record.sink import NullSink, Sink
 from ..synth.videos import is_complete, render_scene, rendered_with
 from ..synth.world import SceneConfig, make_scene
@@ -84,7 +84,7 @@ def run_demo(out: Path, config: SceneConfig = DEMO_SCENE, sync_config: SyncConfi
     data = result_to_dict(result, {"gt_offsets_s": bundle.gt_offsets_s,
                                    "input": {"scene": str(scene_dir), "cues": "true cue bundle"}})
     data.setdefault("timings_s", {})["total_s"] = round(time.perf_counter() - t0, 4)
-    sink.run_summary(data)
+    sink.run_summary(run_result_from_dict(data))
     path = write_json_atomic(data, out / "result.json")
     print(offsets_table(result.offsets_s, result.uncertainty_s, bundle.gt_offsets_s,
                         result.reference, result.unresolved_reason))

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 from ..errors import InputError
+from ..types import PairLandscape, RunResult
 from ._common import offsets_table
 
 
@@ -21,19 +23,22 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _pair_entry(result: dict, a: str, b: str):
-    for p in result.get("pairs", []):
-        if (p["a"], p["b"]) == (a, b):
+def _pair_entry(result: RunResult, a: str, b: str) -> tuple[PairLandscape | None, float]:
+    for p in result.pairs:
+        if (p.a, p.b) == (a, b):
             return p, 1.0
-        if (p["a"], p["b"]) == (b, a):
+        if (p.a, p.b) == (b, a):
             return p, -1.0
     return None, 1.0
 
 
+def _opt(x: float) -> float | None:
+    return x if math.isfinite(x) else None
+
+
 def run(args: argparse.Namespace) -> int:
-    from ..record.diagnose import check_pairs, find_suspects
-    from ..record.read import read_recording
-    from ..record.rerun_sink import entity_name
+    from ..analysis.diagnose import check_pairs, find_suspects
+    from ..io.recording import pair_key, read_recording
 
     rec = read_recording(args.rrd)
     res = rec.result
@@ -42,25 +47,23 @@ def run(args: argparse.Namespace) -> int:
           f"rerun {rec.meta.get('rerun_version')})")
     if res is None:
         raise InputError(f"{args.rrd}: the recording has no result (the run stopped before Stage 2)")
-    truth = res.get("gt_offsets_s") or (rec.videos or {}).get("gt_offsets_s")
-    vids = {v["name"]: v for v in (rec.videos or {}).get("videos", [])}
-    print(f"\nvideos ({len(res['offsets_s'])}), reference {res['reference']}:")
-    for n, v in vids.items():
-        rate = f"{v['fps']:g} fps" if v.get("fps") else "variable rate"
-        print(f"  {n}: {v['width']}x{v['height']}, {v['num_frames']} frames, {v['duration_s']:.2f} s, {rate}")
-    print(offsets_table(res["offsets_s"], res.get("uncertainty_s", {}), truth, res["reference"],
-                        res.get("unresolved", {})))
+    truth = res.gt_offsets_s or rec.gt_offsets_s
+    print(f"\nvideos ({len(res.offsets_s)}), reference {res.reference}:")
+    for v in rec.videos:
+        rate = f"{v.fps:g} fps" if v.fps else "variable rate"
+        print(f"  {v.name}: {v.width}x{v.height}, {v.num_frames} frames, {v.duration_s:.2f} s, {rate}")
+    print(offsets_table(res.offsets_s, res.uncertainty_s, truth, res.reference, res.unresolved))
 
-    pairs = res.get("pairs", [])
-    acc = sum(p["accepted"] for p in pairs)
+    pairs = res.pairs
+    acc = sum(p.decision.accepted for p in pairs)
     print(f"\npairs: {len(pairs)} evaluated, {acc} accepted, {len(pairs) - acc} rejected")
     for p in pairs:
-        off = f"{p['offset_s']:+.4f} s" if p.get("offset_s") is not None else "none"
-        print(f"  {p['a'] + '__' + p['b']:<24} {'accepted' if p['accepted'] else 'REJECTED':<9} "
-              f"Δ={off:<12} {p['reason']}")
+        off = f"{p.best_offset_s:+.4f} s" if _opt(p.best_offset_s) is not None else "none"
+        print(f"  {p.a + '__' + p.b:<24} {'accepted' if p.decision.accepted else 'REJECTED':<9} "
+              f"Δ={off:<12} {p.decision.reason}")
 
     checks = [c for c in check_pairs(res, rec.videos) if c.disagreement_ms is not None]
-    print(f"\nmost disagreeing with the final solution (|Δ_ab − (s_b − s_a)|, largest first):")
+    print("\nmost disagreeing with the final solution (|Δ_ab − (s_b − s_a)|, largest first):")
     if not checks:
         print("  (no pair with both videos synchronized)")
     for c in checks[: args.top]:
@@ -80,17 +83,17 @@ def run(args: argparse.Namespace) -> int:
         a, b = args.pair
         p, sign = _pair_entry(res, a, b)
         if p is None:
-            known = ", ".join(f"{q['a']} {q['b']}" for q in pairs)
+            known = ", ".join(f"{q.a} {q.b}" for q in pairs)
             raise InputError(f"pair {a} {b} was not evaluated in this run; evaluated: {known}")
-        key = f"{entity_name(p['a'])}__{entity_name(p['b'])}"
-        print(f"\npair {p['a']} → {p['b']}" + (f" (evaluated in this order; Δ for {a} → {b} is the "
-                                                "negative)" if sign < 0 else "") + ":")
-        print(f"  {'accepted' if p['accepted'] else 'REJECTED'}: {p['reason']}")
-        print(f"  chosen Δ = {p['offset_s']:+.4f} s" if p.get("offset_s") is not None else "  no minimum")
+        print(f"\npair {p.a} → {p.b}" + (f" (evaluated in this order; Δ for {a} → {b} is the "
+                                         "negative)" if sign < 0 else "") + ":")
+        print(f"  {'accepted' if p.decision.accepted else 'REJECTED'}: {p.decision.reason}")
+        print(f"  chosen Δ = {p.best_offset_s:+.4f} s" if _opt(p.best_offset_s) is not None else "  no minimum")
         print("  landscape minima (best first):")
-        for o, e in zip(p.get("minima_offsets_s", []), p.get("minima_energy", [])):
+        for i in p.minima_idx:
+            o, e = float(p.offsets_s[i]), _opt(float(p.energy[i]))
             print(f"    Δ = {o:+.4f} s   E = {e:.6g}" if e is not None else f"    Δ = {o:+.4f} s")
-        series = rec.landscapes.get(key, {})
+        series = rec.landscapes.get(pair_key(p.a, p.b), {})
         if "energy" in series:
             e = series["energy"]
             print(f"  logged landscape: {len(e.offset_ms)} offsets from {e.offset_ms.min():+d} to "

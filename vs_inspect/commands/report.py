@@ -22,11 +22,11 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..analysis.report_data import load_report_data
     from ..report.build import render_report
-    from ..report.load import load
 
     t0 = time.perf_counter()
-    data = load(args.source, tuple(args.pair) if args.pair else None)
+    data = load_report_data(args.source, tuple(args.pair) if args.pair else None)
     t1 = time.perf_counter()
     paths = render_report(data, args.out)
     t2 = time.perf_counter()

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..io.bundle import read_bundle
-from ..io.result import result_to_dict, write_json_atomic
+from ..io.result import result_to_dict, run_result_from_dict, write_json_atomic
 from ..sync.config import config_to_dict
 from ..sync.run import sync_bundle
 from ._common import add_sync_options, offsets_table, sync_config_from_args
@@ -48,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
         data["timings_s"]["total_s"] = round(time.perf_counter() - t0, 4)
         if bundle.gt_offsets_s:
             data["gt_offsets_s"] = bundle.gt_offsets_s
-        sink.run_summary(data)
+        sink.run_summary(run_result_from_dict(data))
         path = write_json_atomic(data, Path(args.out) / "result.json")
     if describe(sink):
         print(describe(sink))

@@ -18,6 +18,7 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
+from ..analysis.record_views import record_frame, record_mask
 from ..errors import InputError
 from ..record.sink import NullSink, Sink
 from ..types import CameraTrack, CueBundle, TrackPairs, Tracks, VideoInfo
@@ -64,8 +65,8 @@ def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) 
     sink_at = set(np.linspace(0, info.num_frames - 1, max(1, cfg.sink_frames)).round().astype(int).tolist())
     for k, img in iter_frames(src, max_side=cfg.max_side):
         grey.append(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY))
-        if k in sink_at:
-            sink.video_frame(info.name, k, img)
+        if k in sink_at and sink.options is not None:
+            sink.video_frame(info.name, k, record_frame(img, sink.options))
     frames = np.stack(grey)
     h, w = frames.shape[1:]
     scale = (info.width / w, info.height / h)
@@ -74,8 +75,9 @@ def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) 
     t0 = time.perf_counter()
     instances, mode, bg = moving_regions(frames, cfg.motion, cfg.camera_motion.get(info.name))
     moving_fraction = float((instances > 0).mean())
-    for k in sorted(sink_at):
-        sink.dynamic_mask(info.name, k, instances[k])
+    if sink.options is not None:
+        for k in sorted(sink_at):
+            sink.dynamic_mask(info.name, k, record_mask(instances[k], sink.options))
     timings["motion_s"] = timings.get("motion_s", 0.0) + time.perf_counter() - t0
     log.info("%s: %s camera (background motion %.2f px), moving regions cover %.1f%%",
              info.name, mode, bg, 100 * moving_fraction)

@@ -1,7 +1,7 @@
 """Sinks that stages report to: NullSink (nothing) and, with rerun, RerunSink (.rrd file).
 
-RerunSink lives in record.rerun_sink (imported on demand: it pulls in rerun); read_recording in
-record.read reads a recording back.
+RerunSink lives in record.rerun_sink (imported on demand: it pulls in rerun), its viewer layout in
+record.blueprint; io.recording names the recording's entities and reads a recording back.
 """
 
 from .options import RecordOptions

@@ -1,8 +1,10 @@
 """RerunSink: every stage's hooks written to an explicit rr.RecordingStream saved to an .rrd file.
 
-The entity tree is documented in README.md ("Recordings"). The file is written under a hidden
-temporary name next to the target and renamed on close(), so a file with the final name is always
-complete; abort() (or leaving a `with` block by an exception) deletes the temporary file.
+A thin adapter: it logs what the stages hand it (their results, and the views that
+analysis/record_views.py computed for the recording) to the entity paths of io/recording.py.
+The entity tree is documented in README.md ("Recordings"). The file is written through
+io/atomic.atomic_path, so a file with the final name is always complete; abort() (or leaving a
+`with` block by an exception) deletes the temporary file.
 
 Frames, masks and tracks are kept (JPEG-compressed) until the offsets are known, then logged once
 with both the per-video `frame` timeline and the global `time` timeline (seconds, after sync).
@@ -14,32 +16,36 @@ import json
 import logging
 import math
 import os
-import re
-import tempfile
 import time
+from contextlib import ExitStack
+from dataclasses import asdict
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import rerun as rr
 from tqdm import tqdm
 
 from .. import __version__
-from ..io.result import result_to_dict
-from ..types import CameraTrack, CueBundle, PairLandscape, SyncResult, VideoInfo
-from ..analysis.epipolar_sweep import epipolar_sweep
-from ..analysis.trajectories import run_trajectories
+from ..io.atomic import _json_default, atomic_path
+from ..io.recording import (APPLICATION_ID, LOG_DECISIONS, META_BUNDLE, META_CONFIG, META_RECORDING,
+                            META_RESULT, META_VIDEOS, RECORDING_FORMAT, RECORDING_VERSION, SYNC_GRAPH,
+                            SYNC_OFFSETS, TIMELINE_EVENT, TIMELINE_FRAME, TIMELINE_ITERATION,
+                            TIMELINE_OFFSET_MS, TIMELINE_TIME, WORLD_POINTS, camera_path,
+                            camera_trail_path, entity_name, log_path, pair_decision_path,
+                            pair_epipolar_path, pair_landscape_path, solve_residual_path,
+                            solve_weight_path, trajectory_path, video_asset_path, video_image_path,
+                            video_mask_path, video_path, video_tracks_path)
+from ..io.result import run_result_to_dict
+from ..types import CameraTrack, CueBundle, PairLandscape, RunResult, SyncResult, VideoInfo
+from .blueprint import blueprint
 from .options import RecordOptions
 from .sink import Sink
 
-log = logging.getLogger(__name__)
+if TYPE_CHECKING:
+    from ..analysis.record_views import PairRecordView, RunRecordView
 
-RECORDING_FORMAT = "vs-inspect-recording"
-RECORDING_VERSION = 1
-META_RESULT = "meta/result_json"
-META_RECORDING = "meta/recording_json"
-META_CONFIG = "meta/config_json"
-META_BUNDLE = "meta/cue_bundle"  # the cue bundle folder as a zip (component `zip`, uint8)
+log = logging.getLogger(__name__)
 
 # colours (RGB): accepted / rejected / truth / instances
 GREEN, RED, GREY, BLUE, ORANGE = (40, 180, 80), (220, 50, 50), (150, 150, 150), (60, 120, 230), (240, 150, 30)
@@ -47,15 +53,7 @@ PALETTE = np.array([(230, 25, 75), (60, 180, 75), (255, 225, 25), (0, 130, 200),
                     (145, 30, 180), (70, 240, 240), (240, 50, 230), (210, 245, 60), (250, 190, 212),
                     (0, 128, 128), (220, 190, 255), (170, 110, 40), (128, 0, 0)], dtype=np.uint8)
 H264_LIKE = {"h264", "av1"}
-
-
-def entity_name(name: str) -> str:
-    """A video name as one entity-path part (letters, digits, - and _ kept; others become _)."""
-    return re.sub(r"[^A-Za-z0-9_\-]", "_", name) or "_"
-
-
-def pair_path(a: str, b: str) -> str:
-    return f"pairs/{entity_name(a)}__{entity_name(b)}"
+GOOD_LINE_PX = 3.0  # an epipolar line passing this close to its point is drawn green
 
 
 def instance_colors(instance: np.ndarray) -> np.ndarray:
@@ -113,40 +111,41 @@ class _VideoBuffer:
 class RerunSink(Sink):
     """Writes a vs_inspect recording. Use as a context manager or call close()/abort()."""
 
-    def __init__(self, path: str | os.PathLike, application_id: str = "vs_inspect",
+    def __init__(self, path: str | os.PathLike, application_id: str = APPLICATION_ID,
                  options: RecordOptions | None = None, recording_id: str | None = None,
                  progress: bool = True):
         self.path = Path(path)
         self.options = options or RecordOptions()
         self.progress = progress
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".partial", dir=self.path.parent)
-        os.close(fd)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; the finished file gets normal rights
-        self._tmp = Path(tmp)
+        # a hidden temporary file that becomes self.path when close() succeeds (io/atomic.py)
+        self._file = ExitStack()
+        self._tmp = self._file.enter_context(atomic_path(self.path))
         self._t0 = time.perf_counter()
         # a fresh recording id per run (unless given), so two runs opened together do not merge
         self.rec = rr.RecordingStream(application_id, recording_id=recording_id, send_properties=True)
         try:
             self.rec.save(str(self._tmp))
-        except BaseException:
-            self._tmp.unlink(missing_ok=True)
+        except BaseException as exc:
+            self._file.__exit__(type(exc), exc, exc.__traceback__)
             raise
         self._closed = False
         self._videos: dict[str, _VideoBuffer] = {}
         self._world_cameras: dict[str, CameraTrack] | None = None
         self._bundle: CueBundle | None = None
         self._result: SyncResult | None = None
-        self._summary: dict[str, Any] | None = None
-        self._config: dict[str, Any] | None = None
+        self._view: RunRecordView | None = None
+        self._summary: RunResult | None = None
         self._flushed_videos = False
         self._pairs_logged: list[str] = []
         self._events = 0
         self._cams_logged: set[str] = set()
         self.hook_s = 0.0
         self.stats: dict[str, float] = {}
+
+    def image_frames(self, name: str) -> set[int] | None:
+        """Frames of a video this sink holds an image of (None: the video is unknown)."""
+        buf = self._videos.get(name)
+        return set(buf.jpeg) if buf is not None else None
 
     # ---- Stage 0 hooks ----
 
@@ -161,7 +160,7 @@ class RerunSink(Sink):
                 asset = rr.AssetVideo(path=path)
                 ts = np.sort(asset.read_frame_timestamps_nanos())
                 if len(ts) >= info.num_frames:
-                    self.rec.log(f"videos/{entity_name(info.name)}/video", asset, static=True)
+                    self.rec.log(video_asset_path(info.name), asset, static=True)
                     buf.asset, buf.asset_timestamps_ns = True, ts[: info.num_frames]
                     buf.image_size = (info.width, info.height)
             except Exception as exc:  # noqa: BLE001 - rerun could not parse it: use JPEG frames
@@ -169,15 +168,12 @@ class RerunSink(Sink):
 
     @_timed
     def video_frame(self, name: str, frame_index: int, image_bgr: np.ndarray) -> None:
+        """Kept as given (analysis.record_views.record_frame sizes it), JPEG-encoded."""
         import cv2
         buf = self._videos.get(name)
         if not self.options.frames or buf is None or buf.asset:
             return
         img = np.asarray(image_bgr)
-        h, w = img.shape[:2]
-        mw = self.options.max_image_width_px
-        if mw and w > mw:
-            img = cv2.resize(img, (mw, max(1, round(h * mw / w))), interpolation=cv2.INTER_AREA)
         ok, data = cv2.imencode(".jpg", img, [cv2.IMWRITE_JPEG_QUALITY, int(self.options.jpeg_quality)])
         if ok:
             buf.jpeg[int(frame_index)] = data.tobytes()
@@ -185,17 +181,11 @@ class RerunSink(Sink):
 
     @_timed
     def dynamic_mask(self, name: str, frame_index: int, instances: np.ndarray) -> None:
-        import cv2
+        """Kept as given (analysis.record_views.record_mask sizes it and picks its integer type)."""
         buf = self._videos.get(name)
         if not self.options.masks or buf is None:
             return
-        m = np.asarray(instances)
-        h, w = m.shape[:2]
-        mw = self.options.max_mask_width_px
-        m = m.astype(np.uint16 if m.max(initial=0) > 255 else np.uint8)
-        if mw and w > mw:
-            m = cv2.resize(m, (mw, max(1, round(h * mw / w))), interpolation=cv2.INTER_NEAREST)
-        buf.masks[int(frame_index)] = m
+        buf.masks[int(frame_index)] = np.asarray(instances)
 
     @_timed
     def cameras(self, cameras: dict[str, CameraTrack], points_world: np.ndarray | None,
@@ -205,7 +195,7 @@ class RerunSink(Sink):
         if points_world is not None and len(points_world):
             pts = np.asarray(points_world, dtype=np.float32)
             cols = np.asarray(colors, dtype=np.uint8) if colors is not None else None
-            self.rec.log("world/points", rr.Points3D(pts, colors=cols, radii=rr.Radius.ui_points(1.5)),
+            self.rec.log(WORLD_POINTS, rr.Points3D(pts, colors=cols, radii=rr.Radius.ui_points(1.5)),
                          static=True)
 
     # ---- Stage 1 and 2 hooks ----
@@ -216,7 +206,7 @@ class RerunSink(Sink):
         for v in bundle.videos:
             buf = self._videos.setdefault(v.name, _VideoBuffer(v, None))
             buf.info = v
-        self.rec.log("meta/videos_json", rr.TextDocument(json.dumps({
+        self.rec.log(META_VIDEOS, rr.TextDocument(json.dumps({
             "videos": [{"name": v.name, "entity": entity_name(v.name), "width": v.width,
                         "height": v.height, "num_frames": v.num_frames, "fps": v.fps,
                         "duration_s": v.duration_s} for v in bundle.videos],
@@ -228,37 +218,37 @@ class RerunSink(Sink):
         self._log_cameras_static(self._world_cameras or bundle.cameras, list(bundle.videos))
 
     @_timed
-    def pair_landscape(self, landscape: PairLandscape, bundle: CueBundle, energy_fn: Any) -> None:
-        self._log_landscape(landscape, bundle)
-        self._log_decision(landscape, bundle)
-        if self.options.epipolar_offsets:
-            self._log_epipolar(landscape, bundle)
+    def pair_landscape(self, landscape: PairLandscape, view: PairRecordView | None = None) -> None:
+        self._log_landscape(landscape, view)
+        self._log_decision(landscape, view)
+        if view is not None and view.sweep is not None:
+            self._log_epipolar(landscape, view)
 
     @_timed
-    def sync_result(self, result: SyncResult, bundle: CueBundle) -> None:
-        self._result, self._bundle = result, bundle
-        self._log_graph(result)
+    def sync_result(self, result: SyncResult, view: RunRecordView | None = None) -> None:
+        self._result, self._view = result, view
+        if view is not None:
+            self._log_graph(result, view)
         self._log_solve(result)
-        self._log_offsets(result, bundle)
+        if view is not None:
+            self._log_offsets(result, view)
         self._flush_videos(result.offsets_s)
-        if self.options.trajectories:
-            self._log_trajectories(result, bundle)
+        if view is not None:
+            self._log_trajectories(view)
 
     @_timed
     def stage_event(self, stage: str, message: str, **numbers: Any) -> None:
         self._events += 1
         extra = ", ".join(f"{k}={v}" for k, v in numbers.items())
         self.rec.reset_time()
-        self.rec.set_time("event", sequence=self._events)
-        self.rec.log(f"log/{entity_name(stage)}", rr.TextLog(f"{message}" + (f" ({extra})" if extra else ""),
-                                                             level=rr.TextLogLevel.INFO))
+        self.rec.set_time(TIMELINE_EVENT, sequence=self._events)
+        self.rec.log(log_path(stage), rr.TextLog(f"{message}" + (f" ({extra})" if extra else ""),
+                                                 level=rr.TextLogLevel.INFO))
         self.rec.reset_time()
 
     @_timed
-    def run_summary(self, result_dict: dict[str, Any]) -> None:
-        self._summary = result_dict
-        if "config" in result_dict:
-            self._config = result_dict["config"]
+    def run_summary(self, result: RunResult) -> None:
+        self._summary = result
 
     # ---- finishing ----
 
@@ -269,45 +259,54 @@ class RerunSink(Sink):
         try:
             if not self._flushed_videos:
                 self._flush_videos({})
-            data = self._summary
-            if data is None and self._result is not None:
-                data = result_to_dict(self._result, {"gt_offsets_s": self._bundle.gt_offsets_s}
-                                      if self._bundle is not None and self._bundle.gt_offsets_s else None)
-            if data is not None:
-                self.rec.log(META_RESULT, rr.TextDocument(json.dumps(data, default=_json_default),
+            summary = self._summary
+            if summary is None and self._result is not None:
+                r = self._result
+                gt = self._bundle.gt_offsets_s if self._bundle is not None else None
+                summary = RunResult(r.reference, r.offsets_s, r.uncertainty_s, r.unresolved_reason,
+                                    r.pairs, r.solver, r.solve_pairs, r.iterations, r.timings_s,
+                                    gt_offsets_s=gt or None)
+            if summary is not None:
+                self.rec.log(META_RESULT, rr.TextDocument(json.dumps(run_result_to_dict(summary),
+                                                                     default=_json_default),
                                                           media_type="text/plain"), static=True)
-            if self._config is not None:
-                self.rec.log(META_CONFIG, rr.TextDocument(json.dumps(self._config, default=_json_default),
+            if summary is not None and summary.config is not None:
+                self.rec.log(META_CONFIG, rr.TextDocument(json.dumps(summary.config, default=_json_default),
                                                           media_type="text/plain"), static=True)
-            from dataclasses import asdict
             self.rec.log(META_RECORDING, rr.TextDocument(json.dumps({
                 "format": RECORDING_FORMAT, "version": RECORDING_VERSION,
                 "vs_inspect_version": __version__, "rerun_version": rr.__version__,
-                "has_result": data is not None, "options": asdict(self.options),
+                "has_result": summary is not None, "options": asdict(self.options),
                 "pairs": self._pairs_logged}), media_type="text/plain"), static=True)
-            self.rec.send_blueprint(self._blueprint(), make_active=True, make_default=True)
+            names = list(self._videos) or (self._bundle.names if self._bundle else [])
+            self.rec.send_blueprint(blueprint(names, self._pairs_logged, self._result),
+                                    make_active=True, make_default=True)
             self.rec.flush()
             self.rec.disconnect()
-            os.replace(self._tmp, self.path)
+            self._file.close()  # renames the temporary file to self.path
             self._closed = True
             self.stats = {"write_s": self.hook_s + time.perf_counter() - t_close,
                           "open_s": time.perf_counter() - self._t0,
                           "size_mb": self.path.stat().st_size / 1e6}
             log.info("wrote %s (%.1f MB, %.1f s of logging)", self.path, self.stats["size_mb"],
                      self.stats["write_s"])
-        except BaseException:
-            self.abort()
+        except BaseException as exc:
+            self._abort(exc)
             raise
 
     def abort(self) -> None:
         """Stop writing and delete the temporary file; nothing that looks complete is left."""
+        self._abort(None)
+
+    def _abort(self, exc: BaseException | None) -> None:
         if self._closed:
             return
         self._closed = True
         try:
             self.rec.disconnect()
         finally:
-            self._tmp.unlink(missing_ok=True)
+            err = exc or RuntimeError("recording aborted")  # atomic_path deletes on any error
+            self._file.__exit__(type(err), err, err.__traceback__)
 
     # ---- internals: cameras ----
 
@@ -329,7 +328,7 @@ class RerunSink(Sink):
             if cam is None or v.name in self._cams_logged:
                 continue
             self._cams_logged.add(v.name)
-            base = f"world/cameras/{entity_name(v.name)}"
+            base = camera_path(v.name)
             K0 = cam.K if cam.K.ndim == 2 else cam.K[0]
             self.rec.log(base, rr.Pinhole(image_from_camera=K0, resolution=[v.width, v.height],
                                           camera_xyz=rr.ViewCoordinates.RDF, image_plane_distance=dist),
@@ -340,7 +339,7 @@ class RerunSink(Sink):
                                                   relation=rr.TransformRelation.ChildFromParent), static=True)
             else:
                 C = cam.centers()
-                self.rec.log(f"world/camera_paths/{entity_name(v.name)}",
+                self.rec.log(camera_trail_path(v.name),
                              rr.LineStrips3D([C.astype(np.float32)], colors=[ORANGE]), static=True)
 
     def _log_moving_cameras(self, offsets: dict[str, float | None]) -> None:
@@ -353,7 +352,7 @@ class RerunSink(Sink):
             frames = np.arange(n)
             T = cam.pose_at(frames)
             idx = self._indexes(buf.info, frames, offsets.get(name))
-            self.rec.send_columns(f"world/cameras/{entity_name(name)}", idx,
+            self.rec.send_columns(camera_path(name), idx,
                                   rr.Transform3D.columns(translation=T[:, :3, 3], mat3x3=T[:, :3, :3],
                                                          relation=[rr.TransformRelation.ChildFromParent] * n))
 
@@ -361,19 +360,18 @@ class RerunSink(Sink):
 
     @staticmethod
     def _indexes(info: VideoInfo, frames: np.ndarray, offset_s: float | None) -> list:
-        idx = [rr.TimeColumn("frame", sequence=np.asarray(frames, dtype=np.int64))]
+        idx = [rr.TimeColumn(TIMELINE_FRAME, sequence=np.asarray(frames, dtype=np.int64))]
         if offset_s is not None and math.isfinite(offset_s):
-            idx.append(rr.TimeColumn("time", duration=info.timestamps_s[frames] + offset_s))
+            idx.append(rr.TimeColumn(TIMELINE_TIME, duration=info.timestamps_s[frames] + offset_s))
         return idx
 
     def _flush_videos(self, offsets: dict[str, float | None]) -> None:
         self._flushed_videos = True
-        o = self.options
         total = sum(len(b.jpeg) + len(b.masks) for b in self._videos.values())
         bar = tqdm(total=total, desc="recording frames", unit="frame", leave=False,
                    disable=not self.progress or total < 50)
         for name, buf in self._videos.items():
-            info, ent = buf.info, f"videos/{entity_name(name)}"
+            info, ent = buf.info, video_path(name)
             off = offsets.get(name)
             self.rec.log(ent, rr.TextDocument(f"{name}: {info.width}x{info.height}, {info.num_frames} frames, "
                                               f"{info.duration_s:.2f} s, offset_s = {_fmt(off)}"), static=True)
@@ -383,35 +381,36 @@ class RerunSink(Sink):
                                                           colors=[GREY]), static=True)
             if buf.asset and buf.asset_timestamps_ns is not None:
                 frames = np.arange(len(buf.asset_timestamps_ns))
-                self.rec.send_columns(f"{ent}/video", self._indexes(info, frames, off),
+                self.rec.send_columns(video_asset_path(name), self._indexes(info, frames, off),
                                       rr.VideoFrameReference.columns_nanos(buf.asset_timestamps_ns))
                 if name in self._cams_logged:
                     # the same frames on the camera's image plane in 3D: references only, no copy
-                    self.rec.log(f"world/cameras/{entity_name(name)}/image",
-                                 rr.VideoFrameReference.from_fields(video_reference=f"{ent}/video"), static=True)
-                    self.rec.send_columns(f"world/cameras/{entity_name(name)}/image",
+                    self.rec.log(f"{camera_path(name)}/image",
+                                 rr.VideoFrameReference.from_fields(video_reference=video_asset_path(name)),
+                                 static=True)
+                    self.rec.send_columns(f"{camera_path(name)}/image",
                                           self._indexes(info, frames, off),
                                           rr.VideoFrameReference.columns_nanos(buf.asset_timestamps_ns))
             if buf.jpeg:
                 w, h = buf.image_size
-                self.rec.log(f"{ent}/image", rr.Transform3D(scale=[W / w, H / h, 1.0]), static=True)
+                self.rec.log(video_image_path(name), rr.Transform3D(scale=[W / w, H / h, 1.0]), static=True)
                 frames = np.array(sorted(buf.jpeg), dtype=np.int64)
                 for s in range(0, len(frames), 64):
                     fr = frames[s:s + 64]
-                    self.rec.send_columns(f"{ent}/image", self._indexes(info, fr, off),
+                    self.rec.send_columns(video_image_path(name), self._indexes(info, fr, off),
                                           rr.EncodedImage.columns(blob=[buf.jpeg[int(k)] for k in fr],
                                                                   media_type=["image/jpeg"] * len(fr)))
                     bar.update(len(fr))
             if buf.masks:
                 frames = np.array(sorted(buf.masks), dtype=np.int64)
                 mh, mw = buf.masks[int(frames[0])].shape[:2]
-                self.rec.log(f"{ent}/mask", rr.Transform3D(scale=[W / mw, H / mh, 1.0]), static=True)
+                self.rec.log(video_mask_path(name), rr.Transform3D(scale=[W / mw, H / mh, 1.0]), static=True)
                 for k in frames:
                     self.rec.reset_time()
-                    self.rec.set_time("frame", sequence=int(k))
+                    self.rec.set_time(TIMELINE_FRAME, sequence=int(k))
                     if off is not None and math.isfinite(off):
-                        self.rec.set_time("time", duration=float(info.timestamps_s[k] + off))
-                    self.rec.log(f"{ent}/mask", rr.SegmentationImage(buf.masks[int(k)], opacity=0.4))
+                        self.rec.set_time(TIMELINE_TIME, duration=float(info.timestamps_s[k] + off))
+                    self.rec.log(video_mask_path(name), rr.SegmentationImage(buf.masks[int(k)], opacity=0.4))
                     bar.update(1)
                 self.rec.reset_time()
             self._log_tracks(name, info, off)
@@ -421,51 +420,30 @@ class RerunSink(Sink):
         self._log_moving_cameras(offsets)
 
     def _log_tracks(self, name: str, info: VideoInfo, off: float | None) -> None:
-        n_max = self.options.max_tracks_per_video
-        if self._bundle is None or n_max == 0 or name not in self._bundle.tracks:
+        tv = self._view.tracks.get(name) if self._view is not None else None
+        if tv is None:
             return
-        tr = self._bundle.tracks[name]
-        xy = tr.xy
-        if xy.shape[0] == 0:
-            return
-        rows = np.arange(xy.shape[0])
-        if n_max > 0 and len(rows) > n_max:
-            used = np.zeros(len(rows), bool)
-            for (a, b), tp in self._bundle.pairs.items():
-                if a == name:
-                    used[tp.index[:, 0]] = True
-                elif b == name:
-                    used[tp.index[:, 1]] = True
-            rng = np.random.default_rng(0)
-            pri = np.flatnonzero(used)
-            rest = np.flatnonzero(~used)
-            pick = rng.permutation(pri)[:n_max]
-            if len(pick) < n_max:
-                pick = np.concatenate([pick, rng.permutation(rest)[: n_max - len(pick)]])
-            rows = np.sort(pick)
-        sub = xy[rows]  # (N,T,2)
-        seen = np.isfinite(sub[..., 0]) & np.isfinite(sub[..., 1])  # (N,T)
+        seen = np.isfinite(tv.xy[..., 0]) & np.isfinite(tv.xy[..., 1])  # (N,T)
         frames = np.flatnonzero(seen.any(0))
         if len(frames) == 0:
             return
-        inst = tr.instance[rows] if tr.instance is not None else np.full(len(rows), -1)
-        cols = instance_colors(inst)
+        cols = instance_colors(tv.instance)
         pos, col, lengths = [], [], []
         for k in frames:
             m = seen[:, k]
-            pos.append(sub[m, k])
+            pos.append(tv.xy[m, k])
             col.append(cols[m])
             lengths.append(int(m.sum()))
         self.rec.send_columns(
-            f"videos/{entity_name(name)}/tracks", self._indexes(info, frames, off),
+            video_tracks_path(name), self._indexes(info, frames, off),
             rr.Points2D.columns(positions=np.concatenate(pos).astype(np.float32),
                                 colors=np.concatenate(col)).partition(lengths))
-        self.rec.log(f"videos/{entity_name(name)}/tracks", rr.Points2D.from_fields(radii=[2.0]), static=True)
+        self.rec.log(video_tracks_path(name), rr.Points2D.from_fields(radii=[2.0]), static=True)
 
     # ---- internals: pairs ----
 
-    def _log_landscape(self, land: PairLandscape, bundle: CueBundle) -> None:
-        base = f"{pair_path(land.a, land.b)}/landscape"
+    def _log_landscape(self, land: PairLandscape, view: PairRecordView | None) -> None:
+        base = pair_landscape_path(land.a, land.b)
         self._pairs_logged.append(f"{land.a}__{land.b}")
         ms = np.round(np.asarray(land.offsets_s) * 1000.0).astype(np.int64)
         e = np.asarray(land.energy, dtype=np.float64)
@@ -473,34 +451,31 @@ class RerunSink(Sink):
         color = GREEN if land.decision.accepted else RED
         self.rec.log(f"{base}/energy", rr.SeriesLines(colors=[color], names=["E(Δ)"], widths=[1.5]), static=True)
         if ok.any():
-            self.rec.send_columns(f"{base}/energy", [rr.TimeColumn("offset_ms", sequence=ms[ok])],
+            self.rec.send_columns(f"{base}/energy", [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms[ok])],
                                   rr.Scalars.columns(scalars=e[ok]))
         mi = np.asarray(land.minima_idx, dtype=np.int64)
         self.rec.log(f"{base}/minima", rr.SeriesPoints(colors=[BLUE], names=["minima"], markers=["circle"],
                                                        marker_sizes=[4.0]), static=True)
         if len(mi):
-            self.rec.send_columns(f"{base}/minima", [rr.TimeColumn("offset_ms", sequence=ms[mi])],
+            self.rec.send_columns(f"{base}/minima", [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms[mi])],
                                   rr.Scalars.columns(scalars=e[mi]))
         if math.isfinite(land.best_offset_s) and math.isfinite(land.best_energy):
             self.rec.log(f"{base}/chosen", rr.SeriesPoints(colors=[color], names=["chosen"],
                                                            markers=["diamond"], marker_sizes=[7.0]), static=True)
-            self.rec.send_columns(f"{base}/chosen", [rr.TimeColumn("offset_ms",
-                                                                   sequence=[round(land.best_offset_s * 1000)])],
+            self.rec.send_columns(f"{base}/chosen",
+                                  [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=[round(land.best_offset_s * 1000)])],
                                   rr.Scalars.columns(scalars=[land.best_energy]))
-        gt = bundle.gt_offsets_s
-        if gt and land.a in gt and land.b in gt and ok.any():
-            true = gt[land.b] - gt[land.a]
-            e_true = float(np.interp(true, np.asarray(land.offsets_s)[ok], e[ok]))
+        if view is not None and view.true_offset_s is not None and view.true_energy is not None:
             self.rec.log(f"{base}/truth", rr.SeriesPoints(colors=[ORANGE], names=["true Δ"],
                                                           markers=["cross"], marker_sizes=[7.0]), static=True)
-            self.rec.send_columns(f"{base}/truth", [rr.TimeColumn("offset_ms", sequence=[round(true * 1000)])],
-                                  rr.Scalars.columns(scalars=[e_true]))
+            self.rec.send_columns(f"{base}/truth",
+                                  [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=[round(view.true_offset_s * 1000)])],
+                                  rr.Scalars.columns(scalars=[view.true_energy]))
 
-    def _log_decision(self, land: PairLandscape, bundle: CueBundle) -> None:
+    def _log_decision(self, land: PairLandscape, view: PairRecordView | None) -> None:
         d = land.decision
         verdict = "ACCEPTED" if d.accepted else "REJECTED"
-        gt = bundle.gt_offsets_s
-        true = (gt[land.b] - gt[land.a]) if gt and land.a in gt and land.b in gt else None
+        true = view.true_offset_s if view is not None else None
         minima = ", ".join(f"{land.offsets_s[i]:+.4f} s (E={land.energy[i]:.4g})" for i in land.minima_idx[:6])
         rows = [("chosen Δ_ab", f"{_fmt(land.best_offset_s, ' s')} ± {_fmt(land.uncertainty_s, ' s')}"),
                 ("true Δ_ab", _fmt(true, " s") if true is not None else "unknown"),
@@ -516,41 +491,21 @@ class RerunSink(Sink):
         md = (f"## {land.a} → {land.b}: {verdict}\n\n**reason:** {d.reason}\n\n| | |\n|---|---|\n"
               + "\n".join(f"| {k} | {v} |" for k, v in rows)
               + f"\n\n**minima (best first):** {minima or 'none'}\n")
-        self.rec.log(f"{pair_path(land.a, land.b)}/decision", rr.TextDocument(md, media_type=rr.MediaType.MARKDOWN),
+        self.rec.log(pair_decision_path(land.a, land.b), rr.TextDocument(md, media_type=rr.MediaType.MARKDOWN),
                      static=True)
         self.rec.reset_time()
         self._events += 1
-        self.rec.set_time("event", sequence=self._events)
-        self.rec.log("log/decisions", rr.TextLog(
+        self.rec.set_time(TIMELINE_EVENT, sequence=self._events)
+        self.rec.log(LOG_DECISIONS, rr.TextLog(
             f"{land.a}__{land.b} {verdict.lower()} Δ={_fmt(land.best_offset_s, ' s')}: {d.reason}",
             level=rr.TextLogLevel.INFO if d.accepted else rr.TextLogLevel.WARN))
         self.rec.reset_time()
 
-    def _sweep_offsets(self, land: PairLandscape) -> np.ndarray:
-        off = np.asarray(land.offsets_s)
-        n = self.options.epipolar_offsets
-        if n < 0 or len(off) <= n:
-            return off
-        pick = set(np.linspace(0, len(off) - 1, max(2, n // 2)).round().astype(int).tolist())
-        pick |= {int(i) for i in land.minima_idx[:5]}
-        if math.isfinite(land.best_offset_s):
-            c = int(np.argmin(np.abs(off - land.best_offset_s)))
-            half = max(1, (n - len(pick)) // 2)
-            pick |= set(range(max(0, c - half), min(len(off), c + half + 1)))
-        out = off[sorted(pick)]
-        if math.isfinite(land.best_offset_s):
-            out = np.unique(np.concatenate([out, [land.best_offset_s]]))
-        return out
-
-    def _log_epipolar(self, land: PairLandscape, bundle: CueBundle) -> None:
-        offsets = self._sweep_offsets(land)
+    def _log_epipolar(self, land: PairLandscape, view: PairRecordView) -> None:
+        sw = view.sweep
         buf = self._videos.get(land.a)
-        sw = epipolar_sweep(bundle, land.a, land.b, offsets, land.best_offset_s, self.options.epipolar_lines,
-                            prefer_frames=set(buf.jpeg) if buf is not None else None)
-        if sw is None:
-            return
-        base = f"{pair_path(land.a, land.b)}/epipolar"
-        va = bundle.video(land.a)
+        base = pair_epipolar_path(land.a, land.b)
+        va = buf.info if buf is not None else self._bundle.video(land.a)
         W, H = va.width, va.height
         self.rec.log(base, rr.TextDocument(
             f"frame {sw.frame_a} of {land.a} (τ = {sw.time_a_s:.3f} s). Lines: epipolar lines of "
@@ -567,27 +522,24 @@ class RerunSink(Sink):
         elif buf is not None and buf.asset and buf.asset_timestamps_ns is not None:
             self.rec.log(f"{base}/image", rr.VideoFrameReference(
                 nanoseconds=int(buf.asset_timestamps_ns[sw.frame_a]),
-                video_reference=f"videos/{entity_name(land.a)}/video"), static=True)
+                video_reference=video_asset_path(land.a)), static=True)
         ms = np.round(sw.offsets_s * 1000).astype(np.int64)
         cols_inst = instance_colors(sw.instance)
         lines_pos, lines_col, line_len, pt_col = [], [], [], []
-        med = np.full(len(ms), np.nan)
         for d in range(len(ms)):
             seg = sw.segments[d]
             ok = np.isfinite(seg).all((1, 2))
             dist = sw.distance_px[d]
-            good = np.where(dist < 3.0, 1, 0)
+            good = np.where(dist < GOOD_LINE_PX, 1, 0)
             c = np.where(good[:, None] == 1, np.array(GREEN), np.array(RED)).astype(np.uint8)
             c[~np.isfinite(dist)] = GREY
             lines_pos.append(seg[ok].reshape(-1, 2))
             lines_col.append(cols_inst[ok])
             line_len.append(int(ok.sum()))
             pt_col.append(c)
-            if np.isfinite(dist).any():
-                med[d] = float(np.nanmedian(dist))
         # Each row: a list of 2-point strips -> partition LineStrips2D by strip count per offset.
         strips = np.concatenate(lines_pos).reshape(-1, 2, 2).astype(np.float32)  # (S,2,2): 2-point strips
-        tcol = [rr.TimeColumn("offset_ms", sequence=ms)]
+        tcol = [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms)]
         if len(strips):
             self.rec.send_columns(f"{base}/lines", tcol,
                                   rr.LineStrips2D.columns(strips=strips,
@@ -596,28 +548,25 @@ class RerunSink(Sink):
                               rr.Points2D.columns(positions=np.tile(sw.points_a.astype(np.float32), (len(ms), 1)),
                                                   colors=np.concatenate(pt_col)).partition([len(sw.points_a)] * len(ms)))
         self.rec.log(f"{base}/points_a", rr.Points2D.from_fields(radii=[4.0]), static=True)
+        med = view.sweep_median_px
         okm = np.isfinite(med)
         if okm.any():
             self.rec.log(f"{base}/median_distance_px", rr.SeriesLines(names=["median point-line distance (px)"],
                                                                       colors=[BLUE]), static=True)
-            self.rec.send_columns(f"{base}/median_distance_px", [rr.TimeColumn("offset_ms", sequence=ms[okm])],
+            self.rec.send_columns(f"{base}/median_distance_px",
+                                  [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms[okm])],
                                   rr.Scalars.columns(scalars=med[okm]))
 
     # ---- internals: Stage 2 ----
 
-    def _log_graph(self, result: SyncResult) -> None:
-        names = list(result.offsets_s)
-        n = len(names)
-        ang = 2 * np.pi * np.arange(n) / max(n, 1)
-        pos = {v: (300 * math.cos(a), 300 * math.sin(a)) for v, a in zip(names, ang)}
+    def _log_graph(self, result: SyncResult, view: RunRecordView) -> None:
         ids, labels, cols, radii, P = [], [], [], [], []
-        for v in names:
-            off = result.offsets_s[v]
+        for v, off in result.offsets_s.items():
             ids.append(v)
             labels.append(f"{v}\n{_fmt(off, ' s')}" if off is not None else f"{v}\nunresolved")
             cols.append(BLUE if off is not None else GREY)
             radii.append(18.0)
-            P.append(pos[v])
+            P.append(view.graph_xy[v])
         edges = []
         for p in result.pairs:
             mid = f"{p.a}__{p.b}"
@@ -626,12 +575,11 @@ class RerunSink(Sink):
             labels.append(f"Δ={_fmt(p.best_offset_s, ' s', 3)}" if acc else f"✗ {p.decision.reason[:40]}")
             cols.append(GREEN if acc else RED)
             radii.append(5.0)
-            pa, pb = pos.get(p.a, (0, 0)), pos.get(p.b, (0, 0))
-            P.append(((pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2))
+            P.append(view.graph_xy[mid])
             edges += [(p.a, mid), (mid, p.b)]
-        self.rec.log("sync/graph", rr.GraphNodes(ids, labels=labels, colors=cols, radii=radii, positions=P,
-                                                 show_labels=True), static=True)
-        self.rec.log("sync/graph", rr.GraphEdges(edges, graph_type=rr.GraphType.Undirected), static=True)
+        self.rec.log(SYNC_GRAPH, rr.GraphNodes(ids, labels=labels, colors=cols, radii=radii, positions=P,
+                                               show_labels=True), static=True)
+        self.rec.log(SYNC_GRAPH, rr.GraphEdges(edges, graph_type=rr.GraphType.Undirected), static=True)
 
     def _log_solve(self, result: SyncResult) -> None:
         if not result.iterations:
@@ -640,34 +588,29 @@ class RerunSink(Sink):
         R = np.array([it.residual_s for it in result.iterations], dtype=float) * 1000.0  # (I,E)
         Wt = np.array([it.weight for it in result.iterations], dtype=float)
         for e, (a, b) in enumerate(result.solve_pairs):
-            key = f"{entity_name(a)}__{entity_name(b)}"
-            tcol = [rr.TimeColumn("iteration", sequence=its)]
-            self.rec.send_columns(f"sync/solve/residual_ms/{key}", tcol, rr.Scalars.columns(scalars=R[:, e]))
-            self.rec.send_columns(f"sync/solve/weight/{key}", tcol, rr.Scalars.columns(scalars=Wt[:, e]))
+            tcol = [rr.TimeColumn(TIMELINE_ITERATION, sequence=its)]
+            self.rec.send_columns(solve_residual_path(a, b), tcol, rr.Scalars.columns(scalars=R[:, e]))
+            self.rec.send_columns(solve_weight_path(a, b), tcol, rr.Scalars.columns(scalars=Wt[:, e]))
 
-    def _log_offsets(self, result: SyncResult, bundle: CueBundle) -> None:
-        gt = bundle.gt_offsets_s
+    def _log_offsets(self, result: SyncResult, view: RunRecordView) -> None:
         rows = []
-        ref_true = gt.get(result.reference, 0.0) if gt else 0.0
         for v, off in result.offsets_s.items():
             u = result.uncertainty_s.get(v)
-            t = (gt[v] - ref_true) if gt and v in gt else None
-            err = f"{1000 * abs(off - t):.1f}" if off is not None and t is not None else "-"
+            t = view.true_offsets_s.get(v)
+            err = view.errors_ms.get(v)
             rows.append(f"| {v} | {_fmt(off)} | {_fmt(u, '', 4) if u is not None else '-'} | "
-                        f"{_fmt(t) if t is not None else '-'} | {err} | "
+                        f"{_fmt(t) if t is not None else '-'} | "
+                        f"{f'{err:.1f}' if err is not None and t is not None else '-'} | "
                         f"{result.unresolved_reason.get(v, '') if off is None else ''} |")
         md = (f"## Offsets (reference {result.reference}, solver {result.solver})\n\n"
               "| video | offset_s | ± s | true_s | error_ms | note |\n|---|---|---|---|---|---|\n" + "\n".join(rows))
-        self.rec.log("sync/offsets", rr.TextDocument(md, media_type=rr.MediaType.MARKDOWN), static=True)
+        self.rec.log(SYNC_OFFSETS, rr.TextDocument(md, media_type=rr.MediaType.MARKDOWN), static=True)
 
-    def _log_trajectories(self, result: SyncResult, bundle: CueBundle) -> None:
-        o = self.options
-        accepted = [(p.a, p.b, p.decision.contrast) for p in result.pairs if p.decision.accepted]
-        for tj in run_trajectories(bundle, accepted, result.offsets_s, o.max_trajectory_video_pairs,
-                                   o.max_trajectory_pairs):
+    def _log_trajectories(self, view: RunRecordView) -> None:
+        for tj in view.trajectories:
             X = tj.points_world  # (P,T,3)
             ok = np.isfinite(X).all(-1)
-            key = f"world/trajectories/{entity_name(tj.a)}__{entity_name(tj.b)}"
+            key = trajectory_path(tj.a, tj.b)
             cols = instance_colors(tj.instance)
             strips = [X[sg.track, sg.start:sg.stop].astype(np.float32) for sg in tj.segments]
             scol = [cols[sg.track] for sg in tj.segments]
@@ -678,47 +621,6 @@ class RerunSink(Sink):
             lengths = [int(ok[:, k].sum()) for k in frames]
             pos = np.concatenate([X[ok[:, k], k] for k in frames]).astype(np.float32)
             pc = np.concatenate([cols[ok[:, k]] for k in frames])
-            self.rec.send_columns(f"{key}/points", [rr.TimeColumn("time", duration=tj.time_s[frames])],
+            self.rec.send_columns(f"{key}/points", [rr.TimeColumn(TIMELINE_TIME, duration=tj.time_s[frames])],
                                   rr.Points3D.columns(positions=pos, colors=pc).partition(lengths))
             self.rec.log(f"{key}/points", rr.Points3D.from_fields(radii=[rr.Radius.ui_points(4.0)]), static=True)
-
-    # ---- blueprint ----
-
-    def _blueprint(self):
-        import rerun.blueprint as rrb
-        names = list(self._videos) or (self._bundle.names if self._bundle else [])
-        video_views = [rrb.Spatial2DView(origin=f"videos/{entity_name(v)}", name=v) for v in names[:8]]
-        pairs = self._pairs_logged
-        first = pairs[0] if pairs else None
-        if self._result is not None and self._result.pairs:
-            best = sorted(self._result.pairs, key=lambda p: (not p.decision.accepted, -p.decision.contrast))[0]
-            first = f"{best.a}__{best.b}"
-        left = rrb.Vertical(
-            rrb.Grid(*video_views, name="videos") if video_views else rrb.TextDocumentView(origin="videos"),
-            rrb.Spatial3DView(origin="world", name="3D"),
-            row_shares=[1, 1])
-        pair_views = []
-        if first:
-            a, b = first.split("__", 1)
-            pp = pair_path(a, b)
-            pair_views = [rrb.TimeSeriesView(origin=f"{pp}/landscape", name=f"landscape {first}"),
-                          rrb.Spatial2DView(origin=f"{pp}/epipolar", name=f"epipolar {first} (scrub offset_ms)")]
-        right = rrb.Vertical(
-            *pair_views,
-            rrb.Tabs(rrb.TextLogView(origin="log", name="decision log"),
-                     rrb.TextDocumentView(origin="sync/offsets", name="offsets"),
-                     rrb.GraphView(origin="sync/graph", name="pair graph"),
-                     rrb.TimeSeriesView(origin="sync/solve", name="IRLS solve"),
-                     rrb.TimeSeriesView(origin="pairs", name="all landscapes")),
-        )
-        return rrb.Blueprint(rrb.Horizontal(left, right, column_shares=[3, 2]), collapse_panels=False)
-
-
-def _json_default(o):
-    if isinstance(o, np.generic):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, Path):
-        return str(o)
-    raise TypeError(f"cannot write {type(o).__name__} to JSON")

@@ -1,7 +1,9 @@
 """The sink interface stages report through. Library code never logs to a global recording.
 
 A stage calls these hooks with its typed results; a sink decides what to keep. NullSink keeps
-nothing. Hooks have no return value and must not change their arguments.
+nothing. Hooks have no return value and must not change their arguments. A sink that records has
+RecordOptions in `options` (None: it keeps nothing): only then does a stage compute the views the
+recording shows (analysis/record_views.py) and hand them over with its results.
 """
 
 from __future__ import annotations
@@ -11,11 +13,19 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     import numpy as np
 
-    from ..types import CameraTrack, CueBundle, PairLandscape, SyncResult, VideoInfo
+    from ..analysis.record_views import PairRecordView, RunRecordView
+    from ..types import CameraTrack, CueBundle, PairLandscape, RunResult, SyncResult, VideoInfo
+    from .options import RecordOptions
 
 
 class Sink:
     """Base class: every hook is a no-op, so sinks override only what they record."""
+
+    options: RecordOptions | None = None  # what the sink records; None: no views are computed for it
+
+    def image_frames(self, name: str) -> set[int] | None:
+        """Frames of a video the sink holds an image of (None: none or unknown)."""
+        return None
 
     # ---- Stage 0 (cue extraction from videos) ----
 
@@ -23,10 +33,11 @@ class Sink:
         """An input video (path to the file or image folder, None for synthetic input)."""
 
     def video_frame(self, name: str, frame_index: int, image_bgr: np.ndarray) -> None:
-        """One decoded frame (H,W,3) uint8 BGR; sinks may downscale or skip."""
+        """One frame (h,w,3) uint8 BGR as the recording keeps it (analysis.record_views.record_frame)."""
 
     def dynamic_mask(self, name: str, frame_index: int, instances: np.ndarray) -> None:
-        """(H,W) int instance ids of moving regions at a frame (0 = static background)."""
+        """(h,w) uint8/uint16 instance ids of moving regions at a frame (0 = static background), as
+        the recording keeps them (analysis.record_views.record_mask)."""
 
     def cameras(self, cameras: dict[str, CameraTrack], points_world: np.ndarray | None,
                 colors: np.ndarray | None) -> None:
@@ -37,17 +48,17 @@ class Sink:
     def bundle(self, bundle: CueBundle) -> None:
         """Videos, cameras and tracks that Stage 1 starts from."""
 
-    def pair_landscape(self, landscape: PairLandscape, bundle: CueBundle, energy_fn: Any) -> None:
-        """One pair's landscape and decision. energy_fn(offset_s) -> (P,Ts) residuals, for plots."""
+    def pair_landscape(self, landscape: PairLandscape, view: PairRecordView | None = None) -> None:
+        """One pair's landscape and decision, with its recording view (None when options is None)."""
 
-    def sync_result(self, result: SyncResult, bundle: CueBundle) -> None:
-        """Stage 2's offsets, the pair graph and the IRLS iterations."""
+    def sync_result(self, result: SyncResult, view: RunRecordView | None = None) -> None:
+        """Stage 2's offsets and IRLS iterations, with the run's recording view (None when options is None)."""
 
     def stage_event(self, stage: str, message: str, **numbers: Any) -> None:
         """A readable note from any stage (e.g. a camera that could not be registered)."""
 
-    def run_summary(self, result_dict: dict[str, Any]) -> None:
-        """The complete result dictionary of a run (result.json content, with config and inputs)."""
+    def run_summary(self, result: RunResult) -> None:
+        """The whole run's result (result.json's content, with config and inputs)."""
 
     def close(self) -> None:
         """Flush and finish the recording."""

@@ -1,5 +1,5 @@
-"""What a report shows, as typed frozen records. The loaders (load.py, prepare.py) compute these;
-the renderers only draw them.
+"""What a report shows, as typed frozen records. analysis/report_data.py computes these; the
+renderers (figures.py, scene3d.py, mosaic.py, html.py) only draw them.
 
 Time convention (DESIGN.md): a frame at local time τ of video v shows global time τ + offset_s[v];
 Δ_ab = offset_s[b] - offset_s[a], so x_a(t + Δ_ab) and x_b(t) show the same moment.
@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..eval.metrics import offset_errors_ms
 from ..geometry.epipolar import camera_centers
 
 
@@ -91,7 +92,9 @@ class PairView:
         """|chosen - true| in ms when both are known."""
         if self.chosen_offset_s is None or self.true_offset_s is None:
             return None
-        return 1000.0 * abs(self.chosen_offset_s - self.true_offset_s)
+        # Δ_ab is b's offset when a's is 0: the per-video error of b against the truth
+        return offset_errors_ms({self.a: 0.0, self.b: self.chosen_offset_s},
+                                {self.a: 0.0, self.b: self.true_offset_s}, self.a)[self.b]
 
 
 @dataclass(frozen=True)
@@ -174,12 +177,5 @@ class ReportData:
         gt = self.gt_offsets_s
         if not gt or self.reference not in gt:
             return {}
-        ref = self.offsets_s.get(self.reference)
-        out: dict[str, float | None] = {}
-        for v in self.names:
-            off = self.offsets_s.get(v)
-            if v not in gt or off is None or ref is None:
-                out[v] = None
-            else:
-                out[v] = 1000.0 * abs((off - ref) - (gt[v] - gt[self.reference]))
-        return out
+        errors = offset_errors_ms({v: self.offsets_s.get(v) for v in self.names}, gt, self.reference)
+        return {v: errors.get(v) for v in self.names}

@@ -9,6 +9,7 @@ import time
 import numpy as np
 from tqdm import tqdm
 
+from ..analysis.record_views import pair_record_view, run_record_view
 from ..errors import InputError
 from ..record.sink import NullSink, Sink
 from ..types import CueBundle, PairDecision, PairLandscape, SyncResult, TrackPairs
@@ -66,7 +67,8 @@ def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | 
         lands.append(land)
         log.info("%s__%s: %s Δ=%+.4f s (%s)", a, b, "accepted" if land.decision.accepted else
                  "rejected", land.best_offset_s, land.decision.reason)
-        sink.pair_landscape(land, bundle, pe.residuals)
+        sink.pair_landscape(land, None if sink.options is None else
+                            pair_record_view(bundle, land, sink.options, sink.image_frames(a)))
     timings["stage1_s"] = time.perf_counter() - t0
 
     t1 = time.perf_counter()
@@ -92,5 +94,6 @@ def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | 
     timings["stage2_s"] = time.perf_counter() - t1
     result = SyncResult(reference, out.offsets_s, out.uncertainty_s, reasons, tuple(lands),
                         out.pairs, out.iterations, cfg.solve.solver, timings)
-    sink.sync_result(result, bundle)
+    sink.sync_result(result, None if sink.options is None else
+                     run_record_view(bundle, result, sink.options, progress))
     return result

@@ -1,22 +1,28 @@
-"""Computations behind the report: from a result dictionary and a cue bundle to ReportData.
+"""Computations behind the report: from a run's result and its cue bundle to ReportData.
 
 Everything the figures show is computed here (epipolar lines, Sampson errors, triangulated
-trajectories, pair choice), so that the renderers only draw.
+trajectories, pair choice), so that the renderers (report/) only draw. The inputs come from a run
+folder (result.json and the cue bundle it names) or from a recording alone (its result, its
+embedded cue bundle and its frames), both read by io/.
 """
 
 from __future__ import annotations
 
 import logging
 import math
-from typing import Any
+import os
+from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 
 from ..analysis.trajectories import run_trajectories
-from ..geometry.epipolar import epipolar_lines, epipolar_residual, fundamental_from_cameras
+from ..errors import InputError
+from ..geometry.epipolar import (epipolar_lines, epipolar_residual,
+                                 fundamental_from_cameras)
 from ..geometry.sampling import camera_at_frames, sample_video
-from ..types import CueBundle
-from .data import (CameraView, EpipolarPanel, EpipolarState, Mosaic, MosaicTile, PairView,
+from ..types import CueBundle, RunResult
+from ..report.data import (CameraView, EpipolarPanel, EpipolarState, Mosaic, MosaicTile, PairView,
                    ReportData, Trajectory, VideoClock)
 
 log = logging.getLogger(__name__)
@@ -27,30 +33,26 @@ MAX_TRAJECTORIES = 300  # trajectory segments drawn in the 3D scene
 TRAJ_PAIRS = 3  # accepted pairs (best contrast first) triangulated for the 3D scene
 
 
-def _f(x: Any) -> float | None:
-    return None if x is None or not math.isfinite(float(x)) else float(x)
+def _opt(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None
 
 
-def _arr(values, dtype=np.float64) -> np.ndarray:
-    return np.array([np.nan if v is None else v for v in (values or [])], dtype=dtype)
-
-
-def pair_views(result: dict[str, Any], gt: dict[str, float] | None) -> tuple[PairView, ...]:
-    """PairView of every pair of result["pairs"], with the solved and the true Δ_ab."""
-    offs = result.get("offsets_s", {})
+def pair_views(result: RunResult, gt: dict[str, float] | None) -> tuple[PairView, ...]:
+    """PairView of every pair of the result, with the solved and the true Δ_ab."""
+    offs = result.offsets_s
     out = []
-    for p in result.get("pairs", []):
-        a, b = p["a"], p["b"]
-        land = p.get("landscape") or {}
+    for p in result.pairs:
+        a, b = p.a, p.b
         sa, sb = offs.get(a), offs.get(b)
         solved = sb - sa if sa is not None and sb is not None else None
         true = gt[b] - gt[a] if gt and a in gt and b in gt else None
+        offsets = np.asarray(p.offsets_s, dtype=np.float64)
+        energy = np.asarray(p.energy, dtype=np.float64)
         out.append(PairView(
-            a, b, _arr(land.get("offsets_s")), _arr(land.get("energy")),
-            _arr(p.get("minima_offsets_s")), _arr(p.get("minima_energy")),
-            bool(p.get("accepted")), str(p.get("reason", "")), _f(p.get("offset_s")),
-            _f(p.get("uncertainty_s")), solved, true, int(p.get("num_track_pairs", 0)),
-            float(p.get("contrast") or 0.0)))
+            a, b, offsets, energy, offsets[p.minima_idx], energy[p.minima_idx],
+            bool(p.decision.accepted), p.decision.reason, _opt(p.best_offset_s),
+            _opt(p.uncertainty_s), solved, true, int(p.num_track_pairs),
+            float(p.decision.contrast) if math.isfinite(p.decision.contrast) else 0.0))
     return tuple(out)
 
 
@@ -197,22 +199,22 @@ def _downscale(img: np.ndarray, max_width: int = 480) -> np.ndarray:
     return cv2.resize(img, (max_width, int(round(h * max_width / w))), interpolation=cv2.INTER_AREA)
 
 
-def build_report_data(result: dict[str, Any], bundle: CueBundle | None, *, source: str,
+def build_report_data(result: RunResult, bundle: CueBundle | None, *, source: str,
                       gt: dict[str, float] | None = None, video_paths: dict[str, str] | None = None,
                       pair: tuple[str, str] | None = None, frame_reader=None,
                       static_points: np.ndarray | None = None,
                       static_colors: np.ndarray | None = None) -> ReportData:
-    """ReportData from a result dictionary and (when available) the cue bundle behind it.
+    """ReportData from a run's result and (when available) the cue bundle behind it.
 
     frame_reader(path, frame_index) -> (H,W,3) uint8 BGR or None reads video a's frame for the
     epipolar panel when a video path is known.
     """
     notes: list[str] = []
     if gt is None:
-        gt = result.get("gt_offsets_s") or (bundle.gt_offsets_s if bundle is not None else None)
+        gt = result.gt_offsets_s or (bundle.gt_offsets_s if bundle is not None else None)
     pairs = pair_views(result, gt)
-    offsets = {k: (None if v is None else float(v)) for k, v in result["offsets_s"].items()}
-    unc = {k: (None if v is None else float(v)) for k, v in (result.get("uncertainty_s") or {}).items()}
+    offsets = {k: (None if v is None else float(v)) for k, v in result.offsets_s.items()}
+    unc = {k: (None if v is None else float(v)) for k, v in result.uncertainty_s.items()}
     videos: tuple[VideoClock, ...] = ()
     cameras: tuple[CameraView, ...] = ()
     trajs: tuple[Trajectory, ...] = ()
@@ -265,7 +267,109 @@ def build_report_data(result: dict[str, Any], bundle: CueBundle | None, *, sourc
     if static_points is None:
         notes.append("no static reconstruction in the input (cue bundles carry cameras and "
                      "tracks only)")
-    return ReportData(source, result["reference"], videos, offsets, unc,
-                      dict(result.get("unresolved") or {}), pairs, gt, cameras, static_points,
-                      static_colors, trajs, panel, mosaic, tuple(notes),
-                      {k: float(v) for k, v in (result.get("timings_s") or {}).items()})
+    return ReportData(source, result.reference, videos, offsets, unc, dict(result.unresolved), pairs,
+                      gt, cameras, static_points, static_colors, trajs, panel, mosaic, tuple(notes),
+                      {k: float(v) for k, v in result.timings_s.items()})
+
+
+# ---- the report's data of a run folder or of a recording alone ------------------------------
+
+
+def _frame_reader(path: str, index: int, exact: bool = True) -> np.ndarray | None:
+    from ..io.video import open_video, read_frames
+    return read_frames(open_video(path), [index])[0]
+
+
+def _video_paths(result: RunResult, base: Path) -> dict[str, str]:
+    """{video name: existing file} of the run's input videos (as given, or relative to base)."""
+    out = {}
+    for name, p in result.inputs.videos.items():
+        if not p:
+            continue
+        for cand in (Path(str(p)), base / str(p)):
+            if cand.exists():
+                out[str(name)] = str(cand)
+                break
+    return out
+
+
+def find_bundle(run_dir: Path, result: RunResult) -> Path | None:
+    """The run's input bundle (as given, or relative to the run folder), else OUT/cues, OUT/bundle."""
+    cands = []
+    if result.inputs.bundle:
+        cands += [Path(result.inputs.bundle), run_dir / result.inputs.bundle]
+    cands += [run_dir / "cues", run_dir / "bundle"]
+    for c in cands:
+        if (c / "bundle.json").is_file():
+            return c
+    return None
+
+
+def report_data_from_run(run_dir: str | os.PathLike, pair: tuple[str, str] | None = None) -> ReportData:
+    """ReportData of a run folder (OUT/result.json and the cue bundle it names)."""
+    from ..io.bundle import read_bundle, read_gt
+    from ..io.result import read_run_result
+
+    run_dir = Path(run_dir)
+    result = read_run_result(run_dir)
+    bdir = find_bundle(run_dir, result)
+    bundle = read_bundle(bdir) if bdir is not None else None
+    if bdir is None:
+        log.warning("%s: no cue bundle found (input.bundle, cues/, bundle/)", run_dir)
+    gt = result.gt_offsets_s
+    if gt is None and bdir is not None and (bdir / "gt.json").is_file():
+        gt = read_gt(bdir / "gt.json")
+    return build_report_data(result, bundle, source=str(run_dir), gt=gt,
+                             video_paths=_video_paths(result, run_dir), pair=pair,
+                             frame_reader=_frame_reader)
+
+
+def report_data_from_recording(path: str | os.PathLike,
+                               pair: tuple[str, str] | None = None) -> ReportData:
+    """ReportData from a recording alone (no run folder, no videos, no recompute): its result,
+    its embedded cue bundle and the frames it carries."""
+    from ..io.recording import META_BUNDLE, META_RESULT, read_recorded_bundle, read_recording, read_rrd_frames
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: missing file")
+    rec = read_recording(path, with_structure=False, bundle=True)
+    if rec.result is None:
+        raise InputError(f"{path}: the recording has no {META_RESULT} (was it written by "
+                         "vs-inspect's RerunSink after the sync finished?)")
+    bundle = read_recorded_bundle(rec)
+    if bundle is None:
+        log.warning("%s: no %s in the recording: 3D scene, timeline and epipolar panel are missing",
+                    path, META_BUNDLE)
+    frames = None
+    if bundle is not None:
+        try:
+            frames = read_rrd_frames(path, [(v.name, v.width, v.height) for v in bundle.videos])
+        except Exception as exc:  # frames are a backdrop: without them the figures still work
+            log.warning("%s: could not read video frames (%s)", path, exc)
+    reader = None
+    video_paths = None
+    if frames is not None and frames.names():
+        video_paths = {n: f"rrd:{n}" for n in frames.names()}
+
+        def reader(p: str, index: int, exact: bool = True):
+            return frames.read(p[4:], index, exact)
+    data = build_report_data(rec.result, bundle, source=str(path), gt=rec.result.gt_offsets_s,
+                             pair=pair, video_paths=video_paths, frame_reader=reader)
+    if bundle is None:
+        data = replace(data, notes=data.notes + (f"the recording has no {META_BUNDLE}",))
+    return data
+
+
+def load_report_data(path: str | os.PathLike, pair: tuple[str, str] | None = None) -> ReportData:
+    """ReportData of a run folder, a result.json, or an .rrd recording."""
+    p = Path(path)
+    if p.is_dir():
+        return report_data_from_run(p, pair)
+    if p.suffix == ".rrd":
+        return report_data_from_recording(p, pair)
+    if p.name.endswith(".json") and p.is_file():
+        return report_data_from_run(p.parent, pair)
+    if not p.exists():
+        raise InputError(f"{p}: no such run folder or recording")
+    raise InputError(f"{p}: give a run folder (with result.json) or a .rrd recording")

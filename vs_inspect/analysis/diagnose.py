@@ -1,15 +1,22 @@
 """Reading a run's result for what went wrong: pair disagreements and named suspects.
 
-Works on the result dictionary alone (result.json, or meta/result_json of a recording), so the
+Works on the RunResult alone (from result.json, or from a recording's meta/result_json), so the
 same diagnosis comes from a run folder or from an .rrd someone sent.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
+from ..types import RunResult, VideoInfo
+
+if TYPE_CHECKING:
+    from ..io.recording import RecordedVideo
+
+DEFAULT_FRAME_MS = 40.0  # frame interval assumed for a video the caller gives no clock of
 
 @dataclass(frozen=True)
 class PairCheck:
@@ -31,41 +38,41 @@ class Suspect:
     message: str
 
 
-def _frame_ms(result: dict[str, Any], videos: dict[str, Any] | None, name: str) -> float:
-    for v in (videos or {}).get("videos", []):
-        if v.get("name") == name:
-            if v.get("fps"):
-                return 1000.0 / float(v["fps"])
-            if v.get("num_frames", 0) > 1 and v.get("duration_s"):
-                return 1000.0 * float(v["duration_s"]) / (v["num_frames"] - 1)
-    return 40.0
+def _frame_ms(videos: dict[str, RecordedVideo | VideoInfo], name: str) -> float:
+    v = videos.get(name)
+    dt = v.frame_interval_s if v is not None else math.inf
+    return 1000.0 * dt if math.isfinite(dt) else DEFAULT_FRAME_MS
 
 
-def check_pairs(result: dict[str, Any], videos: dict[str, Any] | None = None) -> list[PairCheck]:
+def check_pairs(result: RunResult,
+                videos: Iterable[RecordedVideo | VideoInfo] | None = None) -> list[PairCheck]:
     """Every evaluated pair against the final offsets, most disagreeing first (rejected pairs with
-    a landscape minimum are compared too: a rejected pair that agrees is a cautious rejection)."""
-    offs = result.get("offsets_s", {})
+    a landscape minimum are compared too: a rejected pair that agrees is a cautious rejection).
+    videos: the videos' clocks (a pair's tolerance is two frames of its slower video)."""
+    by_name = {v.name: v for v in (videos or ())}
+    offs = result.offsets_s
     out = []
-    for p in result.get("pairs", []):
-        a, b = p["a"], p["b"]
+    for p in result.pairs:
+        a, b = p.a, p.b
         sa, sb = offs.get(a), offs.get(b)
         sol = (sb - sa) if sa is not None and sb is not None else None
-        d = p.get("offset_s")
+        d = p.best_offset_s if math.isfinite(p.best_offset_s) else None
         dis = abs(d - sol) * 1000.0 if d is not None and sol is not None else None
-        unc = p.get("uncertainty_s")
-        tol = max(2.0 * max(_frame_ms(result, videos, a), _frame_ms(result, videos, b)),
-                  3000.0 * unc if unc is not None and math.isfinite(unc) else 0.0)
-        bad = (not p["accepted"]) or (dis is not None and dis > tol)
-        out.append(PairCheck(a, b, bool(p["accepted"]), p.get("reason", ""), d, sol, dis, tol, bad))
+        unc = p.uncertainty_s
+        tol = max(2.0 * max(_frame_ms(by_name, a), _frame_ms(by_name, b)),
+                  3000.0 * unc if math.isfinite(unc) else 0.0)
+        bad = (not p.decision.accepted) or (dis is not None and dis > tol)
+        out.append(PairCheck(a, b, bool(p.decision.accepted), p.decision.reason, d, sol, dis, tol, bad))
     out.sort(key=lambda c: (-(c.disagreement_ms if c.disagreement_ms is not None else -1.0), c.a, c.b))
     return out
 
 
-def find_suspects(result: dict[str, Any], videos: dict[str, Any] | None = None) -> list[Suspect]:
+def find_suspects(result: RunResult,
+                  videos: Iterable[RecordedVideo | VideoInfo] | None = None) -> list[Suspect]:
     """Name the videos whose pairs mostly fail (a wrong camera pose, bad tracks, no shared motion)
     and the single pairs that fail between videos that are fine elsewhere (wrong matches)."""
     checks = check_pairs(result, videos)
-    names = list(result.get("offsets_s", {}))
+    names = list(result.offsets_s)
     per: dict[str, list[PairCheck]] = {v: [] for v in names}
     for c in checks:
         per.setdefault(c.a, []).append(c)
@@ -86,8 +93,8 @@ def find_suspects(result: dict[str, Any], videos: dict[str, Any] | None = None) 
                     f"{v}: {n_bad} of {len(cs)} pairs fail ({rej} rejected, {inc} inconsistent with the "
                     f"solution) while only {others_bad:.0%} of the other pairs do: its camera pose, "
                     f"calibration or tracks are likely wrong")))
-        if result.get("offsets_s", {}).get(v, 0.0) is None and v not in bad_video:
-            why = result.get("unresolved", {}).get(v, "no accepted pair connects it")
+        if result.offsets_s.get(v, 0.0) is None and v not in bad_video:
+            why = result.unresolved.get(v, "no accepted pair connects it")
             out.append(Suspect("video", v, f"{v}: not synchronized ({why})"))
     for c in checks:
         if not c.bad or c.a in bad_video or c.b in bad_video:

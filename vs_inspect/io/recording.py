@@ -1,0 +1,438 @@
+"""The vs_inspect recording (.rrd): its entity paths, named once, and the one reader of it.
+
+RerunSink (record/rerun_sink.py) writes to these paths; `inspect`, the report and the examples
+read them back here, without recomputing anything: the run's result (result.json, at
+META_RESULT, turned into a RunResult), the recording's own metadata, the structured entities
+(landscape series, decisions, solve iterations), the embedded cue bundle and the video frames.
+Uses rerun.chunk.RrdReader (rerun-sdk 0.41).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import tempfile
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..types import CueBundle, RunResult
+from .result import run_result_from_dict
+
+RECORDING_FORMAT = "vs-inspect-recording"
+RECORDING_VERSION = 1
+APPLICATION_ID = "vs_inspect"
+
+# ---- entity paths -----------------------------------------------------------------------------
+
+META_RESULT = "meta/result_json"  # result.json's dictionary as JSON text
+META_RECORDING = "meta/recording_json"  # format, versions, options, pairs logged
+META_CONFIG = "meta/config_json"  # the run's config as JSON text
+META_VIDEOS = "meta/videos_json"  # the videos (name, entity, size, frames, rate) and the truth
+META_BUNDLE = "meta/cue_bundle"  # the cue bundle folder as a zip (component `zip`, uint8)
+
+VIDEOS = "videos"
+WORLD = "world"
+WORLD_POINTS = "world/points"  # static 3D points of the reconstruction
+PAIRS = "pairs"
+SYNC_GRAPH = "sync/graph"
+SYNC_OFFSETS = "sync/offsets"
+SYNC_SOLVE = "sync/solve"
+LOG = "log"
+LOG_DECISIONS = "log/decisions"
+
+# timelines
+TIMELINE_FRAME = "frame"  # a video's frame index
+TIMELINE_TIME = "time"  # global time after sync, seconds
+TIMELINE_OFFSET_MS = "offset_ms"  # a pair's candidate Δ_ab, whole milliseconds
+TIMELINE_ITERATION = "iteration"  # Stage 2's IRLS iteration
+TIMELINE_EVENT = "event"  # order of log messages
+
+
+def entity_name(name: str) -> str:
+    """A video name as one entity-path part (letters, digits, - and _ kept; others become _)."""
+    return re.sub(r"[^A-Za-z0-9_\-]", "_", name) or "_"
+
+
+def pair_key(a: str, b: str) -> str:
+    """The entity-path part of the ordered pair (a, b): "<a>__<b>"."""
+    return f"{entity_name(a)}__{entity_name(b)}"
+
+
+def pair_path(a: str, b: str) -> str:
+    return f"{PAIRS}/{pair_key(a, b)}"
+
+
+def pair_landscape_path(a: str, b: str) -> str:
+    """Series energy, minima, chosen and truth on the offset_ms timeline."""
+    return f"{pair_path(a, b)}/landscape"
+
+
+def pair_decision_path(a: str, b: str) -> str:
+    return f"{pair_path(a, b)}/decision"
+
+
+def pair_epipolar_path(a: str, b: str) -> str:
+    return f"{pair_path(a, b)}/epipolar"
+
+
+def video_path(name: str) -> str:
+    return f"{VIDEOS}/{entity_name(name)}"
+
+
+def video_asset_path(name: str) -> str:
+    """The embedded H.264/AV1 file (rr.AssetVideo) and its frame references."""
+    return f"{video_path(name)}/video"
+
+
+def video_image_path(name: str) -> str:
+    """JPEG frames on the frame timeline."""
+    return f"{video_path(name)}/image"
+
+
+def video_mask_path(name: str) -> str:
+    return f"{video_path(name)}/mask"
+
+
+def video_tracks_path(name: str) -> str:
+    return f"{video_path(name)}/tracks"
+
+
+def camera_path(name: str) -> str:
+    return f"{WORLD}/cameras/{entity_name(name)}"
+
+
+def camera_trail_path(name: str) -> str:
+    """A moving camera's centres as a line."""
+    return f"{WORLD}/camera_paths/{entity_name(name)}"
+
+
+def trajectory_path(a: str, b: str) -> str:
+    return f"{WORLD}/trajectories/{pair_key(a, b)}"
+
+
+def solve_residual_path(a: str, b: str) -> str:
+    return f"{SYNC_SOLVE}/residual_ms/{pair_key(a, b)}"
+
+
+def solve_weight_path(a: str, b: str) -> str:
+    return f"{SYNC_SOLVE}/weight/{pair_key(a, b)}"
+
+
+def log_path(stage: str) -> str:
+    return f"{LOG}/{entity_name(stage)}"
+
+
+# ---- what the reader returns ------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class LandscapeSeries:
+    """One series of a pair's landscape as logged (offset in whole milliseconds)."""
+
+    offset_ms: np.ndarray  # (D,) int, the `offset_ms` timeline values
+    value: np.ndarray  # (D,) float
+
+
+@dataclass(frozen=True)
+class RecordedVideo:
+    """One video as META_VIDEOS describes it (no timestamps: the cue bundle has those)."""
+
+    name: str
+    entity: str  # its entity-path part (entity_name)
+    width: int  # px
+    height: int  # px
+    num_frames: int
+    fps: float | None  # None for variable frame rate
+    duration_s: float  # local time of the last frame minus the first, seconds
+
+    @property
+    def frame_interval_s(self) -> float:
+        """1/fps, else the mean spacing of frames (inf for a single frame)."""
+        if self.fps:
+            return 1.0 / self.fps
+        if self.num_frames > 1 and self.duration_s:
+            return self.duration_s / (self.num_frames - 1)
+        return float("inf")
+
+
+@dataclass
+class Recording:
+    path: Path
+    meta: dict[str, Any]  # META_RECORDING: format, versions, options, pairs logged
+    result: RunResult | None  # META_RESULT (None: the run stopped before Stage 2)
+    config: dict[str, Any] | None  # META_CONFIG
+    videos: tuple[RecordedVideo, ...] = ()  # META_VIDEOS
+    gt_offsets_s: dict[str, float] | None = None  # the truth logged with the videos, when known
+    decisions: dict[str, str] = field(default_factory=dict)  # pair_key -> markdown
+    landscapes: dict[str, dict[str, LandscapeSeries]] = field(default_factory=dict)  # pair_key -> series
+    solve: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)  # residual_ms/weight -> pair_key -> (I,)
+    bundle_zip: bytes | None = None  # META_BUNDLE (only when read with bundle=True)
+    entities: list[str] = field(default_factory=list)
+
+
+# ---- reading ----------------------------------------------------------------------------------
+
+
+def _column(rb, name: str) -> list:
+    if name not in rb.schema.names:
+        return []
+    return rb.column(name).to_pylist()
+
+
+def _first_text(rb) -> str | None:
+    for v in _column(rb, "TextDocument:text"):
+        if isinstance(v, list):
+            v = v[0] if v else None
+        if v is not None:
+            return str(v)
+    return None
+
+
+def _scalars(rb, timeline: str) -> tuple[np.ndarray, np.ndarray]:
+    t = _column(rb, timeline)
+    s = _column(rb, "Scalars:scalars")
+    vals = [(x[0] if isinstance(x, list) and x else x) for x in s]
+    keep = [i for i, v in enumerate(vals) if v is not None and t and t[i] is not None]
+    return np.array([t[i] for i in keep], dtype=np.int64), np.array([vals[i] for i in keep], dtype=float)
+
+
+def _last_row(column) -> Any:
+    """The last non-null row of a chunk column (a list array)."""
+    for i in range(len(column) - 1, -1, -1):
+        if column[i].is_valid:
+            return column[i]
+    return None
+
+
+def _blob_bytes(row) -> bytes:
+    """The bytes of one row of a (possibly nested) list<uint8> column."""
+    import pyarrow as pa
+    vals = row.values
+    while pa.types.is_list(vals.type) or pa.types.is_large_list(vals.type):
+        vals = vals.flatten()
+    return vals.to_numpy(zero_copy_only=False).astype(np.uint8).tobytes()
+
+
+def _reader(path: Path):
+    """(RrdReader, the vs_inspect store); InputError for a missing, corrupt or empty file."""
+    if not path.is_file():
+        raise InputError(f"{path}: no such recording file")
+    try:
+        import rerun.chunk as rrc
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            reader = rrc.RrdReader(str(path))
+            stores = reader.recordings()
+    except Exception as exc:  # noqa: BLE001 - rerun raises RuntimeError/ValueError with a message
+        raise InputError(f"{path}: not a readable .rrd recording ({exc})") from None
+    if not stores:
+        raise InputError(f"{path}: the .rrd holds no recording")
+    store = next((s for s in stores if s.application_id == APPLICATION_ID), stores[0])
+    return reader, store
+
+
+def _chunks(path: Path, content: list[str]) -> list:
+    reader, store = _reader(path)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return reader.stream(store=store).filter(content=content).to_chunks()
+    except Exception as exc:  # noqa: BLE001
+        raise InputError(f"{path}: the .rrd is damaged or incomplete ({exc})") from None
+
+
+def read_recording(path: str | Path, with_structure: bool = True, bundle: bool = False) -> Recording:
+    """Read a recording; InputError for a missing, corrupt or non-vs_inspect file.
+
+    with_structure: also the landscapes, decisions and solve iterations (else metadata only).
+    bundle: also the embedded cue bundle's zip bytes (Recording.bundle_zip).
+    """
+    path = Path(path)
+    _, store = _reader(path)
+    content = [f"/{p}/**" for p in (("meta", PAIRS, SYNC_SOLVE) if with_structure else ("meta",))]
+    texts: dict[str, str] = {}
+    rec = Recording(path, {}, None, None)
+    entities = set()
+    for ch in _chunks(path, content):
+        ent = ch.entity_path.lstrip("/")
+        entities.add(ent)
+        rb = ch.to_record_batch()
+        if ent == META_BUNDLE:
+            col = next((c for c in rb.schema.names if c.split(":")[-1] == "zip"), None)
+            row = _last_row(rb.column(col)) if col and bundle else None
+            if row is not None:
+                rec.bundle_zip = _blob_bytes(row)
+            continue
+        if ent.startswith("meta/") or ent.endswith("/decision"):
+            txt = _first_text(rb)
+            if txt is not None:
+                texts[ent] = txt
+            continue
+        parts = ent.split("/")
+        if len(parts) == 4 and parts[0] == PAIRS and parts[2] == "landscape":
+            t, v = _scalars(rb, TIMELINE_OFFSET_MS)
+            if len(t):
+                old = rec.landscapes.setdefault(parts[1], {}).get(parts[3])
+                if old is not None:
+                    t, v = np.concatenate([old.offset_ms, t]), np.concatenate([old.value, v])
+                order = np.argsort(t, kind="stable")
+                rec.landscapes[parts[1]][parts[3]] = LandscapeSeries(t[order], v[order])
+        elif len(parts) == 4 and f"{parts[0]}/{parts[1]}" == SYNC_SOLVE:
+            t, v = _scalars(rb, TIMELINE_ITERATION)
+            if len(t):
+                rec.solve.setdefault(parts[2], {})[parts[3]] = v[np.argsort(t)]
+    rec.entities = sorted(entities)
+    if META_RECORDING not in texts:
+        raise InputError(f"{path}: not a vs_inspect recording (no {META_RECORDING}; application "
+                         f"{store.application_id!r})")
+    try:
+        rec.meta = json.loads(texts[META_RECORDING])
+        result = json.loads(texts[META_RESULT]) if META_RESULT in texts else None
+        rec.config = json.loads(texts[META_CONFIG]) if META_CONFIG in texts else None
+        videos = json.loads(texts[META_VIDEOS]) if META_VIDEOS in texts else {}
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{path}: damaged vs_inspect metadata ({exc})") from None
+    if rec.meta.get("format") != RECORDING_FORMAT:
+        raise InputError(f"{path}: not a vs_inspect recording (format {rec.meta.get('format')!r})")
+    if result is not None:
+        rec.result = run_result_from_dict(result, f"{path}:{META_RESULT}")
+    rec.videos = tuple(RecordedVideo(str(v["name"]), str(v.get("entity", entity_name(v["name"]))),
+                                     int(v["width"]), int(v["height"]), int(v["num_frames"]),
+                                     None if v.get("fps") is None else float(v["fps"]),
+                                     float(v.get("duration_s") or 0.0))
+                       for v in videos.get("videos", []))
+    gt = videos.get("gt_offsets_s")
+    rec.gt_offsets_s = {str(k): float(v) for k, v in gt.items()} if isinstance(gt, dict) else None
+    rec.decisions = {k.split("/")[1]: v for k, v in texts.items() if k.startswith(f"{PAIRS}/")}
+    return rec
+
+
+def read_recorded_bundle(rec: Recording) -> CueBundle | None:
+    """The cue bundle embedded at META_BUNDLE (read_recording(..., bundle=True)); None if absent."""
+    if rec.bundle_zip is None:
+        return None
+    from .bundle_zip import bundle_from_zip_bytes
+    return bundle_from_zip_bytes(rec.bundle_zip, f"{rec.path}:{META_BUNDLE}")
+
+
+def _entity_rows(path: Path, entity: str) -> list:
+    """Record batches of one entity (InputError if the file cannot be read)."""
+    return [c.to_record_batch() for c in _chunks(path, [f"/{entity}"])
+            if c.entity_path.lstrip("/") == entity]
+
+
+def read_video_frames(path: str | Path, video: str) -> dict[int, np.ndarray]:
+    """{frame index: BGR image} of the JPEG frames logged at video_image_path(video).
+
+    Images are as logged (downscaled by default): multiply pixel coordinates by
+    video width / image width to get full-resolution pixels. Empty when the video was logged as an
+    embedded video asset or without frames.
+    """
+    import cv2
+
+    out: dict[int, np.ndarray] = {}
+    for rb in _entity_rows(Path(path), video_image_path(video)):
+        frames, blobs = _column(rb, TIMELINE_FRAME), _column(rb, "EncodedImage:blob")
+        for k, blob in zip(frames, blobs):
+            if k is None or not blob:
+                continue
+            data = np.asarray(blob[0] if isinstance(blob[0], list) else blob, dtype=np.uint8)
+            img = cv2.imdecode(data, cv2.IMREAD_COLOR)
+            if img is not None:
+                out[int(k)] = img
+    return out
+
+
+def read_static_points(path: str | Path) -> tuple[np.ndarray, np.ndarray | None]:
+    """(N,3) static 3D points of the reconstruction at WORLD_POINTS and their (N,3) uint8 colours."""
+    pts, cols = np.zeros((0, 3)), None
+    for rb in _entity_rows(Path(path), WORLD_POINTS):
+        p = _column(rb, "Points3D:positions")
+        if p and p[-1]:
+            pts = np.asarray(p[-1], dtype=float)
+        c = _column(rb, "Points3D:colors")
+        if c and c[-1]:
+            rgba = np.asarray(c[-1], dtype=np.uint32)
+            cols = np.stack([(rgba >> 24) & 255, (rgba >> 16) & 255, (rgba >> 8) & 255], -1).astype(np.uint8)
+    return pts, cols
+
+
+class RrdFrames:
+    """Frames a recording carries: embedded H.264/AV1 assets (exact frames, decoded with PyAV) or
+    downscaled JPEG frames (only the frames Stage 0 logged; the nearest one is used)."""
+
+    def __init__(self, assets: dict[str, bytes], jpegs: dict[str, dict[int, bytes]],
+                 sizes: dict[str, tuple[int, int]]):
+        self.assets, self.jpegs, self.sizes = assets, jpegs, sizes
+        self._tmp: dict[str, str] = {}
+        self._dir = None
+
+    def names(self) -> list[str]:
+        return sorted(set(self.assets) | set(self.jpegs))
+
+    def read(self, name: str, index: int, exact: bool = True) -> np.ndarray | None:
+        """(H,W,3) uint8 BGR at full size of frame `index`, or None when the recording lacks it."""
+        import cv2
+        if name in self.assets:
+            from .video import open_video, read_frames
+            if name not in self._tmp:
+                if self._dir is None:
+                    self._dir = tempfile.TemporaryDirectory(prefix="vs-inspect-rrd-frames-")
+                p = Path(self._dir.name) / f"{len(self._tmp)}.mp4"
+                p.write_bytes(self.assets[name])
+                self._tmp[name] = str(p)
+            return read_frames(open_video(self._tmp[name]), [index])[0]
+        frames = self.jpegs.get(name) or {}
+        if not frames:
+            return None
+        if index in frames:
+            k = index
+        elif exact:
+            return None
+        else:
+            keys = np.array(sorted(frames))
+            k = int(keys[np.argmin(np.abs(keys - index))])
+            gap = np.median(np.diff(keys)) if len(keys) > 1 else 1
+            if abs(k - index) > max(1, gap / 2):
+                return None
+        img = cv2.imdecode(np.frombuffer(frames[k], np.uint8), cv2.IMREAD_COLOR)
+        W, H = self.sizes.get(name, (img.shape[1], img.shape[0]))
+        if (img.shape[1], img.shape[0]) != (W, H):
+            img = cv2.resize(img, (W, H), interpolation=cv2.INTER_LINEAR)
+        return img
+
+
+def read_rrd_frames(path: str | Path, videos: list[tuple[str, int, int]]) -> RrdFrames:
+    """The frames at video_asset_path (asset) and video_image_path (JPEG, `frame` timeline) of
+    the given videos, as (name, width px, height px)."""
+    by_ent = {video_path(name): name for name, _, _ in videos}
+    assets: dict[str, bytes] = {}
+    jpegs: dict[str, dict[int, bytes]] = {}
+    for ch in _chunks(Path(path), [f"/{VIDEOS}/**"]):
+        ent = str(ch.entity_path).lstrip("/")
+        base, _, leaf = ent.rpartition("/")
+        if base not in by_ent or leaf not in ("video", "image"):
+            continue
+        name = by_ent[base]
+        rb = ch.to_record_batch()
+        cols = rb.schema.names
+        if leaf == "video":
+            col = next((c for c in cols if c.endswith("AssetVideo:blob")), None)
+            row = _last_row(rb.column(col)) if col else None
+            if row is not None:
+                assets[name] = _blob_bytes(row)
+        else:
+            col = next((c for c in cols if c.endswith("EncodedImage:blob")), None)
+            if col is None or TIMELINE_FRAME not in cols:
+                continue
+            fr, blobs = rb.column(TIMELINE_FRAME), rb.column(col)
+            for i in range(len(fr)):
+                if fr[i].is_valid and blobs[i].is_valid:
+                    jpegs.setdefault(name, {})[int(fr[i].as_py())] = _blob_bytes(blobs[i])
+    sizes = {name: (int(w), int(h)) for name, w, h in videos}
+    return RrdFrames(assets, jpegs, sizes)
