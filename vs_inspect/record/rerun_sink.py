@@ -25,8 +25,8 @@ import rerun as rr
 from tqdm import tqdm
 
 from .. import __version__
-from ..io.result import result_to_dict
-from ..types import CameraTrack, CueBundle, PairLandscape, SyncResult, VideoInfo
+from ..io.result import result_to_dict, run_result_to_dict
+from ..types import CameraTrack, CueBundle, PairLandscape, RunResult, SyncResult, VideoInfo
 from .derived import epipolar_sweep, triangulate_pair
 from .options import RecordOptions
 from .sink import Sink
@@ -254,7 +254,8 @@ class RerunSink(Sink):
         self.rec.reset_time()
 
     @_timed
-    def run_summary(self, result_dict: dict[str, Any]) -> None:
+    def run_summary(self, result: RunResult | dict[str, Any]) -> None:
+        result_dict = run_result_to_dict(result) if isinstance(result, RunResult) else result
         self._summary = result_dict
         if "config" in result_dict:
             self._config = result_dict["config"]
