@@ -13,7 +13,6 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Sequence
-from pathlib import Path
 
 from ..errors import InputError
 from ..record.sink import NullSink, Sink
