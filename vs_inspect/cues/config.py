@@ -1,4 +1,5 @@
-"""Settings of Stage 0 (cue extraction from videos), one docstring per field."""
+"""Settings of Stage 0 (cue extraction from videos), one docstring per field. A field whose
+metadata names a "flag" is a command-line option (pipeline.config generates it)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,9 @@
-"""Settings of Stage 1 and Stage 2, one docstring per field (the CLI shows them as help)."""
+"""Settings of Stage 1 and Stage 2, one docstring per field. A field whose metadata names a "flag"
+is a command-line option (pipeline.config generates it, with the docstring as help)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 
 from ..geometry.epipolar import RESIDUALS
 
@@ -113,11 +114,3 @@ class SyncConfig:
     solve: SolveConfig = SolveConfig()
     pairs: PairSelection = PairSelection()
 
-
-def config_to_dict(cfg) -> dict:
-    """Nested plain dict of a config dataclass (for result.json)."""
-    out = {}
-    for f in fields(cfg):
-        v = getattr(cfg, f.name)
-        out[f.name] = config_to_dict(v) if hasattr(v, "__dataclass_fields__") else v
-    return out
