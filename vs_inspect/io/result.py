@@ -73,16 +73,22 @@ def result_to_dict(result: SyncResult, extra: dict[str, Any] | None = None) -> d
     return out
 
 
-def read_result(path: str | os.PathLike) -> dict[str, Any]:
+def read_json_file(path: str | os.PathLike, name_in_folder: str) -> tuple[Any, Path]:
+    """(the JSON content, the file read) of a file, or of name_in_folder in a folder; InputError
+    naming the file when it is missing or not JSON."""
     path = Path(path)
     if path.is_dir():
-        path = path / "result.json"
+        path = path / name_in_folder
     try:
-        data = json.loads(path.read_text())
+        return json.loads(path.read_text()), path
     except FileNotFoundError:
         raise InputError(f"{path}: missing file") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
         raise InputError(f"{path}: not valid JSON ({exc})") from None
+
+
+def read_result(path: str | os.PathLike) -> dict[str, Any]:
+    data, path = read_json_file(path, "result.json")
     if not isinstance(data, dict) or not isinstance(data.get("offsets_s"), dict) or "reference" not in data:
         raise InputError(f"{path}: not a vs-inspect result (needs 'reference' and 'offsets_s')")
     return data
@@ -223,13 +229,5 @@ def write_run_result(r: RunResult, path: str | os.PathLike) -> Path:
 
 def read_run_result(path: str | os.PathLike) -> RunResult:
     """A result.json (or a run folder holding one) as a RunResult."""
-    path = Path(path)
-    if path.is_dir():
-        path = path / "result.json"
-    try:
-        data = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise InputError(f"{path}: missing file") from None
-    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
-        raise InputError(f"{path}: not valid JSON ({exc})") from None
+    data, path = read_json_file(path, "result.json")
     return run_result_from_dict(data, str(path))

@@ -22,7 +22,6 @@ import ast
 import dataclasses
 import functools
 import inspect
-import json
 import os
 import types
 import typing
@@ -33,6 +32,7 @@ from typing import Any
 from ..cues.config import CueConfig
 from ..errors import InputError
 from ..io.atomic import write_json_atomic
+from ..io.result import read_json_file
 from ..record.options import RecordOptions
 from ..sync.config import SyncConfig
 
@@ -69,15 +69,8 @@ class RunConfig:
 
     @staticmethod
     def load(path: str | os.PathLike) -> RunConfig:
-        path = Path(path)
-        if path.is_dir():
-            path = path / "config.json"
-        try:
-            data = json.loads(path.read_text())
-        except FileNotFoundError:
-            raise InputError(f"{path}: missing file") from None
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise InputError(f"{path}: not valid JSON ({exc})") from None
+        """A config.json (or a run folder holding one); InputError naming the file and the key."""
+        data, path = read_json_file(path, "config.json")
         try:
             return RunConfig.from_dict(data)
         except (InputError, ValueError) as exc:
