@@ -28,13 +28,10 @@ import numpy as np  # noqa: F401  (before pycolmap)
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from vs_inspect.analysis.record_views import record_frame, record_mask  # noqa: E402
-from vs_inspect.io.result import result_to_dict, run_result_from_dict  # noqa: E402
 from vs_inspect.record.options import RecordOptions  # noqa: E402
 from vs_inspect.record.rerun_sink import RerunSink  # noqa: E402
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene  # noqa: E402
-from vs_inspect.sync.config import SyncConfig  # noqa: E402
-from vs_inspect.sync.run import sync_bundle  # noqa: E402
+from vs_inspect.pipeline import RunConfig, run  # noqa: E402
 
 DATA = REPO.parent / "shared" / "data"
 CALI = DATA / "caliscope_post_optimization"
@@ -62,8 +59,7 @@ def bench_demo(out: Path) -> None:
         t = time.perf_counter()
         with RerunSink(out / f"{case.split()[0]}-{len(list(out.iterdir()))}.rrd", options=opts,
                        progress=False) as sink:
-            r = sync_bundle(bundle, SyncConfig(), sink=sink, progress=False)
-            sink.run_summary(run_result_from_dict(result_to_dict(r, {"gt_offsets_s": bundle.gt_offsets_s})))
+            run(bundle, sink=sink, progress=False)
         report(case, sink, time.perf_counter() - t)
 
 
@@ -96,32 +92,23 @@ def bench_budget(out: Path, full_frames: bool = False) -> None:
             for k in range(min(v.num_frames, 300)):
                 img = real[(vi * 57 + k) % len(real)]
                 img = np.roll(img, 3 * k, axis=1)  # make consecutive frames differ
-                sink.video_frame(v.name, k, record_frame(img, opts))
+                sink.video_frame(v.name, k, img)
                 grey = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
-                mask = (grey > 160).astype(np.int32) * (1 + (k // 50) % 3)
-                sink.dynamic_mask(v.name, k, record_mask(mask, opts))
+                sink.dynamic_mask(v.name, k, (grey > 160).astype(np.int32) * (1 + (k // 50) % 3))
                 n_frames += 1
-        r = sync_bundle(b, SyncConfig(), sink=sink, progress=False)
-        sink.run_summary(run_result_from_dict(result_to_dict(r, {"gt_offsets_s": b.gt_offsets_s})))
+        run(b, sink=sink, progress=False)
     report(f"4 x 10 s x 30 fps 720p, {n_frames} frames+masks" + (" (full)" if full_frames else ""),
            sink, time.perf_counter() - t)
 
 
 def bench_caliscope(out: Path) -> None:
-    from vs_inspect.cues import CueConfig, extract_cues
-    from vs_inspect.io.calibration import load_calibration
-    from vs_inspect.io.video import open_video
+    from vs_inspect.cues import CueConfig
     paths = sorted((CALI / "calibration" / "extrinsic").glob("cam_*.mp4"))
-    sources = [open_video(p) for p in paths]
-    calib = load_calibration(CALI / "camera_array.toml", [s.info.name for s in sources])
     for case, cfg in (("caliscope 4 x 57 frames 720p (8 frames/video)", CueConfig()),
                       ("caliscope, every frame sent to the sink", dataclasses.replace(CueConfig(), sink_frames=10_000))):
         t = time.perf_counter()
         with RerunSink(out / f"caliscope-{cfg.sink_frames}.rrd", progress=False) as sink:
-            bundle, stats = extract_cues(sources, calib, cfg, sink=sink, progress=False)
-            r = sync_bundle(bundle, SyncConfig(), sink=sink, progress=False)
-            videos = {s.info.name: str(s.path) for s in sources}
-            sink.run_summary(run_result_from_dict(result_to_dict(r, {"input": {"videos": videos}})))
+            run(paths, RunConfig(cues=cfg), sink, calibration=CALI / "camera_array.toml", progress=False)
         report(case, sink, time.perf_counter() - t)
 
 

@@ -44,9 +44,9 @@ from vs_inspect.cues.learned import MATCHERS  # noqa: E402
 from vs_inspect.errors import InputError  # noqa: E402
 from vs_inspect.commands.calibrate_board import estimate_from_board, rig_to_json  # noqa: E402
 from vs_inspect.io.calibration import load_calibration  # noqa: E402
-from vs_inspect.io.result import write_json_atomic  # noqa: E402
+from vs_inspect.io.atomic import write_json_atomic  # noqa: E402
 from vs_inspect.io.video import VideoWriter, iter_frames, open_video  # noqa: E402
-from vs_inspect.sync.run import sync_bundle  # noqa: E402
+from vs_inspect.pipeline.stage12 import sync_bundle  # noqa: E402
 
 DATA = REPO.parent / "shared" / "data"
 
@@ -138,9 +138,9 @@ def bench_caliscope(args) -> None:
             all_err += vals
             err_corner = errors_ms(res, {n: t + bias.get(n, 0.0) for n, t in truth.items()})
             all_err_corner += [e if e is not None else float("inf") for e in err_corner.values()]
-            rows.append((trial, cuts, err, tc, ts, stats.get("registered_cameras"), stats.get("dropped")))
+            rows.append((trial, cuts, err, tc, ts, stats.registered_cameras, stats.dropped))
             print(f"trial {trial}: cuts {cuts}  err_ms {format_ms(err)}"
-                  f"  cues {tc:.1f}s sync {ts:.1f}s  cameras {stats.get('registered_cameras')} dropped {stats.get('dropped')}",
+                  f"  cues {tc:.1f}s sync {ts:.1f}s  cameras {stats.registered_cameras} dropped {stats.dropped}",
                   flush=True)
     med = statistics.median(all_err)
     within = sum(e <= 1000 / 6 for e in all_err) / len(all_err)
@@ -173,7 +173,7 @@ def bench_visualsync(args) -> None:
         err = errors_ms(res, truth)
         fr = {k: (None if v is None else round(v / 100.0, 2)) for k, v in err.items()}
         print(f"{scene}: error in frames {fr}  cues {tc:.1f}s sync {ts:.1f}s  "
-              f"cameras {stats.get('registered_cameras')}/{len(paths)} dropped {stats.get('dropped')} "
+              f"cameras {stats.registered_cameras}/{len(paths)} dropped {stats.dropped} "
               f"pairs {[(p.a[-12:], p.b[-12:], p.decision.accepted, p.num_track_pairs) for p in res.pairs]}",
               flush=True)
 
@@ -210,14 +210,14 @@ def bench_speed(args) -> None:
             cpu = time.process_time() - c0
             print(f"\nspeed ({label}): 4 videos x {args.seconds} s x 1280x720 @ 30 fps")
             print(f"{'stage':<16}{'seconds':>10}")
-            for k, v in stats["timings_s"].items():
+            for k, v in stats.timings_s.items():
                 print(f"{k:<16}{v:>10.2f}")
             for k, v in res.timings_s.items():
                 print(f"{k:<16}{v:>10.2f}")
             print(f"{'cues+sync':<16}{tc + ts:>10.2f}   (CPU time of this process: {cpu:.1f} s; "
                   f"the machine has 2 cores shared with other jobs)")
-            print(json.dumps({"tracks": stats["tracks"], "track_pairs": stats["track_pairs"],
-                              "registered_cameras": stats["registered_cameras"]}))
+            print(json.dumps({"tracks": stats.tracks, "track_pairs": stats.track_pairs,
+                              "registered_cameras": stats.registered_cameras}))
             # no cuts: the true offsets are the host timestamps of the first frames
             print(f"error against the first frames' timestamps: {format_ms(errors_ms(res, truth))} ms")
 

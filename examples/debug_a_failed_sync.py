@@ -33,11 +33,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from scipy.spatial.transform import Rotation  # noqa: E402
 
-from vs_inspect.analysis.report_data import report_data_from_recording  # noqa: E402
 from vs_inspect.report import figures  # noqa: E402
 from vs_inspect.report.build import render_report  # noqa: E402
-from vs_inspect.sync.config import SyncConfig  # noqa: E402
-from vs_inspect.sync.run import sync_bundle  # noqa: E402
+from vs_inspect.analysis.report_data import report_data_from_recording  # noqa: E402
+from vs_inspect.pipeline import run  # noqa: E402
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene  # noqa: E402
 from vs_inspect.types import CameraTrack, CueBundle, TrackPairs, Tracks  # noqa: E402
 
@@ -88,7 +87,7 @@ def main() -> int:
     bundle = plant_failures(make_cue_scene(SCENE).bundle)
     rrd = out / "debug.rrd"
     with RerunSink(rrd, progress=False) as sink:
-        sync_bundle(bundle, SyncConfig(), sink=sink, progress=False)
+        run(bundle, sink=sink, progress=False)
     print(f"synchronized the broken scene; recording {rrd} ({rrd.stat().st_size / 1e6:.1f} MB)\n")
 
     # ---- from here on, only the recording is used ----

@@ -17,6 +17,7 @@ Conventions (DESIGN.md): a frame at local time τ of video v shows global time �
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import sys
 import time
@@ -32,16 +33,14 @@ import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from vs_inspect.analysis.report_data import report_data_from_run  # noqa: E402
-from vs_inspect.geometry.epipolar import (epipolar_lines, epipolar_residual,  # noqa: E402
-                                          fundamental_from_cameras)
-from vs_inspect.geometry.sampling import sample_video  # noqa: E402
+from vs_inspect.geometry.epipolar import epipolar_residual, fundamental_from_cameras  # noqa: E402
 from vs_inspect.io.bundle import write_bundle  # noqa: E402
-from vs_inspect.io.result import result_to_dict, write_json_atomic  # noqa: E402
+from vs_inspect.io.result import write_run_result  # noqa: E402
+from vs_inspect.pipeline import run  # noqa: E402
 from vs_inspect.report.build import render_report  # noqa: E402
-from vs_inspect.sync.config import SyncConfig  # noqa: E402
-from vs_inspect.sync.run import sync_bundle  # noqa: E402
+from vs_inspect.analysis.report_data import report_data_from_run  # noqa: E402
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene  # noqa: E402
+from vs_inspect.types import RunInputs  # noqa: E402
 
 SCENE = CueSceneConfig(cameras=2, moving=0, variable_rate=0, seconds=6.0, max_offset_s=1.5,
                        noise_px=0.5, wrong_fraction=0.0, pose_error_deg=0.0, points_per_object=12,
@@ -50,8 +49,12 @@ SCENE = CueSceneConfig(cameras=2, moving=0, variable_rate=0, seconds=6.0, max_of
 
 
 def sample(xy: np.ndarray, ts: np.ndarray, q: float) -> np.ndarray:
-    """(N,2) track points at local time q, read as the energy reads them (geometry.sampling)."""
-    return sample_video(ts, None, xy, np.array([q])).xy[:, 0]
+    """(N,2) track points at local time q (linear between frames, NaN outside)."""
+    k = np.searchsorted(ts, q) - 1
+    if k < 0 or k >= len(ts) - 1:
+        return np.full((xy.shape[0], 2), np.nan)
+    w = (q - ts[k]) / (ts[k + 1] - ts[k])
+    return xy[:, k] + w * (xy[:, k + 1] - xy[:, k])
 
 
 def main() -> int:
@@ -117,7 +120,7 @@ def main() -> int:
     ok_b = np.flatnonzero(np.isfinite(xb_all[ib, :, 0]))
     t_b = max((float(vb.timestamps_s[k]) for k in ok_b[::3]), key=wrong_error)
     x_b = sample(xb_all[ib:ib + 1], vb.timestamps_s, t_b)[0]
-    line = epipolar_lines(F_ab, x_b)
+    line = F_ab @ np.array([x_b[0], x_b[1], 1.0])
     fig, axes = plt.subplots(1, 3, figsize=(18, 4.4), dpi=100, layout="constrained")
     for ax, d in zip(axes, trials):
         x_a = sample(xa_all[ia:ia + 1], va.timestamps_s, t_b + d)[0]
@@ -150,9 +153,9 @@ def main() -> int:
         sink = None
     if sink is not None:
         with sink:
-            result = sync_bundle(bundle, SyncConfig(), sink=sink, progress=False)
+            result = run(bundle, sink=sink, progress=False)
     else:
-        result = sync_bundle(bundle, SyncConfig(), progress=False)
+        result = run(bundle, progress=False)
     land = result.pairs[0]
     fig, ax = plt.subplots(figsize=(10, 4.5), dpi=100, layout="constrained")
     ax.plot(land.offsets_s, land.energy, color="#3b4cc0", lw=1.5, label="E(Δ): robust mean Sampson error")
@@ -170,11 +173,11 @@ def main() -> int:
     plt.close(fig)
 
     # ---- the standard report from a run folder ----
-    run = out / "run"
-    bdir = write_bundle(bundle, run / "bundle", overwrite=True)
-    write_json_atomic(result_to_dict(result, {"gt_offsets_s": bundle.gt_offsets_s,
-                                              "input": {"bundle": str(bdir)}}), run / "result.json")
-    render_report(report_data_from_run(run), out / "report")
+    run_dir = out / "run"
+    bdir = write_bundle(bundle, run_dir / "bundle", overwrite=True)
+    write_run_result(dataclasses.replace(result, inputs=RunInputs(bundle=str(bdir))),
+                     run_dir / "result.json")
+    render_report(report_data_from_run(run_dir), out / "report")
     print(f"found Δ_ab = {land.best_offset_s:+.4f} s, true {true_delta:+.4f} s, error "
           f"{1000 * abs(land.best_offset_s - true_delta):.1f} ms ({land.decision.reason})")
     print(f"figures: {out}/step1_geometry.png step2_cue.png step3_search.png report/index.html")

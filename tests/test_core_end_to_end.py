@@ -37,7 +37,8 @@ def test_accuracy_scene_smaller_size(tmp_path):
 
 def test_all_wrong_pair_is_rejected_with_a_reason():
     from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
-    from vs_inspect.sync import SyncConfig, sync_bundle
+    from vs_inspect.pipeline import sync_bundle
+    from vs_inspect.sync import SyncConfig
     scene = make_cue_scene(CueSceneConfig(cameras=4, moving=1, seconds=5.0, no_match_pairs=0, seed=5))
     res = sync_bundle(scene.bundle, SyncConfig(), progress=False)
     bad = [p for p in res.pairs if (p.a, p.b) == scene.all_wrong_pair][0]

@@ -14,7 +14,7 @@ from vs_inspect.analysis.record_views import (GRAPH_RADIUS_PX, graph_layout, pai
 from vs_inspect.eval.metrics import offset_errors_ms
 from vs_inspect.record.options import RecordOptions
 from vs_inspect.sync.config import SyncConfig
-from vs_inspect.sync.run import sync_bundle
+from vs_inspect.pipeline.stage12 import sync_bundle
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
 from vs_inspect.types import PairDecision, PairLandscape
 

@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 
 from vs_inspect.bench.datasets import caliscope_cut, caliscope_cuts, corner_sync_bias_s, load_caliscope
-from vs_inspect.bench.suite import stage1_pairwise, stage2, without_filter
+from vs_inspect.bench.suite import stage1_pairwise, without_filter
 from vs_inspect.bench.datasets import BenchData
 from vs_inspect.sync.config import DecisionConfig, PairSelection, SolveConfig, SyncConfig
 from vs_inspect.sync.pairs import select_pairs
-from vs_inspect.sync.run import sync_bundle
+from vs_inspect.pipeline.stage12 import solve_stage2, sync_bundle
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
 
 SMALL = CueSceneConfig(cameras=4, moving=1, variable_rate=1, seconds=4.0, pairs_per_view_pair=120,
@@ -22,15 +22,14 @@ def small():
     return sc, sync_bundle(sc.bundle, SyncConfig(), progress=False)
 
 
-def test_stage2_on_reused_landscapes_equals_sync_bundle(small):
+def test_ablation_shortcuts_equal_full_runs(small):
+    """The bench reuses the default run's landscapes for its Stage 2 ablations: the filter off
+    (without_filter) and fewer pairs give what a full run with those settings gives."""
     sc, base = small
     b = sc.bundle
     lands = list(base.pairs)
-    assert stage2(b, lands, SolveConfig()) == base.offsets_s
-    ls = sync_bundle(b, SyncConfig(solve=SolveConfig(solver="ls")), progress=False)
-    assert stage2(b, lands, SolveConfig(solver="ls")) == ls.offsets_s
     off = sync_bundle(b, SyncConfig(decision=DecisionConfig(enabled=False)), progress=False)
-    assert stage2(b, without_filter(lands), SolveConfig()) == off.offsets_s
+    assert solve_stage2(b, without_filter(lands), SolveConfig()).offsets_s == off.offsets_s
     assert all(p.decision.accepted or p.num_track_pairs < 8 for p in without_filter(lands))
     sel = PairSelection.parse("rst", 1)
     rst = sync_bundle(b, SyncConfig(pairs=sel), progress=False)
@@ -38,7 +37,7 @@ def test_stage2_on_reused_landscapes_equals_sync_bundle(small):
     by = {(p.a, p.b): p for p in lands}
     chosen = select_pairs(b.names, has, sel)
     assert len(chosen) == len(b.names) - 1
-    assert stage2(b, [by[p] for p in chosen], SolveConfig()) == rst.offsets_s
+    assert solve_stage2(b, [by[p] for p in chosen], SolveConfig()).offsets_s == rst.offsets_s
 
 
 def test_stage1_pairwise_counts_missing_pairs_as_wrong(small):

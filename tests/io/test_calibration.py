@@ -250,7 +250,7 @@ def test_real_corners_sync_with_imported_calibration(shared_data):
 
     from vs_inspect.io.video import open_video
     from vs_inspect.sync.config import SyncConfig
-    from vs_inspect.sync.run import sync_bundle
+    from vs_inspect.pipeline.stage12 import sync_bundle
     from vs_inspect.types import CueBundle, TrackPairs, Tracks, VideoInfo
 
     d = shared_data / "caliscope_post_optimization"

@@ -18,7 +18,7 @@ from vs_inspect.io.result import run_result_to_dict
 from vs_inspect.record.options import RecordOptions
 from vs_inspect.record.rerun_sink import RerunSink
 from vs_inspect.sync.config import SyncConfig
-from vs_inspect.sync.run import sync_bundle
+from vs_inspect.pipeline.stage12 import sync_bundle
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
 from vs_inspect.types import RunResult
 

@@ -17,7 +17,7 @@ from vs_inspect.io.video import VideoWriter
 from vs_inspect.io.visualsync import ImportConfig, import_visualsync, load_pickle_restricted
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
 from vs_inspect.sync.config import SyncConfig
-from vs_inspect.sync.run import sync_bundle
+from vs_inspect.pipeline.stage12 import sync_bundle
 
 FPS = 25.0
 STATIC_TOL_FRAMES = 0.25  # static cameras with 0.5° pose error, 0.8 px noise, 25 % wrong pairs

@@ -24,7 +24,7 @@ from vs_inspect.record.options import RecordOptions
 from vs_inspect.record.rerun_sink import RerunSink
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
 from vs_inspect.sync.config import SyncConfig
-from vs_inspect.sync.run import sync_bundle
+from vs_inspect.pipeline.stage12 import sync_bundle
 from vs_inspect.types import CameraTrack, RunResult, SyncResult
 
 RERUN = Path(sys.executable).parent / "rerun"

@@ -12,11 +12,11 @@ import pytest
 
 from vs_inspect.analysis.report_data import load_report_data
 from vs_inspect.io.bundle import write_bundle
-from vs_inspect.io.result import result_to_dict, write_json_atomic
+from vs_inspect.io.result import write_run_result
+from vs_inspect.pipeline import run as run_pipeline
+from vs_inspect.types import RunInputs
 from vs_inspect.report.build import available, render_report
 from vs_inspect.report.figures import figure_size_px
-from vs_inspect.sync.config import SyncConfig
-from vs_inspect.sync.run import sync_bundle
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
 
 REPO = Path(__file__).resolve().parents[2]
@@ -35,10 +35,9 @@ def run(tmp_path_factory):
     bundle_dir = write_bundle(scene.bundle, root / "run" / "bundle")
     rrd = root / "run.rrd"
     with RerunSink(rrd, progress=False) as sink:
-        result = sync_bundle(scene.bundle, SyncConfig(), sink=sink, progress=False)
-    data = result_to_dict(result, {"gt_offsets_s": scene.bundle.gt_offsets_s,
-                                   "input": {"bundle": str(bundle_dir)}})
-    write_json_atomic(data, root / "run" / "result.json")
+        result = run_pipeline(scene.bundle, sink=sink, progress=False,
+                     recorded_inputs=RunInputs(bundle=str(bundle_dir)))
+    write_run_result(result, root / "run" / "result.json")
     return root / "run", rrd, scene
 
 
@@ -163,10 +162,9 @@ def test_report_with_videos_has_mosaic_and_real_frames(tmp_path):
     with RerunSink(rrd, progress=False) as sink:
         for v in scene.bundle.videos:
             sink.video(v, videos[v.name])
-        result = sync_bundle(scene.bundle, SyncConfig(), sink=sink, progress=False)
-    write_json_atomic(result_to_dict(result, {"gt_offsets_s": scene.bundle.gt_offsets_s,
-                                              "input": {"bundle": str(bundle_dir), "videos": videos}}),
-                      tmp_path / "run" / "result.json")
+        result = run_pipeline(scene.bundle, sink=sink, progress=False,
+                     recorded_inputs=RunInputs(bundle=str(bundle_dir), videos=videos))
+    write_run_result(result, tmp_path / "run" / "result.json")
     data = load_report_data(tmp_path / "run")
     assert data.mosaic is not None and data.epipolar.image_bgr is not None
     assert all(t.image_bgr is not None for t in data.mosaic.tiles)  # offsets within ±1 s of 3 s videos

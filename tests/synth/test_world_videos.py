@@ -78,7 +78,7 @@ def test_true_bundle_recovers_offsets(demo_run, tmp_path):
         assert len(np.unique(bundle.tracks[v].instance)) == 4
     # the demo's result ...
     truth = bundle.gt_offsets_s
-    errs = [abs(data["offsets_s"][v] - truth[v]) * 1000 for v in truth if v != "cam0"]
+    errs = [abs(data.offsets_s[v] - truth[v]) * 1000 for v in truth if v != "cam0"]
     assert np.median(errs) < MAX_MEDIAN_ERROR_MS, errs
     # ... and the CLI on the same bundle
     assert main(["sync", "--bundle", str(out / "scene" / "bundle"), "--out", str(tmp_path),

@@ -168,7 +168,7 @@ def corner_sync_bias_s(session: CaliscopeSession) -> dict[str, float]:
     cross-view tracks) on the uncut videos, minus the offset of the recorded frame times (s,
     against the reference). A camera whose frames reach the host earlier or later than the
     others shows up here whatever the cues."""
-    from ..sync.run import sync_bundle
+    from ..pipeline.stage12 import sync_bundle
 
     bundle = caliscope_cut(session, {}, "caliscope/uncut").bundle
     res = sync_bundle(bundle, progress=False)

@@ -368,16 +368,14 @@ def rows_from_json(d: dict) -> tuple[list[Row], list[Skipped]]:
 
 def write_outputs(rows, skipped, wall_s, command, out: Path | None, json_out: Path | None,
                   machine_info: dict | None = None) -> None:
-    from ..io.result import write_json_atomic
+    from ..io.atomic import write_json_atomic, write_text_atomic
     if out is not None:
         keep = ""
         if out.is_file():
             old = out.read_text()
             if DISCUSSION_MARK in old:
                 keep = old.split(DISCUSSION_MARK, 1)[1].lstrip("\n")
-        tmp = out.with_suffix(out.suffix + ".tmp")
-        tmp.write_text(to_markdown(rows, skipped, wall_s, command, keep, machine_info))
-        os.replace(tmp, out)
+        write_text_atomic(to_markdown(rows, skipped, wall_s, command, keep, machine_info), out)
     if json_out is not None:
         write_json_atomic(rows_to_json(rows, skipped, wall_s, command, machine_info), json_out)
 

@@ -25,9 +25,8 @@ from ..geometry.epipolar import RESIDUALS
 from ..sync.config import DecisionConfig, LandscapeConfig, PairSelection, SolveConfig, SyncConfig
 from ..sync.decision import decide
 from ..sync.pairs import select_pairs
-from ..sync.run import sync_bundle
-from ..sync.solve import PairMeasurement, solve_offsets
-from ..types import CueBundle, PairLandscape
+from ..pipeline.stage12 import solve_stage2, sync_bundle
+from ..types import PairLandscape
 from .datasets import BenchData
 
 log = logging.getLogger(__name__)
@@ -137,24 +136,7 @@ def failed(data: BenchData, method: str, variant: str, exc: BaseException, **ext
                float("nan"), n, n, error=f"{type(exc).__name__}: {exc}"[:200], **extra)
 
 
-# ---- Stage 2 from given landscapes (ablations that keep Stage 1) ------------------------------
-
-
-def stage2(bundle: CueBundle, lands: list[PairLandscape], solve: SolveConfig) -> dict:
-    """Per-video offsets from landscapes, exactly as sync_bundle's Stage 2 (tested equal)."""
-    names = bundle.names
-    reference = solve.reference or names[0]
-    fin = [v.frame_interval_s for v in bundle.videos if math.isfinite(v.frame_interval_s)]
-    slowest = max(fin) if fin else 0.1
-    delta = solve.huber_delta_s or 0.5 * slowest
-    meas = []
-    for land in lands:
-        if land.decision.accepted and math.isfinite(land.best_offset_s):
-            step = land.offsets_s[1] - land.offsets_s[0] if len(land.offsets_s) > 1 else slowest
-            floor = step / math.sqrt(12.0)
-            sigma = land.uncertainty_s if math.isfinite(land.uncertainty_s) else floor
-            meas.append(PairMeasurement(land.a, land.b, land.best_offset_s, max(sigma, 1e-6)))
-    return solve_offsets(names, reference, meas, solve.solver, delta, solve.max_iterations).offsets_s
+# ---- Stage 2 from given landscapes (ablations that keep Stage 1: pipeline.solve_stage2) --------
 
 
 def without_filter(lands: list[PairLandscape]) -> list[PairLandscape]:
@@ -203,10 +185,10 @@ def run_dataset(data: BenchData, opts: PlanOptions, stage0_s: float = float("nan
     if lands is not None:
         # Stage 2 ablations on the same landscapes.
         t = time.perf_counter()
-        rows.append(score(data, stage2(bundle, lands, SolveConfig(solver="ls")), "vs_inspect",
+        rows.append(score(data, solve_stage2(bundle, lands, SolveConfig(solver="ls")).offsets_s, "vs_inspect",
                           "solver=ls", stage2_s=time.perf_counter() - t))
         t = time.perf_counter()
-        rows.append(score(data, stage2(bundle, without_filter(lands), SolveConfig()), "vs_inspect",
+        rows.append(score(data, solve_stage2(bundle, without_filter(lands), SolveConfig()).offsets_s, "vs_inspect",
                           "filter=off", stage2_s=time.perf_counter() - t))
         a100, a500 = stage1_pairwise(data, lands)
         rows.append(Row(data.name, data.group, "vs_inspect", "stage1-only", a100, a500, float("nan"),
@@ -218,7 +200,7 @@ def run_dataset(data: BenchData, opts: PlanOptions, stage0_s: float = float("nan
                 sel = PairSelection.parse(mode, seed)
                 chosen = select_pairs(bundle.names, has, sel)
                 t = time.perf_counter()
-                offs = stage2(bundle, [by[p] for p in chosen], SolveConfig())
+                offs = solve_stage2(bundle, [by[p] for p in chosen], SolveConfig()).offsets_s
                 rows.append(score(data, offs, "vs_inspect", f"pairs={mode}/seed={seed}",
                                   stage2_s=time.perf_counter() - t))
 

@@ -1,5 +1,5 @@
 """Video datasets of the benchmark: the VisualSync clips through the video pipeline (Stage 0 =
-vs_inspect.cues.extract_cues with estimated cameras, no calibration).
+vs_inspect.pipeline.run_stage0 with estimated cameras, no calibration).
 
 Clip <scene>_<cam>_<start>_<end>_<k>.mp4 shows frames start, start+1, ... of one common timeline
 at 10 fps, so the true offset_s of a clip is start / 10 (DESIGN.md convention).
@@ -54,23 +54,26 @@ def frame_motion_signal(src, max_side: int = 320) -> tuple[np.ndarray, np.ndarra
 def _through_stage0(name: str, group: str, srcs: list, calibration, truth: dict[str, float],
                     frame_interval_s: float, cue_config=None
                     ) -> tuple[BenchData, float, BaseException | None]:
+    # srcs: the opened videos (for the motion signals); calibration: the calibration file or None
     """Motion signals of the peer (from the decoded frames, so that it runs even when Stage 0
     fails), then Stage 0: (BenchData, Stage 0 seconds, Stage 0 error or None).
 
     On success data.bundle is the extracted cue bundle with the true offsets (videos that Stage 0
     drops stay in the truth, so every method counts them as unresolved); on failure it is None."""
-    from ..cues import CueConfig, extract_cues
+    from ..cues import CueConfig
+    from ..pipeline.stage0 import run_stage0
 
     signals = {s.info.name: frame_motion_signal(s) for s in srcs}
     notes = {"motion_signals": signals, "truth": truth, "videos_info": [s.info for s in srcs],
              "videos": len(srcs)}
     t0 = time.perf_counter()
     try:
-        bundle, stats = extract_cues(srcs, calibration, cue_config or CueConfig(), progress=False)
+        bundle, stats, _ = run_stage0([s.path for s in srcs], calibration, None,
+                                      cue_config or CueConfig(), progress=False)
     except Exception as exc:  # noqa: BLE001  (Stage 0 failing is a result)
         return BenchData(name, group, None, None, frame_interval_s, notes), time.perf_counter() - t0, exc
     stage0 = time.perf_counter() - t0
-    notes.update(dropped=stats.get("dropped", {}), stage0_timings_s=stats.get("timings_s", {}))
+    notes.update(dropped=stats.dropped, stage0_timings_s=stats.timings_s)
     bundle = dataclasses.replace(bundle, gt_offsets_s=truth)
     return BenchData(name, group, bundle, None, frame_interval_s, notes), stage0, None
 
@@ -114,7 +117,8 @@ def rendered_scene(seed: int, workdir: Path, cue_config=None) -> tuple[BenchData
     truth = json.loads((folder / "gt.json").read_text())["offsets_s"]
     srcs = [open_video(p) for p in sorted(folder.glob("cam*.mp4"))]
     calib = load_calibration(folder / "calibration.json", [s.info.name for s in srcs])
-    data, stage0, error = _through_stage0(f"rendered/s{seed}", "rendered", srcs, calib, truth,
+    data, stage0, error = _through_stage0(f"rendered/s{seed}", "rendered", srcs,
+                                          folder / "calibration.json", truth,
                                           1.0 / 30.0, cue_config)
     if error is None:
         exact = {n: to_camera_track(c) for n, c in calib.items() if n in data.bundle.cameras}

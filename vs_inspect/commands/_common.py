@@ -1,54 +1,48 @@
-"""Shared CLI helpers: sync options from the config dataclasses, and the offsets table."""
+"""Shared CLI helpers: options generated from the run config (pipeline.config), and the offsets table."""
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
+from pathlib import Path
 
-from ..geometry.epipolar import RESIDUALS
-from ..sync.config import (DecisionConfig, LandscapeConfig, PairSelection, SolveConfig,
-                           SyncConfig)
+from ..eval.metrics import offset_errors_ms
+from ..pipeline.config import RunConfig, add_config_options, config_from_args
 
 
-def _doc(cls, name: str) -> str:
-    """The docstring under a dataclass field (see sync/config.py)."""
-    import ast
-    import inspect
-    tree = ast.parse(inspect.getsource(cls))
-    body = tree.body[0].body
-    for i, node in enumerate(body):
-        if isinstance(node, ast.AnnAssign) and getattr(node.target, "id", None) == name:
-            nxt = body[i + 1] if i + 1 < len(body) else None
-            if isinstance(nxt, ast.Expr) and isinstance(nxt.value, ast.Constant):
-                return str(nxt.value.value)
-    return ""
+def add_config_file_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--config", type=Path, default=None, metavar="FILE",
+                   help="settings from a config.json that `sync` wrote (OUT/config.json); options "
+                        "given on the command line override the file's values")
 
 
 def add_sync_options(p: argparse.ArgumentParser) -> None:
-    g = p.add_argument_group("synchronization (Stage 1 and 2)")
-    g.add_argument("--energy", choices=RESIDUALS, default="sampson", help=_doc(LandscapeConfig, "residual"))
-    g.add_argument("--loss", choices=("truncated", "mean"), default="truncated", help=_doc(LandscapeConfig, "loss"))
-    g.add_argument("--solver", choices=("irls", "ls"), default="irls", help=_doc(SolveConfig, "solver"))
-    g.add_argument("--no-spurious-filter", action="store_true", help=_doc(DecisionConfig, "enabled"))
-    g.add_argument("--pairs", default="all", metavar="{all,FRACTION,rst}",
-                   help="pairs of videos to evaluate: " + _doc(PairSelection, "mode"))
-    g.add_argument("--seed", type=int, default=0, help="seed of random pair selection")
-    g.add_argument("--reference", default=None, metavar="NAME", help=_doc(SolveConfig, "reference"))
-    g.add_argument("--range-s", type=float, default=None, help=_doc(LandscapeConfig, "range_s"))
-    g.add_argument("--step-s", type=float, default=None, help=_doc(LandscapeConfig, "step_s"))
-    g.add_argument("--min-overlap-s", type=float, default=1.0, help=_doc(LandscapeConfig, "min_overlap_s"))
-    g.add_argument("--huber-delta-s", type=float, default=None, help=_doc(SolveConfig, "huber_delta_s"))
+    """The Stage 1 + 2 options, generated from sync.config's fields (help = their docstrings)."""
+    add_config_options(p, ("sync",))
 
 
-def sync_config_from_args(args: argparse.Namespace) -> SyncConfig:
-    return SyncConfig(
-        landscape=LandscapeConfig(residual=args.energy, loss=args.loss, range_s=args.range_s,
-                                  step_s=args.step_s, min_overlap_s=args.min_overlap_s),
-        decision=DecisionConfig(enabled=not args.no_spurious_filter),
-        solve=SolveConfig(solver=args.solver, reference=args.reference,
-                          huber_delta_s=args.huber_delta_s),
-        pairs=PairSelection.parse(args.pairs, args.seed),
-    )
+def add_cue_options(p: argparse.ArgumentParser) -> None:
+    """Stage 0's inputs (--calib, --fps) and options generated from cues.config's fields."""
+    g = p.add_argument_group("cue extraction (Stage 0)")
+    g.add_argument("--calib", type=Path, default=None,
+                   help="camera calibration (COLMAP model folder, JSON, or caliscope/anipose TOML); "
+                        "without it the cameras are estimated from the videos with pycolmap")
+    g.add_argument("--fps", type=float, default=None,
+                   help="frame rate of image folders (and of files whose timestamps are unusable)")
+    add_config_options(p, ("cues",), group=g)
+
+
+def run_config(args: argparse.Namespace) -> RunConfig:
+    """The run's config: --config FILE (or the defaults), then the options on the command line,
+    then the recording presets (--rrd-minimal, --rrd-all-*)."""
+    path = getattr(args, "config", None)
+    base = RunConfig.load(path) if path is not None else RunConfig()
+    cfg = config_from_args(args, base)
+    if hasattr(args, "rrd_minimal"):
+        from ._record import record_options
+        cfg = dataclasses.replace(cfg, record=record_options(args, cfg.record))
+    return cfg
 
 
 def fmt_s(x) -> str:
@@ -63,15 +57,28 @@ def offsets_table(offsets: dict, uncertainty: dict, truth: dict | None, referenc
     if truth:
         head += f"{'true_s':>11}{'error_ms':>10}"
     lines.append(head)
-    ref_est = offsets.get(reference)
+    errors_ms = offset_errors_ms(offsets, truth, reference) if truth else {}
     for v, off in offsets.items():
         u = uncertainty.get(v)
         row = f"{v:<16}{fmt_s(off):>11}{('%.4f' % u) if u is not None else '-':>9}"
         if truth and v in truth:
             tv = truth[v] - truth.get(reference, 0.0)
             row += f"{tv:>+11.4f}"
-            row += f"{1000 * abs(off - ref_est - tv):>10.1f}" if off is not None and ref_est is not None else f"{'-':>10}"
+            e = errors_ms.get(v)
+            row += f"{e:>10.1f}" if e is not None else f"{'-':>10}"
         if off is None:
             row += f"   ({unresolved.get(v, 'unresolved')})"
         lines.append(row)
     return "\n".join(lines)
+
+
+def print_run(result, path, truth: dict | None = None) -> None:
+    """The offsets table (input order, truth from the run or given) and the pair counts."""
+    names = list(result.inputs.videos) or list(result.offsets_s)
+    truth = truth if truth is not None else result.gt_offsets_s
+    shown_truth = {n: truth[n] for n in names if n in truth} if truth else None
+    print(offsets_table({n: result.offsets_s.get(n) for n in names},
+                        {n: result.uncertainty_s.get(n) for n in names}, shown_truth,
+                        result.reference, result.unresolved))
+    acc = sum(p.decision.accepted for p in result.pairs)
+    print(f"pairs: {acc} accepted, {len(result.pairs) - acc} rejected; wrote {path}")

@@ -32,8 +32,10 @@ def add_record_options(p: argparse.ArgumentParser) -> None:
                         f"{RecordOptions().max_tracks_per_video} tracks per video)")
 
 
-def record_options(args: argparse.Namespace) -> RecordOptions:
-    base = RecordOptions.minimal() if args.rrd_minimal else RecordOptions()
+def record_options(args: argparse.Namespace, base: RecordOptions = RecordOptions()) -> RecordOptions:
+    """base (RunConfig.record) with the presets given on the command line applied."""
+    if args.rrd_minimal:
+        base = RecordOptions.minimal()
     return base.with_flags(all_offsets=args.rrd_all_offsets, full_frames=args.rrd_full_frames,
                            all_tracks=args.rrd_all_tracks)
 
@@ -46,16 +48,18 @@ def rrd_path(args: argparse.Namespace, out: Path) -> Path | None:
     return Path(os.environ.get(RECORDINGS_ENV) or "recordings") / f"{Path(out).resolve().name}.rrd"
 
 
-def open_sink(args: argparse.Namespace, out: Path, progress: bool = True) -> Sink:
+def open_sink(args: argparse.Namespace, out: Path, options: RecordOptions | None = None,
+              progress: bool = True) -> Sink:
     """A RerunSink writing to --rrd (or the default), or a NullSink with --no-rrd.
 
+    options: what to record (RunConfig.record; default: the command line's presets).
     Use it as a context manager: the .rrd appears only when the block ends without an error.
     """
     path = rrd_path(args, out)
     if path is None:
         return NullSink()
     from ..record.rerun_sink import RerunSink
-    return RerunSink(path, options=record_options(args), progress=progress)
+    return RerunSink(path, options=options or record_options(args), progress=progress)
 
 
 def describe(sink: Sink) -> str | None:

@@ -12,7 +12,7 @@ import time
 from ..bench.runner import (full_plan, machine, quick_plan, rows_from_json, rows_to_json, timed_run,
                             to_text, write_outputs)
 from ..errors import InputError
-from ..io.result import write_json_atomic
+from ..io.atomic import write_json_atomic
 
 
 def _default_data() -> Path:

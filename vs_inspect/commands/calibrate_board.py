@@ -68,8 +68,8 @@ def register(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..io.board import load_board
-    from ..io.result import write_json_atomic
-    from .cues import open_sources
+    from ..io.atomic import write_json_atomic
+    from ..pipeline.stage0 import open_sources
 
     if len(args.videos) < 2:
         raise InputError(f"need at least 2 videos of the rig, got {len(args.videos)}")

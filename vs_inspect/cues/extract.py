@@ -3,7 +3,7 @@
 Each step is a pure function in its own module (motion, tracking, matching, cameras); this
 module decodes the videos, calls them in order, reports to the sink and keeps per-stage timings.
 A video that cannot be used (unreadable, no camera) is left out of the bundle with its reason
-in stats["dropped"], so that the caller can report it as not synchronized.
+in CueStats.dropped, so that the caller can report it as not synchronized.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from tqdm import tqdm
 from ..analysis.record_views import record_frame, record_mask
 from ..errors import InputError
 from ..record.sink import NullSink, Sink
-from ..types import CameraTrack, CueBundle, TrackPairs, Tracks, VideoInfo
+from ..types import CameraTrack, CueBundle, CueStats, TrackPairs, Tracks, VideoCueStats, VideoInfo
 from .config import CueConfig
 from .matching import (KeyframeFeatures, extract_keyframe_features, keyframe_indices,
                        match_tracks)
@@ -150,14 +150,13 @@ def _import_cameras(calibration: dict, vids: dict[str, _VideoCues]) -> tuple[dic
 
 
 def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueConfig(),
-                 sink: Sink | None = None, progress: bool = True) -> tuple[CueBundle, dict]:
-    """Cues of every video: (CueBundle of the usable videos, stats dict).
+                 sink: Sink | None = None, progress: bool = True) -> tuple[CueBundle, CueStats]:
+    """Cues of every video: (CueBundle of the usable videos, CueStats).
 
     sources: VideoSource list (vs_inspect.io.video.open_video). calibration: name ->
     CameraCalibration (vs_inspect.io.calibration.load_calibration) or None to estimate the
-    cameras with pycolmap. stats: "timings_s" per stage, "videos" per-video counts, "pairs"
-    per-pair counts, "dropped" {name: reason} for videos left out of the bundle,
-    "registered_cameras", "camera_source".
+    cameras with pycolmap. CueStats: timings per step, per-video and per-pair counts, the videos
+    left out of the bundle with their reason, the cameras' source.
     """
     sink = sink or NullSink()
     if len(sources) < 2:
@@ -243,7 +242,15 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
                        {n: tracks[n] for n in usable}, pairs)
     sink.stage_event("cues", "cue extraction finished", tracks=stats["tracks"],
                      track_pairs=stats["track_pairs"], cameras=len(cameras))
-    return bundle, stats
+    return bundle, _cue_stats(stats)
+
+
+def _cue_stats(stats: dict) -> CueStats:
+    """The typed record of the counts gathered while extracting (a private dict until here)."""
+    return CueStats(stats["camera_source"], stats["registered_cameras"], stats["tracks"],
+                    stats["track_pairs"], {n: VideoCueStats(**v) for n, v in stats["videos"].items()},
+                    stats["pairs"], stats["dropped"], stats["timings_s"], stats.get("geometric_peaks"),
+                    stats.get("sfm"))
 
 
 def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,

@@ -9,15 +9,14 @@ import json
 import logging
 import math
 import os
-import shutil
-import tempfile
 import zipfile
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import BundleError
-from ..types import CameraTrack, CueBundle, TrackPairs, Tracks, VideoInfo
+from ..types import CameraTrack, CueBundle, CueStats, TrackPairs, Tracks, VideoInfo
+from .atomic import atomic_dir, write_json_atomic
 
 log = logging.getLogger(__name__)
 
@@ -195,14 +194,9 @@ def read_gt(path: str | os.PathLike, names: list[str] | None = None) -> dict[str
 
 
 def write_bundle(bundle: CueBundle, folder: str | os.PathLike, overwrite: bool = False) -> Path:
-    """Write a bundle atomically: into a temporary sibling folder, renamed when complete."""
+    """Write a bundle atomically (io.atomic.atomic_dir): a reader never sees half a bundle."""
     dest = Path(folder)
-    occupied = dest.is_file() or (dest.is_dir() and any(dest.iterdir()))
-    if occupied and not overwrite:
-        raise FileExistsError(f"{dest} exists and is not empty")
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name}.partial-", dir=dest.parent))
-    try:
+    with atomic_dir(dest, overwrite=overwrite) as tmp:
         videos = []
         for v in bundle.videos:
             entry = {"name": v.name, "width": int(v.width), "height": int(v.height),
@@ -235,10 +229,17 @@ def write_bundle(bundle: CueBundle, folder: str | os.PathLike, overwrite: bool =
             np.savez_compressed(tmp / "pairs" / f"{a}__{b}.npz", **arrays)
         if bundle.gt_offsets_s is not None:
             (tmp / "gt.json").write_text(json.dumps({"offsets_s": bundle.gt_offsets_s}, indent=1))
-        if dest.exists():
-            shutil.rmtree(dest)
-        os.replace(tmp, dest)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     return dest
+
+
+def write_cue_stats(stats: CueStats, folder: str | os.PathLike, inputs: dict[str, str],
+                    total_with_io_s: float | None = None) -> Path:
+    """FOLDER/cues_stats.json (atomic): Stage 0's counts, timings and the videos it was given."""
+    from .result import cue_stats_to_dict
+
+    data = cue_stats_to_dict(stats)
+    data["timings_s"] = dict(stats.timings_s)
+    if total_with_io_s is not None:
+        data["timings_s"]["total_with_io_s"] = total_with_io_s
+    data["input"] = {"videos": dict(inputs)}
+    return write_json_atomic(data, Path(folder) / "cues_stats.json")

@@ -12,9 +12,9 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from .atomic import write_json_atomic  # noqa: F401  (re-exported for older imports)
+from .atomic import write_json_atomic
 from ..types import (CueStats, PairDecision, PairLandscape, RunInputs, RunResult, SolveIteration,
-                     SyncResult, VideoCueStats)
+                     VideoCueStats)
 
 
 def _num(x: float) -> float | None:
@@ -52,40 +52,19 @@ def pair_to_dict(p: PairLandscape, with_landscape: bool = True) -> dict[str, Any
     return out
 
 
-def result_to_dict(result: SyncResult, extra: dict[str, Any] | None = None) -> dict[str, Any]:
-    out: dict[str, Any] = {
-        "format": "vs-inspect-result", "version": 1,
-        "reference": result.reference,
-        "offsets_s": {k: _num(v) if v is not None else None for k, v in result.offsets_s.items()},
-        "uncertainty_s": {k: _num(v) if v is not None else None for k, v in result.uncertainty_s.items()},
-        "unresolved": result.unresolved_reason,
-        "pairs": [pair_to_dict(p) for p in result.pairs],
-        "solve": {
-            "solver": result.solver,
-            "pairs": [list(p) for p in result.solve_pairs],
-            "iterations": [{"residual_s": [float(r) for r in it.residual_s],
-                            "weight": [float(w) for w in it.weight]} for it in result.iterations],
-        },
-        "timings_s": {k: round(v, 4) for k, v in result.timings_s.items()},
-    }
-    if extra:
-        out.update(extra)
-    return out
-
-
-def read_result(path: str | os.PathLike) -> dict[str, Any]:
+def read_json_file(path: str | os.PathLike, name_in_folder: str) -> tuple[Any, Path]:
+    """(the JSON content, the file read) of a file, or of name_in_folder in a folder; InputError
+    naming the file when it is missing or not JSON."""
     path = Path(path)
     if path.is_dir():
-        path = path / "result.json"
+        path = path / name_in_folder
     try:
-        data = json.loads(path.read_text())
+        return json.loads(path.read_text()), path
     except FileNotFoundError:
         raise InputError(f"{path}: missing file") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
         raise InputError(f"{path}: not valid JSON ({exc})") from None
-    if not isinstance(data, dict) or not isinstance(data.get("offsets_s"), dict) or "reference" not in data:
-        raise InputError(f"{path}: not a vs-inspect result (needs 'reference' and 'offsets_s')")
-    return data
+
 
 
 # ---- RunResult <-> result.json (format unchanged: version 1) -----------------------------------
@@ -223,13 +202,5 @@ def write_run_result(r: RunResult, path: str | os.PathLike) -> Path:
 
 def read_run_result(path: str | os.PathLike) -> RunResult:
     """A result.json (or a run folder holding one) as a RunResult."""
-    path = Path(path)
-    if path.is_dir():
-        path = path / "result.json"
-    try:
-        data = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise InputError(f"{path}: missing file") from None
-    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
-        raise InputError(f"{path}: not valid JSON ({exc})") from None
+    data, path = read_json_file(path, "result.json")
     return run_result_from_dict(data, str(path))

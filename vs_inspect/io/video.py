@@ -12,9 +12,7 @@ from __future__ import annotations
 
 import bisect
 import logging
-import os
 import re
-import tempfile
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
@@ -26,6 +24,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..types import VideoInfo
+from .atomic import atomic_path
 
 log = logging.getLogger(__name__)
 
@@ -427,6 +426,10 @@ def _read_sequentially(src: VideoSource, wanted: list[int], max_side: int | None
 # ---- writing ----------------------------------------------------------------------------------
 
 
+class _Aborted(Exception):
+    """Passed to the atomic writer when a VideoWriter is aborted (never raised to callers)."""
+
+
 class VideoWriter:
     """H.264 MP4 (libx264, yuv420p) through PyAV; rerun's AssetVideo accepts it.
 
@@ -451,11 +454,9 @@ class VideoWriter:
         self.fps = float(fps)
         self.num_frames = 0
         self._last_pts = -1
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=self.path.parent, prefix=f".{self.path.stem}.",
-                                   suffix=".part.mp4")
-        os.close(fd)
-        self._tmp = Path(tmp)
+        # the one atomic writer (io.atomic), held open from here until close() or abort()
+        self._atomic = atomic_path(self.path, suffix=".mp4")
+        self._tmp = self._atomic.__enter__()
         try:
             self._container = av.open(str(self._tmp), mode="w", format="mp4")
             rate = Fraction(self.fps).limit_denominator(1001 * 1000)
@@ -471,8 +472,8 @@ class VideoWriter:
             # (tests/synth/test_world_videos.py renders a scene twice and compares the files)
             stream.options = {"crf": str(int(crf)), "preset": preset, "x264-params": "mbtree=0"}
             self._stream = stream
-        except BaseException:
-            self._tmp.unlink(missing_ok=True)
+        except BaseException as exc:
+            self._discard(exc)
             raise
         self._closed = False
 
@@ -512,16 +513,18 @@ class VideoWriter:
             for packet in self._stream.encode(None):
                 self._container.mux(packet)
             self._container.close()
-        except BaseException:
-            self._tmp.unlink(missing_ok=True)
+        except BaseException as exc:
+            self._discard(exc)
             raise
         if self.num_frames == 0:
-            self._tmp.unlink(missing_ok=True)
-            raise ValueError(f"{self.path}: no frames were written")
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(self._tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the usual file mode
-        os.replace(self._tmp, self.path)
+            exc = ValueError(f"{self.path}: no frames were written")
+            self._discard(exc)
+            raise exc
+        self._atomic.__exit__(None, None, None)  # renamed into place with the usual file mode
+
+    def _discard(self, exc: BaseException) -> None:
+        """Remove the temporary file (atomic_path's cleanup on an error)."""
+        self._atomic.__exit__(type(exc), exc, exc.__traceback__)
 
     def abort(self) -> None:
         """Stop without producing the file (the temporary file is removed)."""
@@ -532,7 +535,7 @@ class VideoWriter:
             self._container.close()
         except _AV_ERRORS:
             pass
-        self._tmp.unlink(missing_ok=True)
+        self._discard(_Aborted(f"{self.path}: aborted"))
 
     def __enter__(self) -> VideoWriter:
         return self

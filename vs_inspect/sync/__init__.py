@@ -1,7 +1,6 @@
-"""Stage 1 (pair landscapes and decisions) and Stage 2 (global solve)."""
+"""Stage 1 (pair landscapes and decisions) and Stage 2 (global solve): the steps, as pure
+functions; vs_inspect.pipeline.stage12 runs them over a cue bundle."""
 
 from .config import DecisionConfig, LandscapeConfig, PairSelection, SolveConfig, SyncConfig
-from .run import sync_bundle
 
-__all__ = ["DecisionConfig", "LandscapeConfig", "PairSelection", "SolveConfig", "SyncConfig",
-           "sync_bundle"]
+__all__ = ["DecisionConfig", "LandscapeConfig", "PairSelection", "SolveConfig", "SyncConfig"]

@@ -1,25 +1,26 @@
-"""Settings of Stage 1 and Stage 2, one docstring per field (the CLI shows them as help)."""
+"""Settings of Stage 1 and Stage 2, one docstring per field. A field whose metadata names a "flag"
+is a command-line option (pipeline.config generates it, with the docstring as help)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field
 
 from ..geometry.epipolar import RESIDUALS
 
 
 @dataclass(frozen=True)
 class LandscapeConfig:
-    residual: str = "sampson"
+    residual: str = field(default="sampson", metadata={"flag": "--energy", "choices": RESIDUALS})
     """Epipolar residual: sampson (default), symmetric, cosine or algebraic (the paper's ablation)."""
-    loss: str = "truncated"
+    loss: str = field(default="truncated", metadata={"flag": "--loss", "choices": ("truncated", "mean")})
     """Aggregation over (track pair, frame) terms: truncated (robust, default) or mean (the paper's plain mean)."""
     robust_scale: float | None = None
     """Truncation level of the robust loss in the residual's units (px² for sampson); None = 9 x the median residual at the best coarse offset."""
-    min_overlap_s: float = 1.0
+    min_overlap_s: float = field(default=1.0, metadata={"flag": "--min-overlap-s"})
     """Only offsets that leave at least this much common time of the two videos are searched."""
-    range_s: float | None = None
+    range_s: float | None = field(default=None, metadata={"flag": "--range-s"})
     """Search only |Δ| <= range_s (seconds); None = every offset with enough overlap."""
-    step_s: float | None = None
+    step_s: float | None = field(default=None, metadata={"flag": "--step-s"})
     """Grid step of the discrete search; None = the finer of the two frame intervals."""
     min_terms: int = 30
     """An offset with fewer (track pair, frame) terms gets no energy (NaN)."""
@@ -43,7 +44,7 @@ class LandscapeConfig:
 
 @dataclass(frozen=True)
 class DecisionConfig:
-    enabled: bool = True
+    enabled: bool = field(default=True, metadata={"flag": "--no-spurious-filter", "negate": True})
     """Reject pairs whose landscape is ambiguous (off = accept every pair with a minimum: the ablation)."""
     min_track_pairs: int = 8
     """A pair with fewer cross-view track pairs is rejected."""
@@ -67,13 +68,13 @@ class DecisionConfig:
 
 @dataclass(frozen=True)
 class SolveConfig:
-    solver: str = "irls"
+    solver: str = field(default="irls", metadata={"flag": "--solver", "choices": ("irls", "ls")})
     """irls (Huber-loss iteratively reweighted least squares, default) or ls (plain least squares)."""
-    huber_delta_s: float | None = None
+    huber_delta_s: float | None = field(default=None, metadata={"flag": "--huber-delta-s"})
     """Huber threshold in seconds; None = half the coarsest frame interval of the videos."""
     max_iterations: int = 50
     """IRLS iterations at most."""
-    reference: str | None = None
+    reference: str | None = field(default=None, metadata={"flag": "--reference", "metavar": "NAME"})
     """Video whose offset is 0; None = the first video."""
 
     def __post_init__(self) -> None:
@@ -83,12 +84,14 @@ class SolveConfig:
 
 @dataclass(frozen=True)
 class PairSelection:
-    mode: str = "all"
-    """all pairs, a random fraction (keeps a spanning tree so every video stays connected), or rst (a random spanning tree)."""
+    mode: str = field(default="all", metadata={
+        "flag": "--pairs", "type": str, "metavar": "{all,FRACTION,rst}",
+        "apply": lambda text, sel: PairSelection.parse(text, sel.seed)})
+    """Pairs of videos to evaluate: all pairs, a random fraction (keeps a spanning tree so every video stays connected), or rst (a random spanning tree)."""
     fraction: float = 1.0
     """Share of pairs for mode 'fraction'."""
-    seed: int = 0
-    """Seed of the random choices."""
+    seed: int = field(default=0, metadata={"flag": "--seed"})
+    """Seed of random pair selection."""
 
     @staticmethod
     def parse(text: str, seed: int = 0) -> PairSelection:
@@ -111,11 +114,3 @@ class SyncConfig:
     solve: SolveConfig = SolveConfig()
     pairs: PairSelection = PairSelection()
 
-
-def config_to_dict(cfg) -> dict:
-    """Nested plain dict of a config dataclass (for result.json)."""
-    out = {}
-    for f in fields(cfg):
-        v = getattr(cfg, f.name)
-        out[f.name] = config_to_dict(v) if hasattr(v, "__dataclass_fields__") else v
-    return out

@@ -31,7 +31,7 @@ import numpy as np
 from tqdm import tqdm
 
 from ..io.bundle import write_bundle
-from ..io.result import write_json_atomic
+from ..io.atomic import atomic_path, write_json_atomic, write_text_atomic
 from ..io.video import VideoWriter
 from ..types import CameraTrack, CueBundle, TrackPairs, Tracks, VideoInfo
 from .world import CameraSpec, Scene, observe_points
@@ -154,14 +154,13 @@ def write_trajectories(scene: Scene, path: Path) -> None:
     X, _ = scene.world.points_at(g)
     w = scene.world
     moving = [i for i, b in enumerate(w.bodies) if b.moving]
-    tmp = path.with_suffix(".part.npz")
-    np.savez_compressed(tmp, times_global_s=g, points_world=X.astype(np.float32),
-                        point_instance=w.track_instance, point_body=w.track_body,
-                        body_names=np.array([w.bodies[i].name for i in moving]),
-                        body_index=np.array(moving),
-                        body_poses=np.stack([w.bodies[i].world_from_body(g) for i in moving]),
-                        object_names=np.array(w.object_names))
-    tmp.replace(path)
+    with atomic_path(path, suffix=".npz") as tmp:
+        np.savez_compressed(tmp, times_global_s=g, points_world=X.astype(np.float32),
+                            point_instance=w.track_instance, point_body=w.track_body,
+                            body_names=np.array([w.bodies[i].name for i in moving]),
+                            body_index=np.array(moving),
+                            body_poses=np.stack([w.bodies[i].world_from_body(g) for i in moving]),
+                            object_names=np.array(w.object_names))
 
 
 def calibration_dict(scene: Scene, poses: dict[str, np.ndarray]) -> dict:
@@ -238,5 +237,5 @@ def render_scene(scene: Scene, out: Path, crf: int = 20, progress: bool = True) 
     timings["truth_s"] = round(time.perf_counter() - t2, 3)
     timings["total_s"] = round(time.perf_counter() - t0, 3)
     write_json_atomic(scene_dict(scene, timings), out / "scene.json")
-    (out / COMPLETE).write_text(json.dumps({"frames": frames}) + "\n")
+    write_text_atomic(json.dumps({"frames": frames}) + "\n", out / COMPLETE)
     return timings

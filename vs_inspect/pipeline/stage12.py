@@ -1,7 +1,12 @@
-"""Stage 1 over the selected pairs, then Stage 2: a cue bundle in, a SyncResult out."""
+"""Stage 1 over the selected pairs, then Stage 2: a cue bundle in, a SyncResult out.
+
+Stage 1 (pair_landscape) gives each pair an energy over candidate offsets and a decision;
+Stage 2 (solve_stage2) solves one offset per video from the accepted pairs.
+"""
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import time
@@ -13,11 +18,11 @@ from ..analysis.record_views import pair_record_view, run_record_view
 from ..errors import InputError
 from ..record.sink import NullSink, Sink
 from ..types import CueBundle, PairDecision, PairLandscape, SyncResult, TrackPairs
-from .config import SyncConfig
-from .decision import check_inliers, decide
-from .landscape import PairInput, compute_landscape, curvature_uncertainty, refine_minimum
-from .pairs import select_pairs
-from .solve import PairMeasurement, solve_offsets
+from ..sync.config import SolveConfig, SyncConfig
+from ..sync.decision import check_inliers, decide
+from ..sync.landscape import PairInput, compute_landscape, curvature_uncertainty, refine_minimum
+from ..sync.pairs import select_pairs
+from ..sync.solve import PairMeasurement, solve_offsets
 
 log = logging.getLogger(__name__)
 
@@ -50,6 +55,7 @@ def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig):
 
 def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | None = None,
                 progress: bool = True) -> SyncResult:
+    """Stage 1 over the pairs that cfg.pairs selects, then Stage 2, reported to the sink."""
     sink = sink or NullSink()
     names = bundle.names
     reference = cfg.solve.reference or names[0]
@@ -72,9 +78,28 @@ def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | 
     timings["stage1_s"] = time.perf_counter() - t0
 
     t1 = time.perf_counter()
-    slowest = max(v.frame_interval_s for v in bundle.videos if math.isfinite(v.frame_interval_s)) \
-        if any(math.isfinite(v.frame_interval_s) for v in bundle.videos) else 0.1
-    delta = cfg.solve.huber_delta_s or 0.5 * slowest
+    result = solve_stage2(bundle, lands, cfg.solve)
+    timings["stage2_s"] = time.perf_counter() - t1
+    result = dataclasses.replace(result, timings_s=timings)
+    sink.sync_result(result, None if sink.options is None else
+                     run_record_view(bundle, result, sink.options, progress))
+    return result
+
+
+def solve_stage2(bundle: CueBundle, lands: list[PairLandscape] | tuple[PairLandscape, ...],
+                 solve: SolveConfig = SolveConfig()) -> SyncResult:
+    """Stage 2: per-video offsets from the accepted pairs' landscapes (robust global solve).
+
+    The benchmark's Stage 2 ablations (plain least squares, the filter off, fewer pairs) call this
+    with other landscapes or settings. Returns a SyncResult without timings.
+    """
+    names = bundle.names
+    reference = solve.reference or names[0]
+    if reference not in names:
+        raise InputError(f"--reference {reference!r} is not a video of the bundle; known: {names}")
+    finite = [v.frame_interval_s for v in bundle.videos if math.isfinite(v.frame_interval_s)]
+    slowest = max(finite) if finite else 0.1
+    delta = solve.huber_delta_s or 0.5 * slowest
     meas = []
     for land in lands:
         if land.decision.accepted and math.isfinite(land.best_offset_s):
@@ -82,7 +107,7 @@ def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | 
             floor = step / math.sqrt(12.0)  # the grid's own resolution if the curvature is unknown
             sigma = land.uncertainty_s if math.isfinite(land.uncertainty_s) else floor
             meas.append(PairMeasurement(land.a, land.b, land.best_offset_s, max(sigma, 1e-6)))
-    out = solve_offsets(names, reference, meas, cfg.solve.solver, delta, cfg.solve.max_iterations)
+    out = solve_offsets(names, reference, meas, solve.solver, delta, solve.max_iterations)
     reasons = dict(out.unresolved_reason)
     for v, why in list(reasons.items()):
         mine = [p for p in lands if v in (p.a, p.b)]
@@ -91,9 +116,5 @@ def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | 
         else:
             worst = "; ".join(f"{p.a}__{p.b}: {p.decision.reason}" for p in mine[:3])
             reasons[v] = f"{why}; its pairs: {worst}"
-    timings["stage2_s"] = time.perf_counter() - t1
-    result = SyncResult(reference, out.offsets_s, out.uncertainty_s, reasons, tuple(lands),
-                        out.pairs, out.iterations, cfg.solve.solver, timings)
-    sink.sync_result(result, None if sink.options is None else
-                     run_record_view(bundle, result, sink.options, progress))
-    return result
+    return SyncResult(reference, out.offsets_s, out.uncertainty_s, reasons, tuple(lands),
+                      out.pairs, out.iterations, solve.solver)

@@ -1,0 +1,113 @@
+"""pipeline.run: a cue bundle or videos in, one RunResult out, written as result.json v1."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from vs_inspect.io.bundle import read_bundle, write_bundle
+from vs_inspect.io.result import read_run_result, run_result_to_dict, write_run_result
+from vs_inspect.io.video import VideoWriter
+from vs_inspect.pipeline import RunConfig, run, sync_bundle
+from vs_inspect.record.sink import NullSink
+from vs_inspect.sync.config import LandscapeConfig, SyncConfig
+from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
+from vs_inspect.types import RunInputs, RunResult
+
+SMALL = CueSceneConfig(cameras=3, moving=1, variable_rate=1, seconds=4.0, pairs_per_view_pair=100,
+                       max_offset_s=1.0, seed=4)
+
+
+class SummarySink(NullSink):
+    def __init__(self):
+        self.summaries = []
+
+    def run_summary(self, result):
+        self.summaries.append(result)
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return make_cue_scene(SMALL)
+
+
+def test_bundle_in_run_result_out(scene, tmp_path):
+    sink = SummarySink()
+    cfg = RunConfig(sync=SyncConfig(landscape=LandscapeConfig(residual="symmetric")))
+    folder = write_bundle(scene.bundle, tmp_path / "bundle")
+    result = run(folder, cfg, sink, progress=False)
+    direct = sync_bundle(scene.bundle, cfg.sync, progress=False)
+    assert result.offsets_s == direct.offsets_s and result.reference == direct.reference
+    assert result.unresolved == direct.unresolved_reason and result.solver == "irls"
+    assert result.gt_offsets_s == scene.bundle.gt_offsets_s
+    assert result.config == cfg.to_dict() and result.cues is None
+    assert result.inputs == RunInputs(bundle=str(folder))
+    assert list(result.timings_s) == ["stage1_s", "stage2_s", "total_s"]
+    assert sink.summaries == [result]
+    # result.json v1 and back
+    path = write_run_result(result, tmp_path)
+    assert path == tmp_path / "result.json"
+    data = json.loads(path.read_text())
+    assert {"format", "version", "reference", "offsets_s", "uncertainty_s", "unresolved", "pairs",
+            "solve", "timings_s", "config", "input", "gt_offsets_s"} == set(data)
+    assert run_result_to_dict(read_run_result(tmp_path)) == data
+
+
+def test_cue_bundle_object_and_recorded_inputs(scene):
+    said = RunInputs(scene="somewhere", cues="true cue bundle")
+    result = run(scene.bundle, progress=False, recorded_inputs=said)
+    assert isinstance(result, RunResult) and result.inputs == said
+    assert result.offsets_s == sync_bundle(scene.bundle, progress=False).offsets_s
+
+
+def test_bundle_with_video_arguments_is_an_error(scene):
+    from vs_inspect.errors import InputError
+    with pytest.raises(InputError, match="apply to videos"):
+        run(scene.bundle, fps=10.0, progress=False)
+
+
+def _moving_disk_video(path, shift_frames: int) -> None:
+    """A textured static background and a bright disk moving across it, 10 fps."""
+    rng = np.random.default_rng(0)
+    bg = (rng.random((240, 320)) * 120).astype(np.uint8)
+    bg = np.repeat(bg[:, :, None], 3, axis=2)
+    yy, xx = np.mgrid[:240, :320]
+    with VideoWriter(path, 320, 240, 10.0) as w:
+        for k in range(30):
+            t = k + shift_frames
+            img = bg.copy()
+            img[(xx - (60 + 6 * t)) ** 2 + (yy - (100 + 2 * t)) ** 2 < 35 ** 2] = 250
+            w.write(img)
+
+
+def test_videos_in_and_the_unreadable_one_is_null_with_its_reason(tmp_path):
+    a, b, c = tmp_path / "a.mp4", tmp_path / "b.mp4", tmp_path / "c.mp4"
+    _moving_disk_video(a, 0)
+    _moving_disk_video(b, 3)
+    c.write_bytes(b"not a video")
+    cal = tmp_path / "cal.json"
+    cams = {}
+    for i, n in enumerate("abc"):
+        T = np.eye(4)
+        T[0, 3] = -0.5 * i
+        cams[n] = {"K": [[300.0, 0, 160], [0, 300.0, 120], [0, 0, 1]], "cam_from_world": T.tolist(),
+                   "size": [320, 240]}
+    cal.write_text(json.dumps(cams))
+    sink = SummarySink()
+    result = run([a, b, c], sink=sink, calibration=cal, bundle_out=tmp_path / "out" / "cues",
+                 progress=False)
+    assert list(result.offsets_s)[:2] == ["a", "b"] and result.offsets_s["c"] is None
+    assert result.unresolved["c"].startswith("could not be opened")
+    assert result.cues is not None and "c" in result.cues.dropped
+    assert set(result.cues.videos) == {"a", "b"}
+    assert result.inputs == RunInputs(bundle=str(tmp_path / "out" / "cues"),
+                                      videos={"a": str(a), "b": str(b), "c": str(c)})
+    assert "stage0_total_s" in result.timings_s and "stage0_with_io_s" in result.timings_s
+    assert list(result.timings_s)[-3:] == ["stage1_s", "stage2_s", "total_s"]
+    assert read_bundle(tmp_path / "out" / "cues").names == ["a", "b"]
+    assert sink.summaries == [result]
+    data = run_result_to_dict(result)
+    assert data["cues"]["dropped"]["c"] == result.unresolved["c"]
+    assert run_result_to_dict(read_run_result(write_run_result(result, tmp_path / "out"))) == data

