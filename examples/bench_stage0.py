@@ -42,7 +42,8 @@ from vs_inspect.cues import CueConfig, MatchConfig, extract_cues  # noqa: E402
 from vs_inspect.cues.config import CameraConfig, TrackConfig  # noqa: E402
 from vs_inspect.cues.learned import MATCHERS  # noqa: E402
 from vs_inspect.errors import InputError  # noqa: E402
-from vs_inspect.commands.calibrate_board import estimate_from_board, rig_to_json  # noqa: E402
+from vs_inspect.io.calibration import rig_to_json  # noqa: E402
+from vs_inspect.pipeline.board import estimate_from_board  # noqa: E402
 from vs_inspect.io.calibration import load_calibration  # noqa: E402
 from vs_inspect.io.atomic import write_json_atomic  # noqa: E402
 from vs_inspect.io.video import VideoWriter, iter_frames, open_video  # noqa: E402

@@ -3,47 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import logging
-import time
 from pathlib import Path
 
-from tqdm import tqdm
-
 from ..errors import InputError
-
-log = logging.getLogger(__name__)
-
-
-def estimate_from_board(sources: list, board_path: Path, progress: bool = True):
-    """Detect the board in every video and estimate the rig: (RigEstimate, seconds)."""
-    from ..cues.board import BoardDetector, detect_frames, estimate_rig
-    from ..io.board import load_board
-    from ..io.video import iter_frames
-
-    spec = load_board(board_path)
-    t0 = time.perf_counter()
-    detector = BoardDetector(spec)
-    detections = {}
-    for src in tqdm(sources, desc="board corners", unit="video", disable=not progress, leave=False):
-        detections[src.info.name] = detect_frames(iter_frames(src), detector)
-    rig = estimate_rig([s.info for s in sources], detections, spec)
-    for name, why in rig.unregistered.items():
-        log.warning("%s: no camera from the board: %s", name, why)
-    return rig, time.perf_counter() - t0
-
-
-def rig_to_json(rig) -> dict:
-    """The simple calibration JSON (io/calibration.py) plus how each camera was placed."""
-    cams = {n: {"K": c.K.tolist(), "dist": c.dist.tolist(), "cam_from_world": c.cam_from_world.tolist(),
-                "size": list(c.size)} for n, c in rig.cameras.items()}
-    board = {n: {"views": rig.intrinsics[n].views, "rms_px": round(rig.intrinsics[n].rms_px, 4)}
-             for n in rig.intrinsics}
-    for n, (a, rp) in rig.links.items():
-        board[n].update(placed_from=a, coarse_offset_s=round(rp.offset_s, 4),
-                        median_reprojection_px=round(rp.median_px, 3), pairings=rp.pairings,
-                        inliers=rp.inliers)
-    return {"cameras": cams, "board": board, "unregistered": dict(rig.unregistered),
-            "world": "the frame of the first placed camera, metres"}
 
 
 def register(sub) -> None:
@@ -69,6 +31,8 @@ def register(sub) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..io.board import load_board
     from ..io.atomic import write_json_atomic
+    from ..io.calibration import rig_to_json
+    from ..pipeline.board import estimate_from_board
     from ..pipeline.stage0 import open_sources
 
     if len(args.videos) < 2:

@@ -404,3 +404,17 @@ def undistort_points(cal: CameraCalibration, xy: np.ndarray) -> np.ndarray:
 def to_camera_track(cal: CameraCalibration) -> CameraTrack:
     """The static CameraTrack of a calibration (tracks must be undistorted with it first)."""
     return CameraTrack(K=cal.K.copy(), cam_from_world=cal.cam_from_world.copy())
+
+
+def rig_to_json(rig) -> dict:
+    """The simple calibration JSON (io/calibration.py) plus how each camera was placed."""
+    cams = {n: {"K": c.K.tolist(), "dist": c.dist.tolist(), "cam_from_world": c.cam_from_world.tolist(),
+                "size": list(c.size)} for n, c in rig.cameras.items()}
+    board = {n: {"views": rig.intrinsics[n].views, "rms_px": round(rig.intrinsics[n].rms_px, 4)}
+             for n in rig.intrinsics}
+    for n, (a, rp) in rig.links.items():
+        board[n].update(placed_from=a, coarse_offset_s=round(rp.offset_s, 4),
+                        median_reprojection_px=round(rp.median_px, 3), pairings=rp.pairings,
+                        inliers=rp.inliers)
+    return {"cameras": cams, "board": board, "unregistered": dict(rig.unregistered),
+            "world": "the frame of the first placed camera, metres"}
