@@ -272,8 +272,7 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
                                         tracks[a].xy, tracks[b].xy, cfg.geometric)
     coarsest = max((vids[n].info.frame_interval_s for k in found for n in k), default=0.0)
     # each of a triangle's three peaks is located to about ±1 frame (its support window), so
-    # right peaks close within about 3 frames (2 frames rejected the right peaks of a rendered
-    # scene, which missed by 2.4 frames; the wrong peaks of the demo scene miss by 0.7 s)
+    # right peaks close within about 3 frames, while wrong ones miss by far more
     chosen, status = consistent_peaks({k: (gs.peaks_s, gs.peak_votes) for k, (_, gs) in found.items()},
                                       3.0 * coarsest)
     stats["geometric_peaks"] = status
@@ -324,8 +323,7 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
         stats["sfm"]["xfeat_matcher"] = cfg.camera.xfeat_matcher
     static = [n for n, v in vids.items() if v.camera_motion != "moving"]
     # a model resting on few points per image, or missing a static camera, is checked against the
-    # moving points (caliscope's 90° views: XFeat models on 34-49 points per image had focals of
-    # 240-12168 px against calibrated 640-904 and rotations 9-44° off, yet passed the threshold)
+    # moving points: such models can pass the point threshold with wrong focals and rotations
     fewest = min((c.points_seen for c in est.cameras.values()), default=0)
     weak = len(est.cameras) < 2 or any(n not in est.cameras for n in static) or \
         fewest < 2 * cfg.camera.min_inliers

@@ -466,9 +466,7 @@ class VideoWriter:
             stream.time_base = self.TIME_BASE
             stream.codec_context.time_base = self.TIME_BASE
             # no mbtree: with x264's macroblock-tree rate control, encoding the same frames again
-            # in one process gave different files (decoded frames up to 58 grey levels apart) on
-            # these AMD EPYC machines, depending on what was encoded before (5 different files in 8
-            # renderings of a hand-held camera); without it 10 of 10 were identical
+            # in one process could give different files, depending on what was encoded before
             # (tests/synth/test_world_videos.py renders a scene twice and compares the files)
             stream.options = {"crf": str(int(crf)), "preset": preset, "x264-params": "mbtree=0"}
             self._stream = stream
