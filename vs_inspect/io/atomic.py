@@ -77,7 +77,8 @@ def atomic_dir(path: str | os.PathLike, overwrite: bool = False) -> Iterator[Pat
         raise
 
 
-def _json_default(o: Any) -> Any:
+def json_default(o: Any) -> Any:
+    """json.dumps default= for numpy scalars and arrays and paths."""
     if isinstance(o, np.generic):
         return o.item()
     if isinstance(o, np.ndarray):
@@ -91,7 +92,7 @@ def write_json_atomic(data: Any, path: str | os.PathLike, indent: int | None = 1
     """JSON (numpy scalars and arrays allowed) written atomically. Returns the path."""
     path = Path(path)
     with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(data, indent=indent, default=_json_default))
+        tmp.write_text(json.dumps(data, indent=indent, default=json_default))
     return path
 
 

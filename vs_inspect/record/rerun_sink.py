@@ -27,7 +27,7 @@ import rerun as rr
 from tqdm import tqdm
 
 from .. import __version__
-from ..io.atomic import _json_default, atomic_path
+from ..io.atomic import json_default, atomic_path
 from ..io.recording import (APPLICATION_ID, LOG_DECISIONS, META_BUNDLE, META_CONFIG, META_RECORDING,
                             META_RESULT, META_VIDEOS, RECORDING_FORMAT, RECORDING_VERSION, SYNC_GRAPH,
                             SYNC_OFFSETS, TIMELINE_EVENT, TIMELINE_FRAME, TIMELINE_ITERATION,
@@ -268,10 +268,10 @@ class RerunSink(Sink):
                                     gt_offsets_s=gt or None)
             if summary is not None:
                 self.rec.log(META_RESULT, rr.TextDocument(json.dumps(run_result_to_dict(summary),
-                                                                     default=_json_default),
+                                                                     default=json_default),
                                                           media_type="text/plain"), static=True)
             if summary is not None and summary.config is not None:
-                self.rec.log(META_CONFIG, rr.TextDocument(json.dumps(summary.config, default=_json_default),
+                self.rec.log(META_CONFIG, rr.TextDocument(json.dumps(summary.config, default=json_default),
                                                           media_type="text/plain"), static=True)
             self.rec.log(META_RECORDING, rr.TextDocument(json.dumps({
                 "format": RECORDING_FORMAT, "version": RECORDING_VERSION,
