@@ -1,14 +1,23 @@
 """The vs-inspect command line: glue only. Each subcommand lives in vs_inspect/commands/<name>.py
 and registers itself with register(subparsers); this module finds them, runs one, and turns
-input errors into one clear message and an exit code (2 = no result could be produced).
+every failure into one clear line `vs-inspect COMMAND: error: ...` and an exit code, never a
+traceback (-vv logs the traceback for debugging).
+
+Exit codes: 0 done; 2 no result could be produced (bad input or option, an unreadable or
+unwritable file, out of memory); 130 interrupted by Ctrl-C (SIGINT); 143 terminated by SIGTERM.
+SIGTERM takes the same cleanup path as Ctrl-C (a KeyboardInterrupt), so every temporary output
+(io.atomic, the recording's .partial, the SfM scratch folder) is removed before exiting.
 """
 
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import logging
+import os
 import pkgutil
+import signal
 import sys
 
 import numpy  # noqa: F401  (before anything that may import pycolmap; see ENVIRONMENT.md)
@@ -16,16 +25,32 @@ import numpy  # noqa: F401  (before anything that may import pycolmap; see ENVIR
 from . import __version__, commands
 from .errors import VsInspectError
 
+log = logging.getLogger(__name__)
+
+EXIT_FAILED = 2
+EXIT_INTERRUPTED = 130   # 128 + SIGINT
+EXIT_TERMINATED = 143    # 128 + SIGTERM
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the program is, so that cleanup runs as for Ctrl-C."""
+
+
+def _raise_terminated(signum, frame) -> None:
+    raise Terminated()
+
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="vs-inspect",
         description="Synchronize videos of one dynamic scene from cameras that were never "
                     "synchronized, by the epipolar cue (VisualSync), and show why.",
-        epilog="Run 'vs-inspect COMMAND --help' for the options of a command.")
+        epilog="Run 'vs-inspect COMMAND --help' for the options of a command. Exit codes: 0 done, "
+               "2 no result (bad input, an unreadable or unwritable file), 130 Ctrl-C, 143 SIGTERM "
+               "(temporary outputs are removed in both cases).")
     parser.add_argument("--version", action="version", version=f"vs-inspect {__version__}")
     parser.add_argument("-v", "--verbose", action="count", default=0,
-                        help="more log output (-v info, -vv debug)")
+                        help="more log output (-v info, -vv debug, with tracebacks of errors)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda m: m.name):
         if info.name.startswith("_"):
@@ -35,6 +60,47 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def one_line(text: str) -> str:
+    """Messages are one line: a newline in a file name or in a value cannot forge output lines."""
+    return " ".join(str(text).split()) if ("\n" in str(text) or "\r" in str(text)) else str(text)
+
+
+def describe_os_error(exc: OSError, fallback: object = None) -> str:
+    """'<file>: <what went wrong>' for an OSError (the file from the error, else `fallback`)."""
+    what = exc.strerror or exc.__class__.__name__
+    if exc.errno == errno.ENOSPC:
+        what = "no space left on device"
+    elif exc.errno == errno.EROFS:
+        what = "read-only file system"
+    elif exc.errno == errno.ENOTDIR:
+        what = "a part of this path is a file, not a folder"
+    elif exc.errno == errno.EISDIR:
+        what = "is a folder, expected a file"
+    elif isinstance(exc, FileExistsError) and exc.filename is None:
+        return str(exc)
+    name = exc.filename if exc.filename is not None else fallback
+    if name is None:
+        return f"{what} ({exc})" if str(exc) != what else what
+    return f"{os.fsdecode(name)}: {what}"
+
+
+def _message(exc: BaseException, args: argparse.Namespace) -> str:
+    out = getattr(args, "out", None)
+    if isinstance(exc, VsInspectError):
+        return str(exc)
+    if isinstance(exc, OSError):
+        return describe_os_error(exc, out)
+    if isinstance(exc, MemoryError):
+        return ("out of memory" + (f" ({exc})" if str(exc) else "") +
+                ": the input or an option asks for more than this machine has")
+    if isinstance(exc, RecursionError):
+        return "input nested too deeply (recursion limit)"
+    if isinstance(exc, ValueError):
+        return str(exc)
+    # a malformed input that no reader check caught: one line anyway (details with -vv)
+    return f"unexpected input or internal error ({type(exc).__name__}: {exc})"
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -42,18 +108,28 @@ def main(argv: list[str] | None = None) -> int:
                         format="%(levelname)s %(name)s: %(message)s")
     if not getattr(args, "func", None):
         parser.print_help()
-        return 2
+        return EXIT_FAILED
+    previous = None
+    try:
+        previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    except ValueError:  # not the main thread (e.g. called from a worker): leave SIGTERM alone
+        pass
     try:
         return int(args.func(args) or 0)
-    except VsInspectError as exc:
-        print(f"vs-inspect {args.command}: error: {exc}", file=sys.stderr)
-        return exc.exit_code
-    except (ValueError, FileExistsError) as exc:
-        print(f"vs-inspect {args.command}: error: {exc}", file=sys.stderr)
-        return 2
+    except Terminated:
+        print(f"vs-inspect {args.command}: terminated", file=sys.stderr)
+        return EXIT_TERMINATED
     except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
+        print(f"vs-inspect {args.command}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Exception as exc:  # noqa: BLE001  (the promise: one line, never a traceback)
+        log.debug("traceback of the error below", exc_info=True)
+        code = exc.exit_code if isinstance(exc, VsInspectError) else EXIT_FAILED
+        print(f"vs-inspect {args.command}: error: {one_line(_message(exc, args))}", file=sys.stderr)
+        return code
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

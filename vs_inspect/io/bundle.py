@@ -24,14 +24,120 @@ FORMAT = "vs-inspect-cues"
 VERSION = 1
 
 
-def _load_npz(path: Path) -> dict[str, np.ndarray]:
+MAX_NAME_CHARS = 200      # a video name is a file name and an entity path: keep it printable
+MAX_FRAMES = 10_000_000   # 46 h at 60 fps; more is a corrupt or hostile bundle.json
+MAX_IMAGE_SIDE_PX = 100_000
+MEMORY_BUDGET_ENV = "VS_INSPECT_MEMORY_BUDGET_MB"  # arrays a bundle may hold in memory (default 2048 MB)
+
+
+def memory_budget_bytes() -> int:
+    text = os.environ.get(MEMORY_BUDGET_ENV)
+    try:
+        mb = float(text) if text else 2048.0
+    except ValueError:
+        mb = 2048.0
+    return int(max(mb, 1.0) * 2**20)
+
+
+class _Budget:
+    """Bytes the bundle's arrays may still take (checked from the .npy headers before loading)."""
+
+    def __init__(self, total: int):
+        self.total = total
+        self.left = total
+
+    def take(self, path: Path, key: str, nbytes: int) -> None:
+        if nbytes > self.left:
+            raise BundleError(path, f"array {key!r} would need {nbytes / 2**20:.1f} MB, more than the "
+                                    f"memory budget left ({self.left / 2**20:.1f} of {self.total / 2**20:.0f} "
+                                    f"MB; set {MEMORY_BUDGET_ENV} to allow more)")
+        self.left -= nbytes
+
+
+def _npy_headers(path: Path) -> dict[str, tuple[tuple[int, ...], np.dtype]]:
+    """{array name: (shape, dtype)} of an .npz, read from the .npy headers only (nothing decompressed
+    beyond them), so that sizes can be checked before any array is allocated."""
+    out = {}
+    with zipfile.ZipFile(path) as zf:
+        for info in zf.infolist():
+            if not info.filename.endswith(".npy"):
+                continue
+            with zf.open(info) as f:
+                version = np.lib.format.read_magic(f)
+                if version == (1, 0):
+                    shape, _, dtype = np.lib.format.read_array_header_1_0(f)
+                elif version == (2, 0):
+                    shape, _, dtype = np.lib.format.read_array_header_2_0(f)
+                else:
+                    raise ValueError(f"unsupported .npy format version {version} in {info.filename}")
+            out[info.filename[:-4]] = (tuple(int(n) for n in shape), dtype)
+    return out
+
+
+def _shape_text(shape: tuple) -> str:
+    return "(" + ",".join("N" if s is None else str(s) for s in shape) + ")"
+
+
+def _load_npz(path: Path, expect: dict[str, tuple[tuple[int | None, ...], ...]] | None = None,
+              budget: _Budget | None = None, note: str = "") -> dict[str, np.ndarray]:
+    """The arrays of `expect` (name -> allowed shapes, None = any length) from an .npz, after checking
+    every header: real numeric dtype (no objects, no complex), an allowed shape, the memory budget."""
     if not path.is_file():
         raise BundleError(path, "missing file")
     try:
+        headers = _npy_headers(path)
+    except (ValueError, OSError, zipfile.BadZipFile, EOFError, KeyError) as exc:
+        raise BundleError(path, f"not a readable .npz file ({exc})") from None
+    wanted = headers if expect is None else {k: v for k, v in headers.items() if k in expect}
+    for key, (shape, dtype) in wanted.items():
+        if dtype.hasobject or dtype.kind not in "biuf":
+            kind = "complex" if dtype.kind == "c" else str(dtype)
+            raise BundleError(path, f"array {key!r} has dtype {kind}; only real numbers are allowed")
+        if expect is not None:
+            allowed = expect[key]
+            if not any(len(a) == len(shape) and all(w is None or w == s for w, s in zip(a, shape))
+                       for a in allowed):
+                raise BundleError(path, f"array {key!r} has shape {shape}; expected "
+                                        f"{' or '.join(_shape_text(a) for a in allowed)}{note}")
+        nbytes = dtype.itemsize
+        for n in shape:
+            nbytes *= n
+        if budget is not None:
+            budget.take(path, key, nbytes)
+    try:
         with np.load(path, allow_pickle=False) as z:
-            return {k: z[k] for k in z.files}
+            return {k: z[k] for k in wanted}
     except (ValueError, OSError, zipfile.BadZipFile, EOFError) as exc:
         raise BundleError(path, f"not a readable .npz file ({exc})") from None
+
+
+def check_video_name(name: object) -> str | None:
+    """Why `name` cannot be a video name (None when it can): it names files and recording entities
+    and is printed in tables, so it is a short, printable, file-safe string."""
+    if not isinstance(name, str) or not name:
+        return "must be a non-empty string"
+    if len(name) > MAX_NAME_CHARS:
+        return f"is {len(name)} characters long (at most {MAX_NAME_CHARS})"
+    if any(not c.isprintable() for c in name):
+        return "has a newline or another control character"
+    if "/" in name or name.startswith("."):
+        return "must be file-safe (no '/', not starting with '.')"
+    return None
+
+
+def _load_json(path: Path):
+    try:
+        return json.loads(path.read_text())
+    except FileNotFoundError:
+        raise BundleError(path, "missing file") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise BundleError(path, f"not valid JSON ({exc})") from None
+    except RecursionError:
+        raise BundleError(path, "not usable JSON (nested too deeply)") from None
+
+
+def _positive_number(x: object) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) and x > 0
 
 
 def _require(path: Path, data: dict, key: str) -> np.ndarray:
@@ -45,25 +151,47 @@ def _read_video_entry(path: Path, i: int, entry) -> VideoInfo:
     if not isinstance(entry, dict):
         raise BundleError(path, f"{where} must be an object, got {type(entry).__name__}")
     name = entry.get("name")
-    if not isinstance(name, str) or not name or "/" in name or name.startswith("."):
-        raise BundleError(path, f"{where}: 'name' must be a non-empty file-safe string, got {name!r}")
+    problem = check_video_name(name)
+    if problem:
+        shown = repr(name) if not isinstance(name, str) or len(name) <= 40 else repr(name[:40]) + "..."
+        raise BundleError(path, f"{where}: 'name' {problem}, got {shown}")
     where = f"video {name!r}"
-    for key in ("width", "height", "num_frames"):
+    limits = {"width": MAX_IMAGE_SIDE_PX, "height": MAX_IMAGE_SIDE_PX, "num_frames": MAX_FRAMES}
+    for key, most in limits.items():
         val = entry.get(key)
         if not isinstance(val, int) or isinstance(val, bool) or val < 1:
             raise BundleError(path, f"{where}: {key!r} must be a positive integer, got {val!r}")
+        if val > most:
+            raise BundleError(path, f"{where}: {key!r} is {val}, more than the {most} allowed")
+    fps = entry.get("fps")
+    if fps is not None and not _positive_number(fps):
+        raise BundleError(path, f"{where}: 'fps' must be a positive finite number, got {fps!r}")
     try:
-        if entry.get("timestamps_s") is not None:
-            ts = np.asarray(entry["timestamps_s"], dtype=np.float64)
-            fps = entry.get("fps")
-            return VideoInfo(name, entry["width"], entry["height"], entry["num_frames"], ts,
-                             float(fps) if fps else None)
-        fps = entry.get("fps")
-        if not isinstance(fps, (int, float)) or isinstance(fps, bool) or not math.isfinite(fps) or fps <= 0:
+        ts = entry.get("timestamps_s")
+        if ts is not None:
+            if not isinstance(ts, list) or not all(isinstance(t, (int, float)) and not isinstance(t, bool)
+                                                   for t in ts):
+                raise BundleError(path, f"{where}: 'timestamps_s' must be a list of numbers")
+            return VideoInfo(name, entry["width"], entry["height"], entry["num_frames"],
+                             np.asarray(ts, dtype=np.float64), float(fps) if fps else None)
+        if fps is None:
             raise BundleError(path, f"{where}: needs a positive 'fps' or 'timestamps_s', got fps={fps!r}")
         return VideoInfo.constant_rate(name, entry["width"], entry["height"], entry["num_frames"], fps)
     except (ValueError, TypeError) as exc:
         raise BundleError(path, f"{where}: {exc}") from None
+
+
+def _check_camera(path: Path, cam: CameraTrack) -> None:
+    """What the --calib loader checks too: K = [[fx,s,cx],[0,fy,cy],[0,0,1]] with fx, fy > 0, and
+    cam_from_world's last row [0,0,0,1]."""
+    K = cam.K.reshape(-1, 3, 3)
+    if not np.allclose(K[:, 2], [0, 0, 1], atol=1e-9):
+        raise BundleError(path, f"the last row of K must be [0, 0, 1], got {K[0, 2].tolist()}")
+    if np.any(K[:, 0, 0] <= 0) or np.any(K[:, 1, 1] <= 0):
+        raise BundleError(path, "K has a non-positive focal length (K[0,0] and K[1,1] must be > 0)")
+    T = cam.cam_from_world.reshape(-1, 4, 4)
+    if not np.allclose(T[:, 3], [0, 0, 0, 1], atol=1e-9):
+        raise BundleError(path, f"the last row of cam_from_world must be [0, 0, 0, 1], got {T[0, 3].tolist()}")
 
 
 def _split_pair_name(stem: str, names: list[str]) -> tuple[str, str] | None:
@@ -84,10 +212,7 @@ def read_bundle(folder: str | os.PathLike) -> CueBundle:
     meta_path = root / "bundle.json"
     if not meta_path.is_file():
         raise BundleError(meta_path, "missing file")
-    try:
-        meta = json.loads(meta_path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise BundleError(meta_path, f"not valid JSON ({exc})") from None
+    meta = _load_json(meta_path)
     if not isinstance(meta, dict):
         raise BundleError(meta_path, "must hold a JSON object")
     if meta.get("format") != FORMAT:
@@ -105,21 +230,27 @@ def read_bundle(folder: str | os.PathLike) -> CueBundle:
 
     cameras: dict[str, CameraTrack] = {}
     tracks: dict[str, Tracks] = {}
+    budget = _Budget(memory_budget_bytes())
     for v in videos:
+        T = v.num_frames
         cpath = root / "cameras" / f"{v.name}.npz"
-        cdata = _load_npz(cpath)
+        cdata = _load_npz(cpath, {"K": ((3, 3), (T, 3, 3)), "cam_from_world": ((4, 4), (T, 4, 4)),
+                                  "valid": ((T,),)}, budget,
+                          f" (video {v.name!r} has num_frames={T} frames)")
         try:
             cam = CameraTrack(_require(cpath, cdata, "K"), _require(cpath, cdata, "cam_from_world"),
                               cdata.get("valid"))
         except ValueError as exc:
             raise BundleError(cpath, str(exc)) from None
+        _check_camera(cpath, cam)
         if cam.is_moving and cam.num_pose_frames != v.num_frames:
             raise BundleError(cpath, f"has {cam.num_pose_frames} per-frame entries but video "
                                      f"{v.name!r} has num_frames={v.num_frames}")
         cameras[v.name] = cam
 
         tpath = root / "tracks" / f"{v.name}.npz"
-        tdata = _load_npz(tpath)
+        tdata = _load_npz(tpath, {"xy": ((None, T, 2),), "instance": ((None,),)}, budget,
+                          f" (video {v.name!r} has num_frames={T} frames)")
         try:
             tr = Tracks(_require(tpath, tdata, "xy"), tdata.get("instance"))
         except ValueError as exc:
@@ -141,7 +272,7 @@ def read_bundle(folder: str | os.PathLike) -> CueBundle:
                 raise BundleError(ppath, "pairs a video with itself")
             if (b, a) in pairs:
                 raise BundleError(ppath, f"pair given twice (also as {b}__{a}.npz)")
-            pdata = _load_npz(ppath)
+            pdata = _load_npz(ppath, {"index": ((None, 2),), "weight": ((None,),)}, budget)
             try:
                 tp = TrackPairs(a, b, _require(ppath, pdata, "index"), pdata.get("weight"))
             except ValueError as exc:
@@ -172,12 +303,9 @@ def read_bundle(folder: str | os.PathLike) -> CueBundle:
 def read_gt(path: str | os.PathLike, names: list[str] | None = None) -> dict[str, float]:
     """Read {"offsets_s": {...}} and check it names the known videos."""
     path = Path(path)
-    try:
-        data = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise BundleError(path, "missing file") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise BundleError(path, f"not valid JSON ({exc})") from None
+    if path.is_dir():
+        raise BundleError(path, "is a folder; expected a gt.json file")
+    data = _load_json(path)
     offs = data.get("offsets_s") if isinstance(data, dict) else None
     if not isinstance(offs, dict) or not offs:
         raise BundleError(path, "needs a non-empty object 'offsets_s'")
