@@ -40,8 +40,15 @@ def _raise_terminated(signum, frame) -> None:
     raise Terminated()
 
 
+class _Parser(argparse.ArgumentParser):
+    """Usage errors as one line too (`vs-inspect sync: error: argument --fps: ...`), exit 2."""
+
+    def error(self, message: str):
+        self.exit(EXIT_FAILED, f"{self.prog}: error: {one_line(message)} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="vs-inspect",
         description="Synchronize videos of one dynamic scene from cameras that were never "
                     "synchronized, by the epipolar cue (VisualSync), and show why.",

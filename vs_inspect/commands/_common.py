@@ -11,6 +11,28 @@ from ..eval.metrics import offset_errors_ms
 from ..pipeline.config import RunConfig, add_config_options, config_from_args
 
 
+def positive_float(text: str) -> float:
+    """argparse type: a finite number > 0 (frame rates, sizes)."""
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number, got {text!r}") from None
+    if not (math.isfinite(x) and x > 0):
+        raise argparse.ArgumentTypeError(f"must be a positive finite number, got {text!r}")
+    return x
+
+
+def positive_int(text: str) -> int:
+    """argparse type: an integer > 0."""
+    try:
+        x = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
+    if x <= 0:
+        raise argparse.ArgumentTypeError(f"must be positive, got {text!r}")
+    return x
+
+
 def add_config_file_option(p: argparse.ArgumentParser) -> None:
     p.add_argument("--config", type=Path, default=None, metavar="FILE",
                    help="settings from a config.json that `sync` wrote (OUT/config.json); options "
@@ -28,7 +50,7 @@ def add_cue_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--calib", type=Path, default=None,
                    help="camera calibration (COLMAP model folder, JSON, or caliscope/anipose TOML); "
                         "without it the cameras are estimated from the videos with pycolmap")
-    g.add_argument("--fps", type=float, default=None,
+    g.add_argument("--fps", type=positive_float, default=None,
                    help="frame rate of image folders (and of files whose timestamps are unusable)")
     add_config_options(p, ("cues",), group=g)
 

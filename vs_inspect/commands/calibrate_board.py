@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ._common import positive_float
 from ..errors import InputError
 
 
@@ -23,7 +24,7 @@ def register(sub) -> None:
                    help="board description: caliscope charuco.toml (columns, rows, dictionary, "
                         "aruco_scale, square_size_override_cm or board size and units, inverted)")
     p.add_argument("--out", type=Path, required=True, help="calibration JSON to write")
-    p.add_argument("--fps", type=float, default=None, help="frame rate of image folders")
+    p.add_argument("--fps", type=positive_float, default=None, help="frame rate of image folders")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.set_defaults(func=run)
 

@@ -6,6 +6,7 @@ import argparse
 import math
 from pathlib import Path
 
+from ._common import positive_float, positive_int
 from ..errors import InputError
 from ..io.result import read_run_result
 from ..types import RunResult
@@ -25,10 +26,10 @@ def register(sub) -> None:
     p.add_argument("--videos", nargs="+", default=None, metavar="PATH",
                    help="input videos (PATH or NAME=PATH; name = file stem) instead of the paths "
                         "in result.json")
-    p.add_argument("--fps", type=float, default=None,
+    p.add_argument("--fps", type=positive_float, default=None,
                    help="output frame rate (default: the highest input rate)")
-    p.add_argument("--tile-width", type=int, default=480, help="width of each video's tile, px")
-    p.add_argument("--input-fps", type=float, default=None,
+    p.add_argument("--tile-width", type=positive_int, default=480, help="width of each video's tile, px")
+    p.add_argument("--input-fps", type=positive_float, default=None,
                    help="frame rate of image-folder inputs (default: the run's --fps if recorded)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=run)

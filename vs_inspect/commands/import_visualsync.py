@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ._common import positive_float
 from ..io.bundle import write_bundle
 from ..io.visualsync import CAMERAS_FILE, PAIRS_DIR, TRACKS_FILE, ImportConfig, import_visualsync
 
@@ -26,7 +27,7 @@ def register(sub) -> None:
     d = ImportConfig()
     p.add_argument("folder", type=Path, help="folder in the layout below")
     p.add_argument("--out", type=Path, required=True, help="cue bundle folder to write")
-    p.add_argument("--fps", type=float, default=None,
+    p.add_argument("--fps", type=positive_float, default=None,
                    help="frame rate of videos whose folder has no video file")
     p.add_argument("--calib", type=Path, default=None,
                    help="use this calibration (COLMAP folder, .json, .toml) instead of VGGT cameras")

@@ -5,7 +5,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
+from ..errors import check_fields
 from .learned import MATCHERS
+
+
+def _check_numbers(cfg, positive: tuple[str, ...] = (), signed: tuple[str, ...] = ()) -> None:
+    """Every number of a Stage 0 config is finite and >= 0 (the counts in `positive` > 0); the
+    fields in `signed` may be -1 (their "off" or "all" value)."""
+    import dataclasses
+    names = tuple(f.name for f in dataclasses.fields(cfg) if f.name not in signed)
+    check_fields(cfg, nonnegative=names, positive=positive, at_least={n: -1 for n in signed})
 
 
 @dataclass(frozen=True)
@@ -28,6 +37,9 @@ class MotionConfig:
     """Connected moving regions smaller than this fraction of the image are dropped."""
     link_iou: float = 0.05
     """A region continues an instance of the previous frame when their overlap (IoU) is at least this."""
+
+    def __post_init__(self) -> None:
+        _check_numbers(self)
 
 
 @dataclass(frozen=True)
@@ -59,6 +71,10 @@ class TrackConfig:
     region_margin_px: float = 3.0
     """Moving regions are grown by this much (working pixels) for that test (their outlines are rough)."""
 
+    def __post_init__(self) -> None:
+        _check_numbers(self, positive=("max_points", "win_size", "pyramid_levels", "min_length"),
+                       signed=("max_frames_outside",))
+
 
 @dataclass(frozen=True)
 class MatchConfig:
@@ -88,6 +104,7 @@ class MatchConfig:
     def __post_init__(self) -> None:
         if self.descriptor not in ("sift", "xfeat"):
             raise ValueError(f"unknown keyframe descriptor {self.descriptor!r}: use sift or xfeat")
+        _check_numbers(self, positive=("num_keyframes", "max_features", "ratio"))
 
 
 @dataclass(frozen=True)
@@ -112,6 +129,9 @@ class GeometricPairConfig:
     """Vote-histogram peaks whose supporters are kept."""
     peak_halfwidth: int = 2
     """Grid steps either side of a peak that count as supporting it."""
+
+    def __post_init__(self) -> None:
+        _check_numbers(self)
 
 
 @dataclass(frozen=True)
@@ -145,6 +165,7 @@ class CameraConfig:
             raise ValueError(f"unknown camera features {self.features!r}: use sift, xfeat or auto")
         if self.xfeat_matcher not in MATCHERS:
             raise ValueError(f"unknown XFeat matcher {self.xfeat_matcher!r}: use {' or '.join(MATCHERS)}")
+        _check_numbers(self, positive=("static_frames", "moving_frames", "max_side", "max_features"))
 
 
 @dataclass(frozen=True)
@@ -165,6 +186,7 @@ class CueConfig:
     """Frames per video sent to the sink (video_frame and dynamic_mask hooks)."""
 
     def __post_init__(self) -> None:
+        _check_numbers(self, positive=("max_side",))
         bad = {n: m for n, m in self.camera_motion.items() if m not in ("static", "moving")}
         if bad:
             raise ValueError(f"camera_motion must map video names to static or moving, got {bad}")

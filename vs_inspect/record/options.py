@@ -39,6 +39,14 @@ class RecordOptions:
     embed_bundle: bool = True
     """Embed the cue bundle (zip) at meta/cue_bundle, so a report can be made from the .rrd alone."""
 
+    def __post_init__(self) -> None:
+        from ..errors import check_fields
+        check_fields(self, nonnegative=("max_image_width_px", "max_asset_mb", "max_mask_width_px",
+                                        "epipolar_lines", "max_trajectory_pairs",
+                                        "max_trajectory_video_pairs"),
+                     at_least={"max_tracks_per_video": -1, "epipolar_offsets": -1, "jpeg_quality": 1},
+                     at_most={"jpeg_quality": 100})
+
     @staticmethod
     def minimal() -> "RecordOptions":
         """Decisions, landscapes, graph, solve and cameras only: no frames, tracks or 3D tracks."""

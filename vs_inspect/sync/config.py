@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from ..errors import check_fields
 from ..geometry.epipolar import RESIDUALS
 
 
@@ -34,12 +35,8 @@ class LandscapeConfig:
             raise ValueError(f"unknown residual {self.residual!r}; choose one of {RESIDUALS}")
         if self.loss not in ("truncated", "mean"):
             raise ValueError(f"unknown loss {self.loss!r}; choose truncated or mean")
-        if self.min_overlap_s < 0:
-            raise ValueError(f"min_overlap_s must be >= 0, got {self.min_overlap_s}")
-        if self.range_s is not None and self.range_s <= 0:
-            raise ValueError(f"range_s must be positive, got {self.range_s}")
-        if self.step_s is not None and self.step_s <= 0:
-            raise ValueError(f"step_s must be positive, got {self.step_s}")
+        check_fields(self, positive=("robust_scale", "range_s", "step_s", "min_terms"),
+                     nonnegative=("min_overlap_s", "threads"))
 
 
 @dataclass(frozen=True)
@@ -65,6 +62,11 @@ class DecisionConfig:
     reject_range_edge: bool = True
     """Reject when the best minimum lies on the border of the search range."""
 
+    def __post_init__(self) -> None:
+        check_fields(self, nonnegative=("min_track_pairs",), positive=("max_minima",),
+                     fraction=("min_contrast", "max_second_ratio", "min_rival_support", "min_prominence",
+                               "min_inlier_fraction", "inlier_px_fraction"))
+
 
 @dataclass(frozen=True)
 class SolveConfig:
@@ -80,6 +82,7 @@ class SolveConfig:
     def __post_init__(self) -> None:
         if self.solver not in ("irls", "ls"):
             raise ValueError(f"unknown solver {self.solver!r}; choose irls or ls")
+        check_fields(self, positive=("huber_delta_s", "max_iterations"))
 
 
 @dataclass(frozen=True)
@@ -92,6 +95,11 @@ class PairSelection:
     """Share of pairs for mode 'fraction'."""
     seed: int = field(default=0, metadata={"flag": "--seed"})
     """Seed of random pair selection."""
+
+    def __post_init__(self) -> None:
+        check_fields(self, nonnegative=("seed",))
+        if not 0 < self.fraction <= 1:
+            raise ValueError(f"--pairs fraction must be in (0,1], got {self.fraction}")
 
     @staticmethod
     def parse(text: str, seed: int = 0) -> PairSelection:

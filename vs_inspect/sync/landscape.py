@@ -34,6 +34,9 @@ class PairInput:
     tracks: Tracks
 
 
+MAX_CANDIDATE_OFFSETS = 1_000_000  # per pair; each is one energy evaluation over every term
+
+
 @dataclass(frozen=True)
 class RawLandscape:
     offsets_s: np.ndarray  # (D,) Δ_ab candidates, seconds
@@ -56,6 +59,10 @@ def search_offsets(va: VideoInfo, vb: VideoInfo, cfg: LandscapeConfig) -> np.nda
     if hi < lo:
         return np.zeros(0)
     k0, k1 = math.ceil(lo / step - 1e-9), math.floor(hi / step + 1e-9)
+    if k1 - k0 + 1 > MAX_CANDIDATE_OFFSETS:  # refuse before allocating (--step-s 1e-12 asks for TiB)
+        raise ValueError(f"--step-s {step:g} gives {k1 - k0 + 1:.3g} candidate offsets for "
+                         f"{va.name!r} and {vb.name!r} (at most {MAX_CANDIDATE_OFFSETS}): use a larger "
+                         f"--step-s or a smaller --range-s")
     return np.arange(k0, k1 + 1) * step
 
 
