@@ -1,12 +1,14 @@
-"""`vs-inspect sync --bundle` writes recordings/<out name>.rrd by default, --rrd PATH elsewhere,
+"""`vs-inspect sync --bundle` writes recordings/<out name>-<hash>.rrd by default, --rrd PATH elsewhere,
 nothing with --no-rrd; the recording's result equals result.json."""
 
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 from vs_inspect.cli import main
+from vs_inspect.commands._record import default_rrd_path
 from vs_inspect.io.bundle import write_bundle
 from vs_inspect.io.recording import read_recording
 from vs_inspect.io.result import run_result_to_dict
@@ -22,9 +24,10 @@ def test_sync_records_by_default_and_not_with_no_rrd(tmp_path, monkeypatch, caps
     monkeypatch.delenv("VS_INSPECT_RECORDINGS", raising=False)  # the default: ./recordings
     assert main(["sync", "--bundle", str(bdir), "--out", "out/run7", "--no-progress",
                  "--rrd-minimal"]) == 0
-    rrd = tmp_path / "recordings" / "run7.rrd"
+    rrd = tmp_path / default_rrd_path(Path("out/run7"))  # recordings/run7-<hash of the abs. path>.rrd
+    assert rrd.parent == tmp_path / "recordings" and re.fullmatch(r"run7-[0-9a-f]{8}\.rrd", rrd.name)
     assert rrd.is_file()
-    assert "recording: recordings/run7.rrd" in capsys.readouterr().out
+    assert f"recording: recordings/{rrd.name}" in capsys.readouterr().out
     rec = read_recording(rrd)
     on_disk = json.loads((tmp_path / "out" / "run7" / "result.json").read_text())
     assert run_result_to_dict(rec.result) == on_disk
@@ -32,8 +35,7 @@ def test_sync_records_by_default_and_not_with_no_rrd(tmp_path, monkeypatch, caps
     assert rec.meta["options"]["frames"] is False  # --rrd-minimal
 
     assert main(["sync", "--bundle", str(bdir), "--out", "out/run8", "--no-progress", "--no-rrd"]) == 0
-    assert not (tmp_path / "recordings" / "run8.rrd").exists()
-    assert sorted(p.name for p in (tmp_path / "recordings").iterdir()) == ["run7.rrd"]
+    assert sorted(p.name for p in (tmp_path / "recordings").iterdir()) == [rrd.name]
 
 
 def test_recordings_folder_from_environment(tmp_path, monkeypatch):
@@ -42,6 +44,9 @@ def test_recordings_folder_from_environment(tmp_path, monkeypatch):
     from vs_inspect.commands._record import rrd_path
     args = argparse.Namespace(no_rrd=False, rrd=None)
     monkeypatch.setenv("VS_INSPECT_RECORDINGS", str(tmp_path / "recs"))
-    assert rrd_path(args, tmp_path / "out" / "run3") == tmp_path / "recs" / "run3.rrd"
+    got = rrd_path(args, tmp_path / "out" / "run3")
+    assert got.parent == tmp_path / "recs" and re.fullmatch(r"run3-[0-9a-f]{8}\.rrd", got.name)
+    # a/out and b/out get different default recordings
+    assert rrd_path(args, tmp_path / "a" / "out") != rrd_path(args, tmp_path / "b" / "out")
     assert rrd_path(argparse.Namespace(no_rrd=False, rrd="x/y.rrd"), tmp_path) == Path("x/y.rrd")
     assert rrd_path(argparse.Namespace(no_rrd=True, rrd="x/y.rrd"), tmp_path) is None

@@ -7,6 +7,7 @@ import dataclasses
 import math
 from pathlib import Path
 
+from ..errors import InputError
 from ..eval.metrics import offset_errors_ms
 from ..pipeline.config import RunConfig, add_config_options, config_from_args
 
@@ -31,6 +32,35 @@ def positive_int(text: str) -> int:
     if x <= 0:
         raise argparse.ArgumentTypeError(f"must be positive, got {text!r}")
     return x
+
+
+def add_force_option(p: argparse.ArgumentParser, what: str = "--out") -> None:
+    """--force: the one overwrite switch of every command that writes (--overwrite is its alias)."""
+    p.add_argument("--force", "--overwrite", dest="force", action="store_true",
+                   help=f"replace what an earlier run left in {what} (default: refuse)")
+
+
+def check_output_folder(out: Path, force: bool, option: str = "--out") -> None:
+    """Before any work: `out` must be (or become) a folder, and an empty one unless force."""
+    out = Path(out)
+    for parent in [out, *out.parents]:
+        if parent.exists() and not parent.is_dir():
+            raise InputError(f"{option} {out}: {parent} is a file, not a folder")
+        if parent.exists():
+            break
+    if out.is_dir() and any(out.iterdir()) and not force:
+        raise InputError(f"{option} {out} exists and is not empty (it holds an earlier run?); "
+                         "use --force to replace it")
+
+
+def check_output_file(path: Path, force: bool, option: str) -> None:
+    """Before any work: `path` must name a file in a folder (not a folder), new unless force."""
+    path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{option} {path} is a folder; give a file name")
+    check_output_folder(path.parent, True, f"{option}'s folder")
+    if path.exists() and not force:
+        raise InputError(f"{option} {path} exists; use --force to replace it")
 
 
 def add_config_file_option(p: argparse.ArgumentParser) -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import hashlib
 import os
 from pathlib import Path
 
@@ -15,8 +16,10 @@ RECORDINGS_ENV = "VS_INSPECT_RECORDINGS"  # folder of default recordings (defaul
 def add_record_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("recording (rerun .rrd)")
     g.add_argument("--rrd", type=Path, default=None, metavar="PATH",
-                   help="write the recording here (default: recordings/<name of --out>.rrd, or "
-                        f"${RECORDINGS_ENV}/<name of --out>.rrd when that variable is set)")
+                   help="write the recording here (default: recordings/<name of --out>-<hash>.rrd, "
+                        f"or ${RECORDINGS_ENV}/<name of --out>-<hash>.rrd when that variable is "
+                        "set; <hash> is 8 hex digits of the absolute --out path, so a/out and b/out "
+                        "get different recordings)")
     g.add_argument("--no-rrd", action="store_true", help="write no recording")
     g.add_argument("--rrd-minimal", action="store_true",
                    help="log only decisions, landscapes, graph, solve, cameras and the result "
@@ -45,7 +48,29 @@ def rrd_path(args: argparse.Namespace, out: Path) -> Path | None:
         return None
     if args.rrd:
         return Path(args.rrd)
-    return Path(os.environ.get(RECORDINGS_ENV) or "recordings") / f"{Path(out).resolve().name}.rrd"
+    return default_rrd_path(out)
+
+
+def default_rrd_path(out: Path) -> Path:
+    """recordings/<name of out>-<8 hex digits of its absolute path>.rrd (unique per --out)."""
+    resolved = Path(out).resolve()
+    tag = hashlib.sha1(os.fsencode(resolved)).hexdigest()[:8]
+    return Path(os.environ.get(RECORDINGS_ENV) or "recordings") / f"{resolved.name}-{tag}.rrd"
+
+
+def check_rrd_path(args: argparse.Namespace, out: Path) -> None:
+    """Before any work: the recording's path is a file name whose folder can exist."""
+    path = rrd_path(args, out)
+    if path is None:
+        return
+    from ..errors import InputError
+    if path.is_dir():
+        raise InputError(f"--rrd {path} is a folder; give a file name such as {path / 'run.rrd'}")
+    for parent in path.parents:
+        if parent.exists() and not parent.is_dir():
+            raise InputError(f"--rrd {path}: {parent} is a file, not a folder")
+        if parent.exists():
+            break
 
 
 def open_sink(args: argparse.Namespace, out: Path, options: RecordOptions | None = None,

@@ -10,7 +10,7 @@ from ..cues.learned import xfeat_available
 from ..errors import InputError
 from ..io.bundle import write_bundle, write_cue_stats
 from ..pipeline.stage0 import run_stage0
-from ._common import add_config_file_option, add_cue_options, run_config
+from ._common import add_force_option, add_config_file_option, add_cue_options, run_config
 
 
 def register(sub) -> None:
@@ -23,7 +23,7 @@ def register(sub) -> None:
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("videos", nargs="+", type=Path, help="video files or image folders")
     p.add_argument("--out", type=Path, required=True, help="bundle folder to write")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing bundle folder")
+    add_force_option(p, "--out")  # --overwrite: the old name, kept as an alias
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     add_config_file_option(p)
     add_cue_options(p)
@@ -37,13 +37,13 @@ def check_xfeat(cfg) -> None:
 
 def run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
-    if args.out.exists() and any(args.out.iterdir()) and not args.overwrite:
-        raise InputError(f"{args.out} exists and is not empty (use --overwrite)")
+    if args.out.exists() and any(args.out.iterdir()) and not args.force:
+        raise InputError(f"{args.out} exists and is not empty (use --force)")
     cfg = run_config(args)
     check_xfeat(cfg)
     bundle, stats, inputs = run_stage0(args.videos, args.calib, args.fps, cfg.cues,
                                        progress=not args.no_progress)
-    write_bundle(bundle, args.out, overwrite=args.overwrite)
+    write_bundle(bundle, args.out, overwrite=args.force)
     write_cue_stats(stats, args.out, inputs, total_with_io_s=time.perf_counter() - t0)
     print(f"wrote {args.out}: {len(bundle.videos)} videos, {stats.tracks} tracks, "
           f"{stats.track_pairs} track pairs, {stats.registered_cameras} cameras "

@@ -6,7 +6,7 @@ import argparse
 import math
 from pathlib import Path
 
-from ._common import positive_float, positive_int
+from ._common import add_force_option, check_output_file, positive_float, positive_int
 from ..errors import InputError
 from ..io.result import read_run_result
 from ..types import RunResult
@@ -28,6 +28,7 @@ def register(sub) -> None:
                         "in result.json")
     p.add_argument("--fps", type=positive_float, default=None,
                    help="output frame rate (default: the highest input rate)")
+    add_force_option(p, "--mosaic")
     p.add_argument("--tile-width", type=positive_int, default=480, help="width of each video's tile, px")
     p.add_argument("--input-fps", type=positive_float, default=None,
                    help="frame rate of image-folder inputs (default: the run's --fps if recorded)")
@@ -70,6 +71,7 @@ def _video_paths(args, result: RunResult, result_dir: Path) -> dict[str, Path]:
 def run(args: argparse.Namespace) -> int:
     from ..report.mosaic import write_mosaic
 
+    check_output_file(args.mosaic, args.force, "--mosaic")
     result = read_run_result(args.out)
     result_dir = args.out if args.out.is_dir() else args.out.parent
     paths = _video_paths(args, result, result_dir)

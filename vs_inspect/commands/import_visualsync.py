@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ._common import positive_float
+from ._common import add_force_option, positive_float
 from ..io.bundle import write_bundle
 from ..io.visualsync import CAMERAS_FILE, PAIRS_DIR, TRACKS_FILE, ImportConfig, import_visualsync
 
@@ -33,7 +33,7 @@ def register(sub) -> None:
                    help="use this calibration (COLMAP folder, .json, .toml) instead of VGGT cameras")
     p.add_argument("--visibility-threshold", type=float, default=d.visibility_threshold,
                    help=f"visibility above which a track point counts as seen (default {d.visibility_threshold})")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing bundle folder")
+    add_force_option(p, "--out")  # --overwrite: the old name, kept as an alias
     p.set_defaults(func=run)
 
 
@@ -46,7 +46,7 @@ def run(args: argparse.Namespace) -> int:
             if args.folder.is_dir() else []
         calibration = load_calibration(args.calib, names)
     bundle = import_visualsync(args.folder, cfg, calibration)
-    write_bundle(bundle, args.out, overwrite=args.overwrite)
+    write_bundle(bundle, args.out, overwrite=args.force)
     print(f"wrote {args.out}: {len(bundle.videos)} videos "
           f"({sum(c.is_moving for c in bundle.cameras.values())} moving cameras), "
           f"{sum(t.num_tracks for t in bundle.tracks.values())} tracks, "

@@ -6,6 +6,8 @@ import argparse
 import time
 from pathlib import Path
 
+from ._common import add_force_option, check_output_folder
+
 
 def register(sub) -> None:
     p = sub.add_parser("report", help="render report images (PNG + index.html) from a run or a .rrd",
@@ -18,6 +20,7 @@ def register(sub) -> None:
     p.add_argument("--out", type=Path, required=True, help="folder for the PNGs and index.html")
     p.add_argument("--pair", nargs=2, metavar=("A", "B"), default=None,
                    help="pair for the epipolar panel (default: the accepted pair with the sharpest landscape)")
+    add_force_option(p)
     p.set_defaults(func=run)
 
 
@@ -25,10 +28,11 @@ def run(args: argparse.Namespace) -> int:
     from ..analysis.report_data import load_report_data
     from ..report.build import render_report
 
+    check_output_folder(args.out, args.force)
     t0 = time.perf_counter()
     data = load_report_data(args.source, tuple(args.pair) if args.pair else None)
     t1 = time.perf_counter()
-    paths = render_report(data, args.out)
+    paths = render_report(data, args.out, overwrite=args.force)
     t2 = time.perf_counter()
     for key, p in paths.items():
         print(f"{key:<11} {p}")

@@ -8,9 +8,9 @@ from pathlib import Path
 from ..errors import InputError
 from ..io.result import write_run_result
 from ..pipeline import run as run_pipeline
-from ._common import (add_config_file_option, add_cue_options, add_sync_options, print_run,
-                      run_config)
-from ._record import add_record_options, describe, open_sink
+from ._common import (add_config_file_option, add_cue_options, add_force_option, add_sync_options,
+                      check_output_folder, print_run, run_config)
+from ._record import add_record_options, check_rrd_path, describe, open_sink
 
 
 def register(sub) -> None:
@@ -26,6 +26,7 @@ def register(sub) -> None:
     p.add_argument("--bundle", type=Path, help="cue bundle folder (see DESIGN.md, format v1)")
     p.add_argument("--out", type=Path, required=True, help="output folder for result.json")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    add_force_option(p)
     add_config_file_option(p)
     add_sync_options(p)
     add_record_options(p)
@@ -43,6 +44,13 @@ def run(args: argparse.Namespace) -> int:
         from .cues import check_xfeat
         check_xfeat(cfg)
     out = Path(args.out)
+    # every output is checked before any work, so a bad --out or --rrd fails in a second, not
+    # after the whole run; an earlier run's result is replaced only with --force
+    check_output_folder(out, args.force)
+    check_rrd_path(args, out)
+    if args.force and (out / "cues").exists():
+        import shutil
+        shutil.rmtree(out / "cues")
     progress = not args.no_progress
     with open_sink(args, out, cfg.record, progress=progress) as sink:
         if args.bundle:
@@ -50,8 +58,13 @@ def run(args: argparse.Namespace) -> int:
         else:
             result = run_pipeline(args.videos, cfg, sink, calibration=args.calib, fps=args.fps,
                                   bundle_out=out / "cues", progress=progress)
+    # after the recording is complete: result.json last, so its presence means a finished run
+    cfg.save(out / "config.json")
+    try:
         path = write_run_result(result, out / "result.json")
-        cfg.save(out / "config.json")
+    except BaseException:
+        (out / "config.json").unlink(missing_ok=True)
+        raise
     if describe(sink):
         print(describe(sink))
     print_run(result, path)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ._common import add_force_option
 from ..io.bundle import write_bundle
 from ..synth.cues import CueSceneConfig, make_cue_scene
 
@@ -27,7 +28,7 @@ def register(sub) -> None:
     p.add_argument("--no-match-pairs", type=int, default=d.no_match_pairs, help="view pairs without track pairs")
     p.add_argument("--no-all-wrong-pair", action="store_true", help="do not plant a pair with all-wrong matches")
     p.add_argument("--seed", type=int, default=d.seed)
-    p.add_argument("--overwrite", action="store_true", help="replace an existing folder")
+    add_force_option(p, "--out")  # --overwrite: the old name, kept as an alias
     p.set_defaults(func=run)
 
 
@@ -37,7 +38,7 @@ def run(args: argparse.Namespace) -> int:
                          pose_error_deg=args.pose_error_deg, no_match_pairs=args.no_match_pairs,
                          all_wrong_pair=not args.no_all_wrong_pair, seed=args.seed)
     scene = make_cue_scene(cfg)
-    write_bundle(scene.bundle, args.out, overwrite=args.overwrite)
+    write_bundle(scene.bundle, args.out, overwrite=args.force)
     b = scene.bundle
     print(f"wrote {args.out}: {len(b.videos)} videos, {sum(t.num_tracks for t in b.tracks.values())} "
           f"tracks, {len(b.pairs)} view pairs with track pairs")

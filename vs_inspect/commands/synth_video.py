@@ -6,6 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
+from ._common import add_force_option
 from ..errors import InputError
 from ..synth.videos import is_complete, render_scene
 from ..synth.world import SceneConfig, make_scene
@@ -42,7 +43,7 @@ def register(sub) -> None:
     p.add_argument("--arc-deg", type=float, default=d.arc_deg,
                    help="spread the cameras over an arc of this many degrees (360 = all around)")
     p.add_argument("--crf", type=int, default=20, help="H.264 quality (lower = better, larger)")
-    p.add_argument("--overwrite", action="store_true", help="write into a folder with a finished scene")
+    add_force_option(p, "--out")  # --overwrite: the old name, kept as an alias
     p.add_argument("--benchmark", action="store_true",
                    help="print a benchmark line (frames, seconds, frames/s) at the end")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
@@ -51,8 +52,8 @@ def register(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
-    if is_complete(out) and not args.overwrite:
-        raise InputError(f"{out} already holds a finished scene; pass --overwrite to replace it")
+    if is_complete(out) and not args.force:
+        raise InputError(f"{out} already holds a finished scene; pass --force to replace it")
     cfg = SceneConfig(cameras=args.cameras, moving=args.moving, seconds=args.seconds,
                       width=args.width, height=args.height, fps=args.fps or None,
                       max_offset_s=args.max_offset_s, variable_rate=args.variable_rate,

@@ -171,6 +171,16 @@ def _xfeat_database(db: Path, img_dir: Path, mask_dir: Path, reader, cfg: Camera
     pycolmap.verify_matches(db, pairs, options=_verification(seed))
 
 
+def _log_into(pycolmap, folder: Path) -> None:
+    """Send pycolmap's (glog) log files into `folder` instead of $TMPDIR."""
+    try:
+        pycolmap.logging.log_dir = str(folder)
+        for level in (pycolmap.logging.INFO, pycolmap.logging.WARNING, pycolmap.logging.ERROR):
+            pycolmap.logging.set_log_destination(level, str(folder / "colmap."))
+    except (AttributeError, TypeError):  # an older pycolmap without these controls
+        pass
+
+
 def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg: CameraConfig,
                  workdir: str | None, seed: int) -> CameraEstimate:
     import pycolmap
@@ -178,6 +188,7 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
     n_images = sum(len(v[0]) for v in frames_by_video.values())
     tmp = Path(tempfile.mkdtemp(prefix="vs_inspect_sfm_", dir=workdir))
     try:
+        _log_into(pycolmap, tmp)  # COLMAP's log files go to the scratch folder, removed below
         img_dir, mask_dir = tmp / "images", tmp / "masks"
         scales: dict[str, float] = {}
         for name, (idx, images, masks) in frames_by_video.items():

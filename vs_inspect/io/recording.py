@@ -58,6 +58,22 @@ def entity_name(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_\-]", "_", name) or "_"
 
 
+def check_entity_names(names, known: dict[str, str] | None = None) -> dict[str, str]:
+    """{entity: video name} of `names` (added to `known`); InputError naming both videos when two
+    names map to one entity (cam.1 and cam_1 would merge their data in the recording)."""
+    from ..errors import InputError
+
+    seen = dict(known or {})
+    for n in names:
+        e = entity_name(n)
+        if seen.get(e, n) != n:
+            raise InputError(f"videos {seen[e]!r} and {n!r} would share the recording entity {e!r} "
+                             "(names differ only in characters an entity path cannot hold); "
+                             "rename one of them, or write no recording (--no-rrd)")
+        seen[e] = n
+    return seen
+
+
 def pair_key(a: str, b: str) -> str:
     """The entity-path part of the ordered pair (a, b): "<a>__<b>"."""
     return f"{entity_name(a)}__{entity_name(b)}"

@@ -32,7 +32,7 @@ from ..io.recording import (APPLICATION_ID, LOG_DECISIONS, META_BUNDLE, META_CON
                             META_RESULT, META_VIDEOS, RECORDING_FORMAT, RECORDING_VERSION, SYNC_GRAPH,
                             SYNC_OFFSETS, TIMELINE_EVENT, TIMELINE_FRAME, TIMELINE_ITERATION,
                             TIMELINE_OFFSET_MS, TIMELINE_TIME, WORLD_POINTS, camera_path,
-                            camera_trail_path, entity_name, log_path, pair_decision_path,
+                            camera_trail_path, check_entity_names, entity_name, log_path, pair_decision_path,
                             pair_epipolar_path, pair_landscape_path, solve_residual_path,
                             solve_weight_path, trajectory_path, video_asset_path, video_image_path,
                             video_mask_path, video_path, video_tracks_path)
@@ -130,6 +130,7 @@ class RerunSink(Sink):
             raise
         self._closed = False
         self._videos: dict[str, _VideoBuffer] = {}
+        self._entities: dict[str, str] = {}  # entity path part -> video name (unique, see check_entity_names)
         self._world_cameras: dict[str, CameraTrack] | None = None
         self._bundle: CueBundle | None = None
         self._result: SyncResult | None = None
@@ -151,6 +152,7 @@ class RerunSink(Sink):
 
     @_timed
     def video(self, info: VideoInfo, path: str | None) -> None:
+        self._entities = check_entity_names([info.name], self._entities)  # before logging anything of it
         buf = self._videos.setdefault(info.name, _VideoBuffer(info, path))
         buf.info, buf.path = info, path
         o = self.options
@@ -202,6 +204,7 @@ class RerunSink(Sink):
 
     @_timed
     def bundle(self, bundle: CueBundle) -> None:
+        self._entities = check_entity_names([v.name for v in bundle.videos], self._entities)
         self._bundle = bundle
         for v in bundle.videos:
             buf = self._videos.setdefault(v.name, _VideoBuffer(v, None))

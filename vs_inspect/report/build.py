@@ -7,6 +7,7 @@ import logging
 import time
 from pathlib import Path
 
+from ..io.atomic import atomic_dir
 from . import figures
 from .data import ReportData
 from .html import write_index
@@ -46,10 +47,17 @@ def available(data: ReportData) -> list[str]:
     return keys
 
 
-def render_report(data: ReportData, out_dir: str | Path) -> dict[str, Path]:
-    """Write <key>.png for every available figure, index.html and render_times.json."""
+def render_report(data: ReportData, out_dir: str | Path, overwrite: bool = True) -> dict[str, Path]:
+    """Write <key>.png for every available figure, index.html and render_times.json into a fresh
+    folder (io.atomic.atomic_dir: nothing stale from an earlier report, nothing half-written on an
+    error or an interrupt). overwrite=False: refuse a non-empty out_dir (FileExistsError)."""
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    with atomic_dir(out, overwrite=overwrite) as tmp:
+        paths = _render_into(data, Path(tmp))
+    return {k: out / p.name for k, p in paths.items()}
+
+
+def _render_into(data: ReportData, out: Path) -> dict[str, Path]:
     paths: dict[str, Path] = {}
     times: dict[str, float] = {}
     for key in available(data):
