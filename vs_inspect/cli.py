@@ -110,7 +110,12 @@ def _message(exc: BaseException, args: argparse.Namespace) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, --version, or a usage error (one line, see _Parser)
+        return exc.code if isinstance(exc.code, int) else EXIT_FAILED
+    if args.verbose < 2:  # rerun's writer reports I/O errors on stderr too; ours is the one line
+        os.environ.setdefault("RUST_LOG", "off")
     logging.basicConfig(level=[logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)],
                         format="%(levelname)s %(name)s: %(message)s")
     if not getattr(args, "func", None):

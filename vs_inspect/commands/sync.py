@@ -48,6 +48,16 @@ def run(args: argparse.Namespace) -> int:
     # after the whole run; an earlier run's result is replaced only with --force
     check_output_folder(out, args.force)
     check_rrd_path(args, out)
+    fresh = not out.exists()
+    try:
+        return _run(args, cfg, out)
+    except BaseException:
+        if fresh and out.is_dir() and not any(out.iterdir()):
+            out.rmdir()  # a failed run leaves no empty --out behind
+        raise
+
+
+def _run(args: argparse.Namespace, cfg, out: Path) -> int:
     if args.force and (out / "cues").exists():
         import shutil
         shutil.rmtree(out / "cues")

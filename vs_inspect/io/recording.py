@@ -311,19 +311,27 @@ def read_recording(path: str | Path, with_structure: bool = True, bundle: bool =
         result = json.loads(texts[META_RESULT]) if META_RESULT in texts else None
         rec.config = json.loads(texts[META_CONFIG]) if META_CONFIG in texts else None
         videos = json.loads(texts[META_VIDEOS]) if META_VIDEOS in texts else {}
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{path}: damaged vs_inspect metadata ({exc})") from None
-    if rec.meta.get("format") != RECORDING_FORMAT:
-        raise InputError(f"{path}: not a vs_inspect recording (format {rec.meta.get('format')!r})")
+    except (json.JSONDecodeError, RecursionError) as exc:
+        raise InputError(f"{path}: damaged vs_inspect metadata ({type(exc).__name__}: {exc})") from None
+    if not isinstance(rec.meta, dict) or rec.meta.get("format") != RECORDING_FORMAT:
+        shown = rec.meta.get("format") if isinstance(rec.meta, dict) else type(rec.meta).__name__
+        raise InputError(f"{path}: not a vs_inspect recording ({META_RECORDING}: format {shown!r})")
+    if rec.config is not None and not isinstance(rec.config, dict):
+        raise InputError(f"{path}: {META_CONFIG} must be a JSON object, got {type(rec.config).__name__}")
     if result is not None:
         rec.result = run_result_from_dict(result, f"{path}:{META_RESULT}")
-    rec.videos = tuple(RecordedVideo(str(v["name"]), str(v.get("entity", entity_name(v["name"]))),
-                                     int(v["width"]), int(v["height"]), int(v["num_frames"]),
-                                     None if v.get("fps") is None else float(v["fps"]),
-                                     float(v.get("duration_s") or 0.0))
-                       for v in videos.get("videos", []))
-    gt = videos.get("gt_offsets_s")
-    rec.gt_offsets_s = {str(k): float(v) for k, v in gt.items()} if isinstance(gt, dict) else None
+    try:
+        if not isinstance(videos, dict) or not isinstance(videos.get("videos", []), list):
+            raise TypeError(f"must be an object with a list 'videos', got {type(videos).__name__}")
+        rec.videos = tuple(RecordedVideo(str(v["name"]), str(v.get("entity", entity_name(v["name"]))),
+                                         int(v["width"]), int(v["height"]), int(v["num_frames"]),
+                                         None if v.get("fps") is None else float(v["fps"]),
+                                         float(v.get("duration_s") or 0.0))
+                           for v in videos.get("videos", []))
+        gt = videos.get("gt_offsets_s")
+        rec.gt_offsets_s = {str(k): float(v) for k, v in gt.items()} if isinstance(gt, dict) else None
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise InputError(f"{path}: damaged {META_VIDEOS} ({type(exc).__name__}: {exc})") from None
     rec.decisions = {k.split("/")[1]: v for k, v in texts.items() if k.startswith(f"{PAIRS}/")}
     return rec
 

@@ -81,6 +81,23 @@ def _video_codec(path: str) -> str | None:
         return None
 
 
+def _writer_error(path: Path, exc: BaseException) -> OSError:
+    """An OSError naming the recording for a failure of rerun's file writer (which reports only
+    "File-writer thread shut down prematurely"): a full disk or a read-only folder when so."""
+    import errno
+    import shutil
+    folder = path.parent
+    try:
+        full = shutil.disk_usage(folder).free < 1 << 20
+    except OSError:
+        full = False
+    if full:
+        return OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+    if not os.access(folder, os.W_OK):
+        return OSError(errno.EACCES, os.strerror(errno.EACCES), str(path))
+    return OSError(errno.EIO, f"writing the recording failed ({exc})", str(path))
+
+
 def _timed(fn):
     """Adds the wall time of a hook to self.hook_s (the cost of recording, without the stages)."""
     import functools
@@ -293,6 +310,9 @@ class RerunSink(Sink):
                           "size_mb": self.path.stat().st_size / 1e6}
             log.info("wrote %s (%.1f MB, %.1f s of logging)", self.path, self.stats["size_mb"],
                      self.stats["write_s"])
+        except RuntimeError as exc:  # rerun's file writer failed (it logs the OS error itself)
+            self._abort(exc)
+            raise _writer_error(self.path, exc) from None
         except BaseException as exc:
             self._abort(exc)
             raise
