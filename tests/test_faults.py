@@ -547,13 +547,13 @@ def test_sigterm_during_report_leaves_no_folder(run_dir, tmp_path):
 
 
 def test_sigterm_during_sfm_removes_the_scratch_folder(tmp_path):
-    """pycolmap's scratch folder (and its log files) live in one folder the run removes."""
+    """pycolmap's scratch folder (and its log files) live in one folder the run removes, also on
+    SIGTERM (pycolmap's glog replaces the SIGTERM handler at import: signals.import_pycolmap puts
+    ours back)."""
     script = """
         import numpy, sys, time
-        from vs_inspect.cli import Terminated, _raise_terminated
-        import signal
-        signal.signal(signal.SIGTERM, _raise_terminated)
-        import pycolmap
+        from vs_inspect.signals import Terminated, install
+        install()  # as vs_inspect.cli.main does
         import vs_inspect.cues.cameras as c
         def slow(*a, **k):
             print("READY", flush=True)
@@ -569,7 +569,6 @@ def test_sigterm_during_sfm_removes_the_scratch_folder(tmp_path):
             sys.exit(143)
     """
     r = _run_and_terminate(script, tmp_path)
-    if r.returncode != 143 and "READY" not in r.stdout:
-        pytest.skip(f"could not reach the SfM stage with synthetic frames: {r.stderr[-300:]}")
-    assert r.returncode == 143, r.stderr
+    assert r.returncode == 143, r.stderr[-2000:]
+    assert "Aborted" not in r.stderr and "stack trace" not in r.stderr
     assert tree(tmp_path / "tmp") == []

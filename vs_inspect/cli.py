@@ -17,27 +17,21 @@ import importlib
 import logging
 import os
 import pkgutil
-import signal
 import sys
 
 import numpy  # noqa: F401  (before anything that may import pycolmap; see ENVIRONMENT.md)
 
 from . import __version__, commands
 from .errors import VsInspectError
+from .signals import Terminated
+from .signals import install as install_sigterm
+from .signals import restore as restore_sigterm
 
 log = logging.getLogger(__name__)
 
 EXIT_FAILED = 2
 EXIT_INTERRUPTED = 130   # 128 + SIGINT
 EXIT_TERMINATED = 143    # 128 + SIGTERM
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised where the program is, so that cleanup runs as for Ctrl-C."""
-
-
-def _raise_terminated(signum, frame) -> None:
-    raise Terminated()
 
 
 class _Parser(argparse.ArgumentParser):
@@ -121,11 +115,7 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return EXIT_FAILED
-    previous = None
-    try:
-        previous = signal.signal(signal.SIGTERM, _raise_terminated)
-    except ValueError:  # not the main thread (e.g. called from a worker): leave SIGTERM alone
-        pass
+    previous = install_sigterm()
     try:
         return int(args.func(args) or 0)
     except Terminated:
@@ -140,8 +130,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"vs-inspect {args.command}: error: {one_line(_message(exc, args))}", file=sys.stderr)
         return code
     finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
+        restore_sigterm(previous)
 
 
 if __name__ == "__main__":

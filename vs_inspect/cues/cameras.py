@@ -17,6 +17,7 @@ from pathlib import Path
 import cv2
 import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
 
+from ..signals import import_pycolmap
 from ..geometry.epipolar import camera_centers
 from ..geometry.timing import frame_brackets, interpolate_poses
 from ..types import CameraTrack
@@ -109,7 +110,7 @@ def _verification(seed: int):
 
     Its RANSAC runs in worker threads that set_random_seed does not reach: unseeded, repeated runs
     on one input registered different numbers of cameras."""
-    import pycolmap
+    pycolmap = import_pycolmap()
 
     verify = pycolmap.TwoViewGeometryOptions()
     verify.ransac.random_seed = seed
@@ -118,7 +119,7 @@ def _verification(seed: int):
 
 def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool, seed: int) -> None:
     """COLMAP's SIFT features and exhaustive matching with geometric verification."""
-    import pycolmap
+    pycolmap = import_pycolmap()
 
     ext = pycolmap.FeatureExtractionOptions()
     ext.sift.max_num_features = cfg.max_features
@@ -141,7 +142,7 @@ def _xfeat_database(db: Path, img_dir: Path, mask_dir: Path, reader, cfg: Camera
     the mapper runs as with SIFT."""
     import itertools
 
-    import pycolmap
+    pycolmap = import_pycolmap()
 
     from .learned import XFeatMatcher
 
@@ -183,7 +184,7 @@ def _log_into(pycolmap, folder: Path) -> None:
 
 def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg: CameraConfig,
                  workdir: str | None, seed: int) -> CameraEstimate:
-    import pycolmap
+    pycolmap = import_pycolmap()
 
     n_images = sum(len(v[0]) for v in frames_by_video.values())
     tmp = Path(tempfile.mkdtemp(prefix="vs_inspect_sfm_", dir=workdir))

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np  # noqa: I001  (numpy before pycolmap: see ENVIRONMENT.md)
 import cv2
 
+from ..signals import import_pycolmap
 from ..errors import InputError
 from ..types import CameraTrack
 
@@ -260,7 +261,7 @@ def _colmap_intrinsics(model: str, p: np.ndarray):
 
 
 def _load_colmap(path: Path, video_names: list[str]) -> dict[str, tuple[list[str], CameraCalibration]]:
-    import pycolmap  # numpy is already imported (module top): see ENVIRONMENT.md
+    pycolmap = import_pycolmap()  # keeps our SIGTERM handler (glog replaces it)
 
     try:
         rec = pycolmap.Reconstruction(str(path))
