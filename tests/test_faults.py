@@ -572,3 +572,96 @@ def test_sigterm_during_sfm_removes_the_scratch_folder(tmp_path):
     assert r.returncode == 143, r.stderr[-2000:]
     assert "Aborted" not in r.stderr and "stack trace" not in r.stderr
     assert tree(tmp_path / "tmp") == []
+
+
+def test_sigterm_while_writing_a_video_removes_the_partial_mp4(tmp_path):
+    """export's mosaic: the VideoWriter's hidden .partial.mp4 is removed on SIGTERM."""
+    script = """
+        import numpy, sys
+        from vs_inspect.signals import Terminated, install
+        install()
+        from vs_inspect.io.video import VideoWriter
+        try:
+            with VideoWriter("m.mp4", 64, 48, 10.0) as vw:
+                k = 0
+                while True:
+                    vw.write(numpy.full((48, 64, 3), k % 255, numpy.uint8))
+                    k += 1
+                    if k == 20:
+                        print("READY", flush=True)
+        except Terminated:
+            sys.exit(143)
+    """
+    r = _run_and_terminate(script, tmp_path)
+    assert r.returncode == 143, r.stderr
+    assert tree(tmp_path) == ["tmp/"]
+
+
+# ---- hostile recordings -------------------------------------------------------------------------
+
+
+def _recording(path: Path, meta, result=None) -> Path:
+    import rerun as rr
+
+    from vs_inspect.io.recording import APPLICATION_ID, META_RECORDING, META_RESULT
+    rec = rr.RecordingStream(APPLICATION_ID, recording_id=path.stem)
+    rec.save(str(path))
+    rec.log(META_RECORDING, rr.TextDocument(json.dumps(meta), media_type="text/plain"), static=True)
+    if result is not None:
+        rec.log(META_RESULT, rr.TextDocument(json.dumps(result), media_type="text/plain"), static=True)
+    rec.flush()
+    rec.disconnect()
+    return path
+
+
+@pytest.mark.parametrize("meta,result,needle", [
+    (["not", "an", "object"], None, "not a vs_inspect recording"),
+    ({"format": "vs-inspect-recording"}, {}, "result"),
+    ({"format": "vs-inspect-recording"}, {"reference": "a", "offsets_s": {"a": "0.5"}}, "offsets_s"),
+])
+def test_hostile_recording(meta, result, needle, tmp_path, capsys):
+    from vs_inspect.io.recording import RECORDING_FORMAT
+    if isinstance(meta, dict):
+        meta = {**meta, "format": RECORDING_FORMAT}
+    rrd = _recording(tmp_path / "r.rrd", meta, result)
+    fails(["inspect", rrd], capsys, 2, "r.rrd", needle)
+    fails(["report", rrd, "--out", tmp_path / "rep"], capsys, 2, "r.rrd")
+    assert tree(tmp_path) == ["r.rrd"]
+
+
+# ---- hostile video inputs (names come from file names) --------------------------------------
+
+
+def _image_folder(folder: Path, frames: int = 3) -> Path:
+    import cv2
+    folder.mkdir(parents=True)
+    for k in range(frames):
+        cv2.imwrite(str(folder / f"{k:04d}.png"), np.full((32, 32, 3), 40 * k, np.uint8))
+    return folder
+
+
+@pytest.mark.parametrize("name,needle", [("cam\nfake", "control character"), ("c" * 210, "210 characters")])
+def test_video_name_from_a_file_name_is_checked(name, needle, tmp_path, capsys):
+    a, b = _image_folder(tmp_path / "in" / name), _image_folder(tmp_path / "in" / "other")
+    fails(["sync", a, b, "--fps", "10", "--out", tmp_path / "out", "--no-rrd", "--no-progress"], capsys, 2,
+          needle)
+    assert not (tmp_path / "out").exists()
+
+
+def test_entity_collision_of_video_files_is_refused_before_any_work(tmp_path, capsys):
+    a, b = _image_folder(tmp_path / "in" / "cam.1"), _image_folder(tmp_path / "in" / "cam_1")
+    t0 = time.perf_counter()
+    fails(["sync", a, b, "--fps", "10", "--out", tmp_path / "out", "--rrd", tmp_path / "r.rrd",
+           "--no-progress"], capsys, 2, "'cam.1'", "'cam_1'")
+    assert time.perf_counter() - t0 < 5
+    assert tree(tmp_path) == sorted(["in/", "in/cam.1/", "in/cam_1/"] +
+                                    [f"in/{n}/{k:04d}.png" for n in ("cam.1", "cam_1") for k in range(3)])
+
+
+def test_result_with_a_newline_in_a_video_name_cannot_forge_table_lines(run_dir, bundle_dir, tmp_path, capsys):
+    def edit(d):
+        first = next(iter(d["offsets_s"]))
+        d["offsets_s"]["cam9\ncam0   +0.0000"] = d["offsets_s"].pop(first)
+    bad = _result_with(run_dir, tmp_path / "bad", edit)
+    fails(["eval", bad, "--gt", bundle_dir / "gt.json"], capsys, 2, "control character")
+    assert tree(tmp_path) == ["bad/", "bad/result.json"]

@@ -48,6 +48,9 @@ def run(args: argparse.Namespace) -> int:
     # after the whole run; an earlier run's result is replaced only with --force
     check_output_folder(out, args.force)
     check_rrd_path(args, out)
+    if args.videos and not args.no_rrd:  # names are known now: refuse a recording collision early
+        from ..io.recording import check_entity_names
+        check_entity_names([p.name if p.is_dir() else p.stem for p in map(Path, args.videos)])
     fresh = not out.exists()
     try:
         return _run(args, cfg, out)

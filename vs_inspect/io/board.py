@@ -24,7 +24,7 @@ def load_board(path) -> BoardSpec:
     try:
         text = path.read_text()
         data = json.loads(text) if path.suffix.lower() == ".json" else tomllib.loads(text)
-    except (json.JSONDecodeError, tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+    except (json.JSONDecodeError, tomllib.TOMLDecodeError, UnicodeDecodeError, RecursionError) as exc:
         raise InputError(f"{path}: not a readable board description ({exc})") from None
     missing = [k for k in ("columns", "rows", "dictionary") if k not in data]
     if missing:

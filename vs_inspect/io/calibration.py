@@ -175,8 +175,8 @@ def match_names(camera_names: dict[str, list[str]], video_names: list[str], sour
 def _load_json(path: Path) -> dict[str, tuple[list[str], CameraCalibration]]:
     try:
         data = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: not valid JSON ({exc})") from None
+    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
+        raise InputError(f"{path}: not valid JSON ({type(exc).__name__}: {exc})") from None
     if isinstance(data, dict) and isinstance(data.get("cameras"), dict):
         data = data["cameras"]
     if not isinstance(data, dict) or not data:

@@ -160,6 +160,11 @@ def run_result_from_dict(d: dict[str, Any], source: str = "result") -> RunResult
         if not isinstance(d, dict) or not isinstance(d.get("offsets_s"), dict) or "reference" not in d:
             raise InputError("not a vs-inspect result (needs 'reference' and 'offsets_s')")
         offsets = {str(k): _opt_float(v, f"offsets_s[{k!r}]") for k, v in d["offsets_s"].items()}
+        from .bundle import check_video_name
+        for k in offsets:  # names are printed in tables: no forged lines
+            problem = check_video_name(k)
+            if problem:
+                raise InputError(f"video name {k[:40]!r} in offsets_s {problem}")
         unc = {str(k): _opt_float(v, f"uncertainty_s[{k!r}]")
                for k, v in (d.get("uncertainty_s") or {}).items()}
         solve = d.get("solve") or {}

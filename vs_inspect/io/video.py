@@ -117,6 +117,10 @@ def open_video(path, fps: float | None = None, name: str | None = None) -> Video
     path = Path(path)
     if not path.exists():
         raise InputError(f"{path}: no such file or folder")
+    from .bundle import check_video_name
+    problem = check_video_name(name or (path.name if path.is_dir() else path.stem))
+    if problem:
+        raise InputError(f"{path}: the video's name (its file name) {problem}; rename it")
     if path.is_dir():
         return _open_image_folder(path, fps, name)
     vname = name or path.stem
