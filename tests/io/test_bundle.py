@@ -111,3 +111,24 @@ def test_malformed_bundle_gets_one_clear_message_and_exit_2(case, good_bundle, t
 def test_not_a_folder(tmp_path, capsys):
     assert main(["sync", "--bundle", str(tmp_path / "nope"), "--out", str(tmp_path / "o")]) == 2
     assert "not a folder" in capsys.readouterr().err
+
+
+def test_npz_headers_are_read_without_loading_the_arrays(tmp_path):
+    from vs_inspect.io.bundle import _npy_headers
+    np.savez_compressed(tmp_path / "a.npz", xy=np.zeros((2000, 50, 2), np.float32), n=np.arange(3))
+    h = _npy_headers(tmp_path / "a.npz")
+    assert h["xy"][0] == (2000, 50, 2) and h["xy"][1] == np.float32
+    assert h["n"][0] == (3,)
+
+
+def test_embedded_bundle_larger_than_the_budget_is_refused(tmp_path, monkeypatch):
+    import io
+    import zipfile
+
+    from vs_inspect.io.bundle_zip import bundle_from_zip_bytes
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as zf:
+        zf.writestr("tracks/a.npz", b"\0" * (3 << 20))  # 3 MB that compresses to a few kB
+    monkeypatch.setenv("VS_INSPECT_MEMORY_BUDGET_MB", "2")
+    with pytest.raises(BundleError, match="unpacks to 3.0 MB, more than the memory budget"):
+        bundle_from_zip_bytes(buf.getvalue(), "r.rrd")

@@ -43,6 +43,16 @@ def test_entity_paths():
     assert R.log_path("stage 0") == "log/stage_0"
 
 
+def test_entity_names_must_not_collide():
+    assert R.check_entity_names(["cam0", "cam 1"]) == {"cam0": "cam0", "cam_1": "cam 1"}
+    with pytest.raises(InputError, match=r"'cam\.1' and 'cam_1' would share the recording entity 'cam_1'"):
+        R.check_entity_names(["cam.1", "cam_1"])
+    known = R.check_entity_names(["a.b"])
+    with pytest.raises(InputError, match="'a.b' and 'a b'"):
+        R.check_entity_names(["a b"], known)
+    assert R.check_entity_names(["a.b"], known) == known  # the same name again is no collision
+
+
 def test_recorded_video_frame_interval():
     assert RecordedVideo("v", "v", 10, 10, 100, 25.0, 3.96).frame_interval_s == pytest.approx(0.04)
     assert RecordedVideo("v", "v", 10, 10, 5, None, 2.0).frame_interval_s == pytest.approx(0.5)

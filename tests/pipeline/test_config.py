@@ -86,6 +86,32 @@ def test_bad_value_is_an_input_error():
         RunConfig.from_dict({"cues": {"camera_motion": {"cam0": "flying"}}})
 
 
+@pytest.mark.parametrize("data,needle", [
+    ({"sync": {"landscape": {"step_s": float("nan")}}}, "--step-s must be a finite number"),
+    ({"sync": {"landscape": {"min_overlap_s": -1}}}, "--min-overlap-s must be >= 0"),
+    ({"sync": {"landscape": {"min_terms": 0}}}, "min_terms must be positive"),
+    ({"sync": {"decision": {"min_contrast": 1.5}}}, r"min_contrast must be in \[0, 1\]"),
+    ({"sync": {"solve": {"max_iterations": 0}}}, "max_iterations must be positive"),
+    ({"sync": {"solve": {"huber_delta_s": float("inf")}}}, "--huber-delta-s must be a finite number"),
+    ({"sync": {"pairs": {"fraction": 0.0}}}, r"--pairs fraction must be in \(0,1\]"),
+    ({"cues": {"max_side": 0}}, "--max-side must be positive"),
+    ({"cues": {"track": {"fb_max_px": -1.0}}}, "fb_max_px must be >= 0"),
+    ({"cues": {"track": {"max_frames_outside": -2}}}, "max_frames_outside must be >= -1"),
+    ({"cues": {"camera": {"max_side": 0}}}, "max_side must be positive"),
+    ({"record": {"jpeg_quality": 101}}, "jpeg_quality must be <= 100"),
+    ({"record": {"max_asset_mb": float("nan")}}, "max_asset_mb must be a finite number"),
+])
+def test_every_number_is_validated_naming_the_option(data, needle):
+    with pytest.raises(InputError, match=needle):
+        RunConfig.from_dict(data)
+
+
+def test_defaults_and_presets_pass_validation():
+    from vs_inspect.record.options import RecordOptions
+    RunConfig()
+    RecordOptions.minimal().with_flags(all_offsets=True, full_frames=True, all_tracks=True)
+
+
 def test_every_flag_is_there_with_its_docstring_as_help():
     sub = _parser(sync_cmd)._subparsers._group_actions[0].choices["sync"]
     flags = {s: a for a in sub._actions for s in a.option_strings}

@@ -102,3 +102,13 @@ def test_the_energy_reads_videos_as_geometry_sampling_does(scene, a, b):
         assert ok.any()
         np.testing.assert_array_equal(ok, got.valid & (s_cam.valid if s_cam.valid is not None else True))
         np.testing.assert_array_equal(G[ok], F[ok])
+
+
+def test_search_offsets_refuses_too_many_candidates_before_allocating():
+    from vs_inspect.sync.landscape import MAX_CANDIDATE_OFFSETS
+    a = VideoInfo.constant_rate("a", 64, 48, 300, 30.0)
+    b = VideoInfo.constant_rate("b", 64, 48, 300, 30.0)
+    with pytest.raises(ValueError, match="--step-s 1e-12 gives .* candidate offsets"):
+        search_offsets(a, b, LandscapeConfig(step_s=1e-12))
+    step = 18.0 / MAX_CANDIDATE_OFFSETS * 1.01  # just under the bound: allowed
+    assert 0 < len(search_offsets(a, b, LandscapeConfig(step_s=step))) <= MAX_CANDIDATE_OFFSETS

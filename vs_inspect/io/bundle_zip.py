@@ -10,7 +10,7 @@ from pathlib import Path
 
 from ..errors import BundleError
 from ..types import CueBundle
-from .bundle import read_bundle, write_bundle
+from .bundle import MEMORY_BUDGET_ENV, memory_budget_bytes, read_bundle, write_bundle
 
 
 def bundle_to_zip_bytes(bundle: CueBundle) -> bytes:
@@ -35,5 +35,9 @@ def bundle_from_zip_bytes(data: bytes, where: str = "<recording>") -> CueBundle:
         for name in zf.namelist():
             if name.startswith("/") or ".." in Path(name).parts:
                 raise BundleError(where, f"embedded cue bundle has an unsafe path {name!r}")
+        size = sum(i.file_size for i in zf.infolist())  # declared sizes: checked before extracting
+        if size > memory_budget_bytes():
+            raise BundleError(where, f"embedded cue bundle unpacks to {size / 2**20:.1f} MB, more than "
+                                     f"the memory budget ({MEMORY_BUDGET_ENV})")
         zf.extractall(tmp)
         return read_bundle(tmp)
