@@ -61,9 +61,6 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace, cfg, out: Path) -> int:
-    if args.force and (out / "cues").exists():
-        import shutil
-        shutil.rmtree(out / "cues")
     progress = not args.no_progress
     with open_sink(args, out, cfg.record, progress=progress) as sink:
         if args.bundle:
@@ -78,6 +75,9 @@ def _run(args: argparse.Namespace, cfg, out: Path) -> int:
     except BaseException:
         (out / "config.json").unlink(missing_ok=True)
         raise
+    if args.bundle and (out / "cues").is_dir():  # --force over a video run: its cues are not this run's
+        import shutil
+        shutil.rmtree(out / "cues")
     if describe(sink):
         print(describe(sink))
     print_run(result, path)
