@@ -667,3 +667,21 @@ def test_result_with_a_newline_in_a_video_name_cannot_forge_table_lines(run_dir,
     bad = _result_with(run_dir, tmp_path / "bad", edit)
     fails(["eval", bad, "--gt", bundle_dir / "gt.json"], capsys, 2, "control character")
     assert tree(tmp_path) == ["bad/", "bad/result.json"]
+
+
+@pytest.mark.skipif(_can_mount() is not None, reason=str(_can_mount()))
+def test_report_on_a_full_file_system_leaves_nothing(run_dir, tmp_path, capsys):
+    full = tmp_path / "full"
+    with tmpfs(full, "64k"):
+        fails(["report", run_dir, "--out", full / "rep"], capsys, 2, "no space left on device")
+        assert tree(full) == []  # no rep/, no .rep.partial-*, no 0-byte PNG
+
+
+def test_report_on_a_read_only_file_system(run_dir, tmp_path, capsys):
+    ro = tmp_path / "ro"
+    with read_only_folder(ro):
+        if os.access(ro, os.W_OK) and os.geteuid() != 0:
+            pytest.skip("chmod 0o555 does not stop writes here")
+        line = fails(["report", run_dir, "--out", ro / "rep"], capsys, 2, str(ro))
+        assert "read-only file system" in line or "Permission denied" in line
+        assert tree(ro) == ["keep.txt"]
