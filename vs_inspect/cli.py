@@ -124,7 +124,7 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"vs-inspect {args.command}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
-    except Exception as exc:  # noqa: BLE001  (the promise: one line, never a traceback)
+    except Exception as exc:  # the promise: one line, never a traceback
         log.debug("traceback of the error below", exc_info=True)
         code = exc.exit_code if isinstance(exc, VsInspectError) else EXIT_FAILED
         print(f"vs-inspect {args.command}: error: {one_line(_message(exc, args))}", file=sys.stderr)

@@ -10,7 +10,7 @@ from ..cues.learned import xfeat_available
 from ..errors import InputError
 from ..io.bundle import write_bundle, write_cue_stats
 from ..pipeline.stage0 import run_stage0
-from ._common import add_force_option, add_config_file_option, add_cue_options, run_config
+from ._common import add_config_file_option, add_cue_options, add_force_option, run_config
 
 
 def register(sub) -> None:

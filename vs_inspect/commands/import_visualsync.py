@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ._common import add_force_option, positive_float
 from ..io.bundle import write_bundle
 from ..io.visualsync import CAMERAS_FILE, PAIRS_DIR, TRACKS_FILE, ImportConfig, import_visualsync
+from ._common import add_force_option, positive_float
 
 LAYOUT = f"""folder layout:
   DIR/<video>/{TRACKS_FILE}             CoTracker: pickled dict, pred_tracks (T,N,2) px,

@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ._common import add_force_option
 from ..io.bundle import write_bundle
 from ..synth.cues import CueSceneConfig, make_cue_scene
+from ._common import add_force_option
 
 
 def register(sub) -> None:

@@ -6,10 +6,10 @@ import argparse
 import json
 from pathlib import Path
 
-from ._common import add_force_option
 from ..errors import InputError
 from ..synth.videos import is_complete, render_scene
 from ..synth.world import SceneConfig, make_scene
+from ._common import add_force_option
 
 
 def register(sub) -> None:

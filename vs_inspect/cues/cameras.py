@@ -17,9 +17,9 @@ from pathlib import Path
 import cv2
 import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
 
-from ..signals import import_pycolmap
 from ..geometry.epipolar import camera_centers
 from ..geometry.timing import frame_brackets, interpolate_poses
+from ..signals import import_pycolmap
 from ..types import CameraTrack
 from .config import CameraConfig
 from .learned import xfeat_available

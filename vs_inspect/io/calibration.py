@@ -29,8 +29,8 @@ from pathlib import Path
 import numpy as np  # noqa: I001  (numpy before pycolmap: see ENVIRONMENT.md)
 import cv2
 
-from ..signals import import_pycolmap
 from ..errors import InputError
+from ..signals import import_pycolmap
 from ..types import CameraTrack
 
 log = logging.getLogger(__name__)
