@@ -490,7 +490,8 @@ def test_unexpected_errors_are_one_line(exc, needle, bundle_dir, tmp_path, monke
 # ---- SIGTERM takes Ctrl-C's cleanup path ------------------------------------------------------
 
 
-def _run_and_terminate(script: str, tmp_path: Path, ready: str = "READY") -> subprocess.CompletedProcess:
+def _run_and_terminate(script: str, tmp_path: Path, ready: str = "READY",
+                       sig: int = signal.SIGTERM) -> subprocess.CompletedProcess:
     env = {**os.environ, "PYTHONPATH": str(REPO), "TMPDIR": str(tmp_path / "tmp")}
     (tmp_path / "tmp").mkdir(exist_ok=True)
     proc = subprocess.Popen([sys.executable, "-c", textwrap.dedent(script)], cwd=tmp_path, env=env,
@@ -502,12 +503,15 @@ def _run_and_terminate(script: str, tmp_path: Path, ready: str = "READY") -> sub
         if ready in line or not line:
             break
     assert ready in line, proc.stderr.read()
-    proc.send_signal(signal.SIGTERM)
+    proc.send_signal(sig)
     out, err = proc.communicate(timeout=60)
     return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
 
 
-def test_sigterm_during_sync_removes_the_partial_recording(bundle_dir, tmp_path):
+@pytest.mark.parametrize("sig,code,word", [(signal.SIGTERM, 143, "terminated"),
+                                           (signal.SIGINT, 130, "interrupted")])
+def test_sigterm_during_sync_removes_the_partial_recording(bundle_dir, tmp_path, sig, code, word):
+    """SIGTERM takes Ctrl-C's path: the same cleanup, exit 143 (Ctrl-C: 130)."""
     script = f"""
         import numpy, sys, time
         import vs_inspect.commands.sync as s
@@ -522,9 +526,9 @@ def test_sigterm_during_sync_removes_the_partial_recording(bundle_dir, tmp_path)
         sys.exit(main(["sync", "--bundle", {str(bundle_dir)!r}, "--out", "out", "--rrd", "recs/r.rrd",
                        "--no-progress"]))
     """
-    r = _run_and_terminate(script, tmp_path)
-    assert r.returncode == 143, r.stderr
-    assert r.stderr.strip().splitlines() == ["vs-inspect sync: terminated"]
+    r = _run_and_terminate(script, tmp_path, sig=sig)
+    assert r.returncode == code, r.stderr
+    assert r.stderr.strip().splitlines() == [f"vs-inspect sync: {word}"]
     assert tree(tmp_path / "recs") == [] and not (tmp_path / "out").exists()
     assert tree(tmp_path / "tmp") == []
 
