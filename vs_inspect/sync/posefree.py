@@ -186,13 +186,15 @@ def _F_from_params(p: np.ndarray, K_a_inv: np.ndarray, K_b_inv: np.ndarray) -> n
 def estimate_pair(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
                   t_b: np.ndarray, xy_b: np.ndarray, K_b: np.ndarray,
                   config: PoseFreeConfig = PoseFreeConfig(),
-                  offset_range_s: tuple[float, float] | None = None) -> PoseFreePair | None:
+                  offset_range_s: tuple[float, float] | None = None,
+                  coarse: tuple[np.ndarray, np.ndarray] | None = None) -> PoseFreePair | None:
     """Time map and F of a pair from one point track per camera; None when no candidate has
     enough overlap.
 
     t_a (Ta,), t_b (Tb,): local frame times (s); xy_a (Ta,2), xy_b (Tb,2): undistorted px, NaN
     where unseen; K_a, K_b (3,3) px. offset_range_s: the offsets searched (default: every offset
-    with some overlap).
+    with some overlap). coarse: (offsets, score) of an earlier run on the same tracks (e.g. the
+    drift model's, reused by the constant-offset ablation).
     """
     cfg = config
     for name, t, xy in (("a", t_a, xy_a), ("b", t_b, xy_b)):
@@ -204,8 +206,10 @@ def estimate_pair(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
     lo, hi = offset_range_s if offset_range_s is not None else (t_a[0] - t_b[-1], t_a[-1] - t_b[0])
 
     # 1. coarse offsets, rate 1
-    coarse = np.arange(lo, hi + 1e-9, cfg.coarse_step_s)
-    coarse_score = np.array([pair.score(d, 1.0, cfg.coarse_points, cfg.threshold_px)[0] for d in coarse])
+    if coarse is None:
+        grid = np.arange(lo, hi + 1e-9, cfg.coarse_step_s)
+        coarse = (grid, np.array([pair.score(d, 1.0, cfg.coarse_points, cfg.threshold_px)[0] for d in grid]))
+    coarse, coarse_score = coarse
     peaks = _peaks(coarse_score, coarse, cfg.top_k, 2.0)
     if not peaks:
         return None
