@@ -89,18 +89,20 @@ class PoseFreePair:
 
 def interpolate_track(t_query_s: np.ndarray, t_s: np.ndarray, xy: np.ndarray) -> np.ndarray:
     """(Q,2) positions at t_query_s, linear between two neighbouring frames; NaN outside the
-    video or when either neighbour is unseen. t_s (T,) strictly increasing, xy (T,2) px."""
+    video or when either neighbour of a time between frames is unseen. t_s (T,) strictly increasing, xy (T,2) px."""
     t_query_s = np.asarray(t_query_s, dtype=np.float64)
     if xy.shape != (len(t_s), 2):
         raise ValueError(f"xy must have shape ({len(t_s)},2), got {xy.shape}")
     f = np.interp(t_query_s, t_s, np.arange(len(t_s), dtype=np.float64), left=-1.0, right=-1.0)
     i0 = np.floor(f).astype(np.int64)
     ok = (i0 >= 0) & (f <= len(t_s) - 1)
-    i0 = np.minimum(i0, len(t_s) - 2)
     out = np.full((len(t_query_s), 2), np.nan)
     i = i0[ok]
+    j = np.minimum(i + 1, len(t_s) - 1)
     w = (f[ok] - i)[:, None]
-    out[ok] = xy[i] * (1 - w) + xy[i + 1] * w
+    with np.errstate(invalid="ignore"):
+        # on a frame exactly, its neighbour does not matter (even when unseen)
+        out[ok] = np.where(w > 0, xy[i] * (1 - w) + xy[j] * w, xy[i])
     return out
 
 
