@@ -15,9 +15,10 @@ continuous in (offset_s, rate).
 Stages, each cheap enough for tracks of tens of thousands of frames:
 1. coarse: offsets over the whole overlap on a grid, rate = 1; per candidate a MAGSAC F from a
    time-uniform subsample, scored by the inliers among all matches (a short overlap cannot win);
-2. fine: a (offset, rate) grid around the best coarse candidates, same score;
-3. continuous: scipy least_squares over (offset_s, log rate, F as R, t of E = [t]x R with the
-   known K) on Sampson distances with a robust loss; the Jacobian gives the uncertainty.
+2. per coarse peak, a finer offset line, then scipy least_squares over (offset, log rate, F as
+   R, t of E = [t]x R with the known K) on Sampson distances with a robust loss; the peak whose
+   refined F explains most matches wins; the Jacobian gives the uncertainty;
+3. an (offset, rate) image of the score around the solution, for the recording.
 
 Pure numpy/scipy/OpenCV, no I/O.
 """
@@ -44,12 +45,14 @@ class PoseFreeConfig:
     """A candidate needs this share of the smaller track's detections matched."""
     threshold_px: float = 5.0
     """Sampson distance under which a match is an inlier (coarse and fine scores)."""
-    top_k: int = 3
-    """Coarse peaks (at least 2 s apart) examined by the fine search."""
+    top_k: int = 5
+    """Coarse peaks (at least 2 s apart) refined; the one explaining most matches wins."""
     fine_half_width_s: float = 0.4
     fine_step_s: float = 0.04
-    rate_half_width_ppm: float = 2000.0
-    rate_step_ppm: float = 200.0
+    """The offset line examined around each coarse peak, and the image's columns."""
+    rate_half_width_ppm: float = 1000.0
+    rate_step_ppm: float = 100.0
+    """The image's rows, around the estimated rate (the image is for the recording only)."""
     fine_points: int = 800
     refine_loss_scale_px: float = 2.0
     """soft_l1 scale of the continuous refinement (Sampson px)."""
@@ -74,7 +77,8 @@ class PoseFreePair:
     median_sampson_px: float  # over inliers
     coarse_offsets_s: np.ndarray  # (S,) coarse grid
     coarse_score: np.ndarray  # (S,) inliers among all matches (0 where the overlap is too small)
-    fine_offsets_s: np.ndarray  # (U,)
+    pivot_s: float  # a's local time in the middle of the overlap, about which the image's rows turn
+    fine_offsets_s: np.ndarray  # (U,) tau_a - tau_b at a's time pivot_s (= offset_s at rate 1)
     fine_rates_ppm: np.ndarray  # (V,) (rate - 1) * 1e6
     fine_score: np.ndarray  # (V,U) inliers; the (offset, rate) image for the recording
 
@@ -213,77 +217,133 @@ def estimate_pair(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
         coarse = (grid, np.array([pair.score(d, 1.0, cfg.coarse_points, cfg.threshold_px)[0] for d in grid]))
     coarse, coarse_score = coarse
     peaks = _peaks(coarse_score, coarse, cfg.top_k, 2.0)
-    if not peaks:
-        return None
 
-    # 2. fine (offset, rate) grid around each peak; keep the best peak's image
-    rates_ppm = (np.arange(-cfg.rate_half_width_ppm, cfg.rate_half_width_ppm + 1e-9, cfg.rate_step_ppm)
-                 if cfg.estimate_rate else np.zeros(1))
-    # A wrong offset can out-score the true one here (7-dof F fits a single track loosely), so
-    # several peaks go on to the finer, more discriminating score.
-    best = None
+    # 2. per peak: a finer line of offsets at rate 1, then the continuous refinement. A wrong
+    # offset can out-score the true one in the coarse count (a 7-dof F fits one track loosely),
+    # not after the refinement, so the refined inlier count picks the peak.
+    best: _Refined | None = None
     for p in peaks:
         offs = p + np.arange(-cfg.fine_half_width_s, cfg.fine_half_width_s + 1e-9, cfg.fine_step_s)
-        img = np.zeros((len(rates_ppm), len(offs)), dtype=np.int64)
-        for i, r in enumerate(rates_ppm):
-            for j, d in enumerate(offs):
-                img[i, j] = pair.score(d, 1.0 + r * 1e-6, cfg.fine_points, cfg.threshold_px)[0]
-        if best is None or img.max() > best[2].max():
-            best = (offs, rates_ppm, img)
-    offs, rates_ppm, img = best
-    # the centroid of the top cells is steadier than the single best cell of a noisy count
-    top = img >= np.quantile(img, 0.98)
-    w = np.where(top, img, 0).astype(np.float64)
-    d0 = float((w.sum(axis=0) @ offs) / w.sum())
-    r0 = float((w.sum(axis=1) @ rates_ppm) / w.sum()) * 1e-6
-    _, F0 = pair.score(d0, 1.0 + r0, cfg.fine_points * 4, cfg.threshold_px)
-    if F0 is None:
+        line = [pair.score(d, 1.0, cfg.fine_points, cfg.threshold_px)[0] for d in offs]
+        if max(line) <= 0:
+            continue
+        ref = _refine(pair, float(offs[int(np.argmax(line))]), K_a, K_b, cfg)
+        if ref is not None and (best is None or ref.num_inliers > best.num_inliers):
+            best = ref
+    if best is None:
         return None
 
-    # 3. continuous refinement of (offset, log rate, R, t)
-    xa0, xb0, _ = pair.match(d0, 1.0 + r0)
+    # 3. the (offset, rate) image around the solution, rows pivoting about the overlap's middle
+    rates_ppm = (best.rate - 1) * 1e6 + (
+        np.arange(-cfg.rate_half_width_ppm, cfg.rate_half_width_ppm + 1e-9, cfg.rate_step_ppm)
+        if cfg.estimate_rate else np.zeros(1))
+    u0 = best.pivot_s - (best.pivot_s - best.offset_s) / best.rate  # the offset at the pivot
+    cols = u0 + np.arange(-cfg.fine_half_width_s, cfg.fine_half_width_s + 1e-9, cfg.fine_step_s)
+    img = np.zeros((len(rates_ppm), len(cols)), dtype=np.int64)
+    for i, r in enumerate(rates_ppm):
+        rate = 1.0 + r * 1e-6
+        for j, u in enumerate(cols):
+            img[i, j] = pair.score(best.pivot_s - rate * (best.pivot_s - u), rate, cfg.fine_points,
+                                   cfg.threshold_px)[0]
+    return PoseFreePair(best.offset_s, best.rate, best.offset_std_s, best.log_rate_std, best.F_ab,
+                        best.inlier_share, best.num_matches, best.median_sampson_px,
+                        coarse, coarse_score, best.pivot_s, cols, rates_ppm, img)
+
+
+@dataclass(frozen=True)
+class _Refined:
+    offset_s: float
+    rate: float
+    offset_std_s: float
+    log_rate_std: float
+    F_ab: np.ndarray
+    inlier_share: float
+    num_inliers: int
+    num_matches: int
+    median_sampson_px: float
+    pivot_s: float
+
+
+def _refine(pair: _Pair, d0: float, K_a: np.ndarray, K_b: np.ndarray, cfg: PoseFreeConfig) -> _Refined | None:
+    """Continuous (offset, log rate, R, t) from an offset at rate 1. The time map is written
+    about a pivot in the middle of the overlap, tau_b = c + (tau_a - pivot) / rate, so that the
+    shift c and the rate are nearly uncorrelated (offset_s = pivot - rate * c)."""
+    _, F0 = pair.score(d0, 1.0, cfg.fine_points * 4, cfg.threshold_px)
+    if F0 is None:
+        return None
+    xa0, xb0, ok0 = pair.match(d0, 1.0)
     inl = sampson_px(F0, xa0, xb0) < cfg.threshold_px
+    if inl.sum() < 8:
+        return None
+    pivot = float(np.median(pair.t_a[ok0]))
     rotvec, tang = _E_params(F0, K_a, K_b, xa0[inl], xb0[inl])
     Kai, Kbi = np.linalg.inv(K_a), np.linalg.inv(K_b)
     sel = _uniform(len(pair.t_a), cfg.refine_max_points)
-    sub = _Pair(pair.t_a[sel], pair.x_a[sel], t_b, xy_b)
+    t_a, x_a = pair.t_a[sel], pair.x_a[sel]
+
+    def tb_of(x):
+        return x[0] + (t_a - pivot) * (np.exp(-x[1]) if cfg.estimate_rate else 1.0)
 
     def residuals(x):
-        rate = np.exp(x[1]) if cfg.estimate_rate else 1.0
-        xb = interpolate_track((sub.t_a - x[0]) / rate, sub.t_b, sub.xy_b)
+        xb = interpolate_track(tb_of(x), pair.t_b, pair.xy_b)
         ok = np.isfinite(xb).all(axis=1)
-        res = np.full(len(sub.t_a), cfg.threshold_px)  # unmatched: a constant, no gradient
-        res[ok] = sampson_px(_F_from_params(x[2:], Kai, Kbi), sub.x_a[ok], xb[ok])
+        res = np.full(len(t_a), cfg.threshold_px)  # unmatched: a constant, no gradient
+        res[ok] = sampson_px(_F_from_params(x[2:], Kai, Kbi), x_a[ok], xb[ok])
         return res
 
-    x0 = np.r_[d0, np.log1p(r0), rotvec, tang]
-    if not cfg.estimate_rate:
-        x0[1] = 0.0
+    x0 = np.r_[pivot - d0, 0.0, rotvec, tang]
     scale = np.r_[0.01, 1e-4, 1e-2, 1e-2, 1e-2, 1e-2, 1e-2]
     sol = least_squares(residuals, x0, loss="soft_l1", f_scale=cfg.refine_loss_scale_px, x_scale=scale,
                         max_nfev=200)
     x = sol.x
     rate = float(np.exp(x[1])) if cfg.estimate_rate else 1.0
+    offset_s = pivot - rate * x[0]
     F = _F_from_params(x[2:], Kai, Kbi)
-    xa, xb, _ = pair.match(x[0], rate)
+    xa, xb, _ = pair.match(offset_s, rate)
     err = sampson_px(F, xa, xb)
     inl = err < cfg.threshold_px
-    # uncertainty from the inliers' Jacobian (Gauss-Newton covariance, residuals independent)
+    # uncertainty from the inliers' Jacobian (Gauss-Newton covariance, residuals taken as
+    # independent, which they are not along a smooth track: a lower bound)
     r = residuals(x)
-    J = sol.jac
     keep = r < cfg.threshold_px
-    Jk = J[keep]
-    dof = max(int(keep.sum()) - len(x), 1)
-    sigma2 = float(np.sum(r[keep] ** 2) / dof)
     cols = [0, 1] if cfg.estimate_rate else [0]
     cols += list(range(2, len(x)))
-    try:
-        cov = np.linalg.pinv(Jk[:, cols].T @ Jk[:, cols]) * sigma2
-        offset_std = float(np.sqrt(max(cov[0, 0], 0.0)))
-        log_rate_std = float(np.sqrt(max(cov[1, 1], 0.0))) if cfg.estimate_rate else 0.0
-    except np.linalg.LinAlgError:
-        offset_std, log_rate_std = float("nan"), float("nan")
-    return PoseFreePair(float(x[0]), rate, offset_std, log_rate_std, F / np.linalg.norm(F),
-                        float(inl.mean()) if len(inl) else 0.0, int(len(xa)),
-                        float(np.median(err[inl])) if inl.any() else float("nan"),
-                        coarse, coarse_score, offs, rates_ppm, img)
+    Jk = sol.jac[keep][:, cols]
+    sigma2 = float(np.sum(r[keep] ** 2) / max(int(keep.sum()) - len(cols), 1))
+    cov = np.linalg.pinv(Jk.T @ Jk) * sigma2
+    if cfg.estimate_rate:
+        g = np.array([-rate, -rate * x[0]])  # d offset_s / d (c, log rate)
+        offset_var = float(g @ cov[:2, :2] @ g)
+        log_rate_std = float(np.sqrt(max(cov[1, 1], 0.0)))
+    else:
+        offset_var, log_rate_std = float(cov[0, 0]), 0.0
+    return _Refined(float(offset_s), rate, float(np.sqrt(max(offset_var, 0.0))), log_rate_std,
+                    F / np.linalg.norm(F), float(inl.mean()) if len(inl) else 0.0, int(inl.sum()),
+                    int(len(xa)), float(np.median(err[inl])) if inl.any() else float("nan"), float(pivot))
+
+
+def fit_at_time_map(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
+                    t_b: np.ndarray, xy_b: np.ndarray, K_b: np.ndarray, offset_s: float, rate: float,
+                    config: PoseFreeConfig = PoseFreeConfig()) -> tuple[float, float]:
+    """(median Sampson px over inliers, inlier share) of the best E-constrained F with the time
+    map held fixed: how well a given (e.g. ground-truth) time map explains the tracks, to compare
+    with the estimate's own numbers."""
+    cfg = config
+    pair = _Pair(t_a, xy_a, t_b, xy_b)
+    xa, xb, _ = pair.match(offset_s, rate)
+    if len(xa) < 16:
+        return float("nan"), 0.0
+    F0 = _ransac_F(xa, xb, cfg.fine_points * 4, cfg.threshold_px)
+    if F0 is None:
+        return float("nan"), 0.0
+    inl = sampson_px(F0, xa, xb) < cfg.threshold_px
+    if inl.sum() < 8:
+        return float("nan"), 0.0
+    rotvec, tang = _E_params(F0, K_a, K_b, xa[inl], xb[inl])
+    Kai, Kbi = np.linalg.inv(K_a), np.linalg.inv(K_b)
+    sel = _uniform(len(xa), cfg.refine_max_points)
+    sol = least_squares(lambda p: sampson_px(_F_from_params(p, Kai, Kbi), xa[sel], xb[sel]),
+                        np.r_[rotvec, tang], loss="soft_l1", f_scale=cfg.refine_loss_scale_px, max_nfev=200)
+    err = sampson_px(_F_from_params(sol.x, Kai, Kbi), xa, xb)
+    inl = err < cfg.threshold_px
+    return (float(np.median(err[inl])) if inl.any() else float("nan")), float(inl.mean())
