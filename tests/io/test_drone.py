@@ -95,3 +95,14 @@ def test_import_real_dataset(drone_dir, tmp_path):
     meta = json.loads((out / "bundle.json").read_text())
     assert meta["version"] == 1
     np.testing.assert_array_equal(back.cameras["cam4"].cam_from_world, np.eye(4))
+
+
+def test_import_drone_command(drone_dir, tmp_path, capsys):
+    from vs_inspect.cli import main
+
+    out = tmp_path / "bundle"
+    assert main(["import-drone", str(drone_dir), "--out", str(out)]) == 0
+    assert "6 pose-free cameras" in capsys.readouterr().out
+    assert read_pose_free(out) == {f"cam{k}" for k in range(6)}
+    assert main(["import-drone", str(drone_dir), "--out", str(out)]) == 2  # exists, no --overwrite
+    assert main(["import-drone", str(tmp_path / "nothing"), "--out", str(tmp_path / "b2")]) == 2

@@ -58,7 +58,7 @@ def _one_pair(args):
     res_c = None
     if res is not None:
         res_c = estimate_pair(t_a, xy_a, K_a, t_b, xy_b, K_b, replace(cfg, estimate_rate=False),
-                              coarse=(res.coarse_offsets_s, res.coarse_score))
+                              coarse=(res.coarse_offsets_s, res.coarse_score, res.coarse_score_F))
     return a, b, res, res_c, time.perf_counter() - t0
 
 

@@ -14,7 +14,8 @@ continuous in (offset_s, rate).
 
 Stages, each cheap enough for tracks of tens of thousands of frames:
 1. coarse: offsets over the whole overlap on a grid, rate = 1; per candidate a MAGSAC F from a
-   time-uniform subsample, scored by the inliers among all matches (a short overlap cannot win);
+   time-uniform subsample, moved to the nearest F with an essential matrix (K known), scored by
+   the inliers among all matches (a short overlap cannot win);
 2. per coarse peak, a finer offset line, then scipy least_squares over (offset, log rate, F as
    R, t of E = [t]x R with the known K) on Sampson distances with a robust loss; the peak whose
    refined F explains most matches wins; the Jacobian gives the uncertainty;
@@ -45,13 +46,14 @@ class PoseFreeConfig:
     """A candidate needs this share of the smaller track's detections matched."""
     threshold_px: float = 5.0
     """Sampson distance under which a match is an inlier (coarse and fine scores)."""
-    top_k: int = 5
-    """Coarse peaks (at least 2 s apart) refined; the one explaining most matches wins."""
+    top_k: int = 3
+    """Coarse peaks (at least 2 s apart) of each of the two scores refined; the one explaining
+    most matches wins."""
     fine_half_width_s: float = 0.4
     fine_step_s: float = 0.04
     """The offset line examined around each coarse peak, and the image's columns."""
     rate_half_width_ppm: float = 1000.0
-    rate_step_ppm: float = 100.0
+    rate_step_ppm: float = 200.0
     """The image's rows, around the estimated rate (the image is for the recording only)."""
     fine_points: int = 800
     refine_loss_scale_px: float = 2.0
@@ -76,7 +78,8 @@ class PoseFreePair:
     num_matches: int
     median_sampson_px: float  # over inliers
     coarse_offsets_s: np.ndarray  # (S,) coarse grid
-    coarse_score: np.ndarray  # (S,) inliers among all matches (0 where the overlap is too small)
+    coarse_score: np.ndarray  # (S,) inliers of the nearest calibrated F among all matches (0: overlap too small)
+    coarse_score_F: np.ndarray  # (S,) the same for the RANSAC F itself
     pivot_s: float  # a's local time in the middle of the overlap, about which the image's rows turn
     fine_offsets_s: np.ndarray  # (U,) tau_a - tau_b at a's time pivot_s (= offset_s at rate 1)
     fine_rates_ppm: np.ndarray  # (V,) (rate - 1) * 1e6
@@ -124,7 +127,8 @@ def sampson_px(F: np.ndarray, xa: np.ndarray, xb: np.ndarray) -> np.ndarray:
 class _Pair:
     """The two tracks and the matching under a candidate time map."""
 
-    def __init__(self, t_a, xy_a, t_b, xy_b):
+    def __init__(self, t_a, xy_a, t_b, xy_b, K_a=None, K_b=None):
+        self.K_a, self.K_b = K_a, K_b
         seen = np.isfinite(xy_a).all(axis=1)
         self.t_a = np.asarray(t_a, dtype=np.float64)[seen]
         self.x_a = np.asarray(xy_a, dtype=np.float64)[seen]
@@ -138,13 +142,31 @@ class _Pair:
         return self.x_a[ok], xb[ok], ok
 
     def score(self, offset_s: float, rate: float, n_sample: int, thr: float) -> tuple[int, np.ndarray | None]:
+        n, _, F = self.scores(offset_s, rate, n_sample, thr)
+        return n, F
+
+    def scores(self, offset_s: float, rate: float, n_sample: int, thr: float):
+        """(inliers of the nearest calibrated F, inliers of the RANSAC F, that F).
+
+        Where the drone hovers or flies straight, a wrong time map still gets an F that fits
+        every match, but rarely one with an essential matrix's two equal singular values; the
+        projection onto those is crude for a noisy F, though, so both counts propose peaks."""
         xa, xb, _ = self.match(offset_s, rate)
         if len(xa) < max(self.min_matches, 16):
-            return 0, None
+            return 0, 0, None
         F = _ransac_F(xa, xb, n_sample, thr)
         if F is None:
-            return 0, None
-        return int(np.count_nonzero(sampson_px(F, xa, xb) < thr)), F
+            return 0, 0, None
+        n_F = int(np.count_nonzero(sampson_px(F, xa, xb) < thr))
+        if self.K_a is None:
+            return n_F, n_F, F
+        n_E = int(np.count_nonzero(sampson_px(_nearest_calibrated_F(F, self.K_a, self.K_b), xa, xb) < thr))
+        return n_E, n_F, F
+
+
+def _nearest_calibrated_F(F: np.ndarray, K_a: np.ndarray, K_b: np.ndarray) -> np.ndarray:
+    U, _, Vt = np.linalg.svd(K_b.T @ F @ K_a)
+    return np.linalg.inv(K_b).T @ (U @ np.diag([1.0, 1.0, 0.0]) @ Vt) @ np.linalg.inv(K_a)
 
 
 def _uniform(n_total: int, n: int) -> np.ndarray:
@@ -193,20 +215,20 @@ def estimate_pair(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
                   t_b: np.ndarray, xy_b: np.ndarray, K_b: np.ndarray,
                   config: PoseFreeConfig = PoseFreeConfig(),
                   offset_range_s: tuple[float, float] | None = None,
-                  coarse: tuple[np.ndarray, np.ndarray] | None = None) -> PoseFreePair | None:
+                  coarse: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> PoseFreePair | None:
     """Time map and F of a pair from one point track per camera; None when no candidate has
     enough overlap.
 
     t_a (Ta,), t_b (Tb,): local frame times (s); xy_a (Ta,2), xy_b (Tb,2): undistorted px, NaN
     where unseen; K_a, K_b (3,3) px. offset_range_s: the offsets searched (default: every offset
-    with some overlap). coarse: (offsets, score) of an earlier run on the same tracks (e.g. the
+    with some overlap). coarse: (offsets, score, score_F) of an earlier run on the same tracks (e.g. the
     drift model's, reused by the constant-offset ablation).
     """
     cfg = config
     for name, t, xy in (("a", t_a, xy_a), ("b", t_b, xy_b)):
         if np.asarray(xy).shape != (len(t), 2):
             raise ValueError(f"xy_{name} must have shape ({len(t)},2), got {np.asarray(xy).shape}")
-    pair = _Pair(t_a, xy_a, t_b, xy_b)
+    pair = _Pair(t_a, xy_a, t_b, xy_b, np.asarray(K_a, dtype=np.float64), np.asarray(K_b, dtype=np.float64))
     n_b = int(np.isfinite(np.asarray(xy_b)).all(axis=1).sum())
     pair.min_matches = int(cfg.min_overlap * min(len(pair.t_a), n_b))
     lo, hi = offset_range_s if offset_range_s is not None else (t_a[0] - t_b[-1], t_a[-1] - t_b[0])
@@ -214,9 +236,11 @@ def estimate_pair(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
     # 1. coarse offsets, rate 1
     if coarse is None:
         grid = np.arange(lo, hi + 1e-9, cfg.coarse_step_s)
-        coarse = (grid, np.array([pair.score(d, 1.0, cfg.coarse_points, cfg.threshold_px)[0] for d in grid]))
-    coarse, coarse_score = coarse
+        both = np.array([pair.scores(d, 1.0, cfg.coarse_points, cfg.threshold_px)[:2] for d in grid]).reshape(-1, 2)
+        coarse = (grid, both[:, 0], both[:, 1])
+    coarse, coarse_score, coarse_score_F = coarse
     peaks = _peaks(coarse_score, coarse, cfg.top_k, 2.0)
+    peaks += [p for p in _peaks(coarse_score_F, coarse, cfg.top_k, 2.0) if min(abs(p - q) for q in peaks + [np.inf]) >= 2.0]
 
     # 2. per peak: a finer line of offsets at rate 1, then the continuous refinement. A wrong
     # offset can out-score the true one in the coarse count (a 7-dof F fits one track loosely),
@@ -247,7 +271,7 @@ def estimate_pair(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
                                    cfg.threshold_px)[0]
     return PoseFreePair(best.offset_s, best.rate, best.offset_std_s, best.log_rate_std, best.F_ab,
                         best.inlier_share, best.num_matches, best.median_sampson_px,
-                        coarse, coarse_score, best.pivot_s, cols, rates_ppm, img)
+                        coarse, coarse_score, coarse_score_F, best.pivot_s, cols, rates_ppm, img)
 
 
 @dataclass(frozen=True)
