@@ -33,7 +33,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from ..geometry.epipolar import skew
+from ..geometry.epipolar import epipolar_residual, skew
 
 
 @dataclass(frozen=True)
@@ -73,7 +73,7 @@ class PoseFreePair:
     rate: float  # (1 + drift_b) / (1 + drift_a)
     offset_std_s: float  # from the refinement's Jacobian (residuals taken as independent)
     log_rate_std: float
-    F_ab: np.ndarray  # (3,3) x_b^T F x_a = 0, undistorted px
+    F_ab: np.ndarray  # (3,3) x_aᵀ F_ab x_b = 0 (geometry.epipolar's convention), undistorted px
     inlier_share: float  # matches with Sampson distance < threshold_px at the solution
     num_matches: int
     median_sampson_px: float  # over inliers
@@ -113,15 +113,9 @@ def interpolate_track(t_query_s: np.ndarray, t_s: np.ndarray, xy: np.ndarray) ->
     return out
 
 
-def sampson_px(F: np.ndarray, xa: np.ndarray, xb: np.ndarray) -> np.ndarray:
-    """(M,) first-order geometric distance of x_b^T F x_a = 0 (px)."""
-    ha = np.c_[xa, np.ones(len(xa))]
-    hb = np.c_[xb, np.ones(len(xb))]
-    Fa = ha @ F.T
-    Fb = hb @ F
-    num = np.sum(hb * Fa, axis=1)
-    den = np.sqrt(Fa[:, 0] ** 2 + Fa[:, 1] ** 2 + Fb[:, 0] ** 2 + Fb[:, 1] ** 2)
-    return np.abs(num) / np.maximum(den, 1e-12)
+def sampson_px(F_ab: np.ndarray, x_a: np.ndarray, x_b: np.ndarray) -> np.ndarray:
+    """(M,) Sampson distance (px, not squared) of x_aᵀ F_ab x_b = 0."""
+    return np.sqrt(epipolar_residual(F_ab, x_a, x_b, "sampson"))
 
 
 class _Pair:
@@ -164,9 +158,9 @@ class _Pair:
         return n_E, n_F, F
 
 
-def _nearest_calibrated_F(F: np.ndarray, K_a: np.ndarray, K_b: np.ndarray) -> np.ndarray:
-    U, _, Vt = np.linalg.svd(K_b.T @ F @ K_a)
-    return np.linalg.inv(K_b).T @ (U @ np.diag([1.0, 1.0, 0.0]) @ Vt) @ np.linalg.inv(K_a)
+def _nearest_calibrated_F(F_ab: np.ndarray, K_a: np.ndarray, K_b: np.ndarray) -> np.ndarray:
+    U, _, Vt = np.linalg.svd(K_a.T @ F_ab @ K_b)
+    return np.linalg.inv(K_a).T @ (U @ np.diag([1.0, 1.0, 0.0]) @ Vt) @ np.linalg.inv(K_b)
 
 
 def _uniform(n_total: int, n: int) -> np.ndarray:
@@ -181,7 +175,7 @@ def _ransac_F(xa, xb, n_sample, thr):
         return None
     if F is None or F.shape != (3, 3):
         return None
-    return F
+    return F.T  # OpenCV's F has x_bᵀ F x_a = 0; F_ab is its transpose
 
 
 def _peaks(score: np.ndarray, grid: np.ndarray, k: int, min_sep: float) -> list[float]:
@@ -194,9 +188,9 @@ def _peaks(score: np.ndarray, grid: np.ndarray, k: int, min_sep: float) -> list[
     return out
 
 
-def _E_params(F: np.ndarray, K_a: np.ndarray, K_b: np.ndarray, xa: np.ndarray, xb: np.ndarray):
-    """(rotvec (3,), t angles (2,)) of the pose in F, chosen by cheirality."""
-    E = K_b.T @ F @ K_a
+def _E_params(F_ab: np.ndarray, K_a: np.ndarray, K_b: np.ndarray, xa: np.ndarray, xb: np.ndarray):
+    """(rotvec (3,), t angles (2,)) of b_from_a in F_ab, chosen by cheirality."""
+    E = K_b.T @ F_ab.T @ K_a  # OpenCV's order: x_bᵀ E x_a = 0 in normalized coordinates
     na = cv2.undistortPoints(xa.reshape(-1, 1, 2), K_a, None).reshape(-1, 2)
     nb = cv2.undistortPoints(xb.reshape(-1, 1, 2), K_b, None).reshape(-1, 2)
     _, R, t, _ = cv2.recoverPose(E, na, nb, np.eye(3))
@@ -205,24 +199,27 @@ def _E_params(F: np.ndarray, K_a: np.ndarray, K_b: np.ndarray, xa: np.ndarray, x
 
 
 def _F_from_params(p: np.ndarray, K_a_inv: np.ndarray, K_b_inv: np.ndarray) -> np.ndarray:
+    """F_ab of b_from_a = (R = rotvec p[:3], t = unit vector at polar angles p[3:5])."""
     R = Rotation.from_rotvec(p[:3]).as_matrix()
     th, ph = p[3], p[4]
     t = np.array([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)])
-    return K_b_inv.T @ skew(t) @ R @ K_a_inv
+    return (K_b_inv.T @ skew(t) @ R @ K_a_inv).T
 
 
 def estimate_pair(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
                   t_b: np.ndarray, xy_b: np.ndarray, K_b: np.ndarray,
                   config: PoseFreeConfig = PoseFreeConfig(),
                   offset_range_s: tuple[float, float] | None = None,
-                  coarse: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> PoseFreePair | None:
+                  coarse: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+                  peaks_s: list[float] | None = None) -> PoseFreePair | None:
     """Time map and F of a pair from one point track per camera; None when no candidate has
     enough overlap.
 
     t_a (Ta,), t_b (Tb,): local frame times (s); xy_a (Ta,2), xy_b (Tb,2): undistorted px, NaN
     where unseen; K_a, K_b (3,3) px. offset_range_s: the offsets searched (default: every offset
     with some overlap). coarse: (offsets, score, score_F) of an earlier run on the same tracks (e.g. the
-    drift model's, reused by the constant-offset ablation).
+    drift model's, reused by the constant-offset ablation); peaks_s: refine only these offsets
+    instead of the coarse peaks (e.g. the drift model's solution).
     """
     cfg = config
     for name, t, xy in (("a", t_a, xy_a), ("b", t_b, xy_b)):
@@ -239,8 +236,12 @@ def estimate_pair(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
         both = np.array([pair.scores(d, 1.0, cfg.coarse_points, cfg.threshold_px)[:2] for d in grid]).reshape(-1, 2)
         coarse = (grid, both[:, 0], both[:, 1])
     coarse, coarse_score, coarse_score_F = coarse
-    peaks = _peaks(coarse_score, coarse, cfg.top_k, 2.0)
-    peaks += [p for p in _peaks(coarse_score_F, coarse, cfg.top_k, 2.0) if min(abs(p - q) for q in peaks + [np.inf]) >= 2.0]
+    if peaks_s is not None:
+        peaks = list(peaks_s)
+    else:
+        peaks = _peaks(coarse_score, coarse, cfg.top_k, 2.0)
+        peaks += [p for p in _peaks(coarse_score_F, coarse, cfg.top_k, 2.0)
+                  if all(abs(p - q) >= 2.0 for q in peaks)]
 
     # 2. per peak: a finer line of offsets at rate 1, then the continuous refinement. A wrong
     # offset can out-score the true one in the coarse count (a 7-dof F fits one track loosely),
