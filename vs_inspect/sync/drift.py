@@ -1,0 +1,119 @@
+"""Stage 2 with clock drift: per-video (offset_s, drift) from pairwise (offset, rate).
+
+Time model per video v: t_global = offset_s[v] + (1 + drift[v]) * t_local, the reference fixed at
+(0, 0). A pair (a, b) measures (sync.posefree's time map)
+
+    offset_ab = (offset_b - offset_a) / (1 + drift_a)        log rate_ab = l_b - l_a,  l = log(1 + drift)
+
+Rates compose multiplicatively, so the solve is linear in l; offsets enter through one product.
+Robust nonlinear least squares (scipy, Huber on residuals in units of each pair's uncertainty),
+started from a breadth-first walk of the pair graph from the reference.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+
+@dataclass(frozen=True)
+class PairTiming:
+    """One pair's measured time map (sync.posefree convention)."""
+
+    a: str
+    b: str
+    offset_s: float  # Δ_ab in a's clock
+    log_rate: float  # log((1 + drift_b) / (1 + drift_a))
+    offset_std_s: float
+    log_rate_std: float
+
+
+@dataclass(frozen=True)
+class DriftSolution:
+    reference: str
+    offsets_s: dict[str, float]  # None-free: only videos connected to the reference
+    drift_ppm: dict[str, float]
+    offset_std_s: dict[str, float]
+    drift_std_ppm: dict[str, float]
+    pair_residuals: dict[tuple[str, str], tuple[float, float]]  # (offset s, log rate) measured - model
+    with_drift: bool
+
+
+def _connected(reference: str, pairs: list[PairTiming]) -> list[str]:
+    seen, queue = [reference], deque([reference])
+    while queue:
+        v = queue.popleft()
+        for p in pairs:
+            for x, y in ((p.a, p.b), (p.b, p.a)):
+                if x == v and y not in seen:
+                    seen.append(y)
+                    queue.append(y)
+    return seen
+
+
+def _initial(reference: str, order: list[str], pairs: list[PairTiming], with_drift: bool):
+    off, lr = {reference: 0.0}, {reference: 0.0}
+    for v in order[1:]:
+        for p in pairs:
+            if p.b == v and p.a in off:
+                lr[v] = lr[p.a] + p.log_rate if with_drift else 0.0
+                off[v] = off[p.a] + p.offset_s * np.exp(lr[p.a])
+                break
+            if p.a == v and p.b in off:
+                lr[v] = lr[p.b] - p.log_rate if with_drift else 0.0
+                off[v] = off[p.b] - p.offset_s * np.exp(lr[v])
+                break
+    return off, lr
+
+
+def solve_offsets_drift(reference: str, pairs: list[PairTiming], with_drift: bool = True,
+                        min_offset_std_s: float = 1e-3, min_log_rate_std: float = 2e-5,
+                        huber_scale: float = 3.0) -> DriftSolution:
+    """Robust global (offset_s, drift) per video; the floors on the pairs' uncertainties keep an
+    over-confident pair (correlated residuals make its Jacobian std small) from dominating."""
+    order = _connected(reference, pairs)
+    free = order[1:]
+    used = [p for p in pairs if p.a in order and p.b in order]
+    off0, lr0 = _initial(reference, order, used, with_drift)
+    n = len(free)
+    pos = {v: i for i, v in enumerate(free)}
+
+    def unpack(x):
+        off = {reference: 0.0, **{v: x[pos[v]] for v in free}}
+        lr = {reference: 0.0, **{v: (x[n + pos[v]] if with_drift else 0.0) for v in free}}
+        return off, lr
+
+    def residuals(x):
+        off, lr = unpack(x)
+        out = []
+        for p in used:
+            pred = (off[p.b] - off[p.a]) * np.exp(-lr[p.a])
+            out.append((p.offset_s - pred) / max(p.offset_std_s, min_offset_std_s))
+            if with_drift:
+                out.append((p.log_rate - (lr[p.b] - lr[p.a])) / max(p.log_rate_std, min_log_rate_std))
+        return np.asarray(out)
+
+    x0 = np.r_[[off0[v] for v in free], [lr0[v] for v in free] if with_drift else []]
+    if n == 0:
+        return DriftSolution(reference, {reference: 0.0}, {reference: 0.0}, {reference: 0.0},
+                             {reference: 0.0}, {}, with_drift)
+    sol = least_squares(residuals, x0, loss="huber", f_scale=huber_scale)
+    off, lr = unpack(sol.x)
+    try:
+        # scipy's jac at a robust solution is already weighted by the loss
+        cov = np.linalg.pinv(sol.jac.T @ sol.jac)
+        std = np.sqrt(np.clip(np.diag(cov), 0, None))
+    except np.linalg.LinAlgError:
+        std = np.full(len(sol.x), np.nan)
+    off_std = {reference: 0.0, **{v: float(std[pos[v]]) for v in free}}
+    dr_std = {reference: 0.0, **{v: (float(std[n + pos[v]]) * 1e6 if with_drift else 0.0) for v in free}}
+    resid = {}
+    for p in used:
+        pred = (off[p.b] - off[p.a]) * np.exp(-lr[p.a])
+        resid[(p.a, p.b)] = (float(p.offset_s - pred), float(p.log_rate - (lr[p.b] - lr[p.a])))
+    return DriftSolution(reference, {v: float(o) for v, o in off.items()},
+                         {v: float(np.expm1(l) * 1e6) for v, l in lr.items()}, off_std, dr_std, resid,
+                         with_drift)
