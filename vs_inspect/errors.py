@@ -20,3 +20,16 @@ class BundleError(VsInspectError):
 
 class InputError(VsInspectError):
     """Bad input other than a bundle: unknown names, unreadable videos, mismatched calibration."""
+
+
+class NoUsableVideos(InputError):
+    """Stage 0 could use no video (none opened, or none got a camera).
+
+    stats (types.CueStats) says why for each video and inputs ({name: path}) lists every input,
+    so that a run can still report every video as unresolved with its reason.
+    """
+
+    def __init__(self, message: str, stats, inputs: dict[str, str] | None = None):
+        super().__init__(message)
+        self.stats = stats
+        self.inputs = dict(inputs or {})
