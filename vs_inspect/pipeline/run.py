@@ -105,7 +105,7 @@ def _nothing_usable(exc: NoUsableVideos, config: RunConfig, where: RunInputs,
     if reference not in names:
         raise InputError(f"--reference {reference!r} is not one of the videos; known: {names}")
     unresolved = {n: exc.stats.dropped.get(n, "Stage 0 could not use this video") for n in names}
-    unresolved[reference] += " (the reference: no video could be used, so no offset is known)"
+    unresolved[reference] += "; no video could be used, so even the reference has no offset"
     timings = {f"stage0_{k}": v for k, v in exc.stats.timings_s.items()}
     timings["stage0_with_io_s"] = elapsed_s
     timings["total_s"] = elapsed_s
