@@ -22,6 +22,19 @@ class InputError(VsInspectError):
     """Bad input other than a bundle: unknown names, unreadable videos, mismatched calibration."""
 
 
+class NoUsableVideos(InputError):
+    """Stage 0 could use no video (none opened, or none got a camera).
+
+    stats (types.CueStats) says why for each video and inputs ({name: path}) lists every input,
+    so that a run can still report every video as unresolved with its reason.
+    """
+
+    def __init__(self, message: str, stats, inputs: dict[str, str] | None = None):
+        super().__init__(message)
+        self.stats = stats
+        self.inputs = dict(inputs or {})
+
+
 def check_fields(obj, *, positive=(), nonnegative=(), fraction=(), at_least=None, at_most=None) -> None:
     """Validate a config dataclass's numeric fields; ValueError naming the option (its "flag"
     metadata, else the field) on the first bad one. Every float field must be finite (None allowed

@@ -279,6 +279,8 @@ class PairDecision:
     at_range_edge: bool  # best minimum lies on the border of the search range
     inlier_fraction: float = float("nan")  # share of terms at the best offset within inlier_tau_px
     inlier_tau_px: float = float("nan")  # Sampson distance counted as an inlier, px
+    support_fraction: float = float("nan")  # terms at the best minimum / median terms over the landscape
+    track_pairs_at_best: int = -1  # track pairs with at least one term at the best offset (-1: not counted)
 
 
 @dataclass(frozen=True)

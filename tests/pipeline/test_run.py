@@ -111,3 +111,83 @@ def test_videos_in_and_the_unreadable_one_is_null_with_its_reason(tmp_path):
     data = run_result_to_dict(result)
     assert data["cues"]["dropped"]["c"] == result.unresolved["c"]
     assert run_result_to_dict(read_run_result(write_run_result(result, tmp_path / "out"))) == data
+
+
+def _calibration(path, names, sizes=None) -> None:
+    cams = {}
+    for i, n in enumerate(names):
+        T = np.eye(4)
+        T[0, 3] = -0.5 * i
+        cams[n] = {"K": [[300.0, 0, 160], [0, 300.0, 120], [0, 0, 1]], "cam_from_world": T.tolist(),
+                   "size": list((sizes or {}).get(n, (320, 240)))}
+    path.write_text(json.dumps(cams))
+
+
+def _blank_video(path, shift_frames: int) -> None:
+    """A bright disk moving over a uniform background: nothing for a reconstruction to match."""
+    yy, xx = np.mgrid[:120, :160]
+    with VideoWriter(path, 160, 120, 10.0) as w:
+        for k in range(20):
+            t = k + shift_frames
+            img = np.full((120, 160, 3), 90, np.uint8)
+            img[(xx - (30 + 4 * t)) ** 2 + (yy - (50 + t)) ** 2 < 15 ** 2] = 250
+            w.write(img)
+
+
+def test_no_video_gets_a_camera_and_result_json_still_says_why_for_each(tmp_path, capsys):
+    """Stage 0 estimates no camera at all: `sync` still writes result.json, every offset null
+    (the reference's too) with Stage 0's reason, and exits 2."""
+    from vs_inspect.cli import main
+
+    paths = [tmp_path / f"v{i}.mp4" for i in range(3)]
+    for p, s in zip(paths, (0, 2, 3)):
+        _blank_video(p, s)
+    out = tmp_path / "out"
+    code = main(["sync", *map(str, paths), "--out", str(out), "--no-progress", "--no-rrd"])
+    assert code == 2
+    res = json.loads((out / "result.json").read_text())
+    assert res["version"] == 1 and res["reference"] == "v0"
+    assert res["offsets_s"] == {"v0": None, "v1": None, "v2": None}
+    assert res["uncertainty_s"] == {"v0": None, "v1": None, "v2": None}
+    for n in ("v0", "v1", "v2"):
+        assert res["unresolved"][n].startswith("no reconstruction"), res["unresolved"][n]
+        assert res["unresolved"][n].startswith(res["cues"]["dropped"][n])
+    assert res["unresolved"]["v0"].endswith("no video could be used, so even the reference has no offset")
+    assert res["pairs"] == [] and set(res["input"]["videos"]) == {"v0", "v1", "v2"}
+    assert "bundle" not in res["input"]  # no cue bundle was extracted
+    assert "null" in capsys.readouterr().out
+
+
+def test_sync_with_one_readable_video_writes_result_json(tmp_path):
+    from vs_inspect.cli import main
+
+    a, b = tmp_path / "a.mp4", tmp_path / "b.mp4"
+    _blank_video(a, 0)
+    b.write_bytes(b"not a video")
+    out = tmp_path / "out"
+    assert main(["sync", str(a), str(b), "--out", str(out), "--no-progress", "--no-rrd"]) == 2
+    res = json.loads((out / "result.json").read_text())
+    assert res["offsets_s"] == {"a": None, "b": None}
+    assert res["unresolved"]["a"] == ("the only readable video: there is no other video to synchronize "
+                                      "it with; no video could be used, so even the reference has no offset")
+    assert res["unresolved"]["b"].startswith("could not be opened")
+
+
+@pytest.mark.parametrize("reference", [None, "a"])
+def test_reference_without_camera_gives_its_place_to_a_video_with_one(tmp_path, reference):
+    """The default (first) or chosen reference gets no camera (calibration made for another
+    image size): the next video with a camera is the reference, and a's reason says so."""
+    a, b, c = tmp_path / "a.mp4", tmp_path / "b.mp4", tmp_path / "c.mp4"
+    for p, s in ((a, 0), (b, 0), (c, 3)):
+        _moving_disk_video(p, s)
+    cal = tmp_path / "cal.json"
+    _calibration(cal, ["a", "b", "c"], {"a": (100, 100)})
+    config = RunConfig.from_dict({"sync": {"solve": {"reference": reference}}})
+    result = run([a, b, c], config, calibration=cal, progress=False)
+    assert result.reference == "b" and result.offsets_s["b"] == 0.0
+    assert result.offsets_s["a"] is None
+    assert "not a uniform scale" in result.unresolved["a"]
+    assert result.unresolved["a"].endswith("it cannot be the reference, so b is the reference instead")
+    assert "b" not in result.unresolved and [(p.a, p.b) for p in result.pairs] == [("b", "c")]
+    # the run's settings are recorded as given
+    assert result.config["sync"]["solve"]["reference"] == reference

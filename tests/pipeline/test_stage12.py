@@ -35,3 +35,22 @@ def test_unknown_reference_is_an_input_error(small):
     bundle, base = small
     with pytest.raises(InputError, match="'nope' is not a video of the bundle"):
         solve_stage2(bundle, base.pairs, SolveConfig(reference="nope"))
+
+
+def test_decisions_carry_the_evidence_behind_the_best_minimum(small):
+    """Every pair with a minimum says on how much it rests: the share of the usual overlap at its
+    best minimum and the track pairs seen there (at most all of them); right pairs have plenty."""
+    bundle, base = small
+    truth = bundle.gt_offsets_s
+    with_minimum = [land for land in base.pairs if len(land.minima_idx)]
+    assert len(with_minimum) >= 5
+    for land in base.pairs:
+        d = land.decision
+        if not len(land.minima_idx):
+            assert not d.accepted and d.track_pairs_at_best == -1  # not counted
+            continue
+        assert 0 < d.track_pairs_at_best <= land.num_track_pairs
+        assert d.support_fraction > 0
+        if abs(land.best_offset_s - (truth[land.b] - truth[land.a])) < 0.05:
+            assert d.accepted, d.reason
+            assert d.support_fraction >= 0.4 and d.track_pairs_at_best >= 8

@@ -3,7 +3,8 @@
 Each step is a pure function in its own module (motion, tracking, matching, cameras); this
 module decodes the videos, calls them in order, reports to the sink and keeps per-stage timings.
 A video that cannot be used (unreadable, no camera) is left out of the bundle with its reason
-in CueStats.dropped, so that the caller can report it as not synchronized.
+in CueStats.dropped, so that the caller can report it as not synchronized; when no video can be
+used, NoUsableVideos carries those reasons instead of a bundle.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ import numpy as np
 from tqdm import tqdm
 
 from ..analysis.record_views import record_frame, record_mask
-from ..errors import InputError
+from ..errors import InputError, NoUsableVideos
 from ..record.sink import NullSink, Sink
 from ..types import CameraTrack, CueBundle, CueStats, TrackPairs, Tracks, VideoCueStats, VideoInfo
 from .config import CueConfig
@@ -235,9 +236,13 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
     timings["total_s"] = time.perf_counter() - t_all
     stats["track_pairs"] = int(sum(len(p.index) for p in pairs.values()))
     stats["tracks"] = int(sum(t.num_tracks for t in tracks.values()))
+    for n in names:  # every video left out says why, whatever step lost it
+        if n not in cameras and n not in stats["dropped"]:
+            stats["dropped"][n] = "no camera for this video"
     if not usable:
         reasons = "; ".join(f"{n}: {r}" for n, r in stats["dropped"].items())
-        raise InputError(f"no video could be used: {reasons}")
+        raise NoUsableVideos(f"no video could be used: {reasons}", _cue_stats(stats),
+                             {s.info.name: str(s.path) for s in sources})
     bundle = CueBundle(tuple(vids[n].info for n in usable), {n: cameras[n] for n in usable},
                        {n: tracks[n] for n in usable}, pairs)
     sink.stage_event("cues", "cue extraction finished", tracks=stats["tracks"],

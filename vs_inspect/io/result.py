@@ -37,6 +37,8 @@ def pair_to_dict(p: PairLandscape, with_landscape: bool = True) -> dict[str, Any
         "at_range_edge": d.at_range_edge,
         "inlier_fraction": _num(d.inlier_fraction),
         "inlier_tau_px": _num(d.inlier_tau_px),
+        "support_fraction": _num(d.support_fraction),
+        "track_pairs_at_best": d.track_pairs_at_best,
         "num_track_pairs": p.num_track_pairs,
         "residual": p.residual,
         "robust_scale": _num(p.robust_scale),
@@ -148,7 +150,8 @@ def _pair_from_dict(p: dict[str, Any]) -> PairLandscape:
     decision = PairDecision(bool(p["accepted"]), str(p.get("reason", "")), f("contrast"),
                             f("second_depth_ratio"), int(p.get("num_minima", 0)),
                             int(p.get("num_pareto_minima", 0)), bool(p.get("at_range_edge", False)),
-                            f("inlier_fraction"), f("inlier_tau_px"))
+                            f("inlier_fraction"), f("inlier_tau_px"), f("support_fraction"),
+                            int(p.get("track_pairs_at_best", -1)))
     return PairLandscape(str(p["a"]), str(p["b"]), offsets, energy, support, idx, f("offset_s"),
                          f("best_energy"), f("uncertainty_s"), int(p.get("num_track_pairs", 0)),
                          decision, str(p.get("residual", "sampson")), f("robust_scale"))

@@ -10,13 +10,15 @@ result.json is io.result.write_run_result(result, folder).
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import time
 from collections.abc import Sequence
 
-from ..errors import InputError
+from ..errors import InputError, NoUsableVideos
 from ..record.sink import NullSink, Sink
 from ..types import CueBundle, CueStats, RunInputs, RunResult, SyncResult
+from ..sync.config import SyncConfig
 from .config import RunConfig
 from .stage0 import run_stage0
 from .stage12 import sync_bundle
@@ -36,6 +38,10 @@ def run(inputs: CueBundle | PathLike | Sequence[PathLike], config: RunConfig = R
     extracted cue bundle there (replacing it; videos only). sink: receives every stage's
     results and, last, sink.run_summary(result). recorded_inputs: what result.json's "input"
     says (default: the paths given).
+
+    Never stops because Stage 0 could not use a video: such videos (even all of them, even the
+    reference) get None and the reason, and when the reference is one of them another video
+    with cues takes its place (said in its reason).
     """
     t0 = time.perf_counter()
     sink = sink or NullSink()
@@ -46,8 +52,14 @@ def run(inputs: CueBundle | PathLike | Sequence[PathLike], config: RunConfig = R
         where = RunInputs(bundle=str(inputs)) if not isinstance(inputs, CueBundle) else RunInputs()
         stage0_timings: dict[str, float] = {}
     else:
-        bundle, stats, videos = run_stage0(list(inputs), calibration, fps, config.cues, sink=sink,
-                                           progress=progress)
+        try:
+            bundle, stats, videos = run_stage0(list(inputs), calibration, fps, config.cues, sink=sink,
+                                               progress=progress)
+        except NoUsableVideos as exc:  # nothing to synchronize, but every video gets its reason
+            result = _nothing_usable(exc, config, RunInputs(videos=exc.inputs, fps=fps),
+                                     recorded_inputs, time.perf_counter() - t0)
+            sink.run_summary(result)
+            return result
         if bundle_out is not None:
             from ..io.bundle import write_bundle
             write_bundle(bundle, bundle_out, overwrite=True)
@@ -55,10 +67,11 @@ def run(inputs: CueBundle | PathLike | Sequence[PathLike], config: RunConfig = R
                           videos=videos, fps=fps)
         stage0_timings = {f"stage0_{k}": v for k, v in stats.timings_s.items()}
         stage0_timings["stage0_with_io_s"] = time.perf_counter() - t0
-    sync = sync_bundle(bundle, config.sync, sink=sink, progress=progress)
+    sync_cfg, moved = _usable_reference(config.sync, bundle, stats, list(videos))
+    sync = sync_bundle(bundle, sync_cfg, sink=sink, progress=progress)
     timings = {**stage0_timings, **sync.timings_s, "total_s": time.perf_counter() - t0}
     result = _run_result(sync, stats, recorded_inputs or where, config, bundle.gt_offsets_s or None,
-                         timings)
+                         timings, moved)
     sink.run_summary(result)
     return result
 
@@ -70,14 +83,50 @@ def _read_bundle(inputs: CueBundle | PathLike) -> CueBundle:
     return read_bundle(inputs)
 
 
+def _usable_reference(cfg: SyncConfig, bundle: CueBundle, stats: CueStats | None,
+                      inputs: list[str]) -> tuple[SyncConfig, str | None]:
+    """(settings of Stage 1 + 2, the wanted reference when Stage 0 left it out, else None).
+
+    The wanted reference is --reference or the first input video. When Stage 0 left it out (no
+    camera, unreadable), the first video of the bundle takes its place, so that the videos that
+    do have cues are still synchronized.
+    """
+    wanted = cfg.solve.reference or (inputs[0] if inputs else bundle.names[0])
+    if stats is None or wanted in bundle.names or wanted not in stats.dropped:
+        return cfg, None
+    return dataclasses.replace(cfg, solve=dataclasses.replace(cfg.solve, reference=bundle.names[0])), wanted
+
+
+def _nothing_usable(exc: NoUsableVideos, config: RunConfig, where: RunInputs,
+                    recorded_inputs: RunInputs | None, elapsed_s: float) -> RunResult:
+    """The RunResult when Stage 0 could use no video: every offset None, each with its reason."""
+    names = list(exc.inputs) or list(exc.stats.dropped)
+    reference = config.sync.solve.reference or names[0]
+    if reference not in names:
+        raise InputError(f"--reference {reference!r} is not one of the videos; known: {names}")
+    unresolved = {n: exc.stats.dropped.get(n, "Stage 0 could not use this video") for n in names}
+    unresolved[reference] += "; no video could be used, so even the reference has no offset"
+    timings = {f"stage0_{k}": v for k, v in exc.stats.timings_s.items()}
+    timings["stage0_with_io_s"] = elapsed_s
+    timings["total_s"] = elapsed_s
+    return RunResult(reference, {n: None for n in names}, {n: None for n in names}, unresolved, (),
+                     config.sync.solve.solver, (), (), timings, recorded_inputs or where,
+                     config.to_dict(), exc.stats, None)
+
+
 def _run_result(sync: SyncResult, stats: CueStats | None, inputs: RunInputs, config: RunConfig,
-                gt_offsets_s: dict[str, float] | None, timings_s: dict[str, float]) -> RunResult:
-    """The RunResult of Stage 1 + 2's SyncResult; videos Stage 0 left out get None and the reason."""
+                gt_offsets_s: dict[str, float] | None, timings_s: dict[str, float],
+                moved_reference: str | None = None) -> RunResult:
+    """The RunResult of Stage 1 + 2's SyncResult; videos Stage 0 left out get None and the reason
+    (moved_reference: the wanted reference that Stage 0 left out, see _usable_reference)."""
     offsets, unc, unresolved = dict(sync.offsets_s), dict(sync.uncertainty_s), dict(sync.unresolved_reason)
     for name, why in (stats.dropped if stats is not None else {}).items():
         offsets[name] = None
         unc[name] = None
         unresolved[name] = why
+    if moved_reference is not None:
+        unresolved[moved_reference] += (f"; it cannot be the reference, so {sync.reference} is the "
+                                         "reference instead")
     return RunResult(sync.reference, offsets, unc, unresolved, sync.pairs, sync.solver,
                      sync.solve_pairs, sync.iterations, timings_s, inputs, config.to_dict(), stats,
                      dict(gt_offsets_s) if gt_offsets_s else None)

@@ -13,7 +13,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ..cues.config import CueConfig
-from ..errors import InputError
+from ..errors import InputError, NoUsableVideos
 from ..record.sink import Sink
 from ..types import CueBundle, CueStats
 
@@ -59,7 +59,8 @@ def run_stage0(videos: Sequence[PathLike], calibration: PathLike | None = None,
 
     calibration: a file or folder that io.calibration.load_calibration reads, or None to estimate
     the cameras. fps: frame rate of image folders (and of files whose timestamps are unusable).
-    InputError when fewer than two videos are given or can be opened.
+    InputError when fewer than two videos are given; NoUsableVideos (an InputError that carries
+    every video's reason) when fewer than two can be opened or none can be used.
     """
     from ..cues.extract import extract_cues
     from ..io.calibration import load_calibration
@@ -70,10 +71,22 @@ def run_stage0(videos: Sequence[PathLike], calibration: PathLike | None = None,
     sources, inputs, dropped = open_sources(videos, fps)
     if len(sources) < 2:
         why = "; ".join(f"{n}: {r}" for n, r in dropped.items())
-        raise InputError(f"fewer than 2 readable videos ({why})")
+        alone = {s.info.name: "the only readable video: there is no other video to synchronize it with"
+                 for s in sources}
+        stats = _no_cues({**dropped, **alone}, calibration is not None)
+        raise NoUsableVideos(f"fewer than 2 readable videos ({why})", stats, inputs)
     calib = None
     if calibration is not None:
         calib = load_calibration(calibration, [s.info.name for s in sources])
-    bundle, stats = extract_cues(sources, calib, cfg, sink=sink, progress=progress)
+    try:
+        bundle, stats = extract_cues(sources, calib, cfg, sink=sink, progress=progress)
+    except NoUsableVideos as exc:
+        stats = dataclasses.replace(exc.stats, dropped={**dropped, **exc.stats.dropped})
+        raise NoUsableVideos(str(exc), stats, inputs) from None
     stats = dataclasses.replace(stats, dropped={**dropped, **stats.dropped})
     return bundle, stats, inputs
+
+
+def _no_cues(dropped: dict[str, str], calibrated: bool) -> CueStats:
+    """Stage 0's record when it stopped before extracting any cue."""
+    return CueStats("calibration" if calibrated else "estimated", 0, 0, 0, {}, {}, dict(dropped), {})

@@ -19,7 +19,7 @@ from ..errors import InputError
 from ..record.sink import NullSink, Sink
 from ..types import CueBundle, PairDecision, PairLandscape, SyncResult, TrackPairs
 from ..sync.config import SolveConfig, SyncConfig
-from ..sync.decision import check_inliers, decide
+from ..sync.decision import check_inliers, check_track_pairs_at_best, decide
 from ..sync.landscape import PairInput, compute_landscape, curvature_uncertainty, refine_minimum
 from ..sync.pairs import select_pairs
 from ..sync.solve import PairMeasurement, solve_offsets
@@ -42,9 +42,11 @@ def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig):
         tau_px = cfg.decision.inlier_px_fraction * max(np.hypot(va.width, va.height),
                                                        np.hypot(vb.width, vb.height))
         r = pe.residuals(best, kind="sampson")
+        seen = int(np.isfinite(r).any(axis=1).sum()) if r.ndim == 2 else 0
         r = r[np.isfinite(r)]
         inliers = float(np.mean(np.sqrt(r) < tau_px)) if r.size else float("nan")
         decision = check_inliers(decision, inliers, tau_px, cfg.decision)
+        decision = check_track_pairs_at_best(decision, seen, best, cfg.decision)
     if len(tp.index) == 0 and not decision.accepted:
         decision = PairDecision(False, "no cross-view track pairs (the views share no matched motion)",
                                 0.0, 0.0, 0, 0, False)

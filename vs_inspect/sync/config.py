@@ -44,7 +44,9 @@ class DecisionConfig:
     enabled: bool = field(default=True, metadata={"flag": "--no-spurious-filter", "negate": True})
     """Reject pairs whose landscape is ambiguous (off = accept every pair with a minimum: the ablation)."""
     min_track_pairs: int = 8
-    """A pair with fewer cross-view track pairs is rejected."""
+    """A pair with fewer cross-view track pairs, or whose best offset is seen by fewer of them, is rejected: a few wrong matches can line up by chance at some offset."""
+    min_support_fraction: float = 0.4
+    """Reject when the best minimum rests on fewer (track pair, frame) terms than this fraction of the landscape's median count: a mean over few terms dips by chance, while right offsets of matched tracks have at least their usual overlap."""
     min_contrast: float = 0.3
     """Reject when the best energy is less than this fraction below the landscape's median (flat landscape)."""
     max_second_ratio: float = 0.7
@@ -65,7 +67,7 @@ class DecisionConfig:
     def __post_init__(self) -> None:
         check_fields(self, nonnegative=("min_track_pairs",), positive=("max_minima",),
                      fraction=("min_contrast", "max_second_ratio", "min_rival_support", "min_prominence",
-                               "min_inlier_fraction", "inlier_px_fraction"))
+                               "min_inlier_fraction", "inlier_px_fraction", "min_support_fraction"))
 
 
 @dataclass(frozen=True)

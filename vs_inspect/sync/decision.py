@@ -4,6 +4,10 @@ The paper rejects a pair when the best minimum is not clearly deeper than the ne
 there are more than two minima; its research code keeps minima that are Pareto-optimal in energy
 and overlap. Depths here are measured below the landscape's median energy, so they compare
 across pairs and residual kinds.
+
+Weak evidence is refused even when the shape looks clear, since a null is better than a wrong
+offset: a minimum that rests on a small share of the landscape's usual overlap, or that few track
+pairs see, is an energy averaged over too few terms.
 """
 
 from __future__ import annotations
@@ -68,13 +72,37 @@ def check_inliers(decision: PairDecision, inlier_fraction: float, tau_px: float,
     return out
 
 
+def check_track_pairs_at_best(decision: PairDecision, seen: int, offset_s: float,
+                              cfg: DecisionConfig) -> PairDecision:
+    """Add how many track pairs have a term at the best offset; reject a pair accepted so far when
+    fewer than cfg.min_track_pairs do.
+
+    The pair may have many track pairs, yet at a wrong offset only a handful overlap in time:
+    the minimum is then the chance agreement of those few, whatever the others say.
+    """
+    out = replace(decision, track_pairs_at_best=int(seen))
+    if decision.accepted and cfg.enabled and seen < cfg.min_track_pairs:
+        out = replace(out, accepted=False, reason=(
+            f"only {seen} track pairs seen at the best offset {offset_s:+.3f} s (fewer than "
+            f"{cfg.min_track_pairs}): too little evidence for an offset"))
+    return out
+
+
+def support_fraction(support: np.ndarray, energy: np.ndarray, best: int) -> tuple[float, float]:
+    """(terms at the minimum / the landscape's usual overlap, that usual overlap): the usual
+    overlap is the median term count over the offsets that have an energy."""
+    have = np.isfinite(energy)
+    usual = float(np.median(support[have])) if have.any() else 0.0
+    return (float(support[best]) / usual if usual > 0 else float("nan")), usual
+
+
 def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_track_pairs: int,
            cfg: DecisionConfig) -> tuple[PairDecision, np.ndarray]:
     """(decision, minima indices best first)."""
     finite = np.isfinite(energy)
     if num_track_pairs < cfg.min_track_pairs:
-        return PairDecision(False, f"too few track pairs ({num_track_pairs} < {cfg.min_track_pairs})",
-                            0.0, 0.0, 0, 0, False), np.zeros(0, dtype=np.int64)
+        return PairDecision(False, f"too few track pairs: only {num_track_pairs} (fewer than "
+                            f"{cfg.min_track_pairs})", 0.0, 0.0, 0, 0, False), np.zeros(0, dtype=np.int64)
     if not finite.any():
         why = ("no candidate offset leaves the required overlap" if len(energy) == 0 else
                "no offset has enough co-visible track observations (tracks never overlap in time)")
@@ -111,8 +139,9 @@ def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_t
     first_rival = rivals[int(np.argmax(rival_prom))] if len(rivals) else best
     pareto = pareto_minima(energy, support, minima)
     edge = best in (0, len(energy) - 1) or not (finite[max(best - 1, 0)] and finite[min(best + 1, len(energy) - 1)])
+    share, usual = support_fraction(support, energy, best)
     nums = dict(contrast=float(contrast), second_depth_ratio=second, num_minima=significant,
-                num_pareto_minima=len(pareto), at_range_edge=bool(edge))
+                num_pareto_minima=len(pareto), at_range_edge=bool(edge), support_fraction=share)
 
     accepted, reason = True, f"single clear minimum (contrast {contrast:.2f}, rival/best prominence {second:.2f})"
     if weaker_lowest is not None:
@@ -135,4 +164,10 @@ def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_t
         accepted = False
         reason = (f"best minimum at the edge of the search range ({offsets_s[best]:+.3f} s): "
                   "the true offset may lie outside it")
+    elif share < cfg.min_support_fraction:
+        accepted = False
+        reason = (f"minimum at {offsets_s[best]:+.3f} s supported by {100 * share:.0f}% of the "
+                  f"landscape's usual overlap ({int(support[best])} of a median {usual:.0f} "
+                  f"(track pair, frame) terms; fewer than {100 * cfg.min_support_fraction:.0f}%): "
+                  "a mean over few terms dips by chance")
     return PairDecision(accepted, reason, **nums), minima

@@ -1,0 +1,83 @@
+"""Weak evidence is refused with a reason even when the landscape's shape looks clear."""
+
+import numpy as np
+import pytest
+
+from vs_inspect.sync.config import DecisionConfig
+from vs_inspect.sync.decision import check_track_pairs_at_best, decide, support_fraction
+from vs_inspect.types import PairDecision
+
+OFFS = np.linspace(-1, 1, 201)
+
+
+def bowl(center, depth=0.8, width=0.05):
+    return 1.0 - depth * np.exp(-((OFFS - center) / width) ** 2)
+
+
+def test_minimum_on_a_small_share_of_the_usual_overlap_is_refused():
+    """A clear dip where only 12 % of the usual (track pair, frame) terms overlap."""
+    support = np.full(201, 1000)
+    support[125] = 120  # the dip at +0.25 s
+    dec, minima = decide(bowl(0.25), support, OFFS, 100, DecisionConfig())
+    assert OFFS[minima[0]] == pytest.approx(0.25)
+    assert not dec.accepted
+    assert dec.reason == ("minimum at +0.250 s supported by 12% of the landscape's usual overlap "
+                          "(120 of a median 1000 (track pair, frame) terms; fewer than 40%): a mean "
+                          "over few terms dips by chance")
+    assert dec.support_fraction == pytest.approx(0.12)
+
+
+def test_the_usual_overlap_is_the_median_over_offsets_with_an_energy():
+    """Offsets without an energy (too few terms) do not lower the usual overlap."""
+    e = bowl(0.5)
+    e[:100] = np.nan
+    support = np.full(201, 1000)
+    support[:100] = 5
+    share, usual = support_fraction(support, e, 150)
+    assert usual == 1000 and share == pytest.approx(1.0)
+    dec, _ = decide(e, support, OFFS, 100, DecisionConfig())
+    assert dec.accepted, dec.reason
+
+
+def test_minimum_with_its_usual_overlap_or_more_stays_accepted():
+    support = np.round(1000 * (1.2 - np.abs(OFFS))).astype(int)  # overlap shrinks toward the edges
+    dec, _ = decide(bowl(-0.6), support, OFFS, 100, DecisionConfig())
+    # 600 terms at -0.6 s against a median of 700: 86 %
+    assert dec.accepted and dec.reason.startswith("single clear minimum"), dec.reason
+    assert dec.support_fraction == pytest.approx(600 / 700, abs=0.01)
+
+
+def test_support_share_at_the_threshold_is_accepted_and_the_filter_off_accepts_all():
+    support = np.full(201, 1000)
+    support[125] = 400
+    assert decide(bowl(0.25), support, OFFS, 100, DecisionConfig())[0].accepted
+    support[125] = 399
+    assert not decide(bowl(0.25), support, OFFS, 100, DecisionConfig())[0].accepted
+    assert decide(bowl(0.25), support, OFFS, 100, DecisionConfig(enabled=False))[0].accepted
+    assert decide(bowl(0.25), support, OFFS, 100, DecisionConfig(min_support_fraction=0.3))[0].accepted
+
+
+def test_few_track_pairs_in_all_is_refused_with_the_count():
+    dec, minima = decide(bowl(0.0), np.full(201, 1000), OFFS, 6, DecisionConfig())
+    assert not dec.accepted and len(minima) == 0
+    assert dec.reason == "too few track pairs: only 6 (fewer than 8)"
+
+
+ACCEPTED = PairDecision(True, "single clear minimum (contrast 0.80, rival/best prominence 0.00)",
+                        0.8, 0.0, 1, 1, False)
+
+
+def test_few_track_pairs_seen_at_the_best_offset_is_refused():
+    dec = check_track_pairs_at_best(ACCEPTED, 6, 0.25, DecisionConfig())
+    assert not dec.accepted and dec.track_pairs_at_best == 6
+    assert dec.reason == ("only 6 track pairs seen at the best offset +0.250 s (fewer than 8): too "
+                          "little evidence for an offset")
+
+
+def test_enough_track_pairs_at_the_best_offset_keeps_the_decision():
+    dec = check_track_pairs_at_best(ACCEPTED, 8, 0.25, DecisionConfig())
+    assert dec.accepted and dec.reason == ACCEPTED.reason and dec.track_pairs_at_best == 8
+    # a pair refused for another reason keeps that reason; the filter off accepts
+    refused = PairDecision(False, "flat landscape", 0.1, 0.0, 1, 1, False)
+    assert check_track_pairs_at_best(refused, 2, 0.0, DecisionConfig()).reason == "flat landscape"
+    assert check_track_pairs_at_best(ACCEPTED, 2, 0.0, DecisionConfig(enabled=False)).accepted
