@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..io.drone import import_drone, write_drone_bundle
+from ._common import add_force_option
 
 LAYOUT = """folder layout (the multi-view drone tracking datasets):
   DIR/cameras.txt               "camK - model" per line; the order gives the camera ids
@@ -27,13 +28,13 @@ def register(sub) -> None:
                        epilog=LAYOUT, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("folder", type=Path, help="dataset folder in the layout below")
     p.add_argument("--out", type=Path, required=True, help="cue bundle folder to write")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing bundle folder")
+    add_force_option(p, "--out")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     bundle, gt = import_drone(args.folder)
-    write_drone_bundle(bundle, gt, args.out, overwrite=args.overwrite)
+    write_drone_bundle(bundle, gt, args.out, overwrite=args.force)
     seen = {n: int(np.isfinite(t.xy[0, :, 0]).sum()) for n, t in bundle.tracks.items()}
     print(f"wrote {args.out}: {len(bundle.videos)} pose-free cameras, one drone track each "
           f"(detections: {', '.join(f'{n} {k}' for n, k in seen.items())}), {len(bundle.pairs)} view pairs")
