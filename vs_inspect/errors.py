@@ -22,6 +22,10 @@ class InputError(VsInspectError):
     """Bad input other than a bundle: unknown names, unreadable videos, mismatched calibration."""
 
 
+class BadVideoName(InputError):
+    """A video's name (from its file name) cannot be used: the caller must rename the file."""
+
+
 class NoUsableVideos(InputError):
     """Stage 0 could use no video (none opened, or none got a camera).
 

@@ -151,8 +151,7 @@ def track_rows(bundle: CueBundle, name: str, max_tracks: int, seed: int = 0) -> 
     return np.sort(pick)
 
 
-def run_record_view(bundle: CueBundle, result: SyncResult, options: RecordOptions,
-                    progress: bool = False) -> RunRecordView:
+def run_record_view(bundle: CueBundle, result: SyncResult, options: RecordOptions) -> RunRecordView:
     """The view of Stage 2's result: graph layout, the truth and errors, tracks, trajectories."""
     gt = bundle.gt_offsets_s
     ref_true = gt.get(result.reference, 0.0) if gt else 0.0

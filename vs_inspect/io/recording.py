@@ -61,8 +61,6 @@ def entity_name(name: str) -> str:
 def check_entity_names(names, known: dict[str, str] | None = None) -> dict[str, str]:
     """{entity: video name} of `names` (added to `known`); InputError naming both videos when two
     names map to one entity (cam.1 and cam_1 would merge their data in the recording)."""
-    from ..errors import InputError
-
     seen = dict(known or {})
     for n in names:
         e = entity_name(n)

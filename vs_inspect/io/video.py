@@ -22,7 +22,7 @@ import av
 import cv2
 import numpy as np
 
-from ..errors import InputError
+from ..errors import BadVideoName, InputError
 from ..types import VideoInfo
 from .atomic import atomic_path
 
@@ -120,7 +120,7 @@ def open_video(path, fps: float | None = None, name: str | None = None) -> Video
     from .bundle import check_video_name
     problem = check_video_name(name or (path.name if path.is_dir() else path.stem))
     if problem:
-        raise InputError(f"{path}: the video's name (its file name) {problem}; rename it")
+        raise BadVideoName(f"{path}: the video's name (its file name) {problem}; rename it")
     if path.is_dir():
         return _open_image_folder(path, fps, name)
     vname = name or path.stem

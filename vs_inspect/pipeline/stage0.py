@@ -13,7 +13,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ..cues.config import CueConfig
-from ..errors import InputError, NoUsableVideos
+from ..errors import BadVideoName, InputError, NoUsableVideos
 from ..record.sink import Sink
 from ..types import CueBundle, CueStats
 
@@ -27,18 +27,13 @@ def open_sources(paths: Sequence[PathLike], fps: float | None
     """(opened sources, {name: path} of every input, {name: reason} for those not opened)."""
     from ..io.video import open_video
 
-    from ..io.bundle import check_video_name
-
-    # a bad name is the caller's to fix (rename the file), not a video to leave out
-    for p in map(Path, paths):
-        problem = check_video_name(p.name if p.is_dir() else p.stem)
-        if problem:
-            raise InputError(f"{p}: the video's name (its file name) {problem}; rename it")
     sources, inputs, dropped = [], {}, {}
     for p in paths:
         p = Path(p)
         try:
             src = open_video(p, fps=fps)
+        except BadVideoName:  # the caller's to fix (rename the file), not a video to leave out
+            raise
         except InputError as exc:
             name = p.stem if p.suffix else p.name
             dropped[name] = f"could not be opened: {exc}"

@@ -84,7 +84,7 @@ def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | 
     timings["stage2_s"] = time.perf_counter() - t1
     result = dataclasses.replace(result, timings_s=timings)
     sink.sync_result(result, None if sink.options is None else
-                     run_record_view(bundle, result, sink.options, progress))
+                     run_record_view(bundle, result, sink.options))
     return result
 
 
