@@ -214,6 +214,45 @@ def test_export_refuses_an_existing_mosaic_without_force(run_dir, tmp_path, caps
     assert (tmp_path / "m.mp4").read_text() == "earlier"
 
 
+
+@pytest.fixture(scope="module")
+def clips_run_dir(tmp_path_factory):
+    """A result.json over two real noisy clips: its mosaic is far larger than a 16 kB tmpfs."""
+    from vs_inspect.io.video import VideoWriter
+    d = tmp_path_factory.mktemp("clips")
+    rng = np.random.default_rng(0)
+    paths = {}
+    for name in ("left", "right"):
+        paths[name] = d / f"{name}.mp4"
+        with VideoWriter(paths[name], 160, 96, 10.0) as vw:
+            for _ in range(20):
+                vw.write(rng.integers(0, 256, (96, 160, 3), dtype=np.uint8))
+    result = {"reference": "left", "offsets_s": {"left": 0.0, "right": 0.3}, "unresolved": {},
+              "input": {"videos": {n: str(p) for n, p in paths.items()}}}
+    (d / "result.json").write_text(json.dumps(result))
+    return d
+
+
+def test_export_mosaic_on_a_read_only_file_system(clips_run_dir, tmp_path, capsys):
+    ro = tmp_path / "ro"
+    with read_only_folder(ro):
+        if os.access(ro, os.W_OK) and os.geteuid() != 0:
+            pytest.skip("chmod 0o555 does not stop writes here")
+        line = fails(["export", clips_run_dir, "--mosaic", ro / "m.mp4", "--no-progress"], capsys, 2,
+                     str(ro))
+        assert "read-only file system" in line or "Permission denied" in line
+        assert tree(ro) == ["keep.txt"]
+
+
+@pytest.mark.skipif(_can_mount() is not None, reason=str(_can_mount()))
+def test_export_mosaic_on_a_full_file_system(clips_run_dir, tmp_path, capsys):
+    full = tmp_path / "full"
+    with tmpfs(full, "16k"):
+        fails(["export", clips_run_dir, "--mosaic", full / "m.mp4", "--no-progress"], capsys, 2,
+              "no space left on device")
+        assert tree(full) == []  # no hidden .part.mp4 left
+
+
 # ---- overwrite guard, names of outputs, file modes --------------------------------------------
 
 

@@ -184,10 +184,12 @@ def test_reference_without_camera_gives_its_place_to_a_video_with_one(tmp_path, 
     _calibration(cal, ["a", "b", "c"], {"a": (100, 100)})
     config = RunConfig.from_dict({"sync": {"solve": {"reference": reference}}})
     result = run([a, b, c], config, calibration=cal, progress=False)
-    assert result.reference == "b" and result.offsets_s["b"] == 0.0
-    assert result.offsets_s["a"] is None
+    assert result.reference == "b" and result.offsets_s["a"] is None
     assert "not a uniform scale" in result.unresolved["a"]
     assert result.unresolved["a"].endswith("it cannot be the reference, so b is the reference instead")
-    assert "b" not in result.unresolved and [(p.a, p.b) for p in result.pairs] == [("b", "c")]
+    assert [(p.a, p.b) for p in result.pairs] == [("b", "c")]
+    # these blank disks give no tracks, so b-c is not accepted: b's 0 was measured against nothing
+    assert not result.pairs[0].decision.accepted and result.offsets_s["b"] is None
+    assert result.unresolved["b"].startswith("the reference, but no accepted pair links it")
     # the run's settings are recorded as given
     assert result.config["sync"]["solve"]["reference"] == reference

@@ -54,3 +54,18 @@ def test_decisions_carry_the_evidence_behind_the_best_minimum(small):
         if abs(land.best_offset_s - (truth[land.b] - truth[land.a])) < 0.05:
             assert d.accepted, d.reason
             assert d.support_fraction >= 0.4 and d.track_pairs_at_best >= 8
+
+
+def test_a_reference_without_an_accepted_pair_is_null_with_a_reason(small):
+    import dataclasses
+    bundle, base = small
+    ref = bundle.names[0]
+    lands = [p if ref not in (p.a, p.b) else dataclasses.replace(
+        p, decision=dataclasses.replace(p.decision, accepted=False, reason="planted rejection"))
+        for p in base.pairs]
+    out = solve_stage2(bundle, lands)
+    assert out.reference == ref and out.offsets_s[ref] is None and out.uncertainty_s[ref] is None
+    assert out.unresolved_reason[ref].startswith("the reference, but no accepted pair links it")
+    assert "planted rejection" in out.unresolved_reason[ref]
+    # with its pairs accepted it keeps its 0.0 and no reason
+    assert base.offsets_s[ref] == 0.0 and ref not in base.unresolved_reason

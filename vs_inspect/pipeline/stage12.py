@@ -110,13 +110,19 @@ def solve_stage2(bundle: CueBundle, lands: list[PairLandscape] | tuple[PairLands
             sigma = land.uncertainty_s if math.isfinite(land.uncertainty_s) else floor
             meas.append(PairMeasurement(land.a, land.b, land.best_offset_s, max(sigma, 1e-6)))
     out = solve_offsets(names, reference, meas, solve.solver, delta, solve.max_iterations)
-    reasons = dict(out.unresolved_reason)
-    for v, why in list(reasons.items()):
+
+    def with_its_pairs(v: str, why: str) -> str:
         mine = [p for p in lands if v in (p.a, p.b)]
         if not mine:
-            reasons[v] = why + " (no pair with it was evaluated)"
-        else:
-            worst = "; ".join(f"{p.a}__{p.b}: {p.decision.reason}" for p in mine[:3])
-            reasons[v] = f"{why}; its pairs: {worst}"
-    return SyncResult(reference, out.offsets_s, out.uncertainty_s, reasons, tuple(lands),
+            return why + " (no pair with it was evaluated)"
+        return why + "; its pairs: " + "; ".join(f"{p.a}__{p.b}: {p.decision.reason}" for p in mine[:3])
+
+    reasons = {v: with_its_pairs(v, why) for v, why in out.unresolved_reason.items()}
+    offsets, unc = dict(out.offsets_s), dict(out.uncertainty_s)
+    if len(names) > 1 and not any(reference in (m.a, m.b) for m in meas):
+        # its 0.0 is a definition, not a measurement: with no accepted pair it says nothing
+        offsets[reference], unc[reference] = None, None
+        reasons[reference] = with_its_pairs(reference, "the reference, but no accepted pair links it to "
+                                            "another video, so no offset was measured against it")
+    return SyncResult(reference, offsets, unc, reasons, tuple(lands),
                       out.pairs, out.iterations, solve.solver)
