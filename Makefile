@@ -21,6 +21,11 @@ $(STAMP): pyproject.toml Makefile
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
 	    (apt-get update -qq && apt-get install -y -qq libusb-1.0-0) >/dev/null 2>&1 || echo "warning: could not install libusb-1.0-0; open3d features off"; \
 	  else echo "warning: libusb-1.0-0 missing; open3d features off"; fi; fi
+	# Xvfb + mesa (software Vulkan/GL) + ffmpeg: the real rerun viewer's screenshot test and its H.264 video panels.
+	@if ! command -v Xvfb >/dev/null || ! command -v ffmpeg >/dev/null; then \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq xvfb mesa-vulkan-drivers ffmpeg) >/dev/null 2>&1 || echo "warning: could not install xvfb/ffmpeg; the viewer screenshot test will skip"; \
+	  else echo "warning: Xvfb or ffmpeg missing; the viewer screenshot test will skip"; fi; fi
 	# torch first, pinned, so no later requirement pulls a CUDA build.
 	$(PIP) install -q torch==2.13.0
 	$(PIP) install -q -e '.[learned,distributed,test]'
