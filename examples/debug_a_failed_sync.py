@@ -12,7 +12,8 @@ The scene (vs_inspect.synth.cues) has five cameras; three things are broken on p
 The script synchronizes the scene while recording to OUT/debug.rrd, then works only from the
 recording, as someone who was sent the file would: `vs-inspect inspect` (the decisions and the
 suspects it names) and `vs-inspect report` (the figures). It prints, for each planted failure,
-where it shows up.
+where it shows up, and scores inspect's diagnosis against what was planted: true positives,
+false positives (an innocent video or pair accused) and misses.
 """
 
 from __future__ import annotations
@@ -144,12 +145,30 @@ def main() -> int:
     print("   in the report: the timeline draws it hatched ('unresolved: not placed'), the pair "
           "graph has no accepted edge to it, the landscapes of its pairs are empty")
     print(f"\nreport: {paths['index']}")
-    suspects = inspect_text.split("suspects:", 1)[-1]
-    rejected = [ln for ln in inspect_text.splitlines() if "REJECTED" in ln]
-    named = [n for n in (WRONG_POSE, BLIND) if f"- {n}:" in suspects]
-    named += [key] if any(ln.strip().startswith(key) for ln in rejected) else []
-    print(f"`vs-inspect inspect` names {len(named)} of 3 planted failures (as a suspect video or a "
-          f"rejected pair): {named}")
+    # score inspect's diagnosis against what was planted: every accused video or pair is a true
+    # positive when it was planted, else a false positive (a video left unsynchronized only as a
+    # consequence of the others is not accused)
+    from vs_inspect.analysis.diagnose import diagnose
+    from vs_inspect.io.recording import read_recording
+    rec = read_recording(rrd)
+    diag = diagnose(rec.result, rec.videos)
+    planted = {("video", WRONG_POSE): "wrong pose", ("video", BLIND): "blind camera",
+               ("pair", key): "all-wrong matches"}
+    accused = {(s.kind, s.name): s for s in diag.suspects if s.kind in ("video", "pair")}
+    tp = [k for k in accused if k in planted]
+    fp = [k for k in accused if k not in planted]
+    fn = [k for k in planted if k not in accused]
+    print("\ninspect's diagnosis against the planted failures:")
+    for k in tp:
+        print(f"   true positive  {k[0]} {k[1]} ({planted[k]}): cause {accused[k].cause}")
+    for k in fp:
+        print(f"   FALSE POSITIVE {k[0]} {k[1]}: {accused[k].message}")
+    for k in fn:
+        print(f"   missed         {k[0]} {k[1]} ({planted[k]})")
+    print(f"   global cause: {diag.global_cause or 'none'}")
+    print(f"`vs-inspect inspect` names {len(tp)} of {len(planted)} planted failures; "
+          f"false positives: {len(fp)} (innocent videos accused: "
+          f"{sorted(n for kind, n in fp if kind == 'video') or 'none'})")
     print(f"done in {time.perf_counter() - t0:.1f} s")
     return 0
 

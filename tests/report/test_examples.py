@@ -37,6 +37,7 @@ def test_teach_epipolar_cue(tmp_path):
 def test_debug_a_failed_sync(tmp_path):
     out = _run("debug_a_failed_sync.py", tmp_path)
     assert (tmp_path / "debug.rrd").is_file() and (tmp_path / "report" / "index.html").is_file()
-    assert "names 3 of 3 planted failures" in out
+    assert "names 3 of 3 planted failures; false positives: 0 (innocent videos accused: none)" in out
+    assert "FALSE POSITIVE" not in out and "missed " not in out
     assert "cam4: unresolved" not in out  # the wording is "offset: unresolved"
     assert "offset: unresolved" in out
