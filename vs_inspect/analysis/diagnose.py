@@ -251,10 +251,10 @@ def diagnose(result: RunResult, videos: Iterable[RecordedVideo | VideoInfo] | No
         others = [c for c in checks if v not in (c.a, c.b)]
         if others and sum(c.cause == CAUSE_NO_PAIRS for c in others) / len(others) < 0.5:
             accused.add(v)
-            most = max(c.num_track_pairs for c in cs)
+            lo, hi = min(c.num_track_pairs for c in cs), max(c.num_track_pairs for c in cs)
             suspects.append(Suspect("video", v, (
                 f"{v}: {CAUSE_NO_PAIRS}: none of its {len(cs)} pairs has enough cross-view track "
-                f"pairs (at most {most}) while most other pairs do: it does not see the shared "
+                f"pairs ({lo}-{hi}) while most other pairs do: it does not see the shared "
                 f"motion, or its tracks or matches failed"), CAUSE_NO_PAIRS))
 
     # 2. + 3. loops, then videos whose unexplained pairs mostly fail

@@ -42,7 +42,7 @@ def _opt(x: float) -> float | None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..analysis.diagnose import CAUSE_MEANING, diagnose
+    from ..analysis.diagnose import CAUSE_LOOPS, CAUSE_MEANING, diagnose
     from ..io.recording import pair_key, read_recording
 
     rec = read_recording(args.rrd)
@@ -96,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
           f"{sum(lp.bad for lp in diag.loops)} miss")
     for lp in sorted(diag.loops, key=lambda lp: -abs(lp.residual_ms))[: args.top]:
         a, b, c = lp.videos
-        print(f"  {a} → {b} → {c}: {lp.residual_ms:+9.1f} ms (tolerance {lp.tolerance_ms:.0f} ms) "
+        print(f"  {a} → {b} → {c}: {lp.residual_ms:+9.1f} ms (tolerance {lp.tolerance_ms:.1f} ms) "
               f"{'MISSES' if lp.bad else 'closes'}")
 
     print("\ncauses of the failing pairs:")
@@ -120,6 +120,16 @@ def run(args: argparse.Namespace) -> int:
               f"{c.loops - c.loops_bad} of {c.loops} loops: a cautious rejection ({c.reason})")
     for c in diag.unexplained:
         print(f"  (unexplained) {c.key}: {c.cause}: {c.reason}")
+    blamed = {s.name for s in diag.suspects}
+    for lp in diag.loops:
+        keys = [f"{x}__{y}" for x, y in ((lp.videos[0], lp.videos[1]), (lp.videos[1], lp.videos[2]),
+                                         (lp.videos[0], lp.videos[2]))]
+        if lp.bad and not (set(lp.videos) | set(keys)) & blamed:
+            print(f"  (loop) {' → '.join(lp.videos)} misses by {lp.residual_ms:+.1f} ms (tolerance "
+                  f"{lp.tolerance_ms:.1f} ms): one of its pairs is off by about that much "
+                  f"({CAUSE_LOOPS}: pose or calibration, or matches); "
+                  + ("a single loop cannot tell which" if len(diag.loops) == 1 else
+                     "no pair misses all of its loops"))
     for v, why in diag.consequences.items():
         print(f"  (consequence, not a suspect) {v}: not synchronized: {why}")
 
