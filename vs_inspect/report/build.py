@@ -74,7 +74,7 @@ def _render_into(data: ReportData, out: Path, formats: tuple[str, ...] = ("png",
         p = out / f"{key}.{formats[0]}"
         if key == "scene3d":
             from .scene3d import render_scene
-            render_scene(data, p, figures.figure_size_px("scene3d", data), dpi, formats)
+            render_scene(data, p, figures.figure_size_px("scene3d", data, dpi), dpi, formats)
         else:
             getattr(figures, key)(data, p, dpi, formats)
         times[key] = round(time.perf_counter() - t0, 3)

@@ -71,7 +71,8 @@ def landscape_grid_shape(n: int) -> tuple[int, int]:
 def figure_size_px(kind: str, data: ReportData, dpi: float = DPI) -> tuple[int, int]:
     """(width, height) in pixels of each figure's PNG at dpi, so that tests can check it."""
     w, h = _size_px(kind, data)
-    return int(round(w * dpi / DPI)), int(round(h * dpi / DPI))
+    # as matplotlib sizes the canvas: inches (px / DPI) times dpi, truncated
+    return int((w / DPI) * dpi + 1e-6), int((h / DPI) * dpi + 1e-6)
 
 
 def _size_px(kind: str, data: ReportData) -> tuple[int, int]:

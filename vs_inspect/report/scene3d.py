@@ -72,8 +72,8 @@ def _title_lines(text: str, width: int) -> str:
 
 def render_scene(data: ReportData, path: Path, size: tuple[int, int], dpi: float = 100.0,
                  formats: tuple[str, ...] = ("png",)) -> Path:
-    """The 3D scene as PNG (window size × dpi/100); PDF and SVG embed that picture."""
-    size = (int(round(size[0] * dpi / 100.0)), int(round(size[1] * dpi / 100.0)))
+    """The 3D scene as a PNG of size (px, already at dpi: fonts scale by dpi/100); PDF and SVG
+    embed that picture."""
     png = _render_png(data, Path(path).with_suffix(".png"), size, dpi / 100.0)
     out = [png] if "png" in formats else []
     for fmt in formats:
