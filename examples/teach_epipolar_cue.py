@@ -273,8 +273,6 @@ def step6_sweep(path: Path, bundle, a: str, b: str, F_ab: np.ndarray, delta: flo
     """An animation: Δ sweeps across the true offset; b's lines stay, a's points slide."""
     import shutil
 
-    from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
-
     va, vb = bundle.video(a), bundle.video(b)
     xa, xb = bundle.tracks[a].xy, bundle.tracks[b].xy
     idx = bundle.pair(a, b).index
@@ -318,12 +316,27 @@ def step6_sweep(path: Path, bundle, a: str, b: str, F_ab: np.ndarray, delta: flo
         title.set_color(ACCEPT if near else "black")
         return dots, cursor, title
 
-    anim = FuncAnimation(fig, draw, frames=len(deltas), blit=False)
+    # each frame drawn once, then written as GIF (Pillow) and, when ffmpeg is on PATH, as H.264
+    # MP4 (what matplotlib's PillowWriter and FFMpegWriter do, without drawing every frame twice)
+    from PIL import Image
+    fig.canvas.draw()
+    fig.set_layout_engine("none")  # the layout is fixed now: no re-layout on every frame
+    images = []
+    for n in range(len(deltas)):
+        draw(n)
+        fig.canvas.draw()
+        images.append(np.asarray(fig.canvas.buffer_rgba())[..., :3].copy())
+    frames_pil = [Image.fromarray(im) for im in images]
+    frames_pil[0].save(path, save_all=True, append_images=frames_pil[1:], duration=160, loop=0)
     written = [path]
-    anim.save(path, writer=PillowWriter(fps=6))
     if shutil.which("ffmpeg"):
+        import subprocess
+        h, w = images[0].shape[:2]
         mp4 = path.with_suffix(".mp4")
-        anim.save(mp4, writer=FFMpegWriter(fps=6, codec="libx264", extra_args=["-pix_fmt", "yuv420p"]))
+        cmd = ["ffmpeg", "-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgb24",
+               "-s", f"{w}x{h}", "-r", "6", "-i", "-", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+               "-c:v", "libx264", "-pix_fmt", "yuv420p", str(mp4)]
+        subprocess.run(cmd, input=b"".join(im.tobytes() for im in images), check=True)
         written.append(mp4)
     plt.close(fig)
     return written
