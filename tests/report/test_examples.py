@@ -1,6 +1,6 @@
 """The two examples run end to end (each well under a minute on an idle 2-core machine).
 
-Together they take ~90 s on a loaded machine (the teaching example's animated sweep is most of it); the whole suite stays well inside CI's budget, so
+Together they take ~60 s on a loaded machine; the whole suite stays well inside CI's budget, so
 they run by default. VS_INSPECT_SKIP_EXAMPLES=1 skips them for quick local runs."""
 
 from __future__ import annotations

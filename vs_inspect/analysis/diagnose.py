@@ -254,7 +254,8 @@ def diagnose(result: RunResult, videos: Iterable[RecordedVideo | VideoInfo] | No
             lo, hi = min(c.num_track_pairs for c in cs), max(c.num_track_pairs for c in cs)
             suspects.append(Suspect("video", v, (
                 f"{v}: {CAUSE_NO_PAIRS}: none of its {len(cs)} pairs has enough cross-view track "
-                f"pairs ({lo}-{hi}) while most other pairs do: it does not see the shared "
+                f"pairs ({f'{lo}-{hi}' if lo != hi else lo} track pairs) while most other pairs do: "
+                f"it does not see the shared "
                 f"motion, or its tracks or matches failed"), CAUSE_NO_PAIRS))
 
     # 2. + 3. loops, then videos whose unexplained pairs mostly fail
@@ -304,8 +305,11 @@ def diagnose(result: RunResult, videos: Iterable[RecordedVideo | VideoInfo] | No
         if k in blamed:
             pair_suspects.append(Suspect("pair", c.key, _pair_message(c, loop=True), CAUSE_LOOPS))
             continue
-        if not c.accepted and c.loops and c.loops_bad < c.loops and c.cause != CAUSE_NO_PAIRS:
-            cautious.append(c)  # its minimum closes a loop: the offset is right, the decision cautious
+        if (not c.accepted and c.loops and c.loops_bad < c.loops
+                and c.cause not in (CAUSE_NO_PAIRS, CAUSE_FLAT, CAUSE_AMBIGUOUS)):
+            # a clear minimum that closes a loop: the offset is right, the decision cautious (a
+            # flat or ambiguous landscape whose weak minimum lands right by chance still failed)
+            cautious.append(c)
             continue
         fine = [v for v in (c.a, c.b)
                 if sum(not x.bad for x in per[v] if x is not c) >= max(1, 0.5 * (len(per[v]) - 1))]
@@ -352,7 +356,8 @@ def _video_blame(cause: str | None) -> str:
     if cause in (CAUSE_GEOMETRY, CAUSE_LOOPS, CAUSE_SOLUTION):
         return "its camera pose or calibration is likely wrong"
     if cause == CAUSE_FLAT:
-        return "its tracks or matches are likely wrong (no offset fits its pairs)"
+        return ("no offset fits any of its pairs: its camera pose or calibration is likely wrong "
+                "(or its tracks)")
     if cause == CAUSE_EDGE:
         return "its true offset likely lies outside the search range (--range-s)"
     return f"{cause}: {CAUSE_MEANING.get(cause, '')}"
