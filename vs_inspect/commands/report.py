@@ -19,7 +19,7 @@ def register(sub) -> None:
                                    "The same run gives the same figures from its folder and from "
                                    "its .rrd.")
     p.add_argument("source", type=Path, metavar="RUN_DIR_OR_RRD", help="run folder or .rrd file")
-    p.add_argument("--out", type=Path, required=True, help="folder for the PNGs and index.html")
+    p.add_argument("--out", type=Path, required=True, help="folder for the figures and index.html")
     p.add_argument("--pair", nargs=2, metavar=("A", "B"), default=None,
                    help="pair for the epipolar panel (default: the accepted pair with the sharpest landscape)")
     p.add_argument("--format", default="png", metavar="LIST",
