@@ -146,7 +146,7 @@ def _render_png(data: ReportData, path: Path, size: tuple[int, int], scale: floa
     n_traj = len(data.trajectories)
     n_moving = sum(c.is_moving for c in data.cameras)
     title = f"3D scene: {len(data.cameras)} cameras" + \
-            (f" ({n_moving} moving, with their path)" if n_moving else "") + \
+            (f" ({n_moving} moving, with {'its' if n_moving == 1 else 'their'} path)" if n_moving else "") + \
             f", {n_traj} trajectories triangulated at the solved offsets, coloured by global time"
     if data.static_points is None:
         title += "; no static reconstruction in the input"
