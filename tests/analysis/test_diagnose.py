@@ -127,8 +127,12 @@ def _planted() -> RunResult:
 
 
 def test_planted_failures_are_named_with_their_cause_and_no_innocent_video():
-    from vs_inspect.analysis.diagnose import (CAUSE_GEOMETRY, CAUSE_LOOPS, CAUSE_NO_PAIRS,
-                                              diagnose)
+    from vs_inspect.analysis.diagnose import (
+        CAUSE_GEOMETRY,
+        CAUSE_LOOPS,
+        CAUSE_NO_PAIRS,
+        diagnose,
+    )
     videos = [VideoInfo.constant_rate(n, 640, 480, 100, 25.0) for n in FIVE_S]
     d = diagnose(_planted(), videos)
     named = {(s.kind, s.name): s for s in d.suspects}

@@ -12,8 +12,8 @@ EXAMPLES: dict[str, list[tuple[str, str]]] = {
     "bench-drone": [("vs-inspect bench-drone ../shared/data/drone_tracking_dataset3",
                      "per-camera shift and rate errors on the drone dataset")],
     "bench-energy": [("vs-inspect bench-energy", "speed of the landscape against plain numpy")],
-    "calibrate-board": [("vs-inspect calibrate-board cam0.mp4 cam1.mp4 --board charuco.toml "
-                         "--out calib.json", "the rig's cameras; then sync --calib calib.json")],
+    "calibrate-board": [(("vs-inspect calibrate-board cam0.mp4 cam1.mp4 --board charuco.toml "
+                          "--out calib.json"), "the rig's cameras; then sync --calib calib.json")],
     "cues": [("vs-inspect cues cam0.mp4 cam1.mp4 cam2.mp4 --calib calib.json --out bundle",
               "Stage 0 only: a cue bundle to sync later with --bundle")],
     "demo": [("vs-inspect demo", "render (once) and synchronize the built-in scene into out/demo"),

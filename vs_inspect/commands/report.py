@@ -34,7 +34,6 @@ def register(sub) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..analysis.report_data import load_report_data
     from ..report.build import render_report
-
     from ..report.figures import FORMATS
 
     formats = tuple(f.strip().lower() for f in args.format.split(",") if f.strip())

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..errors import InputError
+from ..errors import InputError, VsInspectError
 from ..io.result import write_run_result
 from ..pipeline import run as run_pipeline
 from ._common import (add_config_file_option, add_cue_options, add_force_option, add_gt_option,
@@ -105,5 +105,5 @@ def _frame_intervals(bundle_dir: Path) -> dict[str, float] | None:
         return {v.name: (1.0 / v.fps if v.fps else
                          float(v.timestamps_s[-1] - v.timestamps_s[0]) / max(1, v.num_frames - 1))
                 for v in read_video_infos(bundle_dir)}
-    except Exception:  # the errors in ms are still shown; frames need the clocks
+    except (OSError, ValueError, VsInspectError):  # errors in ms are still shown; frames need clocks
         return None

@@ -62,7 +62,7 @@ def nice_ticks(lo: float, hi: float, max_ticks: int = 6) -> tuple[float, float, 
     if hi2 <= lo2:
         hi2 = lo2 + step
     decimals = max(0, -math.floor(math.log10(step) + 1e-9))
-    return lo2, hi2, int(round((hi2 - lo2) / step)) + 1, decimals
+    return lo2, hi2, round((hi2 - lo2) / step) + 1, decimals
 
 
 def _title_lines(text: str, width: int) -> str:
