@@ -12,7 +12,8 @@ The scene (vs_inspect.synth.cues) has five cameras; three things are broken on p
 The script synchronizes the scene while recording to OUT/debug.rrd, then works only from the
 recording, as someone who was sent the file would: `vs-inspect inspect` (the decisions and the
 suspects it names) and `vs-inspect report` (the figures). It prints, for each planted failure,
-where it shows up.
+where it shows up, and scores inspect's diagnosis against what was planted: true positives,
+false positives (an innocent video or pair accused) and misses.
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from scipy.spatial.transform import Rotation  # noqa: E402
 
 from vs_inspect.report import figures  # noqa: E402
+from vs_inspect.report.figures import fmt_px2  # noqa: E402
 from vs_inspect.report.build import render_report  # noqa: E402
 from vs_inspect.analysis.report_data import report_data_from_recording  # noqa: E402
 from vs_inspect.pipeline import run  # noqa: E402
@@ -119,12 +121,12 @@ def main() -> int:
         print(f"   {p.key}: {'accepted' if p.accepted else 'rejected'}{err} — {p.reason}")
     e = posed.epipolar
     if e is not None:
-        print(f"   epipolar panel {e.a}–{e.b}: median Sampson error {e.chosen.median_sampson_px2:.3g} px² "
-              f"at the chosen Δ vs {e.wrong.median_sampson_px2:.3g} px² at a wrong one "
+        print(f"   epipolar panel {e.a}–{e.b}: median Sampson error {fmt_px2(e.chosen.median_sampson_px2)} px² "
+              f"at the chosen Δ vs {fmt_px2(e.wrong.median_sampson_px2)} px² at a wrong one "
               f"(a healthy pair reaches a few px²) -> {wp_png}")
     good = data.epipolar
     if good is not None:
-        print(f"   for comparison, healthy pair {good.a}–{good.b}: {good.chosen.median_sampson_px2:.3g} px² "
+        print(f"   for comparison, healthy pair {good.a}–{good.b}: {fmt_px2(good.chosen.median_sampson_px2)} px² "
               f"at the chosen Δ")
     print("   in the recording: pairs/<a>__<b>/landscape and .../epipolar of its pairs; "
           "world/cameras shows the frustum turned away")
@@ -134,9 +136,9 @@ def main() -> int:
     if p is not None:
         print(f"   {key}: {'accepted' if p.accepted else 'rejected'} — {p.reason}")
     if allwrong.epipolar is not None:
-        print(f"   its epipolar panel: {allwrong.epipolar.chosen.median_sampson_px2:.3g} px² at "
+        print(f"   its epipolar panel: {fmt_px2(allwrong.epipolar.chosen.median_sampson_px2)} px² at "
               f"the 'best' Δ -> {aw_png}")
-    print("   in the report: its landscape is framed red, flat; the graph shows a dashed edge")
+    print("   in the report: its landscape is framed vermillion (rejected), flat; the graph shows a dashed edge")
     print(f"\n3. {BLIND} never sees the motion:")
     off = data.offsets_s.get(BLIND)
     print(f"   offset: {'unresolved' if off is None else f'{off:+.4f} s'} — "
@@ -144,12 +146,30 @@ def main() -> int:
     print("   in the report: the timeline draws it hatched ('unresolved: not placed'), the pair "
           "graph has no accepted edge to it, the landscapes of its pairs are empty")
     print(f"\nreport: {paths['index']}")
-    suspects = inspect_text.split("suspects:", 1)[-1]
-    rejected = [ln for ln in inspect_text.splitlines() if "REJECTED" in ln]
-    named = [n for n in (WRONG_POSE, BLIND) if f"- {n}:" in suspects]
-    named += [key] if any(ln.strip().startswith(key) for ln in rejected) else []
-    print(f"`vs-inspect inspect` names {len(named)} of 3 planted failures (as a suspect video or a "
-          f"rejected pair): {named}")
+    # score inspect's diagnosis against what was planted: every accused video or pair is a true
+    # positive when it was planted, else a false positive (a video left unsynchronized only as a
+    # consequence of the others is not accused)
+    from vs_inspect.analysis.diagnose import diagnose
+    from vs_inspect.io.recording import read_recording
+    rec = read_recording(rrd)
+    diag = diagnose(rec.result, rec.videos)
+    planted = {("video", WRONG_POSE): "wrong pose", ("video", BLIND): "blind camera",
+               ("pair", key): "all-wrong matches"}
+    accused = {(s.kind, s.name): s for s in diag.suspects if s.kind in ("video", "pair")}
+    tp = [k for k in accused if k in planted]
+    fp = [k for k in accused if k not in planted]
+    fn = [k for k in planted if k not in accused]
+    print("\ninspect's diagnosis against the planted failures:")
+    for k in tp:
+        print(f"   true positive  {k[0]} {k[1]} ({planted[k]}): cause {accused[k].cause}")
+    for k in fp:
+        print(f"   FALSE POSITIVE {k[0]} {k[1]}: {accused[k].message}")
+    for k in fn:
+        print(f"   missed         {k[0]} {k[1]} ({planted[k]})")
+    print(f"   global cause: {diag.global_cause or 'none'}")
+    print(f"`vs-inspect inspect` names {len(tp)} of {len(planted)} planted failures; "
+          f"false positives: {len(fp)} (innocent videos accused: "
+          f"{sorted(n for kind, n in fp if kind == 'video') or 'none'})")
     print(f"done in {time.perf_counter() - t0:.1f} s")
     return 0
 

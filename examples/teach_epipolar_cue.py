@@ -6,6 +6,13 @@ Writes, into --out:
   step1_geometry.png   two static cameras and one moving point: where it is in each image
   step2_cue.png        b's point at time t gives a line in a; a's point lies on it only at the right Δ
   step3_search.png     the offset search: the energy E(Δ) over all candidate offsets, its minimum
+  step4_plane.png      in 3D: the two cameras, the moving point and the epipolar plane through all
+                       three; b's view (its point, the epipole of a) and a's view (the plane's line)
+  step5_ambiguity.png  one point at one moment is not enough: a's track crosses b's line twice,
+                       so two offsets fit; averaging over all points and frames leaves one minimum
+  step6_sweep.gif      an animated sweep of Δ: a's points slide along their tracks and meet b's
+                       lines at the true offset, while the energy E(Δ) is traced (also
+                       step6_sweep.mp4 when ffmpeg is on PATH)
   report/              the standard report (3D scene, landscape, graph, timeline, epipolar panel)
   teach.rrd            the recording: open it with `rerun teach.rrd` and scrub the `offset_ms`
                        timeline under pairs/cam0__cam1/epipolar to watch the lines meet the points
@@ -33,7 +40,9 @@ import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from vs_inspect.geometry.epipolar import epipolar_residual, fundamental_from_cameras  # noqa: E402
+from vs_inspect.geometry.epipolar import (camera_centers, epipolar_lines, epipolar_residual,  # noqa: E402
+                                         fundamental_from_cameras, project)
+from vs_inspect.geometry.triangulate import projection_matrix, triangulate_dlt  # noqa: E402
 from vs_inspect.io.bundle import write_bundle  # noqa: E402
 from vs_inspect.io.result import write_run_result  # noqa: E402
 from vs_inspect.pipeline import run  # noqa: E402
@@ -42,6 +51,7 @@ from vs_inspect.analysis.report_data import report_data_from_run  # noqa: E402
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene  # noqa: E402
 from vs_inspect.types import RunInputs  # noqa: E402
 
+ACCEPT, REJECT, B_COLOR = "#0072B2", "#D55E00", "#E69F00"  # Okabe-Ito: colour-blind safe
 SCENE = CueSceneConfig(cameras=2, moving=0, variable_rate=0, seconds=6.0, max_offset_s=1.5,
                        noise_px=0.5, wrong_fraction=0.0, pose_error_deg=0.0, points_per_object=12,
                        pairs_per_view_pair=300, no_match_pairs=0, all_wrong_pair=False,
@@ -55,6 +65,281 @@ def sample(xy: np.ndarray, ts: np.ndarray, q: float) -> np.ndarray:
         return np.full((xy.shape[0], 2), np.nan)
     w = (q - ts[k]) / (ts[k + 1] - ts[k])
     return xy[:, k] + w * (xy[:, k + 1] - xy[:, k])
+
+
+def px2(x: float) -> str:
+    """A squared pixel error for people (the report's format)."""
+    from vs_inspect.report.figures import fmt_px2
+    return fmt_px2(x)
+
+
+def _frustum(ax, K: np.ndarray, T: np.ndarray, w: int, h: int, depth: float, color: str, name: str):
+    """A camera as a pyramid: its centre and its image's corners at `depth` (world units)."""
+    C = camera_centers(T)
+    corners = np.array([[0, 0, 1], [w, 0, 1], [w, h, 1], [0, h, 1]], float) @ np.linalg.inv(K).T
+    world = (corners * depth - T[:3, 3]) @ T[:3, :3]  # Rᵀ (x − t)
+    for p in world:
+        ax.plot(*zip(C, p), color=color, lw=1.2)
+    ax.plot(*np.vstack([world, world[:1]]).T, color=color, lw=1.5)
+    ax.text(*C, f"  {name}", color=color, fontsize=11, fontweight="bold")
+    return C
+
+
+def step4_plane(path: Path, bundle, a: str, b: str, ia: int, ib: int, t_b: float, delta: float,
+                x_b: np.ndarray, x_a: np.ndarray, F_ab: np.ndarray) -> Path:
+    """3D: both cameras, the point's path, the epipolar plane (C_a, C_b, X); b's view; a's view."""
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    va, vb = bundle.video(a), bundle.video(b)
+    ca, cb = bundle.cameras[a], bundle.cameras[b]
+    Ka, Ta = ca.K.reshape(-1, 3, 3)[0], ca.cam_from_world.reshape(-1, 4, 4)[0]
+    Kb, Tb = cb.K.reshape(-1, 3, 3)[0], cb.cam_from_world.reshape(-1, 4, 4)[0]
+    Pa, Pb = projection_matrix(Ka, Ta), projection_matrix(Kb, Tb)
+    X = triangulate_dlt(Pa, Pb, x_a, x_b)
+    # the point's path: b's frames with a read at the same moment (t + Δ)
+    path_b = bundle.tracks[b].xy[ib]
+    path_a = np.stack([sample(bundle.tracks[a].xy[ia:ia + 1], va.timestamps_s, t + delta)[0]
+                       for t in vb.timestamps_s])
+    path3d = triangulate_dlt(Pa, Pb, path_a, path_b)
+    Ca, Cb = camera_centers(Ta), camera_centers(Tb)
+    base = float(np.linalg.norm(Ca - Cb))
+
+    fig = plt.figure(figsize=(20, 6.8), dpi=100, layout="constrained")
+    gs = fig.add_gridspec(1, 3, width_ratios=[1.35, 1, 1])
+    ax3 = fig.add_subplot(gs[0], projection="3d")
+    _frustum(ax3, Ka, Ta, va.width, va.height, 0.25 * base, ACCEPT, a)
+    _frustum(ax3, Kb, Tb, vb.width, vb.height, 0.25 * base, B_COLOR, b)
+    ok = np.isfinite(path3d[:, 0])
+    ax3.plot(*path3d[ok].T, color="#333333", lw=2.0, label="the point's path")
+    # the plane as a rectangle along the baseline u, reaching past X along v (⊥ u, in the plane)
+    u = (Cb - Ca) / base
+    v = (X - Ca) - np.dot(X - Ca, u) * u
+    height = max(1.4 * np.linalg.norm(v), 0.3 * base)
+    v = v / np.linalg.norm(v)
+    s0, s1 = min(0.0, np.dot(X - Ca, u)) - 0.1 * base, max(base, np.dot(X - Ca, u)) + 0.1 * base
+    quad = np.array([Ca + s0 * u - 0.15 * height * v, Ca + s1 * u - 0.15 * height * v,
+                     Ca + s1 * u + height * v, Ca + s0 * u + height * v])
+    ax3.add_collection3d(Poly3DCollection([quad], alpha=0.28, facecolor="#56B4E9", edgecolor="#0072B2"))
+    for C, col in ((Ca, ACCEPT), (Cb, B_COLOR)):
+        ax3.plot(*zip(C, X), color=col, lw=1.8, ls="--")
+    ax3.plot(*zip(Ca, Cb), color="black", lw=1.5, label="baseline (through both epipoles)")
+    ax3.scatter(*X, s=60, color="black", depthshade=False, label=f"X at global time of {b}'s t = {t_b:.2f} s")
+    pts = np.vstack([Ca, Cb, X, path3d[ok], quad])
+    mid, rad = 0.5 * (pts.min(0) + pts.max(0)), 0.5 * np.ptp(pts, axis=0).max()
+    ax3.set(xlim=(mid[0] - rad, mid[0] + rad), ylim=(mid[1] - rad, mid[1] + rad),
+            zlim=(mid[2] - rad, mid[2] + rad), xlabel="x [m]", ylabel="y [m]", zlabel="z [m]")
+    # look at the plane obliquely from the side of its normal, so that it shows as a surface
+    n = np.cross(u, v)
+    n = n if n[2] >= 0 else -n
+    d = 0.8 * n + 0.35 * v + 0.25 * u
+    d /= np.linalg.norm(d)
+    ax3.view_init(elev=max(20.0, float(np.degrees(np.arcsin(np.clip(d[2], -1, 1))))),
+                  azim=float(np.degrees(np.arctan2(d[1], d[0]))))
+    ax3.legend(loc="upper left", fontsize=8.5)
+    ax3.set_title("3D: the epipolar plane holds both camera centres and the point X;\n"
+                  "it cuts each image in a line (blue: the plane)", fontsize=11)
+
+    # b's view: its point, the epipole (where b sees a's centre) and the plane's line in b
+    axb = fig.add_subplot(gs[1])
+    e_b = project(Kb, Tb, Ca)
+    line_b = epipolar_lines(F_ab.T, x_a)
+    axb.plot(path_b[:, 0], path_b[:, 1], color="#bbbbbb", lw=1.5, label=f"{b}'s track over time")
+    axb.axline((0.0, -line_b[2] / line_b[1]), slope=-line_b[0] / line_b[1], color=ACCEPT, lw=2,
+               label=f"line in {b} of {a}'s point at the same moment")
+    axb.scatter(*x_b, s=110, color=B_COLOR, edgecolors="black", zorder=5, label=f"{b}'s point at t")
+    inside = np.all(np.isfinite(e_b)) and 0 <= e_b[0] <= vb.width and 0 <= e_b[1] <= vb.height
+    if inside:
+        axb.scatter(*e_b, marker="x", s=90, color="black", label=f"epipole: {a}'s centre seen by {b}")
+    axb.set(xlim=(0, vb.width), ylim=(vb.height, 0), xlabel="x [px]", ylabel="y [px]")
+    axb.set_aspect("equal")
+    axb.legend(loc="lower left", fontsize=8.5)
+    axb.set_title(f"{b}'s view (whole image): b's point picks the plane"
+                  + ("" if inside else f"\n(the epipole of {a} is outside the image)"), fontsize=11)
+
+    # a's view: the same plane is a line through a's point at the right moment
+    axa = fig.add_subplot(gs[2])
+    line_a = F_ab @ np.array([x_b[0], x_b[1], 1.0])
+    tr = bundle.tracks[a].xy[ia]
+    axa.plot(tr[:, 0], tr[:, 1], color="#bbbbbb", lw=1.5, label=f"{a}'s track over time")
+    axa.axline((0.0, -line_a[2] / line_a[1]), slope=-line_a[0] / line_a[1], color=B_COLOR, lw=2,
+               label=f"line in {a} of {b}'s point")
+    axa.scatter(*x_a, s=110, color=ACCEPT, edgecolors="black", zorder=5, label=f"{a}'s point at t + Δ")
+    axa.set(xlim=(0, va.width), ylim=(va.height, 0), xlabel="x [px]", ylabel="y [px]")
+    axa.set_aspect("equal")
+    axa.legend(loc="lower left", fontsize=8.5)
+    axa.set_title(f"{a}'s view (whole image): at the true Δ = {delta:+.3f} s\n"
+                  "a's point lies on b's line", fontsize=11)
+    fig.suptitle("Step 4. Why a line: the two camera centres and the point span a plane; each "
+                 "camera sees that plane edge-on, as a line", fontsize=12)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def _crossings(line: np.ndarray, xy: np.ndarray, ts: np.ndarray) -> np.ndarray:
+    """Local times where a track (T,2) crosses a line (sign change of its signed distance,
+    interpolated linearly between frames)."""
+    d = (xy @ line[:2] + line[2]) / np.hypot(line[0], line[1])
+    k = np.flatnonzero(np.isfinite(d[:-1]) & np.isfinite(d[1:]) & (np.sign(d[:-1]) != np.sign(d[1:])))
+    w = d[k] / (d[k] - d[k + 1])
+    return ts[k] + w * (ts[k + 1] - ts[k])
+
+
+def step5_ambiguity(path: Path, bundle, a: str, b: str, F_ab: np.ndarray, delta: float, land) -> Path:
+    """A matched point whose track in a crosses b's line twice: two Δ fit that one observation."""
+    va, vb = bundle.video(a), bundle.video(b)
+    xa, xb = bundle.tracks[a].xy, bundle.tracks[b].xy
+    lo, hi = float(np.nanmin(land.offsets_s)), float(np.nanmax(land.offsets_s))
+    best = None
+    for i, j in bundle.pair(a, b).index:
+        for k in range(0, vb.num_frames, 4):
+            if not np.isfinite(xb[j, k, 0]):
+                continue
+            line = F_ab @ np.array([xb[j, k, 0], xb[j, k, 1], 1.0])
+            ds = _crossings(line, xa[i], va.timestamps_s) - vb.timestamps_s[k]
+            ds = ds[(ds >= lo) & (ds <= hi)]
+            if len(ds) == 2 and np.min(np.abs(ds - delta)) < 0.05:
+                # a clean double crossing: the second one clearly apart in time (not at the
+                # range's edge) and in the image (not noise jittering about the line)
+                gap = float(np.max(np.abs(ds - delta)))
+                p0, p1 = (sample(xa[i][None], va.timestamps_s, vb.timestamps_s[k] + d)[0] for d in ds)
+                apart = float(np.linalg.norm(p0 - p1))
+                score = apart if 0.3 <= gap <= 2.5 else 0.0
+                if best is None or score > best[0]:
+                    best = (score, i, j, k, line, ds)
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(17, 6), dpi=100, layout="constrained",
+                                  width_ratios=[1, 1.25])
+    if best is None:
+        ax.text(0.5, 0.5, "no track in this scene crosses its line twice", ha="center",
+                transform=ax.transAxes)
+    else:
+        _, i, j, k, line, ds = best
+        t_b = float(vb.timestamps_s[k])
+        tr = xa[i]
+        ok = np.isfinite(tr[:, 0])
+        sc = ax.scatter(tr[ok, 0], tr[ok, 1], c=va.timestamps_s[ok] - t_b, cmap="viridis", s=9,
+                        label=f"{a}'s track; colour = Δ at which a shows it")
+        fig.colorbar(sc, ax=ax, label="Δ = local time in a − t  [s]", shrink=0.8)
+        ax.axline((0.0, -line[2] / line[1]), slope=-line[0] / line[1], color=B_COLOR, lw=2,
+                  label=f"line of {b}'s point at t = {t_b:.2f} s")
+        for n, d in enumerate(sorted(ds)):
+            p = sample(tr[None], va.timestamps_s, t_b + d)[0]
+            true = abs(d - delta) < 0.05
+            ax.scatter(*p, s=200, facecolors="none", edgecolors=ACCEPT if true else REJECT, lw=2.5,
+                       zorder=5)
+            ax.annotate(f"Δ = {d:+.2f} s" + (" (true)" if true else " (also fits!)"), p,
+                        xytext=(12, 12 if n % 2 else -18), textcoords="offset points", fontsize=10,
+                        color=ACCEPT if true else REJECT, fontweight="bold")
+        pad = 60
+        ax.set(xlim=(max(0, np.nanmin(tr[:, 0]) - pad), min(va.width, np.nanmax(tr[:, 0]) + pad)),
+               ylim=(min(va.height, np.nanmax(tr[:, 1]) + pad), max(0, np.nanmin(tr[:, 1]) - pad)),
+               xlabel="x [px]", ylabel="y [px]")
+        ax.set_aspect("equal")
+        ax.legend(loc="lower left", fontsize=9)
+        ax.set_title(f"one matched point, one moment: {a}'s track crosses {b}'s line "
+                     f"{len(ds)} times", fontsize=11)
+        # the error of this one observation against Δ, and the energy over all of them
+        grid = np.union1d(land.offsets_s, ds)  # the crossings themselves too: exact zeros
+        x_b = xb[j, k]
+        one = np.array([epipolar_residual(F_ab, sample(tr[None], va.timestamps_s, t_b + d)[0], x_b,
+                                          "sampson") for d in grid], float)
+        floor = 1e-3  # px²: the log axis shows the zeros at the crossings as this floor
+        ax2.plot(grid, np.maximum(one, floor), color=REJECT, lw=1.4,
+                 label="this one observation: Sampson error")
+        ax2.set_yscale("log")
+        ax2.set_ylim(bottom=floor / 2)
+        ax2.set_ylabel("Sampson error of one observation [px²]", color=REJECT)
+        for d in ds:
+            ax2.axvline(d, color=ACCEPT if abs(d - delta) < 0.05 else REJECT, ls=":", lw=1.5)
+        tw = ax2.twinx()
+        tw.plot(land.offsets_s, land.energy, color=ACCEPT, lw=2, label="E(Δ): all points, all frames")
+        tw.set_ylabel("energy over all observations", color=ACCEPT)
+        ax2.axvline(delta, color="black", ls="--", lw=1.2)
+        ax2.set_xlabel(f"Δ = offset({b}) − offset({a}) [s]")
+        h1, l1 = ax2.get_legend_handles_labels()
+        h2, l2 = tw.get_legend_handles_labels()
+        ax2.legend(h1 + h2, l1 + l2, loc="lower left", fontsize=9, framealpha=0.95)
+        ax2.set_title("one observation has a zero at every crossing; the average over all "
+                      "points and frames\nhas one clear minimum (dashed: true Δ)", fontsize=11)
+    fig.suptitle("Step 5. The two-crossings ambiguity: a curved track can meet the same line more "
+                 "than once", fontsize=12)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def step6_sweep(path: Path, bundle, a: str, b: str, F_ab: np.ndarray, delta: float, land,
+                frames: int = 33) -> list[Path]:
+    """An animation: Δ sweeps across the true offset; b's lines stay, a's points slide."""
+    import shutil
+
+    va, vb = bundle.video(a), bundle.video(b)
+    xa, xb = bundle.tracks[a].xy, bundle.tracks[b].xy
+    idx = bundle.pair(a, b).index
+    k = int(np.argmax(np.isfinite(xb[idx[:, 1], :, 0]).sum(0)))  # b's frame with most points
+    t_b = float(vb.timestamps_s[k])
+    seen = np.flatnonzero(np.isfinite(xb[idx[:, 1], k, 0]))
+    pick = idx[seen[np.linspace(0, len(seen) - 1, min(12, len(seen))).round().astype(int)]]
+    lines = epipolar_lines(F_ab, xb[pick[:, 1], k])
+    deltas = np.linspace(delta - 0.8, delta + 0.8, frames)
+    colors = plt.get_cmap("tab20")(np.arange(len(pick)) % 20)
+
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(13, 4.8), dpi=80, layout="constrained",
+                                  width_ratios=[1.25, 1])
+    for l, c in zip(lines, colors):
+        ax.axline((0.0, -l[2] / l[1]), slope=-l[0] / l[1], color=c, lw=1.2, alpha=0.8)
+    for (i, _), c in zip(pick, colors):
+        ax.plot(xa[i, :, 0], xa[i, :, 1], color=c, lw=0.6, alpha=0.35)
+    dots = ax.scatter(np.zeros(len(pick)), np.zeros(len(pick)), s=70, c=colors, edgecolors="black", zorder=5)
+    ax.set(xlim=(0, va.width), ylim=(va.height, 0), xlabel="x [px]", ylabel="y [px]")
+    ax.set_aspect("equal")
+    title = ax.set_title("", fontsize=11)
+    ax2.plot(land.offsets_s, land.energy, color="#3b4cc0", lw=1.4)
+    ax2.axvline(delta, color="black", ls="--", lw=1.0, label=f"true Δ = {delta:+.3f} s")
+    cursor = ax2.axvline(deltas[0], color=REJECT, lw=2)
+    ax2.set(xlim=(deltas[0] - 0.3, deltas[-1] + 0.3), xlabel="Δ [s]", ylabel="energy E(Δ)")
+    ax2.legend(loc="upper right", fontsize=9)
+    ax2.grid(True, alpha=0.3)
+    fig.suptitle(f"Sweeping Δ: lines = {b}'s points at t = {t_b:.2f} s; dots = {a}'s matched "
+                 "points at t + Δ (faint: their tracks)", fontsize=11)
+
+    def draw(n: int):
+        d = deltas[n]
+        pts = np.stack([sample(xa[i:i + 1], va.timestamps_s, t_b + d)[0] for i in pick[:, 0]])
+        dots.set_offsets(np.nan_to_num(pts, nan=-1e4))
+        err = epipolar_residual(F_ab, pts, xb[pick[:, 1], k], "sampson")
+        near = abs(d - delta) < 0.5 * (deltas[1] - deltas[0])
+        cursor.set_xdata([d, d])
+        cursor.set_color(ACCEPT if near else REJECT)
+        title.set_text(f"Δ = {d:+.3f} s: median Sampson error {px2(float(np.nanmedian(err)))} px²"
+                       + ("  — on the lines" if near else ""))
+        title.set_color(ACCEPT if near else "black")
+        return dots, cursor, title
+
+    # each frame drawn once, then written as GIF (Pillow) and, when ffmpeg is on PATH, as H.264
+    # MP4 (what matplotlib's PillowWriter and FFMpegWriter do, without drawing every frame twice)
+    from PIL import Image
+    fig.canvas.draw()
+    fig.set_layout_engine("none")  # the layout is fixed now: no re-layout on every frame
+    images = []
+    for n in range(len(deltas)):
+        draw(n)
+        fig.canvas.draw()
+        images.append(np.asarray(fig.canvas.buffer_rgba())[..., :3].copy())
+    frames_pil = [Image.fromarray(im) for im in images]
+    frames_pil[0].save(path, save_all=True, append_images=frames_pil[1:], duration=160, loop=0)
+    written = [path]
+    if shutil.which("ffmpeg"):
+        import subprocess
+        h, w = images[0].shape[:2]
+        mp4 = path.with_suffix(".mp4")
+        cmd = ["ffmpeg", "-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgb24",
+               "-s", f"{w}x{h}", "-r", "6", "-i", "-", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+               "-c:v", "libx264", "-pix_fmt", "yuv420p", str(mp4)]
+        subprocess.run(cmd, input=b"".join(im.tobytes() for im in images), check=True)
+        written.append(mp4)
+    plt.close(fig)
+    return written
 
 
 def main() -> int:
@@ -93,7 +378,7 @@ def main() -> int:
 
     # ---- step 1: epipolar geometry with a moving point ----
     fig, axes = plt.subplots(1, 2, figsize=(14, 6), dpi=100, layout="constrained")
-    for ax, v, tr, col in ((axes[0], va, xa_all[ia], "#1f77b4"), (axes[1], vb, xb_all[ib], "#ff7f0e")):
+    for ax, v, tr, col in ((axes[0], va, xa_all[ia], ACCEPT), (axes[1], vb, xb_all[ib], B_COLOR)):
         ok = np.isfinite(tr[:, 0])
         sc = ax.scatter(tr[ok, 0], tr[ok, 1], c=v.timestamps_s[ok], cmap="viridis", s=10)
         zoom(ax, tr, v)
@@ -127,15 +412,15 @@ def main() -> int:
         err = float(epipolar_residual(F_ab, x_a, x_b, "sampson"))
         tr = xa_all[ia]
         ax.plot(tr[:, 0], tr[:, 1], color="#bbbbbb", lw=1.5, label=f"{a}'s track over time")
-        ax.axline((0.0, -line[2] / line[1]), slope=-line[0] / line[1], color="#ff7f0e", lw=2,
+        ax.axline((0.0, -line[2] / line[1]), slope=-line[0] / line[1], color=B_COLOR, lw=2,
                   label=f"epipolar line of {b}'s point at t = {t_b:.2f} s")
         good = abs(d - true_delta) < 1e-9
-        ax.scatter([x_a[0]], [x_a[1]], s=120, color="#1a9850" if good else "#d73027", zorder=5,
+        ax.scatter([x_a[0]], [x_a[1]], s=120, color=ACCEPT if good else REJECT, zorder=5,
                    edgecolors="black", label=f"{a}'s point at t + Δ")
         zoom(ax, tr, va)
         ax.set_aspect("equal")
-        ax.set_title(f"Δ = {d:+.3f} s{'  (true)' if good else ''}: Sampson error {err:.3g} px²",
-                     fontsize=11, color="#1a9850" if good else "#d73027")
+        ax.set_title(f"Δ = {d:+.3f} s{'  (true)' if good else ''}: Sampson error {px2(err)} px²",
+                     fontsize=11, color=ACCEPT if good else REJECT)
         ax.set_xlabel("x [px]")
         ax.set_ylabel("y [px]")
         ax.legend(loc="best", fontsize=8.5, framealpha=0.9)
@@ -160,7 +445,7 @@ def main() -> int:
     fig, ax = plt.subplots(figsize=(10, 4.5), dpi=100, layout="constrained")
     ax.plot(land.offsets_s, land.energy, color="#3b4cc0", lw=1.5, label="E(Δ): robust mean Sampson error")
     ax.axvline(true_delta, color="black", ls="--", label=f"true Δ = {true_delta:+.3f} s")
-    ax.axvline(land.best_offset_s, color="#1a9850", lw=2, alpha=0.7,
+    ax.axvline(land.best_offset_s, color=ACCEPT, lw=2, alpha=0.7,
                label=f"found Δ = {land.best_offset_s:+.3f} s "
                      f"(error {1000 * abs(land.best_offset_s - true_delta):.1f} ms)")
     ax.set_xlabel(f"Δ = offset({b}) − offset({a}) [s]")
@@ -172,6 +457,17 @@ def main() -> int:
     fig.savefig(out / "step3_search.png")
     plt.close(fig)
 
+    # ---- step 4: the epipolar plane in 3D, and what b sees ----
+    t_a = t_b + true_delta
+    x_a_true = sample(xa_all[ia:ia + 1], va.timestamps_s, t_a)[0]
+    step4_plane(out / "step4_plane.png", bundle, a, b, ia, ib, t_b, true_delta, x_b, x_a_true, F_ab)
+
+    # ---- step 5: the two-crossings ambiguity ----
+    step5_ambiguity(out / "step5_ambiguity.png", bundle, a, b, F_ab, true_delta, land)
+
+    # ---- step 6: an animated sweep of Δ ----
+    sweep = step6_sweep(out / "step6_sweep.gif", bundle, a, b, F_ab, true_delta, land)
+
     # ---- the standard report from a run folder ----
     run_dir = out / "run"
     bdir = write_bundle(bundle, run_dir / "bundle", overwrite=True)
@@ -180,7 +476,8 @@ def main() -> int:
     render_report(report_data_from_run(run_dir), out / "report")
     print(f"found Δ_ab = {land.best_offset_s:+.4f} s, true {true_delta:+.4f} s, error "
           f"{1000 * abs(land.best_offset_s - true_delta):.1f} ms ({land.decision.reason})")
-    print(f"figures: {out}/step1_geometry.png step2_cue.png step3_search.png report/index.html")
+    print(f"figures: {out}/step1_geometry.png step2_cue.png step3_search.png step4_plane.png "
+          f"step5_ambiguity.png {' '.join(p.name for p in sweep)} report/index.html")
     if sink is not None:
         print(f"recording: {rrd}  (rerun {rrd}; scrub offset_ms under pairs/{a}__{b}/epipolar)")
     print(f"done in {time.perf_counter() - t_start:.1f} s")

@@ -58,6 +58,9 @@ def build_parser() -> argparse.ArgumentParser:
             continue
         module = importlib.import_module(f"{commands.__name__}.{info.name}")
         module.register(sub)
+    from .commands import _help
+    for name, p in sub.choices.items():  # one --help style: defaults once, an Examples epilog
+        _help.apply(p, name)
     return parser
 
 

@@ -83,3 +83,117 @@ def test_a_video_whose_pairs_mostly_fail_is_named():
     assert not any(s.kind == "pair" and "D" in s.name for s in suspects)
     d = next(s for s in suspects if s.name == "D")
     assert "3 of 3 pairs fail (3 rejected, 0 inconsistent" in d.message
+
+
+# ---- planted failures: every one named with its cause, no innocent video accused -------------
+
+FIVE_S = {"A": 0.0, "B": 0.4, "C": -0.7, "D": 1.1, "E": 0.2}
+INLIERS = "few epipolar inliers at the best offset: 20% of observations within 20.0 px (< 45%)"
+
+
+def _pl(a: str, b: str, delta_s: float, accepted: bool, reason: str, track_pairs: int = 150,
+        uncertainty_s: float = float("nan")) -> PairLandscape:
+    offsets = np.linspace(-4.0, 4.0, 81)
+    energy = np.abs(offsets - delta_s) + 1.0 if np.isfinite(delta_s) else np.full(81, np.nan)
+    idx = np.array([int(np.argmin(energy))]) if np.isfinite(delta_s) else np.zeros(0, int)
+    return PairLandscape(a, b, offsets, energy, np.full(81, 10), idx, delta_s, 1.0, uncertainty_s,
+                         track_pairs, PairDecision(accepted, reason, 0.5, 0.1, 1, 1, False))
+
+
+def _planted() -> RunResult:
+    """A (the reference) is innocent; B has a wrong pose (its pairs miss the epipolar lines but
+    their minima are right), E is blind (no cross-view track pairs), A__C has all-wrong matches
+    (a minimum 2.5 s off); C__D is rejected only cautiously (its minimum is right)."""
+    pairs = []
+    names = sorted(FIVE_S)
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            true = FIVE_S[b] - FIVE_S[a]
+            if "E" in (a, b):
+                pairs.append(_pl(a, b, float("nan"), False, "no cross-view track pairs (the views "
+                                 "share no matched motion)", track_pairs=0))
+            elif "B" in (a, b):
+                pairs.append(_pl(a, b, true + 0.01, False, INLIERS))
+            elif (a, b) == ("A", "C"):
+                pairs.append(_pl(a, b, true + 2.5, False, "flat landscape: best energy only 12% below "
+                                 "the median (< 30%)"))
+            elif (a, b) == ("C", "D"):
+                pairs.append(_pl(a, b, true + 0.005, False, INLIERS))
+            else:
+                pairs.append(_pl(a, b, true, True, "single clear minimum"))
+    offsets = {"A": 0.0, "B": None, "C": -0.7, "D": 1.1, "E": None}
+    return RunResult("A", offsets, {v: None for v in offsets}, {"B": "x", "E": "y"}, tuple(pairs),
+                     "irls", (), (), {})
+
+
+def test_planted_failures_are_named_with_their_cause_and_no_innocent_video():
+    from vs_inspect.analysis.diagnose import (
+        CAUSE_GEOMETRY,
+        CAUSE_LOOPS,
+        CAUSE_NO_PAIRS,
+        diagnose,
+    )
+    videos = [VideoInfo.constant_rate(n, 640, 480, 100, 25.0) for n in FIVE_S]
+    d = diagnose(_planted(), videos)
+    named = {(s.kind, s.name): s for s in d.suspects}
+    assert set(named) == {("video", "E"), ("video", "B"), ("pair", "A__C")}
+    assert named["video", "E"].cause == CAUSE_NO_PAIRS
+    assert named["video", "B"].cause == CAUSE_GEOMETRY
+    assert "pose or calibration" in named["video", "B"].message
+    assert named["pair", "A__C"].cause == CAUSE_LOOPS
+    assert d.global_cause is None
+    assert [c.key for c in d.cautious] == ["C__D"]  # rejected, but its minimum closes its loops
+    assert "B" not in d.consequences and "E" not in d.consequences  # accused, not consequences
+    # every failing pair has a cause category
+    assert all(c.cause for c in d.checks if c.bad)
+    # the innocent reference A is never named, though 3 of its 4 pairs fail
+    assert not any(s.name == "A" for s in d.suspects)
+
+
+def test_most_pairs_failing_for_one_reason_is_a_global_cause():
+    from vs_inspect.analysis.diagnose import CAUSE_NO_PAIRS, diagnose
+    names = ["cam0", "cam1", "cam2", "cam3"]
+    pairs = tuple(_pl(a, b, float("nan"), False, f"too few track pairs: only {k} (fewer than 8)",
+                      track_pairs=k)
+                  for k, (a, b) in zip((3, 4, 5, 6, 7, 3),
+                                       [(a, b) for i, a in enumerate(names) for b in names[i + 1:]]))
+    offs = {"cam0": None, "cam1": None, "cam2": None, "cam3": None}
+    r = RunResult("cam0", offs, dict(offs), {n: "no accepted pair" for n in names}, pairs, "irls",
+                  (), (), {})
+    d = diagnose(r)
+    assert d.global_cause == CAUSE_NO_PAIRS
+    assert [s.kind for s in d.suspects] == ["global"]
+    msg = d.suspects[0].message
+    assert msg.startswith("most pairs fail (6 of 6") and "the cause is global: no cross-view pairs" in msg
+    assert "(3-7 track pairs per pair)" in msg
+    assert set(d.consequences) == set(names)  # unresolved, but nobody is blamed
+
+
+def test_a_loop_missing_by_more_than_its_tolerance_is_not_ok():
+    from vs_inspect.analysis.diagnose import diagnose
+    # three accepted pairs each 21.7 ms from the solution (tolerance 40 ms at 50 fps), but their
+    # loop misses by 65 ms (> two frames, 40 ms): none of them is "ok"
+    truth = {"a": 0.0, "b": 0.3, "c": -0.5}
+    e = 0.0217
+    pairs = (_pl("a", "b", 0.3 + e, True, "single clear minimum"),
+             _pl("b", "c", -0.8 + e, True, "single clear minimum"),
+             _pl("a", "c", -0.5 - e, True, "single clear minimum"))
+    r = RunResult("a", dict(truth), {v: 0.001 for v in truth}, {}, pairs, "irls", (), (), {})
+    videos = [VideoInfo.constant_rate(n, 640, 480, 100, 50.0) for n in truth]
+    d = diagnose(r, videos)
+    (loop,) = d.loops
+    assert loop.residual_ms == pytest.approx(65.1, abs=0.1) and loop.tolerance_ms == pytest.approx(40.0)
+    assert loop.bad
+    assert all(not c.bad and c.loops_bad == 1 and not c.ok for c in d.checks)
+    # the same pairs with a closing loop are ok
+    good = tuple(_pl(p.a, p.b, truth[p.b] - truth[p.a], True, "single clear minimum") for p in pairs)
+    d2 = diagnose(RunResult("a", dict(truth), {v: 0.001 for v in truth}, {}, good, "irls", (), (), {}),
+                  videos)
+    assert all(c.ok for c in d2.checks) and not d2.loops[0].bad
+
+
+def test_errors_against_the_truth_per_pair():
+    checks = check_pairs(_result(), gt=TRUE_S)
+    cd = next(c for c in checks if c.key == "C__D")
+    assert cd.error_ms == pytest.approx(500.0)
+    assert all(c.error_ms == pytest.approx(0.0, abs=1e-9) for c in checks if c.key != "C__D")

@@ -105,6 +105,9 @@ def test_report_from_rrd_alone_matches_run_folder(reports):
     assert _numbers(a) == _numbers(b)
     assert from_rrd.offsets_s == from_run.offsets_s
     assert [p.key for p in from_rrd.pairs] == [p.key for p in from_run.pairs]
+    # the same drawing, byte for byte: every figure from the .rrd is the run folder's file
+    for png in sorted(run_out.glob("*.png")):
+        assert png.read_bytes() == (rrd_out / png.name).read_bytes(), png.name
 
 
 def test_pair_choice_and_bad_input(run, tmp_path, capsys):
@@ -178,3 +181,63 @@ def test_report_with_videos_has_mosaic_and_real_frames(tmp_path):
     render_report(from_rrd, tmp_path / "out_rrd")
     assert _check_images(tmp_path / "out_rrd", from_rrd) == EXPECTED | {"mosaic"}
     assert np.abs(from_rrd.epipolar.image_bgr.astype(int) - data.epipolar.image_bgr.astype(int)).mean() < 2
+
+
+def test_formats_and_dpi(run, tmp_path):
+    """--format png,pdf,svg writes each figure in each format; PNGs scale with --dpi."""
+    from vs_inspect.cli import main as cli
+
+    run_dir, _, _ = run
+    assert cli(["report", str(run_dir), "--out", str(tmp_path / "r"), "--format", "png,pdf,svg",
+                "--dpi", "150"]) == 0
+    data = load_report_data(run_dir)
+    for key in available(data):
+        w, h = figure_size_px(key, data, 150)
+        img = _pixels(tmp_path / "r" / f"{key}.png")
+        assert (img.shape[1], img.shape[0]) == (w, h), key
+        assert abs(w - 1.5 * figure_size_px(key, data)[0]) < 1, key
+        assert abs(h - 1.5 * figure_size_px(key, data)[1]) < 1, key
+        assert (tmp_path / "r" / f"{key}.pdf").read_bytes()[:5] == b"%PDF-", key
+        assert "<svg" in (tmp_path / "r" / f"{key}.svg").read_text()[:2000], key
+    assert cli(["report", str(run_dir), "--out", str(tmp_path / "x"), "--format", "png,gif"]) == 2
+    assert cli(["report", str(run_dir), "--out", str(tmp_path / "y"), "--dpi", "0"]) == 2
+    assert not (tmp_path / "x").exists() and not (tmp_path / "y").exists()
+
+
+def test_readable_numbers_and_round_ticks():
+    from vs_inspect.report.figures import fmt_error, fmt_px2
+    from vs_inspect.report.scene3d import nice_ticks
+
+    assert fmt_px2(3.77e-06) == "< 0.001"
+    assert fmt_px2(0.00377) == "0.0038"
+    assert fmt_px2(10.7) == "11" and fmt_px2(1893.0) == "1900" and fmt_px2(2.345) == "2.3"
+    assert fmt_px2(float("nan")) == "—"
+    assert fmt_error(13.46, 0.673) == "13.5 ms (0.67 frames)"
+    lo, hi, n, dec = nice_ticks(-1.37, 7.93)
+    assert (lo, hi, n, dec) == (-2.0, 8.0, 6, 0)
+    lo, hi, n, dec = nice_ticks(0.12, 0.83)
+    assert lo == 0.0 and hi == pytest.approx(1.0) and n == 6 and dec == 1
+
+
+def test_rejected_pair_panel_and_demo_folder_layout(tmp_path):
+    """A rejected pair's epipolar panel is marked rejected (not "chosen"); a folder laid out as
+    `vs-inspect demo` writes it (result.json naming the rendered scene, its true bundle in
+    OUT/scene/bundle) finds its bundle: all five figures, not two."""
+    from vs_inspect.report.html import write_index
+
+    scene = make_cue_scene(SCENE)
+    out = tmp_path / "demo"
+    write_bundle(scene.bundle, out / "scene" / "bundle")
+    result = run_pipeline(scene.bundle, progress=False,
+                          recorded_inputs=RunInputs(scene=str(out / "scene"), cues="true cue bundle"))
+    write_run_result(result, out / "result.json")
+    data = load_report_data(out)
+    assert set(available(data)) == EXPECTED
+    rejected = [p for p in data.pairs if not p.accepted and p.chosen_offset_s is not None]
+    assert rejected, "the scene has a rejected pair with a minimum"
+    r = load_report_data(out, pair=(rejected[0].a, rejected[0].b))
+    assert r.epipolar is not None and r.epipolar.accepted is False
+    html = write_index(r, {}, tmp_path / "i.html").read_text()
+    assert "best of a rejected pair" in html and "(chosen)" not in html
+    ok = load_report_data(out)
+    assert ok.epipolar.accepted is True

@@ -147,7 +147,7 @@ def epipolar_panel(bundle: CueBundle, pair: PairView, image_bgr: np.ndarray | No
                     a, image_bgr.shape[:2], va.width, va.height)
         image_bgr = None
     return EpipolarPanel(a, b, frame, float(va.timestamps_s[frame]), va.width, va.height,
-                         states[0], states[1], image_bgr)
+                         states[0], states[1], image_bgr, bool(pair.accepted))
 
 
 # ---- triangulated trajectories (analysis.trajectories, as the recording shows them) --------
@@ -294,19 +294,25 @@ def _video_paths(result: RunResult, base: Path) -> dict[str, str]:
 
 
 def find_bundle(run_dir: Path, result: RunResult) -> Path | None:
-    """The run's input bundle (as given, or relative to the run folder), else OUT/cues, OUT/bundle."""
+    """The run's input bundle (as given, or relative to the run folder), else the rendered
+    scene's true bundle (`vs-inspect demo` records the scene, not a bundle: SCENE/bundle, also
+    as OUT/scene/bundle when the folder moved), else OUT/cues, OUT/bundle."""
     cands = []
     if result.inputs.bundle:
         cands += [Path(result.inputs.bundle), run_dir / result.inputs.bundle]
-    cands += [run_dir / "cues", run_dir / "bundle"]
+    if result.inputs.scene:
+        cands += [Path(result.inputs.scene) / "bundle", run_dir / result.inputs.scene / "bundle"]
+    cands += [run_dir / "scene" / "bundle", run_dir / "cues", run_dir / "bundle"]
     for c in cands:
         if (c / "bundle.json").is_file():
             return c
     return None
 
 
-def report_data_from_run(run_dir: str | os.PathLike, pair: tuple[str, str] | None = None) -> ReportData:
-    """ReportData of a run folder (OUT/result.json and the cue bundle it names)."""
+def report_data_from_run(run_dir: str | os.PathLike, pair: tuple[str, str] | None = None,
+                         gt: dict[str, float] | None = None) -> ReportData:
+    """ReportData of a run folder (OUT/result.json and the cue bundle it names). gt: true
+    offsets (else the run's or its bundle's gt.json when there is one)."""
     from ..io.bundle import read_bundle, read_gt
     from ..io.result import read_run_result
 
@@ -316,7 +322,7 @@ def report_data_from_run(run_dir: str | os.PathLike, pair: tuple[str, str] | Non
     bundle = read_bundle(bdir) if bdir is not None else None
     if bdir is None:
         log.warning("%s: no cue bundle found (input.bundle, cues/, bundle/)", run_dir)
-    gt = result.gt_offsets_s
+    gt = gt or result.gt_offsets_s
     if gt is None and bdir is not None and (bdir / "gt.json").is_file():
         gt = read_gt(bdir / "gt.json")
     return build_report_data(result, bundle, source=str(run_dir), gt=gt,
@@ -324,8 +330,8 @@ def report_data_from_run(run_dir: str | os.PathLike, pair: tuple[str, str] | Non
                              frame_reader=_frame_reader)
 
 
-def report_data_from_recording(path: str | os.PathLike,
-                               pair: tuple[str, str] | None = None) -> ReportData:
+def report_data_from_recording(path: str | os.PathLike, pair: tuple[str, str] | None = None,
+                               gt: dict[str, float] | None = None) -> ReportData:
     """ReportData from a recording alone (no run folder, no videos, no recompute): its result,
     its embedded cue bundle and the frames it carries."""
     from ..io.recording import META_BUNDLE, META_RESULT, read_recorded_bundle, read_recording, read_rrd_frames
@@ -354,22 +360,24 @@ def report_data_from_recording(path: str | os.PathLike,
 
         def reader(p: str, index: int, exact: bool = True):
             return frames.read(p[4:], index, exact)
-    data = build_report_data(rec.result, bundle, source=str(path), gt=rec.result.gt_offsets_s,
+    gt = gt or rec.result.gt_offsets_s or (bundle.gt_offsets_s if bundle is not None else None)
+    data = build_report_data(rec.result, bundle, source=str(path), gt=gt,
                              pair=pair, video_paths=video_paths, frame_reader=reader)
     if bundle is None:
         data = replace(data, notes=data.notes + (f"the recording has no {META_BUNDLE}",))
     return data
 
 
-def load_report_data(path: str | os.PathLike, pair: tuple[str, str] | None = None) -> ReportData:
-    """ReportData of a run folder, a result.json, or an .rrd recording."""
+def load_report_data(path: str | os.PathLike, pair: tuple[str, str] | None = None,
+                     gt: dict[str, float] | None = None) -> ReportData:
+    """ReportData of a run folder, a result.json, or an .rrd recording (gt: true offsets)."""
     p = Path(path)
     if p.is_dir():
-        return report_data_from_run(p, pair)
+        return report_data_from_run(p, pair, gt)
     if p.suffix == ".rrd":
-        return report_data_from_recording(p, pair)
+        return report_data_from_recording(p, pair, gt)
     if p.name.endswith(".json") and p.is_file():
-        return report_data_from_run(p.parent, pair)
+        return report_data_from_run(p.parent, pair, gt)
     if not p.exists():
         raise InputError(f"{p}: no such run folder or recording")
     raise InputError(f"{p}: give a run folder (with result.json) or a .rrd recording")

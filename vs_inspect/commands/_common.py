@@ -97,19 +97,51 @@ def run_config(args: argparse.Namespace) -> RunConfig:
     return cfg
 
 
+def add_gt_option(p: argparse.ArgumentParser) -> None:
+    """--gt FILE: true offsets, so that the command shows every error against them."""
+    p.add_argument("--gt", type=Path, default=None, metavar="FILE",
+                   help="true offsets (a gt.json: {\"offsets_s\": {\"cam0\": 0.0, ...}}): show each "
+                        "video's error in ms and in frames against them")
+
+
+def load_gt(path: Path | None, names: list[str], reference: str) -> dict[str, float] | None:
+    """The --gt file for these videos (None without --gt): it must name only known videos and
+    give the reference's true offset (errors are measured after aligning the reference)."""
+    if path is None:
+        return None
+    from ..io.bundle import read_gt
+    gt = read_gt(path, names)
+    if reference not in gt:
+        raise InputError(f"--gt {path}: no true offset for the reference video {reference!r} "
+                         "(errors are measured relative to it)")
+    return gt
+
+
+def error_frames(errors_ms: dict[str, float | None],
+                 frame_s: dict[str, float] | None) -> dict[str, float | None]:
+    """Each error in frames of its own video (None where the error or the clock is unknown)."""
+    out: dict[str, float | None] = {}
+    for v, e in errors_ms.items():
+        dt = (frame_s or {}).get(v)
+        out[v] = e / (1000.0 * dt) if e is not None and dt and math.isfinite(dt) else None
+    return out
+
+
 def fmt_s(x) -> str:
     return "null" if x is None or (isinstance(x, float) and not math.isfinite(x)) else f"{x:+.4f}"
 
 
 def offsets_table(offsets: dict, uncertainty: dict, truth: dict | None, reference: str,
-                  unresolved: dict) -> str:
-    """A short plain-text table of offsets, with the truth and error when known."""
+                  unresolved: dict, frame_s: dict[str, float] | None = None) -> str:
+    """A short plain-text table of offsets, with the truth and error when known (and the error
+    in frames of each video when its frame interval frame_s[v], seconds, is given)."""
     lines = []
     head = f"{'video':<16}{'offset_s':>11}{'± s':>9}"
     if truth:
-        head += f"{'true_s':>11}{'error_ms':>10}"
+        head += f"{'true_s':>11}{'error_ms':>10}" + (f"{'frames':>8}" if frame_s else "")
     lines.append(head)
     errors_ms = offset_errors_ms(offsets, truth, reference) if truth else {}
+    frames = error_frames(errors_ms, frame_s) if frame_s else {}
     for v, off in offsets.items():
         u = uncertainty.get(v)
         row = f"{v:<16}{fmt_s(off):>11}{('%.4f' % u) if u is not None else '-':>9}"
@@ -118,19 +150,24 @@ def offsets_table(offsets: dict, uncertainty: dict, truth: dict | None, referenc
             row += f"{tv:>+11.4f}"
             e = errors_ms.get(v)
             row += f"{e:>10.1f}" if e is not None else f"{'-':>10}"
+            if frame_s:
+                f = frames.get(v)
+                row += f"{f:>8.2f}" if f is not None else f"{'-':>8}"
         if off is None:
             row += f"   ({unresolved.get(v, 'unresolved')})"
         lines.append(row)
     return "\n".join(lines)
 
 
-def print_run(result, path, truth: dict | None = None) -> None:
-    """The offsets table (input order, truth from the run or given) and the pair counts."""
+def print_run(result, path, truth: dict | None = None,
+              frame_s: dict[str, float] | None = None) -> None:
+    """The offsets table (input order, truth from the run or given; errors in frames when the
+    frame intervals frame_s are given) and the pair counts."""
     names = list(result.inputs.videos) or list(result.offsets_s)
     truth = truth if truth is not None else result.gt_offsets_s
     shown_truth = {n: truth[n] for n in names if n in truth} if truth else None
     print(offsets_table({n: result.offsets_s.get(n) for n in names},
                         {n: result.uncertainty_s.get(n) for n in names}, shown_truth,
-                        result.reference, result.unresolved))
+                        result.reference, result.unresolved, frame_s if shown_truth else None))
     acc = sum(p.decision.accepted for p in result.pairs)
     print(f"pairs: {acc} accepted, {len(result.pairs) - acc} rejected; wrote {path}")

@@ -14,7 +14,7 @@ from ..io.result import read_run_result
 
 def register(sub) -> None:
     p = sub.add_parser("eval", help="score a result.json against true offsets",
-                       description="Pairwise A@100 and A@500 (%%) and per-video δ_mean / δ_med (ms) "
+                       description="Pairwise A@100 and A@500 (%) and per-video δ_mean / δ_med (ms) "
                                    "relative to the result's reference video.")
     p.add_argument("result", type=Path, help="result.json or the run folder holding it")
     p.add_argument("--gt", type=Path, required=True, help="gt.json with {'offsets_s': {...}}")

@@ -8,18 +8,23 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..types import PairLandscape, RunResult
-from ._common import offsets_table
+from ._common import add_gt_option, load_gt, offsets_table
 
 
 def register(sub) -> None:
     p = sub.add_parser("inspect", help="summarize a recording (.rrd): offsets, decisions, suspects",
                        description="Reads a vs_inspect recording alone (nothing is recomputed) and "
                                    "prints the videos and their offsets, each pair's decision with its "
-                                   "reason, the pairs that most disagree with the final solution and "
-                                   "the videos or pairs that look broken.")
+                                   "reason, the pairs that most disagree with the final solution, the "
+                                   "loops of three pairs, the cause of each failing pair (no "
+                                   "cross-view pairs, flat landscape, inconsistent geometry or "
+                                   "loops: pose or calibration, edge of the search range) and the "
+                                   "videos or pairs to blame, or the one global cause when most "
+                                   "pairs fail.")
     p.add_argument("rrd", type=Path, help="a .rrd written by vs-inspect sync/demo")
     p.add_argument("--pair", nargs=2, metavar=("A", "B"), help="also print this pair's landscape minima")
-    p.add_argument("--top", type=int, default=5, help="how many disagreeing pairs to list")
+    p.add_argument("--top", type=int, default=5, help="how many disagreeing pairs and loops to list")
+    add_gt_option(p)
     p.set_defaults(func=run)
 
 
@@ -37,7 +42,7 @@ def _opt(x: float) -> float | None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..analysis.diagnose import check_pairs, find_suspects
+    from ..analysis.diagnose import CAUSE_LOOPS, CAUSE_MEANING, diagnose
     from ..io.recording import pair_key, read_recording
 
     rec = read_recording(args.rrd)
@@ -47,37 +52,86 @@ def run(args: argparse.Namespace) -> int:
           f"rerun {rec.meta.get('rerun_version')})")
     if res is None:
         raise InputError(f"{args.rrd}: the recording has no result (the run stopped before Stage 2)")
-    truth = res.gt_offsets_s or rec.gt_offsets_s
+    gt = load_gt(args.gt, list(res.offsets_s), res.reference)
+    truth = gt or res.gt_offsets_s or rec.gt_offsets_s
+    frame_s = {v.name: v.frame_interval_s for v in rec.videos}
     print(f"\nvideos ({len(res.offsets_s)}), reference {res.reference}:")
     for v in rec.videos:
         rate = f"{v.fps:g} fps" if v.fps else "variable rate"
         print(f"  {v.name}: {v.width}x{v.height}, {v.num_frames} frames, {v.duration_s:.2f} s, {rate}")
-    print(offsets_table(res.offsets_s, res.uncertainty_s, truth, res.reference, res.unresolved))
+    print(offsets_table(res.offsets_s, res.uncertainty_s, truth, res.reference, res.unresolved,
+                        frame_s if truth else None))
 
+    diag = diagnose(res, rec.videos, truth)
+    by_key = {c.key: c for c in diag.checks}
     pairs = res.pairs
     acc = sum(p.decision.accepted for p in pairs)
-    print(f"\npairs: {len(pairs)} evaluated, {acc} accepted, {len(pairs) - acc} rejected")
+    print(f"\npairs: {len(pairs)} evaluated, {acc} accepted, {len(pairs) - acc} rejected"
+          + ("; error = |Δ − true Δ|" if truth else ""))
     for p in pairs:
+        c = by_key[f"{p.a}__{p.b}"]
         off = f"{p.best_offset_s:+.4f} s" if _opt(p.best_offset_s) is not None else "none"
+        err = f"error {c.error_ms:.1f} ms  " if c.error_ms is not None else ""
+        cause = f" [{c.cause}]" if c.bad and c.cause else ""
         print(f"  {p.a + '__' + p.b:<24} {'accepted' if p.decision.accepted else 'REJECTED':<9} "
-              f"Δ={off:<12} {p.decision.reason}")
+              f"Δ={off:<12} {p.num_track_pairs:>5} track pairs  {err}{p.decision.reason}{cause}")
 
-    checks = [c for c in check_pairs(res, rec.videos) if c.disagreement_ms is not None]
-    print("\nmost disagreeing with the final solution (|Δ_ab − (s_b − s_a)|, largest first):")
+    checks = [c for c in diag.checks if c.disagreement_ms is not None]
+    print("\nmost disagreeing with the final solution (|Δ_ab − (s_b − s_a)|, largest first; ok = "
+          "within tolerance and every loop through it closes):")
     if not checks:
         print("  (no pair with both videos synchronized)")
     for c in checks[: args.top]:
-        flag = "INCONSISTENT" if c.disagreement_ms > c.tolerance_ms else "ok"
+        if c.disagreement_ms > c.tolerance_ms:
+            flag = "INCONSISTENT"
+        elif c.loops_bad:
+            flag = f"LOOP OFF ({c.loops_bad} of {c.loops} loops miss, worst by {c.worst_loop_ms:.0f} ms)"
+        else:
+            flag = "ok"
         print(f"  {c.a + '__' + c.b:<24} {c.disagreement_ms:9.1f} ms  (Δ={c.offset_s:+.4f}, solution "
               f"{c.solution_s:+.4f}, tolerance {c.tolerance_ms:.0f} ms) {flag}"
               f"{'' if c.accepted else ', rejected: ' + c.reason}")
 
-    suspects = find_suspects(res, rec.videos)
+    print(f"\nloops of three pairs (Δ_ab + Δ_bc − Δ_ac should be 0): {len(diag.loops)}, "
+          f"{sum(lp.bad for lp in diag.loops)} miss")
+    for lp in sorted(diag.loops, key=lambda lp: -abs(lp.residual_ms))[: args.top]:
+        a, b, c = lp.videos
+        print(f"  {a} → {b} → {c}: {lp.residual_ms:+9.1f} ms (tolerance {lp.tolerance_ms:.1f} ms) "
+              f"{'MISSES' if lp.bad else 'closes'}")
+
+    print("\ncauses of the failing pairs:")
+    failing = [c for c in diag.checks if c.bad]
+    if not failing:
+        print("  none: every pair is accepted and agrees with the solution")
+    causes: dict[str, list[str]] = {}
+    for c in failing:
+        causes.setdefault(c.cause or "?", []).append(c.key)
+    for cause, keys in sorted(causes.items(), key=lambda kv: -len(kv[1])):
+        print(f"  {cause} ({len(keys)}): {', '.join(keys)}\n      {CAUSE_MEANING.get(cause, '')}")
+
     print("\nsuspects:")
-    if not suspects:
-        print("  none: every pair agrees with the solution within its tolerance")
-    for s in suspects:
+    if not diag.suspects:
+        print("  none: no video or pair is to blame" if failing else
+              "  none: every pair agrees with the solution within its tolerance")
+    for s in diag.suspects:
         print(f"  - {s.message}")
+    for c in diag.cautious:
+        print(f"  (not a suspect) {c.key}: rejected, but its minimum Δ={c.offset_s:+.4f} s closes "
+              f"{c.loops - c.loops_bad} of {c.loops} loops: a cautious rejection ({c.reason})")
+    for c in diag.unexplained:
+        print(f"  (unexplained) {c.key}: {c.cause}: {c.reason}")
+    blamed = {s.name for s in diag.suspects}
+    for lp in diag.loops:
+        keys = [f"{x}__{y}" for x, y in ((lp.videos[0], lp.videos[1]), (lp.videos[1], lp.videos[2]),
+                                         (lp.videos[0], lp.videos[2]))]
+        if lp.bad and not (set(lp.videos) | set(keys)) & blamed:
+            print(f"  (loop) {' → '.join(lp.videos)} misses by {lp.residual_ms:+.1f} ms (tolerance "
+                  f"{lp.tolerance_ms:.1f} ms): one of its pairs is off by about that much "
+                  f"({CAUSE_LOOPS}: pose or calibration, or matches); "
+                  + ("a single loop cannot tell which" if len(diag.loops) == 1 else
+                     "no pair misses all of its loops"))
+    for v, why in diag.consequences.items():
+        print(f"  (consequence, not a suspect) {v}: not synchronized: {why}")
 
     if args.pair:
         a, b = args.pair

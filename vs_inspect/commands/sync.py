@@ -5,11 +5,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..errors import InputError
+from ..errors import InputError, VsInspectError
 from ..io.result import write_run_result
 from ..pipeline import run as run_pipeline
-from ._common import (add_config_file_option, add_cue_options, add_force_option, add_sync_options,
-                      check_output_folder, print_run, run_config)
+from ._common import (add_config_file_option, add_cue_options, add_force_option, add_gt_option,
+                      add_sync_options, check_output_folder, load_gt, print_run, run_config)
 from ._record import add_record_options, check_rrd_path, describe, open_sink
 
 
@@ -27,6 +27,7 @@ def register(sub) -> None:
     p.add_argument("--out", type=Path, required=True, help="output folder for result.json")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     add_force_option(p)
+    add_gt_option(p)
     add_config_file_option(p)
     add_sync_options(p)
     add_record_options(p)
@@ -48,6 +49,11 @@ def run(args: argparse.Namespace) -> int:
     # after the whole run; an earlier run's result is replaced only with --force
     check_output_folder(out, args.force)
     check_rrd_path(args, out)
+    if args.gt is not None:  # a missing, malformed or mismatched truth fails now, not after the run
+        from ..io.bundle import read_gt, read_video_infos
+        names = ([v.name for v in read_video_infos(args.bundle)] if args.bundle else
+                 [p.name if p.is_dir() else p.stem for p in map(Path, args.videos)])
+        read_gt(args.gt, names)
     if args.videos and not args.no_rrd:  # names are known now: refuse a recording collision early
         from ..io.recording import check_entity_names
         check_entity_names([p.name if p.is_dir() else p.stem for p in map(Path, args.videos)])
@@ -80,7 +86,8 @@ def _run(args: argparse.Namespace, cfg, out: Path) -> int:
         shutil.rmtree(out / "cues")
     if describe(sink):
         print(describe(sink))
-    print_run(result, path)
+    truth = load_gt(args.gt, list(result.offsets_s), result.reference)
+    print_run(result, path, truth=truth, frame_s=_frame_intervals(args.bundle or out / "cues"))
     return exit_code(result)
 
 
@@ -88,3 +95,15 @@ def exit_code(result) -> int:
     """0 when at least two videos got offsets (or the only one), else 2."""
     resolved = len(result.resolved)
     return 0 if resolved >= 2 or len(result.offsets_s) == 1 else 2
+
+
+def _frame_intervals(bundle_dir: Path) -> dict[str, float] | None:
+    """Each video's frame interval (s) from the run's bundle.json, for errors in frames: 1/fps,
+    or the mean spacing of a variable-rate video's frames (as inspect and report count them)."""
+    from ..io.bundle import read_video_infos
+    try:
+        return {v.name: (1.0 / v.fps if v.fps else
+                         float(v.timestamps_s[-1] - v.timestamps_s[0]) / max(1, v.num_frames - 1))
+                for v in read_video_infos(bundle_dir)}
+    except (OSError, ValueError, VsInspectError):  # errors in ms are still shown; frames need clocks
+        return None

@@ -204,6 +204,17 @@ def _split_pair_name(stem: str, names: list[str]) -> tuple[str, str] | None:
     return None
 
 
+def read_video_infos(folder: str | os.PathLike) -> list[VideoInfo]:
+    """The videos of a bundle (names and clocks) from its bundle.json alone, checked as
+    read_bundle checks them: no track or camera is loaded."""
+    meta_path = Path(folder) / "bundle.json"
+    meta = _load_json(meta_path)
+    entries = meta.get("videos") if isinstance(meta, dict) else None
+    if not isinstance(entries, list) or not entries:
+        raise BundleError(meta_path, "empty bundle: 'videos' must be a non-empty list")
+    return [_read_video_entry(meta_path, i, e) for i, e in enumerate(entries)]
+
+
 def read_bundle(folder: str | os.PathLike) -> CueBundle:
     """Read and validate a cue bundle folder."""
     root = Path(folder)

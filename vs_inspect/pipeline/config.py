@@ -202,7 +202,8 @@ def add_config_options(parser: argparse.ArgumentParser, sections: tuple[str, ...
             md = f.metadata
             owner = functools.reduce(getattr, path[1:], default_root)
             default = getattr(owner, f.name)
-            help_text = md.get("help") or field_doc(cls, f.name)
+            # a docstring's "None = X" (the config file's null) reads "default: X" on the command line
+            help_text = (md.get("help") or field_doc(cls, f.name)).replace("None = ", "default: ")
             kw: dict[str, Any] = {"dest": _dest(path, f.name), "default": argparse.SUPPRESS}
             if md.get("negate"):
                 kw.update(action="store_const", const=False)
@@ -218,7 +219,10 @@ def add_config_options(parser: argparse.ArgumentParser, sections: tuple[str, ...
                 if "nargs" in md:
                     kw["nargs"] = md["nargs"]
                 shown = md.get("default_text", default)
-                if not isinstance(shown, dict):
+                # once, and only a real value: a docstring that explains its own default (or
+                # what None means) is not followed by "(default: None)"
+                if not isinstance(shown, dict) and shown is not None \
+                        and "default" not in help_text.lower():
                     help_text += f" (default: {shown})"
             g.add_argument(md["flag"], help=help_text.replace("%", "%%"), **kw)
 

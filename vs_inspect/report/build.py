@@ -18,12 +18,13 @@ CAPTIONS = {
     "scene3d": "3D scene: camera frustums coloured per video (a moving camera with its path and "
                "frustums along it), the static reconstruction when there is one, and the moving "
                "points triangulated at the solved offsets, coloured by global time.",
-    "landscapes": "Energy landscape E(Δ) of every pair: green frame = accepted, red frame = "
+    "landscapes": "Energy landscape E(Δ) of every pair: blue frame = accepted, vermillion frame = "
                   "rejected (with the reason); star = best minimum, circles = other minima, solid "
-                  "line = chosen Δ, orange triangle = Δ implied by the global solve, dashed black line = "
+                  "line = chosen Δ, purple triangle = Δ implied by the global solve, dashed black line = "
                   "true Δ when known.",
-    "pair_graph": "Pair graph: videos as nodes (with their solved offsets), accepted pairs as "
-                  "solid green edges labelled with Δ, rejected pairs as dashed red edges.",
+    "pair_graph": "Pair graph: videos as nodes (with their solved offsets, and their errors when "
+                  "the truth is known), accepted pairs as solid blue edges labelled with Δ, rejected "
+                  "pairs as dashed vermillion edges.",
     "timeline": "Timeline of all videos before sync (each on its own clock) and after sync "
                 "(placed on the global time axis).",
     "epipolar": "Epipolar panel: the same frame of video a; b's matched points at t − Δ give "
@@ -47,31 +48,41 @@ def available(data: ReportData) -> list[str]:
     return keys
 
 
-def render_report(data: ReportData, out_dir: str | Path, overwrite: bool = True) -> dict[str, Path]:
-    """Write <key>.png for every available figure, index.html and render_times.json into a fresh
-    folder (io.atomic.atomic_dir: nothing stale from an earlier report, nothing half-written on an
-    error or an interrupt). overwrite=False: refuse a non-empty out_dir (FileExistsError)."""
+def render_report(data: ReportData, out_dir: str | Path, overwrite: bool = True,
+                  formats: tuple[str, ...] = ("png",), dpi: float = figures.DPI) -> dict[str, Path]:
+    """Write <key>.<format> for every available figure and format (png, pdf, svg; PNG at dpi),
+    index.html and render_times.json into a fresh folder (io.atomic.atomic_dir: nothing stale
+    from an earlier report, nothing half-written on an error or an interrupt). overwrite=False:
+    refuse a non-empty out_dir (FileExistsError). Returns {key: first format's file}."""
+    bad = [f for f in formats if f not in figures.FORMATS]
+    if bad or not formats:
+        raise ValueError(f"--format {','.join(formats)}: choose from {','.join(figures.FORMATS)}")
+    if not (dpi > 0 and dpi <= 1200):
+        raise ValueError(f"--dpi {dpi}: must be in (0, 1200]")
     out = Path(out_dir)
     with atomic_dir(out, overwrite=overwrite) as tmp:
-        paths = _render_into(data, Path(tmp))
+        paths = _render_into(data, Path(tmp), tuple(formats), float(dpi))
     return {k: out / p.name for k, p in paths.items()}
 
 
-def _render_into(data: ReportData, out: Path) -> dict[str, Path]:
+def _render_into(data: ReportData, out: Path, formats: tuple[str, ...] = ("png",),
+                 dpi: float = figures.DPI) -> dict[str, Path]:
     paths: dict[str, Path] = {}
     times: dict[str, float] = {}
     for key in available(data):
         t0 = time.perf_counter()
-        p = out / f"{key}.png"
+        p = out / f"{key}.{formats[0]}"
         if key == "scene3d":
             from .scene3d import render_scene
-            render_scene(data, p, figures.figure_size_px("scene3d", data))
+            render_scene(data, p, figures.figure_size_px("scene3d", data, dpi), dpi, formats)
         else:
-            getattr(figures, key)(data, p)
+            getattr(figures, key)(data, p, dpi, formats)
         times[key] = round(time.perf_counter() - t0, 3)
         paths[key] = p
         log.info("wrote %s (%.2f s)", p, times[key])
-    captions = {k: (paths[k].name, CAPTIONS[k]) for k in paths}
+    # the page shows PNG (or SVG) pictures; a PDF-only report links the files
+    shown = next((f for f in ("png", "svg") if f in formats), formats[0])
+    captions = {k: (paths[k].with_suffix("." + shown).name, CAPTIONS[k]) for k in paths}
     paths["index"] = write_index(data, captions, out / "index.html")
     (out / "render_times.json").write_text(json.dumps(times, indent=1))
     return paths

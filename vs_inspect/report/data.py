@@ -28,6 +28,13 @@ class VideoClock:
     fps: float | None  # nominal rate, None for variable frame rate
     path: str | None = None  # video file or image folder when it can be read, else None
 
+    @property
+    def frame_interval_s(self) -> float:
+        """1/fps, or the mean spacing of a variable-rate video's frames, seconds."""
+        if self.fps:
+            return 1.0 / self.fps
+        return (self.end_s - self.start_s) / (self.num_frames - 1) if self.num_frames > 1 else float("nan")
+
 
 @dataclass(frozen=True)
 class CameraView:
@@ -122,6 +129,7 @@ class EpipolarPanel:
     wrong: EpipolarState
     chosen: EpipolarState
     image_bgr: np.ndarray | None = None  # (H,W,3) uint8 frame of a when the video could be read
+    accepted: bool = True  # the pair's decision: a rejected pair's "chosen" Δ is only its best
 
 
 @dataclass(frozen=True)
@@ -179,3 +187,11 @@ class ReportData:
             return {}
         errors = offset_errors_ms({v: self.offsets_s.get(v) for v in self.names}, gt, self.reference)
         return {v: errors.get(v) for v in self.names}
+
+    def errors_frames(self) -> dict[str, float | None]:
+        """errors_ms() in frames of each video (empty without truth)."""
+        out: dict[str, float | None] = {}
+        for v, e in self.errors_ms().items():
+            dt = self.video(v).frame_interval_s
+            out[v] = e / (1000.0 * dt) if e is not None and np.isfinite(dt) and dt > 0 else None
+        return out

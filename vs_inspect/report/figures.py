@@ -1,7 +1,9 @@
 """2D report figures with matplotlib (Agg): landscapes, pair graph, timeline, epipolar panel.
 
-Each function takes ReportData (or a part of it) and an output path, draws, and writes one PNG of
-a size fixed by figure_size_px; nothing is computed here.
+Each function takes ReportData (or a part of it) and an output path, draws, and writes the figure
+in each requested format (PNG of a size fixed by figure_size_px at the given dpi, PDF, SVG);
+nothing is computed here. Colours: the Okabe-Ito palette (safe for colour-blind readers):
+accepted = blue, rejected = vermillion, never red against green.
 """
 
 from __future__ import annotations
@@ -19,21 +21,46 @@ from matplotlib.patches import Patch  # noqa: E402
 
 from .data import EpipolarPanel, PairView, ReportData  # noqa: E402
 
-DPI = 100
-ACCEPT = "#1a9850"  # green
-REJECT = "#d73027"  # red
+DPI = 100  # default resolution; figure_size_px is in pixels at this dpi
+FORMATS = ("png", "pdf", "svg")
+OKABE_ITO = ("#E69F00", "#56B4E9", "#009E73", "#F0E442", "#0072B2", "#D55E00", "#CC79A7", "#000000")
+ACCEPT = "#0072B2"  # Okabe-Ito blue
+REJECT = "#D55E00"  # Okabe-Ito vermillion
 TRUTH = "#222222"
-SOLVED = "#ff9900"  # orange: Δ implied by the global solve
-ACCEPT_BG = "#eef8f0"
-REJECT_BG = "#fcecea"
+SOLVED = "#CC79A7"  # Okabe-Ito reddish purple: Δ implied by the global solve
+ACCEPT_BG = "#e9f1f8"
+REJECT_BG = "#fbece3"
 plt.rcParams.update({"font.size": 11, "axes.titlesize": 11, "axes.labelsize": 10,
                      "xtick.labelsize": 9, "ytick.labelsize": 9, "legend.fontsize": 9})
 
 
 def video_colors(names: list[str]) -> dict[str, tuple[float, float, float]]:
-    """One stable colour per video (tab10, tab20 beyond 10 videos), shared by all figures."""
-    cmap = plt.get_cmap("tab10" if len(names) <= 10 else "tab20")
+    """One stable colour per video, shared by all figures: Okabe-Ito (without black and yellow,
+    which white labels do not read on) up to 6 videos, tab20 beyond."""
+    from matplotlib.colors import to_rgb
+    pal = [c for c in OKABE_ITO if c not in ("#000000", "#F0E442")]
+    if len(names) <= len(pal):
+        return {n: to_rgb(pal[i]) for i, n in enumerate(names)}
+    cmap = plt.get_cmap("tab20")
     return {n: tuple(cmap(i % cmap.N)[:3]) for i, n in enumerate(names)}
+
+
+def fmt_px2(x: float | None) -> str:
+    """A squared pixel error for people: two significant digits, "< 0.001" below that."""
+    if x is None or not math.isfinite(x):
+        return "—"
+    if x < 1e-3:
+        return "< 0.001"
+    d = math.floor(math.log10(x))
+    r = round(x, 1 - d)
+    return f"{r:.0f}" if d >= 1 else f"{r:.{1 - d}f}"
+
+
+def fmt_error(ms: float | None, frames: float | None = None) -> str:
+    """'13.5 ms (0.67 frames)'; '—' when unknown."""
+    if ms is None or not math.isfinite(ms):
+        return "—"
+    return f"{ms:.1f} ms" + (f" ({frames:.2f} frames)" if frames is not None else "")
 
 
 def landscape_grid_shape(n: int) -> tuple[int, int]:
@@ -41,11 +68,17 @@ def landscape_grid_shape(n: int) -> tuple[int, int]:
     return max(1, math.ceil(n / cols)), cols
 
 
-def figure_size_px(kind: str, data: ReportData) -> tuple[int, int]:
-    """(width, height) in pixels of each figure, so that tests can check what was written."""
+def figure_size_px(kind: str, data: ReportData, dpi: float = DPI) -> tuple[int, int]:
+    """(width, height) in pixels of each figure's PNG at dpi, so that tests can check it."""
+    w, h = _size_px(kind, data)
+    # as matplotlib sizes the canvas: inches (px / DPI) times dpi, truncated
+    return int((w / DPI) * dpi + 1e-6), int((h / DPI) * dpi + 1e-6)
+
+
+def _size_px(kind: str, data: ReportData) -> tuple[int, int]:
     if kind == "landscapes":
         rows, cols = landscape_grid_shape(len(data.pairs))
-        return 380 * cols, 60 + 270 * rows
+        return max(760, 380 * cols), 110 + 300 * rows
     if kind == "pair_graph":
         return 1000, 900
     if kind == "timeline":
@@ -73,10 +106,21 @@ def _fig(kind: str, data: ReportData):
     return plt.figure(figsize=(w / DPI, h / DPI), dpi=DPI, layout="constrained")
 
 
-def _save(fig, path: Path) -> Path:
-    fig.savefig(path, dpi=DPI)  # no bbox_inches: the size stays what figure_size_px says
+def _save(fig, path: Path, dpi: float = DPI, formats: tuple[str, ...] = ("png",)) -> Path:
+    """Write path with each format's suffix; returns the first. No bbox_inches: the size stays
+    what figure_size_px says, and constrained layout keeps every label inside it."""
+    out = []
+    for fmt in formats:
+        p = Path(path).with_suffix("." + fmt)
+        fig.savefig(p, dpi=dpi, format=fmt, metadata=_METADATA.get(fmt))
+        out.append(p)
     plt.close(fig)
-    return path
+    return out[0]
+
+
+# no creation date: the same drawing gives the same bytes (a report from a run folder and from
+# its .rrd can be compared file by file)
+_METADATA = {"pdf": {"CreationDate": None}, "svg": {"Date": None}}
 
 
 def _fmt(x: float | None, unit: str = " s", digits: int = 3) -> str:
@@ -95,8 +139,8 @@ def _landscape_axes(ax, p: PairView) -> None:
     mark = "accepted" if p.accepted else "REJECTED"
     ax.set_title(f"{p.a} – {p.b}   {mark}", color=col, fontweight="bold", loc="left", fontsize=11)
     if p.offsets_s.size == 0 or not np.isfinite(p.energy).any():
-        ax.text(0.5, 0.5, "no landscape\n" + _wrap(p.reason, 40), ha="center", va="center",
-                transform=ax.transAxes, fontsize=9, color=REJECT)
+        ax.text(0.5, 0.5, "no landscape\n" + _wrap(p.reason, 44), ha="center", va="center",
+                transform=ax.transAxes, fontsize=8.5, color=REJECT)
         ax.set_xticks([])
         ax.set_yticks([])
         return
@@ -115,23 +159,24 @@ def _landscape_axes(ax, p: PairView) -> None:
                 transform=ax.get_xaxis_transform(), clip_on=False, zorder=5)
     txt = f"Δ = {_fmt(p.chosen_offset_s)}"
     if p.error_ms is not None:
-        txt += f"\nerror {p.error_ms:.1f} ms"
+        txt += f"\nerror vs truth {p.error_ms:.1f} ms"
     if p.disagreement_ms is not None and p.disagreement_ms > 100.0:
         txt += f"\n{p.disagreement_ms:.0f} ms off the global solve"
     if not p.accepted:
-        txt += "\n" + _wrap(p.reason, 38)
-    ax.text(0.02, 0.04, txt, transform=ax.transAxes, fontsize=8.5, va="bottom", ha="left",
-            bbox=dict(boxstyle="round,pad=0.25", fc="white", ec=col, alpha=0.9))
+        txt += "\n" + _wrap(p.reason, 50)
+    ax.text(0.02, 0.04, txt, transform=ax.transAxes, fontsize=7.5 if not p.accepted else 8.5,
+            va="bottom", ha="left", bbox=dict(boxstyle="round,pad=0.25", fc="white", ec=col, alpha=0.9))
     ax.margins(x=0.01)
     ax.grid(True, alpha=0.3)
 
 
 def _wrap(text: str, width: int) -> str:
+    """The whole text in lines of at most width characters (never cut)."""
     import textwrap
-    return "\n".join(textwrap.wrap(text, width)[:3])
+    return "\n".join(textwrap.wrap(text, width))
 
 
-def landscapes(data: ReportData, path: Path) -> Path:
+def landscapes(data: ReportData, path: Path, dpi: float = DPI, formats: tuple[str, ...] = ("png",)) -> Path:
     fig = _fig("landscapes", data)
     rows, cols = landscape_grid_shape(len(data.pairs))
     axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False)).ravel()
@@ -154,18 +199,21 @@ def landscapes(data: ReportData, path: Path) -> Path:
                           markeredgecolor="k", markersize=10, label="Δ of the global solve"))
     if data.gt_offsets_s:
         handles.append(Line2D([], [], color=TRUTH, ls=(0, (4, 3)), label="true Δ"))
-    fig.legend(handles=handles, loc="outside upper center", ncol=len(handles), frameon=False)
-    return _save(fig, path)
+    # as many legend entries per row as the figure's width holds (about 190 px each)
+    ncol = max(1, min(len(handles), _size_px("landscapes", data)[0] // 190))
+    fig.legend(handles=handles, loc="outside upper center", ncol=ncol, frameon=False)
+    return _save(fig, path, dpi, formats)
 
 
 # ---- pair graph ----------------------------------------------------------------------------
 
 
-def pair_graph(data: ReportData, path: Path) -> Path:
+def pair_graph(data: ReportData, path: Path, dpi: float = DPI, formats: tuple[str, ...] = ("png",)) -> Path:
     fig = _fig("pair_graph", data)
     ax = fig.add_subplot()
     names = data.names or sorted({n for p in data.pairs for n in (p.a, p.b)})
     colors = video_colors(names)
+    errs, frames = data.errors_ms(), data.errors_frames() if data.videos else {}
     n = len(names)
     ang = np.pi / 2 - 2 * np.pi * np.arange(n) / max(n, 1)
     pos = {v: (np.cos(a), np.sin(a)) for v, a in zip(names, ang)}
@@ -188,28 +236,35 @@ def pair_graph(data: ReportData, path: Path) -> Path:
         ax.text(x, y, v, ha="center", va="center", fontsize=10, fontweight="bold", color="white",
                 zorder=7)
         sub = "reference (0 s)" if v == data.reference else ("unresolved" if off is None else f"{off:+.3f} s")
-        ax.text(1.2 * x, 1.2 * y, sub, ha="center", va="center", fontsize=10, zorder=7,
+        if v in errs and v != data.reference:
+            sub += f"\nerror {fmt_error(errs[v], frames.get(v))}"
+        # outside the node, on the side away from the centre
+        ha = "left" if x > 0.3 else "right" if x < -0.3 else "center"
+        va = "bottom" if y > 0.3 else "top" if y < -0.3 else "center"
+        ax.text(1.14 * x, 1.14 * y, sub, ha=ha, va=va, fontsize=10, zorder=7,
                 color="black" if off is not None else REJECT)
-    ax.set_xlim(-1.45, 1.45)
-    ax.set_ylim(-1.4, 1.4)
+    ax.set_xlim(-1.6, 1.6)
+    ax.set_ylim(-1.45, 1.45)
     ax.set_aspect("equal")
     ax.axis("off")
     acc = sum(p.accepted for p in data.pairs)
     ax.set_title(f"Pair graph: {acc} accepted (solid, Δ = offset(b) − offset(a) along a→b in "
-                 f"name order, label near a), {len(data.pairs) - acc} rejected (dashed)", fontsize=11)
-    return _save(fig, path)
+                 f"name order, label near a),\n{len(data.pairs) - acc} rejected (dashed)"
+                 + ("; errors against the truth under the offsets" if errs else ""), fontsize=11)
+    return _save(fig, path, dpi, formats)
 
 
 # ---- timeline ------------------------------------------------------------------------------
 
 
-def timeline(data: ReportData, path: Path) -> Path:
+def timeline(data: ReportData, path: Path, dpi: float = DPI, formats: tuple[str, ...] = ("png",)) -> Path:
     fig = _fig("timeline", data)
     before, after = fig.subplots(2, 1, sharex=True, height_ratios=[1, 1])
     colors = video_colors(data.names)
     n = len(data.videos)
     gt = data.gt_offsets_s or {}
     ref_gt = gt.get(data.reference, 0.0)
+    errs, frames = data.errors_ms(), data.errors_frames()
     for i, v in enumerate(data.videos):
         y = n - 1 - i
         before.barh(y, v.end_s - v.start_s, left=v.start_s, color=colors[v.name], height=0.6,
@@ -227,6 +282,9 @@ def timeline(data: ReportData, path: Path) -> Path:
             if v.name in gt:
                 x = gt[v.name] - ref_gt + v.start_s
                 after.plot([x, x], [y - 0.42, y + 0.42], color=TRUTH, lw=2.0)
+            if errs.get(v.name) is not None and v.name != data.reference:
+                after.text(v.end_s + off + 0.1, y, f"error {fmt_error(errs[v.name], frames.get(v.name))}",
+                           va="center", fontsize=8.5)
         rate = f"{v.fps:g} fps" if v.fps else "variable fps"
         before.text(v.end_s + 0.1, y, f"{v.num_frames} frames, {rate}", va="center", fontsize=8.5)
     for ax, title in ((before, "before sync: every video starts at its own local 0"),
@@ -239,14 +297,16 @@ def timeline(data: ReportData, path: Path) -> Path:
     after.set_xlabel(f"time [s]  (global axis: {data.reference} starts at 0)")
     lo = min([v.start_s + (data.offsets_s.get(v.name) or 0.0) for v in data.videos] + [0.0])
     hi = max([v.end_s + (data.offsets_s.get(v.name) or 0.0) for v in data.videos] + [1.0])
-    after.set_xlim(lo - 0.3, hi + 0.15 * (hi - lo) + 0.5)
-    return _save(fig, path)
+    after.set_xlim(lo - 0.3, hi + 0.22 * (hi - lo) + 0.5)
+    return _save(fig, path, dpi, formats)
 
 
 # ---- epipolar panel ------------------------------------------------------------------------
 
 
 def _epipolar_axes(ax, e: EpipolarPanel, state, title: str, good: bool) -> None:
+    """One state of the panel; good = drawn in the accepted colour (a rejected pair's best
+    offset is not)."""
     W, H = e.width, e.height
     if e.image_bgr is not None:
         ax.imshow(e.image_bgr[..., ::-1], extent=(-0.5, W - 0.5, H - 0.5, -0.5))
@@ -269,29 +329,33 @@ def _epipolar_axes(ax, e: EpipolarPanel, state, title: str, good: bool) -> None:
     ax.set_title(title, color=col, fontsize=11, fontweight="bold")
     ax.set_xlabel("x [px]")
     ax.set_ylabel("y [px]")
-    ax.text(0.01, 0.99, f"median Sampson error {state.median_sampson_px2:.3g} px²",
+    ax.text(0.01, 0.99, f"median Sampson error {fmt_px2(state.median_sampson_px2)} px²",
             transform=ax.transAxes, va="top", ha="left", fontsize=11,
             bbox=dict(boxstyle="round,pad=0.3", fc="white", ec=col, alpha=0.92))
 
 
-def epipolar(data: ReportData, path: Path) -> Path:
+def epipolar(data: ReportData, path: Path, dpi: float = DPI, formats: tuple[str, ...] = ("png",)) -> Path:
     e = data.epipolar
     fig = _fig("epipolar", data)
     left, right = fig.subplots(1, 2)
     _epipolar_axes(left, e, e.wrong, f"wrong offset Δ = {e.wrong.offset_s:+.3f} s", False)
-    _epipolar_axes(right, e, e.chosen, f"chosen offset Δ = {e.chosen.offset_s:+.3f} s", True)
+    if e.accepted:
+        _epipolar_axes(right, e, e.chosen, f"chosen offset Δ = {e.chosen.offset_s:+.3f} s", True)
+    else:
+        _epipolar_axes(right, e, e.chosen, f"best offset of a REJECTED pair Δ = {e.chosen.offset_s:+.3f} s",
+                       False)
     backdrop = "video frame" if e.image_bgr is not None else "blank canvas: video not available"
     fig.suptitle(f"{e.a} frame {e.frame_a} (t = {e.time_a_s:.3f} s; {backdrop}).  Dots: {e.a}'s "
                  f"track points.  Lines (same colour): epipolar lines of the matched points of "
                  f"{e.b} at t − Δ.\nAt the right Δ each line passes through its dot; matches that "
                  f"are wrong miss at every Δ.", fontsize=11)
-    return _save(fig, path)
+    return _save(fig, path, dpi, formats)
 
 
 # ---- mosaic of one moment --------------------------------------------------------------------
 
 
-def mosaic(data: ReportData, path: Path) -> Path:
+def mosaic(data: ReportData, path: Path, dpi: float = DPI, formats: tuple[str, ...] = ("png",)) -> Path:
     m = data.mosaic
     fig = _fig("mosaic", data)
     rows, cols = _mosaic_grid(len(m.tiles))
@@ -317,4 +381,4 @@ def mosaic(data: ReportData, path: Path) -> Path:
             side.set_edgecolor(colors.get(t.name, "k"))
             side.set_linewidth(3)
     fig.suptitle(f"one global moment across all videos after sync: t = {m.time_s:.3f} s", fontsize=12)
-    return _save(fig, path)
+    return _save(fig, path, dpi, formats)

@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 from .data import ReportData
+from .figures import fmt_px2
 
 
 def _s(x: float | None, digits: int = 4, sign: bool = True) -> str:
@@ -20,7 +21,7 @@ body { font-family: system-ui, sans-serif; margin: 24px; max-width: 1700px; colo
 table { border-collapse: collapse; margin: 8px 0 24px 0; font-size: 14px; }
 th, td { border: 1px solid #ccc; padding: 4px 8px; text-align: right; }
 th { background: #f2f2f2; } td.l { text-align: left; }
-tr.acc td.d { color: #1a9850; font-weight: bold; } tr.rej td.d { color: #d73027; font-weight: bold; }
+tr.acc td.d { color: #0072B2; font-weight: bold; } tr.rej td.d { color: #D55E00; font-weight: bold; }
 figure { margin: 12px 0 32px 0; } figure img { max-width: 100%; border: 1px solid #ddd; }
 figcaption { font-size: 14px; color: #444; margin-top: 4px; }
 .notes li { color: #8a5a00; }
@@ -32,6 +33,7 @@ def write_index(data: ReportData, images: dict[str, tuple[str, str]], path: Path
     e = html.escape
     gt = data.gt_offsets_s
     errs = data.errors_ms()
+    frames = data.errors_frames() if data.videos else {}
     out = ["<!doctype html>", "<html><head><meta charset='utf-8'>",
            "<title>vs-inspect report</title>", f"<style>{CSS}</style></head><body>",
            "<h1>vs-inspect report</h1>",
@@ -40,7 +42,7 @@ def write_index(data: ReportData, images: dict[str, tuple[str, str]], path: Path
            "video v shows global time τ + offset(v); Δ<sub>ab</sub> = offset(b) − offset(a).</p>"]
 
     out.append("<h2>Offsets</h2><table id='offsets'><tr><th>video</th><th>offset [s]</th>"
-               "<th>± [s]</th>" + ("<th>true [s]</th><th>error [ms]</th>" if gt else "")
+               "<th>± [s]</th>" + ("<th>true [s]</th><th>error [ms]</th><th>error [frames]</th>" if gt else "")
                + "<th>status</th></tr>")
     ref_gt = gt.get(data.reference, 0.0) if gt else 0.0
     for v in data.names or list(data.offsets_s):
@@ -48,7 +50,8 @@ def write_index(data: ReportData, images: dict[str, tuple[str, str]], path: Path
         row = f"<tr><td class='l'>{e(v)}</td><td>{_s(off)}</td>" \
               f"<td>{_s(data.uncertainty_s.get(v), 4, False)}</td>"
         if gt:
-            row += f"<td>{_s(gt[v] - ref_gt) if v in gt else '—'}</td><td>{_s(errs.get(v), 1, False)}</td>"
+            row += (f"<td>{_s(gt[v] - ref_gt) if v in gt else '—'}</td><td>{_s(errs.get(v), 1, False)}</td>"
+                    f"<td>{_s(frames.get(v), 2, False)}</td>")
         status = "reference" if v == data.reference else (
             "synchronized" if off is not None else "unresolved: " + data.unresolved.get(v, ""))
         out.append(row + f"<td class='l'>{e(status)}</td></tr>")
@@ -79,9 +82,10 @@ def write_index(data: ReportData, images: dict[str, tuple[str, str]], path: Path
         ep = data.epipolar
         out.append("<h2>Epipolar check</h2><table id='epipolar'><tr><th>pair</th><th>frame of a</th>"
                    "<th>Δ [s]</th><th>median Sampson error [px²]</th></tr>")
-        for label, st in (("wrong", ep.wrong), ("chosen", ep.chosen)):
+        best = "chosen" if ep.accepted else "best of a rejected pair"
+        for label, st in (("wrong", ep.wrong), (best, ep.chosen)):
             out.append(f"<tr><td class='l'>{e(ep.a)} – {e(ep.b)} ({label})</td><td>{ep.frame_a}</td>"
-                       f"<td>{_s(st.offset_s, 3)}</td><td>{st.median_sampson_px2:.3g}</td></tr>")
+                       f"<td>{_s(st.offset_s, 3)}</td><td>{e(fmt_px2(st.median_sampson_px2))}</td></tr>")
         out.append("</table>")
 
     out.append("<h2>Figures</h2>")

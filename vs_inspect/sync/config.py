@@ -41,7 +41,10 @@ class LandscapeConfig:
 
 @dataclass(frozen=True)
 class DecisionConfig:
-    enabled: bool = field(default=True, metadata={"flag": "--no-spurious-filter", "negate": True})
+    enabled: bool = field(default=True, metadata={
+        "flag": "--no-spurious-filter", "negate": True,
+        "help": "turn off the spurious-pair filter: accept every pair with a minimum, ambiguous "
+                "or not (the paper's ablation)"})
     """Reject pairs whose landscape is ambiguous (off = accept every pair with a minimum: the ablation)."""
     min_track_pairs: int = 8
     """A pair with fewer cross-view track pairs, or whose best offset is seen by fewer of them, is rejected: a few wrong matches can line up by chance at some offset."""

@@ -1,0 +1,86 @@
+"""How every command's --help reads: one formatter (a default shown once, never "None" or for a
+switch) and an Examples epilog per command. cli.build_parser applies both to every subcommand."""
+
+from __future__ import annotations
+
+import argparse
+import textwrap
+
+EXAMPLES: dict[str, list[tuple[str, str]]] = {
+    "bench": [("vs-inspect bench --quick", "a few minutes: a small subset, tables printed"),
+              ("vs-inspect bench --only cue/easy --json rows.json", "one dataset, rows as JSON")],
+    "bench-drone": [("vs-inspect bench-drone ../shared/data/drone_tracking_dataset3",
+                     "per-camera shift and rate errors on the drone dataset")],
+    "bench-energy": [("vs-inspect bench-energy", "speed of the landscape against plain numpy")],
+    "calibrate-board": [(("vs-inspect calibrate-board cam0.mp4 cam1.mp4 --board charuco.toml "
+                          "--out calib.json"), "the rig's cameras; then sync --calib calib.json")],
+    "cues": [("vs-inspect cues cam0.mp4 cam1.mp4 cam2.mp4 --calib calib.json --out bundle",
+              "Stage 0 only: a cue bundle to sync later with --bundle")],
+    "demo": [("vs-inspect demo", "render (once) and synchronize the built-in scene into out/demo"),
+             ("vs-inspect demo --true-cues-only --out out/demo", "skip the videos' Stage 0 run"),
+             ("vs-inspect report out/demo --out out/demo-report", "then its figures")],
+    "eval": [("vs-inspect eval out/run --gt scene/gt.json", "A@100, A@500 and per-video errors")],
+    "export": [("vs-inspect export out/run --mosaic out/run/mosaic.mp4",
+                "all inputs side by side on the global timeline")],
+    "import-drone": [("vs-inspect import-drone ../shared/data/drone_tracking_dataset3 --out drone",
+                      "a pose-free cue bundle with gt.json")],
+    "import-visualsync": [("vs-inspect import-visualsync visualsync_out --out bundle",
+                           "a cue bundle from CoTracker / VGGT / filtered-pair outputs")],
+    "inspect": [("vs-inspect inspect run.rrd", "offsets, decisions, causes and suspects"),
+                ("vs-inspect inspect run.rrd --gt scene/gt.json --pair cam0 cam2",
+                 "with errors against the truth and one pair's minima")],
+    "report": [("vs-inspect report out/run --out out/run-report", "from a run folder"),
+               ("vs-inspect report run.rrd --out report --format png,pdf --dpi 200",
+                "from a recording alone, as PNG and PDF at 200 dpi"),
+               ("vs-inspect report out/run --out report --gt scene/gt.json",
+                "errors against the truth in the figures")],
+    "sync": [("vs-inspect sync cam0.mp4 cam1.mp4 cam2.mp4 --calib calib.json --out out/run",
+              "the whole pipeline on videos"),
+             ("vs-inspect sync --bundle scene/bundle --out out/run --gt scene/gt.json",
+              "Stage 1 + 2 on a cue bundle, errors against the truth"),
+             ("vs-inspect sync --config out/run/config.json --bundle scene/bundle --out out/again --force",
+              "repeat a run with its saved settings")],
+    "synth-cues": [("vs-inspect synth-cues --out synth", "a cue-level scene with gt.json"),
+                   ("vs-inspect sync --bundle synth --out out/synth --gt synth/gt.json", "then sync it")],
+    "synth-video": [("vs-inspect synth-video --out scene --cameras 3 --seconds 4",
+                     "videos, calibration.json, gt.json and the true bundle")],
+}
+
+
+def examples_epilog(command: str) -> str | None:
+    rows = EXAMPLES.get(command)
+    if not rows:
+        return None
+    lines = ["Examples:"]
+    for cmd, what in rows:
+        lines.append(f"  {cmd}")
+        lines += textwrap.wrap(what, 76, initial_indent="      ", subsequent_indent="      ")
+    return "\n".join(lines)
+
+
+class HelpFormatter(argparse.HelpFormatter):
+    """A default shown once: not when the help already says it, not for a required option, a
+    switch or an unset (None) default. Text with line breaks (an epilog of examples or a layout)
+    is printed as written; a single paragraph is wrapped."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        d = action.default
+        if ("default" in text.lower() or action.required or d is None or d is argparse.SUPPRESS
+                or isinstance(d, bool) or action.nargs == 0 or not action.option_strings):
+            return text
+        return text + " (default: %(default)s)"
+
+    def _fill_text(self, text: str, width: int, indent: str) -> str:
+        if "\n" in text:
+            return "".join(indent + line for line in text.splitlines(keepends=True))
+        return super()._fill_text(text, width, indent)
+
+
+def apply(parser: argparse.ArgumentParser, command: str) -> None:
+    """The formatter and the Examples epilog on one subcommand's parser (an existing epilog, such
+    as a layout description, is kept above the examples)."""
+    parser.formatter_class = HelpFormatter
+    ex = examples_epilog(command)
+    if ex:
+        parser.epilog = f"{parser.epilog.rstrip()}\n\n{ex}" if parser.epilog else ex
