@@ -614,7 +614,7 @@ class RerunSink(Sink):
             if seen.any():
                 self.rec.log(f"{base}/tracks", rr.Points2D(tv.xy[seen, k].astype(np.float32),
                                                            colors=instance_colors(tv.instance[seen]),
-                                                           radii=[3.0], draw_order=-28.0))
+                                                           radii=[rr.Radius.ui_points(2.5)], draw_order=-28.0))
         self.rec.log(base, rr.TextDocument(f"{name} frame {k} (τ = {info.timestamps_s[k]:.3f} s): shown on "
                                            "the offset timeline; switch to `time` to play the synchronized videos"))
         self.rec.reset_time()
@@ -766,7 +766,9 @@ class RerunSink(Sink):
         self.rec.send_columns(f"{base}/points_a", tcol,
                               rr.Points2D.columns(positions=np.tile(sw.points_a.astype(np.float32), (len(ms), 1)),
                                                   colors=np.concatenate(pt_col)).partition([len(sw.points_a)] * len(ms)))
-        self.rec.log(f"{base}/points_a", rr.Points2D.from_fields(radii=[5.0]), static=True)
+        # in screen points: the views shrink a 1280 px frame to a few hundred px
+        self.rec.log(f"{base}/points_a", rr.Points2D.from_fields(radii=[rr.Radius.ui_points(4.0)]), static=True)
+        self.rec.log(f"{base}/lines", rr.LineStrips2D.from_fields(radii=[rr.Radius.ui_points(0.75)]), static=True)
         med = view.sweep_median_px
         okm = np.isfinite(med)
         if okm.any():

@@ -202,13 +202,15 @@ def _empty_recording(path: Path) -> Path:
     return path
 
 
-def chosen_and_wrong_ms(rrd: Path) -> tuple[int, int, str | None]:
-    """(chosen, wrong, pair): the chosen Δ in ms of the pair in the first container (the layout's
-    active tab) and an offset a third of the search range away from it, in range."""
+def chosen_and_wrong_ms(rrd: Path, pair: tuple[str, str] | None = None) -> tuple[int, int, str | None]:
+    """(chosen, wrong, pair): the chosen Δ in ms of the pair (default: the one in the first
+    container, the layout's active tab) and an offset a third of the search range away from it."""
     from ..io.recording import read_recording
     from .blueprint import shown_pairs
     rec = read_recording(rrd)
     shown = shown_pairs(rec.meta.get("pairs", []), rec.result)
+    if pair is not None:
+        shown = [(pair[0], pair[1], None)]
     key = f"{shown[0][0]}__{shown[0][1]}" if shown else None
     from ..io.recording import pair_key
     series = rec.landscapes.get(pair_key(shown[0][0], shown[0][1]), {}) if shown else {}
@@ -256,6 +258,21 @@ def on_screen_views(layout: dict) -> list[str]:
     return out
 
 
+def activate_pair(layout: dict, a: str, b: str) -> bool:
+    """Make the container of pair a→b the active tab of its Tabs (in place); False if absent."""
+    containers = {k: v["ContainerBlueprint"] for k, v in layout.items()
+                  if k.startswith("/container/") and "ContainerBlueprint" in v}
+    target = next((k for k, c in containers.items() if str(c.get("display_name", "")).endswith(f"{a}→{b}")), None)
+    if target is None:
+        return False
+    item = target.lstrip("/")
+    for c in containers.values():
+        if c.get("container_kind") == "Tabs" and item in c.get("contents", []):
+            c["active_tab"] = item
+            return True
+    return False
+
+
 def _locate(full: np.ndarray, tile: np.ndarray) -> tuple[int, int, int, int]:
     """(x, y, w, h) of a panel's screenshot inside the screenshot of the whole viewer."""
     import cv2
@@ -282,11 +299,14 @@ def _paint(client, settle_s: float, min_rounds: int = 2, max_rounds: int = 6) ->
 
 
 def take_screenshots(rrd: str | Path, out_dir: str | Path, offsets_ms: dict[str, int] | None = None,
-                     mode: str = "auto", settle_s: float = 1.0) -> list[Screenshots]:
+                     mode: str = "auto", settle_s: float = 1.0,
+                     pair: tuple[str, str] | None = None) -> list[Screenshots]:
     """Open rrd in the native viewer, take a screenshot of the viewer with the time cursor at each
     offset (label -> ms on the offset_ms timeline; default: the chosen Δ of the pair on screen
     and a wrong one), cut out every panel on screen, and measure each panel's ink against the same
     layout over an empty recording. PNGs go to out_dir as <label>.png and <label>/<panel>.png.
+    pair: (a, b) whose container is brought to the front (default: the layout's first, a failed
+    pair when there is one).
 
     Panels are located once (a screenshot of each panel, found in the whole viewer's), then cut
     from one screenshot per offset: a screenshot costs about a second in software rendering.
@@ -298,7 +318,7 @@ def take_screenshots(rrd: str | Path, out_dir: str | Path, offsets_ms: dict[str,
     rrd, out_dir = Path(rrd), Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     if offsets_ms is None:
-        chosen, wrong, _ = chosen_and_wrong_ms(rrd)
+        chosen, wrong, _ = chosen_and_wrong_ms(rrd, pair)
         offsets_ms = {"chosen": chosen, "wrong": wrong}
     fulls: dict[str, tuple[int, np.ndarray]] = {}
     with tempfile.TemporaryDirectory(prefix="vs-inspect-shots-") as tmp, \
@@ -308,6 +328,11 @@ def take_screenshots(rrd: str | Path, out_dir: str | Path, offsets_ms: dict[str,
         _paint(client, 2 * settle_s, min_rounds=4)
         opened_on = next((r.current_timeline for r in client.get_state().recordings if r.store_id == store), None)
         layout = client.get_blueprint(store_id=store).blueprint
+        if pair is not None:
+            if not activate_pair(layout, *pair):
+                raise ValueError(f"no container of pair {pair[0]}→{pair[1]} in the layout")
+            client.set_blueprint(layout, store_id=store)
+            _paint(client, settle_s)
         shown = set(on_screen_views(layout))
         views = [v for v in client.get_state().views if v.visible and v.view_id.replace("-", "") in shown]
         rects: dict[str, tuple[int, int, int, int]] = {}
@@ -352,9 +377,12 @@ def main(argv: list[str] | None = None) -> int:
                    help="virtual X display (Xvfb) or the viewer's headless mode (auto: Xvfb if on PATH)")
     p.add_argument("--at", type=int, action="append", metavar="MS",
                    help="offsets (ms on offset_ms) instead of the chosen and a wrong one; repeatable")
+    p.add_argument("--pair", nargs=2, metavar=("A", "B"),
+                   help="bring this pair's container to the front (default: the first, failed first)")
     args = p.parse_args(argv)
     offsets = {f"at_{ms}ms": ms for ms in args.at} if args.at else None
-    shots = take_screenshots(args.rrd, args.out, offsets, mode=args.mode)
+    shots = take_screenshots(args.rrd, args.out, offsets, mode=args.mode,
+                             pair=tuple(args.pair) if args.pair else None)
     bad = 0
     for s in shots:
         print(f"{s.label} (offset_ms = {s.offset_ms}): {s.full}")
