@@ -149,10 +149,21 @@ def _decoded(jpeg: bytes, draw_order: float | None = None) -> rr.Image:
 
 
 def _video_codec(path: str) -> str | None:
+    """The codec name of an H.264/AV1 file rerun's viewer can play, else None (JPEG frames then).
+
+    rerun 0.41's native viewer shows no frame of an H.264 stream whose own timing (the SPS's
+    frame rate) is far from the container's frame rate, e.g. libx264 fed a 1/90000 time base
+    (SPS: 90000 fps): its panels stay at the loading dots."""
     try:
         import av
         with av.open(str(path)) as c:
-            return c.streams.video[0].codec_context.name
+            s = c.streams.video[0]
+            rate, sps_rate = s.average_rate or s.guessed_rate, s.codec_context.framerate
+            if rate and sps_rate and not 0.5 <= float(sps_rate) / float(rate) <= 2.0:
+                log.info("%s: H.264 timing says %s fps, the file %s fps: not embedded (rerun's "
+                         "viewer cannot play it)", path, sps_rate, rate)
+                return None
+            return s.codec_context.name
     except Exception:  # noqa: BLE001 - any failure: not embeddable, fall back to JPEG frames
         return None
 
