@@ -109,8 +109,12 @@ def test_every_panel_shows_something_at_the_chosen_and_a_wrong_offset(tmp_path):
     import cv2
     # the frames themselves are on screen (grey 70 in the frames drawn above; the viewer's
     # background is near black): a video panel is not only tracks and a mask
+    # cam0 is an embedded H.264 file: the native viewer decodes it with the ffmpeg executable
+    h264 = {"cam0", "epipolar cam0"} if shutil.which("ffmpeg") is None else set()
     for s in shots:
         for p in s.panels:
+            if any(p.name.startswith(n) for n in h264):
+                continue
             if p.name in result.offsets_s or p.name.startswith("epipolar"):
                 img = cv2.imread(str(p.path))
                 frame_grey = (np.abs(img.astype(int) - 70).max(-1) <= 12).mean()

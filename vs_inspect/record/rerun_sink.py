@@ -919,7 +919,9 @@ cameras and masks use an Okabe-Ito palette without green or red; the static back
 is transparent.
 
 **Video panels empty?** Videos embedded as H.264/AV1 files are decoded by the viewer: the native
-viewer needs `ffmpeg` on PATH for H.264 (the web viewer decodes in the browser).
+viewer runs the `ffmpeg` executable for H.264, which must be on PATH (else the panels say "Failed
+to decode: Couldn't find an installation of the FFmpeg executable"); the web viewer
+(`rerun --web-viewer FILE.rrd`) decodes in the browser.
 
 Videos in this recording: {", ".join(names) or "none"}.
 """

@@ -380,6 +380,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--pair", nargs=2, metavar=("A", "B"),
                    help="bring this pair's container to the front (default: the first, failed first)")
     args = p.parse_args(argv)
+    if shutil.which("ffmpeg") is None:
+        print("note: ffmpeg is not on PATH: the native viewer shows no frame of embedded H.264 videos",
+              file=sys.stderr)
     offsets = {f"at_{ms}ms": ms for ms in args.at} if args.at else None
     shots = take_screenshots(args.rrd, args.out, offsets, mode=args.mode,
                              pair=tuple(args.pair) if args.pair else None)
