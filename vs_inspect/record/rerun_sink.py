@@ -59,8 +59,9 @@ REJECTED = (213, 94, 0)  # vermillion
 GREY = (150, 150, 150)  # unknown, no data
 MINIMA = (86, 180, 233)  # sky blue
 TRUTH = (240, 228, 66)  # yellow
-PALETTE = np.array([(86, 180, 233), (240, 228, 66), (204, 121, 167), (0, 114, 178), (170, 150, 230),
-                    (245, 245, 245), (250, 190, 212)], dtype=np.uint8)  # no orange: too near vermillion
+# no orange (too near vermillion), no yellow (the epipolar points' "on the line")
+PALETTE = np.array([(86, 180, 233), (204, 121, 167), (0, 114, 178), (170, 150, 230), (245, 245, 245),
+                    (250, 190, 212), (150, 225, 245)], dtype=np.uint8)
 # point-to-line distance in the epipolar views: blue (far) through grey to yellow (on the line)
 RAMP = np.array([(70, 90, 210), (150, 150, 160), (253, 234, 69)], dtype=float)  # visible on black
 H264_LIKE = {"h264", "av1"}
