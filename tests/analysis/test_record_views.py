@@ -9,14 +9,15 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from vs_inspect.analysis.record_views import (GRAPH_RADIUS_PX, graph_layout, pair_record_view,
-                                              run_record_view, sweep_offsets, track_rows)
+from vs_inspect.analysis.record_views import (GRAPH_PAIR_AT, GRAPH_RADIUS_PX, graph_layout,
+                                              pair_record_view, run_record_view, sweep_offsets,
+                                              track_rows, triangle_residuals)
 from vs_inspect.eval.metrics import offset_errors_ms
 from vs_inspect.record.options import RecordOptions
 from vs_inspect.sync.config import SyncConfig
 from vs_inspect.pipeline.stage12 import sync_bundle
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
-from vs_inspect.types import PairDecision, PairLandscape
+from vs_inspect.types import PairDecision, PairLandscape, SyncResult
 
 
 def _land(offsets_s: np.ndarray, minima_idx: list[int], best_offset_s: float) -> PairLandscape:
@@ -44,16 +45,53 @@ def synced():
     return scene.bundle, sync_bundle(scene.bundle, SyncConfig(), progress=False)
 
 
-def test_graph_layout_circle_and_midpoints(synced):
+def test_graph_layout_circle_and_pair_nodes_on_their_chords(synced):
     _, result = synced
     xy = graph_layout(result)
     names = list(result.offsets_s)
     assert xy[names[0]] == pytest.approx((GRAPH_RADIUS_PX, 0.0))
     for v in names:
         assert np.hypot(*xy[v]) == pytest.approx(GRAPH_RADIUS_PX)
+    t = GRAPH_PAIR_AT
     for p in result.pairs:
-        mid = xy[f"{p.a}__{p.b}"]
-        assert mid == pytest.approx(((xy[p.a][0] + xy[p.b][0]) / 2, (xy[p.a][1] + xy[p.b][1]) / 2))
+        node = xy[f"{p.a}__{p.b}"]
+        assert node == pytest.approx((xy[p.a][0] + t * (xy[p.b][0] - xy[p.a][0]),
+                                      xy[p.a][1] + t * (xy[p.b][1] - xy[p.a][1])))
+
+
+def test_graph_layout_pair_nodes_do_not_meet_at_the_centre():
+    """Four videos: the two diagonals cross at the centre, where halfway nodes (and their labels)
+    would lie on top of each other."""
+    names = ["v0", "v1", "v2", "v3"]
+    pairs = tuple(_land(np.zeros(3), [], 0.0) for _ in range(2))
+    pairs = (replace(pairs[0], a="v0", b="v2"), replace(pairs[1], a="v1", b="v3"))
+    result = SyncResult("v0", {n: 0.0 for n in names}, {}, {}, pairs, (), ())
+    xy = graph_layout(result)
+    d = np.subtract(xy["v0__v2"], xy["v1__v3"])
+    assert np.hypot(*d) > 0.25 * GRAPH_RADIUS_PX
+
+
+def test_triangle_residuals_close_loops_and_name_the_wrong_pair():
+    """Δ_ab + Δ_bc − Δ_ac per triangle, either direction of a pair (Δ_ba = −Δ_ab); a wrong pair
+    shows in every triangle it is part of, largest first."""
+    true = {"a": 0.0, "b": 1.0, "c": 2.5, "d": -0.5}
+    wrong = ("b", "d")
+
+    def pair(x, y, off):
+        return replace(_land(np.zeros(3), [], off), a=x, b=y)
+    pairs = [pair("a", "b", 1.0), pair("c", "b", -1.5), pair("a", "c", 2.5), pair("a", "d", -0.5),
+             pair("b", "d", -1.5 + 0.2), pair("c", "d", -3.0)]
+    pairs.append(replace(pair("b", "c", float("nan")), decision=PairDecision(False, "x", 0, 0, 0, 0, False)))
+    result = SyncResult("a", dict.fromkeys(true, 0.0), {}, {}, tuple(pairs), (), ())
+    tri = triangle_residuals(result)
+    assert {(t.a, t.b, t.c) for t in tri} == {("a", "b", "c"), ("a", "b", "d"), ("a", "c", "d"), ("b", "c", "d")}
+    by = {(t.a, t.b, t.c): t.residual_ms for t in tri}
+    assert by[("a", "b", "c")] == pytest.approx(0.0, abs=1e-9)  # (c,b) used reversed; (b,c) has no Δ
+    assert by[("a", "c", "d")] == pytest.approx(0.0, abs=1e-9)
+    assert by[("a", "b", "d")] == pytest.approx(200.0)  # Δ_ab + Δ_bd − Δ_ad = 1 − 1.3 + 0.5 (s)
+    assert by[("b", "c", "d")] == pytest.approx(-200.0)  # Δ_bc + Δ_cd − Δ_bd = 1.5 − 3 + 1.3
+    assert {(t.a, t.b, t.c) for t in tri[:2]} == {("a", "b", "d"), ("b", "c", "d")}  # both hold b-d
+    assert all(wrong[0] in (t.a, t.b, t.c) and wrong[1] in (t.a, t.b, t.c) for t in tri[:2])
 
 
 def test_track_rows_prefer_paired_tracks(synced):

@@ -279,3 +279,66 @@ def test_real_videos_recording_verifies(shared_data, tmp_path):
     frames = read_video_frames(out, sources[0].info.name)
     assert len(frames) == sources[0].info.num_frames and frames[0].shape == (360, 640, 3)
     assert out.stat().st_size < 20e6
+
+
+def _texts(path: Path) -> dict[str, str]:
+    import rerun.chunk as rrc
+    out = {}
+    for c in rrc.RrdReader(str(path)).stream().to_chunks():
+        rb = c.to_record_batch()
+        if "TextDocument:text" in rb.schema.names:
+            v = rb.column("TextDocument:text")[0].as_py()
+            out[c.entity_path.lstrip("/")] = v[0] if isinstance(v, list) else v
+    return out
+
+
+def test_guide_pairs_table_and_loop_closure(planted_run):
+    """What a person reads first: the guide, every pair with its verdict and reason (failed pairs
+    first, as the containers), and the loop-closure residual of every triangle of pairs."""
+    from vs_inspect.record.blueprint import pair_order
+    texts = _texts(planted_run["path"])
+    guide = texts["guide"]
+    assert "offset_ms" in guide and "ffmpeg" in guide and "time" in guide
+    result = planted_run["result"]
+    table = texts["sync/pairs"].split("|---|---|---|---|---|---|---|")[1].strip().splitlines()
+    assert len(table) == len(result.pairs)
+    for row, p in zip(table, pair_order(result.pairs)):
+        assert f"{p.a} → {p.b}" in row and p.decision.reason in row
+        assert row.startswith("| ✓" if p.decision.accepted else "| ✗")
+    rejected = [not p.decision.accepted for p in pair_order(result.pairs)]
+    assert rejected == sorted(rejected, reverse=True)  # failed pairs first
+    a, b = planted_run["scene"].all_wrong_pair
+    assert not next(p for p in result.pairs if {p.a, p.b} == {a, b}).decision.accepted
+    loops = texts["sync/loops"]
+    n = len(result.offsets_s)
+    rows = [r for r in loops.splitlines() if r.startswith("| cam")]
+    assert 0 < len(rows) <= n * (n - 1) * (n - 2) // 6
+    res = [abs(float(r.split("|")[2])) for r in rows]
+    assert res == sorted(res, reverse=True)
+
+
+def test_palette_keeps_green_and_red_for_the_verdict():
+    """Instances, cameras and pairs never take the accepted/rejected colours or anything close;
+    a mask's background (id 0) is transparent."""
+    from vs_inspect.record.rerun_sink import ACCEPTED, PALETTE, REJECTED, annotation_context, distance_colors
+    import colorsys
+
+    def hue_sat(c):
+        h, _, s = colorsys.rgb_to_hls(*(np.asarray(c) / 255.0))
+        return 360 * h, s
+
+    for c in PALETTE:
+        h, s = hue_sat(c)
+        for v in (ACCEPTED, REJECTED):
+            hv, _ = hue_sat(v)
+            gap = min(abs(h - hv), 360 - abs(h - hv))
+            assert gap > 25 or s < 0.25, (c.tolist(), v, gap)  # another hue, or a grey/white
+        assert not 75 < h < 170 or s < 0.25, c.tolist()  # nothing green
+    ctx = annotation_context(3).context.as_arrow_array().to_pylist()[0]
+    colours = {d["class_id"]: d["class_description"]["info"]["color"] for d in ctx}
+    assert colours[0] & 0xFF == 0  # RGBA: alpha 0
+    assert all(colours[k] & 0xFF == 255 and colours[k] >> 8 == int.from_bytes(bytes(PALETTE[k % len(PALETTE)]), "big")
+               for k in (1, 2, 3))  # instance k: PALETTE[k], as the tracks (instance_colors)
+    ramp = distance_colors(np.array([0.0, 5.0, 10.0, np.nan]), 10.0).astype(int)
+    assert ramp[0].tolist() == [253, 234, 69] and ramp[2].tolist() == [70, 90, 210]
+    assert ramp[3].tolist() == [150, 150, 150]

@@ -19,6 +19,8 @@ from ..record.options import RecordOptions
 from ..types import CueBundle, PairLandscape, SyncResult
 
 GRAPH_RADIUS_PX = 300.0  # video nodes sit on a circle of this radius in the pair graph view
+GRAPH_PAIR_AT = 0.35  # a pair's node sits this far along the chord from a to b (not halfway:
+# the chords of opposite videos all cross at the centre, and their labels would overlap there)
 
 
 @dataclass(frozen=True)
@@ -40,6 +42,18 @@ class VideoTracksView:
 
 
 @dataclass(frozen=True)
+class TriangleResidual:
+    """Loop closure of three pairs: offsets are differences, so Δ_ab + Δ_bc − Δ_ac = 0 when all
+    three pairs are right; a large residual names a triangle with at least one wrong pair."""
+
+    a: str
+    b: str
+    c: str
+    residual_ms: float  # Δ_ab + Δ_bc − Δ_ac of the pairs' chosen offsets, ms
+    accepted: int  # how many of the three pairs were accepted (0-3)
+
+
+@dataclass(frozen=True)
 class RunRecordView:
     """Stage 2's result as the recording shows it, besides the SyncResult."""
 
@@ -49,6 +63,7 @@ class RunRecordView:
     errors_ms: dict[str, float | None]  # video -> |error| against the truth, ms (offset_errors_ms)
     tracks: dict[str, VideoTracksView]  # video -> its tracks to log (only videos with tracks)
     trajectories: tuple[PairTrajectories, ...]  # accepted pairs triangulated at the solved offsets
+    triangles: tuple[TriangleResidual, ...] = ()  # every triangle of evaluated pairs, largest |residual| first
 
 
 def record_frame(image_bgr: np.ndarray, options: RecordOptions) -> np.ndarray:
@@ -120,15 +135,39 @@ def pair_record_view(bundle: CueBundle, land: PairLandscape, options: RecordOpti
 
 
 def graph_layout(result: SyncResult) -> dict[str, tuple[float, float]]:
-    """Videos evenly on a circle, each pair's node halfway between its two videos."""
+    """Videos evenly on a circle, each pair's node on the chord from a to b, GRAPH_PAIR_AT of the
+    way from a."""
     names = list(result.offsets_s)
     ang = 2 * np.pi * np.arange(len(names)) / max(len(names), 1)
     pos = {v: (GRAPH_RADIUS_PX * math.cos(a), GRAPH_RADIUS_PX * math.sin(a)) for v, a in zip(names, ang)}
     out = dict(pos)
+    t = GRAPH_PAIR_AT
     for p in result.pairs:
         pa, pb = pos.get(p.a, (0, 0)), pos.get(p.b, (0, 0))
-        out[f"{p.a}__{p.b}"] = ((pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2)
+        out[f"{p.a}__{p.b}"] = (pa[0] + t * (pb[0] - pa[0]), pa[1] + t * (pb[1] - pa[1]))
     return out
+
+
+def triangle_residuals(result: SyncResult) -> tuple[TriangleResidual, ...]:
+    """Δ_ab + Δ_bc − Δ_ac for every three videos whose three pairs all have a chosen offset
+    (either direction: Δ_ba = −Δ_ab), largest |residual| first. Names in result.offsets_s order."""
+    delta: dict[tuple[str, str], tuple[float, bool]] = {}
+    for p in result.pairs:
+        if math.isfinite(p.best_offset_s):
+            delta[(p.a, p.b)] = (float(p.best_offset_s), p.decision.accepted)
+            delta.setdefault((p.b, p.a), (-float(p.best_offset_s), p.decision.accepted))
+    names = list(result.offsets_s)
+    out = []
+    for i, a in enumerate(names):
+        for j in range(i + 1, len(names)):
+            b = names[j]
+            for c in names[j + 1:]:
+                legs = [delta.get(k) for k in ((a, b), (b, c), (a, c))]
+                if any(x is None for x in legs):
+                    continue
+                (ab, ok1), (bc, ok2), (ac, ok3) = legs
+                out.append(TriangleResidual(a, b, c, 1000.0 * (ab + bc - ac), int(ok1) + int(ok2) + int(ok3)))
+    return tuple(sorted(out, key=lambda t: -abs(t.residual_ms)))
 
 
 def track_rows(bundle: CueBundle, name: str, max_tracks: int, seed: int = 0) -> np.ndarray:
@@ -172,4 +211,4 @@ def run_record_view(bundle: CueBundle, result: SyncResult, options: RecordOption
         trajs = run_trajectories(bundle, accepted, result.offsets_s, options.max_trajectory_video_pairs,
                                  options.max_trajectory_pairs)
     return RunRecordView(graph_layout(result), true, {v: errors.get(v) for v in result.offsets_s},
-                         tracks, trajs)
+                         tracks, trajs, triangle_residuals(result))

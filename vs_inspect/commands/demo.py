@@ -4,7 +4,9 @@ The input is a rendered multi-camera scene (vs_inspect.synth: videos plus exact 
 rendered once into OUT/scene and reused by later runs. run_demo() synchronizes the scene's TRUE
 cue bundle (exact cameras, projected surface points, exact track pairs), which separates the
 solver's errors from Stage 0's; run_video_pipeline() then sends the rendered videos through the
-whole pipeline with their calibration (skipped with --true-cues-only).
+whole pipeline with their calibration (skipped with --true-cues-only). Each run writes its own
+recording (unless --no-rrd): the video run's is the first one's name with "-videos" added, so a
+failure of Stage 0 on the videos can be debugged from its .rrd like any `sync` run.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from ..synth.world import SceneConfig, make_scene
 from ..types import RunInputs, RunResult
 from ._common import offsets_table, print_run
 from ._common import run_config as run_config_of
-from ._record import add_record_options, describe, open_sink
+from ._record import add_record_options, describe, open_sink, rrd_path
 from .sync import exit_code
 
 DEMO_SCENE = SceneConfig(cameras=4, moving=1, seconds=8.0, width=640, height=480, fps=None,
@@ -90,16 +92,22 @@ def run_demo(out: Path, config: SceneConfig = DEMO_SCENE, run_config: RunConfig 
     return result
 
 
+def video_rrd_path(true_cues_rrd: Path) -> Path:
+    """The video run's recording beside the true-cue run's: <name>-videos.rrd."""
+    return true_cues_rrd.with_name(f"{true_cues_rrd.stem}-videos.rrd")
+
+
 def run_video_pipeline(out: Path, scene_dir: Path, run_config: RunConfig = RunConfig(),
-                       progress: bool = True) -> int:
+                       progress: bool = True, sink: Sink | None = None) -> int:
     """The rendered videos through the whole pipeline, exactly as a user's videos would go
-    (`vs-inspect sync cam*.mp4 --calib calibration.json`), printed against the truth."""
+    (`vs-inspect sync cam*.mp4 --calib calibration.json`), printed against the truth; recorded
+    to sink when given."""
     videos = sorted(scene_dir.glob("cam*.mp4"))
     truth = read_gt(scene_dir / "gt.json")
     print("\n== the rendered videos through the whole pipeline (Stage 0 + 1 + 2), as "
           f"`vs-inspect sync cam*.mp4 --calib calibration.json --out {out}` ==")
     out = Path(out)
-    result = run_pipeline(videos, run_config, calibration=scene_dir / "calibration.json",
+    result = run_pipeline(videos, run_config, sink, calibration=scene_dir / "calibration.json",
                           bundle_out=out / "cues", progress=progress)
     path = write_run_result(result, out / "result.json")
     run_config.save(out / "config.json")
@@ -111,9 +119,16 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     cfg = run_config_of(args)
     with open_sink(args, out, cfg.record, progress=not args.no_progress) as sink:
-        run_demo(out, run_config=cfg, sink=sink, rerender=args.rerender, progress=not args.no_progress)
+        run_demo(out, DEMO_SCENE, run_config=cfg, sink=sink, rerender=args.rerender,
+                 progress=not args.no_progress)
     if describe(sink):
         print(describe(sink))
     if not args.true_cues_only:
-        run_video_pipeline(out / "videos", out / "scene", cfg, progress=not args.no_progress)
+        first = rrd_path(args, out)
+        video_args = argparse.Namespace(**{**vars(args), "rrd": video_rrd_path(first) if first else None})
+        with open_sink(video_args, out / "videos", cfg.record, progress=not args.no_progress) as vsink:
+            run_video_pipeline(out / "videos", out / "scene", cfg, progress=not args.no_progress,
+                               sink=vsink)
+        if describe(vsink):
+            print(describe(vsink))
     return 0

@@ -42,6 +42,9 @@ PAIRS = "pairs"
 SYNC_GRAPH = "sync/graph"
 SYNC_OFFSETS = "sync/offsets"
 SYNC_SOLVE = "sync/solve"
+SYNC_PAIRS = "sync/pairs"  # every pair's verdict, Δ and reason as one table (failed pairs first)
+SYNC_LOOPS = "sync/loops"  # loop-closure residual Δ_ab + Δ_bc − Δ_ac per triangle of pairs
+GUIDE = "guide"  # "how to read this recording" (markdown)
 LOG = "log"
 LOG_DECISIONS = "log/decisions"
 
@@ -116,8 +119,19 @@ def video_tracks_path(name: str) -> str:
     return f"{video_path(name)}/tracks"
 
 
+def video_still_path(name: str) -> str:
+    """One static frame (with its mask and tracks below it), so that the video's view shows
+    something on timelines where the video has no time (offset_ms)."""
+    return f"{video_path(name)}/still"
+
+
 def camera_path(name: str) -> str:
     return f"{WORLD}/cameras/{entity_name(name)}"
+
+
+def camera_labels_path() -> str:
+    """Each camera's centre as a labelled point (the frustums themselves carry no text)."""
+    return f"{WORLD}/camera_labels"
 
 
 def camera_trail_path(name: str) -> str:

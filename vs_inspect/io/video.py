@@ -472,7 +472,12 @@ class VideoWriter:
             # no mbtree: with x264's macroblock-tree rate control, encoding the same frames again
             # in one process could give different files, depending on what was encoded before
             # (tests/synth/test_world_videos.py renders a scene twice and compares the files)
-            stream.options = {"crf": str(int(crf)), "preset": preset, "x264-params": "mbtree=0"}
+            # force-cfr with the nominal rate: the stream's own timing (SPS) says `fps`, not the
+            # 1/90000 time base (rerun's viewer plays no H.264 whose SPS claims 90000 fps); the
+            # frames keep their exact presentation times in the container
+            stream.codec_context.framerate = rate
+            stream.options = {"crf": str(int(crf)), "preset": preset,
+                              "x264-params": "mbtree=0:force-cfr=1"}
             self._stream = stream
         except BaseException as exc:
             self._discard(exc)

@@ -1,41 +1,143 @@
-"""The recording's default layout in the rerun viewer (a rerun blueprint)."""
+"""The recording's default layout in the rerun viewer (a rerun blueprint).
+
+The viewer opens on the `offset_ms` timeline (the candidate offsets Δ of the pairs), paused, with
+the time panel expanded over the whole search range. Three columns:
+
+- left: "how to read this recording", the pairs table, offsets, loop closure and the decision log
+  (tabs); below them all landscapes (one series per pair), the pair graph and the IRLS solve;
+- middle: one container per pair (landscape, epipolar lines over the tracklets, decision text),
+  failed pairs first, at most MAX_PAIR_CONTAINERS of them;
+- right: the videos and the 3D world (cameras, trajectories).
+"""
 
 from __future__ import annotations
 
-from ..io.recording import (LOG, PAIRS, SYNC_GRAPH, SYNC_OFFSETS, SYNC_SOLVE, VIDEOS, WORLD,
-                            pair_landscape_path, pair_epipolar_path, video_path)
-from ..types import SyncResult
+import math
+
+from ..io.recording import (GUIDE, LOG, SYNC_GRAPH, SYNC_LOOPS, SYNC_OFFSETS, SYNC_PAIRS, SYNC_SOLVE,
+                            TIMELINE_OFFSET_MS, VIDEOS, WORLD, pair_decision_path, pair_epipolar_path,
+                            pair_landscape_path, video_path)
+from ..types import PairLandscape, SyncResult
+
+MAX_PAIR_CONTAINERS = 12  # pair containers in the middle column; the rest are in the pairs table
+MAX_VIDEO_VIEWS = 8  # video views in the grid
 
 
-def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResult | None):
-    """Videos and the 3D world on the left; the best pair's landscape and epipolar view, then the
-    decision log, offsets, pair graph, solve and all landscapes on the right.
+def pair_order(pairs) -> list[PairLandscape]:
+    """Most informative first: rejected pairs (those with more track pairs first: something was
+    there to be found), then accepted ones from the least clear (lowest contrast) up."""
+    def key(p: PairLandscape):
+        c = p.decision.contrast
+        return (p.decision.accepted, -p.num_track_pairs if not p.decision.accepted else 0,
+                c if math.isfinite(c) else -math.inf, p.a, p.b)
+    return sorted(pairs, key=key)
 
-    pairs_logged: "a__b" of every pair in the order they were logged (the first is shown when the
-    result is unknown).
+
+def _bounds(size: tuple[int, int] | None):
+    """The whole image of a video (full-resolution px), whatever else the view holds."""
+    import rerun.blueprint as rrb
+    if size is None:
+        return None
+    return rrb.VisualBounds2D(x_range=[0, size[0]], y_range=[0, size[1]])
+
+
+def _pair_container(a: str, b: str, accepted: bool | None, views: set[str],
+                    range_ms: tuple[int, int] | None, size_a: tuple[int, int] | None = None):
+    import rerun.blueprint as rrb
+    arrow = f"{a}→{b}"
+    mark = "" if accepted is None else ("✓ " if accepted else "✗ ")
+    lower = []
+    if "epipolar" in views:
+        lower.append(rrb.Spatial2DView(origin=pair_epipolar_path(a, b), name=f"epipolar {arrow}",
+                                       visual_bounds=_bounds(size_a)))
+    lower.append(rrb.TextDocumentView(origin=pair_decision_path(a, b), name=f"decision {arrow}"))
+    bottom = rrb.Horizontal(*lower, column_shares=[3, 2][: len(lower)]) if len(lower) > 1 else lower[0]
+    if "landscape" not in views:  # no finite energy: nothing to plot
+        return rrb.Vertical(bottom, name=f"{mark}{arrow}")
+    land = rrb.TimeSeriesView(origin=pair_landscape_path(a, b), name=f"landscape {arrow}",
+                              time_ranges=_full_range(), axis_x=_axis(range_ms),
+                              plot_legend=rrb.PlotLegend(visible=True))
+    return rrb.Vertical(land, bottom, row_shares=[2, 3], name=f"{mark}{arrow}")
+
+
+def _full_range():
+    """All the data of the offset timeline, wherever the cursor is."""
+    import rerun.blueprint as rrb
+    inf = rrb.TimeRangeBoundary.infinite()
+    return [rrb.VisibleTimeRange(TIMELINE_OFFSET_MS, start=inf, end=inf)]
+
+
+def _axis(range_ms: tuple[int, int] | None):
+    """An x axis over the whole search range (by default a plot follows the cursor with a window
+    narrower than the range)."""
+    import rerun as rr
+    import rerun.blueprint as rrb
+    if range_ms is None:
+        return None
+    lo, hi = range_ms
+    return rrb.TimeAxis(view_range=rr.TimeRange(start=rrb.TimeRangeBoundary.absolute(seq=lo),
+                                                end=rrb.TimeRangeBoundary.absolute(seq=hi)))
+
+
+def shown_pairs(pairs_logged: list[str], result: SyncResult | None) -> list[tuple[str, str, bool | None]]:
+    """(a, b, accepted) of the pairs that get a container, in order (None: verdict unknown)."""
+    if result is not None and result.pairs:
+        return [(p.a, p.b, p.decision.accepted) for p in pair_order(result.pairs)][:MAX_PAIR_CONTAINERS]
+    return [(*k.split("__", 1), None) for k in pairs_logged][:MAX_PAIR_CONTAINERS]
+
+
+def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResult | None,
+              pair_views: dict[str, set[str]] | None = None, timeline: str = TIMELINE_OFFSET_MS,
+              has_loops: bool = False, range_ms: tuple[int, int] | None = None,
+              sizes: dict[str, tuple[int, int]] | None = None, eye: tuple | None = None):
+    """The default blueprint.
+
+    pairs_logged: "a__b" of every pair in the order they were logged (their order when the result
+    is unknown). pair_views: "a__b" -> the views that have data ("landscape", "epipolar"; a pair
+    missing here is assumed to have both). timeline: the one the viewer opens on. has_loops:
+    triangles of pairs were logged (SYNC_LOOPS). range_ms: the search range on offset_ms, the
+    landscape plots' x axis (None: rerun's default). sizes: video -> (width, height) px, the
+    bounds of its 2D views. eye: (position, look target, up) of the 3D view (None: rerun's).
     """
     import rerun.blueprint as rrb
-    video_views = [rrb.Spatial2DView(origin=video_path(v), name=v) for v in video_names[:8]]
-    first = pairs_logged[0] if pairs_logged else None
-    if result is not None and result.pairs:
-        best = sorted(result.pairs, key=lambda p: (not p.decision.accepted, -p.decision.contrast))[0]
-        first = f"{best.a}__{best.b}"
-    left = rrb.Vertical(
-        rrb.Grid(*video_views, name="videos") if video_views else rrb.TextDocumentView(origin=VIDEOS),
-        rrb.Spatial3DView(origin=WORLD, name="3D"),
-        row_shares=[1, 1])
-    pair_views = []
-    if first:
-        a, b = first.split("__", 1)
-        pair_views = [rrb.TimeSeriesView(origin=pair_landscape_path(a, b), name=f"landscape {first}"),
-                      rrb.Spatial2DView(origin=pair_epipolar_path(a, b),
-                                        name=f"epipolar {first} (scrub offset_ms)")]
+    pair_views, sizes = pair_views or {}, sizes or {}
+    shown = shown_pairs(pairs_logged, result)
+    containers = [_pair_container(a, b, acc, pair_views.get(f"{a}__{b}", {"landscape", "epipolar"}),
+                                  range_ms, sizes.get(a)) for a, b, acc in shown]
+    info = [rrb.TextDocumentView(origin=GUIDE, name="how to read this recording")]
+    if result is not None:
+        info += [rrb.TextDocumentView(origin=SYNC_PAIRS, name="pairs (failed first)"),
+                 rrb.TextDocumentView(origin=SYNC_OFFSETS, name="offsets")]
+    if has_loops:
+        info.append(rrb.TextDocumentView(origin=SYNC_LOOPS, name="loop closure"))
+    info.append(rrb.TextLogView(origin=LOG, name="decision log"))
+    energies = [f"+ /{pair_landscape_path(*k.split('__', 1))}/energy" for k in pairs_logged
+                if "landscape" in pair_views.get(k, {"landscape"})]
+    overview = []
+    if energies:
+        overview.append(rrb.TimeSeriesView(origin="/", contents=energies, name="all landscapes",
+                                           time_ranges=_full_range(), axis_x=_axis(range_ms),
+                                           plot_legend=rrb.PlotLegend(visible=True)))
+    if result is not None:
+        overview.append(rrb.GraphView(origin=SYNC_GRAPH, name="pair graph"))
+        if result.iterations:
+            overview.append(rrb.TimeSeriesView(origin=SYNC_SOLVE, name="IRLS solve (timeline: iteration)"))
+    left = rrb.Vertical(rrb.Tabs(*info, active_tab=0), *( [rrb.Tabs(*overview, active_tab=0)] if overview else []),
+                        row_shares=[1, 1][: 1 + bool(overview)])
+    video_views = [rrb.Spatial2DView(origin=video_path(v), name=v, visual_bounds=_bounds(sizes.get(v)))
+                   for v in video_names[:MAX_VIDEO_VIEWS]]
     right = rrb.Vertical(
-        *pair_views,
-        rrb.Tabs(rrb.TextLogView(origin=LOG, name="decision log"),
-                 rrb.TextDocumentView(origin=SYNC_OFFSETS, name="offsets"),
-                 rrb.GraphView(origin=SYNC_GRAPH, name="pair graph"),
-                 rrb.TimeSeriesView(origin=SYNC_SOLVE, name="IRLS solve"),
-                 rrb.TimeSeriesView(origin=PAIRS, name="all landscapes")),
-    )
-    return rrb.Blueprint(rrb.Horizontal(left, right, column_shares=[3, 2]), collapse_panels=False)
+        rrb.Grid(*video_views, name="videos") if video_views else rrb.TextDocumentView(origin=VIDEOS),
+        rrb.Spatial3DView(origin=WORLD, name="3D",
+                          eye_controls=rrb.EyeControls3D(position=eye[0], look_target=eye[1], eye_up=eye[2])
+                          if eye else None),
+        row_shares=[1, 1])
+    columns = [left]
+    if containers:
+        columns.append(rrb.Tabs(*containers, active_tab=0, name="pairs (failed first)"))
+    columns.append(right)
+    shares = [2, 3, 3] if containers else [2, 3]
+    return rrb.Blueprint(rrb.Horizontal(*columns, column_shares=shares),
+                         rrb.BlueprintPanel(state="collapsed"), rrb.SelectionPanel(state="collapsed"),
+                         rrb.TimePanel(state="expanded", timeline=timeline, play_state="paused"),
+                         auto_views=False)

@@ -8,6 +8,9 @@ io/atomic.atomic_path, so a file with the final name is always complete; abort()
 
 Frames, masks and tracks are kept (JPEG-compressed) until the offsets are known, then logged once
 with both the per-video `frame` timeline and the global `time` timeline (seconds, after sync).
+Landscapes and epipolar views live on the `offset_ms` timeline, on which the viewer opens; so that
+the video and 3D views are not empty there, each video's still frame and each moving camera's
+middle pose are also logged once at the smallest candidate offset of the run.
 """
 
 from __future__ import annotations
@@ -28,17 +31,19 @@ from tqdm import tqdm
 
 from .. import __version__
 from ..io.atomic import json_default, atomic_path
-from ..io.recording import (APPLICATION_ID, LOG_DECISIONS, META_BUNDLE, META_CONFIG, META_RECORDING,
-                            META_RESULT, META_VIDEOS, RECORDING_FORMAT, RECORDING_VERSION, SYNC_GRAPH,
-                            SYNC_OFFSETS, TIMELINE_EVENT, TIMELINE_FRAME, TIMELINE_ITERATION,
-                            TIMELINE_OFFSET_MS, TIMELINE_TIME, WORLD_POINTS, camera_path,
-                            camera_trail_path, check_entity_names, entity_name, log_path, pair_decision_path,
+from ..io.recording import (APPLICATION_ID, GUIDE, LOG_DECISIONS, META_BUNDLE, META_CONFIG,
+                            META_RECORDING, META_RESULT, META_VIDEOS, RECORDING_FORMAT,
+                            RECORDING_VERSION, SYNC_GRAPH, SYNC_LOOPS, SYNC_OFFSETS, SYNC_PAIRS,
+                            VIDEOS, TIMELINE_EVENT, TIMELINE_FRAME, TIMELINE_ITERATION,
+                            TIMELINE_OFFSET_MS, TIMELINE_TIME, WORLD_POINTS, camera_labels_path,
+                            camera_path, camera_trail_path, check_entity_names, entity_name, log_path, pair_decision_path,
                             pair_epipolar_path, pair_landscape_path, solve_residual_path,
                             solve_weight_path, trajectory_path, video_asset_path, video_image_path,
-                            video_mask_path, video_path, video_tracks_path)
+                            video_mask_path, video_path, video_still_path,
+                            video_tracks_path)
 from ..io.result import run_result_to_dict
 from ..types import CameraTrack, CueBundle, PairLandscape, RunResult, SyncResult, VideoInfo
-from .blueprint import blueprint
+from .blueprint import MAX_PAIR_CONTAINERS, blueprint, pair_order
 from .options import RecordOptions
 from .sink import Sink
 
@@ -47,20 +52,48 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-# colours (RGB): accepted / rejected / truth / instances
-GREEN, RED, GREY, BLUE, ORANGE = (40, 180, 80), (220, 50, 50), (150, 150, 150), (60, 120, 230), (240, 150, 30)
-PALETTE = np.array([(230, 25, 75), (60, 180, 75), (255, 225, 25), (0, 130, 200), (245, 130, 48),
-                    (145, 30, 180), (70, 240, 240), (240, 50, 230), (210, 245, 60), (250, 190, 212),
-                    (0, 128, 128), (220, 190, 255), (170, 110, 40), (128, 0, 0)], dtype=np.uint8)
+# Colours (RGB) from the Okabe-Ito set (colour-blind safe). Green and red mean only "accepted" and
+# "rejected"; instances, cameras and pairs take PALETTE, which has neither.
+ACCEPTED = (0, 158, 115)  # bluish green
+REJECTED = (213, 94, 0)  # vermillion
+GREY = (150, 150, 150)  # unknown, no data
+MINIMA = (86, 180, 233)  # sky blue
+TRUTH = (240, 228, 66)  # yellow
+# no orange (too near vermillion), no yellow (the epipolar points' "on the line")
+PALETTE = np.array([(86, 180, 233), (204, 121, 167), (0, 114, 178), (170, 150, 230), (245, 245, 245),
+                    (250, 190, 212), (150, 225, 245)], dtype=np.uint8)
+# point-to-line distance in the epipolar views: blue (far) through grey to yellow (on the line)
+RAMP = np.array([(70, 90, 210), (150, 150, 160), (253, 234, 69)], dtype=float)  # visible on black
 H264_LIKE = {"h264", "av1"}
-GOOD_LINE_PX = 3.0  # an epipolar line passing this close to its point is drawn green
+MIN_RAMP_PX = 1.0  # the distance ramp spans at least this many px, so sub-pixel noise keeps one colour
+FRUSTUM_SCALE = 0.3  # frustum depth as a share of the cameras' spread around their median
 
 
 def instance_colors(instance: np.ndarray) -> np.ndarray:
+    """(N,3) uint8: PALETTE by instance id (the same colours as the masks' annotation context);
+    GREY for -1 (unknown)."""
     inst = np.asarray(instance, dtype=np.int64)
     out = PALETTE[np.mod(inst, len(PALETTE))].copy()
     out[inst < 0] = GREY
     return out
+
+
+def distance_colors(distance_px: np.ndarray, scale_px: float) -> np.ndarray:
+    """(...,3) uint8 on RAMP: yellow at 0 px, blue at scale_px and beyond, GREY for NaN."""
+    d = np.asarray(distance_px, dtype=float)
+    x = 1.0 - np.clip(np.nan_to_num(d, nan=np.inf) / max(scale_px, 1e-9), 0.0, 1.0)
+    stops = np.linspace(0.0, 1.0, len(RAMP))
+    out = np.stack([np.interp(x, stops, RAMP[:, c]) for c in range(3)], -1).round().astype(np.uint8)
+    out[~np.isfinite(d)] = GREY
+    return out
+
+
+def annotation_context(max_id: int = 255) -> "rr.AnnotationContext":
+    """Mask ids: 0 is the static background (transparent), k ≥ 1 is moving instance k in PALETTE."""
+    classes = [rr.AnnotationInfo(id=0, label="static background", color=(0, 0, 0, 0))]
+    classes += [rr.AnnotationInfo(id=k, label=f"instance {k}", color=tuple(int(c) for c in PALETTE[k % len(PALETTE)]))
+                for k in range(1, max_id + 1)]
+    return rr.AnnotationContext(classes)
 
 
 def _num(x: Any) -> float | None:
@@ -72,11 +105,66 @@ def _fmt(x: Any, unit: str = "", prec: int = 4) -> str:
     return "n/a" if v is None else f"{v:+.{prec}f}{unit}"
 
 
+def _eye_behind(cams: dict[str, CameraTrack]) -> tuple | None:
+    """(position, look target, up) of a 3D view behind and above the cameras, looking where they
+    look, so that all frustums and what they see are in view (rerun's default eye frames the
+    bounding box of everything, which a few far triangulated points make tiny)."""
+    C, fwd, up = [], [], []
+    for cam in cams.values():
+        T = cam.cam_from_world.reshape(-1, 4, 4)
+        c = cam.centers()
+        ok = np.isfinite(c).all(1)
+        if not ok.any():
+            continue
+        R = T[ok][:, :3, :3]
+        C.append(c[ok].mean(0))
+        fwd.append(R[:, 2, :].mean(0))  # camera z (forward) in world coordinates
+        up.append(-R[:, 1, :].mean(0))  # camera y points down
+    if len(C) < 1:
+        return None
+    C, f, u = np.array(C), np.mean(fwd, 0), np.mean(up, 0)
+    if np.linalg.norm(u) < 1e-6:
+        return None
+    u = u / np.linalg.norm(u)
+    centre = C.mean(0)
+    spread = max(float(np.linalg.norm(C - centre, axis=1).max()), 1e-3)
+    facing = float(np.linalg.norm(f))  # ~1: cameras look the same way; ~0: they look inward
+    if facing < 0.5:  # a ring of cameras: look at its centre, from outside and above
+        f = fwd[0]
+    f = f - np.dot(f, u) * u
+    if np.linalg.norm(f) < 1e-6:
+        return None
+    f = f / np.linalg.norm(f)
+    target = centre + (f * spread if facing >= 0.5 else 0.0)
+    position = target - f * 2.0 * spread + u * 1.2 * spread
+    return tuple(map(lambda x: [float(v) for v in x], (position, target, u)))
+
+
+def _decoded(jpeg: bytes, draw_order: float | None = None) -> rr.Image:
+    """A JPEG as a decoded image. For images shown on the offset timeline: rerun 0.41's viewer
+    shows no EncodedImage (JPEG) while the time cursor is at a negative value of a sequence
+    timeline, and about half of the candidate offsets are negative; decoded images show."""
+    import cv2
+    bgr = cv2.imdecode(np.frombuffer(jpeg, np.uint8), cv2.IMREAD_COLOR)
+    return rr.Image(bgr, color_model="BGR", draw_order=draw_order)
+
+
 def _video_codec(path: str) -> str | None:
+    """The codec name of an H.264/AV1 file rerun's viewer can play, else None (JPEG frames then).
+
+    rerun 0.41's native viewer shows no frame of an H.264 stream whose own timing (the SPS's
+    frame rate) is far from the container's frame rate, e.g. libx264 fed a 1/90000 time base
+    (SPS: 90000 fps): its panels stay at the loading dots."""
     try:
         import av
         with av.open(str(path)) as c:
-            return c.streams.video[0].codec_context.name
+            s = c.streams.video[0]
+            rate, sps_rate = s.average_rate or s.guessed_rate, s.codec_context.framerate
+            if rate and sps_rate and not 0.5 <= float(sps_rate) / float(rate) <= 2.0:
+                log.info("%s: H.264 timing says %s fps, the file %s fps: not embedded (rerun's "
+                         "viewer cannot play it)", path, sps_rate, rate)
+                return None
+            return s.codec_context.name
     except Exception:  # noqa: BLE001 - any failure: not embeddable, fall back to JPEG frames
         return None
 
@@ -155,6 +243,12 @@ class RerunSink(Sink):
         self._summary: RunResult | None = None
         self._flushed_videos = False
         self._pairs_logged: list[str] = []
+        self._pair_views: dict[str, set[str]] = {}  # "a__b" -> views with data ("landscape", "epipolar")
+        self._sweep_frames: dict[str, int] = {}  # video -> frame shown by an epipolar view of it
+        self._offset_ms_min: int | None = None  # smallest candidate offset logged (offset_ms)
+        self._offset_ms_max: int | None = None
+        self._notes: list[str] = []  # stage events, repeated in the guide
+        self._eye: tuple | None = None  # 3D view's (position, look target, up), world
         self._events = 0
         self._cams_logged: set[str] = set()
         self.hook_s = 0.0
@@ -249,6 +343,7 @@ class RerunSink(Sink):
         self._result, self._view = result, view
         if view is not None:
             self._log_graph(result, view)
+            self._log_loops(view)
         self._log_solve(result)
         if view is not None:
             self._log_offsets(result, view)
@@ -260,6 +355,7 @@ class RerunSink(Sink):
     def stage_event(self, stage: str, message: str, **numbers: Any) -> None:
         self._events += 1
         extra = ", ".join(f"{k}={v}" for k, v in numbers.items())
+        self._notes.append(f"{stage}: {message}" + (f" ({extra})" if extra else ""))
         self.rec.reset_time()
         self.rec.set_time(TIMELINE_EVENT, sequence=self._events)
         self.rec.log(log_path(stage), rr.TextLog(f"{message}" + (f" ({extra})" if extra else ""),
@@ -299,8 +395,9 @@ class RerunSink(Sink):
                 "has_result": summary is not None, "options": asdict(self.options),
                 "pairs": self._pairs_logged}), media_type="text/plain"), static=True)
             names = list(self._videos) or (self._bundle.names if self._bundle else [])
-            self.rec.send_blueprint(blueprint(names, self._pairs_logged, self._result),
-                                    make_active=True, make_default=True)
+            self._log_pairs_table()
+            self._log_guide(names)
+            self.rec.send_blueprint(self.blueprint(names), make_active=True, make_default=True)
             self.rec.flush()
             self.rec.disconnect()
             self._file.close()  # renames the temporary file to self.path
@@ -316,6 +413,15 @@ class RerunSink(Sink):
         except BaseException as exc:
             self._abort(exc)
             raise
+
+    def blueprint(self, names: list[str]):
+        """The default blueprint of what was logged so far (record/blueprint.py)."""
+        timeline = TIMELINE_OFFSET_MS if self._offset_ms_min is not None else TIMELINE_TIME
+        rng = (self._offset_ms_min, self._offset_ms_max) if self._offset_ms_min is not None else None
+        return blueprint(names, self._pairs_logged, self._result, self._pair_views, timeline,
+                         has_loops=bool(self._view is not None and self._view.triangles), range_ms=rng,
+                         sizes={n: (b.info.width, b.info.height) for n, b in self._videos.items()},
+                         eye=self._eye)
 
     def abort(self) -> None:
         """Stop writing and delete the temporary file; nothing that looks complete is left."""
@@ -334,23 +440,37 @@ class RerunSink(Sink):
     # ---- internals: cameras ----
 
     def _scene_scale(self, cams: dict[str, CameraTrack]) -> float:
-        C = np.concatenate([c.centers() for c in cams.values()])
-        C = C[np.isfinite(C).all(1)]
+        """Median distance of the cameras (a moving one by its mean centre, so that its many
+        frames do not outvote the others) from their mean, world units."""
+        C = []
+        for cam in cams.values():
+            c = cam.centers()
+            c = c[np.isfinite(c).all(1)]
+            if len(c):
+                C.append(c.mean(0))
         if len(C) < 2:
             return 1.0
-        d = np.linalg.norm(C - np.median(C, axis=0), axis=1)
-        return float(np.median(d)) or 1.0
+        C = np.array(C)
+        return float(np.median(np.linalg.norm(C - C.mean(0), axis=1))) or 1.0
+
+    def _camera_color(self, name: str) -> tuple[int, int, int]:
+        names = list(self._videos) or (self._bundle.names if self._bundle else [])
+        i = names.index(name) if name in names else len(names)
+        return tuple(int(c) for c in PALETTE[i % len(PALETTE)])
 
     def _log_cameras_static(self, cams: dict[str, CameraTrack], videos: list[VideoInfo]) -> None:
-        """Pinhole and (static) pose of each camera, once per camera."""
+        """Pinhole and (static) pose of each camera, once per camera; a labelled point at each
+        camera's centre (the middle pose of a moving one), in the camera's colour."""
         if not cams:
             return
-        dist = 0.08 * self._scene_scale(cams)
+        dist = FRUSTUM_SCALE * self._scene_scale(cams)
+        new = False
         for v in videos:
             cam = cams.get(v.name)
             if cam is None or v.name in self._cams_logged:
                 continue
             self._cams_logged.add(v.name)
+            new = True
             base = camera_path(v.name)
             K0 = cam.K if cam.K.ndim == 2 else cam.K[0]
             self.rec.log(base, rr.Pinhole(image_from_camera=K0, resolution=[v.width, v.height],
@@ -363,7 +483,26 @@ class RerunSink(Sink):
             else:
                 C = cam.centers()
                 self.rec.log(camera_trail_path(v.name),
-                             rr.LineStrips3D([C.astype(np.float32)], colors=[ORANGE]), static=True)
+                             rr.LineStrips3D([C[np.isfinite(C).all(1)].astype(np.float32)],
+                                             colors=[self._camera_color(v.name)],
+                                             radii=rr.Radius.ui_points(1.5),
+                                             labels=[f"{v.name} path"]), static=True)
+        if new:
+            self._eye = _eye_behind(cams)
+            names = [n for n in self._cams_logged if n in cams]
+            centres, labels, colors = [], [], []
+            for n in sorted(names, key=lambda n: list(cams).index(n)):
+                C = cams[n].centers()
+                C = C[np.isfinite(C).all(1)]
+                if len(C):
+                    centres.append(C[len(C) // 2])
+                    labels.append(n)
+                    colors.append(self._camera_color(n))
+            if centres:
+                self.rec.log(camera_labels_path(), rr.Points3D(np.array(centres, dtype=np.float32),
+                                                               labels=labels, colors=colors,
+                                                               radii=rr.Radius.ui_points(4.0),
+                                                               show_labels=True), static=True)
 
     def _log_moving_cameras(self, offsets: dict[str, float | None]) -> None:
         cams = self._world_cameras or (self._bundle.cameras if self._bundle else {})
@@ -378,6 +517,13 @@ class RerunSink(Sink):
             self.rec.send_columns(camera_path(name), idx,
                                   rr.Transform3D.columns(translation=T[:, :3, 3], mat3x3=T[:, :3, :3],
                                                          relation=[rr.TransformRelation.ChildFromParent] * n))
+            if self._offset_ms_min is not None:  # the middle pose on the offset timeline (see top)
+                Tm = T[n // 2]
+                self.rec.reset_time()
+                self.rec.set_time(TIMELINE_OFFSET_MS, sequence=self._offset_ms_min)
+                self.rec.log(camera_path(name), rr.Transform3D(
+                    translation=Tm[:3, 3], mat3x3=Tm[:3, :3], relation=rr.TransformRelation.ChildFromParent))
+                self.rec.reset_time()
 
     # ---- internals: videos ----
 
@@ -393,6 +539,8 @@ class RerunSink(Sink):
         total = sum(len(b.jpeg) + len(b.masks) for b in self._videos.values())
         bar = tqdm(total=total, desc="recording frames", unit="frame", leave=False,
                    disable=not self.progress or total < 50)
+        max_id = max((int(m.max(initial=0)) for b in self._videos.values() for m in b.masks.values()), default=0)
+        self.rec.log(VIDEOS, annotation_context(min(max(max_id, 1), 255)), static=True)
         for name, buf in self._videos.items():
             info, ent = buf.info, video_path(name)
             off = offsets.get(name)
@@ -437,10 +585,51 @@ class RerunSink(Sink):
                     bar.update(1)
                 self.rec.reset_time()
             self._log_tracks(name, info, off)
+            self._log_still(name, buf)
             buf.jpeg.clear()
             buf.masks.clear()
         bar.close()
         self._log_moving_cameras(offsets)
+
+    def _log_still(self, name: str, buf: _VideoBuffer) -> None:
+        """One frame of the video (the one its epipolar view shows, else the middle one) with its
+        mask and tracks, at the smallest candidate offset on the offset timeline (see top)."""
+        if self._offset_ms_min is None:
+            return
+        info, W, H = buf.info, buf.info.width, buf.info.height
+        frames = sorted(buf.jpeg) if buf.jpeg else (list(range(len(buf.asset_timestamps_ns)))
+                                                     if buf.asset and buf.asset_timestamps_ns is not None else [])
+        if not frames:
+            return
+        want = self._sweep_frames.get(name, frames[len(frames) // 2])
+        k = min(frames, key=lambda f: abs(f - want))
+        base = video_still_path(name)
+        self.rec.reset_time()
+        self.rec.set_time(TIMELINE_OFFSET_MS, sequence=self._offset_ms_min)
+        # draw orders below the live frames (-10), in case a view shows both
+        if buf.jpeg:
+            w, h = buf.image_size
+            self.rec.log(f"{base}/image", rr.Transform3D(scale=[W / w, H / h, 1.0]), static=True)
+            self.rec.log(f"{base}/image", _decoded(buf.jpeg[k], draw_order=-30.0))
+        else:
+            self.rec.log(f"{base}/image", rr.VideoFrameReference(
+                nanoseconds=int(buf.asset_timestamps_ns[k]), video_reference=video_asset_path(name),
+                draw_order=-30.0))
+        if buf.masks:
+            km = min(buf.masks, key=lambda f: abs(f - k))
+            m = buf.masks[km]
+            self.rec.log(f"{base}/mask", rr.Transform3D(scale=[W / m.shape[1], H / m.shape[0], 1.0]), static=True)
+            self.rec.log(f"{base}/mask", rr.SegmentationImage(m, opacity=0.4, draw_order=-29.0))
+        tv = self._view.tracks.get(name) if self._view is not None else None
+        if tv is not None and k < tv.xy.shape[1]:
+            seen = np.isfinite(tv.xy[:, k]).all(-1)
+            if seen.any():
+                self.rec.log(f"{base}/tracks", rr.Points2D(tv.xy[seen, k].astype(np.float32),
+                                                           colors=instance_colors(tv.instance[seen]),
+                                                           radii=[rr.Radius.ui_points(2.5)], draw_order=-28.0))
+        self.rec.log(base, rr.TextDocument(f"{name} frame {k} (τ = {info.timestamps_s[k]:.3f} s): shown on "
+                                           "the offset timeline; switch to `time` to play the synchronized videos"))
+        self.rec.reset_time()
 
     def _log_tracks(self, name: str, info: VideoInfo, off: float | None) -> None:
         tv = self._view.tracks.get(name) if self._view is not None else None
@@ -467,17 +656,26 @@ class RerunSink(Sink):
 
     def _log_landscape(self, land: PairLandscape, view: PairRecordView | None) -> None:
         base = pair_landscape_path(land.a, land.b)
-        self._pairs_logged.append(f"{land.a}__{land.b}")
+        key = f"{land.a}__{land.b}"
+        self._pairs_logged.append(key)
         ms = np.round(np.asarray(land.offsets_s) * 1000.0).astype(np.int64)
+        if len(ms):
+            lo, hi = int(ms.min()), int(ms.max())
+            self._offset_ms_min = lo if self._offset_ms_min is None else min(lo, self._offset_ms_min)
+            self._offset_ms_max = hi if self._offset_ms_max is None else max(hi, self._offset_ms_max)
         e = np.asarray(land.energy, dtype=np.float64)
         ok = np.isfinite(e)
-        color = GREEN if land.decision.accepted else RED
-        self.rec.log(f"{base}/energy", rr.SeriesLines(colors=[color], names=["E(Δ)"], widths=[1.5]), static=True)
+        color = ACCEPTED if land.decision.accepted else REJECTED
+        mark = "✓" if land.decision.accepted else "✗"
+        # the pair in the series' name: "all landscapes" shows every pair's energy in one plot
+        self.rec.log(f"{base}/energy", rr.SeriesLines(colors=[color], names=[f"{mark} {land.a}→{land.b}"],
+                                                      widths=[1.5]), static=True)
         if ok.any():
+            self._pair_views.setdefault(key, set()).add("landscape")
             self.rec.send_columns(f"{base}/energy", [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms[ok])],
                                   rr.Scalars.columns(scalars=e[ok]))
         mi = np.asarray(land.minima_idx, dtype=np.int64)
-        self.rec.log(f"{base}/minima", rr.SeriesPoints(colors=[BLUE], names=["minima"], markers=["circle"],
+        self.rec.log(f"{base}/minima", rr.SeriesPoints(colors=[MINIMA], names=["minima"], markers=["circle"],
                                                        marker_sizes=[4.0]), static=True)
         if len(mi):
             self.rec.send_columns(f"{base}/minima", [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms[mi])],
@@ -489,7 +687,7 @@ class RerunSink(Sink):
                                   [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=[round(land.best_offset_s * 1000)])],
                                   rr.Scalars.columns(scalars=[land.best_energy]))
         if view is not None and view.true_offset_s is not None and view.true_energy is not None:
-            self.rec.log(f"{base}/truth", rr.SeriesPoints(colors=[ORANGE], names=["true Δ"],
+            self.rec.log(f"{base}/truth", rr.SeriesPoints(colors=[TRUTH], names=["true Δ"],
                                                           markers=["cross"], marker_sizes=[7.0]), static=True)
             self.rec.send_columns(f"{base}/truth",
                                   [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=[round(view.true_offset_s * 1000)])],
@@ -519,6 +717,12 @@ class RerunSink(Sink):
         self.rec.reset_time()
         self._events += 1
         self.rec.set_time(TIMELINE_EVENT, sequence=self._events)
+        # also at its chosen Δ on the offset timeline (the viewer opens there; a pair without one
+        # at its first candidate), so that the decision log is not empty on it
+        at = land.best_offset_s if math.isfinite(land.best_offset_s) else \
+            (float(land.offsets_s[0]) if len(land.offsets_s) else None)
+        if at is not None:
+            self.rec.set_time(TIMELINE_OFFSET_MS, sequence=round(at * 1000))
         self.rec.log(LOG_DECISIONS, rr.TextLog(
             f"{land.a}__{land.b} {verdict.lower()} Δ={_fmt(land.best_offset_s, ' s')}: {d.reason}",
             level=rr.TextLogLevel.INFO if d.accepted else rr.TextLogLevel.WARN))
@@ -528,34 +732,38 @@ class RerunSink(Sink):
         sw = view.sweep
         buf = self._videos.get(land.a)
         base = pair_epipolar_path(land.a, land.b)
+        self._pair_views.setdefault(f"{land.a}__{land.b}", set()).add("epipolar")
+        self._sweep_frames.setdefault(land.a, int(sw.frame_a))
         va = buf.info if buf is not None else self._bundle.video(land.a)
         W, H = va.width, va.height
         self.rec.log(base, rr.TextDocument(
             f"frame {sw.frame_a} of {land.a} (τ = {sw.time_a_s:.3f} s). Lines: epipolar lines of "
-            f"{land.b}'s paired points at τ − Δ; points: {land.a}'s points. Scrub `offset_ms`: lines pass "
-            f"through the points only near the right Δ (chosen {_fmt(land.best_offset_s, ' s')})."),
+            f"{land.b}'s paired points at τ − Δ, in their instance's colour; points: {land.a}'s points, "
+            "yellow when on their line, blue when far. Scrub `offset_ms`: lines pass through "
+            f"the points only near the right Δ (chosen {_fmt(land.best_offset_s, ' s')})."),
             static=True)
         self.rec.log(f"{base}/border", rr.LineStrips2D([[[0, 0], [W, 0], [W, H], [0, H], [0, 0]]],
                                                        colors=[GREY]), static=True)
         if buf is not None and sw.frame_a in buf.jpeg:
             w, h = buf.image_size
             self.rec.log(f"{base}/image", rr.Transform3D(scale=[W / w, H / h, 1.0]), static=True)
-            self.rec.log(f"{base}/image", rr.EncodedImage(contents=buf.jpeg[sw.frame_a],
-                                                          media_type="image/jpeg"), static=True)
+            self.rec.log(f"{base}/image", _decoded(buf.jpeg[sw.frame_a]), static=True)
         elif buf is not None and buf.asset and buf.asset_timestamps_ns is not None:
             self.rec.log(f"{base}/image", rr.VideoFrameReference(
                 nanoseconds=int(buf.asset_timestamps_ns[sw.frame_a]),
                 video_reference=video_asset_path(land.a)), static=True)
         ms = np.round(sw.offsets_s * 1000).astype(np.int64)
         cols_inst = instance_colors(sw.instance)
+        # the ramp's far end: the median distance over all offsets shown, so that points are
+        # yellow only where they are much closer to their lines than usual (an absolute threshold
+        # paints every point "on its line" at every offset when the points barely move)
+        fin = sw.distance_px[np.isfinite(sw.distance_px)]
+        ramp_px = max(float(np.median(fin)) if len(fin) else MIN_RAMP_PX, MIN_RAMP_PX)
         lines_pos, lines_col, line_len, pt_col = [], [], [], []
         for d in range(len(ms)):
             seg = sw.segments[d]
             ok = np.isfinite(seg).all((1, 2))
-            dist = sw.distance_px[d]
-            good = np.where(dist < GOOD_LINE_PX, 1, 0)
-            c = np.where(good[:, None] == 1, np.array(GREEN), np.array(RED)).astype(np.uint8)
-            c[~np.isfinite(dist)] = GREY
+            c = distance_colors(sw.distance_px[d], ramp_px)
             lines_pos.append(seg[ok].reshape(-1, 2))
             lines_col.append(cols_inst[ok])
             line_len.append(int(ok.sum()))
@@ -570,12 +778,14 @@ class RerunSink(Sink):
         self.rec.send_columns(f"{base}/points_a", tcol,
                               rr.Points2D.columns(positions=np.tile(sw.points_a.astype(np.float32), (len(ms), 1)),
                                                   colors=np.concatenate(pt_col)).partition([len(sw.points_a)] * len(ms)))
-        self.rec.log(f"{base}/points_a", rr.Points2D.from_fields(radii=[4.0]), static=True)
+        # in screen points: the views shrink a 1280 px frame to a few hundred px
+        self.rec.log(f"{base}/points_a", rr.Points2D.from_fields(radii=[rr.Radius.ui_points(4.0)]), static=True)
+        self.rec.log(f"{base}/lines", rr.LineStrips2D.from_fields(radii=[rr.Radius.ui_points(0.75)]), static=True)
         med = view.sweep_median_px
         okm = np.isfinite(med)
         if okm.any():
             self.rec.log(f"{base}/median_distance_px", rr.SeriesLines(names=["median point-line distance (px)"],
-                                                                      colors=[BLUE]), static=True)
+                                                                      colors=[MINIMA]), static=True)
             self.rec.send_columns(f"{base}/median_distance_px",
                                   [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms[okm])],
                                   rr.Scalars.columns(scalars=med[okm]))
@@ -586,8 +796,8 @@ class RerunSink(Sink):
         ids, labels, cols, radii, P = [], [], [], [], []
         for v, off in result.offsets_s.items():
             ids.append(v)
-            labels.append(f"{v}\n{_fmt(off, ' s')}" if off is not None else f"{v}\nunresolved")
-            cols.append(BLUE if off is not None else GREY)
+            labels.append(f"{v} {_fmt(off, ' s', 3)}" if off is not None else f"{v} unresolved")
+            cols.append(self._camera_color(v) if off is not None else GREY)
             radii.append(18.0)
             P.append(view.graph_xy[v])
         edges = []
@@ -595,9 +805,10 @@ class RerunSink(Sink):
             mid = f"{p.a}__{p.b}"
             acc = p.decision.accepted
             ids.append(mid)
-            labels.append(f"Δ={_fmt(p.best_offset_s, ' s', 3)}" if acc else f"✗ {p.decision.reason[:40]}")
-            cols.append(GREEN if acc else RED)
-            radii.append(5.0)
+            # short labels (long ones overlapped); the reasons are in the pairs table
+            labels.append(f"✓ {_fmt(p.best_offset_s, ' s', 3)}" if acc else "✗")
+            cols.append(ACCEPTED if acc else REJECTED)
+            radii.append(6.0)
             P.append(view.graph_xy[mid])
             edges += [(p.a, mid), (mid, p.b)]
         self.rec.log(SYNC_GRAPH, rr.GraphNodes(ids, labels=labels, colors=cols, radii=radii, positions=P,
@@ -629,6 +840,96 @@ class RerunSink(Sink):
               "| video | offset_s | ± s | true_s | error_ms | note |\n|---|---|---|---|---|---|\n" + "\n".join(rows))
         self.rec.log(SYNC_OFFSETS, rr.TextDocument(md, media_type=rr.MediaType.MARKDOWN), static=True)
 
+    def _log_loops(self, view: RunRecordView) -> None:
+        if not view.triangles:
+            return
+        rows = [f"| {t.a} → {t.b} → {t.c} | {t.residual_ms:+.1f} | {t.accepted}/3 |"
+                for t in view.triangles[:40]]
+        more = len(view.triangles) - len(rows)
+        md = ("## Loop closure per triangle of pairs\n\nOffsets are differences, so the chosen "
+              "Δ_ab + Δ_bc − Δ_ac is 0 ms when all three pairs are right. A large residual names a "
+              "triangle with at least one wrong pair; a pair in several large triangles is the "
+              "suspect. Largest first.\n\n| triangle a → b → c | residual ms | pairs accepted |\n"
+              "|---|---|---|\n" + "\n".join(rows)
+              + (f"\n\n{more} more triangles with smaller residuals are not listed." if more > 0 else ""))
+        self.rec.log(SYNC_LOOPS, rr.TextDocument(md, media_type=rr.MediaType.MARKDOWN), static=True)
+
+    def _log_pairs_table(self) -> None:
+        """Every pair's verdict, Δ and reason in one table, in the containers' order."""
+        r = self._result
+        if r is None or not r.pairs:
+            return
+        truth = self._bundle.gt_offsets_s if self._bundle is not None else None
+        rows = []
+        for i, p in enumerate(pair_order(r.pairs)):
+            true = (truth[p.b] - truth[p.a]) if truth and p.a in truth and p.b in truth else None
+            rows.append(f"| {'✓' if p.decision.accepted else '✗'} | {p.a} → {p.b} | "
+                        f"{_fmt(p.best_offset_s, '', 3)} | {_fmt(true, '', 3) if true is not None else '-'} | "
+                        f"{p.decision.contrast:.2f} | {p.num_track_pairs} | {p.decision.reason} |"
+                        + (" (no container)" if i >= MAX_PAIR_CONTAINERS else ""))
+        n_rej = sum(not p.decision.accepted for p in r.pairs)
+        md = (f"## Pairs: {len(r.pairs) - n_rej} accepted, {n_rej} rejected\n\n"
+              "| | pair a → b | chosen Δ_ab s | true Δ_ab s | contrast | track pairs | reason |\n"
+              "|---|---|---|---|---|---|---|\n" + "\n".join(rows))
+        self.rec.log(SYNC_PAIRS, rr.TextDocument(md, media_type=rr.MediaType.MARKDOWN), static=True)
+
+    def _log_guide(self, names: list[str]) -> None:
+        """The "how to read this recording" document."""
+        r = self._result
+        n_pairs = len(r.pairs) if r is not None else len(self._pairs_logged)
+        shown = min(n_pairs, MAX_PAIR_CONTAINERS)
+        lo, hi = self._offset_ms_min, self._offset_ms_max
+        rng = f" ({lo / 1000:+.3f} s to {hi / 1000:+.3f} s)" if lo is not None and hi is not None else ""
+        capped = (f" Only the {shown} most informative of the {n_pairs} pairs have a container (rejected "
+                  "pairs with the most track pairs first, then accepted pairs from the least clear "
+                  "minimum up); every pair is in the **pairs** table and in **all landscapes**; to see "
+                  "another pair, add a view with origin `pairs/<a>__<b>`." if n_pairs > shown else "")
+        md = f"""# How to read this recording
+
+The viewer opens on the **`offset_ms`** timeline: the candidate pair offset Δ_ab in milliseconds
+over the whole search range{rng}. Δ_ab = offset_s[b] − offset_s[a]: video b started Δ_ab later
+than a. Move the time cursor (drag it, or type a value in the time field) to sweep Δ.
+
+**Middle column: one tab per pair a→b, failed pairs first.** ✗ marks a rejected pair, ✓ an accepted
+one.{capped}
+
+- *landscape*: the energy E(Δ) of the pair, low where the epipolar constraint holds. The diamond is
+  the chosen Δ, circles the significant minima, a cross the true Δ when known. A rejected pair usually shows no clear single
+  minimum, or its minimum sits at the edge of the search range.
+- *epipolar*: one frame of a with the epipolar lines of b's matched points at the cursor's Δ
+  (lines in the colour of their moving instance). Points are a's matched points: **yellow** when
+  their line passes through them, **blue** when far (scaled to the median distance of this
+  pair). At the right Δ the lines go through the points; at a wrong one they miss.
+- *decision*: the verdict, its reason and the numbers behind it.
+
+**Left column**: this guide; **pairs** (verdict, chosen and true Δ and reason of every pair);
+**offsets** (one per video, with the truth and the error when known); **loop closure** (Δ_ab + Δ_bc
+− Δ_ac per triangle of pairs: large residuals point at wrong pairs); the **decision log** (one line
+per pair at its chosen Δ). Below: **all landscapes** (every pair's E(Δ), named a→b), the **pair
+graph** (videos with their offsets; a node on each evaluated pair's edge, ✓ with Δ or ✗) and the
+**IRLS solve** (residual and weight per accepted pair; switch the timeline to `iteration`).
+
+**Right column**: the videos and the 3D world. On `offset_ms` each video shows one still frame with
+its moving-region mask and tracks. Switch the timeline to **`time`** (seconds after
+synchronization) to play the videos together at the solved offsets, or **`frame`** for each
+video's own frame index. In 3D: the camera frustums, each labelled with its video's name, a
+moving camera's path, and the tracks of accepted pairs triangulated at the solved offsets.
+
+**Colours**: green means only *accepted* and red (vermillion) only *rejected*. Moving instances,
+cameras and masks use an Okabe-Ito palette without green or red; the static background of a mask
+is transparent.
+
+**Video panels empty?** Videos embedded as H.264/AV1 files are decoded by the viewer: the native
+viewer runs the `ffmpeg` executable for H.264, which must be on PATH (else the panels say "Failed
+to decode: Couldn't find an installation of the FFmpeg executable"); the web viewer
+(`rerun --web-viewer FILE.rrd`) decodes in the browser.
+
+Videos in this recording: {", ".join(names) or "none"}.
+"""
+        if self._notes:
+            md += "\n## Notes from the stages\n\n" + "\n".join(f"- {n}" for n in self._notes[-30:]) + "\n"
+        self.rec.log(GUIDE, rr.TextDocument(md, media_type=rr.MediaType.MARKDOWN), static=True)
+
     def _log_trajectories(self, view: RunRecordView) -> None:
         for tj in view.trajectories:
             X = tj.points_world  # (P,T,3)
@@ -638,8 +939,13 @@ class RerunSink(Sink):
             strips = [X[sg.track, sg.start:sg.stop].astype(np.float32) for sg in tj.segments]
             scol = [cols[sg.track] for sg in tj.segments]
             if strips:
-                self.rec.log(key, rr.LineStrips3D(strips, colors=np.array(scol), radii=rr.Radius.ui_points(1.0)),
+                self.rec.log(key, rr.LineStrips3D(strips, colors=np.array(scol), radii=rr.Radius.ui_points(2.0)),
                              static=True)
+                centre = np.median(np.concatenate(strips), axis=0)
+                if len(view.trajectories) <= 3:  # more labels overlap
+                    self.rec.log(f"{key}/label", rr.Points3D([centre], labels=[f"tracks {tj.a}-{tj.b}"],
+                                                             colors=[GREY], radii=rr.Radius.ui_points(2.0),
+                                                             show_labels=True), static=True)
             frames = np.flatnonzero(ok.any(0))
             lengths = [int(ok[:, k].sum()) for k in frames]
             pos = np.concatenate([X[ok[:, k], k] for k in frames]).astype(np.float32)

@@ -1,0 +1,402 @@
+"""Screenshots of a recording in the real rerun viewer, and a check that every panel shows something.
+
+The viewer is the native one from rerun-sdk (`rerun` beside the Python executable), rendered in
+software (Mesa lavapipe through Vulkan): under Xvfb when it is on PATH, else in the viewer's own
+headless mode. rerun.experimental.ViewerClient opens the recording, moves the time cursor on the
+`offset_ms` timeline and takes a screenshot of the whole viewer and of each visible panel.
+
+A panel counts as showing something when its pixels differ from the same panel of the same
+layout over an empty recording (the layout is copied with get_blueprint/set_blueprint, so the
+panel sizes, titles, axes and grids are identical and only the data differs).
+
+    python -m vs_inspect.record.screenshots RUN.rrd --out shots/
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import math
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..io.recording import TIMELINE_OFFSET_MS
+
+INK_DIFF = 40  # a pixel is ink when a channel differs from the empty panel by more than this (0-255)
+MIN_INK = 0.002  # a panel shows something when at least this share of its pixels is ink
+WINDOW = (1920, 1080)  # logical points
+
+
+@dataclass(frozen=True)
+class PanelShot:
+    name: str  # the panel's title
+    view_class: str  # rerun's view class, e.g. "TimeSeries"
+    path: Path  # PNG of the panel
+    ink: float  # share of its pixels that differ from the same panel over an empty recording
+    reports: tuple[str, ...]  # warnings and errors the viewer reported for the panel
+
+    @property
+    def empty(self) -> bool:
+        return self.ink < MIN_INK
+
+
+@dataclass(frozen=True)
+class Screenshots:
+    label: str  # "chosen" or "wrong"
+    offset_ms: int  # where the time cursor was, on the offset_ms timeline
+    full: Path  # PNG of the whole viewer
+    panels: tuple[PanelShot, ...]  # every panel on screen
+    timeline_on_open: str | None  # the timeline the viewer showed when the recording opened
+
+    @property
+    def empty_panels(self) -> list[str]:
+        return [p.name for p in self.panels if p.empty]
+
+
+def rerun_executable() -> Path | None:
+    """The viewer that comes with the installed rerun-sdk (beside this Python), else on PATH."""
+    here = Path(sys.executable).parent / "rerun"
+    if here.is_file():
+        return here
+    found = shutil.which("rerun")
+    return Path(found) if found else None
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _software_env(base: dict[str, str]) -> dict[str, str]:
+    """Software rendering: Mesa's lavapipe Vulkan driver when installed, llvmpipe GL otherwise."""
+    env = dict(base)
+    icd = Path("/usr/share/vulkan/icd.d/lvp_icd.x86_64.json")
+    if icd.is_file():
+        env.setdefault("VK_ICD_FILENAMES", str(icd))
+        env.setdefault("WGPU_BACKEND", "vulkan")
+    else:
+        env.setdefault("WGPU_BACKEND", "gl")
+    env.setdefault("LIBGL_ALWAYS_SOFTWARE", "1")
+    return env
+
+
+@contextlib.contextmanager
+def viewer(mode: str = "auto", size: tuple[int, int] = WINDOW, log_path: Path | None = None):
+    """A running native viewer and a ViewerClient connected to it; both are stopped on exit.
+
+    mode: "xvfb" (a virtual X display), "headless" (the viewer's offscreen mode) or "auto" (xvfb
+    when Xvfb is on PATH). RuntimeError with the viewer's output when it does not come up.
+    """
+    from rerun.experimental import ViewerClient
+
+    exe = rerun_executable()
+    if exe is None:
+        raise RuntimeError("no rerun viewer executable (install rerun-sdk)")
+    if mode == "auto":
+        mode = "xvfb" if shutil.which("Xvfb") else "headless"
+    env = _software_env(os.environ)
+    tmp = tempfile.TemporaryDirectory(prefix="vs-inspect-viewer-")
+    env.setdefault("XDG_RUNTIME_DIR", tmp.name)
+    env.setdefault("XDG_CONFIG_HOME", str(Path(tmp.name) / "config"))
+    env.setdefault("XDG_DATA_HOME", str(Path(tmp.name) / "data"))
+    procs: list[subprocess.Popen] = []
+    log = open(log_path or Path(tmp.name) / "viewer.log", "w")
+    try:
+        if mode == "xvfb":
+            xvfb = shutil.which("Xvfb")
+            if xvfb is None:
+                raise RuntimeError("Xvfb is not on PATH (apt-get install xvfb), or use mode='headless'")
+            # -displayfd: Xvfb picks a free display number and writes it to the pipe
+            r, w = os.pipe()
+            procs.append(subprocess.Popen([xvfb, "-displayfd", str(w), "-screen", "0",
+                                           f"{size[0]}x{size[1]}x24", "-nolisten", "tcp"],
+                                          pass_fds=(w,), stdout=log, stderr=log, start_new_session=True))
+            os.close(w)
+            with os.fdopen(r) as f:
+                display = f.readline().strip()
+            if not display:
+                raise RuntimeError("Xvfb did not start")
+            env["DISPLAY"] = f":{display}"
+            env.pop("WAYLAND_DISPLAY", None)
+        port = _free_port()
+        cmd = [str(exe), "--port", str(port), "--hide-welcome-screen", "--window-size",
+               f"{size[0]}x{size[1]}", "--memory-limit", "2GB"]
+        if mode == "headless":
+            cmd.append("--headless")
+        procs.append(subprocess.Popen(cmd, env=env, stdout=log, stderr=log, start_new_session=True))
+        deadline = time.monotonic() + 30
+        while True:
+            try:
+                client = ViewerClient.connect(f"rerun+http://127.0.0.1:{port}/proxy")
+                client.get_state()
+                break
+            except Exception:  # noqa: BLE001 - not listening yet
+                if procs[-1].poll() is not None or time.monotonic() > deadline:
+                    log.flush()
+                    text = Path(log.name).read_text(errors="replace")[-2000:]
+                    raise RuntimeError(f"the rerun viewer did not come up ({mode}):\n{text}") from None
+                time.sleep(0.3)
+        yield client
+    finally:
+        for p in reversed(procs):  # only the processes started here, each by its own group
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(p.pid, 15)
+            try:
+                p.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                with contextlib.suppress(ProcessLookupError):
+                    os.killpg(p.pid, 9)
+                p.wait(timeout=5)
+        log.close()
+        tmp.cleanup()
+
+
+def _open(client, path: Path, timeout_s: float = 30.0) -> str:
+    """Open an .rrd, wait until it is loaded; its store id."""
+    res = client.open(str(path.resolve()))
+    ids = [s for s in res.store_ids if s.startswith("Recording:")]
+    deadline = time.monotonic() + timeout_s
+    while client.get_state().loading and time.monotonic() < deadline:
+        time.sleep(0.2)
+    if not ids:
+        raise RuntimeError(f"the viewer opened no recording from {path}")
+    return ids[0]
+
+
+def _png(data: bytes) -> np.ndarray:
+    import cv2
+    img = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+    if img is None:
+        raise RuntimeError("the viewer returned no image")
+    return img
+
+
+def ink(panel_bgr: np.ndarray, empty_bgr: np.ndarray) -> float:
+    """Share of pixels that differ (any channel by more than INK_DIFF) from the empty panel."""
+    if panel_bgr.shape != empty_bgr.shape:
+        import cv2
+        empty_bgr = cv2.resize(empty_bgr, (panel_bgr.shape[1], panel_bgr.shape[0]))
+    diff = np.abs(panel_bgr.astype(np.int16) - empty_bgr.astype(np.int16)).max(-1)
+    return float((diff > INK_DIFF).mean())
+
+
+def _empty_recording(path: Path) -> Path:
+    """An .rrd with one static entity that no panel of the layout shows."""
+    import rerun as rr
+    rec = rr.RecordingStream("vs_inspect_empty_layout")
+    rec.save(str(path))
+    rec.log("zz_nothing", rr.TextDocument("-"), static=True)
+    rec.flush()
+    rec.disconnect()
+    return path
+
+
+def chosen_and_wrong_ms(rrd: Path, pair: tuple[str, str] | None = None) -> tuple[int, int, str | None]:
+    """(chosen, wrong, pair): the chosen Δ in ms of the pair (default: the one in the first
+    container, the layout's active tab) and an offset a third of the search range away from it."""
+    from ..io.recording import read_recording
+    from .blueprint import shown_pairs
+    rec = read_recording(rrd)
+    shown = shown_pairs(rec.meta.get("pairs", []), rec.result)
+    if pair is not None:
+        shown = [(pair[0], pair[1], None)]
+    key = f"{shown[0][0]}__{shown[0][1]}" if shown else None
+    from ..io.recording import pair_key
+    series = rec.landscapes.get(pair_key(shown[0][0], shown[0][1]), {}) if shown else {}
+    all_ms = np.concatenate([s.offset_ms for p in rec.landscapes.values() for s in p.values()]) \
+        if rec.landscapes else np.zeros(1, np.int64)
+    lo, hi = int(all_ms.min()), int(all_ms.max())
+    chosen = None
+    if rec.result is not None and shown:
+        p = next((p for p in rec.result.pairs if (p.a, p.b) == shown[0][:2]), None)
+        if p is not None and math.isfinite(p.best_offset_s):
+            chosen = round(p.best_offset_s * 1000)
+    if chosen is None and "energy" in series:
+        e = series["energy"]
+        chosen = int(e.offset_ms[np.argmin(e.value)])
+    if chosen is None:
+        chosen = (lo + hi) // 2
+    step = max(1, (hi - lo) // 3)
+    wrong = chosen + step if chosen + step <= hi else chosen - step
+    return chosen, wrong, key
+
+
+def on_screen_views(layout: dict) -> list[str]:
+    """View ids (32 hex digits) that a blueprint (ViewerClient.get_blueprint) puts on screen:
+    every view under the root container, but only the active tab of a Tabs container."""
+    containers = {k.split("/", 2)[2]: v["ContainerBlueprint"] for k, v in layout.items()
+                  if k.startswith("/container/") and "ContainerBlueprint" in v}
+    inside = {c.split("/", 1)[1] for v in containers.values() for c in v.get("contents", [])}
+    roots = [cid for cid in containers if cid not in inside]
+    out: list[str] = []
+
+    def walk(item: str) -> None:
+        kind, _, ident = item.partition("/")
+        if kind == "view":
+            out.append(ident.replace("-", ""))
+            return
+        c = containers.get(ident, {})
+        contents = c.get("contents", [])
+        if c.get("container_kind") == "Tabs" and contents:
+            contents = [c.get("active_tab") or contents[0]]
+        for child in contents:
+            walk(child)
+
+    for r in roots:
+        walk(f"container/{r}")
+    return out
+
+
+def activate_pair(layout: dict, a: str, b: str) -> bool:
+    """Make the container of pair a→b the active tab of its Tabs (in place); False if absent."""
+    containers = {k: v["ContainerBlueprint"] for k, v in layout.items()
+                  if k.startswith("/container/") and "ContainerBlueprint" in v}
+    target = next((k for k, c in containers.items() if str(c.get("display_name", "")).endswith(f"{a}→{b}")), None)
+    if target is None:
+        return False
+    item = target.lstrip("/")
+    for c in containers.values():
+        if c.get("container_kind") == "Tabs" and item in c.get("contents", []):
+            c["active_tab"] = item
+            return True
+    return False
+
+
+def _locate(full: np.ndarray, tile: np.ndarray) -> tuple[int, int, int, int]:
+    """(x, y, w, h) of a panel's screenshot inside the screenshot of the whole viewer."""
+    import cv2
+    h, w = tile.shape[:2]
+    if h > full.shape[0] or w > full.shape[1]:
+        raise RuntimeError(f"a panel ({w}x{h}) is larger than the viewer ({full.shape[1]}x{full.shape[0]})")
+    res = cv2.matchTemplate(full, tile, cv2.TM_SQDIFF_NORMED)
+    _, _, (x, y), _ = cv2.minMaxLoc(res)
+    return x, y, w, h
+
+
+def _paint(client, settle_s: float, min_rounds: int = 2, max_rounds: int = 6) -> None:
+    """Let the viewer paint until two frames in a row look the same, after at least min_rounds
+    (images and videos are decoded in the background and appear some frames later; the viewer
+    paints only when asked), at most max_rounds times."""
+    prev = None
+    for i in range(max_rounds):
+        time.sleep(settle_s / 2)
+        img = _png(client.take_screenshot(max_size=480))
+        if i + 1 >= min_rounds and prev is not None and img.shape == prev.shape and \
+                np.abs(img.astype(np.int16) - prev.astype(np.int16)).max() <= 8:
+            return
+        prev = img
+
+
+def take_screenshots(rrd: str | Path, out_dir: str | Path, offsets_ms: dict[str, int] | None = None,
+                     mode: str = "auto", settle_s: float = 1.0,
+                     pair: tuple[str, str] | None = None) -> list[Screenshots]:
+    """Open rrd in the native viewer, take a screenshot of the viewer with the time cursor at each
+    offset (label -> ms on the offset_ms timeline; default: the chosen Δ of the pair on screen
+    and a wrong one), cut out every panel on screen, and measure each panel's ink against the same
+    layout over an empty recording. PNGs go to out_dir as <label>.png and <label>/<panel>.png.
+    pair: (a, b) whose container is brought to the front (default: the layout's first, a failed
+    pair when there is one).
+
+    Panels are located once (a screenshot of each panel, found in the whole viewer's), then cut
+    from one screenshot per offset: a screenshot costs about a second in software rendering.
+    """
+    import re
+
+    import cv2
+
+    rrd, out_dir = Path(rrd), Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    if offsets_ms is None:
+        chosen, wrong, _ = chosen_and_wrong_ms(rrd, pair)
+        offsets_ms = {"chosen": chosen, "wrong": wrong}
+    fulls: dict[str, tuple[int, np.ndarray]] = {}
+    with tempfile.TemporaryDirectory(prefix="vs-inspect-shots-") as tmp, \
+            viewer(mode, log_path=out_dir / "viewer.log") as client:
+        store = _open(client, rrd)
+        # blueprint applied, panels laid out, the static images decoded (once: they are cached)
+        _paint(client, 2 * settle_s, min_rounds=4)
+        opened_on = next((r.current_timeline for r in client.get_state().recordings if r.store_id == store), None)
+        layout = client.get_blueprint(store_id=store).blueprint
+        if pair is not None:
+            if not activate_pair(layout, *pair):
+                raise ValueError(f"no container of pair {pair[0]}→{pair[1]} in the layout")
+            client.set_blueprint(layout, store_id=store)
+            _paint(client, settle_s)
+        shown = set(on_screen_views(layout))
+        views = [v for v in client.get_state().views if v.visible and v.view_id.replace("-", "") in shown]
+        rects: dict[str, tuple[int, int, int, int]] = {}
+        for label, ms in offsets_ms.items():
+            client.set_time(TIMELINE_OFFSET_MS, sequence=int(ms), play_state="paused", recording=store)
+            _paint(client, settle_s)
+            full = _png(client.take_screenshot())
+            if not rects:
+                rects = {v.view_id: _locate(full, _png(client.take_screenshot(v.view_id))) for v in views}
+            fulls[label] = (int(ms), full)
+        empty = _open(client, _empty_recording(Path(tmp) / "empty.rrd"))
+        client.set_blueprint(layout, store_id=empty)
+        _paint(client, settle_s)
+        blank = _png(client.take_screenshot())
+    shots: list[Screenshots] = []
+    for label, (ms, full) in fulls.items():
+        full_path = out_dir / f"{label}.png"
+        cv2.imwrite(str(full_path), full)
+        (out_dir / label).mkdir(exist_ok=True)
+        panels = []
+        for v in views:
+            x, y, w, h = rects[v.view_id]
+            img, base = full[y:y + h, x:x + w], blank[y:y + h, x:x + w]
+            safe = re.sub(r"[^A-Za-z0-9_.\-]+", "_", v.name or v.view_class)[:60]
+            path = out_dir / label / f"{safe}.png"
+            cv2.imwrite(str(path), img)
+            panels.append(PanelShot(v.name, v.view_class, path, ink(img, base),
+                                    tuple(f"{r.severity}: {r.summary}" for r in v.reports)))
+        shots.append(Screenshots(label, ms, full_path, tuple(panels), opened_on))
+    cv2.imwrite(str(out_dir / "empty_layout.png"), blank)
+    return shots
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m vs_inspect.record.screenshots",
+                                description="Screenshots of a recording in the native rerun viewer "
+                                            "(software rendering) at the chosen offset and at a wrong "
+                                            "one; exit 1 when a visible panel is empty.")
+    p.add_argument("rrd", type=Path)
+    p.add_argument("--out", type=Path, required=True, help="folder for the PNGs")
+    p.add_argument("--mode", choices=("auto", "xvfb", "headless"), default="auto",
+                   help="virtual X display (Xvfb) or the viewer's headless mode (auto: Xvfb if on PATH)")
+    p.add_argument("--at", type=int, action="append", metavar="MS",
+                   help="offsets (ms on offset_ms) instead of the chosen and a wrong one; repeatable")
+    p.add_argument("--pair", nargs=2, metavar=("A", "B"),
+                   help="bring this pair's container to the front (default: the first, failed first)")
+    args = p.parse_args(argv)
+    if shutil.which("ffmpeg") is None:
+        print("note: ffmpeg is not on PATH: the native viewer shows no frame of embedded H.264 videos",
+              file=sys.stderr)
+    offsets = {f"at_{ms}ms": ms for ms in args.at} if args.at else None
+    shots = take_screenshots(args.rrd, args.out, offsets, mode=args.mode,
+                             pair=tuple(args.pair) if args.pair else None)
+    bad = 0
+    for s in shots:
+        print(f"{s.label} (offset_ms = {s.offset_ms}): {s.full}")
+        for ps in s.panels:
+            flag = "EMPTY" if ps.empty else "ok"
+            bad += ps.empty
+            print(f"  {flag:5s} ink {100 * ps.ink:5.1f}%  {ps.view_class:12s} {ps.name}"
+                  + (f"  [{'; '.join(ps.reports)}]" if ps.reports else ""))
+    print(json.dumps({"empty_panels": bad}))
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
