@@ -146,7 +146,7 @@ def test_no_video_gets_a_camera_and_result_json_still_says_why_for_each(tmp_path
     code = main(["sync", *map(str, paths), "--out", str(out), "--no-progress", "--no-rrd"])
     assert code == 2
     res = json.loads((out / "result.json").read_text())
-    assert res["version"] == 1 and res["reference"] == "v0"
+    assert res["version"] == 2 and res["reference"] == "v0"
     assert res["offsets_s"] == {"v0": None, "v1": None, "v2": None}
     assert res["uncertainty_s"] == {"v0": None, "v1": None, "v2": None}
     for n in ("v0", "v1", "v2"):

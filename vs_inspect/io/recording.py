@@ -86,6 +86,12 @@ def pair_landscape_path(a: str, b: str) -> str:
     return f"{pair_path(a, b)}/landscape"
 
 
+def pair_rate_landscape_path(a: str, b: str) -> str:
+    """The drift model's (Δ, rate) energy: "image" (rr.Image, RGB: columns the offset at the
+    pivot, rows the rate) and "energy" (rr.Tensor, rows rate_ppm, columns offset)."""
+    return f"{pair_path(a, b)}/rate_landscape"
+
+
 def pair_decision_path(a: str, b: str) -> str:
     return f"{pair_path(a, b)}/decision"
 
