@@ -183,8 +183,12 @@ def _pose_free_rejected(bundle: CueBundle, a: str, b: str, tp: TrackPairs, cfg: 
 
 
 def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | None = None,
-                progress: bool = True) -> SyncResult:
-    """Stage 1 over the pairs that cfg.pairs selects, then Stage 2, reported to the sink."""
+                progress: bool = True,
+                pose_free: dict[tuple[str, str], PoseFreePair | None] | None = None) -> SyncResult:
+    """Stage 1 over the pairs that cfg.pairs selects, then Stage 2, reported to the sink.
+
+    pose_free: estimates of pose-free pairs made earlier (estimate_pose_free_pairs; e.g. the drift
+    model's, reused by the benchmark's constant-offset ablation); the others are estimated here."""
     sink = sink or NullSink()
     names = bundle.names
     reference = cfg.solve.reference or names[0]
@@ -197,7 +201,9 @@ def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | 
     chosen = select_pairs(names, has, cfg.pairs)
     lands: list[PairLandscape] = []
     pose_free_pairs = [(a, b) for a, b in chosen if is_pose_free_pair(bundle, a, b)]
-    pose_free = estimate_pose_free_pairs(bundle, pose_free_pairs, cfg, progress)
+    given = dict(pose_free or {})
+    pose_free = {**{k: given[k] for k in pose_free_pairs if k in given},
+                 **estimate_pose_free_pairs(bundle, [k for k in pose_free_pairs if k not in given], cfg, progress)}
     for a, b in tqdm(chosen, desc="pair landscapes", unit="pair", disable=not progress,
                      leave=False):
         land, pe = pair_landscape(bundle, a, b, cfg, pose_free.get((a, b)), (a, b) in pose_free)
