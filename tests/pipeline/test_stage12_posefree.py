@@ -10,7 +10,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from vs_inspect.io.bundle import read_bundle, write_bundle
-from vs_inspect.pipeline.stage12 import is_pose_free_pair, sync_bundle
+from vs_inspect.pipeline.stage12 import estimate_pose_free_pairs, is_pose_free_pair, sync_bundle
 from vs_inspect.sync.config import DriftConfig, LandscapeConfig, PoseFreeSyncConfig, SyncConfig
 from vs_inspect.types import CameraTrack, CueBundle, TrackPairs, Tracks, VideoInfo
 
@@ -90,3 +90,13 @@ def test_pose_free_bundle_constant_model_is_the_ablation():
     for n in OFFSETS:
         assert res.offsets_s[n] is not None
         assert abs(res.offsets_s[n] - OFFSETS[n]) < 0.1
+
+
+def test_pose_free_pairs_in_worker_processes_match_in_process():
+    b = drone_bundle()
+    pairs = [("c0", "c1"), ("c0", "c2")]
+    one = estimate_pose_free_pairs(b, pairs, CFG)
+    two = estimate_pose_free_pairs(b, pairs, dataclasses.replace(CFG, pose_free=PoseFreeSyncConfig(workers=2)))
+    assert list(two) == pairs
+    for k in pairs:
+        assert one[k].offset_s == two[k].offset_s and one[k].rate == two[k].rate

@@ -9,9 +9,9 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+import multiprocessing
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 from tqdm import tqdm
@@ -149,8 +149,10 @@ def estimate_pose_free_pairs(bundle: CueBundle, chosen: list[tuple[str, str]], c
     if workers <= 1:
         return {k: _estimate_pose_free(j) for k, j in tqdm(jobs.items(), desc="pose-free pairs", unit="pair",
                                                          disable=not progress, leave=False)}
-    with ProcessPoolExecutor(max_workers=workers) as ex:
-        out = list(tqdm(ex.map(_estimate_pose_free, jobs.values()), total=len(jobs), desc="pose-free pairs",
+    # a Pool, not a ProcessPoolExecutor: leaving the block terminates the workers, so that Ctrl-C
+    # or SIGTERM does not wait for minutes of pair estimates
+    with multiprocessing.Pool(workers) as pool:
+        out = list(tqdm(pool.imap(_estimate_pose_free, jobs.values()), total=len(jobs), desc="pose-free pairs",
                         unit="pair", disable=not progress, leave=False))
     return dict(zip(jobs, out))
 
