@@ -139,6 +139,14 @@ def _estimate_pose_free(job: tuple) -> PoseFreePair | None:
     return estimate_pair(t_a, xy_a, K_a, t_b, xy_b, K_b, pcfg, offset_range_s=rng)
 
 
+def _quiet_worker() -> None:
+    """A worker ends on SIGTERM (the pool's exit sends it) without the parent's handler, which
+    would raise and print; Ctrl-C is the parent's to handle."""
+    import signal
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def estimate_pose_free_pairs(bundle: CueBundle, chosen: list[tuple[str, str]], cfg: SyncConfig,
                              progress: bool = False) -> dict[tuple[str, str], PoseFreePair | None]:
     """sync.posefree over the chosen pose-free pairs, in worker processes when there are several."""
@@ -151,7 +159,7 @@ def estimate_pose_free_pairs(bundle: CueBundle, chosen: list[tuple[str, str]], c
                                                          disable=not progress, leave=False)}
     # a Pool, not a ProcessPoolExecutor: leaving the block terminates the workers, so that Ctrl-C
     # or SIGTERM does not wait for minutes of pair estimates
-    with multiprocessing.Pool(workers) as pool:
+    with multiprocessing.Pool(workers, initializer=_quiet_worker) as pool:
         out = list(tqdm(pool.imap(_estimate_pose_free, jobs.values()), total=len(jobs), desc="pose-free pairs",
                         unit="pair", disable=not progress, leave=False))
     return dict(zip(jobs, out))
