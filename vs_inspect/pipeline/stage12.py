@@ -290,9 +290,12 @@ def solve_stage2_drift(bundle: CueBundle, lands: list[PairLandscape] | tuple[Pai
             off, pivot, std = land.pivot_offset_s, land.pivot_s, land.pivot_offset_std_s
         else:  # the rate fit found no energy around the minimum: the 1-D result at its rate
             off, pivot, std = land.best_offset_s, 0.0, land.uncertainty_s
+        if not math.isfinite(std):  # no curvature there: the 1-D figure, else the grid's resolution
+            step = land.offsets_s[1] - land.offsets_s[0] if len(land.offsets_s) > 1 else 0.1
+            std = land.uncertainty_s if math.isfinite(land.uncertainty_s) else step / math.sqrt(12.0)
         lstd = land.log_rate_std
-        timings.append(PairTiming(land.a, land.b, off, math.log(land.rate),
-                                  std if math.isfinite(std) else 1.0,
+        # a rate the pair cannot tell is left to the other pairs and the drift prior
+        timings.append(PairTiming(land.a, land.b, off, math.log(land.rate), std,
                                   lstd if math.isfinite(lstd) else 1.0, pivot))
     sol = solve_offsets_drift(reference, timings, with_drift=True, drift_prior_ppm=drift.prior_ppm)
     offsets: dict[str, float | None] = {v: None for v in names}
