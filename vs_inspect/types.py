@@ -204,9 +204,12 @@ class CueBundle:
     tracks: dict[str, Tracks]
     pairs: dict[tuple[str, str], TrackPairs]
     gt_offsets_s: dict[str, float] | None = None  # true offsets when known (DESIGN.md convention)
+    pose_free: frozenset[str] = frozenset()  # videos whose camera has K only (cam_from_world a placeholder)
+    gt_drift_ppm: dict[str, float] | None = None  # true clock drift when known (gt.json drift_ppm)
 
     def __post_init__(self) -> None:
         names = [v.name for v in self.videos]
+        object.__setattr__(self, "pose_free", frozenset(self.pose_free))
         if not names:
             raise ValueError("bundle has no videos")
         if len(set(names)) != len(names):
@@ -300,6 +303,23 @@ class PairLandscape:
     decision: PairDecision
     residual: str = "sampson"
     robust_scale: float = float("nan")  # scale of the robust loss, in the residual's units
+    rate: float = 1.0  # (1 + drift_b) / (1 + drift_a): τ_a = Δ + rate · τ_b (1 without the drift model)
+    log_rate_std: float = float("nan")  # 1-sigma of log(rate); NaN without the drift model
+    pivot_s: float = 0.0  # b's local time where pivot_offset_s is measured (middle of the overlap)
+    pivot_offset_s: float = float("nan")  # τ_a - τ_b at τ_b = pivot_s (nearly uncorrelated with the rate)
+    pivot_offset_std_s: float = float("nan")  # its 1-sigma
+    rate_landscape: RateLandscape | None = None  # the energy over (Δ, rate), with the drift model
+    pose_free: bool = False  # the pair's F came from its tracks (sync.posefree), not from cameras
+
+
+@dataclass(frozen=True)
+class RateLandscape:
+    """A pair's energy over (offset at the pivot, rate) around its minimum (the drift model)."""
+
+    pivot_s: float  # b's local time about which the rows turn
+    offsets_s: np.ndarray  # (U,) τ_a - τ_b at τ_b = pivot_s, seconds
+    rates_ppm: np.ndarray  # (V,) (rate - 1) * 1e6
+    energy: np.ndarray  # (V,U) normalized energy, NaN where the overlap is too small
 
 
 @dataclass(frozen=True)
@@ -323,6 +343,8 @@ class SyncResult:
     iterations: tuple[SolveIteration, ...]
     solver: str = "irls"
     timings_s: dict[str, float] = field(default_factory=dict)
+    drift_ppm: dict[str, float | None] | None = None  # with the drift model: (1 + drift) - 1 per video, ppm
+    drift_std_ppm: dict[str, float | None] | None = None  # its 1-sigma, ppm
 
 
 # ---- a whole run (Stage 0 + 1 + 2), as written to result.json --------------------------------
@@ -391,6 +413,9 @@ class RunResult:
     config: dict[str, Any] | None = None  # the run's config as saved (pipeline.RunConfig.to_dict)
     cues: CueStats | None = None  # None when the run started from a cue bundle
     gt_offsets_s: dict[str, float] | None = None  # true offsets when known (bundle gt.json, --gt)
+    drift_ppm: dict[str, float | None] | None = None  # with the drift model (--drift), per video, ppm
+    drift_std_ppm: dict[str, float | None] | None = None  # its 1-sigma, ppm
+    gt_drift_ppm: dict[str, float] | None = None  # true drift when known (gt.json drift_ppm)
 
     @property
     def resolved(self) -> list[str]:

@@ -1,4 +1,4 @@
-"""pipeline.run: a cue bundle or videos in, one RunResult out, written as result.json v1."""
+"""pipeline.run: a cue bundle or videos in, one RunResult out, written as result.json (v2)."""
 
 from __future__ import annotations
 
@@ -46,12 +46,13 @@ def test_bundle_in_run_result_out(scene, tmp_path):
     assert result.inputs == RunInputs(bundle=str(folder))
     assert list(result.timings_s) == ["stage1_s", "stage2_s", "total_s"]
     assert sink.summaries == [result]
-    # result.json v1 and back
+    # result.json (v2: constant-offset runs add only "time_model") and back
     path = write_run_result(result, tmp_path)
     assert path == tmp_path / "result.json"
     data = json.loads(path.read_text())
     assert {"format", "version", "reference", "offsets_s", "uncertainty_s", "unresolved", "pairs",
-            "solve", "timings_s", "config", "input", "gt_offsets_s"} == set(data)
+            "solve", "timings_s", "config", "input", "gt_offsets_s", "time_model"} == set(data)
+    assert data["time_model"] == "constant"
     assert run_result_to_dict(read_run_result(tmp_path)) == data
 
 
@@ -146,7 +147,7 @@ def test_no_video_gets_a_camera_and_result_json_still_says_why_for_each(tmp_path
     code = main(["sync", *map(str, paths), "--out", str(out), "--no-progress", "--no-rrd"])
     assert code == 2
     res = json.loads((out / "result.json").read_text())
-    assert res["version"] == 1 and res["reference"] == "v0"
+    assert res["version"] == 2 and res["reference"] == "v0"
     assert res["offsets_s"] == {"v0": None, "v1": None, "v2": None}
     assert res["uncertainty_s"] == {"v0": None, "v1": None, "v2": None}
     for n in ("v0", "v1", "v2"):

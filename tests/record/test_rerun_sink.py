@@ -342,3 +342,39 @@ def test_palette_keeps_green_and_red_for_the_verdict():
     ramp = distance_colors(np.array([0.0, 5.0, 10.0, np.nan]), 10.0).astype(int)
     assert ramp[0].tolist() == [253, 234, 69] and ramp[2].tolist() == [70, 90, 210]
     assert ramp[3].tolist() == [150, 150, 150]
+
+
+def test_drift_run_records_the_rate_landscape_image(tmp_path):
+    """--drift on a pose-free pair: the (Δ, rate) energy is in the recording as an RGB image and
+    a tensor under the pair's entity path, the file verifies, and the image reads back."""
+    sys.path.insert(0, str(Path(__file__).parents[1] / "pipeline"))
+    from test_stage12_posefree import CFG, drone_bundle
+
+    from vs_inspect.io.recording import pair_rate_landscape_path, read_rate_landscape
+    from vs_inspect.sync.config import DriftConfig
+
+    full = drone_bundle()
+    keep = ("c0", "c1")
+    b = dataclasses.replace(full, videos=full.videos[:2], cameras={k: full.cameras[k] for k in keep},
+                            tracks={k: full.tracks[k] for k in keep}, pairs={keep: full.pairs[keep]},
+                            gt_offsets_s={k: full.gt_offsets_s[k] for k in keep},
+                            gt_drift_ppm={k: full.gt_drift_ppm[k] for k in keep}, pose_free=frozenset(keep))
+    path = tmp_path / "drift.rrd"
+    with RerunSink(path, progress=False) as sink:
+        res = sync_bundle(b, dataclasses.replace(CFG, drift=DriftConfig(enabled=True)), sink=sink, progress=False)
+    land = res.pairs[0]
+    assert land.rate_landscape is not None
+    proc = rerun_verify(path, tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    base = pair_rate_landscape_path("c0", "c1")
+    assert {f"{base}/image", f"{base}/energy", f"{base}/axes"} <= chunk_entities(path)
+    img, energy = read_rate_landscape(path, "c0", "c1")
+    rl = land.rate_landscape
+    assert energy.shape == rl.energy.shape and np.allclose(energy, rl.energy, rtol=1e-6)
+    assert img.dtype == np.uint8 and img.shape[2] == 3
+    assert img.shape[0] % len(rl.rates_ppm) == 0 and img.shape[1] % len(rl.offsets_s) == 0
+    # the lowest energy cell is the darkest (viridis), the highest the brightest
+    cell = img.shape[0] // len(rl.rates_ppm)
+    lum = img[cell // 4::cell, cell // 4::cell].astype(float).sum(axis=2)
+    lo, hi = np.unravel_index(np.nanargmin(rl.energy), rl.energy.shape), np.unravel_index(np.nanargmax(rl.energy), rl.energy.shape)
+    assert lum[lo] < lum[hi]

@@ -16,7 +16,7 @@ from ..eval.metrics import offset_errors_ms
 from .epipolar_sweep import EpipolarSweep, epipolar_sweep
 from .trajectories import PairTrajectories, run_trajectories
 from ..record.options import RecordOptions
-from ..types import CueBundle, PairLandscape, SyncResult
+from ..types import CueBundle, PairLandscape, RateLandscape, SyncResult
 
 GRAPH_RADIUS_PX = 300.0  # video nodes sit on a circle of this radius in the pair graph view
 GRAPH_PAIR_AT = 0.35  # a pair's node sits this far along the chord from a to b (not halfway:
@@ -31,6 +31,7 @@ class PairRecordView:
     true_energy: float | None  # landscape energy interpolated at true_offset_s (None: unknown or no finite energy)
     sweep: EpipolarSweep | None  # epipolar lines at the offsets chosen for the view (None: none shown)
     sweep_median_px: np.ndarray  # (D,) px, median point-line distance at each sweep offset, NaN where none
+    rate_image: np.ndarray | None = None  # (H,W,3) uint8 RGB, the (Δ, rate) energy (drift model; rate_landscape_image)
 
 
 @dataclass(frozen=True)
@@ -122,7 +123,8 @@ def pair_record_view(bundle: CueBundle, land: PairLandscape, options: RecordOpti
         if true is not None and ok.any() else None
     sweep = None
     med = np.zeros(0)
-    if options.epipolar_offsets:
+    # a pose-free pair's cameras are placeholders: no epipolar lines to draw from them
+    if options.epipolar_offsets and not land.pose_free:
         sweep = epipolar_sweep(bundle, land.a, land.b, sweep_offsets(land, options.epipolar_offsets),
                                land.best_offset_s, options.epipolar_lines,
                                prefer_frames=set(image_frames) if image_frames is not None else None)
@@ -131,7 +133,63 @@ def pair_record_view(bundle: CueBundle, land: PairLandscape, options: RecordOpti
         for d in range(len(med)):
             if np.isfinite(sweep.distance_px[d]).any():
                 med[d] = float(np.nanmedian(sweep.distance_px[d]))
-    return PairRecordView(true, e_true, sweep, med)
+    image = None
+    if land.rate_landscape is not None:
+        truth = None
+        gd = bundle.gt_drift_ppm
+        if true is not None and gd and land.a in gd and land.b in gd:
+            da, db = gd[land.a] * 1e-6, gd[land.b] * 1e-6
+            rate = (1 + db) / (1 + da)
+            truth = (true / (1 + da) + (rate - 1) * land.rate_landscape.pivot_s, (rate - 1) * 1e6)
+        elif true is not None:
+            truth = (true, 0.0)
+        image = rate_landscape_image(land.rate_landscape, (land.pivot_offset_s, (land.rate - 1) * 1e6), truth)
+    return PairRecordView(true, e_true, sweep, med, image)
+
+
+RATE_IMAGE_CELL_PX = 16  # each (offset, rate) cell is drawn as a square of this many pixels
+
+
+def rate_landscape_image(rl: RateLandscape, chosen: tuple[float, float] | None = None,
+                         truth: tuple[float, float] | None = None) -> np.ndarray:
+    """(V·c, U·c, 3) uint8 RGB of the energy over (offset at the pivot: columns, left to right;
+    rate: rows, lowest ppm at the top), c = RATE_IMAGE_CELL_PX: viridis from the lowest energy
+    (dark) to the highest (bright), grey where there is none; a white ring at the chosen
+    (pivot offset s, ppm), an orange cross at the truth when known."""
+    from matplotlib import colormaps
+
+    e = np.asarray(rl.energy, dtype=np.float64)
+    ok = np.isfinite(e)
+    lo, hi = (float(e[ok].min()), float(e[ok].max())) if ok.any() else (0.0, 1.0)
+    z = np.where(ok, (e - lo) / (hi - lo if hi > lo else 1.0), 0.0)
+    rgb = (colormaps["viridis"](z)[..., :3] * 255).round().astype(np.uint8)
+    rgb[~ok] = 128
+    c = RATE_IMAGE_CELL_PX
+    img = np.ascontiguousarray(np.repeat(np.repeat(rgb, c, axis=0), c, axis=1))
+
+    def pixel(off_s: float, ppm: float) -> tuple[int, int] | None:
+        cols, rows = np.asarray(rl.offsets_s), np.asarray(rl.rates_ppm)
+        if not (math.isfinite(off_s) and math.isfinite(ppm)) or len(cols) < 2 or len(rows) < 1:
+            return None
+        x = (off_s - cols[0]) / (cols[1] - cols[0])
+        y = (ppm - rows[0]) / (rows[1] - rows[0]) if len(rows) > 1 else 0.0
+        if not (-0.5 <= x <= len(cols) - 0.5 and -0.5 <= y <= len(rows) - 0.5):
+            return None
+        return int(round((y + 0.5) * c)), int(round((x + 0.5) * c))
+
+    h, w = img.shape[:2]
+    if truth is not None and (p := pixel(*truth)) is not None:
+        r0, c0 = p
+        for d in range(-c // 2, c // 2 + 1):
+            for dy, dx in ((d, d), (d, -d)):
+                if 0 <= r0 + dy < h and 0 <= c0 + dx < w:
+                    img[r0 + dy, c0 + dx] = (255, 140, 0)
+    if chosen is not None and (p := pixel(*chosen)) is not None:
+        r0, c0 = p
+        yy, xx = np.mgrid[0:h, 0:w]
+        ring = np.abs(np.hypot(yy - r0, xx - c0) - c * 0.45) < 1.0
+        img[ring] = 255
+    return img
 
 
 def graph_layout(result: SyncResult) -> dict[str, tuple[float, float]]:

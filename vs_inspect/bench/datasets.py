@@ -44,10 +44,13 @@ class BenchData:
     notes: dict = field(default_factory=dict)
 
 
-def cue_scene(difficulty: str, seed: int) -> BenchData:
+def cue_scene(difficulty: str, seed: int, drift_ppm: float = 0.0, seconds: float | None = None) -> BenchData:
+    """A synthetic cue scene; drift_ppm: every non-reference video's clock drifts by ± this;
+    seconds: the typical video length (default CueSceneConfig's)."""
     if difficulty not in DIFFICULTIES:
         raise InputError(f"unknown difficulty {difficulty!r}; known: {sorted(DIFFICULTIES)}")
-    cfg = CueSceneConfig(cameras=SCENE_CAMERAS, seed=seed, **DIFFICULTIES[difficulty])
+    extra = {} if seconds is None else {"seconds": seconds}
+    cfg = CueSceneConfig(cameras=SCENE_CAMERAS, seed=seed, drift_ppm=drift_ppm, **DIFFICULTIES[difficulty], **extra)
     scene = make_cue_scene(cfg)
     fi = float(np.median([v.frame_interval_s for v in scene.bundle.videos]))
     return BenchData(f"cue/{difficulty}/s{seed}", f"cue/{difficulty}", scene.bundle,

@@ -2,9 +2,10 @@
 tracking dataset, from detections alone, against the README's ground truth; the constant-offset
 model is the ablation (same pairs, rate fixed at 1, its error shown).
 
-Every pair of cameras is estimated (sync.posefree), in worker processes, then Stage 2 with drift
-(sync.drift) fixes camera 0. The ablation reuses each pair's coarse landscape and starts from the
-drift model's offset, so it differs only in the time model. Errors per camera: the offset error in frames of that camera (at its
+It runs the product's path, `sync --drift` on the pose-free bundle (pipeline.stage12.sync_bundle:
+every pair's F, shift and rate from its tracks in worker processes, the energy with that F, Stage
+2 with drift fixing camera 0), timed; then the constant-offset model on the same pairs' estimates
+(energy at rate 1, one offset per camera), so that it differs only in the time model. Errors per camera: the offset error in frames of that camera (at its
 local time 0), the worst frame error over its recording (offset and drift together), and the rate
 error in ppm.
 """
@@ -16,14 +17,15 @@ import math
 import os
 import time
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..sync.drift import DriftSolution, PairTiming, solve_offsets_drift
-from ..sync.posefree import PoseFreeConfig, PoseFreePair, estimate_pair, fit_at_time_map
-from ..types import CueBundle
+from ..sync.config import DriftConfig, PoseFreeSyncConfig, SyncConfig
+from ..sync.drift import DriftSolution
+from ..sync.posefree import PoseFreeConfig, PoseFreePair, fit_at_time_map
+from ..types import CueBundle, SyncResult
 
 log = logging.getLogger(__name__)
 
@@ -41,52 +43,22 @@ class CameraError:
 
 @dataclass(frozen=True)
 class DroneBenchResult:
-    drift: DriftSolution
-    constant: DriftSolution
-    pairs: dict[tuple[str, str], PoseFreePair | None]
-    pairs_constant: dict[tuple[str, str], PoseFreePair | None]
+    drift: DriftSolution  # the product's --drift run (sync_bundle), as per-camera offset and drift
+    constant: DriftSolution  # the same pairs' estimates, constant-offset model (drift 0)
+    sync_drift: SyncResult
+    sync_constant: SyncResult
+    pairs: dict[tuple[str, str], PoseFreePair | None]  # what each pair's tracks gave (sync.posefree)
     fit_at_truth: dict[tuple[str, str], tuple[float, float]]  # (median Sampson px, inlier share)
     errors_drift: list[CameraError]
     errors_constant: list[CameraError]
-    wall_s: float
+    wall_s: float  # the --drift run: pose-free pairs, energies, Stage 2
+    wall_constant_s: float  # the ablation's energies and Stage 2 (its pairs' estimates reused)
     workers: int
-
-
-def _one_pair(args):
-    (a, b, t_a, xy_a, K_a, t_b, xy_b, K_b, cfg) = args
-    t0 = time.perf_counter()
-    res = estimate_pair(t_a, xy_a, K_a, t_b, xy_b, K_b, cfg)
-    res_c = None
-    if res is not None:
-        res_c = estimate_pair(t_a, xy_a, K_a, t_b, xy_b, K_b, replace(cfg, estimate_rate=False),
-                              coarse=(res.coarse_offsets_s, res.coarse_score, res.coarse_score_F),
-                              peaks_s=[res.offset_s])
-    return a, b, res, res_c, time.perf_counter() - t0
 
 
 def _truth_fit(args):
     (a, b, t_a, xy_a, K_a, t_b, xy_b, K_b, cfg, offset_s, rate) = args
     return (a, b), fit_at_time_map(t_a, xy_a, K_a, t_b, xy_b, K_b, offset_s, rate, cfg)
-
-
-def estimate_all_pairs(bundle: CueBundle, cfg: PoseFreeConfig, workers: int):
-    names = bundle.names
-    jobs = []
-    for i, a in enumerate(names):
-        for b in names[i + 1:]:
-            va, vb = bundle.video(a), bundle.video(b)
-            jobs.append((a, b, va.timestamps_s, bundle.tracks[a].xy[0], bundle.cameras[a].K,
-                         vb.timestamps_s, bundle.tracks[b].xy[0], bundle.cameras[b].K, cfg))
-    out, out_c = {}, {}
-    if workers > 1:
-        with ProcessPoolExecutor(max_workers=workers) as ex:
-            results = list(ex.map(_one_pair, jobs))
-    else:
-        results = [_one_pair(j) for j in jobs]
-    for a, b, res, res_c, dt in results:
-        log.info("pair %s-%s: %.1f s", a, b, dt)
-        out[(a, b)], out_c[(a, b)] = res, res_c
-    return out, out_c
 
 
 def fits_at_truth(bundle: CueBundle, gt_offsets_s: dict[str, float], gt_drift_ppm: dict[str, float],
@@ -105,16 +77,6 @@ def fits_at_truth(bundle: CueBundle, gt_offsets_s: dict[str, float], gt_drift_pp
         with ProcessPoolExecutor(max_workers=workers) as ex:
             return dict(ex.map(_truth_fit, jobs))
     return dict(_truth_fit(j) for j in jobs)
-
-
-MIN_INLIER_SHARE = 0.5
-"""A pair whose refined F explains fewer of its matches than this locked onto a wrong offset."""
-
-
-def _timings(pairs: dict[tuple[str, str], PoseFreePair | None], with_rate: bool) -> list[PairTiming]:
-    return [PairTiming(a, b, p.offset_s, math.log(p.rate) if with_rate else 0.0, p.offset_std_s,
-                       p.log_rate_std if with_rate else 1.0)
-            for (a, b), p in pairs.items() if p is not None and p.inlier_share >= MIN_INLIER_SHARE]
 
 
 def camera_errors(sol: DriftSolution, bundle: CueBundle, gt_offsets_s: dict[str, float],
@@ -138,49 +100,81 @@ def camera_errors(sol: DriftSolution, bundle: CueBundle, gt_offsets_s: dict[str,
     return out
 
 
-def run_drone_bench(bundle: CueBundle, gt_drift_ppm: dict[str, float], cfg: PoseFreeConfig = PoseFreeConfig(),
-                    workers: int = 2) -> DroneBenchResult:
+def _as_solution(res: SyncResult) -> DriftSolution:
+    ok = [v for v, o in res.offsets_s.items() if o is not None]
+    drift = res.drift_ppm or {}
+    std = res.drift_std_ppm or {}
+    return DriftSolution(res.reference, {v: float(res.offsets_s[v]) for v in ok},
+                         {v: float(drift.get(v) or 0.0) for v in ok},
+                         {v: float(res.uncertainty_s[v] or 0.0) for v in ok},
+                         {v: float(std.get(v) or 0.0) for v in ok}, {}, res.drift_ppm is not None)
+
+
+def run_drone_bench(bundle: CueBundle, gt_drift_ppm: dict[str, float], workers: int = 2,
+                    truth_fit: bool = True,
+                    estimates: dict[tuple[str, str], PoseFreePair | None] | None = None) -> DroneBenchResult:
+    """The product's path (pipeline.stage12.sync_bundle on the pose-free bundle) with --drift, then
+    the constant-offset model on the same pairs' estimates (the ablation, timed apart).
+    estimates: the pairs' sync.posefree estimates of an earlier run (then not timed again)."""
+    from ..pipeline.stage12 import estimate_pose_free_pairs, sync_bundle
+
     if bundle.gt_offsets_s is None:
         raise ValueError("the bundle has no gt.json offsets")
+    names = bundle.names
+    pairs = [(a, b) for i, a in enumerate(names) for b in names[i + 1:] if (a, b) in bundle.pairs]
+    pf_cfg = PoseFreeSyncConfig(workers=workers)
+    cfg_d = SyncConfig(drift=DriftConfig(enabled=True), pose_free=pf_cfg)
     t0 = time.perf_counter()
-    pairs, pairs_c = estimate_all_pairs(bundle, cfg, workers)
-    ref = bundle.names[0]
-    sol = solve_offsets_drift(ref, _timings(pairs, True), with_drift=True)
-    sol_c = solve_offsets_drift(ref, _timings(pairs_c, False), with_drift=False)
+    est = dict(estimates) if estimates is not None else estimate_pose_free_pairs(bundle, pairs, cfg_d)
+    res_d = sync_bundle(bundle, cfg_d, progress=False, pose_free=est)
     wall = time.perf_counter() - t0
-    at_truth = fits_at_truth(bundle, bundle.gt_offsets_s, gt_drift_ppm, cfg, workers)  # not timed
-    return DroneBenchResult(sol, sol_c, pairs, pairs_c, at_truth,
+    t1 = time.perf_counter()
+    res_c = sync_bundle(bundle, SyncConfig(pose_free=pf_cfg), progress=False, pose_free=est)
+    wall_c = time.perf_counter() - t1
+    at_truth = (fits_at_truth(bundle, bundle.gt_offsets_s, gt_drift_ppm, PoseFreeConfig(), workers)
+                if truth_fit else {})  # not timed
+    sol, sol_c = _as_solution(res_d), _as_solution(res_c)
+    return DroneBenchResult(sol, sol_c, res_d, res_c, est, at_truth,
                             camera_errors(sol, bundle, bundle.gt_offsets_s, gt_drift_ppm),
-                            camera_errors(sol_c, bundle, bundle.gt_offsets_s, gt_drift_ppm), wall, workers)
+                            camera_errors(sol_c, bundle, bundle.gt_offsets_s, gt_drift_ppm), wall, wall_c,
+                            workers)
 
 
 def format_table(res: DroneBenchResult, bundle: CueBundle) -> str:
-    lines = [f"drone dataset: {len(bundle.videos)} cameras, {len(res.pairs)} pairs, "
-             f"wall {res.wall_s:.1f} s on {res.workers} worker(s)",
+    lines = [f"drone dataset: {len(bundle.videos)} cameras, {len(res.pairs)} pairs; `sync --drift` path "
+             f"wall {res.wall_s:.1f} s on {res.workers} worker(s) (constant-offset ablation on the same "
+             f"pair estimates: {res.wall_constant_s:.1f} s more)",
              "", "per camera (reference " + res.drift.reference + "); frame errors in that camera's frames",
              f"{'camera':8} {'fps':>8} | {'drift model: offset err':>23} {'worst err':>10} {'est ppm':>9} "
-             f"{'true ppm':>9} {'rate err ppm':>12} | {'constant offset: offset err':>27} {'worst err':>10} "
-             f"{'rate err ppm':>12}"]
+             f"{'± ppm':>7} {'true ppm':>9} {'rate err ppm':>12} | {'constant offset: offset err':>27} "
+             f"{'worst err':>10} {'rate err ppm':>12}"]
+    std = res.sync_drift.drift_std_ppm or {}
     for e, c in zip(res.errors_drift, res.errors_constant):
+        s = std.get(e.name)
         lines.append(f"{e.name:8} {e.fps:8.3f} | {e.offset_err_frames:+23.2f} {e.worst_err_frames:10.2f} "
-                     f"{e.est_drift_ppm:+9.1f} {e.true_drift_ppm:+9.1f} {e.drift_err_ppm:+12.1f} | "
-                     f"{c.offset_err_frames:+27.2f} {c.worst_err_frames:10.2f} {c.drift_err_ppm:+12.1f}")
-    lines += ["", "pairs (drift model): offset_s ± std, drift ppm ± std, inlier share, median Sampson px "
-                  "(estimate; README truth with F refitted)"]
-    for (a, b), p in res.pairs.items():
-        if p is None:
-            lines.append(f"  {a}-{b}: no estimate (overlap too small)")
-            continue
-        if (a, b) not in res.drift.pair_residuals:
-            r = (math.nan, math.nan)
-        else:
-            r = res.drift.pair_residuals[(a, b)]
-        lines.append(f"  {a}-{b}: {p.offset_s:+10.4f} ± {p.offset_std_s:.4f} s  {p.drift_ppm:+8.1f} ± "
-                     f"{p.drift_std_ppm:6.1f} ppm  inliers {p.inlier_share:.2f} of {p.num_matches}  "
-                     f"{p.median_sampson_px:.2f} px; truth {res.fit_at_truth[(a, b)][0]:.2f} px "
-                     f"{res.fit_at_truth[(a, b)][1]:.2f}  | "
-                     + (f"residual {r[0] * 1e3:+8.1f} ms {r[1] * 1e6:+8.1f} ppm" if math.isfinite(r[0])
-                        else f"rejected (inlier share < {MIN_INLIER_SHARE})"))
+                     f"{e.est_drift_ppm:+9.1f} {(s if s is not None else math.nan):7.1f} {e.true_drift_ppm:+9.1f} "
+                     f"{e.drift_err_ppm:+12.1f} | {c.offset_err_frames:+27.2f} {c.worst_err_frames:10.2f} "
+                     f"{c.drift_err_ppm:+12.1f}")
+    gt, gd = bundle.gt_offsets_s or {}, bundle.gt_drift_ppm or {}
+    lines += ["", "pairs: the tracks' estimate (sync.posefree: offset s, drift ppm ± std, inlier share), the "
+                  "--drift pair (energy minimum at that rate), its error against the README, Stage 2 verdict"]
+    for land in res.sync_drift.pairs:
+        a, b = land.a, land.b
+        p = res.pairs.get((a, b))
+        head = (f"  {a}-{b}: tracks {p.offset_s:+10.4f} s {p.drift_ppm:+8.1f} ± {p.drift_std_ppm:6.1f} ppm "
+                f"inliers {p.inlier_share:.2f} of {p.num_matches} ({p.median_sampson_px:.2f} px)"
+                if p is not None else f"  {a}-{b}: tracks gave nothing")
+        if (a, b) in res.fit_at_truth:
+            head += f"; truth's fit {res.fit_at_truth[(a, b)][0]:.2f} px {res.fit_at_truth[(a, b)][1]:.2f}"
+        if land.decision.accepted and a in gt and b in gt:
+            da, db = gd.get(a, 0.0) * 1e-6, gd.get(b, 0.0) * 1e-6
+            t_off, t_ppm = (gt[b] - gt[a]) / (1 + da), ((1 + db) / (1 + da) - 1) * 1e6
+            fps = bundle.video(b).fps or 1 / bundle.video(b).frame_interval_s
+            head += (f" | pair {land.best_offset_s:+10.4f} s {(land.rate - 1) * 1e6:+8.1f} ppm, err "
+                     f"{(land.best_offset_s - t_off) * fps:+.2f} frames {(land.rate - 1) * 1e6 - t_ppm:+.1f} ppm")
+        elif not land.decision.accepted:
+            head += f" | rejected: {land.decision.reason}"
+        lines.append(head)
     return "\n".join(lines)
 
 

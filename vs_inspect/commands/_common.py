@@ -169,5 +169,12 @@ def print_run(result, path, truth: dict | None = None,
     print(offsets_table({n: result.offsets_s.get(n) for n in names},
                         {n: result.uncertainty_s.get(n) for n in names}, shown_truth,
                         result.reference, result.unresolved, frame_s if shown_truth else None))
+    if result.drift_ppm is not None:  # --drift: t_global = offset_s + (1 + drift) * t_local
+        std = result.drift_std_ppm or {}
+        gd = result.gt_drift_ppm or {}
+        print("clock drift (ppm): " + ", ".join(
+            f"{n} " + ("-" if result.drift_ppm.get(n) is None else
+                       f"{result.drift_ppm[n]:+.1f} ± {std.get(n) or 0.0:.1f}"
+                       + (f" (true {gd[n]:+.1f})" if n in gd else "")) for n in names))
     acc = sum(p.decision.accepted for p in result.pairs)
     print(f"pairs: {acc} accepted, {len(result.pairs) - acc} rejected; wrote {path}")

@@ -28,6 +28,8 @@ def register(sub) -> None:
     p.add_argument("--no-match-pairs", type=int, default=d.no_match_pairs, help="view pairs without track pairs")
     p.add_argument("--no-all-wrong-pair", action="store_true", help="do not plant a pair with all-wrong matches")
     p.add_argument("--seed", type=int, default=d.seed)
+    p.add_argument("--drift-ppm", type=float, default=d.drift_ppm,
+                   help="clock drift of every non-reference video, ± this many ppm (gt.json gets drift_ppm)")
     add_force_option(p, "--out")  # --overwrite: the old name, kept as an alias
     p.set_defaults(func=run)
 
@@ -36,7 +38,8 @@ def run(args: argparse.Namespace) -> int:
     cfg = CueSceneConfig(cameras=args.cameras, moving=args.moving, variable_rate=args.variable_rate,
                          seconds=args.seconds, noise_px=args.noise_px, wrong_fraction=args.wrong_fraction,
                          pose_error_deg=args.pose_error_deg, no_match_pairs=args.no_match_pairs,
-                         all_wrong_pair=not args.no_all_wrong_pair, seed=args.seed)
+                         all_wrong_pair=not args.no_all_wrong_pair, seed=args.seed,
+                         drift_ppm=args.drift_ppm)
     scene = make_cue_scene(cfg)
     write_bundle(scene.bundle, args.out, overwrite=args.force)
     b = scene.bundle

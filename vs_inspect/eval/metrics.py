@@ -80,3 +80,39 @@ def evaluate_offsets(estimated_s: dict[str, float | None], true_s: dict[str, flo
         float(errs.max()) if errs.size else float("nan"),
         sum(1 for e in per_video.values() if e is None) + (1 if ref_est is None else 0),
         per_video, reference)
+
+
+@dataclass(frozen=True)
+class VideoTimeError:
+    """One video's error against the truth, relative to the reference (time model with drift)."""
+
+    offset_err_s: float  # (offset_v - offset_ref) - (true_v - true_ref), signed
+    offset_err_frames: float | None  # the same in this video's frames (None without its fps)
+    drift_err_ppm: float | None  # rate relative to the reference, estimated - true (None: no drift given)
+
+
+def time_errors(estimated_s: dict[str, float | None], true_s: dict[str, float], reference: str,
+                fps: dict[str, float] | None = None, est_drift_ppm: dict[str, float | None] | None = None,
+                true_drift_ppm: dict[str, float] | None = None) -> dict[str, VideoTimeError | None]:
+    """Signed per-video errors of offset (s and frames) and drift (ppm), relative to the
+    reference; a result without drift counts as drift 0 (the constant-offset model) when the
+    truth has drift. None where the video or the reference is unresolved."""
+    ref_est, ref_true = estimated_s.get(reference), true_s.get(reference)
+    out: dict[str, VideoTimeError | None] = {}
+    for v, est in estimated_s.items():
+        if v not in true_s:
+            continue
+        if est is None or ref_est is None or ref_true is None:
+            out[v] = None
+            continue
+        err = (est - ref_est) - (true_s[v] - ref_true)
+        frames = err * fps[v] if fps and v in fps else None
+        d_err = None
+        if true_drift_ppm is not None and v in true_drift_ppm and reference in true_drift_ppm:
+            e_v = (est_drift_ppm or {}).get(v) or 0.0
+            e_r = (est_drift_ppm or {}).get(reference) or 0.0
+            rel_est = (1 + e_v * 1e-6) / (1 + e_r * 1e-6)
+            rel_true = (1 + true_drift_ppm[v] * 1e-6) / (1 + true_drift_ppm[reference] * 1e-6)
+            d_err = (rel_est - rel_true) * 1e6
+        out[v] = VideoTimeError(float(err), None if frames is None else float(frames), d_err)
+    return out

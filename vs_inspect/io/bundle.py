@@ -22,6 +22,7 @@ log = logging.getLogger(__name__)
 
 FORMAT = "vs-inspect-cues"
 VERSION = 1
+POSE_FREE_KEY = "pose_free"  # optional per-video key of bundle.json: the camera has K only
 
 
 MAX_NAME_CHARS = 200      # a video name is a file name and an entity path: keep it printable
@@ -301,12 +302,15 @@ def read_bundle(folder: str | os.PathLike) -> CueBundle:
         if others:
             log.warning("%s: ignoring files that are not .npz: %s", pair_dir, others)
 
-    gt = None
+    gt, gt_drift = None, None
     gt_path = root / "gt.json"
     if gt_path.is_file():
         gt = read_gt(gt_path, names)
+        gt_drift = read_gt_drift(gt_path, names)
+    # optional per-video key (import-drone): only K is known, the pose is a placeholder
+    pose_free = frozenset(str(e["name"]) for e in entries if e.get(POSE_FREE_KEY) is True)
     try:
-        return CueBundle(tuple(videos), cameras, tracks, pairs, gt)
+        return CueBundle(tuple(videos), cameras, tracks, pairs, gt, pose_free, gt_drift)
     except ValueError as exc:
         raise BundleError(root, str(exc)) from None
 
@@ -332,6 +336,26 @@ def read_gt(path: str | os.PathLike, names: list[str] | None = None) -> dict[str
     return out
 
 
+def read_gt_drift(path: str | os.PathLike, names: list[str] | None = None) -> dict[str, float] | None:
+    """gt.json's optional "drift_ppm" ({video: ppm}, time model t_global = offset_s + (1 + drift)
+    * t_local); None when absent."""
+    path = Path(path)
+    data = _load_json(path)
+    d = data.get("drift_ppm") if isinstance(data, dict) else None
+    if d is None:
+        return None
+    if not isinstance(d, dict):
+        raise BundleError(path, "'drift_ppm' must be an object {video: ppm}")
+    out = {}
+    for k, v in d.items():
+        if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
+            raise BundleError(path, f"drift_ppm of {k!r} must be a finite number, got {v!r}")
+        out[str(k)] = float(v)
+    if names is not None and set(out) - set(names):
+        raise BundleError(path, f"drift_ppm names unknown videos {sorted(set(out) - set(names))}")
+    return out
+
+
 def write_bundle(bundle: CueBundle, folder: str | os.PathLike, overwrite: bool = False) -> Path:
     """Write a bundle atomically (io.atomic.atomic_dir): a reader never sees half a bundle."""
     dest = Path(folder)
@@ -346,6 +370,8 @@ def write_bundle(bundle: CueBundle, folder: str | os.PathLike, overwrite: bool =
                                                       atol=1e-9, rtol=0)
             if not const:
                 entry["timestamps_s"] = [float(t) for t in v.timestamps_s]
+            if v.name in bundle.pose_free:
+                entry[POSE_FREE_KEY] = True
             videos.append(entry)
         (tmp / "bundle.json").write_text(
             json.dumps({"format": FORMAT, "version": VERSION, "videos": videos}, indent=1))
@@ -367,7 +393,10 @@ def write_bundle(bundle: CueBundle, folder: str | os.PathLike, overwrite: bool =
                 arrays["weight"] = tp.weight
             np.savez_compressed(tmp / "pairs" / f"{a}__{b}.npz", **arrays)
         if bundle.gt_offsets_s is not None:
-            (tmp / "gt.json").write_text(json.dumps({"offsets_s": bundle.gt_offsets_s}, indent=1))
+            gt: dict = {"offsets_s": bundle.gt_offsets_s}
+            if bundle.gt_drift_ppm is not None:
+                gt["drift_ppm"] = bundle.gt_drift_ppm
+            (tmp / "gt.json").write_text(json.dumps(gt, indent=1))
     return dest
 
 

@@ -34,11 +34,9 @@ import numpy as np
 from ..errors import InputError
 from ..types import CameraTrack, CueBundle, TrackPairs, Tracks, VideoInfo
 from .atomic import write_json_atomic
-from .bundle import write_bundle
+from .bundle import POSE_FREE_KEY, write_bundle
 
 log = logging.getLogger(__name__)
-
-POSE_FREE_KEY = "pose_free"
 
 
 @dataclass(frozen=True)
@@ -218,7 +216,8 @@ def import_drone(folder: str | os.PathLike) -> tuple[CueBundle, DroneGT | None]:
     if readme.is_file() and "(alpha)" in readme.read_text():
         alpha, beta = parse_gt_tables(readme.read_text())
         gt = gt_from_tables(names, {c.name: c.fps for c in cams}, alpha, beta)
-    bundle = CueBundle(tuple(videos), cameras, tracks, pairs, gt.offsets_s if gt else None)
+    bundle = CueBundle(tuple(videos), cameras, tracks, pairs, gt.offsets_s if gt else None,
+                       frozenset(names), gt.drift_ppm if gt else None)
     return bundle, gt
 
 

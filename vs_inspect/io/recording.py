@@ -89,6 +89,12 @@ def pair_landscape_path(a: str, b: str) -> str:
     return f"{pair_path(a, b)}/landscape"
 
 
+def pair_rate_landscape_path(a: str, b: str) -> str:
+    """The drift model's (Δ, rate) energy: "image" (rr.Image, RGB: columns the offset at the
+    pivot, rows the rate) and "energy" (rr.Tensor, rows rate_ppm, columns offset)."""
+    return f"{pair_path(a, b)}/rate_landscape"
+
+
 def pair_decision_path(a: str, b: str) -> str:
     return f"{pair_path(a, b)}/decision"
 
@@ -382,6 +388,26 @@ def read_video_frames(path: str | Path, video: str) -> dict[int, np.ndarray]:
             if img is not None:
                 out[int(k)] = img
     return out
+
+
+def read_rate_landscape(path: str | Path, a: str, b: str) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """(the (H,W,3) uint8 RGB image, the (V,U) float32 energy) logged at pair_rate_landscape_path
+    (the drift model's (Δ, rate) landscape of pair (a, b)); None for what is not there."""
+    base = pair_rate_landscape_path(a, b)
+    image = energy = None
+    for rb in _entity_rows(Path(path), f"{base}/image"):
+        buf, fmt = _column(rb, "Image:buffer"), _column(rb, "Image:format")
+        if buf and buf[-1] and fmt and fmt[-1]:
+            f = fmt[-1][0] if isinstance(fmt[-1], list) else fmt[-1]
+            data = np.asarray(buf[-1][0] if isinstance(buf[-1][0], list) else buf[-1], dtype=np.uint8)
+            image = data.reshape(int(f["height"]), int(f["width"]), -1)
+    for rb in _entity_rows(Path(path), f"{base}/energy"):
+        col = _column(rb, "Tensor:data")
+        if col and col[-1]:
+            t = col[-1][0] if isinstance(col[-1], list) else col[-1]
+            shape = [int(s) for s in t["shape"]]
+            energy = np.asarray(t["buffer"], dtype=np.float32).reshape(shape)
+    return image, energy
 
 
 def read_static_points(path: str | Path) -> tuple[np.ndarray, np.ndarray | None]:

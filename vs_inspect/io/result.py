@@ -13,8 +13,8 @@ import numpy as np
 
 from ..errors import InputError
 from .atomic import write_json_atomic
-from ..types import (CueStats, PairDecision, PairLandscape, RunInputs, RunResult, SolveIteration,
-                     VideoCueStats)
+from ..types import (CueStats, PairDecision, PairLandscape, RateLandscape, RunInputs, RunResult,
+                     SolveIteration, VideoCueStats)
 
 
 def _num(x: float) -> float | None:
@@ -45,6 +45,22 @@ def pair_to_dict(p: PairLandscape, with_landscape: bool = True) -> dict[str, Any
         "minima_offsets_s": [float(p.offsets_s[i]) for i in p.minima_idx],
         "minima_energy": [_num(float(p.energy[i])) for i in p.minima_idx],
     }
+    if p.pose_free:
+        out["pose_free"] = True
+    if math.isfinite(p.log_rate_std) or p.rate_landscape is not None or p.rate != 1.0:
+        # the drift model (v2): τ_a = offset_s + rate · τ_b
+        out["rate"] = float(p.rate)
+        out["drift_ppm"] = (float(p.rate) - 1.0) * 1e6
+        out["drift_std_ppm"] = _num(p.log_rate_std * 1e6)
+        out["pivot_s"] = float(p.pivot_s)
+        out["pivot_offset_s"] = _num(p.pivot_offset_s)
+        out["pivot_offset_std_s"] = _num(p.pivot_offset_std_s)
+        if with_landscape and p.rate_landscape is not None:
+            rl = p.rate_landscape
+            out["rate_landscape"] = {"pivot_s": float(rl.pivot_s),
+                                     "offsets_s": [float(x) for x in rl.offsets_s],
+                                     "rates_ppm": [float(x) for x in rl.rates_ppm],
+                                     "energy": [[_num(float(x)) for x in row] for row in rl.energy]}
     if with_landscape:
         out["landscape"] = {
             "offsets_s": [float(x) for x in p.offsets_s],
@@ -69,7 +85,14 @@ def read_json_file(path: str | os.PathLike, name_in_folder: str) -> tuple[Any, P
 
 
 
-# ---- RunResult <-> result.json (format unchanged: version 1) -----------------------------------
+# ---- RunResult <-> result.json ------------------------------------------------------------------
+# Version 2 (the drift model) adds "time_model", and with --drift "drift_ppm" and "drift_std_ppm"
+# per video, per pair "rate", "drift_ppm", "drift_std_ppm", "pivot_s", "pivot_offset_s",
+# "pivot_offset_std_s", "rate_landscape"; pose-free pairs say "pose_free": true; "gt_drift_ppm"
+# when the bundle's gt.json has drift. Every key of version 1 is where it was, so version 1 files
+# read as before (constant offsets, no drift).
+
+RESULT_VERSION = 2
 
 
 def _opt_float(x: Any, what: str) -> float | None:
@@ -105,10 +128,12 @@ def cue_stats_from_dict(d: dict[str, Any], timings_s: dict[str, float] | None = 
 
 
 def run_result_to_dict(r: RunResult) -> dict[str, Any]:
-    """result.json's dictionary (DESIGN.md): the keys of format version 1, in the same places."""
+    """result.json's dictionary (DESIGN.md): the keys of format version 1 in the same places, and
+    version 2's (above)."""
     out: dict[str, Any] = {
-        "format": "vs-inspect-result", "version": 1,
+        "format": "vs-inspect-result", "version": RESULT_VERSION,
         "reference": r.reference,
+        "time_model": "constant" if r.drift_ppm is None else "drift",
         "offsets_s": {k: _num(v) if v is not None else None for k, v in r.offsets_s.items()},
         "uncertainty_s": {k: _num(v) if v is not None else None for k, v in r.uncertainty_s.items()},
         "unresolved": dict(r.unresolved),
@@ -126,8 +151,14 @@ def run_result_to_dict(r: RunResult) -> dict[str, Any]:
     inp = {k: v for k, v in dataclasses.asdict(r.inputs).items() if v not in (None, {})}
     if inp:
         out["input"] = inp
+    if r.drift_ppm is not None:
+        out["drift_ppm"] = {k: _num(v) if v is not None else None for k, v in r.drift_ppm.items()}
+        out["drift_std_ppm"] = {k: _num(v) if v is not None else None
+                                for k, v in (r.drift_std_ppm or {}).items()}
     if r.gt_offsets_s is not None:
         out["gt_offsets_s"] = dict(r.gt_offsets_s)
+    if r.gt_drift_ppm is not None:
+        out["gt_drift_ppm"] = dict(r.gt_drift_ppm)
     if r.cues is not None:
         out["cues"] = cue_stats_to_dict(r.cues)
     return out
@@ -152,9 +183,20 @@ def _pair_from_dict(p: dict[str, Any]) -> PairLandscape:
                             int(p.get("num_pareto_minima", 0)), bool(p.get("at_range_edge", False)),
                             f("inlier_fraction"), f("inlier_tau_px"), f("support_fraction"),
                             int(p.get("track_pairs_at_best", -1)))
+    rate_land = None
+    rl = p.get("rate_landscape")
+    if isinstance(rl, dict):
+        rate_land = RateLandscape(float(rl["pivot_s"]), np.asarray(rl["offsets_s"], dtype=np.float64),
+                                  np.asarray(rl["rates_ppm"], dtype=np.float64),
+                                  np.asarray([[np.nan if e is None else e for e in row] for row in rl["energy"]],
+                                             dtype=np.float64).reshape(len(rl["rates_ppm"]), len(rl["offsets_s"])))
+    rate = f("rate")
     return PairLandscape(str(p["a"]), str(p["b"]), offsets, energy, support, idx, f("offset_s"),
                          f("best_energy"), f("uncertainty_s"), int(p.get("num_track_pairs", 0)),
-                         decision, str(p.get("residual", "sampson")), f("robust_scale"))
+                         decision, str(p.get("residual", "sampson")), f("robust_scale"),
+                         1.0 if math.isnan(rate) else rate, f("drift_std_ppm") * 1e-6,
+                         float(p.get("pivot_s", 0.0)), f("pivot_offset_s"), f("pivot_offset_std_s"),
+                         rate_land, bool(p.get("pose_free", False)))
 
 
 def run_result_from_dict(d: dict[str, Any], source: str = "result") -> RunResult:
@@ -187,13 +229,28 @@ def run_result_from_dict(d: dict[str, Any], source: str = "result") -> RunResult
             cues = cue_stats_from_dict(d["cues"], {k.removeprefix("stage0_"): v for k, v in timings.items()
                                                    if k.startswith("stage0_")})
         gt = d.get("gt_offsets_s")
+        version = d.get("version", 1)
+        if version not in (1, RESULT_VERSION):
+            raise InputError(f"result format version {version!r} is not one this reader knows (1, {RESULT_VERSION})")
+
+        def per_video(key: str) -> dict[str, float | None] | None:
+            m = d.get(key)
+            if m is None:
+                return None
+            if not isinstance(m, dict):
+                raise InputError(f"{key} must be an object {{video: number or null}}")
+            return {str(k): _opt_float(v, f"{key}[{k!r}]") for k, v in m.items()}
+
+        drift, drift_std, gt_drift = per_video("drift_ppm"), per_video("drift_std_ppm"), per_video("gt_drift_ppm")
         return RunResult(str(d["reference"]), offsets, unc, {str(k): str(v) for k, v in
                                                              (d.get("unresolved") or {}).items()},
                          tuple(_pair_from_dict(p) for p in d.get("pairs", [])),
                          str(solve.get("solver", "irls")),
                          tuple(tuple(p) for p in solve.get("pairs", [])), iters, timings, inputs,
                          d.get("config"), cues,
-                         {str(k): float(v) for k, v in gt.items()} if isinstance(gt, dict) else None)
+                         {str(k): float(v) for k, v in gt.items()} if isinstance(gt, dict) else None,
+                         drift, drift_std,
+                         {k: v for k, v in gt_drift.items() if v is not None} if gt_drift is not None else None)
     except InputError as exc:
         raise InputError(f"{source}: {exc}") from None
     except (KeyError, TypeError, ValueError, AttributeError) as exc:

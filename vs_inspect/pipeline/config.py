@@ -10,6 +10,7 @@ Field metadata understood by add_config_options:
   flag     the option, e.g. "--energy"
   choices  allowed values; help  replaces the docstring; metavar, nargs  as in argparse
   negate   True: a boolean field that the flag switches off (store_const False)
+  enable   True: a boolean field that the flag switches on (store_const True)
   append   True: a repeatable option (the values arrive as a list)
   apply    f(value, owner) -> new owner: how the option's value changes the field's dataclass
            (for options that set several fields, or parse a text); default: set the field
@@ -207,6 +208,8 @@ def add_config_options(parser: argparse.ArgumentParser, sections: tuple[str, ...
             kw: dict[str, Any] = {"dest": _dest(path, f.name), "default": argparse.SUPPRESS}
             if md.get("negate"):
                 kw.update(action="store_const", const=False)
+            elif md.get("enable"):
+                kw.update(action="store_const", const=True)
             elif md.get("append"):
                 kw.update(action="append", metavar=md.get("metavar"))
             else:

@@ -72,6 +72,8 @@ def run(inputs: CueBundle | PathLike | Sequence[PathLike], config: RunConfig = R
     timings = {**stage0_timings, **sync.timings_s, "total_s": time.perf_counter() - t0}
     result = _run_result(sync, stats, recorded_inputs or where, config, bundle.gt_offsets_s or None,
                          timings, moved)
+    if sync.drift_ppm is not None or bundle.gt_drift_ppm is not None:
+        result = dataclasses.replace(result, gt_drift_ppm=bundle.gt_drift_ppm, **_drift_of(sync, stats))
     sink.run_summary(result)
     return result
 
@@ -112,6 +114,16 @@ def _nothing_usable(exc: NoUsableVideos, config: RunConfig, where: RunInputs,
     return RunResult(reference, {n: None for n in names}, {n: None for n in names}, unresolved, (),
                      config.sync.solve.solver, (), (), timings, recorded_inputs or where,
                      config.to_dict(), exc.stats, None)
+
+
+def _drift_of(sync: SyncResult, stats: CueStats | None) -> dict:
+    """RunResult's drift fields of the drift model's SyncResult (None for videos Stage 0 left out)."""
+    if sync.drift_ppm is None:
+        return {}
+    drift, std = dict(sync.drift_ppm), dict(sync.drift_std_ppm or {})
+    for name in (stats.dropped if stats is not None else {}):
+        drift[name] = std[name] = None
+    return {"drift_ppm": drift, "drift_std_ppm": std}
 
 
 def _run_result(sync: SyncResult, stats: CueStats | None, inputs: RunInputs, config: RunConfig,

@@ -9,6 +9,8 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+import multiprocessing
+import os
 import time
 
 import numpy as np
@@ -17,22 +19,39 @@ from tqdm import tqdm
 from ..analysis.record_views import pair_record_view, run_record_view
 from ..errors import InputError
 from ..record.sink import NullSink, Sink
-from ..types import CueBundle, PairDecision, PairLandscape, SyncResult, TrackPairs
-from ..sync.config import SolveConfig, SyncConfig
+from ..types import (CameraTrack, CueBundle, PairDecision, PairLandscape, SolveIteration, SyncResult,
+                     TrackPairs)
+from ..sync.config import DriftConfig, SolveConfig, SyncConfig
 from ..sync.decision import check_inliers, check_track_pairs_at_best, decide
 from ..sync.landscape import PairInput, compute_landscape, curvature_uncertainty, refine_minimum
 from ..sync.pairs import select_pairs
+from ..sync.drift import PairTiming, solve_offsets_drift
+from ..sync.posefree import PoseFreeConfig, PoseFreePair, estimate_pair
+from ..sync.rate import fit_rate, scaled_video
 from ..sync.solve import PairMeasurement, solve_offsets
 
 log = logging.getLogger(__name__)
 
 
-def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig):
-    """Stage 1 for one ordered pair: (PairLandscape, PairEnergy or None)."""
+def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig,
+                   pose_free: PoseFreePair | None = None, pose_free_pair: bool = False):
+    """Stage 1 for one ordered pair: (PairLandscape, PairEnergy or None).
+
+    pose_free_pair: the pair has no usable cameras; pose_free is then what its tracks gave
+    (sync.posefree: F, shift, rate), the energy uses the cameras of that F and is searched in a
+    window around that shift (None: the pair is rejected with the reason). With the drift model
+    (cfg.drift.enabled) the 1-D minimum is refined over (Δ, rate) (sync.rate)."""
     tp = bundle.pair(a, b) or TrackPairs(a, b, np.zeros((0, 2), dtype=np.int64))
     side = {n: PairInput(bundle.video(n), bundle.cameras[n], bundle.tracks[n]) for n in (a, b)}
-    raw, pe = compute_landscape(side[a], side[b], tp, cfg.landscape)
-    decision, minima = decide(raw.energy, raw.support, raw.offsets_s, len(tp.index), cfg.decision)
+    offsets, rate0, decision_cfg = None, 1.0, cfg.decision
+    if pose_free_pair:
+        if pose_free is None or pose_free.b_from_a is None or pose_free.inlier_share < MIN_POSE_FREE_INLIERS:
+            return _pose_free_rejected(bundle, a, b, tp, cfg, pose_free), None
+        side, offsets, rate0 = _pose_free_inputs(bundle, a, b, side, cfg, pose_free)
+        # one track followed by both cameras is the evidence here (its F explains most matches)
+        decision_cfg = dataclasses.replace(cfg.decision, min_track_pairs=min(cfg.decision.min_track_pairs, 1))
+    raw, pe = compute_landscape(side[a], side[b], tp, cfg.landscape, offsets)
+    decision, minima = decide(raw.energy, raw.support, raw.offsets_s, len(tp.index), decision_cfg)
     best, best_e, sigma = float("nan"), float("nan"), float("nan")
     if len(minima):
         best_idx = int(minima[0])
@@ -45,19 +64,141 @@ def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig):
         seen = int(np.isfinite(r).any(axis=1).sum()) if r.ndim == 2 else 0
         r = r[np.isfinite(r)]
         inliers = float(np.mean(np.sqrt(r) < tau_px)) if r.size else float("nan")
-        decision = check_inliers(decision, inliers, tau_px, cfg.decision)
-        decision = check_track_pairs_at_best(decision, seen, best, cfg.decision)
+        decision = check_inliers(decision, inliers, tau_px, decision_cfg)
+        decision = check_track_pairs_at_best(decision, seen, best, decision_cfg)
     if len(tp.index) == 0 and not decision.accepted:
         decision = PairDecision(False, "no cross-view track pairs (the views share no matched motion)",
                                 0.0, 0.0, 0, 0, False)
     land = PairLandscape(a, b, raw.offsets_s, raw.energy, raw.support, minima, best, best_e, sigma,
                          len(tp.index), decision, cfg.landscape.residual, raw.robust_scale)
+    if pose_free_pair:
+        land = dataclasses.replace(land, rate=rate0, pose_free=True)
+    if cfg.drift.enabled and math.isfinite(best):
+        # b unscaled: the fit starts from (best, rate0) in the pair's own clocks
+        side_b = dataclasses.replace(side[b], video=bundle.video(b))
+        fit = fit_rate(side[a], side_b, tp, cfg.landscape, cfg.drift, best, rate0, raw.robust_scale,
+                       max(len(tp.index), 1))
+        if fit is not None and pose_free_pair:
+            # the rate its tracks gave (a continuous fit on every detection) is sharper than the
+            # energy's over a single track, whose terms enter and leave as the rate turns: the
+            # pair keeps it, with the energy's minimum at that rate, and the image is shown
+            land = dataclasses.replace(land, log_rate_std=pose_free.log_rate_std, pivot_s=fit.pivot_s,
+                                       pivot_offset_s=best + (rate0 - 1.0) * fit.pivot_s,
+                                       pivot_offset_std_s=sigma, rate_landscape=fit.landscape)
+        elif fit is not None:
+            land = dataclasses.replace(land, best_offset_s=fit.offset_s, best_energy=fit.energy,
+                                       rate=fit.rate, log_rate_std=fit.log_rate_std, pivot_s=fit.pivot_s,
+                                       pivot_offset_s=fit.pivot_offset_s,
+                                       pivot_offset_std_s=fit.pivot_offset_std_s,
+                                       rate_landscape=fit.landscape)
     return land, pe
 
 
+MIN_POSE_FREE_INLIERS = 0.5
+"""A pose-free pair whose refined F explains fewer of its matches than this has no geometry to
+build the energy on (a wrong shift, or too little common motion)."""
+
+
+def is_pose_free_pair(bundle: CueBundle, a: str, b: str) -> bool:
+    """The pair's cameras cannot give F: either video is marked pose-free (K only), or both
+    cameras are static at the same centre (no baseline, F = 0)."""
+    if a in bundle.pose_free or b in bundle.pose_free:
+        return True
+    ca, cb = bundle.cameras[a], bundle.cameras[b]
+    if ca.is_moving or cb.is_moving:
+        return False
+    centre = [-c.cam_from_world[:3, :3].T @ c.cam_from_world[:3, 3] for c in (ca, cb)]
+    return bool(np.linalg.norm(centre[0] - centre[1]) < 1e-9)
+
+
+def _pair_track_rows(bundle: CueBundle, a: str, b: str) -> tuple[int, int]:
+    """The track pair seen in most frames by both sides: the one posefree estimates from."""
+    tp = bundle.pair(a, b)
+    seen = {n: np.isfinite(bundle.tracks[n].xy).all(axis=2).sum(axis=1) for n in (a, b)}
+    counts = np.minimum(seen[a][tp.index[:, 0]], seen[b][tp.index[:, 1]])
+    i = int(np.argmax(counts))
+    return int(tp.index[i, 0]), int(tp.index[i, 1])
+
+
+def _static_K(cam) -> np.ndarray:
+    return cam.K if cam.K.ndim == 2 else cam.K[0]
+
+
+def pose_free_job(bundle: CueBundle, a: str, b: str, cfg: SyncConfig) -> tuple:
+    """The arguments of sync.posefree.estimate_pair for one pose-free pair (picklable)."""
+    ia, ib = _pair_track_rows(bundle, a, b)
+    va, vb = bundle.video(a), bundle.video(b)
+    pcfg = PoseFreeConfig(estimate_rate=cfg.drift.enabled)
+    rng = None if cfg.landscape.range_s is None else (-cfg.landscape.range_s, cfg.landscape.range_s)
+    return (va.timestamps_s, bundle.tracks[a].xy[ia], _static_K(bundle.cameras[a]),
+            vb.timestamps_s, bundle.tracks[b].xy[ib], _static_K(bundle.cameras[b]), pcfg, rng)
+
+
+def _estimate_pose_free(job: tuple) -> PoseFreePair | None:
+    t_a, xy_a, K_a, t_b, xy_b, K_b, pcfg, rng = job
+    return estimate_pair(t_a, xy_a, K_a, t_b, xy_b, K_b, pcfg, offset_range_s=rng)
+
+
+def _quiet_worker() -> None:
+    """A worker ends on SIGTERM (the pool's exit sends it) without the parent's handler, which
+    would raise and print; Ctrl-C is the parent's to handle."""
+    import signal
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def estimate_pose_free_pairs(bundle: CueBundle, chosen: list[tuple[str, str]], cfg: SyncConfig,
+                             progress: bool = False) -> dict[tuple[str, str], PoseFreePair | None]:
+    """sync.posefree over the chosen pose-free pairs, in worker processes when there are several."""
+    jobs = {(a, b): pose_free_job(bundle, a, b, cfg) for a, b in chosen}
+    if not jobs:
+        return {}
+    workers = min(cfg.pose_free.workers or os.cpu_count() or 1, len(jobs))
+    if workers <= 1:
+        return {k: _estimate_pose_free(j) for k, j in tqdm(jobs.items(), desc="pose-free pairs", unit="pair",
+                                                         disable=not progress, leave=False)}
+    # a Pool, not a ProcessPoolExecutor: leaving the block terminates the workers, so that Ctrl-C
+    # or SIGTERM does not wait for minutes of pair estimates
+    with multiprocessing.Pool(workers, initializer=_quiet_worker) as pool:
+        out = list(tqdm(pool.imap(_estimate_pose_free, jobs.values()), total=len(jobs), desc="pose-free pairs",
+                        unit="pair", disable=not progress, leave=False))
+    return dict(zip(jobs, out))
+
+
+def _pose_free_inputs(bundle: CueBundle, a: str, b: str, side: dict[str, PairInput], cfg: SyncConfig,
+                      pf: PoseFreePair):
+    """(the pair's inputs with the cameras of pf's F, the window of offsets, the rate read at)."""
+    cam_a = CameraTrack(_static_K(bundle.cameras[a]), np.eye(4))
+    cam_b = CameraTrack(_static_K(bundle.cameras[b]), pf.b_from_a)
+    rate0 = pf.rate if cfg.drift.enabled else 1.0
+    vb = scaled_video(bundle.video(b), rate0)
+    side = {a: dataclasses.replace(side[a], camera=cam_a),
+            b: dataclasses.replace(side[b], camera=cam_b, video=vb)}
+    step = cfg.landscape.step_s or min(side[a].video.frame_interval_s, vb.frame_interval_s)
+    half = cfg.pose_free.window_s
+    k0, k1 = math.ceil((pf.offset_s - half) / step), math.floor((pf.offset_s + half) / step)
+    return side, np.arange(k0, k1 + 1) * step, rate0
+
+
+def _pose_free_rejected(bundle: CueBundle, a: str, b: str, tp: TrackPairs, cfg: SyncConfig,
+                        pf: PoseFreePair | None) -> PairLandscape:
+    why = ("pose-free pair: its tracks gave no time shift (too little common motion)" if pf is None else
+           f"pose-free pair: the F of its best time shift explains {pf.inlier_share:.0%} of the matches "
+           f"(< {MIN_POSE_FREE_INLIERS:.0%})")
+    nan = float("nan")
+    empty = np.zeros(0)
+    return PairLandscape(a, b, empty, empty, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
+                         nan, nan, nan, len(tp.index), PairDecision(False, why, 0.0, 0.0, 0, 0, False),
+                         cfg.landscape.residual, nan, pose_free=True)
+
+
 def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | None = None,
-                progress: bool = True) -> SyncResult:
-    """Stage 1 over the pairs that cfg.pairs selects, then Stage 2, reported to the sink."""
+                progress: bool = True,
+                pose_free: dict[tuple[str, str], PoseFreePair | None] | None = None) -> SyncResult:
+    """Stage 1 over the pairs that cfg.pairs selects, then Stage 2, reported to the sink.
+
+    pose_free: estimates of pose-free pairs made earlier (estimate_pose_free_pairs; e.g. the drift
+    model's, reused by the benchmark's constant-offset ablation); the others are estimated here."""
     sink = sink or NullSink()
     names = bundle.names
     reference = cfg.solve.reference or names[0]
@@ -69,9 +210,13 @@ def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | 
     has = {k for k, v in bundle.pairs.items() if len(v.index)}
     chosen = select_pairs(names, has, cfg.pairs)
     lands: list[PairLandscape] = []
+    pose_free_pairs = [(a, b) for a, b in chosen if is_pose_free_pair(bundle, a, b)]
+    given = dict(pose_free or {})
+    pose_free = {**{k: given[k] for k in pose_free_pairs if k in given},
+                 **estimate_pose_free_pairs(bundle, [k for k in pose_free_pairs if k not in given], cfg, progress)}
     for a, b in tqdm(chosen, desc="pair landscapes", unit="pair", disable=not progress,
                      leave=False):
-        land, pe = pair_landscape(bundle, a, b, cfg)
+        land, pe = pair_landscape(bundle, a, b, cfg, pose_free.get((a, b)), (a, b) in pose_free)
         lands.append(land)
         log.info("%s__%s: %s Δ=%+.4f s (%s)", a, b, "accepted" if land.decision.accepted else
                  "rejected", land.best_offset_s, land.decision.reason)
@@ -80,7 +225,8 @@ def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | 
     timings["stage1_s"] = time.perf_counter() - t0
 
     t1 = time.perf_counter()
-    result = solve_stage2(bundle, lands, cfg.solve)
+    result = (solve_stage2_drift(bundle, lands, cfg.solve, cfg.drift) if cfg.drift.enabled else
+              solve_stage2(bundle, lands, cfg.solve))
     timings["stage2_s"] = time.perf_counter() - t1
     result = dataclasses.replace(result, timings_s=timings)
     sink.sync_result(result, None if sink.options is None else
@@ -126,3 +272,53 @@ def solve_stage2(bundle: CueBundle, lands: list[PairLandscape] | tuple[PairLands
                                             "another video, so no offset was measured against it")
     return SyncResult(reference, offsets, unc, reasons, tuple(lands),
                       out.pairs, out.iterations, solve.solver)
+
+
+def solve_stage2_drift(bundle: CueBundle, lands: list[PairLandscape] | tuple[PairLandscape, ...],
+                       solve: SolveConfig = SolveConfig(), drift: DriftConfig = DriftConfig()) -> SyncResult:
+    """Stage 2 with clock drift: per-video offset_s and drift from the accepted pairs' (Δ at the
+    pivot, rate) (sync.drift: robust, the reference fixed at offset 0 and drift 0)."""
+    names = bundle.names
+    reference = solve.reference or names[0]
+    if reference not in names:
+        raise InputError(f"--reference {reference!r} is not a video of the bundle; known: {names}")
+    timings = []
+    for land in lands:
+        if not (land.decision.accepted and math.isfinite(land.best_offset_s)):
+            continue
+        if math.isfinite(land.pivot_offset_s):
+            off, pivot, std = land.pivot_offset_s, land.pivot_s, land.pivot_offset_std_s
+        else:  # the rate fit found no energy around the minimum: the 1-D result at its rate
+            off, pivot, std = land.best_offset_s, 0.0, land.uncertainty_s
+        if not math.isfinite(std):  # no curvature there: the 1-D figure, else the grid's resolution
+            step = land.offsets_s[1] - land.offsets_s[0] if len(land.offsets_s) > 1 else 0.1
+            std = land.uncertainty_s if math.isfinite(land.uncertainty_s) else step / math.sqrt(12.0)
+        lstd = land.log_rate_std
+        # a rate the pair cannot tell is left to the other pairs and the drift prior
+        timings.append(PairTiming(land.a, land.b, off, math.log(land.rate), std,
+                                  lstd if math.isfinite(lstd) else 1.0, pivot))
+    sol = solve_offsets_drift(reference, timings, with_drift=True, drift_prior_ppm=drift.prior_ppm)
+    offsets: dict[str, float | None] = {v: None for v in names}
+    unc: dict[str, float | None] = {v: None for v in names}
+    drift: dict[str, float | None] = {v: None for v in names}
+    drift_std: dict[str, float | None] = {v: None for v in names}
+    reasons: dict[str, str] = {}
+    for v in names:
+        if v in sol.offsets_s:
+            offsets[v], unc[v] = sol.offsets_s[v], sol.offset_std_s[v]
+            drift[v], drift_std[v] = sol.drift_ppm[v], sol.drift_std_ppm[v]
+        else:
+            mine = [p for p in lands if v in (p.a, p.b)]
+            reasons[v] = ("no chain of accepted pairs links it to the reference " + reference + "; its pairs: "
+                          + "; ".join(f"{p.a}__{p.b}: {p.decision.reason}" for p in mine[:3]))
+    if len(names) > 1 and not timings:
+        offsets[reference] = unc[reference] = drift[reference] = drift_std[reference] = None
+        reasons[reference] = "the reference, but no accepted pair links it to another video"
+    used = tuple((t.a, t.b) for t in timings if (t.a, t.b) in sol.pair_residuals)
+    res = np.array([sol.pair_residuals[p][0] for p in used])
+    std = np.array([max(t.offset_std_s, 1e-3) for t in timings if (t.a, t.b) in sol.pair_residuals])
+    z = np.abs(res) / std if len(res) else res
+    weight = np.minimum(1.0, 3.0 / np.maximum(z, 1e-12)) if len(res) else res  # sync.drift's Huber scale 3
+    return SyncResult(reference, offsets, unc, reasons, tuple(lands), used,
+                      (SolveIteration(res, weight),) if len(res) else (), "drift-huber",
+                      drift_ppm=drift, drift_std_ppm=drift_std)

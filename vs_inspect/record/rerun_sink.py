@@ -37,7 +37,8 @@ from ..io.recording import (APPLICATION_ID, GUIDE, LOG_DECISIONS, META_BUNDLE, M
                             VIDEOS, TIMELINE_EVENT, TIMELINE_FRAME, TIMELINE_ITERATION,
                             TIMELINE_OFFSET_MS, TIMELINE_TIME, WORLD_POINTS, camera_labels_path,
                             camera_path, camera_trail_path, check_entity_names, entity_name, log_path, pair_decision_path,
-                            pair_epipolar_path, pair_landscape_path, solve_residual_path,
+                            pair_epipolar_path, pair_landscape_path, pair_rate_landscape_path,
+                            solve_residual_path,
                             solve_weight_path, trajectory_path, video_asset_path, video_image_path,
                             video_mask_path, video_path, video_still_path,
                             video_tracks_path)
@@ -334,6 +335,8 @@ class RerunSink(Sink):
     @_timed
     def pair_landscape(self, landscape: PairLandscape, view: PairRecordView | None = None) -> None:
         self._log_landscape(landscape, view)
+        if landscape.rate_landscape is not None:
+            self._log_rate_landscape(landscape, view)
         self._log_decision(landscape, view)
         if view is not None and view.sweep is not None:
             self._log_epipolar(landscape, view)
@@ -692,6 +695,20 @@ class RerunSink(Sink):
             self.rec.send_columns(f"{base}/truth",
                                   [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=[round(view.true_offset_s * 1000)])],
                                   rr.Scalars.columns(scalars=[view.true_energy]))
+
+    def _log_rate_landscape(self, land: PairLandscape, view: PairRecordView | None) -> None:
+        base = pair_rate_landscape_path(land.a, land.b)
+        rl = land.rate_landscape
+        self.rec.log(f"{base}/energy", rr.Tensor(np.asarray(rl.energy, dtype=np.float32),
+                                                 dim_names=["rate_ppm", "offset_at_pivot"]), static=True)
+        if view is not None and view.rate_image is not None:
+            self.rec.log(f"{base}/image", rr.Image(view.rate_image, color_model="RGB"), static=True)
+        self.rec.log(f"{base}/axes", rr.TextDocument(
+            f"rows: rate - 1 = {rl.rates_ppm[0]:+.0f} .. {rl.rates_ppm[-1]:+.0f} ppm (top to bottom); "
+            f"columns: τ_a - τ_b at b's local time {rl.pivot_s:.3f} s = {rl.offsets_s[0]:+.4f} .. "
+            f"{rl.offsets_s[-1]:+.4f} s (left to right); chosen: white ring "
+            f"({land.pivot_offset_s:+.4f} s, {(land.rate - 1) * 1e6:+.1f} ppm); truth: orange cross",
+            media_type="text/plain"), static=True)
 
     def _log_decision(self, land: PairLandscape, view: PairRecordView | None) -> None:
         d = land.decision

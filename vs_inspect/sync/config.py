@@ -121,9 +121,44 @@ class PairSelection:
 
 
 @dataclass(frozen=True)
+class DriftConfig:
+    enabled: bool = field(default=False, metadata={"flag": "--drift", "enable": True})
+    """Clock drift: each video's time is t_global = offset_s + (1 + drift) * t_local; each accepted pair's (Δ, rate) is refined on the energy around its 1-D minimum and Stage 2 solves offset and drift per video (the reference fixed). Off: one constant offset per video."""
+    rate_half_width_ppm: float = 1000.0
+    """The (Δ, rate) search spans the pair's rate ± this many ppm (pose-free pairs: around the rate their tracks gave)."""
+    rate_step_ppm: float = 100.0
+    """Row spacing of that search (and of the recording's image); the minimum is then refined continuously."""
+    offset_half_width_frames: float = 4.0
+    """Its columns: the 1-D minimum ± this many frames of the finer video, at the overlap's middle."""
+    offset_columns: int = 17
+    """Number of columns."""
+    fit_rows: int = 3
+    """The rate is the vertex of a parabola through the row minima within this many rows of the lowest."""
+    prior_ppm: float = 1000.0
+    """Stage 2: each video's drift has a zero-mean prior of this 1-sigma (ppm), so that pairs too short to tell the rate leave it near 0 instead of at noise."""
+
+    def __post_init__(self) -> None:
+        check_fields(self, positive=("rate_half_width_ppm", "rate_step_ppm", "offset_half_width_frames",
+                                     "offset_columns", "fit_rows", "prior_ppm"))
+
+
+@dataclass(frozen=True)
+class PoseFreeSyncConfig:
+    window_s: float = 2.0
+    """A pose-free pair's energy is searched over the offset its tracks gave ± this (seconds)."""
+    workers: int = 0
+    """Processes estimating pose-free pairs at once; 0 = the number of cores (at most the pairs)."""
+
+    def __post_init__(self) -> None:
+        check_fields(self, positive=("window_s",), nonnegative=("workers",))
+
+
+@dataclass(frozen=True)
 class SyncConfig:
     landscape: LandscapeConfig = LandscapeConfig()
     decision: DecisionConfig = DecisionConfig()
     solve: SolveConfig = SolveConfig()
     pairs: PairSelection = PairSelection()
+    drift: DriftConfig = DriftConfig()
+    pose_free: PoseFreeSyncConfig = PoseFreeSyncConfig()
 

@@ -29,6 +29,13 @@ class PairTiming:
     log_rate: float  # log((1 + drift_b) / (1 + drift_a))
     offset_std_s: float
     log_rate_std: float
+    pivot_s: float = 0.0  # b's local time at which offset_s is measured: τ_a - τ_b there (0: Δ_ab)
+
+
+def _predicted_offset(p: PairTiming, off: dict[str, float], lr: dict[str, float]) -> float:
+    """τ_a - τ_b at τ_b = pivot under the per-video models (pivot 0: (offset_b - offset_a) / (1 + drift_a))."""
+    g = off[p.b] + np.exp(lr[p.b]) * p.pivot_s
+    return (g - off[p.a]) * np.exp(-lr[p.a]) - p.pivot_s
 
 
 @dataclass(frozen=True)
@@ -58,22 +65,26 @@ def _initial(reference: str, order: list[str], pairs: list[PairTiming], with_dri
     off, lr = {reference: 0.0}, {reference: 0.0}
     for v in order[1:]:
         for p in pairs:
+            # τ_a = (offset_s + pivot) at τ_b = pivot: the same moment in both models
             if p.b == v and p.a in off:
                 lr[v] = lr[p.a] + p.log_rate if with_drift else 0.0
-                off[v] = off[p.a] + p.offset_s * np.exp(lr[p.a])
+                g = off[p.a] + np.exp(lr[p.a]) * (p.offset_s + p.pivot_s)
+                off[v] = g - np.exp(lr[v]) * p.pivot_s
                 break
             if p.a == v and p.b in off:
                 lr[v] = lr[p.b] - p.log_rate if with_drift else 0.0
-                off[v] = off[p.b] - p.offset_s * np.exp(lr[v])
+                g = off[p.b] + np.exp(lr[p.b]) * p.pivot_s
+                off[v] = g - np.exp(lr[v]) * (p.offset_s + p.pivot_s)
                 break
     return off, lr
 
 
 def solve_offsets_drift(reference: str, pairs: list[PairTiming], with_drift: bool = True,
                         min_offset_std_s: float = 1e-3, min_log_rate_std: float = 2e-5,
-                        huber_scale: float = 3.0) -> DriftSolution:
+                        huber_scale: float = 3.0, drift_prior_ppm: float | None = None) -> DriftSolution:
     """Robust global (offset_s, drift) per video; the floors on the pairs' uncertainties keep an
-    over-confident pair (correlated residuals make its Jacobian std small) from dominating."""
+    over-confident pair (correlated residuals make its Jacobian std small) from dominating.
+    drift_prior_ppm: a zero-mean prior of this 1-sigma on each video's drift (None: none)."""
     order = _connected(reference, pairs)
     free = order[1:]
     used = [p for p in pairs if p.a in order and p.b in order]
@@ -90,10 +101,12 @@ def solve_offsets_drift(reference: str, pairs: list[PairTiming], with_drift: boo
         off, lr = unpack(x)
         out = []
         for p in used:
-            pred = (off[p.b] - off[p.a]) * np.exp(-lr[p.a])
+            pred = _predicted_offset(p, off, lr)
             out.append((p.offset_s - pred) / max(p.offset_std_s, min_offset_std_s))
             if with_drift:
                 out.append((p.log_rate - (lr[p.b] - lr[p.a])) / max(p.log_rate_std, min_log_rate_std))
+        if with_drift and drift_prior_ppm is not None:
+            out.extend(lr[v] / (drift_prior_ppm * 1e-6) for v in free)
         return np.asarray(out)
 
     x0 = np.r_[[off0[v] for v in free], [lr0[v] for v in free] if with_drift else []]
@@ -103,8 +116,14 @@ def solve_offsets_drift(reference: str, pairs: list[PairTiming], with_drift: boo
     sol = least_squares(residuals, x0, loss="huber", f_scale=huber_scale)
     off, lr = unpack(sol.x)
     try:
-        # scipy's jac at a robust solution is already weighted by the loss
+        # scipy's jac at a robust solution is already weighted by the loss; the pairs' own
+        # uncertainties are rough (curvature, correlated residuals), so the covariance is scaled
+        # by the residuals' reduced chi-square when there are more measurements than unknowns:
+        # a robust standard error from the solve's residuals and Jacobian
         cov = np.linalg.pinv(sol.jac.T @ sol.jac)
+        dof = len(sol.fun) - len(sol.x)
+        if dof > 0:
+            cov = cov * float(2.0 * np.sum(sol.cost) / dof)
         std = np.sqrt(np.clip(np.diag(cov), 0, None))
     except np.linalg.LinAlgError:
         std = np.full(len(sol.x), np.nan)
@@ -112,7 +131,7 @@ def solve_offsets_drift(reference: str, pairs: list[PairTiming], with_drift: boo
     dr_std = {reference: 0.0, **{v: (float(std[n + pos[v]]) * 1e6 if with_drift else 0.0) for v in free}}
     resid = {}
     for p in used:
-        pred = (off[p.b] - off[p.a]) * np.exp(-lr[p.a])
+        pred = _predicted_offset(p, off, lr)
         resid[(p.a, p.b)] = (float(p.offset_s - pred), float(p.log_rate - (lr[p.b] - lr[p.a])))
     return DriftSolution(reference, {v: float(o) for v, o in off.items()},
                          {v: float(np.expm1(l) * 1e6) for v, l in lr.items()}, off_std, dr_std, resid,

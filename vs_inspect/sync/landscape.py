@@ -171,10 +171,11 @@ class PairEnergy:
         return 9.0 * best
 
 
-def compute_landscape(a: PairInput, b: PairInput, pairs: TrackPairs,
-                      cfg: LandscapeConfig) -> tuple[RawLandscape, PairEnergy]:
-    """The discrete landscape over the default (or configured) search grid."""
-    offsets = search_offsets(a.video, b.video, cfg)
+def compute_landscape(a: PairInput, b: PairInput, pairs: TrackPairs, cfg: LandscapeConfig,
+                      offsets_s: np.ndarray | None = None) -> tuple[RawLandscape, PairEnergy]:
+    """The discrete landscape over the default (or configured) search grid, or over offsets_s
+    (D,) seconds when given (a pose-free pair's window around the offset its tracks gave)."""
+    offsets = search_offsets(a.video, b.video, cfg) if offsets_s is None else np.asarray(offsets_s, float)
     pe = PairEnergy(a, b, pairs, cfg)
     if len(offsets) == 0 or len(pairs.index) == 0:
         nan = np.full(len(offsets), np.nan)

@@ -84,6 +84,7 @@ class PoseFreePair:
     fine_offsets_s: np.ndarray  # (U,) tau_a - tau_b at a's time pivot_s (= offset_s at rate 1)
     fine_rates_ppm: np.ndarray  # (V,) (rate - 1) * 1e6
     fine_score: np.ndarray  # (V,U) inliers; the (offset, rate) image for the recording
+    b_from_a: np.ndarray | None = None  # (4,4) the relative pose behind F_ab (unit baseline): x_b = R x_a + t
 
     @property
     def drift_ppm(self) -> float:
@@ -198,12 +199,19 @@ def _E_params(F_ab: np.ndarray, K_a: np.ndarray, K_b: np.ndarray, xa: np.ndarray
     return Rotation.from_matrix(R).as_rotvec(), np.array([np.arccos(np.clip(t[2], -1, 1)), np.arctan2(t[1], t[0])])
 
 
+def _pose_from_params(p: np.ndarray) -> np.ndarray:
+    """(4,4) b_from_a of (R = rotvec p[:3], t = unit vector at polar angles p[3:5])."""
+    th, ph = p[3], p[4]
+    out = np.eye(4)
+    out[:3, :3] = Rotation.from_rotvec(p[:3]).as_matrix()
+    out[:3, 3] = [np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)]
+    return out
+
+
 def _F_from_params(p: np.ndarray, K_a_inv: np.ndarray, K_b_inv: np.ndarray) -> np.ndarray:
     """F_ab of b_from_a = (R = rotvec p[:3], t = unit vector at polar angles p[3:5])."""
-    R = Rotation.from_rotvec(p[:3]).as_matrix()
-    th, ph = p[3], p[4]
-    t = np.array([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)])
-    return (K_b_inv.T @ skew(t) @ R @ K_a_inv).T
+    T = _pose_from_params(p)
+    return (K_b_inv.T @ skew(T[:3, 3]) @ T[:3, :3] @ K_a_inv).T
 
 
 def estimate_pair(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
@@ -272,7 +280,8 @@ def estimate_pair(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
                                    cfg.threshold_px)[0]
     return PoseFreePair(best.offset_s, best.rate, best.offset_std_s, best.log_rate_std, best.F_ab,
                         best.inlier_share, best.num_matches, best.median_sampson_px,
-                        coarse, coarse_score, coarse_score_F, best.pivot_s, cols, rates_ppm, img)
+                        coarse, coarse_score, coarse_score_F, best.pivot_s, cols, rates_ppm, img,
+                        best.b_from_a)
 
 
 @dataclass(frozen=True)
@@ -287,6 +296,7 @@ class _Refined:
     num_matches: int
     median_sampson_px: float
     pivot_s: float
+    b_from_a: np.ndarray  # (4,4)
 
 
 def _refine(pair: _Pair, d0: float, K_a: np.ndarray, K_b: np.ndarray, cfg: PoseFreeConfig) -> _Refined | None:
@@ -344,7 +354,8 @@ def _refine(pair: _Pair, d0: float, K_a: np.ndarray, K_b: np.ndarray, cfg: PoseF
         offset_var, log_rate_std = float(cov[0, 0]), 0.0
     return _Refined(float(offset_s), rate, float(np.sqrt(max(offset_var, 0.0))), log_rate_std,
                     F / np.linalg.norm(F), float(inl.mean()) if len(inl) else 0.0, int(inl.sum()),
-                    int(len(xa)), float(np.median(err[inl])) if inl.any() else float("nan"), float(pivot))
+                    int(len(xa)), float(np.median(err[inl])) if inl.any() else float("nan"), float(pivot),
+                    _pose_from_params(x[2:]))
 
 
 def fit_at_time_map(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,

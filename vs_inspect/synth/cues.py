@@ -47,6 +47,9 @@ class CueSceneConfig:
     """Frame rates drawn for the videos."""
     seed: int = 0
     """Seed of everything random."""
+    drift_ppm: float = 0.0
+    """Clock drift of every non-reference video, ± this (random sign, ppm): its frames show the
+    moments offset_s + (1 + drift) * t_local (0: the constant-offset world of the paper)."""
 
 
 @dataclass(frozen=True)
@@ -115,6 +118,9 @@ def make_cue_scene(cfg: CueSceneConfig = CueSceneConfig()) -> CueScene:
     offsets = {names[0]: 0.0}
     for v in names[1:]:
         offsets[v] = float(np.round(rng.uniform(-cfg.max_offset_s, cfg.max_offset_s), 4))
+    # signs from their own stream: a scene without drift is the same scene as before
+    signs = np.random.default_rng(cfg.seed + 104729).choice([-1.0, 1.0], size=n)
+    drift = {v: (0.0 if i == 0 else float(signs[i] * cfg.drift_ppm)) for i, v in enumerate(names)}
     moving = set(names[n - cfg.moving:]) if cfg.moving else set()
     vfr = set(names[1:1 + cfg.variable_rate]) - moving if cfg.variable_rate else set()
     resolutions = [(1280, 720), (1920, 1080), (640, 480), (1024, 768), (960, 540)]
@@ -133,7 +139,8 @@ def make_cue_scene(cfg: CueSceneConfig = CueSceneConfig()) -> CueScene:
         else:
             video = VideoInfo.constant_rate(v, W, H, T, fps)
         videos.append(video)
-        g = video.timestamps_s + offsets[v]
+        g = video.timestamps_s + offsets[v] if not cfg.drift_ppm else \
+            offsets[v] + (1.0 + drift[v] * 1e-6) * video.timestamps_s
         fx = W * rng.uniform(0.8, 1.1)
         K = np.array([[fx, 0, W / 2 + rng.uniform(-10, 10)],
                       [0, fx * rng.uniform(0.97, 1.03), H / 2 + rng.uniform(-10, 10)], [0, 0, 1]])
@@ -226,5 +233,6 @@ def make_cue_scene(cfg: CueSceneConfig = CueSceneConfig()) -> CueScene:
 
     g_grid = np.linspace(-cfg.max_offset_s, cfg.seconds + cfg.max_offset_s, 200)
     pts = object_points(g_grid, np.random.default_rng(cfg.seed + 7919), cfg.points_per_object)
-    bundle = CueBundle(tuple(videos), cams, tracks, pairs, offsets)
+    bundle = CueBundle(tuple(videos), cams, tracks, pairs, offsets,
+                       gt_drift_ppm=drift if cfg.drift_ppm else None)
     return CueScene(bundle, true_cams, pts, g_grid, all_wrong, no_match)

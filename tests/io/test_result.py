@@ -1,0 +1,78 @@
+"""result.json: version 2 (the drift model) written and read back; version 1 files still read."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from vs_inspect.cli import main
+from vs_inspect.errors import InputError
+from vs_inspect.io.result import read_run_result, run_result_to_dict, write_run_result
+from vs_inspect.pipeline import RunConfig, run
+from vs_inspect.sync.config import DriftConfig, SyncConfig
+from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
+
+SMALL = CueSceneConfig(cameras=3, moving=0, variable_rate=0, seconds=6.0, pairs_per_view_pair=150,
+                       max_offset_s=1.0, no_match_pairs=0, all_wrong_pair=False, seed=3, drift_ppm=200.0)
+
+
+@pytest.fixture(scope="module")
+def drift_result():
+    scene = make_cue_scene(SMALL)
+    return scene, run(scene.bundle, RunConfig(sync=SyncConfig(drift=DriftConfig(enabled=True))), progress=False)
+
+
+def test_v2_round_trip_with_drift(drift_result, tmp_path):
+    scene, res = drift_result
+    assert res.drift_ppm is not None and set(res.drift_ppm) == set(res.offsets_s)
+    assert res.gt_drift_ppm == scene.bundle.gt_drift_ppm
+    data = json.loads(write_run_result(res, tmp_path).read_text())
+    assert data["version"] == 2 and data["time_model"] == "drift"
+    assert set(data["drift_ppm"]) == set(data["offsets_s"]) == set(data["drift_std_ppm"])
+    assert all(v is None or math.isfinite(v) for v in data["uncertainty_s"].values())
+    accepted = [p for p in data["pairs"] if p["accepted"]]
+    assert accepted and all({"rate", "drift_ppm", "drift_std_ppm", "pivot_s", "pivot_offset_s",
+                             "rate_landscape"} <= set(p) for p in accepted)
+    back = read_run_result(tmp_path)
+    assert back.drift_ppm == res.drift_ppm and back.drift_std_ppm == res.drift_std_ppm
+    rl, rl_back = res.pairs[0].rate_landscape, back.pairs[0].rate_landscape
+    if rl is not None:
+        assert np.allclose(rl.energy, rl_back.energy, equal_nan=True) and rl_back.energy.shape == rl.energy.shape
+    assert run_result_to_dict(back) == data
+
+
+def test_v1_file_still_reads(tmp_path):
+    v1 = {"format": "vs-inspect-result", "version": 1, "reference": "a",
+          "offsets_s": {"a": 0.0, "b": 1.5}, "uncertainty_s": {"a": 0.0, "b": 0.001}, "unresolved": {},
+          "pairs": [{"a": "a", "b": "b", "offset_s": 1.5, "accepted": True, "reason": "ok",
+                     "uncertainty_s": 0.001, "minima_offsets_s": [1.5]}],
+          "solve": {"solver": "irls", "pairs": [["a", "b"]], "iterations": []}, "timings_s": {}}
+    (tmp_path / "result.json").write_text(json.dumps(v1))
+    r = read_run_result(tmp_path)
+    assert r.offsets_s == {"a": 0.0, "b": 1.5} and r.drift_ppm is None
+    assert r.pairs[0].rate == 1.0 and r.pairs[0].rate_landscape is None
+    assert run_result_to_dict(r)["time_model"] == "constant"
+    v9 = dict(v1, version=9)
+    (tmp_path / "result.json").write_text(json.dumps(v9))
+    with pytest.raises(InputError, match="version 9"):
+        read_run_result(tmp_path)
+
+
+def test_eval_prints_frames_and_ppm(tmp_path, capsys):
+    (tmp_path / "result.json").write_text(json.dumps(
+        {"version": 2, "reference": "a", "offsets_s": {"a": 0.0, "b": 1.01},
+         "drift_ppm": {"a": 0.0, "b": 150.0}}))
+    (tmp_path / "gt.json").write_text(json.dumps(
+        {"offsets_s": {"a": 0.0, "b": 1.0}, "drift_ppm": {"a": 0.0, "b": 100.0}, "fps": {"a": 30.0, "b": 25.0}}))
+    assert main(["eval", str(tmp_path / "result.json"), "--gt", str(tmp_path / "gt.json")]) == 0
+    out = capsys.readouterr().out
+    assert "offset +0.25 frames" in out  # 10 ms at 25 fps
+    assert "drift +50.0 ppm" in out
+    # a constant-offset result against a drifting truth: its drift error is the whole drift
+    (tmp_path / "result.json").write_text(json.dumps({"reference": "a", "offsets_s": {"a": 0.0, "b": 1.0}}))
+    assert main(["eval", str(tmp_path / "result.json"), "--gt", str(tmp_path / "gt.json")]) == 0
+    out = capsys.readouterr().out
+    assert "drift -100.0 ppm (constant-offset result" in out

@@ -1,0 +1,139 @@
+"""Stage 1 with clock drift: a pair's energy over (Δ, rate) around its 1-D minimum.
+
+Time map of a pair (sync.posefree's convention): τ_a = Δ + rate · τ_b, rate = (1 + drift_b) /
+(1 + drift_a). Reading b at rate · τ_b is the same energy with b's frame times scaled by the rate,
+so the residuals, kernels and camera sampling of sync.landscape are used unchanged. The rows of
+the search turn about a pivot p, b's local time in the middle of the overlap: a column is
+c = τ_a - τ_b at τ_b = p, so Δ = c - (rate - 1) · p, and c and the rate are nearly uncorrelated
+(which is what Stage 2 is given).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..types import RateLandscape, TrackPairs, VideoInfo
+from .config import DriftConfig, LandscapeConfig
+from .landscape import PairEnergy, PairInput
+
+
+def scaled_video(v: VideoInfo, rate: float) -> VideoInfo:
+    """v with its local times multiplied by rate (b's times in a's clock, up to the offset)."""
+    return VideoInfo(v.name, v.width, v.height, v.num_frames, v.timestamps_s * rate,
+                     None if v.fps is None else v.fps / rate)
+
+
+def overlap_pivot_s(va: VideoInfo, vb: VideoInfo, offset_s: float, rate: float) -> float:
+    """b's local time in the middle of the common span under τ_a = offset_s + rate · τ_b."""
+    lo = max(vb.timestamps_s[0], (va.timestamps_s[0] - offset_s) / rate)
+    hi = min(vb.timestamps_s[-1], (va.timestamps_s[-1] - offset_s) / rate)
+    return float(0.5 * (lo + hi)) if hi > lo else float(0.5 * (vb.timestamps_s[0] + vb.timestamps_s[-1]))
+
+
+@dataclass(frozen=True)
+class RateFit:
+    offset_s: float  # Δ_ab at τ_b = 0 (τ_a = offset_s + rate · τ_b)
+    rate: float  # (1 + drift_b) / (1 + drift_a)
+    pivot_s: float  # b's local time of the pivot
+    pivot_offset_s: float  # τ_a - τ_b at τ_b = pivot_s
+    pivot_offset_std_s: float  # 1-sigma (curvature of the energy), NaN when not positive definite
+    log_rate_std: float  # 1-sigma of log(rate)
+    energy: float  # at the solution
+    landscape: RateLandscape
+
+
+class _RateEnergy:
+    """E(c, rate) of one pair, one PairEnergy per rate (cached: the grid's rows repeat)."""
+
+    def __init__(self, a: PairInput, b: PairInput, pairs: TrackPairs, cfg: LandscapeConfig,
+                 pivot_s: float, scale: float):
+        self.a, self.b, self.pairs, self.cfg = a, b, pairs, cfg
+        self.pivot_s, self.scale = pivot_s, scale
+        self._cache: dict[float, PairEnergy] = {}
+
+    def _pe(self, rate: float) -> PairEnergy:
+        pe = self._cache.get(rate)
+        if pe is None:
+            b = dataclasses.replace(self.b, video=scaled_video(self.b.video, rate))
+            pe = self._cache[rate] = PairEnergy(self.a, b, self.pairs, self.cfg)
+        return pe
+
+    def row(self, cols_s: np.ndarray, rate: float) -> np.ndarray:
+        e, _ = self._pe(rate).energy(cols_s - (rate - 1.0) * self.pivot_s, self.scale)
+        return e
+
+
+def fit_rate(a: PairInput, b: PairInput, pairs: TrackPairs, cfg: LandscapeConfig, drift: DriftConfig,
+             offset_s: float, rate0: float, robust_scale: float, num_track_pairs: int) -> RateFit | None:
+    """(Δ, rate) of the pair near (offset_s, rate0) on the pair's energy; None when the grid
+    around it has no energy (no overlap).
+
+    A grid over the pivot offset (the 1-D minimum ± offset_half_width_frames) and the rate
+    (rate0 ± rate_half_width_ppm); sub-cell minima from parabolas (see below). The
+    uncertainties are the landscape-curvature figure of sync.landscape.curvature_uncertainty
+    per axis (var = E* / (n a), n track pairs: rough; NaN when the energy is flat there)."""
+    scale = robust_scale if math.isfinite(robust_scale) else 0.0
+    step = min(a.video.frame_interval_s, b.video.frame_interval_s * rate0)
+    pivot = overlap_pivot_s(a.video, b.video, offset_s, rate0)
+    c0 = offset_s + (rate0 - 1.0) * pivot
+    cols = c0 + np.linspace(-drift.offset_half_width_frames * step, drift.offset_half_width_frames * step,
+                            drift.offset_columns)
+    ppm0 = (rate0 - 1.0) * 1e6
+    rates_ppm = ppm0 + np.arange(-drift.rate_half_width_ppm, drift.rate_half_width_ppm + 1e-9, drift.rate_step_ppm)
+    E = _RateEnergy(a, b, pairs, cfg, pivot, scale)
+    img = np.stack([E.row(cols, 1.0 + r * 1e-6) for r in rates_ppm])
+    if not np.isfinite(img).any():
+        return None
+    # per row the sub-column minimum (parabola through its lowest cell and the two beside it);
+    # then a parabola over the rows near the lowest: the energy is a mean over terms that enter
+    # and leave as the rate turns the time map, so it is noisy cell to cell and flat in the rate
+    # over a short overlap; a fit over several rows averages that, and a flat fit says so
+    row_c = np.full(len(rates_ppm), np.nan)
+    row_e = np.full(len(rates_ppm), np.nan)
+    row_a = np.full(len(rates_ppm), np.nan)
+    for r, row in enumerate(img):
+        if not np.isfinite(row).any():
+            continue
+        j = int(np.nanargmin(row))
+        row_c[r], row_e[r] = cols[j], row[j]
+        if 0 < j < len(cols) - 1 and np.isfinite(row[j - 1:j + 2]).all():
+            x, e, a2 = _parabola(cols[j - 1:j + 2], row[j - 1:j + 2])
+            if a2 > 0 and abs(x - cols[j]) <= cols[1] - cols[0]:
+                row_c[r], row_e[r], row_a[r] = x, e, a2
+    i = int(np.nanargmin(row_e))
+    near = [k for k in range(i - drift.fit_rows, i + drift.fit_rows + 1)
+            if 0 <= k < len(rates_ppm) and np.isfinite(row_e[k])]
+    u_std = float("nan")
+    ppm = float(rates_ppm[i])
+    if len(near) >= 3:
+        A = np.vander(rates_ppm[near] - rates_ppm[i], 3)
+        q, *_ = np.linalg.lstsq(A, row_e[near], rcond=None)
+        if q[0] > 0:
+            # clipped to the rows fitted: beyond them the parabola is extrapolation
+            ppm = float(np.clip(rates_ppm[i] - q[1] / (2 * q[0]),
+                                rates_ppm[near[0]], rates_ppm[near[-1]]))
+            e_min = max(float(np.polyval(q, ppm - rates_ppm[i])), 1e-12)
+            u_std = math.sqrt(e_min / (max(num_track_pairs, 1) * q[0])) * 1e-6
+    # the pivot offset at that rate: between the two nearest rows' minima
+    ok = np.isfinite(row_c)
+    c = float(np.interp(ppm, rates_ppm[ok], row_c[ok]))
+    e_best = float(np.interp(ppm, rates_ppm[ok], row_e[ok]))
+    a_c = row_a[i]
+    c_std = (math.sqrt(max(e_best, 1e-12) / (max(num_track_pairs, 1) * a_c))
+             if math.isfinite(a_c) and a_c > 0 else float("nan"))
+    rate = 1.0 + ppm * 1e-6
+    land = RateLandscape(pivot, cols, rates_ppm, img)
+    return RateFit(float(c - (rate - 1.0) * pivot), rate, pivot, float(c), c_std, u_std, e_best, land)
+
+
+def _parabola(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
+    """(vertex x, vertex y, a) of y = a (x - x0)² + y0 through three points."""
+    q = np.polyfit(x - x[1], y, 2)
+    if q[0] <= 0:
+        return float(x[1]), float(y[1]), float(q[0])
+    x0 = -q[1] / (2 * q[0])
+    return float(x[1] + x0), float(np.polyval(q, x0)), float(q[0])
