@@ -47,6 +47,7 @@ class CameraEstimate:
     num_images: int
     num_registered: int
     features: str  # "sift", "xfeat", "aliked" or "disk": what the reconstruction was built from
+    image_pairs: tuple = ()  # per SfM image pair with matches: {"a", "b" (video/frame.jpg), "matches", "verified"}
 
 
 def _pose_matrix(rigid) -> np.ndarray:
@@ -176,6 +177,28 @@ def _learned_database(features: str, db: Path, img_dir: Path, mask_dir: Path, re
     pycolmap.verify_matches(db, pairs, options=_verification(seed))
 
 
+def _image_pair_matches(db: Path) -> tuple:
+    """Matches and geometrically verified matches of every matched SfM image pair (the recording
+    and result.json show them: which frames of which videos the reconstruction could tie)."""
+    pycolmap = import_pycolmap()
+
+    database = pycolmap.Database.open(db)
+    try:
+        names = {im.image_id: im.name for im in database.read_all_images()}
+        raw = dict(zip(*database.read_all_matches()))
+        verified = {pid: len(g.inlier_matches) for pid, g in zip(*database.read_two_view_geometries())}
+    finally:
+        database.close()
+    out = []
+    for pid in sorted(set(raw) | set(verified)):
+        a, b = pycolmap.pair_id_to_image_pair(pid)
+        out.append({"a": names.get(a, str(a)), "b": names.get(b, str(b)),
+                    "matches": int(len(raw.get(pid, ()))), "verified": int(verified.get(pid, 0))})
+    log.info("SfM image pairs (matches/verified): %s",
+             ", ".join(f"{p['a']}-{p['b']} {p['matches']}/{p['verified']}" for p in out))
+    return tuple(out)
+
+
 def _log_into(pycolmap, folder: Path) -> None:
     """Send pycolmap's (glog) log files into `folder` instead of $TMPDIR."""
     try:
@@ -214,6 +237,7 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
             _learned_database(features, db, img_dir, mask_dir, reader, cfg, seed)
         else:
             _sift_database(db, img_dir, reader, cfg, few=n_images <= 16, seed=seed)
+        image_pairs = _image_pair_matches(db)
         opts = pycolmap.IncrementalPipelineOptions()
         opts.random_seed = seed
         # one thread everywhere and a fixed seed: with several threads COLMAP registered
@@ -229,7 +253,7 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
         if not recs:
             return CameraEstimate({}, {n: "no reconstruction: too few matches between the frames "
                                          "of the videos (static background)" for n in frames_by_video},
-                                  None, None, n_images, 0, features)
+                                  None, None, n_images, 0, features, image_pairs)
 
         def videos_in(rec):
             return {rec.images[i].name.split("/")[0] for i in rec.reg_image_ids()}
@@ -279,7 +303,7 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
             cams[name] = EstimatedCamera(track, cam, s, np.sort(fk), int(seen))
         pts = np.array([p.xyz for p in rec.points3D.values()]) if rec.num_points3D() else None
         cols = np.array([p.color for p in rec.points3D.values()], np.uint8) if rec.num_points3D() else None
-        return CameraEstimate(cams, unreg, pts, cols, n_images, rec.num_reg_images(), features)
+        return CameraEstimate(cams, unreg, pts, cols, n_images, rec.num_reg_images(), features, image_pairs)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 

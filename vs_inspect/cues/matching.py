@@ -131,6 +131,7 @@ class PairStats:
     snapped: int  # matches whose both ends snapped to a track
     instance_pairs: int  # matched instance pairs kept
     track_pairs: int  # track pairs output
+    keyframe_matches: np.ndarray | None = None  # (Ka,Kb) int matches per keyframe pair (rows fa.keyframes, cols fb.keyframes)
 
 
 def match_tracks(a: str, b: str, fa: KeyframeFeatures, fb: KeyframeFeatures, inst_a: np.ndarray,
@@ -138,22 +139,24 @@ def match_tracks(a: str, b: str, fa: KeyframeFeatures, fb: KeyframeFeatures, ins
     """Track pairs between videos a and b from keyframe descriptor matches (every keyframe pair)."""
     votes_a, votes_b = [], []
     total = 0
-    for ka in fa.keyframes:
+    per_pair = np.zeros((len(fa.keyframes), len(fb.keyframes)), np.int64)
+    for i, ka in enumerate(fa.keyframes):
         sa = np.nonzero(fa.frame == ka)[0]
         if not len(sa):
             continue
-        for kb in fb.keyframes:
+        for j, kb in enumerate(fb.keyframes):
             sb = np.nonzero(fb.frame == kb)[0]
             if len(sb) < 2:
                 continue
             m = match_descriptors(fa.desc[sa], fb.desc[sb], cfg.ratio, cfg.mutual)
             total += len(m)
+            per_pair[i, j] = len(m)
             ta, tb = fa.track[sa[m[:, 0]]], fb.track[sb[m[:, 1]]]
             ok = (ta >= 0) & (tb >= 0)
             votes_a.append(ta[ok]), votes_b.append(tb[ok])
     empty = TrackPairs(a, b, np.zeros((0, 2), np.int64), np.zeros(0))
     if not votes_a or not sum(len(v) for v in votes_a):
-        return empty, PairStats(total, 0, 0, 0)
+        return empty, PairStats(total, 0, 0, 0, per_pair)
     va, vb = np.concatenate(votes_a), np.concatenate(votes_b)
     snapped = len(va)
     nb = int(vb.max()) + 1
@@ -187,4 +190,4 @@ def match_tracks(a: str, b: str, fa: KeyframeFeatures, fb: KeyframeFeatures, ins
         keep = np.array([best_b[int(ta[i])] == i and best_a[int(tb[i])] == i for i in range(len(ta))], bool)
         ta, tb, w = ta[keep], tb[keep], w[keep]
     tp = TrackPairs(a, b, np.stack([ta, tb], axis=1).astype(np.int64), w)
-    return tp, PairStats(total, snapped, kept_inst, len(ta))
+    return tp, PairStats(total, snapped, kept_inst, len(ta), per_pair)
