@@ -5,7 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from vs_inspect.bench.matchers import View, format_row, make_bench_matcher, measure_pair, summary_table
+from vs_inspect.bench.matchers import (
+    View,
+    format_row,
+    make_bench_matcher,
+    measure_pair,
+    summary_table,
+)
 
 from ..cues.scenes import texture
 

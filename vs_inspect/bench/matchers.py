@@ -26,7 +26,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras, relative_pose
+from ..geometry.epipolar import (
+    epipolar_residual,
+    fundamental_from_cameras,
+    relative_pose,
+)
 
 METHODS = ("sift", "xfeat-mnn", "xfeat-lighterglue", "aliked-lightglue", "disk-lightglue")
 MAX_SIDE = 1024  # images are downscaled to at most this side before features
@@ -163,7 +167,7 @@ def measure_pair(dataset: str, label: str, va: View, vb: View, matchers: dict) -
         mxa, mxb = _undistort(va, fa.keypoints[ma]), _undistort(vb, fb.keypoints[mb])
         mov_ok = _sampson_px(F, mxa, mxb) < SAMPSON_PX
         rows.append(PairRow(dataset, label, method, int(bg.sum()), float(bg_ok.mean()) if len(bg_ok) else 0.0,
-                            _rotation_error_deg(va, vb, xa, xb), int(len(ma)),
+                            _rotation_error_deg(va, vb, xa, xb), len(ma),
                             float(mov_ok.mean()) if len(mov_ok) else 0.0, sec, reference))
     return rows
 
@@ -278,8 +282,8 @@ def format_row(r: PairRow) -> str:
 
 def summary_table(rows: list[PairRow]) -> str:
     """Markdown: per dataset and method, medians over pairs (matches, consistent shares, seconds)."""
-    lines = ["| data | method | pairs | bg matches | bg within 2 px | rot err (deg) | moving matches | "
-             "moving within 2 px | moving consistent matches | s / pair |",
+    lines = [("| data | method | pairs | bg matches | bg within 2 px | rot err (deg) | moving matches | "
+              "moving within 2 px | moving consistent matches | s / pair |"),
              "|---|---|---|---|---|---|---|---|---|---|"]
     keys = sorted({(r.dataset, r.method) for r in rows}, key=lambda k: (k[0], METHODS.index(k[1])))
     for ds, m in keys:
@@ -384,8 +388,8 @@ def sfm_table(data: Path, datasets: list[str], kinds: tuple[tuple[str, str], ...
 
 
 def sfm_markdown(rows: list[SfmRow]) -> str:
-    lines = ["| data | features | SfM images | cameras registered | fewest 3D points per camera | "
-             "median rotation error (deg) | seconds |", "|---|---|---|---|---|---|---|"]
+    lines = [("| data | features | SfM images | cameras registered | fewest 3D points per camera | "
+              "median rotation error (deg) | seconds |"), "|---|---|---|---|---|---|---|"]
     for r in rows:
         name = r.features + (f" + {r.xfeat_matcher}" if r.features == "xfeat" else
                              " + LightGlue" if r.features in ("aliked", "disk") else " (COLMAP)")

@@ -134,7 +134,7 @@ def lightglue_weights_dir() -> Path | None:
         return None
     if spec is None or not spec.submodule_search_locations:
         return None
-    return Path(list(spec.submodule_search_locations)[0]) / "pretrained_weights"
+    return Path(next(iter(spec.submodule_search_locations))) / "pretrained_weights"
 
 
 def lightglue_unavailable(features: str) -> str | None:
@@ -191,7 +191,9 @@ class LightGlueMatcher:
         self.min_confidence = min_confidence
         folder = lightglue_weights_dir()
         ext_file, glue_file = (folder / f for f in LIGHTGLUE_WEIGHTS[features])
-        load = lambda f: torch.load(str(f), map_location="cpu", weights_only=True)  # noqa: E731
+        def load(f):
+            return torch.load(str(f), map_location="cpu", weights_only=True)
+
         if features == "aliked":
             # top-k mode (threshold <= 0): the top_k strongest maxima, like XFeat's top_k
             self._extractor = KF.ALIKED(model_name="aliked-n16", max_num_keypoints=top_k, detection_threshold=-1)
