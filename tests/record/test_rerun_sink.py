@@ -378,3 +378,38 @@ def test_drift_run_records_the_rate_landscape_image(tmp_path):
     lum = img[cell // 4::cell, cell // 4::cell].astype(float).sum(axis=2)
     lo, hi = np.unravel_index(np.nanargmin(rl.energy), rl.energy.shape), np.unravel_index(np.nanargmax(rl.energy), rl.energy.shape)
     assert lum[lo] < lum[hi]
+
+
+def test_keyframe_matches_per_pair_are_recorded(tmp_path):
+    """Stage 0's descriptor matches per keyframe pair (match_tracks on a real texture seen by two
+    'videos', one shifted): the counts add up to the pair's matches, and the recording holds them
+    as a series on the keyframe_pair timeline plus a (Ka,Kb) grid, readable back."""
+    import cv2
+
+    from vs_inspect.cues.config import MatchConfig
+    from vs_inspect.cues.matching import extract_keyframe_features, match_tracks
+
+    from ..cues.scenes import texture
+
+    img = texture(240, 320, 5, blur=1.5)
+    frames_a = np.stack([img, np.roll(img, 3, axis=1), np.zeros_like(img)])  # keyframe 2: blank, no features
+    frames_b = np.stack([np.roll(img, 6, axis=0), np.roll(img, -4, axis=1)])
+    cfg = MatchConfig(dynamic_only=False)
+    fa = extract_keyframe_features(frames_a, None, np.arange(3), np.zeros((0, 3, 2)), cfg)
+    fb = extract_keyframe_features(frames_b, None, np.arange(2), np.zeros((0, 2, 2)), cfg)
+    _, ps = match_tracks("a", "b", fa, fb, np.zeros(0, int), np.zeros(0, int), cfg)
+    counts = ps.keyframe_matches
+    assert counts.shape == (3, 2) and counts.sum() == ps.matches
+    assert (counts[:2] > 50).all() and (counts[2] == 0).all(), counts
+    out = tmp_path / "matches.rrd"
+    with RerunSink(out, progress=False) as sink:
+        sink.pair_matches("a", "b", fa.keyframes, fb.keyframes, counts)
+    assert rerun_verify(out, tmp_path).returncode == 0
+    assert {"pairs/a__b/keyframe_matches", "pairs/a__b/keyframe_matches/grid"} <= chunk_entities(out)
+    import rerun.chunk as rrc
+    store = rrc.RrdReader(str(out)).stream().collect()
+    tab = store.reader("keyframe_pair", contents="/pairs/a__b/keyframe_matches").to_arrow_table()
+    col = [c for c in tab.column_names if c.endswith("Scalars:scalars")][0]
+    got = np.array([v[0] for v in tab.column(col).to_pylist()])
+    order = np.argsort(np.array(tab.column("keyframe_pair").to_pylist()))
+    assert np.array_equal(got[order], counts.ravel())

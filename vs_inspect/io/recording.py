@@ -54,6 +54,7 @@ TIMELINE_TIME = "time"  # global time after sync, seconds
 TIMELINE_OFFSET_MS = "offset_ms"  # a pair's candidate Δ_ab, whole milliseconds
 TIMELINE_ITERATION = "iteration"  # Stage 2's IRLS iteration
 TIMELINE_EVENT = "event"  # order of log messages
+TIMELINE_KEYFRAME_PAIR = "keyframe_pair"  # Stage 0's keyframe pairs of a video pair, row-major (keyframe of a, of b)
 
 
 def entity_name(name: str) -> str:
@@ -101,6 +102,12 @@ def pair_decision_path(a: str, b: str) -> str:
 
 def pair_epipolar_path(a: str, b: str) -> str:
     return f"{pair_path(a, b)}/epipolar"
+
+
+def pair_matches_path(a: str, b: str) -> str:
+    """Stage 0's descriptor matches per keyframe pair: a count series on the keyframe_pair
+    timeline, and /grid the (keyframes of a, keyframes of b) counts as a tensor."""
+    return f"{pair_path(a, b)}/keyframe_matches"
 
 
 def video_path(name: str) -> str:

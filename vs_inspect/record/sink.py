@@ -39,6 +39,11 @@ class Sink:
         """(h,w) uint8/uint16 instance ids of moving regions at a frame (0 = static background), as
         the recording keeps them (analysis.record_views.record_mask)."""
 
+    def pair_matches(self, a: str, b: str, frames_a: np.ndarray, frames_b: np.ndarray,
+                     counts: np.ndarray) -> None:
+        """Descriptor matches between every keyframe of a (frames_a (Ka,)) and of b (frames_b (Kb,)):
+        counts (Ka,Kb) int."""
+
     def cameras(self, cameras: dict[str, CameraTrack], points_world: np.ndarray | None,
                 colors: np.ndarray | None) -> None:
         """Cameras of all videos in one world frame, and the static 3D points (N,3) with (N,3) uint8 colours."""
