@@ -12,7 +12,6 @@ import math
 import time
 
 import numpy as np
-from tqdm import tqdm
 
 from ..analysis.record_views import pair_record_view, run_record_view
 from ..errors import InputError
@@ -23,6 +22,7 @@ from ..sync.decision import check_inliers, check_track_pairs_at_best, decide
 from ..sync.landscape import PairInput, compute_landscape, curvature_uncertainty, refine_minimum
 from ..sync.pairs import select_pairs
 from ..sync.solve import PairMeasurement, solve_offsets
+from ..engine import Engine, LocalEngine, TaskFailed
 
 log = logging.getLogger(__name__)
 
@@ -55,10 +55,30 @@ def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig):
     return land, pe
 
 
+def _pair_task(shared: tuple[CueBundle, SyncConfig], pair: tuple[str, str]) -> PairLandscape:
+    """Stage 1 of one pair as an engine task: the landscape only (the PairEnergy stays behind)."""
+    bundle, cfg = shared
+    return pair_landscape(bundle, pair[0], pair[1], cfg)[0]
+
+
+def _fixed_threads(cfg: SyncConfig) -> SyncConfig:
+    """cfg with the kernel's work split fixed to this process's thread count, so that a task on
+    another worker or node sums in the same order and gives the same landscape bit for bit."""
+    if cfg.landscape.threads:
+        return cfg
+    import numba
+    return dataclasses.replace(cfg, landscape=dataclasses.replace(cfg.landscape,
+                                                                  threads=numba.get_num_threads()))
+
+
 def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | None = None,
-                progress: bool = True) -> SyncResult:
-    """Stage 1 over the pairs that cfg.pairs selects, then Stage 2, reported to the sink."""
+                progress: bool = True, engine: Engine | None = None) -> SyncResult:
+    """Stage 1 over the pairs that cfg.pairs selects, then Stage 2, reported to the sink.
+
+    engine: where the pairs' landscapes are computed (default: in this process); Stage 2 and
+    everything reported to the sink stay here, in pair order, whatever the engine."""
     sink = sink or NullSink()
+    engine = engine or LocalEngine()
     names = bundle.names
     reference = cfg.solve.reference or names[0]
     if reference not in names:
@@ -67,11 +87,15 @@ def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | 
     sink.bundle(bundle)
     t0 = time.perf_counter()
     has = {k for k, v in bundle.pairs.items() if len(v.index)}
-    chosen = select_pairs(names, has, cfg.pairs)
+    chosen = select_pairs(names, has, cfg.pairs, bundle.cameras)
     lands: list[PairLandscape] = []
-    for a, b in tqdm(chosen, desc="pair landscapes", unit="pair", disable=not progress,
-                     leave=False):
-        land, pe = pair_landscape(bundle, a, b, cfg)
+    task_cfg = _fixed_threads(cfg)
+    for (a, b), land in zip(chosen, engine.map(_pair_task, chosen, shared=(bundle, task_cfg),
+                                                desc="pair landscapes", unit="pair", progress=progress)):
+        if isinstance(land, TaskFailed):  # its worker died: the pair counts as not evaluated
+            log.warning("%s__%s: %s", a, b, land.reason)
+            sink.stage_event("landscapes", f"{a}__{b}: not evaluated: {land.reason}")
+            continue
         lands.append(land)
         log.info("%s__%s: %s Δ=%+.4f s (%s)", a, b, "accepted" if land.decision.accepted else
                  "rejected", land.best_offset_s, land.decision.reason)
