@@ -30,7 +30,7 @@ PathLike = str | os.PathLike
 def run(inputs: CueBundle | PathLike | Sequence[PathLike], config: RunConfig = RunConfig(),
         sink: Sink | None = None, *, calibration: PathLike | None = None, fps: float | None = None,
         bundle_out: PathLike | None = None, progress: bool = True,
-        recorded_inputs: RunInputs | None = None) -> RunResult:
+        recorded_inputs: RunInputs | None = None, engine: Engine | None = None) -> RunResult:
     """Synchronize: one offset per input video (None with the reason when it has none).
 
     inputs: a cue bundle (CueBundle, or the path of its folder) for Stage 1 + 2, or a list of
@@ -42,11 +42,15 @@ def run(inputs: CueBundle | PathLike | Sequence[PathLike], config: RunConfig = R
 
     config.engine says where Stage 0's per-video and Stage 1's per-pair work runs (this process,
     or Ray tasks); Stage 2, the sink and the result are the driver's, the same either way.
+    engine: an engine already open (it is left open), instead of opening config.engine's.
 
     Never stops because Stage 0 could not use a video: such videos (even all of them, even the
     reference) get None and the reason, and when the reference is one of them another video
     with cues takes its place (said in its reason).
     """
+    if engine is not None:
+        return _run(inputs, config, sink or NullSink(), engine, calibration, fps, bundle_out, progress,
+                    recorded_inputs)
     with open_engine(config.engine) as engine:
         return _run(inputs, config, sink or NullSink(), engine, calibration, fps, bundle_out, progress,
                     recorded_inputs)
