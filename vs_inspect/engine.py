@@ -24,6 +24,7 @@ import logging
 import os
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from tqdm import tqdm
@@ -104,6 +105,11 @@ class RayEngine(Engine):
     def __init__(self, address: str | None = None, num_cpus: int | None = None):
         # no usage statistics and no dashboard: nothing leaves the machine
         os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
+        if not address:
+            # an embedded Ray listens on the loopback address only (Ray otherwise binds to the
+            # machine's network address, which a single machine does not need); read when ray
+            # is first imported
+            os.environ.setdefault("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")
         try:
             import ray
         except ImportError:
@@ -111,12 +117,19 @@ class RayEngine(Engine):
         self._ray = ray
         self._owned = not ray.is_initialized()
         if self._owned:
-            kw: dict[str, Any] = dict(log_to_driver=False, configure_logging=False)
+            # the workers import the same vs_inspect as this driver when its folder is reachable
+            # from them (the embedded Ray, or a cluster on shared storage)
+            here = str(Path(__file__).resolve().parents[1])
+            path = os.pathsep.join(p for p in (here, os.environ.get("PYTHONPATH", "")) if p)
+            kw: dict[str, Any] = dict(log_to_driver=False, configure_logging=False,
+                                      runtime_env={"env_vars": {"PYTHONPATH": path}})
             try:
                 if address:
                     ray.init(address=address, **kw)
                 else:
-                    ray.init(num_cpus=num_cpus or os.cpu_count() or 1, include_dashboard=False, **kw)
+                    # "local": always a new Ray of its own, never one found running on the machine
+                    ray.init(address="local", num_cpus=num_cpus or os.cpu_count() or 1,
+                             include_dashboard=False, **kw)
             except (ConnectionError, RuntimeError, ValueError) as exc:
                 where = f"the Ray cluster at {address}" if address else "an embedded Ray"
                 raise InputError(f"--engine ray: could not start or join {where}: {exc}") from None
