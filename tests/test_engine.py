@@ -3,6 +3,7 @@ and a video whose task fails (a corrupt stream) is null with its reason while th
 
 from __future__ import annotations
 
+import hashlib
 import os
 from pathlib import Path
 
@@ -13,6 +14,8 @@ from vs_inspect.bench.scale import RANGE_S, rig_config
 from vs_inspect.engine import EngineConfig, LocalEngine, TaskFailed, open_engine
 from vs_inspect.errors import InputError
 from vs_inspect.pipeline import RunConfig, run
+from vs_inspect.record.options import RecordOptions
+from vs_inspect.record.sink import Sink
 from vs_inspect.sync.config import LandscapeConfig, PairSelection, SyncConfig
 from vs_inspect.synth.cues import make_cue_scene
 
@@ -123,7 +126,37 @@ def test_twelve_cameras_same_offsets_local_and_ray_cluster(ray_cluster):
         np.testing.assert_array_equal(d.energy, l.energy)
 
 
+class _Calls(Sink):
+    """A recording sink that notes every hook call (with a digest of the images it gets)."""
+
+    def __init__(self):
+        self.options = RecordOptions()
+        self.calls: list[tuple] = []
+
+    def video(self, info, path):
+        self.calls.append(("video", info.name))
+
+    def video_frame(self, name, frame_index, image_bgr):
+        self.calls.append(("frame", name, frame_index, hashlib.sha1(image_bgr.tobytes()).hexdigest()))
+
+    def dynamic_mask(self, name, frame_index, instances):
+        self.calls.append(("mask", name, frame_index, hashlib.sha1(instances.tobytes()).hexdigest()))
+
+    def cameras(self, cameras, points_world, colors):
+        self.calls.append(("cameras", tuple(cameras)))
+
+    def pair_landscape(self, landscape, view=None):
+        self.calls.append(("pair", landscape.a, landscape.b, landscape.energy.tobytes(), view is not None))
+
+    def sync_result(self, result, view=None):
+        self.calls.append(("sync", tuple(result.offsets_s.items()), view is not None))
+
+    def stage_event(self, stage, message, **numbers):
+        self.calls.append(("event", stage, message))
+
+
 def test_corrupt_video_task_is_null_with_its_reason_and_the_rest_finish(ray_cluster, tmp_path):
+    """...and a recording sink sees the same calls, in the same order, under both engines."""
     import json
     videos = [tmp_path / f"v{i}.mp4" for i in range(3)]
     for i, v in enumerate(videos):
@@ -141,9 +174,12 @@ def test_corrupt_video_task_is_null_with_its_reason_and_the_rest_finish(ray_clus
                    "size": [320, 240]}
     cal.write_text(json.dumps(cams))
     inputs = [videos[0], videos[1], bad, videos[2]]
-    local = run(inputs, RunConfig(), calibration=cal, progress=False)
+    local_sink, ray_sink = _Calls(), _Calls()
+    local = run(inputs, RunConfig(), local_sink, calibration=cal, progress=False)
     cfg = RunConfig(engine=EngineConfig("ray", ray_address=ray_cluster))
-    distributed = run(inputs, cfg, calibration=cal, progress=False)
+    distributed = run(inputs, cfg, ray_sink, calibration=cal, progress=False)
+    assert any(c[0] == "frame" for c in local_sink.calls) and any(c[0] == "pair" for c in local_sink.calls)
+    assert ray_sink.calls == local_sink.calls
     for res in (local, distributed):
         assert res.offsets_s["bad"] is None
         assert res.unresolved["bad"].startswith("could not be read:") and "corrupt" in res.unresolved["bad"]
