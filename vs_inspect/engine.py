@@ -121,8 +121,8 @@ class RayEngine(Engine):
             # from them (the embedded Ray, or a cluster on shared storage)
             here = str(Path(__file__).resolve().parents[1])
             path = os.pathsep.join(p for p in (here, os.environ.get("PYTHONPATH", "")) if p)
-            kw: dict[str, Any] = dict(log_to_driver=False, configure_logging=False,
-                                      runtime_env={"env_vars": {"PYTHONPATH": path}})
+            kw: dict[str, Any] = {"log_to_driver": False, "configure_logging": False,
+                                  "runtime_env": {"env_vars": {"PYTHONPATH": path}}}
             try:
                 if address:
                     ray.init(address=address, **kw)

@@ -20,8 +20,8 @@ import numpy as np
 from tqdm import tqdm
 
 from ..analysis.record_views import record_frame, record_mask
-from ..errors import InputError, NoUsableVideos
 from ..engine import Engine, LocalEngine, TaskFailed
+from ..errors import InputError, NoUsableVideos
 from ..record.sink import NullSink, Sink
 from ..types import CameraTrack, CueBundle, CueStats, TrackPairs, Tracks, VideoCueStats, VideoInfo
 from .config import CueConfig

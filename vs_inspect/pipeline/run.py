@@ -18,8 +18,8 @@ from collections.abc import Sequence
 from ..engine import Engine, open_engine
 from ..errors import InputError, NoUsableVideos
 from ..record.sink import NullSink, Sink
-from ..types import CueBundle, CueStats, RunInputs, RunResult, SyncResult
 from ..sync.config import SyncConfig
+from ..types import CueBundle, CueStats, RunInputs, RunResult, SyncResult
 from .config import RunConfig
 from .stage0 import run_stage0
 from .stage12 import sync_bundle
@@ -51,8 +51,8 @@ def run(inputs: CueBundle | PathLike | Sequence[PathLike], config: RunConfig = R
     if engine is not None:
         return _run(inputs, config, sink or NullSink(), engine, calibration, fps, bundle_out, progress,
                     recorded_inputs)
-    with open_engine(config.engine) as engine:
-        return _run(inputs, config, sink or NullSink(), engine, calibration, fps, bundle_out, progress,
+    with open_engine(config.engine) as opened:
+        return _run(inputs, config, sink or NullSink(), opened, calibration, fps, bundle_out, progress,
                     recorded_inputs)
 
 

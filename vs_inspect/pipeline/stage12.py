@@ -14,6 +14,7 @@ import time
 import numpy as np
 
 from ..analysis.record_views import pair_record_view, run_record_view
+from ..engine import Engine, LocalEngine, TaskFailed
 from ..errors import InputError
 from ..record.sink import NullSink, Sink
 from ..types import CueBundle, PairDecision, PairLandscape, SyncResult, TrackPairs
@@ -22,7 +23,6 @@ from ..sync.decision import check_inliers, check_track_pairs_at_best, decide
 from ..sync.landscape import PairInput, compute_landscape, curvature_uncertainty, refine_minimum
 from ..sync.pairs import select_pairs
 from ..sync.solve import PairMeasurement, solve_offsets
-from ..engine import Engine, LocalEngine, TaskFailed
 
 log = logging.getLogger(__name__)
 
