@@ -177,3 +177,16 @@ def test_help_shows_no_measurement_of_a_dataset():
     text = _parser(sync_cmd)._subparsers._group_actions[0].choices["sync"].format_help()
     for word in ("blenderbox", "pan160906", "fencing1", "rendered scene", "measured", " min on "):
         assert word not in text, word
+
+
+def test_engine_and_knn_flags():
+    from vs_inspect.engine import EngineConfig
+    args = _parser(sync_cmd).parse_args(["sync", "--out", "o", "--engine", "ray", "--ray-address",
+                                         "127.0.0.1:6379", "--pairs", "knn:3", "--seed", "2"])
+    cfg = run_config(args)
+    assert cfg.engine == EngineConfig("ray", "127.0.0.1:6379")
+    assert cfg.sync.pairs == PairSelection("knn", 1.0, 2, 3)
+    assert RunConfig.from_dict(json.loads(json.dumps(cfg.to_dict()))) == cfg
+    assert run_config(_parser(sync_cmd).parse_args(["sync", "--out", "o"])).engine == EngineConfig("local")
+    with pytest.raises(InputError, match="knn:K"):
+        run_config(_parser(sync_cmd).parse_args(["sync", "--out", "o", "--pairs", "knn:0"]))

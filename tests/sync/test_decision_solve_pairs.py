@@ -149,3 +149,50 @@ def test_pair_selection_modes():
     assert PairSelection.parse("0.8").fraction == 0.8
     with pytest.raises(ValueError):
         PairSelection.parse("2")
+
+
+def _ring(n: int) -> dict:
+    """n static cameras on a circle, each looking at the centre (viewing directions 360/n apart)."""
+    from vs_inspect.geometry.epipolar import look_at
+    from vs_inspect.types import CameraTrack
+    K = np.array([[800.0, 0, 640], [0, 800, 360], [0, 0, 1]])
+    return {f"v{i}": CameraTrack(K, look_at([9 * np.cos(2 * np.pi * i / n), 9 * np.sin(2 * np.pi * i / n), 2],
+                                            [0, 0, 1])) for i in range(n)}
+
+
+def test_knn_pairs_are_the_nearest_viewing_directions_and_stay_connected():
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    n = 16
+    cams = _ring(n)
+    names = list(cams)
+    every = select_pairs(names, set(), PairSelection("all"))
+    sel = PairSelection.parse("knn:2")
+    assert (sel.mode, sel.k) == ("knn", 2)
+    knn = select_pairs(names, set(every), sel, cams)
+    # on a ring the two nearest viewing directions are the two neighbours: the ring's n edges
+    ring = {tuple(sorted((f"v{i}", f"v{(i + 1) % n}"), key=names.index)) for i in range(n)}
+    assert set(knn) == ring
+    assert len(knn) <= n * sel.k + n - 1
+    # with k=1 the nearest-neighbour graph falls apart; the spanning tree joins it again
+    idx = {v: i for i, v in enumerate(names)}
+    one = select_pairs(names, set(every), PairSelection.parse("knn:1"), cams)
+    g = coo_matrix((np.ones(len(one)), ([idx[a] for a, _ in one], [idx[b] for _, b in one])), shape=(n, n))
+    assert connected_components(g, directed=False)[0] == 1
+    # pairs without track pairs are never spent on
+    some = set(every) - {("v0", "v1")}
+    assert ("v0", "v1") not in select_pairs(names, some, sel, cams)
+    with pytest.raises(ValueError, match="needs the cameras"):
+        select_pairs(names, set(every), sel)
+    for bad in ("knn:0", "knn:x", "knn:"):
+        with pytest.raises(ValueError, match="knn:K"):
+            PairSelection.parse(bad)
+
+
+def test_knn_on_a_large_rig_costs_n_times_k():
+    from vs_inspect.bench.scale import rig_config
+    from vs_inspect.synth.cues import make_cue_scene
+    bundle = make_cue_scene(rig_config(64)).bundle
+    has = {k for k, v in bundle.pairs.items() if len(v.index)}
+    knn = select_pairs(bundle.names, has, PairSelection.parse("knn:4"), bundle.cameras)
+    assert 64 * 2 <= len(knn) <= 64 * 4 + 63  # not 2016

@@ -71,7 +71,7 @@ def add_config_file_option(p: argparse.ArgumentParser) -> None:
 
 def add_sync_options(p: argparse.ArgumentParser) -> None:
     """The Stage 1 + 2 options, generated from sync.config's fields (help = their docstrings)."""
-    add_config_options(p, ("sync",))
+    add_config_options(p, ("sync", "engine"))
 
 
 def add_cue_options(p: argparse.ArgumentParser) -> None:

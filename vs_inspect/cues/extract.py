@@ -20,6 +20,7 @@ import numpy as np
 from tqdm import tqdm
 
 from ..analysis.record_views import record_frame, record_mask
+from ..engine import Engine, LocalEngine, TaskFailed
 from ..errors import InputError, NoUsableVideos
 from ..record.sink import NullSink, Sink
 from ..types import CameraTrack, CueBundle, CueStats, TrackPairs, Tracks, VideoCueStats, VideoInfo
@@ -120,6 +121,46 @@ def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) 
                       moving_fraction, sfm)
 
 
+@dataclass(frozen=True)
+class VideoCuesOutcome:
+    """What one video's Stage 0 task returns: its cues, or why it has none, with the views the
+    recording keeps (the driver hands them to its sink, so tasks need no sink)."""
+
+    cues: _VideoCues | None  # None when the video could not be read
+    error: str | None  # why (None when cues is set)
+    frames: tuple  # ((frame index, (h,w,3) uint8 BGR), ...) as the recording keeps them
+    masks: tuple  # ((frame index, (h,w) instance ids), ...)
+    timings_s: dict  # step -> seconds spent on this video
+
+
+class _Collect(NullSink):
+    """Keeps what _video_cues would show a recording sink, to hand over from a task."""
+
+    def __init__(self, options):
+        self.options = options
+        self.frames: list = []
+        self.masks: list = []
+
+    def video_frame(self, name, frame_index, image_bgr):
+        self.frames.append((frame_index, image_bgr))
+
+    def dynamic_mask(self, name, frame_index, instances):
+        self.masks.append((frame_index, instances))
+
+
+def video_cues_task(task: tuple, src) -> VideoCuesOutcome:
+    """Stage 0 of one video as an engine task. task: (CueConfig, the sink's RecordOptions or None,
+    whether camera-estimation frames are needed); src: its VideoSource (the task opens the file,
+    which must be reachable from the worker)."""
+    cfg, options, need_sfm = task
+    collect, timings = _Collect(options), {}
+    try:
+        cues = _video_cues(src, cfg, collect, need_sfm, timings)
+    except InputError as exc:
+        return VideoCuesOutcome(None, str(exc), tuple(collect.frames), tuple(collect.masks), timings)
+    return VideoCuesOutcome(cues, None, tuple(collect.frames), tuple(collect.masks), timings)
+
+
 def _import_cameras(calibration: dict, vids: dict[str, _VideoCues]) -> tuple[dict, dict, dict]:
     """(cameras, undistorted tracks, dropped) from an imported calibration."""
     from ..io.calibration import fit_to_video, to_camera_track, undistort_points
@@ -151,8 +192,13 @@ def _import_cameras(calibration: dict, vids: dict[str, _VideoCues]) -> tuple[dic
 
 
 def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueConfig(),
-                 sink: Sink | None = None, progress: bool = True) -> tuple[CueBundle, CueStats]:
+                 sink: Sink | None = None, progress: bool = True,
+                 engine: Engine | None = None) -> tuple[CueBundle, CueStats]:
     """Cues of every video: (CueBundle of the usable videos, CueStats).
+
+    engine: where each video's own cues (decoding, moving regions, tracks, features) are
+    computed, one task per video (default: in this process); matching across videos, the
+    cameras and everything reported to the sink stay here, in video order.
 
     sources: VideoSource list (vs_inspect.io.video.open_video). calibration: name ->
     CameraCalibration (vs_inspect.io.calibration.load_calibration) or None to estimate the
@@ -172,15 +218,25 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
                    "camera_source": "calibration" if calibration is not None else "estimated"}
     t_all = time.perf_counter()
     vids: dict[str, _VideoCues] = {}
-    for src in tqdm(sources, desc="cues per video", unit="video", disable=not progress, leave=False):
+    engine = engine or LocalEngine()
+    task = (cfg, sink.options, calibration is None)
+    for src, out in zip(sources, engine.map(video_cues_task, sources, shared=task,
+                                            desc="cues per video", unit="video", progress=progress)):
         sink.video(src.info, str(src.path))
-        try:
-            v = _video_cues(src, cfg, sink, calibration is None, timings)
-        except InputError as exc:
-            stats["dropped"][src.info.name] = f"could not be read: {exc}"
-            sink.stage_event("cues", f"{src.info.name}: could not be read: {exc}")
-            log.warning("%s: could not be read: %s", src.info.name, exc)
+        if isinstance(out, TaskFailed):  # its worker or node died
+            out = VideoCuesOutcome(None, out.reason, (), (), {})
+        for k, img in out.frames:
+            sink.video_frame(src.info.name, k, img)
+        for k, mask in out.masks:
+            sink.dynamic_mask(src.info.name, k, mask)
+        for step, sec in out.timings_s.items():
+            timings[step] = timings.get(step, 0.0) + sec
+        if out.cues is None:
+            stats["dropped"][src.info.name] = f"could not be read: {out.error}"
+            sink.stage_event("cues", f"{src.info.name}: could not be read: {out.error}")
+            log.warning("%s: could not be read: %s", src.info.name, out.error)
             continue
+        v = out.cues
         vids[src.info.name] = v
         n_tracks = v.xy_full.shape[0]
         stats["videos"][src.info.name] = {

@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from ..cues.config import CueConfig
+from ..engine import EngineConfig
 from ..errors import InputError
 from ..io.atomic import write_json_atomic
 from ..io.result import read_json_file
@@ -50,6 +51,9 @@ class RunConfig:
     """Stage 1 (pair landscapes and decisions) and Stage 2 (global solve)."""
     record: RecordOptions = field(default_factory=RecordOptions)
     """What the rerun recording keeps (when a recording is written)."""
+    engine: EngineConfig = field(default_factory=EngineConfig,
+                                 metadata={"group": "engine (where Stage 0 and Stage 1 run)"})
+    """Where the per-video and per-pair work runs (local or Ray); the results do not depend on it."""
 
     def to_dict(self) -> dict[str, Any]:
         return _to_dict(self)

@@ -15,10 +15,11 @@ import os
 import time
 from collections.abc import Sequence
 
+from ..engine import Engine, open_engine
 from ..errors import InputError, NoUsableVideos
 from ..record.sink import NullSink, Sink
-from ..types import CueBundle, CueStats, RunInputs, RunResult, SyncResult
 from ..sync.config import SyncConfig
+from ..types import CueBundle, CueStats, RunInputs, RunResult, SyncResult
 from .config import RunConfig
 from .stage0 import run_stage0
 from .stage12 import sync_bundle
@@ -29,7 +30,7 @@ PathLike = str | os.PathLike
 def run(inputs: CueBundle | PathLike | Sequence[PathLike], config: RunConfig = RunConfig(),
         sink: Sink | None = None, *, calibration: PathLike | None = None, fps: float | None = None,
         bundle_out: PathLike | None = None, progress: bool = True,
-        recorded_inputs: RunInputs | None = None) -> RunResult:
+        recorded_inputs: RunInputs | None = None, engine: Engine | None = None) -> RunResult:
     """Synchronize: one offset per input video (None with the reason when it has none).
 
     inputs: a cue bundle (CueBundle, or the path of its folder) for Stage 1 + 2, or a list of
@@ -39,12 +40,25 @@ def run(inputs: CueBundle | PathLike | Sequence[PathLike], config: RunConfig = R
     results and, last, sink.run_summary(result). recorded_inputs: what result.json's "input"
     says (default: the paths given).
 
+    config.engine says where Stage 0's per-video and Stage 1's per-pair work runs (this process,
+    or Ray tasks); Stage 2, the sink and the result are the driver's, the same either way.
+    engine: an engine already open (it is left open), instead of opening config.engine's.
+
     Never stops because Stage 0 could not use a video: such videos (even all of them, even the
     reference) get None and the reason, and when the reference is one of them another video
     with cues takes its place (said in its reason).
     """
+    if engine is not None:
+        return _run(inputs, config, sink or NullSink(), engine, calibration, fps, bundle_out, progress,
+                    recorded_inputs)
+    with open_engine(config.engine) as opened:
+        return _run(inputs, config, sink or NullSink(), opened, calibration, fps, bundle_out, progress,
+                    recorded_inputs)
+
+
+def _run(inputs, config: RunConfig, sink: Sink, engine: Engine, calibration, fps, bundle_out,
+         progress: bool, recorded_inputs: RunInputs | None) -> RunResult:
     t0 = time.perf_counter()
-    sink = sink or NullSink()
     if isinstance(inputs, CueBundle) or isinstance(inputs, (str, os.PathLike)):
         if calibration is not None or fps is not None or bundle_out is not None:
             raise InputError("calibration, fps and bundle_out apply to videos, not to a cue bundle")
@@ -54,7 +68,7 @@ def run(inputs: CueBundle | PathLike | Sequence[PathLike], config: RunConfig = R
     else:
         try:
             bundle, stats, videos = run_stage0(list(inputs), calibration, fps, config.cues, sink=sink,
-                                               progress=progress)
+                                               progress=progress, engine=engine)
         except NoUsableVideos as exc:  # nothing to synchronize, but every video gets its reason
             result = _nothing_usable(exc, config, RunInputs(videos=exc.inputs, fps=fps),
                                      recorded_inputs, time.perf_counter() - t0)
@@ -68,7 +82,7 @@ def run(inputs: CueBundle | PathLike | Sequence[PathLike], config: RunConfig = R
         stage0_timings = {f"stage0_{k}": v for k, v in stats.timings_s.items()}
         stage0_timings["stage0_with_io_s"] = time.perf_counter() - t0
     sync_cfg, moved = _usable_reference(config.sync, bundle, stats, list(videos))
-    sync = sync_bundle(bundle, sync_cfg, sink=sink, progress=progress)
+    sync = sync_bundle(bundle, sync_cfg, sink=sink, progress=progress, engine=engine)
     timings = {**stage0_timings, **sync.timings_s, "total_s": time.perf_counter() - t0}
     result = _run_result(sync, stats, recorded_inputs or where, config, bundle.gt_offsets_s or None,
                          timings, moved)

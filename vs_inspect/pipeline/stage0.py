@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ..cues.config import CueConfig
+from ..engine import Engine
 from ..errors import BadVideoName, InputError, NoUsableVideos
 from ..record.sink import Sink
 from ..types import CueBundle, CueStats
@@ -60,11 +61,13 @@ def check_cue_config(cfg: CueConfig) -> None:
 
 def run_stage0(videos: Sequence[PathLike], calibration: PathLike | None = None,
                fps: float | None = None, cfg: CueConfig = CueConfig(), sink: Sink | None = None,
-               progress: bool = True) -> tuple[CueBundle, CueStats, dict[str, str]]:
+               progress: bool = True, engine: Engine | None = None
+               ) -> tuple[CueBundle, CueStats, dict[str, str]]:
     """Stage 0 on video files or image folders: (bundle, stats, {name: path} of every input).
 
     calibration: a file or folder that io.calibration.load_calibration reads, or None to estimate
     the cameras. fps: frame rate of image folders (and of files whose timestamps are unusable).
+    engine: where each video's cues are extracted (default: in this process).
     InputError when fewer than two videos are given; NoUsableVideos (an InputError that carries
     every video's reason) when fewer than two can be opened or none can be used.
     """
@@ -85,7 +88,7 @@ def run_stage0(videos: Sequence[PathLike], calibration: PathLike | None = None,
     if calibration is not None:
         calib = load_calibration(calibration, [s.info.name for s in sources])
     try:
-        bundle, stats = extract_cues(sources, calib, cfg, sink=sink, progress=progress)
+        bundle, stats = extract_cues(sources, calib, cfg, sink=sink, progress=progress, engine=engine)
     except NoUsableVideos as exc:
         stats = dataclasses.replace(exc.stats, dropped={**dropped, **exc.stats.dropped})
         raise NoUsableVideos(str(exc), stats, inputs) from None

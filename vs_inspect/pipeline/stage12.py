@@ -17,6 +17,7 @@ import numpy as np
 from tqdm import tqdm
 
 from ..analysis.record_views import pair_record_view, run_record_view
+from ..engine import Engine, LocalEngine, TaskFailed
 from ..errors import InputError
 from ..record.sink import NullSink, Sink
 from ..types import (CameraTrack, CueBundle, PairDecision, PairLandscape, SolveIteration, SyncResult,
@@ -192,14 +193,36 @@ def _pose_free_rejected(bundle: CueBundle, a: str, b: str, tp: TrackPairs, cfg: 
                          cfg.landscape.residual, nan, pose_free=True)
 
 
+def _pair_task(shared: tuple[CueBundle, SyncConfig],
+               item: tuple[str, str, PoseFreePair | None, bool]) -> PairLandscape:
+    """Stage 1 of one pair as an engine task: the landscape only (the PairEnergy stays behind)."""
+    bundle, cfg = shared
+    a, b, pf, is_pose_free = item
+    return pair_landscape(bundle, a, b, cfg, pf, is_pose_free)[0]
+
+
+def _fixed_threads(cfg: SyncConfig) -> SyncConfig:
+    """cfg with the kernel's work split fixed to this process's thread count, so that a task on
+    another worker or node sums in the same order and gives the same landscape bit for bit."""
+    if cfg.landscape.threads:
+        return cfg
+    import numba
+    return dataclasses.replace(cfg, landscape=dataclasses.replace(cfg.landscape,
+                                                                  threads=numba.get_num_threads()))
+
+
 def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | None = None,
                 progress: bool = True,
-                pose_free: dict[tuple[str, str], PoseFreePair | None] | None = None) -> SyncResult:
+                pose_free: dict[tuple[str, str], PoseFreePair | None] | None = None,
+                engine: Engine | None = None) -> SyncResult:
     """Stage 1 over the pairs that cfg.pairs selects, then Stage 2, reported to the sink.
 
     pose_free: estimates of pose-free pairs made earlier (estimate_pose_free_pairs; e.g. the drift
-    model's, reused by the benchmark's constant-offset ablation); the others are estimated here."""
+    model's, reused by the benchmark's constant-offset ablation); the others are estimated here.
+    engine: where the pairs' landscapes are computed (default: in this process); Stage 2 and
+    everything reported to the sink stay here, in pair order, whatever the engine."""
     sink = sink or NullSink()
+    engine = engine or LocalEngine()
     names = bundle.names
     reference = cfg.solve.reference or names[0]
     if reference not in names:
@@ -208,15 +231,20 @@ def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | 
     sink.bundle(bundle)
     t0 = time.perf_counter()
     has = {k for k, v in bundle.pairs.items() if len(v.index)}
-    chosen = select_pairs(names, has, cfg.pairs)
+    chosen = select_pairs(names, has, cfg.pairs, bundle.cameras)
     lands: list[PairLandscape] = []
     pose_free_pairs = [(a, b) for a, b in chosen if is_pose_free_pair(bundle, a, b)]
     given = dict(pose_free or {})
     pose_free = {**{k: given[k] for k in pose_free_pairs if k in given},
                  **estimate_pose_free_pairs(bundle, [k for k in pose_free_pairs if k not in given], cfg, progress)}
-    for a, b in tqdm(chosen, desc="pair landscapes", unit="pair", disable=not progress,
-                     leave=False):
-        land, pe = pair_landscape(bundle, a, b, cfg, pose_free.get((a, b)), (a, b) in pose_free)
+    task_cfg = _fixed_threads(cfg)
+    items = [(a, b, pose_free.get((a, b)), (a, b) in pose_free) for a, b in chosen]
+    for (a, b), land in zip(chosen, engine.map(_pair_task, items, shared=(bundle, task_cfg),
+                                                desc="pair landscapes", unit="pair", progress=progress)):
+        if isinstance(land, TaskFailed):  # its worker died: the pair counts as not evaluated
+            log.warning("%s__%s: %s", a, b, land.reason)
+            sink.stage_event("landscapes", f"{a}__{b}: not evaluated: {land.reason}")
+            continue
         lands.append(land)
         log.info("%s__%s: %s Δ=%+.4f s (%s)", a, b, "accepted" if land.decision.accepted else
                  "rejected", land.best_offset_s, land.decision.reason)

@@ -93,28 +93,37 @@ class SolveConfig:
 @dataclass(frozen=True)
 class PairSelection:
     mode: str = field(default="all", metadata={
-        "flag": "--pairs", "type": str, "metavar": "{all,FRACTION,rst}",
+        "flag": "--pairs", "type": str, "metavar": "{all,FRACTION,rst,knn:K}",
         "apply": lambda text, sel: PairSelection.parse(text, sel.seed)})
-    """Pairs of videos to evaluate: all pairs, a random fraction (keeps a spanning tree so every video stays connected), or rst (a random spanning tree)."""
+    """Pairs of videos to evaluate: all pairs, a random fraction (keeps a spanning tree so every video stays connected), rst (a random spanning tree), or knn:K (each camera with the K cameras whose viewing directions are closest, plus the fewest pairs that connect the rest: about N*K pairs for N videos)."""
     fraction: float = 1.0
     """Share of pairs for mode 'fraction'."""
     seed: int = field(default=0, metadata={"flag": "--seed"})
     """Seed of random pair selection."""
+    k: int = 4
+    """Nearest cameras per camera for mode 'knn'."""
 
     def __post_init__(self) -> None:
-        check_fields(self, nonnegative=("seed",))
+        check_fields(self, nonnegative=("seed",), positive=("k",))
+        if self.mode not in ("all", "rst", "fraction", "knn"):
+            raise ValueError(f"unknown pair selection {self.mode!r}; choose all, rst, fraction or knn")
         if not 0 < self.fraction <= 1:
             raise ValueError(f"--pairs fraction must be in (0,1], got {self.fraction}")
 
     @staticmethod
     def parse(text: str, seed: int = 0) -> PairSelection:
-        """'all' | 'rst' | a fraction in (0,1] such as '0.5'."""
+        """'all' | 'rst' | a fraction in (0,1] such as '0.5' | 'knn:K' with K >= 1 such as 'knn:4'."""
         if text in ("all", "rst"):
             return PairSelection(text, 1.0, seed)
+        if text.startswith("knn:"):
+            k = text.removeprefix("knn:")
+            if not k.isdigit() or int(k) < 1:
+                raise ValueError(f"--pairs knn:K needs a whole number K >= 1, got {text!r}")
+            return PairSelection("knn", 1.0, seed, int(k))
         try:
             frac = float(text)
         except ValueError:
-            raise ValueError(f"--pairs must be all, rst or a fraction in (0,1], got {text!r}") from None
+            raise ValueError(f"--pairs must be all, rst, knn:K or a fraction in (0,1], got {text!r}") from None
         if not 0 < frac <= 1:
             raise ValueError(f"--pairs fraction must be in (0,1], got {frac}")
         return PairSelection("fraction", frac, seed)
