@@ -1,4 +1,4 @@
-"""Track pairs from epipolar consistency: two static cameras, points moving in 3D."""
+"""Track pairs from epipolar consistency: static and hand-held cameras, points moving in 3D."""
 
 from __future__ import annotations
 
@@ -69,11 +69,41 @@ def test_pairs_are_the_same_points_and_the_top_peak_is_the_offset(offset_s):
     assert st.peak_votes[0] > 2 * max(st.peak_votes[1:] + (0,))
 
 
-def test_moving_camera_is_refused_and_no_motion_gives_nothing():
+def test_moving_camera_with_per_frame_poses_pairs_with_a_static_one():
+    rng = np.random.default_rng(3)
+    cam_a = CameraTrack(K, look_at([6.0, 0.0, 1.5], [0, 0, 1]))
+    T, n, shift = 100, 40, 8  # b starts 8 frames after a: Δ_ab = +8 / FPS
+    poses = np.stack([look_at([0.015 * t, 6.0 - 0.01 * t, 2.5] + rng.normal(0, 0.02, 3), [0, 0, 1])
+                      for t in range(T)])
+    cam_b = CameraTrack(K, poses)
+    t_glob = np.arange(T + shift)
+    start = rng.uniform([-1, -1, 0.3], [1, 1, 1.7], (2 * n, 3))
+    vel = rng.normal(0, 0.02, (2 * n, 3))
+    phase = rng.uniform(0, 6.3, (2 * n, 1))
+    X = start[:, None] + vel[:, None] * t_glob[None, :, None] \
+        + 0.4 * np.sin(0.2 * t_glob[None, :] + phase)[..., None] * rng.normal(0, 1, (2 * n, 1, 3))
+    xy_a = project(cam_a.K, cam_a.cam_from_world, X[:n, :T]) + rng.normal(0, 0.3, (n, T, 2))
+    perm = rng.permutation(n)
+    Xb = np.concatenate([X[:n][perm], X[n:]])[:, shift:shift + T]  # b's frame q = global q + shift
+    xy_b = np.stack([project(K, poses[q], Xb[:, q]) for q in range(T)], 1) + rng.normal(0, 0.3, (2 * n, T, 2))
+    ts = np.arange(T) / FPS
+    info_a, info_b = VideoInfo("a", 640, 480, T, ts, FPS), VideoInfo("b", 640, 480, T, ts, FPS)
+    a_of_b = {j: int(perm[j]) for j in range(n)}
+    tp, st = geometric_pairs("a", "b", info_a, info_b, cam_a, cam_b, xy_a, xy_b)
+    assert st.peaks_s[0] == pytest.approx(shift / FPS, abs=1.5 / FPS)
+    top = tp.index[st.pair_peak == 0]
+    right = sum(a_of_b.get(int(j)) == int(i) for i, j in top)
+    assert right >= 30 and right >= 0.9 * len(top), (right, len(top))
+    # the same pair the other way round: the moving camera first, Δ negated, the same pairs
+    tp2, st2 = geometric_pairs("b", "a", info_b, info_a, cam_b, cam_a, xy_b, xy_a)
+    assert st2.peaks_s[0] == pytest.approx(-st.peaks_s[0])
+    assert {tuple(x) for x in tp2.index[:, ::-1].tolist()} == {tuple(x) for x in tp.index.tolist()}
+    with pytest.raises(ValueError, match="at least one static camera"):
+        geometric_pairs("b", "b2", info_b, info_b, cam_b, cam_b, xy_b, xy_b)
+
+
+def test_no_motion_gives_nothing():
     info_a, info_b, cam_a, cam_b, xy_a, xy_b, _ = _scene(0.0)
-    moving = CameraTrack(K, np.repeat(cam_b.cam_from_world[None], info_b.num_frames, 0))
-    with pytest.raises(ValueError, match="two static cameras"):
-        geometric_pairs("a", "b", info_a, info_b, cam_a, moving, xy_a, xy_b)
     still_a = np.repeat(np.nanmedian(xy_a, axis=1, keepdims=True), info_a.num_frames, 1)
     still_b = np.repeat(np.nanmedian(xy_b, axis=1, keepdims=True), info_b.num_frames, 1)
     tp, st = geometric_pairs("a", "b", info_a, info_b, cam_a, cam_b, still_a, still_b)
