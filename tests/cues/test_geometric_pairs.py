@@ -5,7 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vs_inspect.cues.geometric_pairs import consistent_peaks, epipolar_extent, geometric_pairs
+from vs_inspect.cues.geometric_pairs import (GeometricPairStats, consistent_at, consistent_peaks,
+                                             epipolar_extent, geometric_pairs, joint_offsets,
+                                             supporters)
 from vs_inspect.geometry.epipolar import fundamental_from_cameras, look_at, project
 from vs_inspect.types import CameraTrack, VideoInfo
 
@@ -156,3 +158,57 @@ def test_consistent_peaks_near_tie_decided_by_closure():
     clear = dict(peaks)
     clear[("a", "b")] = ((-0.675, -0.75, -0.6333), (160, 78, 73))
     assert consistent_peaks(clear, 0.12)[0][("a", "b")] == 0
+
+
+def _votes(peaks: dict[float, int], lo: float = -3.0, hi: float = 3.0, step: float = 0.02,
+           seed: int = 0) -> GeometricPairStats:
+    """A pair's vote histogram: chance votes everywhere plus the given peaks (Δ -> votes)."""
+    rng = np.random.default_rng(seed)
+    offs = np.round(np.arange(lo, hi + step / 2, step), 6)
+    v = rng.poisson(2.0, len(offs)).astype(float)
+    for d, n in peaks.items():
+        v[np.argmin(np.abs(offs - d))] += n
+    return GeometricPairStats(0, int(v.sum()), 0, (), (), None, offs, v, 0.03)
+
+
+def test_joint_offsets_closes_the_pairs_where_a_single_pair_would_pick_a_false_peak():
+    # true offsets: a 0, b 0.5, c -0.3; a__b's false peak (a repeated motion) is the higher one
+    found = {("a", "b"): _votes({1.9: 30, 0.5: 24}, seed=1),
+             ("a", "c"): _votes({-0.3: 25, 0.8: 12}, seed=2),
+             ("b", "c"): _votes({-0.8: 22, 2.0: 15}, seed=3)}
+    choice = joint_offsets(found, 0.1)
+    assert choice is not None
+    assert choice.offsets_s["a"] == 0.0
+    assert choice.offsets_s["b"] == pytest.approx(0.5, abs=0.021)
+    assert choice.offsets_s["c"] == pytest.approx(-0.3, abs=0.021)
+    assert all(m > 3 for m in choice.margin.values()), choice.margin
+    # a camera whose pairs carry no peak at all is not preferred anywhere: its margin is small
+    flat = dict(found)
+    flat[("a", "c")] = _votes({}, seed=4)
+    flat[("b", "c")] = _votes({}, seed=5)
+    weak = joint_offsets(flat, 0.1)
+    assert weak.margin["c"] < 3 < weak.margin["b"]
+    # two cameras: nothing to close
+    assert joint_offsets({("a", "b"): found[("a", "b")]}, 0.1) is None
+
+
+def test_supporters_are_one_to_one_with_the_least_residual():
+    st = GeometricPairStats(5, 5, 0, (), (), None, np.array([0.0, 0.1]), np.array([3.0, 2.0]), 0.05,
+                            np.array([[1, 7], [1, 8], [2, 7], [3, 9], [4, 9]]),
+                            np.array([0.5, 0.52, 0.48, 0.5, 1.5]), np.array([1.0, 0.5, 0.2, 1.0, 0.1]))
+    got = {tuple(x) for x in supporters(st, 0.5).tolist()}
+    # (4, 9) votes elsewhere; 1-8 and 2-7 beat 1-7 (total residual 0.7 against 1.0 + nothing)
+    assert got == {(1, 8), (2, 7), (3, 9)}
+    assert len(supporters(st, -2.0)) == 0
+    flipped = st.swapped()
+    assert {tuple(x) for x in supporters(flipped, -0.5).tolist()} == {(8, 1), (7, 2), (9, 3)}
+
+
+def test_consistent_at_keeps_the_same_points_at_the_right_offset_only():
+    info_a, info_b, cam_a, cam_b, xy_a, xy_b, a_to_b = _scene(0.4)
+    right = np.array([[i, j] for i, j in a_to_b.items()])
+    wrong = np.stack([right[:, 0], np.roll(right[:, 1], 1)], 1)
+    ok = consistent_at(info_a, info_b, cam_a, cam_b, xy_a, xy_b, right, 0.4, 2.0, 0.8, 8)
+    assert ok.mean() > 0.8
+    assert consistent_at(info_a, info_b, cam_a, cam_b, xy_a, xy_b, wrong, 0.4, 2.0, 0.8, 8).mean() < 0.1
+    assert consistent_at(info_a, info_b, cam_a, cam_b, xy_a, xy_b, right, -0.4, 2.0, 0.8, 8).mean() < 0.2

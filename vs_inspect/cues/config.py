@@ -129,7 +129,7 @@ class GeometricPairConfig:
     """Vote-histogram peaks whose supporters are kept."""
     peak_halfwidth: int = 2
     """Grid steps either side of a peak that count as supporting it."""
-    joint: bool = False
+    joint: bool = True
     """With three or more cameras, choose every camera's offset at once from all pairs' vote histograms (geometric_pairs.joint_offsets) and keep each pair's supporters of the implied Δ, instead of closing triangles of each pair's top peaks."""
     joint_min_margin: float = 3.0
     """Joint choice: a camera's geometric pairs are used only if its offset beats the best choice that moves it (by more than 3 frames) by this much summed vote z-score."""
