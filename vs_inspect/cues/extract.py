@@ -371,8 +371,17 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, cameras: dict, tracks: dic
             "geometric_peaks_s": [round(p, 4) for p in gs.peaks_s],
             "geometric_peak_votes": list(gs.peak_votes), "geometric_joint_delta_s": round(delta, 4),
             "descriptor_pairs_kept": int(len(desc.index)), "descriptor_pairs_before": int(n_desc)})
+        votes = int((np.abs(gs.cand_offset_s - delta) <= gs.halfwidth_s + 1e-9).sum()) \
+            if gs.cand_offset_s is not None else 0
+        stats["pairs"][f"{a}__{b}"].update({"geometric_joint_votes": votes,
+                                            "geometric_joint_margin": [round(joint.margin[a], 2),
+                                                                       round(joint.margin[b], 2)]})
         sink.stage_event("cues", f"{a}__{b}: {len(index)} track pairs from epipolar consistency "
-                                 f"(joint vote over all camera pairs: Δ {delta:+.3f} s)")
+                                 f"(joint vote over all camera pairs: Δ {delta:+.3f} s)",
+                         pair=f"{a}__{b}", votes=votes, informative=gs.informative,
+                         geometric_pairs=int(len(index)), descriptor_pairs_kept=int(len(desc.index)),
+                         descriptor_pairs_before=int(n_desc), margin_a=round(joint.margin[a], 2),
+                         margin_b=round(joint.margin[b], 2))
         log.info("%s__%s: %d geometric track pairs (%d new) at the joint Δ %+.3f s", a, b,
                  len(index), n_new, delta)
     return out
