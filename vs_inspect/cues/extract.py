@@ -332,9 +332,9 @@ def _merge_pairs(tp: TrackPairs, index: np.ndarray) -> tuple[TrackPairs, int]:
 def _add_joint_pairs(pairs: dict, found: dict, joint, cameras: dict, tracks: dict, vids: dict,
                      cfg: CueConfig, stats: dict, sink: Sink) -> dict:
     """The supporters of the jointly chosen offsets (geometric_pairs.joint_offsets) for every pair
-    of two cameras whose offset won by at least joint_min_margin; nothing for the others. Between
-    two such cameras a descriptor pair is kept only if it is epipolar-consistent at the joint Δ
-    (with joint_filter_descriptor): the descriptor pairs are mostly wrong on small moving objects
+    of two cameras whose offset won by at least joint_min_margin; nothing for the others. A
+    descriptor pair is kept only if it is epipolar-consistent at the joint Δ (with
+    joint_filter_descriptor): the descriptor pairs are mostly wrong on small moving objects
     (BENCHMARKS.md), and the joint Δ is the best evidence there is of the moment they share."""
     from .geometric_pairs import consistent_at, supporters
 
@@ -358,7 +358,9 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, cameras: dict, tracks: dic
         index = supporters(gs, delta) if both else np.zeros((0, 2), np.int64)
         desc = pairs[(a, b)]
         n_desc = len(desc.index)
-        if both and cfg.geometric.joint_filter_descriptor and n_desc:
+        # an unsure camera's descriptor pairs are filtered too: at a wrong joint Δ few survive
+        # (the pair is then refused for too few pairs) instead of a wrong minimum being accepted
+        if cfg.geometric.joint_filter_descriptor and n_desc:
             g = cfg.geometric
             tau = max(2.0, g.tau_diag * float(np.hypot(vids[b].info.width, vids[b].info.height)))
             ok = consistent_at(vids[a].info, vids[b].info, cameras[a], cameras[b], tracks[a].xy,

@@ -397,7 +397,7 @@ def joint_offsets(found: dict[tuple[str, str], GeometricPairStats], tol_s: float
     `candidates` highest z-peaks of its pairs with the others. A single pair can have a false
     peak above its true one (a repeated motion, points moving along their epipolar lines), but
     the false peaks of several pairs rarely close. margin says how much each camera's offset is
-    preferred over the best choice that moves it by more than tol_s. None when no camera is
+    preferred over the best choice that moves it by more than tol_s against every other camera. None when no camera is
     paired with every other (or there are fewer than three cameras).
     """
     found = {k: st for k, st in found.items() if st.votes is not None and len(st.votes)}
@@ -449,7 +449,10 @@ def joint_offsets(found: dict[tuple[str, str], GeometricPairStats], tol_s: float
     top = int(np.argmax(score))
     margin = {}
     for c, n in enumerate(names):
-        away = np.abs(combo[:, c] - combo[top, c]) > tol_s
+        # c moved against every other camera (the first camera's offset is 0 by definition, so
+        # "moved" must be relative, or it would never move)
+        rel = (combo - combo[:, c:c + 1]) - (combo[top] - combo[top, c])
+        away = np.all(np.abs(np.delete(rel, c, axis=1)) > tol_s, axis=1)
         margin[n] = float(score[top] - score[away].max()) if away.any() else float("inf")
     return JointChoice({n: float(combo[top, c]) for c, n in enumerate(names)}, float(score[top]),
                        margin, tol_s)
