@@ -5,9 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vs_inspect.cues.geometric_pairs import (GeometricPairStats, consistent_at, consistent_peaks,
-                                             epipolar_extent, geometric_pairs, joint_offsets,
-                                             supporters)
+from vs_inspect.cues.geometric_pairs import (
+    GeometricPairStats,
+    consistent_at,
+    consistent_peaks,
+    epipolar_extent,
+    geometric_pairs,
+    joint_offsets,
+    supporters,
+)
 from vs_inspect.geometry.epipolar import fundamental_from_cameras, look_at, project
 from vs_inspect.types import CameraTrack, VideoInfo
 

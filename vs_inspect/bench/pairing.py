@@ -99,7 +99,7 @@ def pair_truth(bundle: CueBundle, cams: dict[str, CameraTrack], offsets_s: dict[
     judged = common >= min_common
     right = judged & (2 * hits > common)
     # every right pair among all tracks: per frame of b, the points within tol of each other's line
-    keys, counts = [], []
+    keys = []
     for q in range(xb.shape[1]):
         if not np.all(np.isfinite(F[q])):
             continue

@@ -53,7 +53,7 @@ class GeometricPairStats:
     cand_offset_s: np.ndarray | None = None  # (M,) their best Δ_ab, seconds
     cand_res: np.ndarray | None = None  # (M,) their mean Sampson distance² there, px²
 
-    def swapped(self) -> "GeometricPairStats":
+    def swapped(self) -> GeometricPairStats:
         """The same evidence for the pair taken the other way round (Δ_ba = -Δ_ab)."""
         flip = None if self.vote_offsets_s is None else -self.vote_offsets_s[::-1]
         return GeometricPairStats(
@@ -380,7 +380,7 @@ def vote_z(st: GeometricPairStats) -> tuple[np.ndarray, np.ndarray]:
     (median and MAD over all offsets: most offsets get only chance votes)."""
     offs, v = st.vote_offsets_s, st.votes
     step = float(np.median(np.diff(offs))) if len(offs) > 1 else 1.0
-    hw = max(1, int(round(st.halfwidth_s / step)))
+    hw = max(1, round(st.halfwidth_s / step))
     sm = np.convolve(v, np.ones(2 * hw + 1), mode="same")
     med = np.median(sm)
     mad = 1.4826 * np.median(np.abs(sm - med))
