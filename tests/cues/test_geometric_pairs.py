@@ -12,7 +12,6 @@ from vs_inspect.cues.geometric_pairs import (
     epipolar_extent,
     geometric_pairs,
     joint_offsets,
-    local_peak,
     supporters,
 )
 from vs_inspect.geometry.epipolar import fundamental_from_cameras, look_at, project
@@ -219,10 +218,3 @@ def test_consistent_at_keeps_the_same_points_at_the_right_offset_only():
     assert ok.mean() > 0.8
     assert consistent_at(info_a, info_b, cam_a, cam_b, xy_a, xy_b, wrong, 0.4, 2.0, 0.8, 8).mean() < 0.1
     assert consistent_at(info_a, info_b, cam_a, cam_b, xy_a, xy_b, right, -0.4, 2.0, 0.8, 8).mean() < 0.2
-
-
-def test_local_peak_finds_the_pairs_own_best_bin_near_a_given_offset():
-    st = _votes({0.5: 30, 0.56: 18, 1.9: 40}, seed=6)
-    assert local_peak(st, 0.56, 0.09) == pytest.approx(0.5, abs=0.021)  # within the smoothing
-    assert local_peak(st, 0.56, 0.01) == pytest.approx(0.56, abs=0.011)  # the far peaks are out of reach
-    assert local_peak(st, 1.0, 0.05) == pytest.approx(1.0, abs=0.05)

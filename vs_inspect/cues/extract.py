@@ -336,7 +336,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, cameras: dict, tracks: dic
     descriptor pair is kept only if it is epipolar-consistent at the joint Δ (with
     joint_filter_descriptor): the descriptor pairs are mostly wrong on small moving objects
     (BENCHMARKS.md), and the joint Δ is the best evidence there is of the moment they share."""
-    from .geometric_pairs import consistent_at, local_peak, supporters
+    from .geometric_pairs import consistent_at, supporters
 
     sure = {n: m >= cfg.geometric.joint_min_margin for n, m in joint.margin.items()}
     stats["geometric_peaks"] = "joint"
@@ -353,9 +353,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, cameras: dict, tracks: dic
         log.warning(msg)
     out = dict(pairs)
     for (a, b), (_, gs) in found.items():
-        # the pair's own vote peak next to the jointly chosen Δ: supporters picked around a Δ
-        # a frame off would pull Stage 1 there (measured on the demo scene, see the report)
-        delta = local_peak(gs, joint.offsets_s[b] - joint.offsets_s[a], 3.0 * gs.halfwidth_s)
+        delta = joint.offsets_s[b] - joint.offsets_s[a]
         both = bool(sure.get(a) and sure.get(b))
         index = supporters(gs, delta) if both else np.zeros((0, 2), np.int64)
         desc = pairs[(a, b)]

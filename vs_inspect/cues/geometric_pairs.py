@@ -498,14 +498,3 @@ def consistent_at(info_a: VideoInfo, info_b: VideoInfo, cam_a: CameraTrack, cam_
         n = np.isfinite(d).sum(1)
         fit = (d < tau_px).sum(1)
     return (n >= min_frames) & (fit >= min_share * np.maximum(n, 1))
-
-
-def local_peak(st: GeometricPairStats, delta_s: float, radius_s: float) -> float:
-    """The highest point of the pair's own smoothed vote histogram within radius_s of delta_s
-    (delta_s when nothing is there). The joint choice picks a pair's peak among several, but it
-    is located on candidate grids that need not be the pair's own best bin."""
-    if st.vote_offsets_s is None or not len(st.vote_offsets_s):
-        return delta_s
-    offs, z = vote_z(st)
-    near = np.nonzero(np.abs(offs - delta_s) <= radius_s + 1e-9)[0]
-    return float(offs[near[np.argmax(z[near])]]) if len(near) else delta_s
