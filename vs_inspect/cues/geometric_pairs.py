@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numba as nb
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 
 from ..geometry.epipolar import fundamental_from_cameras
 from ..geometry.timing import frame_brackets
@@ -44,28 +45,49 @@ class GeometricPairStats:
     peaks_s: tuple[float, ...]  # Δ_ab of the kept peaks, seconds
     peak_votes: tuple[int, ...]  # informative pairs voting for each kept peak
     pair_peak: np.ndarray | None = None  # (P,) int, which kept peak each output pair supports
+    # the evidence behind the peaks, for the joint choice over all camera pairs (joint_offsets)
+    vote_offsets_s: np.ndarray | None = None  # (D,) Δ_ab grid, seconds, increasing
+    votes: np.ndarray | None = None  # (D,) informative candidates whose best offset is there
+    halfwidth_s: float = 0.0  # a candidate supports Δ when its best offset is this close, seconds
+    cand_index: np.ndarray | None = None  # (M,2) informative candidates (track of a, track of b)
+    cand_offset_s: np.ndarray | None = None  # (M,) their best Δ_ab, seconds
+    cand_res: np.ndarray | None = None  # (M,) their mean Sampson distance² there, px²
+
+    def swapped(self) -> GeometricPairStats:
+        """The same evidence for the pair taken the other way round (Δ_ba = -Δ_ab)."""
+        flip = None if self.vote_offsets_s is None else -self.vote_offsets_s[::-1]
+        return GeometricPairStats(
+            self.candidates, self.informative, self.kept, tuple(-p for p in self.peaks_s),
+            self.peak_votes, self.pair_peak, flip,
+            None if self.votes is None else self.votes[::-1].copy(), self.halfwidth_s,
+            None if self.cand_index is None else self.cand_index[:, ::-1].copy(),
+            None if self.cand_offset_s is None else -self.cand_offset_s, self.cand_res)
 
 
 @nb.njit(inline="always")
-def _sampson(xa, i, kk, ww, G, l0, l1, l2):
-    """Sampson distance² (px²) of a's point interpolated at (kk, ww) and b's point with line l = G x_b."""
+def _sampson(xa, i, kk, ww, G, q, l0, l1, l2):
+    """Sampson distance² (px²) of a's point interpolated at (kk, ww) and b's point at its frame q
+    with line l = G[q] x_b."""
     a0 = xa[i, kk, 0] + ww * (xa[i, kk + 1, 0] - xa[i, kk, 0])
     a1 = xa[i, kk, 1] + ww * (xa[i, kk + 1, 1] - xa[i, kk, 1])
-    m0 = G[0, 0] * a0 + G[1, 0] * a1 + G[2, 0]  # line in b: Gᵀ x_a
-    m1 = G[0, 1] * a0 + G[1, 1] * a1 + G[2, 1]
+    m0 = G[q, 0, 0] * a0 + G[q, 1, 0] * a1 + G[q, 2, 0]  # line in b: Gᵀ x_a
+    m1 = G[q, 0, 1] * a0 + G[q, 1, 1] * a1 + G[q, 2, 1]
     num = a0 * l0 + a1 * l1 + l2
     return num * num / (m0 * m0 + m1 * m1 + l0 * l0 + l1 * l1)  # NaN where a is not seen
 
 
 @nb.njit(parallel=True, cache=True)
 def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_share, max_band,
-                 min_sweep, qstep):
+                 min_sweep, qstep, truncated):
     """Per candidate: number of consistent offsets, best offset index, its mean Sampson (px²).
 
     xa (Na,Ta,2) is interpolated at τ_b + Δ_d via (k, w) (D,Tb); xb (Nb,Tb,2) read at its frames.
-    G (3,3) with x_aᵀ G x_b = 0; e_b (3,) epipole in b. The fitting moments must spread at least
+    G (Tb,3,3) with x_aᵀ G[q] x_b = 0 at b's frame q (one G repeated for two static cameras; per
+    frame when b moves; NaN where b has no pose); e_b (Tb,3) epipole in b. The fitting moments must spread at least
     min_sweep px across b's epipolar lines. Candidates consistent at more than max_band offsets
-    get best -1. Only every qstep-th frame of b is read (frame counts are of those).
+    get best -1. Only every qstep-th frame of b is read (frame counts are of those). The best
+    offset has the least mean Sampson over the fitting moments, or with truncated the least mean
+    of min(Sampson, tau²) over all common moments (a misfit then counts against an offset).
     """
     C = cand_a.shape[0]
     D, Tb = k.shape
@@ -84,14 +106,14 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
         for q in range(Tb):
             y0 = xb[j, q, 0]
             y1 = xb[j, q, 1]
-            okb[q] = q % qstep == 0 and not (np.isnan(y0) or np.isnan(y1))
+            okb[q] = q % qstep == 0 and not (np.isnan(y0) or np.isnan(y1) or np.isnan(G[q, 0, 0]))
             if okb[q]:
                 q0 = min(q0, q)
                 q1 = q
                 nvb += 1
-            lb0[q] = G[0, 0] * y0 + G[0, 1] * y1 + G[0, 2]
-            lb1[q] = G[1, 0] * y0 + G[1, 1] * y1 + G[1, 2]
-            lb2[q] = G[2, 0] * y0 + G[2, 1] * y1 + G[2, 2]
+            lb0[q] = G[q, 0, 0] * y0 + G[q, 0, 1] * y1 + G[q, 0, 2]
+            lb1[q] = G[q, 1, 0] * y0 + G[q, 1, 1] * y1 + G[q, 1, 2]
+            lb2[q] = G[q, 2, 0] * y0 + G[q, 2, 1] * y1 + G[q, 2, 2]
         ka0, ka1 = Ta, -1  # a's seen span (interpolation needs frames k and k+1)
         for kk in range(Ta):
             if not np.isnan(xa[i, kk, 0]):
@@ -111,7 +133,7 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
                 kk = k[d, q]
                 if not okb[q] or kk < ka0 or kk >= ka1:
                     continue
-                r = _sampson(xa, i, kk, w[d, q], G, lb0[q], lb1[q], lb2[q])
+                r = _sampson(xa, i, kk, w[d, q], G, q, lb0[q], lb1[q], lb2[q])
                 if r >= 2.25 * tau2:  # False for NaN (a not seen there)
                     missed += 1
             if missed > 1:
@@ -119,6 +141,7 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
             n = 0
             fit = 0
             acc = 0.0
+            acc_t = 0.0
             r0 = 0.0  # reference epipolar line in b through the first fitting point
             r1 = 0.0
             r2 = 0.0
@@ -128,10 +151,11 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
                 kk = k[d, q]
                 if kk < ka0 or kk >= ka1 or not okb[q]:
                     continue
-                r = _sampson(xa, i, kk, w[d, q], G, lb0[q], lb1[q], lb2[q])
+                r = _sampson(xa, i, kk, w[d, q], G, q, lb0[q], lb1[q], lb2[q])
                 if np.isnan(r):
                     continue
                 n += 1
+                acc_t += min(r, tau2)
                 if r >= tau2:
                     if n - fit > max_miss:
                         break
@@ -139,9 +163,9 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
                 if fit == 0:
                     y0 = xb[j, q, 0]
                     y1 = xb[j, q, 1]
-                    r0 = y1 * e_b[2] - e_b[1]
-                    r1 = e_b[0] - y0 * e_b[2]
-                    r2 = y0 * e_b[1] - y1 * e_b[0]
+                    r0 = y1 * e_b[q, 2] - e_b[q, 1]
+                    r1 = e_b[q, 0] - y0 * e_b[q, 2]
+                    r2 = y0 * e_b[q, 1] - y1 * e_b[q, 0]
                     nn = np.sqrt(r0 * r0 + r1 * r1)
                     if nn > 0:
                         r0 /= nn
@@ -154,7 +178,7 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
                 hi = max(hi, s)
             if n >= min_frames and fit >= min_share * n and hi - lo >= min_sweep:
                 n_cons[c] += 1
-                mean = acc / fit
+                mean = acc_t / n if truncated else acc / fit
                 if mean < best_res[c]:
                     best_res[c] = mean
                     best[c] = d
@@ -199,25 +223,62 @@ def _peaks(votes: np.ndarray, count: int, halfwidth: int) -> list[int]:
     return out
 
 
+def _per_frame_fundamentals(cam_a: CameraTrack, cam_b: CameraTrack, Tb: int) -> np.ndarray:
+    """(Tb,3,3) G with x_aᵀ G[q] x_b = 0 at b's frame q (a static); NaN where b has no pose."""
+    q = np.arange(Tb)
+    if cam_b.num_pose_frames not in (1, Tb):
+        raise ValueError(f"camera b has {cam_b.num_pose_frames} poses for {Tb} frames")
+    Kb = cam_b.K_at(q)
+    pb = cam_b.pose_at(q)
+    G = np.stack([fundamental_from_cameras(cam_a.K, cam_a.cam_from_world, Kb[t], pb[t]) for t in q])
+    if cam_b.valid is not None:
+        G[~np.asarray(cam_b.valid, bool)] = np.nan
+    return G
+
+
+def _one_to_one(cand_a: np.ndarray, cand_b: np.ndarray, res: np.ndarray) -> np.ndarray:
+    """Indices into the candidates: a one-to-one choice of least total residual (Hungarian)."""
+    ua, ra = np.unique(cand_a, return_inverse=True)
+    ub, rb = np.unique(cand_b, return_inverse=True)
+    big = 1e9
+    cost = np.full((len(ua), len(ub)), big)
+    which = np.full((len(ua), len(ub)), -1, np.int64)
+    order = np.argsort(-res, kind="stable")  # the least residual of a repeated cell wins
+    cost[ra[order], rb[order]] = res[order]
+    which[ra[order], rb[order]] = order
+    rows, cols = linear_sum_assignment(cost)
+    ok = cost[rows, cols] < big
+    return np.sort(which[rows[ok], cols[ok]])
+
+
 def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a: CameraTrack,
                     cam_b: CameraTrack, xy_a: np.ndarray, xy_b: np.ndarray,
                     cfg: GeometricPairConfig = GeometricPairConfig()
                     ) -> tuple[TrackPairs, GeometricPairStats]:
-    """Track pairs between static cameras a and b from epipolar consistency over time.
+    """Track pairs between cameras a and b from epipolar consistency over time.
 
-    xy_a (Na,Ta,2), xy_b (Nb,Tb,2): undistorted px in the cameras' pinhole models.
+    At most one of the two cameras may move (per-frame poses); its epipolar geometry is taken
+    per frame. xy_a (Na,Ta,2), xy_b (Nb,Tb,2): undistorted px in the cameras' pinhole models.
     """
+    if cam_a.is_moving and cam_b.is_moving:
+        raise ValueError("geometric_pairs needs at least one static camera")
+    if cam_a.is_moving:  # the moving camera is always b inside: Δ_ba = -Δ_ab
+        tp, st = geometric_pairs(b, a, info_b, info_a, cam_b, cam_a, xy_b, xy_a, cfg)
+        return TrackPairs(a, b, tp.index[:, ::-1].copy(), tp.weight), st.swapped()
     empty = TrackPairs(a, b, np.zeros((0, 2), np.int64), np.zeros(0))
-    if cam_a.is_moving or cam_b.is_moving:
-        raise ValueError("geometric_pairs needs two static cameras")
-    G = fundamental_from_cameras(cam_a.K, cam_a.cam_from_world, cam_b.K, cam_b.cam_from_world)
+    Tb = xy_b.shape[1]
+    G = _per_frame_fundamentals(cam_a, cam_b, Tb)
+    posed = np.isfinite(G[:, 0, 0])
+    if not posed.any():
+        return empty, GeometricPairStats(0, 0, 0, (), ())
     diag = float(np.hypot(info_b.width, info_b.height))
     tau = max(2.0, cfg.tau_diag * diag)
-    u, _, vt = np.linalg.svd(G)
-    e_a, e_b = u[:, -1], vt[-1]  # unit null vectors: Gᵀ e_a = 0, G e_b = 0
-    ia = _candidates(xy_a, cfg.max_tracks, cfg.min_frames, epipolar_extent(xy_a, e_a),
+    u, _, vt = np.linalg.svd(np.where(posed[:, None, None], G, np.eye(3)))
+    e_a, e_b = u[:, :, -1], vt[:, -1]  # (Tb,3) unit null vectors: Gᵀ e_a = 0, G e_b = 0
+    mid = np.nonzero(posed)[0][posed.sum() // 2]  # a moving b's extent is judged at a middle pose
+    ia = _candidates(xy_a, cfg.max_tracks, cfg.min_frames, epipolar_extent(xy_a, e_a[mid]),
                      cfg.min_sweep_tau * tau)
-    ib = _candidates(xy_b, cfg.max_tracks, cfg.min_frames, epipolar_extent(xy_b, e_b),
+    ib = _candidates(xy_b, cfg.max_tracks, cfg.min_frames, epipolar_extent(xy_b, e_b[mid]),
                      cfg.min_sweep_tau * tau)
     if not len(ia) or not len(ib):
         return empty, GeometricPairStats(0, 0, 0, (), ())
@@ -231,11 +292,11 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
     cand_b = np.tile(ib, len(ia))
     _, best, res = _consistency(np.ascontiguousarray(xy_a, np.float64),
                                 np.ascontiguousarray(xy_b, np.float64), cand_a, cand_b,
-                                np.ascontiguousarray(G), e_b, np.ascontiguousarray(k),
-                                np.ascontiguousarray(w), tau * tau, cfg.min_frames,
-                                cfg.min_inlier_share,
+                                np.ascontiguousarray(G), np.ascontiguousarray(e_b),
+                                np.ascontiguousarray(k), np.ascontiguousarray(w), tau * tau,
+                                cfg.min_frames, cfg.min_inlier_share,
                                 max(1, int(cfg.max_band_share * len(offsets))),
-                                cfg.min_sweep_tau * tau, qstep)
+                                cfg.min_sweep_tau * tau, qstep, cfg.score == "truncated")
     informative = best >= 0
     votes = np.bincount(best[informative], minlength=len(offsets)).astype(float)
     peaks = _peaks(votes, cfg.peaks, cfg.peak_halfwidth)
@@ -244,25 +305,24 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
         near = informative & (np.abs(best - p) <= cfg.peak_halfwidth)
         peak_votes.append(int(near.sum()))
         sel = np.nonzero(near)[0]
-        # one partner per track at this peak, greedily by lowest mean residual
-        sel = sel[np.argsort(res[sel], kind="stable")]
-        used_a: set[int] = set()
-        used_b: set[int] = set()
-        for c in sel:
-            if cand_a[c] in used_a or cand_b[c] in used_b:
-                continue
-            used_a.add(int(cand_a[c]))
-            used_b.add(int(cand_b[c]))
-            keep_a.append(int(cand_a[c]))
-            keep_b.append(int(cand_b[c]))
-            keep_p.append(pi)
+        if not len(sel):
+            continue
+        # one partner per track at this peak: the one-to-one choice of least total residual
+        sel = sel[_one_to_one(cand_a[sel], cand_b[sel], res[sel])]
+        keep_a += cand_a[sel].tolist()
+        keep_b += cand_b[sel].tolist()
+        keep_p += [pi] * len(sel)
     index = np.stack([np.array(keep_a, np.int64), np.array(keep_b, np.int64)], 1) \
         if keep_a else np.zeros((0, 2), np.int64)
     # a track pair supporting two peaks is kept once, with the first (highest) peak
     index, first = np.unique(index, axis=0, return_index=True)
+    coarser = max(info_a.frame_interval_s, info_b.frame_interval_s)
+    inf = np.nonzero(informative)[0]
     stats = GeometricPairStats(len(cand_a), int(informative.sum()), len(index),
                                tuple(float(offsets[p]) for p in peaks), tuple(peak_votes),
-                               np.array(keep_p, np.int64)[first])
+                               np.array(keep_p, np.int64)[first], offsets, votes,
+                               max(step * cfg.peak_halfwidth, 0.5 * coarser),
+                               np.stack([cand_a[inf], cand_b[inf]], 1), offsets[best[inf]], res[inf])
     return TrackPairs(a, b, index, np.ones(len(index))), stats
 
 
@@ -303,3 +363,138 @@ def consistent_peaks(peaks: dict[tuple[str, str], tuple[tuple[float, ...], tuple
             if cost < best_cost:
                 best, best_cost = ch, cost
     return (best, "chosen") if best is not None else (None, "inconsistent")
+
+
+@dataclass(frozen=True)
+class JointChoice:
+    """Offsets of all cameras chosen at once from every pair's vote histogram."""
+
+    offsets_s: dict[str, float]  # camera -> offset_s (the first camera's is 0)
+    score: float  # Σ over pairs of the vote z-score at the implied Δ_ab
+    margin: dict[str, float]  # camera -> score lost by the best choice that moves it by > tol_s
+    tol_s: float
+
+
+def vote_z(st: GeometricPairStats) -> tuple[np.ndarray, np.ndarray]:
+    """(offsets_s (D,), z (D,)): the vote histogram summed over ±halfwidth_s, as robust z-scores
+    (median and MAD over all offsets: most offsets get only chance votes)."""
+    offs, v = st.vote_offsets_s, st.votes
+    step = float(np.median(np.diff(offs))) if len(offs) > 1 else 1.0
+    hw = max(1, round(st.halfwidth_s / step))
+    sm = np.convolve(v, np.ones(2 * hw + 1), mode="same")
+    med = np.median(sm)
+    mad = 1.4826 * np.median(np.abs(sm - med))
+    return offs, (sm - med) / max(mad, 1.0)
+
+
+def joint_offsets(found: dict[tuple[str, str], GeometricPairStats], tol_s: float,
+                  candidates: int = 10, max_combinations: int = 200_000) -> JointChoice | None:
+    """Offsets of every camera that together collect the most votes over all pairs.
+
+    Each pair's votes are z-scored (vote_z); a choice of offsets scores the sum over pairs of
+    the z-score at its Δ_ab = offset_b - offset_a (a Δ outside a pair's grid scores -5). The
+    choices tried: with each camera in turn as the reference, every combination of the
+    `candidates` highest z-peaks of its pairs with the others. A single pair can have a false
+    peak above its true one (a repeated motion, points moving along their epipolar lines), but
+    the false peaks of several pairs rarely close. margin says how much each camera's offset is
+    preferred over the best choice that moves it by more than tol_s against every other camera. None when no camera is
+    paired with every other (or there are fewer than three cameras).
+    """
+    found = {k: st for k, st in found.items() if st.votes is not None and len(st.votes)}
+    names = sorted({n for k in found for n in k})
+    if len(names) < 3:
+        return None
+    zs = {k: vote_z(st) for k, st in found.items()}
+
+    def lookup(a: str, b: str, delta: np.ndarray) -> np.ndarray:
+        if (a, b) in zs:
+            offs, z = zs[(a, b)]
+        else:
+            offs, z = zs[(b, a)]
+            delta = -delta
+        i = np.clip(np.searchsorted(offs, delta), 1, max(1, len(offs) - 1))
+        i = np.where(np.abs(offs[i] - delta) < np.abs(offs[i - 1] - delta), i, i - 1)
+        inside = (delta >= offs[0] - 1e-9) & (delta <= offs[-1] + 1e-9)
+        return np.where(inside, z[i], -5.0)
+
+    def peaks_of(a: str, b: str) -> list[float]:
+        offs, z = zs[(a, b)] if (a, b) in zs else (-zs[(b, a)][0], zs[(b, a)][1])
+        sep = max(found[(a, b) if (a, b) in found else (b, a)].halfwidth_s, 1e-6) * 2
+        out: list[float] = []
+        for i in np.argsort(-z, kind="stable"):
+            if len(out) >= per:
+                break
+            if all(abs(offs[i] - o) > sep for o in out):
+                out.append(float(offs[i]))
+        return out
+
+    per = max(1, min(candidates, int(max_combinations ** (1.0 / (len(names) - 1)))))
+    rows, scores = [], []
+    for ref in names:
+        others = [n for n in names if n != ref]
+        if not all((ref, c) in zs or (c, ref) in zs for c in others):
+            continue
+        grids = np.meshgrid(*[np.array(peaks_of(ref, c)) for c in others], indexing="ij")
+        combo = np.zeros((grids[0].size, len(names)))
+        for c, g in zip(others, grids):
+            combo[:, names.index(c)] = g.ravel()
+        score = np.zeros(len(combo))
+        for (a, b) in zs:
+            score += lookup(a, b, combo[:, names.index(b)] - combo[:, names.index(a)])
+        rows.append(combo - combo[:, :1])  # first camera at 0
+        scores.append(score)
+    if not rows:
+        return None
+    combo, score = np.concatenate(rows), np.concatenate(scores)
+    top = int(np.argmax(score))
+    margin = {}
+    for c, n in enumerate(names):
+        # c moved against every other camera (the first camera's offset is 0 by definition, so
+        # "moved" must be relative, or it would never move)
+        rel = (combo - combo[:, c:c + 1]) - (combo[top] - combo[top, c])
+        away = np.all(np.abs(np.delete(rel, c, axis=1)) > tol_s, axis=1)
+        margin[n] = float(score[top] - score[away].max()) if away.any() else float("inf")
+    return JointChoice({n: float(combo[top, c]) for c, n in enumerate(names)}, float(score[top]),
+                       margin, tol_s)
+
+
+def supporters(st: GeometricPairStats, delta_s: float) -> np.ndarray:
+    """(P,2) track pairs whose best offset lies within halfwidth_s of delta_s, one partner per
+    track (the one-to-one choice of least total residual)."""
+    if st.cand_index is None or not len(st.cand_index):
+        return np.zeros((0, 2), np.int64)
+    sel = np.nonzero(np.abs(st.cand_offset_s - delta_s) <= st.halfwidth_s + 1e-9)[0]
+    if not len(sel):
+        return np.zeros((0, 2), np.int64)
+    sel = sel[_one_to_one(st.cand_index[sel, 0], st.cand_index[sel, 1], st.cand_res[sel])]
+    return st.cand_index[sel].astype(np.int64)
+
+
+def consistent_at(info_a: VideoInfo, info_b: VideoInfo, cam_a: CameraTrack, cam_b: CameraTrack,
+                  xy_a: np.ndarray, xy_b: np.ndarray, index: np.ndarray, delta_s: float,
+                  tau_px: float, min_share: float, min_frames: int) -> np.ndarray:
+    """(P,) bool: the track pairs index (P,2) whose points lie within tau_px (Sampson) of each
+    other's epipolar lines at Δ_ab = delta_s in at least min_share of at least min_frames common
+    moments. At most one of the cameras may move."""
+    if cam_a.is_moving:
+        return consistent_at(info_b, info_a, cam_b, cam_a, xy_b, xy_a, index[:, ::-1], -delta_s,
+                             tau_px, min_share, min_frames)
+    if not len(index):
+        return np.zeros(0, bool)
+    G = _per_frame_fundamentals(cam_a, cam_b, xy_b.shape[1])  # (Tb,3,3)
+    k, w = frame_brackets(info_a.timestamps_s, info_b.timestamps_s + delta_s)
+    kc = np.clip(k, 0, max(0, xy_a.shape[1] - 2))
+    kn = np.minimum(kc + 1, xy_a.shape[1] - 1)
+    xa = xy_a[index[:, 0]][:, kc] + w[None, :, None] * (xy_a[index[:, 0]][:, kn] - xy_a[index[:, 0]][:, kc])
+    xa[:, k < 0] = np.nan
+    xb = xy_b[index[:, 1]]
+    ha = np.concatenate([xa, np.ones(xa.shape[:-1] + (1,))], -1)
+    hb = np.concatenate([xb, np.ones(xb.shape[:-1] + (1,))], -1)
+    lb = np.einsum("tij,ptj->pti", G, hb)  # lines in a
+    la = np.einsum("tji,ptj->pti", G, ha)  # lines in b
+    num = np.einsum("pti,pti->pt", ha, lb)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        d = np.abs(num) / np.sqrt(lb[..., 0] ** 2 + lb[..., 1] ** 2 + la[..., 0] ** 2 + la[..., 1] ** 2)
+        n = np.isfinite(d).sum(1)
+        fit = (d < tau_px).sum(1)
+    return (n >= min_frames) & (fit >= min_share * np.maximum(n, 1))
