@@ -18,7 +18,8 @@ def register(sub) -> None:
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--difficulty", choices=sorted(DIFFICULTIES), default="default")
     p.add_argument("--seeds", type=int, default=5, help="scenes 0..N-1")
-    p.add_argument("--drift-ppm", type=float, default=200.0)
+    p.add_argument("--drift-ppm", type=float, default=200.0,
+                   help="clock drift of every non-reference video, ± this with a random sign (ppm)")
     p.add_argument("--seconds", type=float, default=None,
                    help="typical video length (default: the scenes' usual 8 s)")
     p.set_defaults(func=run)

@@ -27,7 +27,8 @@ def register(sub) -> None:
                                    "whether the engines gave identical offsets.",
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--cameras", type=positive_int, nargs="+", default=[8, 16, 32, 64], help="rig sizes")
-    p.add_argument("--engines", nargs="+", choices=("local", "ray"), default=["local", "ray"])
+    p.add_argument("--engines", nargs="+", choices=("local", "ray"), default=["local", "ray"],
+                   help="engines to run every cell on")
     p.add_argument("--pairs", nargs="+", type=_pairs_mode, default=["all", "rst", "knn:4"],
                    help="pair selections (as sync's --pairs)")
     p.add_argument("--ray-cpus", type=positive_int, default=None,

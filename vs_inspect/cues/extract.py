@@ -339,8 +339,15 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     # right peaks close within about 3 frames, while wrong ones miss by far more
     joint = joint_offsets({k: gs for k, (_, gs) in found.items()}, 3.0 * coarsest) \
         if cfg.geometric.joint else None
-    if joint is not None:
+    sure = [] if joint is None else [n for n, m in joint.margin.items() if m >= cfg.geometric.joint_min_margin]
+    if len(sure) >= 2:
         return _add_joint_pairs(pairs, found, joint, cameras, tracks, vids, cfg, stats, sink)
+    if joint is not None:
+        # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
+        # decides (and refuses when the triangles do not close), as before the joint choice
+        sink.stage_event("cues", "joint vote sure of fewer than two cameras (margins "
+                         + ", ".join(f"{n} {m:.1f}" for n, m in joint.margin.items())
+                         + "): geometric peaks chosen by triangle closure")
     chosen, status = consistent_peaks({k: (gs.peaks_s, gs.peak_votes) for k, (_, gs) in found.items()},
                                       3.0 * coarsest)
     stats["geometric_peaks"] = status

@@ -51,7 +51,10 @@ def pair_to_dict(p: PairLandscape, with_landscape: bool = True) -> dict[str, Any
         # the drift model (v2): τ_a = offset_s + rate · τ_b
         out["rate"] = float(p.rate)
         out["drift_ppm"] = (float(p.rate) - 1.0) * 1e6
-        out["drift_std_ppm"] = _num(p.log_rate_std * 1e6)
+        # a standard error needs no 17 digits; rounded, the file reads back and writes again
+        # to the same number (the ×1e-6 of reading and the ×1e6 here do not invert exactly)
+        std_ppm = _num(p.log_rate_std * 1e6)
+        out["drift_std_ppm"] = None if std_ppm is None else round(std_ppm, 6)
         out["pivot_s"] = float(p.pivot_s)
         out["pivot_offset_s"] = _num(p.pivot_offset_s)
         out["pivot_offset_std_s"] = _num(p.pivot_offset_std_s)

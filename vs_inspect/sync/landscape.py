@@ -76,12 +76,15 @@ class PairEnergy:
         s, i = (a, b) if self.sample_is_a else (b, a)
         self.s, self.i = s, i
         idx = pairs.index
-        self.pair_s = np.ascontiguousarray(idx[:, 0] if self.sample_is_a else idx[:, 1])
-        self.pair_i = np.ascontiguousarray(idx[:, 1] if self.sample_is_a else idx[:, 0])
-        self.weight = (np.ones(len(idx)) if pairs.weight is None
-                       else np.asarray(pairs.weight, dtype=np.float64))
-        self.xs = np.ascontiguousarray(s.tracks.xy, dtype=np.float64)
-        self.xi = np.ascontiguousarray(i.tracks.xy, dtype=np.float64)
+        # writable C arrays always: read-only ones (a Ray task's inputs) would make numba compile a
+        # second specialization of the kernels, whose reassociated sums differ in the last digits
+        def own(x, dtype=None):
+            return np.require(x, dtype=dtype, requirements=("C", "W"))
+        self.pair_s = own(idx[:, 0] if self.sample_is_a else idx[:, 1])
+        self.pair_i = own(idx[:, 1] if self.sample_is_a else idx[:, 0])
+        self.weight = (np.ones(len(idx)) if pairs.weight is None else own(pairs.weight, np.float64))
+        self.xs = own(s.tracks.xy, np.float64)
+        self.xi = own(i.tracks.xy, np.float64)
         # τ_i = t_s + sign·Δ_ab (a's time is b's time + Δ).
         self.sign = -1.0 if self.sample_is_a else 1.0
         self.moving = a.camera.is_moving or b.camera.is_moving
@@ -89,7 +92,7 @@ class PairEnergy:
         if not self.moving:
             F_ab = fundamental_from_cameras(a.camera.K, a.camera.cam_from_world,
                                             b.camera.K, b.camera.cam_from_world)
-            self.G_static = np.ascontiguousarray(F_ab if self.sample_is_a else F_ab.T)
+            self.G_static = own(F_ab if self.sample_is_a else F_ab.T)
 
     def _brackets(self, offsets_s: np.ndarray):
         q = self.s.video.timestamps_s[None, :] + self.sign * offsets_s[:, None]
