@@ -181,12 +181,12 @@ def format_table(res: DroneBenchResult, bundle: CueBundle) -> str:
 def load_drone_bundle(path: str | os.PathLike) -> tuple[CueBundle, dict[str, float]]:
     """A bundle folder written by import-drone, or the dataset folder itself (imported in memory)."""
     from ..io.bundle import read_bundle
-    from ..io.drone import import_drone, read_gt_drift_ppm
+    from ..io.drone import import_drone
 
     p = Path(path)
     if (p / "bundle.json").is_file():
-        drift = read_gt_drift_ppm(p)
-        bundle = read_bundle(p)
+        bundle = read_bundle(p)  # with gt.json's drift_ppm
+        drift = bundle.gt_drift_ppm
     else:
         bundle, gt = import_drone(p)
         drift = gt.drift_ppm if gt is not None else None

@@ -339,9 +339,9 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     # right peaks close within about 3 frames, while wrong ones miss by far more
     joint = joint_offsets({k: gs for k, (_, gs) in found.items()}, 3.0 * coarsest) \
         if cfg.geometric.joint else None
-    sure = [] if joint is None else [n for n, m in joint.margin.items() if m >= cfg.geometric.joint_min_margin]
-    if len(sure) >= 2:
-        return _add_joint_pairs(pairs, found, joint, cameras, tracks, vids, cfg, stats, sink)
+    sure = {} if joint is None else {n: m >= cfg.geometric.joint_min_margin for n, m in joint.margin.items()}
+    if sum(sure.values()) >= 2:
+        return _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg, stats, sink)
     if joint is not None:
         # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
         # decides (and refuses when the triangles do not close), as before the joint choice
@@ -393,16 +393,16 @@ def _merge_pairs(tp: TrackPairs, index: np.ndarray) -> tuple[TrackPairs, int]:
                       np.concatenate([w_desc, np.ones(len(new))])), len(new)
 
 
-def _add_joint_pairs(pairs: dict, found: dict, joint, cameras: dict, tracks: dict, vids: dict,
-                     cfg: CueConfig, stats: dict, sink: Sink) -> dict:
+def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cameras: dict,
+                     tracks: dict, vids: dict, cfg: CueConfig, stats: dict, sink: Sink) -> dict:
     """The supporters of the jointly chosen offsets (geometric_pairs.joint_offsets) for every pair
-    of two cameras whose offset won by at least joint_min_margin; nothing for the others. A
+    of two cameras whose offset won by at least joint_min_margin (sure: camera -> whether it
+    did); nothing for the others. A
     descriptor pair is kept only if it is epipolar-consistent at the joint Δ (with
     joint_filter_descriptor): the descriptor pairs are mostly wrong on small moving objects
     (BENCHMARKS.md), and the joint Δ is the best evidence there is of the moment they share."""
     from .geometric_pairs import consistent_at, supporters
 
-    sure = {n: m >= cfg.geometric.joint_min_margin for n, m in joint.margin.items()}
     stats["geometric_peaks"] = "joint"
     stats["geometric_joint"] = {"offsets_s": {n: round(o, 4) for n, o in joint.offsets_s.items()},
                                 "score": round(joint.score, 2),

@@ -16,7 +16,6 @@ from __future__ import annotations
 import contextlib
 import importlib.util
 import io
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -35,6 +34,38 @@ class Features:
     keypoints: np.ndarray  # (N,2) float32, px of the image given (pixel centres at integers)
     descriptors: np.ndarray  # (N,D) float32, unit length (XFeat D=64, ALIKED and DISK D=128)
     image_size: tuple[int, int]  # (width, height) px of that image (LightGlue normalizes by it)
+
+
+@contextlib.contextmanager
+def _fixed_threads(torch, threads: int, inference: bool = False):
+    """A fixed torch thread count (same input, same features and matches); inference: also
+    torch.inference_mode."""
+    prev = torch.get_num_threads()
+    torch.set_num_threads(threads)
+    try:
+        with torch.inference_mode() if inference else contextlib.nullcontext():
+            yield
+    finally:
+        torch.set_num_threads(prev)
+
+
+def _image_tensor(torch, image_bgr: np.ndarray):
+    """(1,3,H,W) float RGB in [0, 1] from an (H,W,3) uint8 BGR image."""
+    rgb = np.ascontiguousarray(image_bgr[..., ::-1])
+    return torch.from_numpy(rgb).permute(2, 0, 1)[None].float() / 255.0
+
+
+def _features_in_mask(kp: np.ndarray, desc: np.ndarray, mask: np.ndarray | None,
+                      image_bgr: np.ndarray) -> Features:
+    """Features of the keypoints (K,2) whose nearest pixel is True in mask (H,W) bool (all
+    when mask is None)."""
+    if mask is not None and len(kp):
+        h, w = mask.shape
+        xi = np.clip(np.round(kp[:, 0]).astype(int), 0, w - 1)
+        yi = np.clip(np.round(kp[:, 1]).astype(int), 0, h - 1)
+        keep = mask[yi, xi]
+        kp, desc = kp[keep], desc[keep]
+    return Features(kp, desc, (int(image_bgr.shape[1]), int(image_bgr.shape[0])))
 
 
 class XFeatMatcher:
@@ -62,32 +93,15 @@ class XFeatMatcher:
 
             self._glue = LighterGlue()
 
-    @contextlib.contextmanager
     def _fixed_threads(self):
-        """A fixed torch thread count: same input, same features and matches."""
-        prev = self._torch.get_num_threads()
-        self._torch.set_num_threads(self._threads)
-        try:
-            yield
-        finally:
-            self._torch.set_num_threads(prev)
+        return _fixed_threads(self._torch, self._threads)
 
     def features(self, image_bgr: np.ndarray, mask: np.ndarray | None = None) -> Features:
         """Keypoints of an (H,W,3) uint8 image; mask (H,W) bool keeps keypoints where True."""
-        torch = self._torch
         with self._fixed_threads():
-            rgb = np.ascontiguousarray(image_bgr[..., ::-1])
-            x = torch.from_numpy(rgb).permute(2, 0, 1)[None].float() / 255.0
-            out = self._model.detectAndCompute(x)[0]
-        kp = out["keypoints"].numpy().astype(np.float32)
-        desc = out["descriptors"].numpy().astype(np.float32)
-        if mask is not None and len(kp):
-            h, w = mask.shape
-            xi = np.clip(np.round(kp[:, 0]).astype(int), 0, w - 1)
-            yi = np.clip(np.round(kp[:, 1]).astype(int), 0, h - 1)
-            keep = mask[yi, xi]
-            kp, desc = kp[keep], desc[keep]
-        return Features(kp, desc, (int(image_bgr.shape[1]), int(image_bgr.shape[0])))
+            out = self._model.detectAndCompute(_image_tensor(self._torch, image_bgr))[0]
+        return _features_in_mask(out["keypoints"].numpy().astype(np.float32),
+                                 out["descriptors"].numpy().astype(np.float32), mask, image_bgr)
 
     def match(self, a: Features, b: Features) -> np.ndarray:
         """(M,2) uint32 indices (into a, into b): LighterGlue's matches above min_confidence, or
@@ -212,36 +226,20 @@ class LightGlueMatcher:
                       .replace(f"cross_attn.{i}.", f"transformers.{i}.cross_attn."): v for k, v in state.items()}
         _load_checked(self._glue, state, allowed_unexpected=(".r",))  # DISK's file keeps a stale buffer
 
-    @contextlib.contextmanager
     def _fixed_threads(self):
-        prev = self._torch.get_num_threads()
-        self._torch.set_num_threads(self._threads)
-        try:
-            with self._torch.inference_mode():
-                yield
-        finally:
-            self._torch.set_num_threads(prev)
+        return _fixed_threads(self._torch, self._threads, inference=True)
 
     def features(self, image_bgr: np.ndarray, mask: np.ndarray | None = None) -> Features:
         """Keypoints of an (H,W,3) uint8 image (pixel centres at integers); mask (H,W) bool keeps
         keypoints where True."""
-        torch = self._torch
-        rgb = np.ascontiguousarray(image_bgr[..., ::-1])
-        x = torch.from_numpy(rgb).permute(2, 0, 1)[None].float() / 255.0
+        x = _image_tensor(self._torch, image_bgr)
         with self._fixed_threads():
             if self.kind == "aliked":
                 out = self._extractor(x)[0]
             else:
                 out = self._extractor(x, n=self.top_k, pad_if_not_divisible=True)[0]
-        kp = out.keypoints.numpy().astype(np.float32)
-        desc = out.descriptors.numpy().astype(np.float32)
-        if mask is not None and len(kp):
-            h, w = mask.shape
-            xi = np.clip(np.round(kp[:, 0]).astype(int), 0, w - 1)
-            yi = np.clip(np.round(kp[:, 1]).astype(int), 0, h - 1)
-            keep = mask[yi, xi]
-            kp, desc = kp[keep], desc[keep]
-        return Features(kp, desc, (int(image_bgr.shape[1]), int(image_bgr.shape[0])))
+        return _features_in_mask(out.keypoints.numpy().astype(np.float32),
+                                 out.descriptors.numpy().astype(np.float32), mask, image_bgr)
 
     def match(self, a: Features, b: Features) -> np.ndarray:
         """(M,2) uint32 indices (into a, into b) of LightGlue's matches above min_confidence."""
@@ -272,12 +270,3 @@ def make_matcher(features: str, top_k: int, xfeat_matcher: str = "mnn"):
     if features == "xfeat":
         return XFeatMatcher(top_k=top_k, matcher=xfeat_matcher)
     return LightGlueMatcher(features, top_k=top_k)
-
-
-def timed_match(matcher, a: np.ndarray, b: np.ndarray, mask_a=None, mask_b=None):
-    """(features a, features b, matches (M,2), seconds) for one image pair: features of both
-    images plus matching, the time a pair costs when nothing is cached."""
-    t0 = time.perf_counter()
-    fa, fb = matcher.features(a, mask_a), matcher.features(b, mask_b)
-    m = matcher.match(fa, fb)
-    return fa, fb, m, time.perf_counter() - t0

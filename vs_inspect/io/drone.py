@@ -34,7 +34,7 @@ import numpy as np
 from ..errors import InputError
 from ..types import CameraTrack, CueBundle, TrackPairs, Tracks, VideoInfo
 from .atomic import write_json_atomic
-from .bundle import POSE_FREE_KEY, write_bundle
+from .bundle import POSE_FREE_KEY, read_gt_drift, write_bundle
 
 log = logging.getLogger(__name__)
 
@@ -223,13 +223,9 @@ def import_drone(folder: str | os.PathLike) -> tuple[CueBundle, DroneGT | None]:
 
 def write_drone_bundle(bundle: CueBundle, gt: DroneGT | None, folder: str | os.PathLike,
                        overwrite: bool = False) -> Path:
-    """write_bundle, then mark the videos pose-free and add drift to gt.json (optional keys)."""
+    """write_bundle (which marks bundle.pose_free's videos in bundle.json), then gt.json with the
+    dataset's alpha/beta beside offsets and drift."""
     dest = write_bundle(bundle, folder, overwrite=overwrite)
-    meta_path = dest / "bundle.json"
-    meta = json.loads(meta_path.read_text())
-    for entry in meta["videos"]:
-        entry[POSE_FREE_KEY] = True
-    write_json_atomic(meta, meta_path)
     if gt is not None:
         write_json_atomic(gt_to_dict(gt), dest / "gt.json")
     return dest
@@ -253,7 +249,4 @@ def read_pose_free(folder: str | os.PathLike) -> set[str]:
 def read_gt_drift_ppm(folder: str | os.PathLike) -> dict[str, float] | None:
     """gt.json's optional drift_ppm (None when absent)."""
     path = Path(folder) / "gt.json"
-    if not path.is_file():
-        return None
-    d = json.loads(path.read_text()).get("drift_ppm")
-    return {str(k): float(v) for k, v in d.items()} if isinstance(d, dict) else None
+    return read_gt_drift(path) if path.is_file() else None

@@ -262,6 +262,14 @@ def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | 
     return result
 
 
+def _with_its_pairs(lands, v: str, why: str) -> str:
+    """why, followed by the decisions of v's first three evaluated pairs."""
+    mine = [p for p in lands if v in (p.a, p.b)]
+    if not mine:
+        return why + " (no pair with it was evaluated)"
+    return why + "; its pairs: " + "; ".join(f"{p.a}__{p.b}: {p.decision.reason}" for p in mine[:3])
+
+
 def solve_stage2(bundle: CueBundle, lands: list[PairLandscape] | tuple[PairLandscape, ...],
                  solve: SolveConfig = SolveConfig()) -> SyncResult:
     """Stage 2: per-video offsets from the accepted pairs' landscapes (robust global solve).
@@ -285,19 +293,13 @@ def solve_stage2(bundle: CueBundle, lands: list[PairLandscape] | tuple[PairLands
             meas.append(PairMeasurement(land.a, land.b, land.best_offset_s, max(sigma, 1e-6)))
     out = solve_offsets(names, reference, meas, solve.solver, delta, solve.max_iterations)
 
-    def with_its_pairs(v: str, why: str) -> str:
-        mine = [p for p in lands if v in (p.a, p.b)]
-        if not mine:
-            return why + " (no pair with it was evaluated)"
-        return why + "; its pairs: " + "; ".join(f"{p.a}__{p.b}: {p.decision.reason}" for p in mine[:3])
-
-    reasons = {v: with_its_pairs(v, why) for v, why in out.unresolved_reason.items()}
+    reasons = {v: _with_its_pairs(lands, v, why) for v, why in out.unresolved_reason.items()}
     offsets, unc = dict(out.offsets_s), dict(out.uncertainty_s)
     if len(names) > 1 and not any(reference in (m.a, m.b) for m in meas):
         # its 0.0 is a definition, not a measurement: with no accepted pair it says nothing
         offsets[reference], unc[reference] = None, None
-        reasons[reference] = with_its_pairs(reference, "the reference, but no accepted pair links it to "
-                                            "another video, so no offset was measured against it")
+        reasons[reference] = _with_its_pairs(lands, reference, "the reference, but no accepted pair links it "
+                                             "to another video, so no offset was measured against it")
     return SyncResult(reference, offsets, unc, reasons, tuple(lands),
                       out.pairs, out.iterations, solve.solver)
 
@@ -336,9 +338,8 @@ def solve_stage2_drift(bundle: CueBundle, lands: list[PairLandscape] | tuple[Pai
             offsets[v], unc[v] = sol.offsets_s[v], sol.offset_std_s[v]
             drift[v], drift_std[v] = sol.drift_ppm[v], sol.drift_std_ppm[v]
         else:
-            mine = [p for p in lands if v in (p.a, p.b)]
-            reasons[v] = ("no chain of accepted pairs links it to the reference " + reference + "; its pairs: "
-                          + "; ".join(f"{p.a}__{p.b}: {p.decision.reason}" for p in mine[:3]))
+            reasons[v] = _with_its_pairs(lands, v, "no chain of accepted pairs links it to the reference "
+                                         + reference)
     if len(names) > 1 and not timings:
         offsets[reference] = unc[reference] = drift[reference] = drift_std[reference] = None
         reasons[reference] = "the reference, but no accepted pair links it to another video"

@@ -76,8 +76,8 @@ class PairEnergy:
         s, i = (a, b) if self.sample_is_a else (b, a)
         self.s, self.i = s, i
         idx = pairs.index
-        # writable C arrays always: read-only ones (a Ray task's inputs) would make numba compile a
-        # second specialization of the kernels, whose reassociated sums differ in the last digits
+        # writable C arrays always: read-only ones (a Ray task's inputs) would make numba compile
+        # and cache a second specialization of the kernels for the same work
         def own(x, dtype=None):
             return np.require(x, dtype=dtype, requirements=("C", "W"))
         self.pair_s = own(idx[:, 0] if self.sample_is_a else idx[:, 1])

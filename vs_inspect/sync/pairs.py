@@ -70,9 +70,7 @@ def nearest_camera_pairs(names: list[str], candidates: list[tuple[str, str]],
 
 def _centre(cam: CameraTrack) -> np.ndarray:
     """(3,) camera centre in world coordinates (the mean over frames for a moving camera)."""
-    T = np.asarray(cam.cam_from_world).reshape(-1, 4, 4)
-    R, t = T[:, :3, :3], T[:, :3, 3]
-    return (-np.einsum("fji,fj->fi", R, t)).mean(axis=0)
+    return cam.centers().mean(axis=0)
 
 
 def select_pairs(names: list[str], has_matches: set[tuple[str, str]],
