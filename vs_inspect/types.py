@@ -14,6 +14,14 @@ import numpy as np
 from .geometry.epipolar import camera_centers
 
 
+def frame_length_s(fps: float | None, duration_s: float, num_frames: int) -> float:
+    """A frame's length for counting errors in frames, the one definition used by sync, inspect,
+    diagnose and report: 1/fps, else the mean spacing of the frames (inf for a single frame)."""
+    if fps:
+        return 1.0 / fps
+    return duration_s / (num_frames - 1) if num_frames > 1 and duration_s > 0 else float("inf")
+
+
 def _require_shape(name: str, array: np.ndarray, shape: tuple) -> None:
     """Raise ValueError unless array matches shape (None = any length)."""
     ok = array.ndim == len(shape) and all(s is None or s == d for s, d in zip(shape, array.shape))
@@ -67,6 +75,12 @@ class VideoInfo:
         if self.num_frames < 2:
             return float("inf")
         return float(np.median(np.diff(self.timestamps_s)))
+
+    @property
+    def frame_length_s(self) -> float:
+        """frame_length_s(): 1/fps or the mean spacing, for errors in frames (the median above
+        sets search steps)."""
+        return frame_length_s(self.fps, self.duration_s, self.num_frames)
 
 
 @dataclass(frozen=True)

@@ -92,6 +92,9 @@ def test_triangle_residuals_close_loops_and_name_the_wrong_pair():
     assert by[("b", "c", "d")] == pytest.approx(-200.0)  # Δ_bc + Δ_cd − Δ_bd = 1.5 − 3 + 1.3
     assert {(t.a, t.b, t.c) for t in tri[:2]} == {("a", "b", "d"), ("b", "c", "d")}  # both hold b-d
     assert all(wrong[0] in (t.a, t.b, t.c) and wrong[1] in (t.a, t.b, t.c) for t in tri[:2])
+    # inspect's verdict: the two triangles through the wrong pair miss, the others close
+    assert [t.closes for t in tri] == [False, False, True, True]
+    assert all(0 < t.tolerance_ms < 200.0 for t in tri)
 
 
 def test_track_rows_prefer_paired_tracks(synced):

@@ -24,7 +24,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from ..types import RunResult, VideoInfo
+from ..types import RunResult, SyncResult, VideoInfo, frame_length_s
 
 if TYPE_CHECKING:
     from ..io.recording import RecordedVideo
@@ -125,7 +125,7 @@ class Diagnosis:
 
 def _frame_ms(videos: dict[str, RecordedVideo | VideoInfo], name: str) -> float:
     v = videos.get(name)
-    dt = v.frame_interval_s if v is not None else math.inf
+    dt = frame_length_s(v.fps, v.duration_s, v.num_frames) if v is not None else math.inf
     return 1000.0 * dt if math.isfinite(dt) else DEFAULT_FRAME_MS
 
 
@@ -146,7 +146,14 @@ def _cause_of_reason(reason: str) -> str | None:
     return None
 
 
-def _loops(result: RunResult, by_name: dict) -> list[Loop]:
+def loop_closures(result: RunResult | SyncResult, videos: Iterable[RecordedVideo | VideoInfo] = ()) -> list[Loop]:
+    """Every triangle of three pairs with a chosen offset (Δ_ba = −Δ_ab), names sorted, with its
+    tolerance: LOOP_TOLERANCE_FRAMES frames of its slowest video, or 3σ of the three pairs'
+    uncertainties when larger. The recording's loop table and inspect both read these."""
+    return _loops(result, {v.name: v for v in videos})
+
+
+def _loops(result: RunResult | SyncResult, by_name: dict) -> list[Loop]:
     delta: dict[tuple[str, str], float] = {}
     sigma: dict[frozenset, float] = {}
     for p in result.pairs:

@@ -13,10 +13,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..eval.metrics import offset_errors_ms
+from .diagnose import loop_closures
 from .epipolar_sweep import EpipolarSweep, epipolar_sweep
 from .trajectories import PairTrajectories, run_trajectories
 from ..record.options import RecordOptions
-from ..types import CueBundle, PairLandscape, RateLandscape, SyncResult
+from ..types import CueBundle, PairLandscape, RateLandscape, SyncResult, VideoInfo
 
 GRAPH_RADIUS_PX = 300.0  # video nodes sit on a circle of this radius in the pair graph view
 GRAPH_PAIR_AT = 0.35  # a pair's node sits this far along the chord from a to b (not halfway:
@@ -52,6 +53,11 @@ class TriangleResidual:
     c: str
     residual_ms: float  # Δ_ab + Δ_bc − Δ_ac of the pairs' chosen offsets, ms
     accepted: int  # how many of the three pairs were accepted (0-3)
+    tolerance_ms: float  # diagnose's loop tolerance (2 frames of the slowest video, or 3σ)
+
+    @property
+    def closes(self) -> bool:
+        return abs(self.residual_ms) <= self.tolerance_ms
 
 
 @dataclass(frozen=True)
@@ -206,25 +212,12 @@ def graph_layout(result: SyncResult) -> dict[str, tuple[float, float]]:
     return out
 
 
-def triangle_residuals(result: SyncResult) -> tuple[TriangleResidual, ...]:
-    """Δ_ab + Δ_bc − Δ_ac for every three videos whose three pairs all have a chosen offset
-    (either direction: Δ_ba = −Δ_ab), largest |residual| first. Names in result.offsets_s order."""
-    delta: dict[tuple[str, str], tuple[float, bool]] = {}
-    for p in result.pairs:
-        if math.isfinite(p.best_offset_s):
-            delta[(p.a, p.b)] = (float(p.best_offset_s), p.decision.accepted)
-            delta.setdefault((p.b, p.a), (-float(p.best_offset_s), p.decision.accepted))
-    names = list(result.offsets_s)
-    out = []
-    for i, a in enumerate(names):
-        for j in range(i + 1, len(names)):
-            b = names[j]
-            for c in names[j + 1:]:
-                legs = [delta.get(k) for k in ((a, b), (b, c), (a, c))]
-                if any(x is None for x in legs):
-                    continue
-                (ab, ok1), (bc, ok2), (ac, ok3) = legs
-                out.append(TriangleResidual(a, b, c, 1000.0 * (ab + bc - ac), int(ok1) + int(ok2) + int(ok3)))
+def triangle_residuals(result: SyncResult, videos: Collection[VideoInfo] = ()) -> tuple[TriangleResidual, ...]:
+    """diagnose.loop_closures (Δ_ab + Δ_bc − Δ_ac per triangle of pairs with a chosen offset, and
+    its tolerance) with how many of its pairs were accepted, largest |residual| first."""
+    accepted = {frozenset((p.a, p.b)) for p in result.pairs if p.decision.accepted}
+    out = [TriangleResidual(*lp.videos, lp.residual_ms, sum(k in accepted for k in lp.pairs()), lp.tolerance_ms)
+           for lp in loop_closures(result, videos)]
     return tuple(sorted(out, key=lambda t: -abs(t.residual_ms)))
 
 
@@ -269,4 +262,4 @@ def run_record_view(bundle: CueBundle, result: SyncResult, options: RecordOption
         trajs = run_trajectories(bundle, accepted, result.offsets_s, options.max_trajectory_video_pairs,
                                  options.max_trajectory_pairs)
     return RunRecordView(graph_layout(result), true, {v: errors.get(v) for v in result.offsets_s},
-                         tracks, trajs, triangle_residuals(result))
+                         tracks, trajs, triangle_residuals(result, bundle.videos))

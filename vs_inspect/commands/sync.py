@@ -99,11 +99,10 @@ def exit_code(result) -> int:
 
 def _frame_intervals(bundle_dir: Path) -> dict[str, float] | None:
     """Each video's frame interval (s) from the run's bundle.json, for errors in frames: 1/fps,
-    or the mean spacing of a variable-rate video's frames (as inspect and report count them)."""
+    or the mean spacing of a variable-rate video's frames (types.frame_length_s, as inspect,
+    diagnose and report count them)."""
     from ..io.bundle import read_video_infos
     try:
-        return {v.name: (1.0 / v.fps if v.fps else
-                         float(v.timestamps_s[-1] - v.timestamps_s[0]) / max(1, v.num_frames - 1))
-                for v in read_video_infos(bundle_dir)}
+        return {v.name: v.frame_length_s for v in read_video_infos(bundle_dir)}
     except (OSError, ValueError, VsInspectError):  # errors in ms are still shown; frames need clocks
         return None

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..types import CueBundle, RunResult
+from ..types import CueBundle, RunResult, frame_length_s
 from .result import run_result_from_dict
 
 RECORDING_FORMAT = "vs-inspect-recording"
@@ -193,12 +193,8 @@ class RecordedVideo:
 
     @property
     def frame_interval_s(self) -> float:
-        """1/fps, else the mean spacing of frames (inf for a single frame)."""
-        if self.fps:
-            return 1.0 / self.fps
-        if self.num_frames > 1 and self.duration_s:
-            return self.duration_s / (self.num_frames - 1)
-        return float("inf")
+        """types.frame_length_s: 1/fps, else the mean spacing of frames (inf for a single frame)."""
+        return frame_length_s(self.fps, self.duration_s, self.num_frames)
 
 
 @dataclass

@@ -29,7 +29,7 @@ import numpy as np
 import rerun as rr
 from tqdm import tqdm
 
-from .. import __version__
+from .. import __version__, palette
 from ..io.atomic import json_default, atomic_path
 from ..io.recording import (APPLICATION_ID, GUIDE, LOG_DECISIONS, META_BUNDLE, META_CONFIG,
                             META_RECORDING, META_RESULT, META_VIDEOS, RECORDING_FORMAT,
@@ -53,16 +53,12 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-# Colours (RGB) from the Okabe-Ito set (colour-blind safe). Green and red mean only "accepted" and
-# "rejected"; instances, cameras and pairs take PALETTE, which has neither.
-ACCEPTED = (0, 158, 115)  # bluish green
-REJECTED = (213, 94, 0)  # vermillion
+# Colours: vs_inspect.palette, shared with the report (green and red mean only accepted/rejected).
+ACCEPTED, REJECTED = palette.ACCEPTED, palette.REJECTED
 GREY = (150, 150, 150)  # unknown, no data
 MINIMA = (86, 180, 233)  # sky blue
 TRUTH = (240, 228, 66)  # yellow
-# no orange (too near vermillion), no yellow (the epipolar points' "on the line")
-PALETTE = np.array([(86, 180, 233), (204, 121, 167), (0, 114, 178), (170, 150, 230), (245, 245, 245),
-                    (250, 190, 212), (150, 225, 245)], dtype=np.uint8)
+PALETTE = np.array(palette.CATEGORY, dtype=np.uint8)
 # point-to-line distance in the epipolar views: blue (far) through grey to yellow (on the line)
 RAMP = np.array([(70, 90, 210), (150, 150, 160), (253, 234, 69)], dtype=float)  # visible on black
 H264_LIKE = {"h264", "av1"}
@@ -473,8 +469,7 @@ class RerunSink(Sink):
 
     def _camera_color(self, name: str) -> tuple[int, int, int]:
         names = list(self._videos) or (self._bundle.names if self._bundle else [])
-        i = names.index(name) if name in names else len(names)
-        return tuple(int(c) for c in PALETTE[i % len(PALETTE)])
+        return palette.category(names.index(name) if name in names else len(names))
 
     def _log_cameras_static(self, cams: dict[str, CameraTrack], videos: list[VideoInfo]) -> None:
         """Pinhole and (static) pose of each camera, once per camera; a labelled point at each
@@ -875,14 +870,15 @@ class RerunSink(Sink):
     def _log_loops(self, view: RunRecordView) -> None:
         if not view.triangles:
             return
-        rows = [f"| {t.a} → {t.b} → {t.c} | {t.residual_ms:+.1f} | {t.accepted}/3 |"
-                for t in view.triangles[:40]]
+        rows = [f"| {t.a} → {t.b} → {t.c} | {t.residual_ms:+.1f} | {t.tolerance_ms:.1f} | "
+                f"{'closes' if t.closes else '**LOOP OFF**'} | {t.accepted}/3 |" for t in view.triangles[:40]]
         more = len(view.triangles) - len(rows)
         md = ("## Loop closure per triangle of pairs\n\nOffsets are differences, so the chosen "
               "Δ_ab + Δ_bc − Δ_ac is 0 ms when all three pairs are right. A large residual names a "
               "triangle with at least one wrong pair; a pair in several large triangles is the "
-              "suspect. Largest first.\n\n| triangle a → b → c | residual ms | pairs accepted |\n"
-              "|---|---|---|\n" + "\n".join(rows)
+              "suspect. The tolerance is `vs-inspect inspect`'s: 2 frames of the slowest video, or "
+              "3σ of the pairs' uncertainties. Largest first.\n\n| triangle a → b → c | residual ms "
+              "| tolerance ms | loop | pairs accepted |\n|---|---|---|---|---|\n" + "\n".join(rows)
               + (f"\n\n{more} more triangles with smaller residuals are not listed." if more > 0 else ""))
         self.rec.log(SYNC_LOOPS, rr.TextDocument(md, media_type=rr.MediaType.MARKDOWN), static=True)
 

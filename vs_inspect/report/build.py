@@ -18,7 +18,7 @@ CAPTIONS = {
     "scene3d": "3D scene: camera frustums coloured per video (a moving camera with its path and "
                "frustums along it), the static reconstruction when there is one, and the moving "
                "points triangulated at the solved offsets, coloured by global time.",
-    "landscapes": "Energy landscape E(Δ) of every pair: blue frame = accepted, vermillion frame = "
+    "landscapes": "Energy landscape E(Δ) of every pair: green frame = accepted, vermillion frame = "
                   "rejected (with the reason); star = best minimum, circles = other minima, solid "
                   "line = chosen Δ, purple triangle = Δ implied by the global solve, dashed black line = "
                   "true Δ when known.",

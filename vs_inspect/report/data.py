@@ -13,6 +13,7 @@ import numpy as np
 
 from ..eval.metrics import offset_errors_ms
 from ..geometry.epipolar import camera_centers
+from ..types import frame_length_s
 
 
 @dataclass(frozen=True)
@@ -30,10 +31,8 @@ class VideoClock:
 
     @property
     def frame_interval_s(self) -> float:
-        """1/fps, or the mean spacing of a variable-rate video's frames, seconds."""
-        if self.fps:
-            return 1.0 / self.fps
-        return (self.end_s - self.start_s) / (self.num_frames - 1) if self.num_frames > 1 else float("nan")
+        """types.frame_length_s: 1/fps, or the mean spacing of a variable-rate video's frames, s."""
+        return frame_length_s(self.fps, self.end_s - self.start_s, self.num_frames)
 
 
 @dataclass(frozen=True)

@@ -2,8 +2,8 @@
 
 Each function takes ReportData (or a part of it) and an output path, draws, and writes the figure
 in each requested format (PNG of a size fixed by figure_size_px at the given dpi, PDF, SVG);
-nothing is computed here. Colours: the Okabe-Ito palette (safe for colour-blind readers):
-accepted = blue, rejected = vermillion, never red against green.
+nothing is computed here. Colours: vs_inspect.palette, the recording's (Okabe-Ito, safe for
+colour-blind readers): accepted = bluish green, rejected = vermillion, videos in neither.
 """
 
 from __future__ import annotations
@@ -19,30 +19,24 @@ import numpy as np  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
+from .. import palette  # noqa: E402
 from .data import EpipolarPanel, PairView, ReportData  # noqa: E402
 
 DPI = 100  # default resolution; figure_size_px is in pixels at this dpi
 FORMATS = ("png", "pdf", "svg")
-OKABE_ITO = ("#E69F00", "#56B4E9", "#009E73", "#F0E442", "#0072B2", "#D55E00", "#CC79A7", "#000000")
-ACCEPT = "#0072B2"  # Okabe-Ito blue
-REJECT = "#D55E00"  # Okabe-Ito vermillion
+ACCEPT = palette.hex_of(palette.ACCEPTED)
+REJECT = palette.hex_of(palette.REJECTED)
 TRUTH = "#222222"
 SOLVED = "#CC79A7"  # Okabe-Ito reddish purple: Δ implied by the global solve
-ACCEPT_BG = "#e9f1f8"
-REJECT_BG = "#fbece3"
+ACCEPT_BG = palette.hex_of(palette.tint(palette.ACCEPTED, 0.1))
+REJECT_BG = palette.hex_of(palette.tint(palette.REJECTED, 0.1))
 plt.rcParams.update({"font.size": 11, "axes.titlesize": 11, "axes.labelsize": 10,
                      "xtick.labelsize": 9, "ytick.labelsize": 9, "legend.fontsize": 9})
 
 
 def video_colors(names: list[str]) -> dict[str, tuple[float, float, float]]:
-    """One stable colour per video, shared by all figures: Okabe-Ito (without black and yellow,
-    which white labels do not read on) up to 6 videos, tab20 beyond."""
-    from matplotlib.colors import to_rgb
-    pal = [c for c in OKABE_ITO if c not in ("#000000", "#F0E442")]
-    if len(names) <= len(pal):
-        return {n: to_rgb(pal[i]) for i, n in enumerate(names)}
-    cmap = plt.get_cmap("tab20")
-    return {n: tuple(cmap(i % cmap.N)[:3]) for i, n in enumerate(names)}
+    """One stable colour per video, the recording's (vs_inspect.palette), as matplotlib floats."""
+    return {n: tuple(c / 255 for c in rgb) for n, rgb in palette.video_colours(names).items()}
 
 
 def fmt_px2(x: float | None) -> str:
@@ -233,8 +227,8 @@ def pair_graph(data: ReportData, path: Path, dpi: float = DPI, formats: tuple[st
         x, y = pos[v]
         off = data.offsets_s.get(v)
         ax.scatter([x], [y], s=1500, color=colors[v], edgecolors="black", linewidths=1.2, zorder=6)
-        ax.text(x, y, v, ha="center", va="center", fontsize=10, fontweight="bold", color="white",
-                zorder=7)
+        ax.text(x, y, v, ha="center", va="center", fontsize=10, fontweight="bold", zorder=7,
+                color=palette.text_on(tuple(round(255 * c) for c in colors[v])))
         sub = "reference (0 s)" if v == data.reference else ("unresolved" if off is None else f"{off:+.3f} s")
         if v in errs and v != data.reference:
             sub += f"\nerror {fmt_error(errs[v], frames.get(v))}"
