@@ -202,6 +202,13 @@ def test_formats_and_dpi(run, tmp_path):
     assert cli(["report", str(run_dir), "--out", str(tmp_path / "x"), "--format", "png,gif"]) == 2
     assert cli(["report", str(run_dir), "--out", str(tmp_path / "y"), "--dpi", "0"]) == 2
     assert not (tmp_path / "x").exists() and not (tmp_path / "y").exists()
+    # the library call checks the same way as the command (one check, one message)
+    from vs_inspect.errors import InputError
+    with pytest.raises(InputError, match="--dpi 5: must be between 10 and 1200"):
+        render_report(data, tmp_path / "z", dpi=5)
+    with pytest.raises(InputError, match="unknown format"):
+        render_report(data, tmp_path / "z", formats=("png", "tiff"))
+    assert not (tmp_path / "z").exists()
 
 
 def test_readable_numbers_and_round_ticks():

@@ -34,15 +34,9 @@ def register(sub) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..analysis.report_data import load_report_data
     from ..report.build import render_report
-    from ..report.figures import FORMATS
+    from ..report.figures import checked_render_options
 
-    formats = tuple(f.strip().lower() for f in args.format.split(",") if f.strip())
-    bad = [f for f in formats if f not in FORMATS]
-    if bad or not formats:
-        raise InputError(f"--format {args.format}: unknown format {bad or ''}; choose from "
-                         f"{','.join(FORMATS)} (comma-separated)")
-    if not (10 <= args.dpi <= 1200):
-        raise InputError(f"--dpi {args.dpi:g}: must be between 10 and 1200")
+    formats = checked_render_options(args.format, args.dpi)  # before any loading
     gt = None
     if args.gt is not None:
         from ..io.bundle import read_gt

@@ -54,11 +54,7 @@ def render_report(data: ReportData, out_dir: str | Path, overwrite: bool = True,
     index.html and render_times.json into a fresh folder (io.atomic.atomic_dir: nothing stale
     from an earlier report, nothing half-written on an error or an interrupt). overwrite=False:
     refuse a non-empty out_dir (FileExistsError). Returns {key: first format's file}."""
-    bad = [f for f in formats if f not in figures.FORMATS]
-    if bad or not formats:
-        raise ValueError(f"--format {','.join(formats)}: choose from {','.join(figures.FORMATS)}")
-    if not (dpi > 0 and dpi <= 1200):
-        raise ValueError(f"--dpi {dpi}: must be in (0, 1200]")
+    formats = figures.checked_render_options(formats, dpi)
     out = Path(out_dir)
     with atomic_dir(out, overwrite=overwrite) as tmp:
         paths = _render_into(data, Path(tmp), tuple(formats), float(dpi))

@@ -20,10 +20,26 @@ from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
 from .. import palette  # noqa: E402
+from ..errors import InputError  # noqa: E402
 from .data import EpipolarPanel, PairView, ReportData  # noqa: E402
 
 DPI = 100  # default resolution; figure_size_px is in pixels at this dpi
 FORMATS = ("png", "pdf", "svg")
+DPI_RANGE = (10.0, 1200.0)
+
+
+def checked_render_options(formats: str | tuple[str, ...], dpi: float) -> tuple[str, ...]:
+    """The formats (a tuple, or "png,pdf" as --format gives them) and dpi checked once for the
+    command and the library: InputError naming the bad value."""
+    text = formats if isinstance(formats, str) else ",".join(formats)
+    fmts = tuple(f.strip().lower() for f in text.split(",") if f.strip())
+    bad = [f for f in fmts if f not in FORMATS]
+    if bad or not fmts:
+        raise InputError(f"--format {text}: unknown format {bad or ''}; choose from "
+                         f"{','.join(FORMATS)} (comma-separated)")
+    if not (DPI_RANGE[0] <= dpi <= DPI_RANGE[1]):
+        raise InputError(f"--dpi {dpi:g}: must be between {DPI_RANGE[0]:g} and {DPI_RANGE[1]:g}")
+    return fmts
 ACCEPT = palette.hex_of(palette.ACCEPTED)
 REJECT = palette.hex_of(palette.REJECTED)
 TRUTH = "#222222"
