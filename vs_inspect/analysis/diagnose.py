@@ -24,6 +24,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
+from ..eval.metrics import offset_errors_ms
 from ..types import RunResult, SyncResult, VideoInfo, frame_length_s
 
 if TYPE_CHECKING:
@@ -213,7 +214,7 @@ def _checks(result: RunResult, videos, gt) -> tuple[list[PairCheck], list[Loop]]
                 cause = CAUSE_LOOPS if lps and nbad == len(lps) else CAUSE_SOLUTION
         err = None
         if gt and a in gt and b in gt and d is not None:
-            err = 1000.0 * abs(d - (gt[b] - gt[a]))
+            err = offset_errors_ms({a: 0.0, b: d}, gt, a)[b]  # the pair's Δ as b's offset from a
         out.append(PairCheck(a, b, bool(p.decision.accepted), p.decision.reason, d, sol, dis, tol,
                              bad, cause, int(p.num_track_pairs), len(lps), nbad, worst, err))
     out.sort(key=lambda c: (-(c.disagreement_ms if c.disagreement_ms is not None else -1.0), c.a, c.b))
@@ -224,10 +225,11 @@ def _loop_blamed(checks: list[PairCheck], loops: list[Loop], skip: set[str]) -> 
     """Pairs blamed by the loops: for every bad loop, the pair(s) with the largest share of bad
     loops, when that share is all of its loops (a pair with a closing loop is never blamed); pairs
     of a video in skip (already blamed itself) are not."""
-    share: dict[frozenset, float] = {}
-    for k in {k for lp in loops for k in lp.pairs()}:
-        mine = [lp for lp in loops if k in lp.pairs()]
-        share[k] = sum(lp.bad for lp in mine) / len(mine)
+    through: dict[frozenset, list[bool]] = {}  # pair -> badness of each loop through it
+    for lp in loops:
+        for k in lp.pairs():
+            through.setdefault(k, []).append(lp.bad)
+    share = {k: sum(bad) / len(bad) for k, bad in through.items()}
     blamed: set[frozenset] = set()
     for lp in loops:
         if not lp.bad:
