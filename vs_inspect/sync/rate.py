@@ -46,25 +46,13 @@ class RateFit:
     landscape: RateLandscape
 
 
-class _RateEnergy:
-    """E(c, rate) of one pair, one PairEnergy per rate (cached: the grid's rows repeat)."""
-
-    def __init__(self, a: PairInput, b: PairInput, pairs: TrackPairs, cfg: LandscapeConfig,
-                 pivot_s: float, scale: float):
-        self.a, self.b, self.pairs, self.cfg = a, b, pairs, cfg
-        self.pivot_s, self.scale = pivot_s, scale
-        self._cache: dict[float, PairEnergy] = {}
-
-    def _pe(self, rate: float) -> PairEnergy:
-        pe = self._cache.get(rate)
-        if pe is None:
-            b = dataclasses.replace(self.b, video=scaled_video(self.b.video, rate))
-            pe = self._cache[rate] = PairEnergy(self.a, b, self.pairs, self.cfg)
-        return pe
-
-    def row(self, cols_s: np.ndarray, rate: float) -> np.ndarray:
-        e, _ = self._pe(rate).energy(cols_s - (rate - 1.0) * self.pivot_s, self.scale)
-        return e
+def _energy_row(a: PairInput, b: PairInput, pairs: TrackPairs, cfg: LandscapeConfig, pivot_s: float,
+                scale: float, cols_s: np.ndarray, rate: float) -> np.ndarray:
+    """E(c, rate) over the pivot offsets cols_s at one rate: b's clock scaled by it (each row of
+    the grid has its own rate, so nothing is worth keeping between rows)."""
+    b = dataclasses.replace(b, video=scaled_video(b.video, rate))
+    e, _ = PairEnergy(a, b, pairs, cfg).energy(cols_s - (rate - 1.0) * pivot_s, scale)
+    return e
 
 
 def fit_rate(a: PairInput, b: PairInput, pairs: TrackPairs, cfg: LandscapeConfig, drift: DriftConfig,
@@ -84,8 +72,7 @@ def fit_rate(a: PairInput, b: PairInput, pairs: TrackPairs, cfg: LandscapeConfig
                             drift.offset_columns)
     ppm0 = (rate0 - 1.0) * 1e6
     rates_ppm = ppm0 + np.arange(-drift.rate_half_width_ppm, drift.rate_half_width_ppm + 1e-9, drift.rate_step_ppm)
-    E = _RateEnergy(a, b, pairs, cfg, pivot, scale)
-    img = np.stack([E.row(cols, 1.0 + r * 1e-6) for r in rates_ppm])
+    img = np.stack([_energy_row(a, b, pairs, cfg, pivot, scale, cols, 1.0 + r * 1e-6) for r in rates_ppm])
     if not np.isfinite(img).any():
         return None
     # per row the sub-column minimum (parabola through its lowest cell and the two beside it);
