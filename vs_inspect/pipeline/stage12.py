@@ -28,7 +28,7 @@ from ..sync.landscape import PairInput, compute_landscape, curvature_uncertainty
 from ..sync.pairs import select_pairs
 from ..sync.drift import PairTiming, solve_offsets_drift
 from ..sync.posefree import PoseFreeConfig, PoseFreePair, estimate_pair
-from ..sync.rate import fit_rate, scaled_video
+from ..sync.rate import fit_rate, rate_landscape, scaled_video
 from ..sync.solve import PairMeasurement, solve_offsets
 
 log = logging.getLogger(__name__)
@@ -75,23 +75,27 @@ def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig,
     if pose_free_pair:
         land = dataclasses.replace(land, rate=rate0, pose_free=True)
     if cfg.drift.enabled and math.isfinite(best):
-        # b unscaled: the fit starts from (best, rate0) in the pair's own clocks
+        # b unscaled: the grid starts from (best, rate0) in the pair's own clocks
         side_b = dataclasses.replace(side[b], video=bundle.video(b))
-        fit = fit_rate(side[a], side_b, tp, cfg.landscape, cfg.drift, best, rate0, raw.robust_scale,
-                       max(len(tp.index), 1))
-        if fit is not None and pose_free_pair:
+        if pose_free_pair:
             # the rate its tracks gave (a continuous fit on every detection) is sharper than the
             # energy's over a single track, whose terms enter and leave as the rate turns: the
-            # pair keeps it, with the energy's minimum at that rate, and the image is shown
-            land = dataclasses.replace(land, log_rate_std=pose_free.log_rate_std, pivot_s=fit.pivot_s,
-                                       pivot_offset_s=best + (rate0 - 1.0) * fit.pivot_s,
-                                       pivot_offset_std_s=sigma, rate_landscape=fit.landscape)
-        elif fit is not None:
-            land = dataclasses.replace(land, best_offset_s=fit.offset_s, best_energy=fit.energy,
-                                       rate=fit.rate, log_rate_std=fit.log_rate_std, pivot_s=fit.pivot_s,
-                                       pivot_offset_s=fit.pivot_offset_s,
-                                       pivot_offset_std_s=fit.pivot_offset_std_s,
-                                       rate_landscape=fit.landscape)
+            # pair keeps it, with the energy's minimum at that rate; the energy's (Δ, rate) grid
+            # is only the image shown, so it is not fitted
+            img = rate_landscape(side[a], side_b, tp, cfg.landscape, cfg.drift, best, rate0, raw.robust_scale)
+            if img is not None:
+                land = dataclasses.replace(land, log_rate_std=pose_free.log_rate_std, pivot_s=img.pivot_s,
+                                           pivot_offset_s=best + (rate0 - 1.0) * img.pivot_s,
+                                           pivot_offset_std_s=sigma, rate_landscape=img)
+        else:
+            fit = fit_rate(side[a], side_b, tp, cfg.landscape, cfg.drift, best, rate0, raw.robust_scale,
+                           max(len(tp.index), 1))
+            if fit is not None:
+                land = dataclasses.replace(land, best_offset_s=fit.offset_s, best_energy=fit.energy,
+                                           rate=fit.rate, log_rate_std=fit.log_rate_std, pivot_s=fit.pivot_s,
+                                           pivot_offset_s=fit.pivot_offset_s,
+                                           pivot_offset_std_s=fit.pivot_offset_std_s,
+                                           rate_landscape=fit.landscape)
     return land, pe
 
 
