@@ -34,6 +34,11 @@ def test_one_wrong_pair_is_outvoted_and_constant_model_has_no_drift():
     for n in names:
         assert sol.offsets_s[n] == pytest.approx(OFFSETS[n], abs=0.01)
     assert abs(sol.pair_residuals[("p", "q")][0]) > 4.0
+    # the solve's own Huber weights: the wrong pair (~5 s off, std 1 ms) down to 3 / 5000,
+    # the others whole
+    assert sol.pair_weights[("p", "q")] == pytest.approx(3.0 / (abs(sol.pair_residuals[("p", "q")][0]) / 1e-3))
+    assert sol.pair_weights[("p", "q")] < 1e-3
+    assert all(w == 1.0 for k, w in sol.pair_weights.items() if k != ("p", "q"))
     const = solve_offsets_drift("r", [_pair(a, b) for i, a in enumerate(names) for b in names[i + 1:]],
                                 with_drift=False)
     assert set(const.drift_ppm.values()) == {0.0}

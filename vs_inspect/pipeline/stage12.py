@@ -349,9 +349,7 @@ def solve_stage2_drift(bundle: CueBundle, lands: list[PairLandscape] | tuple[Pai
         reasons[reference] = "the reference, but no accepted pair links it to another video"
     used = tuple((t.a, t.b) for t in timings if (t.a, t.b) in sol.pair_residuals)
     res = np.array([sol.pair_residuals[p][0] for p in used])
-    std = np.array([max(t.offset_std_s, 1e-3) for t in timings if (t.a, t.b) in sol.pair_residuals])
-    z = np.abs(res) / std if len(res) else res
-    weight = np.minimum(1.0, 3.0 / np.maximum(z, 1e-12)) if len(res) else res  # sync.drift's Huber scale 3
+    weight = np.array([sol.pair_weights[p] for p in used])
     return SyncResult(reference, offsets, unc, reasons, tuple(lands), used,
                       (SolveIteration(res, weight),) if len(res) else (), "drift-huber",
                       drift_ppm=drift, drift_std_ppm=drift_std)

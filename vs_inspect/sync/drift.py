@@ -13,7 +13,7 @@ started from a breadth-first walk of the pair graph from the reference.
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -47,6 +47,8 @@ class DriftSolution:
     drift_std_ppm: dict[str, float]
     pair_residuals: dict[tuple[str, str], tuple[float, float]]  # (offset s, log rate) measured - model
     with_drift: bool
+    pair_weights: dict[tuple[str, str], float] = field(default_factory=dict)
+    """Huber weight (0, 1] of each pair's offset residual at the solution (in units of its floored std)."""
 
 
 def _connected(reference: str, pairs: list[PairTiming]) -> list[str]:
@@ -129,10 +131,12 @@ def solve_offsets_drift(reference: str, pairs: list[PairTiming], with_drift: boo
         std = np.full(len(sol.x), np.nan)
     off_std = {reference: 0.0, **{v: float(std[pos[v]]) for v in free}}
     dr_std = {reference: 0.0, **{v: (float(std[n + pos[v]]) * 1e6 if with_drift else 0.0) for v in free}}
-    resid = {}
+    resid, weight = {}, {}
     for p in used:
         pred = _predicted_offset(p, off, lr)
         resid[(p.a, p.b)] = (float(p.offset_s - pred), float(p.log_rate - (lr[p.b] - lr[p.a])))
+        z = abs(resid[(p.a, p.b)][0]) / max(p.offset_std_s, min_offset_std_s)
+        weight[(p.a, p.b)] = min(1.0, huber_scale / max(z, 1e-12))
     return DriftSolution(reference, {v: float(o) for v, o in off.items()},
                          {v: float(np.expm1(l) * 1e6) for v, l in lr.items()}, off_std, dr_std, resid,
-                         with_drift)
+                         with_drift, weight)
