@@ -48,3 +48,14 @@ def test_one_wrong_pair_is_outvoted_and_constant_model_has_no_drift():
 def test_unconnected_video_is_left_out():
     sol = solve_offsets_drift("r", [_pair("r", "p")])
     assert set(sol.offsets_s) == {"r", "p"}
+
+
+def test_walk_from_the_reference_visits_neighbours_in_the_pairs_order():
+    """The initial guess seeds videos in this order (a robust solve can depend on it): each
+    video's neighbours in the order of the pairs, whatever the pair's direction or the names."""
+    from vs_inspect.sync.drift import _connected
+    pairs = [_pair(a, b) for a, b in (("r", "p"), ("s", "q"), ("r", "q"), ("s", "r"))]
+    assert _connected("r", pairs) == ["r", "p", "q", "s"]
+    assert _connected("q", pairs) == ["q", "s", "r", "p"]
+    assert _connected("r", []) == ["r"]
+    assert _connected("r", [_pair("p", "q")]) == ["r"]

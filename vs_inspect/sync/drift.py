@@ -12,11 +12,12 @@ started from a breadth-first walk of the pair graph from the reference.
 
 from __future__ import annotations
 
-from collections import deque
 from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import least_squares
+from scipy.sparse import csr_array
+from scipy.sparse.csgraph import breadth_first_order
 
 
 @dataclass(frozen=True)
@@ -52,15 +53,18 @@ class DriftSolution:
 
 
 def _connected(reference: str, pairs: list[PairTiming]) -> list[str]:
-    seen, queue = [reference], deque([reference])
-    while queue:
-        v = queue.popleft()
-        for p in pairs:
-            for x, y in ((p.a, p.b), (p.b, p.a)):
-                if x == v and y not in seen:
-                    seen.append(y)
-                    queue.append(y)
-    return seen
+    """The videos the pairs link to the reference, breadth-first from it: the order in which
+    _initial seeds them, which the robust solve's result can depend on. A video's neighbours are
+    visited in the pairs' order: each pair is stored in both rows of the graph, and a row keeps
+    its entries in that order (csgraph walks a row as stored; tests/sync/test_drift.py checks it)."""
+    names = list(dict.fromkeys([reference, *(v for p in pairs for v in (p.a, p.b))]))
+    idx = {v: i for i, v in enumerate(names)}
+    rows = np.array([idx[v] for p in pairs for v in (p.a, p.b)], dtype=np.int64)
+    cols = np.array([idx[v] for p in pairs for v in (p.b, p.a)], dtype=np.int64)
+    by_row = np.argsort(rows, kind="stable")
+    indptr = np.r_[0, np.cumsum(np.bincount(rows, minlength=len(names)))]
+    graph = csr_array((np.ones(len(rows)), cols[by_row], indptr), shape=(len(names), len(names)))
+    return [names[i] for i in breadth_first_order(graph, 0, directed=True, return_predecessors=False)]
 
 
 def _initial(reference: str, order: list[str], pairs: list[PairTiming], with_drift: bool):
