@@ -20,25 +20,14 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
 
+from ..eval.metrics import VideoTimeError, time_errors
 from ..sync.config import DriftConfig, PoseFreeSyncConfig, SyncConfig
 from ..sync.drift import DriftSolution
 from ..sync.posefree import PoseFreeConfig, PoseFreePair, fit_at_time_map
 from ..types import CueBundle, SyncResult
 
 log = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class CameraError:
-    name: str
-    fps: float
-    offset_err_frames: float  # (estimated - true offset_s) * fps
-    worst_err_frames: float  # max over the camera's local times of the mapped-frame error
-    drift_err_ppm: float
-    est_drift_ppm: float
-    true_drift_ppm: float
 
 
 @dataclass(frozen=True)
@@ -49,8 +38,9 @@ class DroneBenchResult:
     sync_constant: SyncResult
     pairs: dict[tuple[str, str], PoseFreePair | None]  # what each pair's tracks gave (sync.posefree)
     fit_at_truth: dict[tuple[str, str], tuple[float, float]]  # (median Sampson px, inlier share)
-    errors_drift: list[CameraError]
-    errors_constant: list[CameraError]
+    errors_drift: dict[str, VideoTimeError | None]  # per camera against the README (eval.metrics.time_errors)
+    errors_constant: dict[str, VideoTimeError | None]
+    gt_drift_ppm: dict[str, float]  # the README's, per camera (camera 0: 0)
     wall_s: float  # the --drift run: pose-free pairs, energies, Stage 2
     wall_constant_s: float  # the ablation's energies and Stage 2 (its pairs' estimates reused)
     workers: int
@@ -80,24 +70,13 @@ def fits_at_truth(bundle: CueBundle, gt_offsets_s: dict[str, float], gt_drift_pp
 
 
 def camera_errors(sol: DriftSolution, bundle: CueBundle, gt_offsets_s: dict[str, float],
-                  gt_drift_ppm: dict[str, float]) -> list[CameraError]:
-    out = []
-    for v in bundle.videos:
-        n = v.name
-        if n not in sol.offsets_s:
-            out.append(CameraError(n, v.fps or 1 / v.frame_interval_s, math.nan, math.nan, math.nan,
-                                   math.nan, gt_drift_ppm.get(n, math.nan)))
-            continue
-        fps = v.fps or 1.0 / v.frame_interval_s
-        d_est, d_true = sol.drift_ppm[n] * 1e-6, gt_drift_ppm[n] * 1e-6
-        # the global time the estimate gives a local time, minus the truth, at the ends of the
-        # video; converted to this camera's frames
-        ends = np.array([v.timestamps_s[0], v.timestamps_s[-1]])
-        g_err = (sol.offsets_s[n] + (1 + d_est) * ends) - (gt_offsets_s[n] + (1 + d_true) * ends)
-        out.append(CameraError(n, fps, (sol.offsets_s[n] - gt_offsets_s[n]) * fps,
-                               float(np.max(np.abs(g_err)) * fps), (d_est - d_true) * 1e6,
-                               d_est * 1e6, d_true * 1e6))
-    return out
+                  gt_drift_ppm: dict[str, float]) -> dict[str, VideoTimeError | None]:
+    """eval.metrics.time_errors of a solution, with each camera's frame rate and span (its first
+    and last local times: the worst frame error over the recording is at one of them)."""
+    fps = {v.name: v.fps or 1.0 / v.frame_interval_s for v in bundle.videos}
+    span = {v.name: (float(v.timestamps_s[0]), float(v.timestamps_s[-1])) for v in bundle.videos}
+    est = {v: sol.offsets_s.get(v) for v in bundle.names}
+    return time_errors(est, gt_offsets_s, sol.reference, fps, sol.drift_ppm, gt_drift_ppm, span)
 
 
 def _as_solution(res: SyncResult) -> DriftSolution:
@@ -136,7 +115,8 @@ def run_drone_bench(bundle: CueBundle, gt_drift_ppm: dict[str, float], workers: 
     sol, sol_c = _as_solution(res_d), _as_solution(res_c)
     return DroneBenchResult(sol, sol_c, res_d, res_c, est, at_truth,
                             camera_errors(sol, bundle, bundle.gt_offsets_s, gt_drift_ppm),
-                            camera_errors(sol_c, bundle, bundle.gt_offsets_s, gt_drift_ppm), wall, wall_c,
+                            camera_errors(sol_c, bundle, bundle.gt_offsets_s, gt_drift_ppm), dict(gt_drift_ppm),
+                            wall, wall_c,
                             workers)
 
 
@@ -149,12 +129,17 @@ def format_table(res: DroneBenchResult, bundle: CueBundle) -> str:
              f"{'± ppm':>7} {'true ppm':>9} {'rate err ppm':>12} | {'constant offset: offset err':>27} "
              f"{'worst err':>10} {'rate err ppm':>12}"]
     std = res.sync_drift.drift_std_ppm or {}
-    for e, c in zip(res.errors_drift, res.errors_constant):
-        s = std.get(e.name)
-        lines.append(f"{e.name:8} {e.fps:8.3f} | {e.offset_err_frames:+23.2f} {e.worst_err_frames:10.2f} "
-                     f"{e.est_drift_ppm:+9.1f} {(s if s is not None else math.nan):7.1f} {e.true_drift_ppm:+9.1f} "
-                     f"{e.drift_err_ppm:+12.1f} | {c.offset_err_frames:+27.2f} {c.worst_err_frames:10.2f} "
-                     f"{c.drift_err_ppm:+12.1f}")
+    nan = math.nan
+    for v in bundle.videos:
+        n = v.name
+        e, c = res.errors_drift.get(n), res.errors_constant.get(n)
+        s = std.get(n)
+        lines.append(f"{n:8} {v.fps or 1 / v.frame_interval_s:8.3f} | "
+                     f"{e.offset_err_frames if e else nan:+23.2f} {e.worst_err_frames if e else nan:10.2f} "
+                     f"{res.drift.drift_ppm.get(n, nan):+9.1f} {(s if s is not None else nan):7.1f} "
+                     f"{res.gt_drift_ppm.get(n, nan):+9.1f} {e.drift_err_ppm if e else nan:+12.1f} | "
+                     f"{c.offset_err_frames if c else nan:+27.2f} {c.worst_err_frames if c else nan:10.2f} "
+                     f"{c.drift_err_ppm if c else nan:+12.1f}")
     gt, gd = bundle.gt_offsets_s or {}, bundle.gt_drift_ppm or {}
     lines += ["", "pairs: the tracks' estimate (sync.posefree: offset s, drift ppm ± std, inlier share), the "
                   "--drift pair (energy minimum at that rate), its error against the README, Stage 2 verdict"]
