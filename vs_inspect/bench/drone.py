@@ -16,13 +16,13 @@ import logging
 import math
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
 
+from ..engine import Engine, EngineConfig, LocalEngine, TaskFailed, open_engine
 from ..eval.metrics import VideoTimeError, time_errors
-from ..sync.config import DriftConfig, PoseFreeSyncConfig, SyncConfig
+from ..sync.config import DriftConfig, SyncConfig
 from ..sync.drift import DriftSolution
 from ..sync.posefree import PoseFreeConfig, PoseFreePair, fit_at_time_map
 from ..types import CueBundle, SyncResult
@@ -43,30 +43,31 @@ class DroneBenchResult:
     gt_drift_ppm: dict[str, float]  # the README's, per camera (camera 0: 0)
     wall_s: float  # the --drift run: pose-free pairs, energies, Stage 2
     wall_constant_s: float  # the ablation's energies and Stage 2 (its pairs' estimates reused)
-    workers: int
+    workers: int  # Ray CPUs (1: in this process)
+    engine_start_s: float  # starting the embedded Ray (0 in this process), not in wall_s
 
 
-def _truth_fit(args):
-    (a, b, t_a, xy_a, K_a, t_b, xy_b, K_b, cfg, offset_s, rate) = args
-    return (a, b), fit_at_time_map(t_a, xy_a, K_a, t_b, xy_b, K_b, offset_s, rate, cfg)
+def _truth_fit(shared: tuple[CueBundle, dict[str, float], dict[str, float], PoseFreeConfig],
+               pair: tuple[str, str]) -> tuple[float, float]:
+    """fit_at_time_map of one pair at the ground truth's time map (an engine task)."""
+    bundle, gt_offsets_s, gt_drift_ppm, cfg = shared
+    a, b = pair
+    va, vb = bundle.video(a), bundle.video(b)
+    da, db = gt_drift_ppm[a] * 1e-6, gt_drift_ppm[b] * 1e-6
+    return fit_at_time_map(va.timestamps_s, bundle.tracks[a].xy[0], bundle.cameras[a].K,
+                           vb.timestamps_s, bundle.tracks[b].xy[0], bundle.cameras[b].K,
+                           (gt_offsets_s[b] - gt_offsets_s[a]) / (1 + da), (1 + db) / (1 + da), cfg)
 
 
 def fits_at_truth(bundle: CueBundle, gt_offsets_s: dict[str, float], gt_drift_ppm: dict[str, float],
-                  cfg: PoseFreeConfig, workers: int) -> dict[tuple[str, str], tuple[float, float]]:
-    """Per pair, how well the ground truth's time map explains the tracks (F refitted)."""
+                  cfg: PoseFreeConfig, engine: Engine | None = None) -> dict[tuple[str, str], tuple[float, float]]:
+    """Per pair, how well the ground truth's time map explains the tracks (F refitted), on the
+    engine (default: in this process); a pair whose task died is left out."""
     names = bundle.names
-    jobs = []
-    for i, a in enumerate(names):
-        for b in names[i + 1:]:
-            va, vb = bundle.video(a), bundle.video(b)
-            da, db = gt_drift_ppm[a] * 1e-6, gt_drift_ppm[b] * 1e-6
-            jobs.append((a, b, va.timestamps_s, bundle.tracks[a].xy[0], bundle.cameras[a].K,
-                         vb.timestamps_s, bundle.tracks[b].xy[0], bundle.cameras[b].K, cfg,
-                         (gt_offsets_s[b] - gt_offsets_s[a]) / (1 + da), (1 + db) / (1 + da)))
-    if workers > 1:
-        with ProcessPoolExecutor(max_workers=workers) as ex:
-            return dict(ex.map(_truth_fit, jobs))
-    return dict(_truth_fit(j) for j in jobs)
+    pairs = [(a, b) for i, a in enumerate(names) for b in names[i + 1:]]
+    out = (engine or LocalEngine()).map(_truth_fit, pairs, shared=(bundle, gt_offsets_s, gt_drift_ppm, cfg),
+                                        desc="fits at the truth", unit="pair", progress=False)
+    return {k: fit for k, fit in zip(pairs, out) if not isinstance(fit, TaskFailed)}
 
 
 def camera_errors(sol: DriftSolution, bundle: CueBundle, gt_offsets_s: dict[str, float],
@@ -94,36 +95,42 @@ def run_drone_bench(bundle: CueBundle, gt_drift_ppm: dict[str, float], workers: 
                     estimates: dict[tuple[str, str], PoseFreePair | None] | None = None) -> DroneBenchResult:
     """The product's path (pipeline.stage12.sync_bundle on the pose-free bundle) with --drift, then
     the constant-offset model on the same pairs' estimates (the ablation, timed apart).
-    estimates: the pairs' sync.posefree estimates of an earlier run (then not timed again)."""
+    workers > 1: the pairs run as Ray tasks on an embedded Ray of that many CPUs (`sync --engine
+    ray --ray-cpus N`), started before the clock does (its start is reported apart); 1: in this
+    process. estimates: the pairs' sync.posefree estimates of an earlier run (then not timed again)."""
     from ..pipeline.stage12 import estimate_pose_free_pairs, sync_bundle
 
     if bundle.gt_offsets_s is None:
         raise ValueError("the bundle has no gt.json offsets")
     names = bundle.names
     pairs = [(a, b) for i, a in enumerate(names) for b in names[i + 1:] if (a, b) in bundle.pairs]
-    pf_cfg = PoseFreeSyncConfig(workers=workers)
-    cfg_d = SyncConfig(drift=DriftConfig(enabled=True), pose_free=pf_cfg)
-    t0 = time.perf_counter()
-    est = dict(estimates) if estimates is not None else estimate_pose_free_pairs(bundle, pairs, cfg_d)
-    res_d = sync_bundle(bundle, cfg_d, progress=False, pose_free=est)
-    wall = time.perf_counter() - t0
-    t1 = time.perf_counter()
-    res_c = sync_bundle(bundle, SyncConfig(pose_free=pf_cfg), progress=False, pose_free=est)
-    wall_c = time.perf_counter() - t1
-    at_truth = (fits_at_truth(bundle, bundle.gt_offsets_s, gt_drift_ppm, PoseFreeConfig(), workers)
-                if truth_fit else {})  # not timed
+    cfg_d = SyncConfig(drift=DriftConfig(enabled=True))
+    t_start = time.perf_counter()
+    with open_engine(EngineConfig("ray", ray_cpus=workers) if workers > 1 else EngineConfig()) as engine:
+        start_s = time.perf_counter() - t_start
+        t0 = time.perf_counter()
+        est = (dict(estimates) if estimates is not None else
+               estimate_pose_free_pairs(bundle, pairs, cfg_d, engine=engine))
+        res_d = sync_bundle(bundle, cfg_d, progress=False, pose_free=est, engine=engine)
+        wall = time.perf_counter() - t0
+        t1 = time.perf_counter()
+        res_c = sync_bundle(bundle, SyncConfig(), progress=False, pose_free=est, engine=engine)
+        wall_c = time.perf_counter() - t1
+        at_truth = (fits_at_truth(bundle, bundle.gt_offsets_s, gt_drift_ppm, PoseFreeConfig(), engine)
+                    if truth_fit else {})  # not timed
     sol, sol_c = _as_solution(res_d), _as_solution(res_c)
     return DroneBenchResult(sol, sol_c, res_d, res_c, est, at_truth,
                             camera_errors(sol, bundle, bundle.gt_offsets_s, gt_drift_ppm),
                             camera_errors(sol_c, bundle, bundle.gt_offsets_s, gt_drift_ppm), dict(gt_drift_ppm),
-                            wall, wall_c,
-                            workers)
+                            wall, wall_c, workers, start_s)
 
 
 def format_table(res: DroneBenchResult, bundle: CueBundle) -> str:
     lines = [f"drone dataset: {len(bundle.videos)} cameras, {len(res.pairs)} pairs; `sync --drift` path "
-             f"wall {res.wall_s:.1f} s on {res.workers} worker(s) (constant-offset ablation on the same "
-             f"pair estimates: {res.wall_constant_s:.1f} s more)",
+             f"wall {res.wall_s:.1f} s on "
+             + (f"{res.workers} Ray CPUs (the embedded Ray's start, {res.engine_start_s:.1f} s, not included)"
+                if res.workers > 1 else "1 process")
+             + f" (constant-offset ablation on the same pair estimates: {res.wall_constant_s:.1f} s more)",
              "", "per camera (reference " + res.drift.reference + "); frame errors in that camera's frames",
              f"{'camera':8} {'fps':>8} | {'drift model: offset err':>23} {'worst err':>10} {'est ppm':>9} "
              f"{'± ppm':>7} {'true ppm':>9} {'rate err ppm':>12} | {'constant offset: offset err':>27} "
@@ -146,6 +153,7 @@ def format_table(res: DroneBenchResult, bundle: CueBundle) -> str:
     for land in res.sync_drift.pairs:
         a, b = land.a, land.b
         p = res.pairs.get((a, b))
+        p = p if isinstance(p, PoseFreePair) else None  # None or its task died
         head = (f"  {a}-{b}: tracks {p.offset_s:+10.4f} s {p.drift_ppm:+8.1f} ± {p.drift_std_ppm:6.1f} ppm "
                 f"inliers {p.inlier_share:.2f} of {p.num_matches} ({p.median_sampson_px:.2f} px)"
                 if p is not None else f"  {a}-{b}: tracks gave nothing")

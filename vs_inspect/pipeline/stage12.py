@@ -9,12 +9,9 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
-import multiprocessing
-import os
 import time
 
 import numpy as np
-from tqdm import tqdm
 
 from ..analysis.record_views import pair_record_view, run_record_view
 from ..engine import Engine, LocalEngine, TaskFailed
@@ -130,7 +127,7 @@ def _static_K(cam) -> np.ndarray:
 
 
 def pose_free_job(bundle: CueBundle, a: str, b: str, cfg: SyncConfig) -> tuple:
-    """The arguments of sync.posefree.estimate_pair for one pose-free pair (picklable)."""
+    """The arguments of sync.posefree.estimate_pair for one pose-free pair."""
     ia, ib = _pair_track_rows(bundle, a, b)
     va, vb = bundle.video(a), bundle.video(b)
     pcfg = PoseFreeConfig(estimate_rate=cfg.drift.enabled)
@@ -139,35 +136,24 @@ def pose_free_job(bundle: CueBundle, a: str, b: str, cfg: SyncConfig) -> tuple:
             vb.timestamps_s, bundle.tracks[b].xy[ib], _static_K(bundle.cameras[b]), pcfg, rng)
 
 
-def _estimate_pose_free(job: tuple) -> PoseFreePair | None:
-    t_a, xy_a, K_a, t_b, xy_b, K_b, pcfg, rng = job
+def _pose_free_task(shared: tuple[CueBundle, SyncConfig], item: tuple[str, str]) -> PoseFreePair | None:
+    """sync.posefree for one pose-free pair as an engine task."""
+    bundle, cfg = shared
+    t_a, xy_a, K_a, t_b, xy_b, K_b, pcfg, rng = pose_free_job(bundle, *item, cfg)
     return estimate_pair(t_a, xy_a, K_a, t_b, xy_b, K_b, pcfg, offset_range_s=rng)
 
 
-def _quiet_worker() -> None:
-    """A worker ends on SIGTERM (the pool's exit sends it) without the parent's handler, which
-    would raise and print; Ctrl-C is the parent's to handle."""
-    import signal
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
 def estimate_pose_free_pairs(bundle: CueBundle, chosen: list[tuple[str, str]], cfg: SyncConfig,
-                             progress: bool = False) -> dict[tuple[str, str], PoseFreePair | None]:
-    """sync.posefree over the chosen pose-free pairs, in worker processes when there are several."""
-    jobs = {(a, b): pose_free_job(bundle, a, b, cfg) for a, b in chosen}
-    if not jobs:
+                             progress: bool = False, engine: Engine | None = None
+                             ) -> dict[tuple[str, str], PoseFreePair | TaskFailed | None]:
+    """sync.posefree over the chosen pose-free pairs, on the engine (default: in this process),
+    in the order of chosen; a pair whose task died with its worker is TaskFailed."""
+    if not chosen:  # nothing to send (a Ray engine would still ship the bundle)
         return {}
-    workers = min(cfg.pose_free.workers or os.cpu_count() or 1, len(jobs))
-    if workers <= 1:
-        return {k: _estimate_pose_free(j) for k, j in tqdm(jobs.items(), desc="pose-free pairs", unit="pair",
-                                                         disable=not progress, leave=False)}
-    # a Pool, not a ProcessPoolExecutor: leaving the block terminates the workers, so that Ctrl-C
-    # or SIGTERM does not wait for minutes of pair estimates
-    with multiprocessing.Pool(workers, initializer=_quiet_worker) as pool:
-        out = list(tqdm(pool.imap(_estimate_pose_free, jobs.values()), total=len(jobs), desc="pose-free pairs",
-                        unit="pair", disable=not progress, leave=False))
-    return dict(zip(jobs, out))
+    engine = engine or LocalEngine()
+    out = engine.map(_pose_free_task, chosen, shared=(bundle, cfg), desc="pose-free pairs", unit="pair",
+                     progress=progress)
+    return dict(zip(chosen, out))
 
 
 def _pose_free_inputs(bundle: CueBundle, a: str, b: str, side: dict[str, PairInput], cfg: SyncConfig,
@@ -240,7 +226,13 @@ def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | 
     pose_free_pairs = [(a, b) for a, b in chosen if is_pose_free_pair(bundle, a, b)]
     given = dict(pose_free or {})
     pose_free = {**{k: given[k] for k in pose_free_pairs if k in given},
-                 **estimate_pose_free_pairs(bundle, [k for k in pose_free_pairs if k not in given], cfg, progress)}
+                 **estimate_pose_free_pairs(bundle, [k for k in pose_free_pairs if k not in given], cfg, progress,
+                                            engine)}
+    for (a, b), pf in list(pose_free.items()):
+        if isinstance(pf, TaskFailed):  # its worker died: the pair counts as not evaluated
+            log.warning("%s__%s: %s", a, b, pf.reason)
+            sink.stage_event("landscapes", f"{a}__{b}: not evaluated: {pf.reason}")
+            chosen = [k for k in chosen if k != (a, b)]
     task_cfg = _fixed_threads(cfg)
     items = [(a, b, pose_free.get((a, b)), (a, b) in pose_free) for a, b in chosen]
     for (a, b), land in zip(chosen, engine.map(_pair_task, items, shared=(bundle, task_cfg),
