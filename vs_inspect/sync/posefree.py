@@ -345,22 +345,33 @@ def fit_at_time_map(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
     """(median Sampson px over inliers, inlier share) of the best E-constrained F with the time
     map held fixed: how well a given (e.g. ground-truth) time map explains the tracks, to compare
     with the estimate's own numbers."""
+    _, median_px, share = fit_F_at_time_map(t_a, xy_a, K_a, t_b, xy_b, K_b, offset_s, rate, config)
+    return median_px, share
+
+
+def fit_F_at_time_map(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
+                      t_b: np.ndarray, xy_b: np.ndarray, K_b: np.ndarray, offset_s: float, rate: float,
+                      config: PoseFreeConfig = PoseFreeConfig()) -> tuple[np.ndarray | None, float, float]:
+    """(F_ab, median Sampson px over inliers, inlier share) of the best E-constrained F with the
+    time map held fixed (MAGSAC, then the continuous refinement of R, t on Sampson distances);
+    F_ab None (and NaN, 0) when too few matches. Inputs as in estimate_pair."""
     cfg = config
     pair = _Pair(t_a, xy_a, t_b, xy_b)
     xa, xb, _ = pair.match(offset_s, rate)
     if len(xa) < 16:
-        return float("nan"), 0.0
+        return None, float("nan"), 0.0
     F0 = _ransac_F(xa, xb, cfg.fine_points * 4, cfg.threshold_px)
     if F0 is None:
-        return float("nan"), 0.0
+        return None, float("nan"), 0.0
     inl = sampson_px(F0, xa, xb) < cfg.threshold_px
     if inl.sum() < 8:
-        return float("nan"), 0.0
+        return None, float("nan"), 0.0
     rotvec, tang = _E_params(F0, K_a, K_b, xa[inl], xb[inl])
     Kai, Kbi = np.linalg.inv(K_a), np.linalg.inv(K_b)
     sel = _uniform(len(xa), cfg.refine_max_points)
     sol = least_squares(lambda p: sampson_px(_F_from_params(p, Kai, Kbi), xa[sel], xb[sel]),
                         np.r_[rotvec, tang], loss="soft_l1", f_scale=cfg.refine_loss_scale_px, max_nfev=200)
-    err = sampson_px(_F_from_params(sol.x, Kai, Kbi), xa, xb)
+    F = _F_from_params(sol.x, Kai, Kbi)
+    err = sampson_px(F, xa, xb)
     inl = err < cfg.threshold_px
-    return (float(np.median(err[inl])) if inl.any() else float("nan")), float(inl.mean())
+    return F, (float(np.median(err[inl])) if inl.any() else float("nan")), float(inl.mean())
