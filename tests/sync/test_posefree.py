@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from vs_inspect.sync.posefree import PoseFreeConfig, estimate_pair, interpolate_track, sampson_px
+from vs_inspect.sync.posefree import (PoseFreeConfig, estimate_pair, fit_at_time_map, fit_F_at_time_map,
+                                      interpolate_track, sampson_px)
 
 OFFSET_S = 3.217  # b started this long after a
 DRIFT_B = 200e-6  # b's clock runs 200 ppm fast; a is the reference
@@ -93,3 +94,18 @@ def test_interpolate_track_linear_and_nan_where_a_neighbour_is_unseen():
     assert np.isnan(out[5:]).all()
     with pytest.raises(ValueError, match=r"shape \(4,2\)"):
         interpolate_track(np.zeros(1), t, xy[:3])
+
+
+def test_F_at_a_fixed_time_map_fits_the_true_one_and_not_a_wrong_one():
+    t_a, xy_a, t_b, xy_b = _scene(2)
+    rate = 1 + DRIFT_B
+    F, median_px, share = fit_F_at_time_map(t_a, xy_a, K_A, t_b, xy_b, K_B, OFFSET_S, rate)
+    assert share > 0.95 and median_px < 3 * NOISE_PX
+    g = np.linspace(10, 60, 50)  # the true geometry: exact points on their epipolar lines
+    assert np.median(sampson_px(F, _project(K_A, np.eye(3), np.zeros(3), _world(g)),
+                                _project(K_B, R_B, C_B, _world(g)))) < 1.0
+    assert fit_at_time_map(t_a, xy_a, K_A, t_b, xy_b, K_B, OFFSET_S, rate) == (median_px, share)
+    _, wrong_px, wrong_share = fit_F_at_time_map(t_a, xy_a, K_A, t_b, xy_b, K_B, OFFSET_S + 0.5, rate)
+    assert wrong_share < share - 0.2 or wrong_px > 2 * median_px
+    none, nan_px, zero = fit_F_at_time_map(t_a, xy_a, K_A, t_b, xy_b, K_B, 500.0, rate)  # no overlap
+    assert none is None and np.isnan(nan_px) and zero == 0.0
