@@ -42,6 +42,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scipy.stats import theilslopes
 
 from vs_inspect.io.drone import import_drone, read_drone_camera
 from vs_inspect.sync.posefree import (
@@ -112,6 +113,8 @@ def local_shift_frames(pm: PairMap, g0: float, g1: float, centre: float = 0.0,
     if not np.isfinite(energy).any():
         return float("nan"), 0
     k = int(np.nanargmin(energy))
+    if k in (0, len(shifts) - 1):  # at the edge of the search: not a minimum, no shift
+        return float("nan"), 0
     best = float(shifts[k])
     if 0 < k < len(shifts) - 1 and np.isfinite(energy[k - 1:k + 2]).all():
         e0, e1, e2 = energy[k - 1:k + 2]
@@ -132,14 +135,16 @@ def windows(bundle, gt, width_s: float) -> list[tuple[float, float]]:
 
 def line_fit(centres_s: np.ndarray, shifts_frames: np.ndarray, fps_c: float, mid_s: float):
     """(value at mid_s in frames, slope as a rate error in ppm, rms of the residual in frames,
-    largest jump between neighbouring windows after the line, windows used)."""
+    largest jump between neighbouring windows after the line, windows used). The line is
+    Theil-Sen's (scipy.stats.theilslopes: the median of the pairwise slopes), so that a window
+    whose minimum is a wrong one (a hover, a short overlap) does not tilt it."""
     ok = np.isfinite(shifts_frames)
     if ok.sum() < 3:
         return (float("nan"),) * 4 + (int(ok.sum()),)
-    q = np.polyfit(centres_s[ok] - mid_s, shifts_frames[ok], 1)
-    res = shifts_frames[ok] - np.polyval(q, centres_s[ok] - mid_s)
-    jump = float(np.max(np.abs(np.diff(res)))) if ok.sum() > 1 else float("nan")
-    return float(q[1]), float(q[0] / fps_c * 1e6), float(np.sqrt(np.mean(res ** 2))), jump, int(ok.sum())
+    slope, at_mid, *_ = theilslopes(shifts_frames[ok], centres_s[ok] - mid_s)
+    res = shifts_frames[ok] - (at_mid + slope * (centres_s[ok] - mid_s))
+    return (float(at_mid), float(slope / fps_c * 1e6), float(np.sqrt(np.mean(res ** 2))),
+            float(np.max(np.abs(np.diff(res)))), int(ok.sum()))
 
 
 def collinear_share(xy: np.ndarray, tol_px: float = 1e-3) -> tuple[float, float]:
@@ -161,7 +166,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--data", type=Path, default=DATA, help="the dataset folder (default: %(default)s)")
     ap.add_argument("--window-s", type=float, default=60.0, help="window width, global seconds (default: 60)")
     ap.add_argument("--fine-window-s", type=float, default=10.0,
-                    help="the finer windows of the jump check, c against cam0 (default: 10)")
+                    help="the finer windows of the jump check, c against cam0 (default: 10 s)")
     ap.add_argument("--cameras", default="cam0,cam1,cam2,cam3,cam4,cam5",
                     help="the cameras c examined, comma-separated (default: all)")
     args = ap.parse_args(argv)
@@ -195,7 +200,8 @@ def main(argv: list[str] | None = None) -> int:
     centres = np.array([0.5 * (a + b) for a, b in wins])
     mid = 0.5 * (wins[0][0] + wins[-1][1])
     print(f"local shift minus the README's prediction, in frames of camera c (windows of {args.window_s:g} s "
-          f"of cam0's clock; '-': fewer than {MIN_MATCHES} matched detections)")
+          f"of cam0's clock; '-': fewer than {MIN_MATCHES} matched detections, or the energy's lowest "
+          f"shift at the edge of the ±{HALF_RANGE_FRAMES:g}-frame search)")
     print("positive: c's detection that matches r's at r's time tau is the one the README maps to tau - shift\n")
     summary = []
     for c in cams:
@@ -213,7 +219,7 @@ def main(argv: list[str] | None = None) -> int:
             summary.append((c, r, pm) + line_fit(centres, shifts[r], pm.fps_c, mid))
         print()
 
-    print(f"per pair: a line through the windows' shifts (frames of c at the middle of the recording, "
+    print(f"per pair: a Theil-Sen line through the windows' shifts (frames of c at the middle of the recording, "
           f"{mid:.0f} s; slope as a rate error, ppm), its rms residual and largest jump between "
           f"neighbouring windows (frames); the whole-recording F at the README's map: inlier share "
           f"(< {THRESHOLD_PX:g} px) and median Sampson px")
@@ -225,22 +231,25 @@ def main(argv: list[str] | None = None) -> int:
 
     fine = windows(bundle, gt, args.fine_window_s)
     fc = np.array([0.5 * (a + b) for a, b in fine])
-    print(f"\njump check: each camera c against cam0 in windows of {args.fine_window_s:g} s, shift minus a "
-          f"line through them (frames of c)")
-    print(f"{'c':5} {'windows':>7} {'slope ppm':>10} {'rms fr':>7} {'jump fr':>8} {'max |res| fr':>12}")
+    print(f"\njump check: each camera c against cam0 (cam0 against cam2) in windows of {args.fine_window_s:g} s (searched ±"
+          f"{FINE_HALF_FRAMES:g} frames around the line above), shift minus a Theil-Sen line through them "
+          f"(frames of c): rms, largest jump between neighbours, median |residual|, share of windows over 1 frame")
+    print(f"{'c':5} {'r':5} {'windows':>7} {'slope ppm':>10} {'rms fr':>7} {'jump fr':>8} {'median |res|':>12} "
+          f"{'|res| > 1':>9}")
     for c in cams:
-        if (c, "cam0") not in maps:
+        r = next((r for r in REFS if (c, r) in maps), None)
+        if r is None:
             continue
-        pm = maps[(c, "cam0")]
+        pm = maps[(c, r)]
         # around the coarse windows' line (± 8 frames): a jump of the shift within that shows
-        at_mid, ppm = next((m, p) for cc, rr, _, m, p, *_ in summary if (cc, rr) == (c, "cam0"))
+        at_mid, ppm = next((m, p) for cc, rr, _, m, p, *_ in summary if (cc, rr) == (c, r))
         guess = at_mid + ppm * 1e-6 * pm.fps_c * (fc - mid) if np.isfinite(at_mid) else np.zeros(len(fc))
         s = np.array([local_shift_frames(pm, a, b, g, FINE_HALF_FRAMES)[0] for (a, b), g in zip(fine, guess)])
         at_mid, ppm, rms, jump, n = line_fit(fc, s, pm.fps_c, mid)
         ok = np.isfinite(s)
-        res = (s[ok] - np.polyval(np.polyfit(fc[ok] - mid, s[ok], 1), fc[ok] - mid) if ok.sum() >= 3
-               else np.array([np.nan]))
-        print(f"{c:5} {n:7d} {ppm:+10.0f} {rms:7.2f} {jump:8.2f} {np.max(np.abs(res)):12.2f}")
+        res = np.abs(s[ok] - (at_mid + ppm * 1e-6 * pm.fps_c * (fc[ok] - mid)))
+        print(f"{c:5} {r:5} {n:7d} {ppm:+10.0f} {rms:7.2f} {jump:8.2f} {np.median(res):12.2f} "
+              f"{np.mean(res > 1.0):9.2f}")
 
     print("\nlinear-interpolation signature (the detection files' px): share of three consecutive detected "
           "frames whose middle lies within 0.001 px of its neighbours' midpoint; median |second difference|")
