@@ -2,12 +2,13 @@
 tracking dataset, from detections alone, against the README's ground truth; the constant-offset
 model is the ablation (same pairs, rate fixed at 1, its error shown).
 
-It runs the product's path, `sync --drift` on the pose-free bundle (pipeline.stage12.sync_bundle:
-every pair's F, shift and rate from its tracks in worker processes, the energy with that F, Stage
-2 with drift fixing camera 0), timed; then the constant-offset model on the same pairs' estimates
-(energy at rate 1, one offset per camera), so that it differs only in the time model. Errors per camera: the offset error in frames of that camera (at its
-local time 0), the worst frame error over its recording (offset and drift together), and the rate
-error in ppm.
+It runs the product's path, `sync --drift --engine ray` on the pose-free bundle
+(pipeline.stage12.sync_bundle: every pair's F, shift and rate from its tracks, the energy with
+that F, as Ray tasks; Stage 2 with drift fixing camera 0), timed; then the constant-offset model
+on the same pairs' estimates (energy at rate 1, one offset per camera), so that it differs only
+in the time model. Errors per camera (eval.metrics.time_errors): the offset error in frames of
+that camera (at its local time 0), the worst frame error over its recording (offset and drift
+together), and the rate error in ppm.
 """
 
 from __future__ import annotations
@@ -18,7 +19,6 @@ import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
-
 
 from ..engine import Engine, EngineConfig, LocalEngine, TaskFailed, open_engine
 from ..eval.metrics import VideoTimeError, time_errors
