@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vs_inspect.bench.drift_cues import DriftSceneRow, _end_errors, summarize
+from vs_inspect.bench.drift_cues import DriftSceneRow, end_errors, summarize
 from vs_inspect.types import CameraTrack, CueBundle, SyncResult, Tracks, VideoInfo
 
 
@@ -19,12 +19,12 @@ def _bundle():
 def test_end_error_counts_the_drift_over_the_video():
     b = _bundle()
     const = SyncResult("r", {"r": 0.0, "v": 1.0}, {}, {}, (), (), ())
-    ends, derr = _end_errors(const, b)
+    ends, derr = end_errors(const, b)
     # exact at local time 0, but 200 ppm of the last frame's 10 s short at the end
     assert ends["v"] == pytest.approx(200e-6 * 10.0 * 1e3)
     assert derr["v"] == pytest.approx(-200.0)
     drift = SyncResult("r", {"r": 0.0, "v": 1.0}, {}, {}, (), (), (), drift_ppm={"r": 0.0, "v": 200.0})
-    ends, derr = _end_errors(drift, b)
+    ends, derr = end_errors(drift, b)
     assert ends["v"] == pytest.approx(0.0, abs=1e-9) and derr["v"] == pytest.approx(0.0)
 
 

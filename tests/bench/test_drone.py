@@ -16,9 +16,12 @@ def test_camera_errors_in_frames_and_ppm():
                        {v.name: Tracks(np.zeros((1, v.num_frames, 2))) for v in videos}, {})
     sol = DriftSolution("r", {"r": 0.0, "v": 2.02}, {"r": 0.0, "v": 150.0}, {}, {}, {}, True)
     errs = camera_errors(sol, bundle, {"r": 0.0, "v": 2.0}, {"r": 0.0, "v": 50.0})
-    e = errs[1]
+    e = errs["v"]
     assert e.offset_err_frames == pytest.approx(0.02 * 25)
     assert e.drift_err_ppm == pytest.approx(100.0)
     # worst at the last frame (local time 299/25 s): 20 ms + 100 ppm of 11.96 s, in 25 fps frames
     assert e.worst_err_frames == pytest.approx((0.02 + 100e-6 * 299 / 25) * 25)
-    assert errs[0].offset_err_frames == 0.0
+    assert errs["r"].offset_err_frames == 0.0 and errs["r"].worst_err_frames == 0.0
+    # a camera the solution left out has no error
+    sol_r = DriftSolution("r", {"r": 0.0}, {"r": 0.0}, {}, {}, {}, True)
+    assert camera_errors(sol_r, bundle, {"r": 0.0, "v": 2.0}, {"r": 0.0, "v": 50.0})["v"] is None

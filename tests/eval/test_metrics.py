@@ -3,7 +3,7 @@ import math
 import pytest
 
 from vs_inspect.cli import main
-from vs_inspect.eval.metrics import evaluate_offsets, pair_auc
+from vs_inspect.eval.metrics import evaluate_offsets, pair_auc, time_errors
 
 
 def test_pair_auc_exact_values():
@@ -39,3 +39,23 @@ def test_eval_cli(tmp_path, capsys):
     assert "80.0" in out and "20.0" in out  # A@100 = 80 %, δ = 20 ms
     (tmp_path / "gt2.json").write_text(json.dumps({"offsets_s": {"a": 0.0, "zz": 1.0}}))
     assert main(["eval", str(tmp_path), "--gt", str(tmp_path / "gt2.json")]) == 2
+
+
+def test_time_errors_offset_drift_and_over_the_span():
+    """Relative to the reference (its own offset taken out); the error grows with local time by
+    the rate error, so over a 0..100 s span it is worst at an end."""
+    true = {"r": 1.0, "v": 3.0, "w": 0.0}
+    est = {"r": 2.0, "v": 4.01, "w": None}
+    te = time_errors(est, true, "r", {"r": 30.0, "v": 25.0}, {"r": 0.0, "v": -150.0}, {"r": 0.0, "v": 50.0},
+                     {"r": (0.0, 100.0), "v": (0.0, 100.0)})
+    v = te["v"]
+    assert v.offset_err_s == pytest.approx(0.01) and v.offset_err_frames == pytest.approx(0.25)
+    assert v.drift_err_ppm == pytest.approx(-200.0)
+    assert v.end_err_s == pytest.approx(0.01 - 200e-6 * 100.0)  # -0.01 s at the last frame
+    assert v.worst_err_s == pytest.approx(0.01) and v.worst_err_frames == pytest.approx(0.25)
+    assert te["w"] is None and te["r"].offset_err_s == 0.0 and te["r"].worst_err_s == 0.0
+    # without a span or fps: those errors are unknown; a truth without drift gives no drift error,
+    # and its time map is the constant one
+    bare = time_errors(est, true, "r", est_drift_ppm={"v": -150.0}, span_s={"v": (0.0, 10.0)})["v"]
+    assert bare.offset_err_frames is None and bare.drift_err_ppm is None and bare.worst_err_frames is None
+    assert bare.end_err_s == pytest.approx(0.01 - 150e-6 * 10.0)

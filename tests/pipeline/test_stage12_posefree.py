@@ -7,11 +7,13 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import pytest
 from scipy.spatial.transform import Rotation
 
 from vs_inspect.io.bundle import read_bundle, write_bundle
 from vs_inspect.pipeline.stage12 import estimate_pose_free_pairs, is_pose_free_pair, sync_bundle
-from vs_inspect.sync.config import DriftConfig, LandscapeConfig, PoseFreeSyncConfig, SyncConfig
+from vs_inspect.engine import EngineConfig, open_engine
+from vs_inspect.sync.config import DriftConfig, LandscapeConfig, SyncConfig
 from vs_inspect.types import CameraTrack, CueBundle, TrackPairs, Tracks, VideoInfo
 
 OFFSETS = {"c0": 0.0, "c1": 3.217, "c2": -4.61}
@@ -55,7 +57,7 @@ def drone_bundle(seed: int = 0) -> CueBundle:
     return CueBundle(tuple(videos), cams, tracks, pairs, dict(OFFSETS), frozenset(names), dict(DRIFT_PPM))
 
 
-CFG = SyncConfig(landscape=LandscapeConfig(range_s=15.0), pose_free=PoseFreeSyncConfig(workers=1))
+CFG = SyncConfig(landscape=LandscapeConfig(range_s=15.0))
 
 
 def test_pose_free_marker_round_trips(tmp_path):
@@ -92,11 +94,16 @@ def test_pose_free_bundle_constant_model_is_the_ablation():
         assert abs(res.offsets_s[n] - OFFSETS[n]) < 0.1
 
 
-def test_pose_free_pairs_in_worker_processes_match_in_process():
+def test_pose_free_pairs_on_ray_match_in_process():
+    """The pose-free pairs run on the run's engine (no pool of their own): as Ray tasks they give
+    the in-process estimates bit for bit, in the order of the pairs."""
+    pytest.importorskip("ray", reason="ray is not installed (pip install 'vs_inspect[distributed]')")
     b = drone_bundle()
-    pairs = [("c0", "c1"), ("c0", "c2")]
+    pairs = [("c0", "c2"), ("c0", "c1")]
     one = estimate_pose_free_pairs(b, pairs, CFG)
-    two = estimate_pose_free_pairs(b, pairs, dataclasses.replace(CFG, pose_free=PoseFreeSyncConfig(workers=2)))
-    assert list(two) == pairs
+    with open_engine(EngineConfig("ray", ray_cpus=2)) as eng:
+        two = estimate_pose_free_pairs(b, pairs, CFG, engine=eng)
+    assert list(one) == list(two) == pairs
     for k in pairs:
         assert one[k].offset_s == two[k].offset_s and one[k].rate == two[k].rate
+        np.testing.assert_array_equal(one[k].F_ab, two[k].F_ab)

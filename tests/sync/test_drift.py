@@ -34,6 +34,11 @@ def test_one_wrong_pair_is_outvoted_and_constant_model_has_no_drift():
     for n in names:
         assert sol.offsets_s[n] == pytest.approx(OFFSETS[n], abs=0.01)
     assert abs(sol.pair_residuals[("p", "q")][0]) > 4.0
+    # the solve's own Huber weights: the wrong pair (~5 s off, std 1 ms) down to 3 / 5000,
+    # the others whole
+    assert sol.pair_weights[("p", "q")] == pytest.approx(3.0 / (abs(sol.pair_residuals[("p", "q")][0]) / 1e-3))
+    assert sol.pair_weights[("p", "q")] < 1e-3
+    assert all(w == 1.0 for k, w in sol.pair_weights.items() if k != ("p", "q"))
     const = solve_offsets_drift("r", [_pair(a, b) for i, a in enumerate(names) for b in names[i + 1:]],
                                 with_drift=False)
     assert set(const.drift_ppm.values()) == {0.0}
@@ -43,3 +48,14 @@ def test_one_wrong_pair_is_outvoted_and_constant_model_has_no_drift():
 def test_unconnected_video_is_left_out():
     sol = solve_offsets_drift("r", [_pair("r", "p")])
     assert set(sol.offsets_s) == {"r", "p"}
+
+
+def test_walk_from_the_reference_visits_neighbours_in_the_pairs_order():
+    """The initial guess seeds videos in this order (a robust solve can depend on it): each
+    video's neighbours in the order of the pairs, whatever the pair's direction or the names."""
+    from vs_inspect.sync.drift import _connected
+    pairs = [_pair(a, b) for a, b in (("r", "p"), ("s", "q"), ("r", "q"), ("s", "r"))]
+    assert _connected("r", pairs) == ["r", "p", "q", "s"]
+    assert _connected("q", pairs) == ["q", "s", "r", "p"]
+    assert _connected("r", []) == ["r"]
+    assert _connected("r", [_pair("p", "q")]) == ["r"]

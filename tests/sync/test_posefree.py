@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from vs_inspect.sync.posefree import PoseFreeConfig, estimate_pair, interpolate_track, sampson_px
+from vs_inspect.sync.posefree import (PoseFreeConfig, estimate_pair, fit_at_time_map, fit_F_at_time_map,
+                                      interpolate_track, sampson_px)
 
 OFFSET_S = 3.217  # b started this long after a
 DRIFT_B = 200e-6  # b's clock runs 200 ppm fast; a is the reference
@@ -46,7 +47,7 @@ def _scene(seed=0):
     return t_a, xy_a, t_b, xy_b
 
 
-FAST = PoseFreeConfig(top_k=2, rate_half_width_ppm=600, rate_step_ppm=200, fine_half_width_s=0.2)
+FAST = PoseFreeConfig(top_k=2, fine_half_width_s=0.2)
 
 
 def test_recovers_shift_and_rate():
@@ -57,9 +58,12 @@ def test_recovers_shift_and_rate():
     assert abs(r.drift_ppm - DRIFT_B * 1e6) < RATE_TOL_PPM
     assert r.inlier_share > 0.95
     assert r.offset_std_s < OFFSET_TOL_S and r.drift_std_ppm < RATE_TOL_PPM
-    # the landscape peaks at the true offset, and the (offset, rate) image is the grid's shape
+    # the landscape peaks at the true offset; the refined F explains the matches to the noise
+    # (0.3 px per coordinate), and the pivot lies in the middle of the overlap (a's clock)
     assert abs(r.coarse_offsets_s[np.argmax(r.coarse_score)] - OFFSET_S) < 1.0
-    assert r.fine_score.shape == (len(r.fine_rates_ppm), len(r.fine_offsets_s))
+    assert r.median_sampson_px < 3 * NOISE_PX
+    overlap = (max(t_a[0], OFFSET_S + t_b[0]), min(t_a[-1], OFFSET_S + (1 + DRIFT_B) * t_b[-1]))
+    assert abs(r.pivot_s - 0.5 * sum(overlap)) < 2.0
     # F maps a's points to b's epipolar lines (not transposed): exact points have ~0 distance
     g = np.linspace(10, 60, 50)
     xa = _project(K_A, np.eye(3), np.zeros(3), _world(g))
@@ -72,7 +76,7 @@ def test_constant_offset_model_keeps_rate_one_and_swapped_pair_flips_sign():
     t_a, xy_a, t_b, xy_b = _scene(1)
     r = estimate_pair(t_a, xy_a, K_A, t_b, xy_b, K_B, PoseFreeConfig(top_k=2, estimate_rate=False,
                       fine_half_width_s=0.2), offset_range_s=(-30.0, 30.0))
-    assert r.rate == 1.0 and r.fine_rates_ppm.tolist() == [0.0]
+    assert r.rate == 1.0 and r.drift_std_ppm == 0.0  # no rate estimated, so none uncertain
     # 200 ppm over the overlap is a few ms: the constant model lands near the middle of the drift
     assert abs(r.offset_s - OFFSET_S) < 0.05
     s = estimate_pair(t_b, xy_b, K_B, t_a, xy_a, K_A, FAST, offset_range_s=(-30.0, 30.0))
@@ -90,3 +94,18 @@ def test_interpolate_track_linear_and_nan_where_a_neighbour_is_unseen():
     assert np.isnan(out[5:]).all()
     with pytest.raises(ValueError, match=r"shape \(4,2\)"):
         interpolate_track(np.zeros(1), t, xy[:3])
+
+
+def test_F_at_a_fixed_time_map_fits_the_true_one_and_not_a_wrong_one():
+    t_a, xy_a, t_b, xy_b = _scene(2)
+    rate = 1 + DRIFT_B
+    F, median_px, share = fit_F_at_time_map(t_a, xy_a, K_A, t_b, xy_b, K_B, OFFSET_S, rate)
+    assert share > 0.95 and median_px < 3 * NOISE_PX
+    g = np.linspace(10, 60, 50)  # the true geometry: exact points on their epipolar lines
+    assert np.median(sampson_px(F, _project(K_A, np.eye(3), np.zeros(3), _world(g)),
+                                _project(K_B, R_B, C_B, _world(g)))) < 1.0
+    assert fit_at_time_map(t_a, xy_a, K_A, t_b, xy_b, K_B, OFFSET_S, rate) == (median_px, share)
+    _, wrong_px, wrong_share = fit_F_at_time_map(t_a, xy_a, K_A, t_b, xy_b, K_B, OFFSET_S + 0.5, rate)
+    assert wrong_share < share - 0.2 or wrong_px > 2 * median_px
+    none, nan_px, zero = fit_F_at_time_map(t_a, xy_a, K_A, t_b, xy_b, K_B, 500.0, rate)  # no overlap
+    assert none is None and np.isnan(nan_px) and zero == 0.0

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..eval.metrics import offset_errors_ms
+from ..eval.metrics import offset_errors_ms, time_errors
 from ..pipeline.stage12 import sync_bundle
 from ..sync.config import DriftConfig, SyncConfig
 from .datasets import cue_scene
@@ -27,23 +27,15 @@ class DriftSceneRow:
     wall_s: float
 
 
-def _end_errors(res, bundle) -> tuple[dict, dict]:
-    ref, gt, gd = res.reference, bundle.gt_offsets_s, bundle.gt_drift_ppm or {}
-    ends, derr = {}, {}
-    for v in bundle.videos:
-        n = v.name
-        if n == ref:
-            continue
-        if res.offsets_s.get(n) is None or res.offsets_s.get(ref) is None:
-            ends[n] = derr[n] = None
-            continue
-        d_est = (res.drift_ppm or {}).get(n) or 0.0
-        t_end = float(v.timestamps_s[-1])
-        g_est = res.offsets_s[n] - res.offsets_s[ref] + (1 + d_est * 1e-6) * t_end
-        g_true = gt[n] - gt[ref] + (1 + gd.get(n, 0.0) * 1e-6) * t_end
-        ends[n] = abs(g_est - g_true) * 1e3
-        derr[n] = d_est - (gd.get(n, 0.0) - gd.get(ref, 0.0))
-    return ends, derr
+def end_errors(res, bundle) -> tuple[dict, dict]:
+    """Per non-reference video: |error| (ms) of the global time of its last frame, and its drift
+    error (ppm, relative to the reference); None where unresolved (eval.metrics.time_errors)."""
+    gd = bundle.gt_drift_ppm or dict.fromkeys(bundle.gt_offsets_s, 0.0)  # a truth without drift: 0
+    span = {v.name: (float(v.timestamps_s[0]), float(v.timestamps_s[-1])) for v in bundle.videos}
+    te = time_errors(res.offsets_s, bundle.gt_offsets_s, res.reference, None, res.drift_ppm, gd, span)
+    te.pop(res.reference, None)
+    return ({n: None if e is None else abs(e.end_err_s) * 1e3 for n, e in te.items()},
+            {n: None if e is None else e.drift_err_ppm for n, e in te.items()})
 
 
 def run_drift_cues(difficulty: str = "default", seeds: tuple[int, ...] = (0, 1, 2, 3, 4),
@@ -58,7 +50,7 @@ def run_drift_cues(difficulty: str = "default", seeds: tuple[int, ...] = (0, 1, 
             wall = time.perf_counter() - t0
             err = offset_errors_ms(res.offsets_s, b.gt_offsets_s, res.reference)
             err.pop(res.reference, None)
-            ends, derr = _end_errors(res, b)
+            ends, derr = end_errors(res, b)
             rows.append(DriftSceneRow(data.name, model, err, ends, derr, wall))
     return rows
 
@@ -89,4 +81,4 @@ def per_scene(rows: list[DriftSceneRow]) -> str:
     return "\n".join(out) if out else ""
 
 
-__all__ = ["DriftSceneRow", "per_scene", "run_drift_cues", "summarize"]
+__all__ = ["DriftSceneRow", "end_errors", "per_scene", "run_drift_cues", "summarize"]

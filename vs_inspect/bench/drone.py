@@ -2,12 +2,13 @@
 tracking dataset, from detections alone, against the README's ground truth; the constant-offset
 model is the ablation (same pairs, rate fixed at 1, its error shown).
 
-It runs the product's path, `sync --drift` on the pose-free bundle (pipeline.stage12.sync_bundle:
-every pair's F, shift and rate from its tracks in worker processes, the energy with that F, Stage
-2 with drift fixing camera 0), timed; then the constant-offset model on the same pairs' estimates
-(energy at rate 1, one offset per camera), so that it differs only in the time model. Errors per camera: the offset error in frames of that camera (at its
-local time 0), the worst frame error over its recording (offset and drift together), and the rate
-error in ppm.
+It runs the product's path, `sync --drift --engine ray` on the pose-free bundle
+(pipeline.stage12.sync_bundle: every pair's F, shift and rate from its tracks, the energy with
+that F, as Ray tasks; Stage 2 with drift fixing camera 0), timed; then the constant-offset model
+on the same pairs' estimates (energy at rate 1, one offset per camera), so that it differs only
+in the time model. Errors per camera (eval.metrics.time_errors): the offset error in frames of
+that camera (at its local time 0), the worst frame error over its recording (offset and drift
+together), and the rate error in ppm.
 """
 
 from __future__ import annotations
@@ -16,29 +17,17 @@ import logging
 import math
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
-from ..sync.config import DriftConfig, PoseFreeSyncConfig, SyncConfig
+from ..engine import Engine, EngineConfig, LocalEngine, TaskFailed, open_engine
+from ..eval.metrics import VideoTimeError, time_errors
+from ..sync.config import DriftConfig, SyncConfig
 from ..sync.drift import DriftSolution
 from ..sync.posefree import PoseFreeConfig, PoseFreePair, fit_at_time_map
 from ..types import CueBundle, SyncResult
 
 log = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class CameraError:
-    name: str
-    fps: float
-    offset_err_frames: float  # (estimated - true offset_s) * fps
-    worst_err_frames: float  # max over the camera's local times of the mapped-frame error
-    drift_err_ppm: float
-    est_drift_ppm: float
-    true_drift_ppm: float
 
 
 @dataclass(frozen=True)
@@ -49,55 +38,46 @@ class DroneBenchResult:
     sync_constant: SyncResult
     pairs: dict[tuple[str, str], PoseFreePair | None]  # what each pair's tracks gave (sync.posefree)
     fit_at_truth: dict[tuple[str, str], tuple[float, float]]  # (median Sampson px, inlier share)
-    errors_drift: list[CameraError]
-    errors_constant: list[CameraError]
+    errors_drift: dict[str, VideoTimeError | None]  # per camera against the README (eval.metrics.time_errors)
+    errors_constant: dict[str, VideoTimeError | None]
+    gt_drift_ppm: dict[str, float]  # the README's, per camera (camera 0: 0)
     wall_s: float  # the --drift run: pose-free pairs, energies, Stage 2
     wall_constant_s: float  # the ablation's energies and Stage 2 (its pairs' estimates reused)
-    workers: int
+    workers: int  # Ray CPUs (1: in this process)
+    engine_start_s: float  # starting the embedded Ray (0 in this process), not in wall_s
 
 
-def _truth_fit(args):
-    (a, b, t_a, xy_a, K_a, t_b, xy_b, K_b, cfg, offset_s, rate) = args
-    return (a, b), fit_at_time_map(t_a, xy_a, K_a, t_b, xy_b, K_b, offset_s, rate, cfg)
+def _truth_fit(shared: tuple[CueBundle, dict[str, float], dict[str, float], PoseFreeConfig],
+               pair: tuple[str, str]) -> tuple[float, float]:
+    """fit_at_time_map of one pair at the ground truth's time map (an engine task)."""
+    bundle, gt_offsets_s, gt_drift_ppm, cfg = shared
+    a, b = pair
+    va, vb = bundle.video(a), bundle.video(b)
+    da, db = gt_drift_ppm[a] * 1e-6, gt_drift_ppm[b] * 1e-6
+    return fit_at_time_map(va.timestamps_s, bundle.tracks[a].xy[0], bundle.cameras[a].K,
+                           vb.timestamps_s, bundle.tracks[b].xy[0], bundle.cameras[b].K,
+                           (gt_offsets_s[b] - gt_offsets_s[a]) / (1 + da), (1 + db) / (1 + da), cfg)
 
 
 def fits_at_truth(bundle: CueBundle, gt_offsets_s: dict[str, float], gt_drift_ppm: dict[str, float],
-                  cfg: PoseFreeConfig, workers: int) -> dict[tuple[str, str], tuple[float, float]]:
-    """Per pair, how well the ground truth's time map explains the tracks (F refitted)."""
+                  cfg: PoseFreeConfig, engine: Engine | None = None) -> dict[tuple[str, str], tuple[float, float]]:
+    """Per pair, how well the ground truth's time map explains the tracks (F refitted), on the
+    engine (default: in this process); a pair whose task died is left out."""
     names = bundle.names
-    jobs = []
-    for i, a in enumerate(names):
-        for b in names[i + 1:]:
-            va, vb = bundle.video(a), bundle.video(b)
-            da, db = gt_drift_ppm[a] * 1e-6, gt_drift_ppm[b] * 1e-6
-            jobs.append((a, b, va.timestamps_s, bundle.tracks[a].xy[0], bundle.cameras[a].K,
-                         vb.timestamps_s, bundle.tracks[b].xy[0], bundle.cameras[b].K, cfg,
-                         (gt_offsets_s[b] - gt_offsets_s[a]) / (1 + da), (1 + db) / (1 + da)))
-    if workers > 1:
-        with ProcessPoolExecutor(max_workers=workers) as ex:
-            return dict(ex.map(_truth_fit, jobs))
-    return dict(_truth_fit(j) for j in jobs)
+    pairs = [(a, b) for i, a in enumerate(names) for b in names[i + 1:]]
+    out = (engine or LocalEngine()).map(_truth_fit, pairs, shared=(bundle, gt_offsets_s, gt_drift_ppm, cfg),
+                                        desc="fits at the truth", unit="pair", progress=False)
+    return {k: fit for k, fit in zip(pairs, out) if not isinstance(fit, TaskFailed)}
 
 
 def camera_errors(sol: DriftSolution, bundle: CueBundle, gt_offsets_s: dict[str, float],
-                  gt_drift_ppm: dict[str, float]) -> list[CameraError]:
-    out = []
-    for v in bundle.videos:
-        n = v.name
-        if n not in sol.offsets_s:
-            out.append(CameraError(n, v.fps or 1 / v.frame_interval_s, math.nan, math.nan, math.nan,
-                                   math.nan, gt_drift_ppm.get(n, math.nan)))
-            continue
-        fps = v.fps or 1.0 / v.frame_interval_s
-        d_est, d_true = sol.drift_ppm[n] * 1e-6, gt_drift_ppm[n] * 1e-6
-        # the global time the estimate gives a local time, minus the truth, at the ends of the
-        # video; converted to this camera's frames
-        ends = np.array([v.timestamps_s[0], v.timestamps_s[-1]])
-        g_err = (sol.offsets_s[n] + (1 + d_est) * ends) - (gt_offsets_s[n] + (1 + d_true) * ends)
-        out.append(CameraError(n, fps, (sol.offsets_s[n] - gt_offsets_s[n]) * fps,
-                               float(np.max(np.abs(g_err)) * fps), (d_est - d_true) * 1e6,
-                               d_est * 1e6, d_true * 1e6))
-    return out
+                  gt_drift_ppm: dict[str, float]) -> dict[str, VideoTimeError | None]:
+    """eval.metrics.time_errors of a solution, with each camera's frame rate and span (its first
+    and last local times: the worst frame error over the recording is at one of them)."""
+    fps = {v.name: v.fps or 1.0 / v.frame_interval_s for v in bundle.videos}
+    span = {v.name: (float(v.timestamps_s[0]), float(v.timestamps_s[-1])) for v in bundle.videos}
+    est = {v: sol.offsets_s.get(v) for v in bundle.names}
+    return time_errors(est, gt_offsets_s, sol.reference, fps, sol.drift_ppm, gt_drift_ppm, span)
 
 
 def _as_solution(res: SyncResult) -> DriftSolution:
@@ -115,52 +95,65 @@ def run_drone_bench(bundle: CueBundle, gt_drift_ppm: dict[str, float], workers: 
                     estimates: dict[tuple[str, str], PoseFreePair | None] | None = None) -> DroneBenchResult:
     """The product's path (pipeline.stage12.sync_bundle on the pose-free bundle) with --drift, then
     the constant-offset model on the same pairs' estimates (the ablation, timed apart).
-    estimates: the pairs' sync.posefree estimates of an earlier run (then not timed again)."""
+    workers > 1: the pairs run as Ray tasks on an embedded Ray of that many CPUs (`sync --engine
+    ray --ray-cpus N`), started before the clock does (its start is reported apart); 1: in this
+    process. estimates: the pairs' sync.posefree estimates of an earlier run (then not timed again)."""
     from ..pipeline.stage12 import estimate_pose_free_pairs, sync_bundle
 
     if bundle.gt_offsets_s is None:
         raise ValueError("the bundle has no gt.json offsets")
     names = bundle.names
     pairs = [(a, b) for i, a in enumerate(names) for b in names[i + 1:] if (a, b) in bundle.pairs]
-    pf_cfg = PoseFreeSyncConfig(workers=workers)
-    cfg_d = SyncConfig(drift=DriftConfig(enabled=True), pose_free=pf_cfg)
-    t0 = time.perf_counter()
-    est = dict(estimates) if estimates is not None else estimate_pose_free_pairs(bundle, pairs, cfg_d)
-    res_d = sync_bundle(bundle, cfg_d, progress=False, pose_free=est)
-    wall = time.perf_counter() - t0
-    t1 = time.perf_counter()
-    res_c = sync_bundle(bundle, SyncConfig(pose_free=pf_cfg), progress=False, pose_free=est)
-    wall_c = time.perf_counter() - t1
-    at_truth = (fits_at_truth(bundle, bundle.gt_offsets_s, gt_drift_ppm, PoseFreeConfig(), workers)
-                if truth_fit else {})  # not timed
+    cfg_d = SyncConfig(drift=DriftConfig(enabled=True))
+    t_start = time.perf_counter()
+    with open_engine(EngineConfig("ray", ray_cpus=workers) if workers > 1 else EngineConfig()) as engine:
+        start_s = time.perf_counter() - t_start
+        t0 = time.perf_counter()
+        est = (dict(estimates) if estimates is not None else
+               estimate_pose_free_pairs(bundle, pairs, cfg_d, engine=engine))
+        res_d = sync_bundle(bundle, cfg_d, progress=False, pose_free=est, engine=engine)
+        wall = time.perf_counter() - t0
+        t1 = time.perf_counter()
+        res_c = sync_bundle(bundle, SyncConfig(), progress=False, pose_free=est, engine=engine)
+        wall_c = time.perf_counter() - t1
+        at_truth = (fits_at_truth(bundle, bundle.gt_offsets_s, gt_drift_ppm, PoseFreeConfig(), engine)
+                    if truth_fit else {})  # not timed
     sol, sol_c = _as_solution(res_d), _as_solution(res_c)
     return DroneBenchResult(sol, sol_c, res_d, res_c, est, at_truth,
                             camera_errors(sol, bundle, bundle.gt_offsets_s, gt_drift_ppm),
-                            camera_errors(sol_c, bundle, bundle.gt_offsets_s, gt_drift_ppm), wall, wall_c,
-                            workers)
+                            camera_errors(sol_c, bundle, bundle.gt_offsets_s, gt_drift_ppm), dict(gt_drift_ppm),
+                            wall, wall_c, workers, start_s)
 
 
 def format_table(res: DroneBenchResult, bundle: CueBundle) -> str:
     lines = [f"drone dataset: {len(bundle.videos)} cameras, {len(res.pairs)} pairs; `sync --drift` path "
-             f"wall {res.wall_s:.1f} s on {res.workers} worker(s) (constant-offset ablation on the same "
-             f"pair estimates: {res.wall_constant_s:.1f} s more)",
+             f"wall {res.wall_s:.1f} s on "
+             + (f"{res.workers} Ray CPUs (the embedded Ray's start, {res.engine_start_s:.1f} s, not included)"
+                if res.workers > 1 else "1 process")
+             + f" (constant-offset ablation on the same pair estimates: {res.wall_constant_s:.1f} s more)",
              "", "per camera (reference " + res.drift.reference + "); frame errors in that camera's frames",
              f"{'camera':8} {'fps':>8} | {'drift model: offset err':>23} {'worst err':>10} {'est ppm':>9} "
              f"{'± ppm':>7} {'true ppm':>9} {'rate err ppm':>12} | {'constant offset: offset err':>27} "
              f"{'worst err':>10} {'rate err ppm':>12}"]
     std = res.sync_drift.drift_std_ppm or {}
-    for e, c in zip(res.errors_drift, res.errors_constant):
-        s = std.get(e.name)
-        lines.append(f"{e.name:8} {e.fps:8.3f} | {e.offset_err_frames:+23.2f} {e.worst_err_frames:10.2f} "
-                     f"{e.est_drift_ppm:+9.1f} {(s if s is not None else math.nan):7.1f} {e.true_drift_ppm:+9.1f} "
-                     f"{e.drift_err_ppm:+12.1f} | {c.offset_err_frames:+27.2f} {c.worst_err_frames:10.2f} "
-                     f"{c.drift_err_ppm:+12.1f}")
+    nan = math.nan
+    for v in bundle.videos:
+        n = v.name
+        e, c = res.errors_drift.get(n), res.errors_constant.get(n)
+        s = std.get(n)
+        lines.append(f"{n:8} {v.fps or 1 / v.frame_interval_s:8.3f} | "
+                     f"{e.offset_err_frames if e else nan:+23.2f} {e.worst_err_frames if e else nan:10.2f} "
+                     f"{res.drift.drift_ppm.get(n, nan):+9.1f} {(s if s is not None else nan):7.1f} "
+                     f"{res.gt_drift_ppm.get(n, nan):+9.1f} {e.drift_err_ppm if e else nan:+12.1f} | "
+                     f"{c.offset_err_frames if c else nan:+27.2f} {c.worst_err_frames if c else nan:10.2f} "
+                     f"{c.drift_err_ppm if c else nan:+12.1f}")
     gt, gd = bundle.gt_offsets_s or {}, bundle.gt_drift_ppm or {}
     lines += ["", "pairs: the tracks' estimate (sync.posefree: offset s, drift ppm ± std, inlier share), the "
                   "--drift pair (energy minimum at that rate), its error against the README, Stage 2 verdict"]
     for land in res.sync_drift.pairs:
         a, b = land.a, land.b
         p = res.pairs.get((a, b))
+        p = p if isinstance(p, PoseFreePair) else None  # None or its task died
         head = (f"  {a}-{b}: tracks {p.offset_s:+10.4f} s {p.drift_ppm:+8.1f} ± {p.drift_std_ppm:6.1f} ppm "
                 f"inliers {p.inlier_share:.2f} of {p.num_matches} ({p.median_sampson_px:.2f} px)"
                 if p is not None else f"  {a}-{b}: tracks gave nothing")

@@ -7,6 +7,8 @@ import pickle
 from pathlib import Path
 
 from ..bench.drone import format_table, load_drone_bundle, run_drone_bench
+from ..engine import TaskFailed
+from ..errors import InputError
 from ..io.atomic import atomic_path
 
 
@@ -19,7 +21,9 @@ def register(sub) -> None:
                                    "ground truth, with the constant-offset model as the ablation.",
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("path", type=Path, help="a bundle written by import-drone, or the dataset folder")
-    p.add_argument("--workers", type=int, default=2, help="processes estimating pairs in parallel")
+    p.add_argument("--workers", type=int, default=2,
+                   help="CPUs of an embedded Ray running the pairs in parallel (`sync --engine ray --ray-cpus N`); "
+                        "1: in this process")
     p.add_argument("--no-truth-fit", action="store_true",
                    help="skip refitting F at the README's time map (the untimed per-pair comparison)")
     p.add_argument("--estimates", type=Path, default=None, metavar="FILE",
@@ -29,6 +33,8 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.workers < 1:
+        raise InputError(f"--workers must be at least 1, got {args.workers}")
     bundle, drift = load_drone_bundle(args.path)
     est = None
     if args.estimates is not None and args.estimates.is_file():
@@ -38,6 +44,7 @@ def run(args: argparse.Namespace) -> int:
     res = run_drone_bench(bundle, drift, workers=args.workers, truth_fit=not args.no_truth_fit, estimates=est)
     if args.estimates is not None and est is None:
         with atomic_path(args.estimates) as tmp:
-            tmp.write_bytes(pickle.dumps(res.pairs))
+            # a pair whose task died is left out: a later run estimates it again
+            tmp.write_bytes(pickle.dumps({k: p for k, p in res.pairs.items() if not isinstance(p, TaskFailed)}))
     print(format_table(res, bundle))
     return 0

@@ -84,20 +84,32 @@ def evaluate_offsets(estimated_s: dict[str, float | None], true_s: dict[str, flo
 
 @dataclass(frozen=True)
 class VideoTimeError:
-    """One video's error against the truth, relative to the reference (time model with drift)."""
+    """One video's error against the truth, relative to the reference (time model with drift).
 
-    offset_err_s: float  # (offset_v - offset_ref) - (true_v - true_ref), signed
+    The error at the video's local time t is that of the moment it maps t to, in the
+    reference's terms: ((offset_v - offset_ref) + rate_v t) - ((true_v - true_ref) + true_rate_v t),
+    rates relative to the reference's; linear in t, so largest at an end of the video."""
+
+    offset_err_s: float  # the error at local time 0: (offset_v - offset_ref) - (true_v - true_ref), signed
     offset_err_frames: float | None  # the same in this video's frames (None without its fps)
     drift_err_ppm: float | None  # rate relative to the reference, estimated - true (None: no drift given)
+    end_err_s: float | None = None  # the error at the video's last local time, signed (None without its span)
+    worst_err_s: float | None = None  # max |error| at the span's first and last local times (None without it)
+    worst_err_frames: float | None = None  # the same in this video's frames (None without its fps or span)
 
 
 def time_errors(estimated_s: dict[str, float | None], true_s: dict[str, float], reference: str,
                 fps: dict[str, float] | None = None, est_drift_ppm: dict[str, float | None] | None = None,
-                true_drift_ppm: dict[str, float] | None = None) -> dict[str, VideoTimeError | None]:
-    """Signed per-video errors of offset (s and frames) and drift (ppm), relative to the
-    reference; a result without drift counts as drift 0 (the constant-offset model) when the
-    truth has drift. None where the video or the reference is unresolved."""
+                true_drift_ppm: dict[str, float] | None = None,
+                span_s: dict[str, tuple[float, float]] | None = None) -> dict[str, VideoTimeError | None]:
+    """Signed per-video errors of offset (s and frames), drift (ppm) and, given a video's span
+    (its first and last local times, s), at its end and at its worst, relative to the reference.
+    The one definition of these errors (eval, bench-drone, bench-drift-cues). A result without
+    drift counts as drift 0 (the constant-offset model); a truth without drift (or without this
+    video's) as drift 0 in the time map, and then no drift error is given. None where the video
+    or the reference is unresolved."""
     ref_est, ref_true = estimated_s.get(reference), true_s.get(reference)
+    est_d, true_d = est_drift_ppm or {}, true_drift_ppm or {}
     out: dict[str, VideoTimeError | None] = {}
     for v, est in estimated_s.items():
         if v not in true_s:
@@ -105,14 +117,17 @@ def time_errors(estimated_s: dict[str, float | None], true_s: dict[str, float], 
         if est is None or ref_est is None or ref_true is None:
             out[v] = None
             continue
+        rel_est = (1 + (est_d.get(v) or 0.0) * 1e-6) / (1 + (est_d.get(reference) or 0.0) * 1e-6)
+        rel_true = (1 + true_d.get(v, 0.0) * 1e-6) / (1 + true_d.get(reference, 0.0) * 1e-6)
         err = (est - ref_est) - (true_s[v] - ref_true)
-        frames = err * fps[v] if fps and v in fps else None
-        d_err = None
-        if true_drift_ppm is not None and v in true_drift_ppm and reference in true_drift_ppm:
-            e_v = (est_drift_ppm or {}).get(v) or 0.0
-            e_r = (est_drift_ppm or {}).get(reference) or 0.0
-            rel_est = (1 + e_v * 1e-6) / (1 + e_r * 1e-6)
-            rel_true = (1 + true_drift_ppm[v] * 1e-6) / (1 + true_drift_ppm[reference] * 1e-6)
-            d_err = (rel_est - rel_true) * 1e6
-        out[v] = VideoTimeError(float(err), None if frames is None else float(frames), d_err)
+        v_fps = fps.get(v) if fps else None
+        d_err = (rel_est - rel_true) * 1e6 if v in true_d and reference in true_d else None
+        end = worst = worst_frames = None
+        if span_s is not None and v in span_s:
+            first, last = (((est - ref_est) + rel_est * t) - ((true_s[v] - ref_true) + rel_true * t)
+                           for t in span_s[v])
+            end, worst = float(last), float(max(abs(first), abs(last)))
+            worst_frames = None if v_fps is None else worst * v_fps
+        out[v] = VideoTimeError(float(err), None if v_fps is None else float(err * v_fps), d_err, end, worst,
+                                worst_frames)
     return out

@@ -9,12 +9,9 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
-import multiprocessing
-import os
 import time
 
 import numpy as np
-from tqdm import tqdm
 
 from ..analysis.record_views import pair_record_view, run_record_view
 from ..engine import Engine, LocalEngine, TaskFailed
@@ -28,7 +25,7 @@ from ..sync.landscape import PairInput, compute_landscape, curvature_uncertainty
 from ..sync.pairs import select_pairs
 from ..sync.drift import PairTiming, solve_offsets_drift
 from ..sync.posefree import PoseFreeConfig, PoseFreePair, estimate_pair
-from ..sync.rate import fit_rate, scaled_video
+from ..sync.rate import fit_rate, rate_landscape, scaled_video
 from ..sync.solve import PairMeasurement, solve_offsets
 
 log = logging.getLogger(__name__)
@@ -75,23 +72,27 @@ def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig,
     if pose_free_pair:
         land = dataclasses.replace(land, rate=rate0, pose_free=True)
     if cfg.drift.enabled and math.isfinite(best):
-        # b unscaled: the fit starts from (best, rate0) in the pair's own clocks
+        # b unscaled: the grid starts from (best, rate0) in the pair's own clocks
         side_b = dataclasses.replace(side[b], video=bundle.video(b))
-        fit = fit_rate(side[a], side_b, tp, cfg.landscape, cfg.drift, best, rate0, raw.robust_scale,
-                       max(len(tp.index), 1))
-        if fit is not None and pose_free_pair:
+        if pose_free_pair:
             # the rate its tracks gave (a continuous fit on every detection) is sharper than the
             # energy's over a single track, whose terms enter and leave as the rate turns: the
-            # pair keeps it, with the energy's minimum at that rate, and the image is shown
-            land = dataclasses.replace(land, log_rate_std=pose_free.log_rate_std, pivot_s=fit.pivot_s,
-                                       pivot_offset_s=best + (rate0 - 1.0) * fit.pivot_s,
-                                       pivot_offset_std_s=sigma, rate_landscape=fit.landscape)
-        elif fit is not None:
-            land = dataclasses.replace(land, best_offset_s=fit.offset_s, best_energy=fit.energy,
-                                       rate=fit.rate, log_rate_std=fit.log_rate_std, pivot_s=fit.pivot_s,
-                                       pivot_offset_s=fit.pivot_offset_s,
-                                       pivot_offset_std_s=fit.pivot_offset_std_s,
-                                       rate_landscape=fit.landscape)
+            # pair keeps it, with the energy's minimum at that rate; the energy's (Δ, rate) grid
+            # is only the image shown, so it is not fitted
+            img = rate_landscape(side[a], side_b, tp, cfg.landscape, cfg.drift, best, rate0, raw.robust_scale)
+            if img is not None:
+                land = dataclasses.replace(land, log_rate_std=pose_free.log_rate_std, pivot_s=img.pivot_s,
+                                           pivot_offset_s=best + (rate0 - 1.0) * img.pivot_s,
+                                           pivot_offset_std_s=sigma, rate_landscape=img)
+        else:
+            fit = fit_rate(side[a], side_b, tp, cfg.landscape, cfg.drift, best, rate0, raw.robust_scale,
+                           max(len(tp.index), 1))
+            if fit is not None:
+                land = dataclasses.replace(land, best_offset_s=fit.offset_s, best_energy=fit.energy,
+                                           rate=fit.rate, log_rate_std=fit.log_rate_std, pivot_s=fit.pivot_s,
+                                           pivot_offset_s=fit.pivot_offset_s,
+                                           pivot_offset_std_s=fit.pivot_offset_std_s,
+                                           rate_landscape=fit.landscape)
     return land, pe
 
 
@@ -126,7 +127,7 @@ def _static_K(cam) -> np.ndarray:
 
 
 def pose_free_job(bundle: CueBundle, a: str, b: str, cfg: SyncConfig) -> tuple:
-    """The arguments of sync.posefree.estimate_pair for one pose-free pair (picklable)."""
+    """The arguments of sync.posefree.estimate_pair for one pose-free pair."""
     ia, ib = _pair_track_rows(bundle, a, b)
     va, vb = bundle.video(a), bundle.video(b)
     pcfg = PoseFreeConfig(estimate_rate=cfg.drift.enabled)
@@ -135,35 +136,24 @@ def pose_free_job(bundle: CueBundle, a: str, b: str, cfg: SyncConfig) -> tuple:
             vb.timestamps_s, bundle.tracks[b].xy[ib], _static_K(bundle.cameras[b]), pcfg, rng)
 
 
-def _estimate_pose_free(job: tuple) -> PoseFreePair | None:
-    t_a, xy_a, K_a, t_b, xy_b, K_b, pcfg, rng = job
+def _pose_free_task(shared: tuple[CueBundle, SyncConfig], item: tuple[str, str]) -> PoseFreePair | None:
+    """sync.posefree for one pose-free pair as an engine task."""
+    bundle, cfg = shared
+    t_a, xy_a, K_a, t_b, xy_b, K_b, pcfg, rng = pose_free_job(bundle, *item, cfg)
     return estimate_pair(t_a, xy_a, K_a, t_b, xy_b, K_b, pcfg, offset_range_s=rng)
 
 
-def _quiet_worker() -> None:
-    """A worker ends on SIGTERM (the pool's exit sends it) without the parent's handler, which
-    would raise and print; Ctrl-C is the parent's to handle."""
-    import signal
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
 def estimate_pose_free_pairs(bundle: CueBundle, chosen: list[tuple[str, str]], cfg: SyncConfig,
-                             progress: bool = False) -> dict[tuple[str, str], PoseFreePair | None]:
-    """sync.posefree over the chosen pose-free pairs, in worker processes when there are several."""
-    jobs = {(a, b): pose_free_job(bundle, a, b, cfg) for a, b in chosen}
-    if not jobs:
+                             progress: bool = False, engine: Engine | None = None
+                             ) -> dict[tuple[str, str], PoseFreePair | TaskFailed | None]:
+    """sync.posefree over the chosen pose-free pairs, on the engine (default: in this process),
+    in the order of chosen; a pair whose task died with its worker is TaskFailed."""
+    if not chosen:  # nothing to send (a Ray engine would still ship the bundle)
         return {}
-    workers = min(cfg.pose_free.workers or os.cpu_count() or 1, len(jobs))
-    if workers <= 1:
-        return {k: _estimate_pose_free(j) for k, j in tqdm(jobs.items(), desc="pose-free pairs", unit="pair",
-                                                         disable=not progress, leave=False)}
-    # a Pool, not a ProcessPoolExecutor: leaving the block terminates the workers, so that Ctrl-C
-    # or SIGTERM does not wait for minutes of pair estimates
-    with multiprocessing.Pool(workers, initializer=_quiet_worker) as pool:
-        out = list(tqdm(pool.imap(_estimate_pose_free, jobs.values()), total=len(jobs), desc="pose-free pairs",
-                        unit="pair", disable=not progress, leave=False))
-    return dict(zip(jobs, out))
+    engine = engine or LocalEngine()
+    out = engine.map(_pose_free_task, chosen, shared=(bundle, cfg), desc="pose-free pairs", unit="pair",
+                     progress=progress)
+    return dict(zip(chosen, out))
 
 
 def _pose_free_inputs(bundle: CueBundle, a: str, b: str, side: dict[str, PairInput], cfg: SyncConfig,
@@ -236,7 +226,13 @@ def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | 
     pose_free_pairs = [(a, b) for a, b in chosen if is_pose_free_pair(bundle, a, b)]
     given = dict(pose_free or {})
     pose_free = {**{k: given[k] for k in pose_free_pairs if k in given},
-                 **estimate_pose_free_pairs(bundle, [k for k in pose_free_pairs if k not in given], cfg, progress)}
+                 **estimate_pose_free_pairs(bundle, [k for k in pose_free_pairs if k not in given], cfg, progress,
+                                            engine)}
+    for (a, b), pf in list(pose_free.items()):
+        if isinstance(pf, TaskFailed):  # its worker died: the pair counts as not evaluated
+            log.warning("%s__%s: %s", a, b, pf.reason)
+            sink.stage_event("landscapes", f"{a}__{b}: not evaluated: {pf.reason}")
+            chosen = [k for k in chosen if k != (a, b)]
     task_cfg = _fixed_threads(cfg)
     items = [(a, b, pose_free.get((a, b)), (a, b) in pose_free) for a, b in chosen]
     for (a, b), land in zip(chosen, engine.map(_pair_task, items, shared=(bundle, task_cfg),
@@ -345,9 +341,7 @@ def solve_stage2_drift(bundle: CueBundle, lands: list[PairLandscape] | tuple[Pai
         reasons[reference] = "the reference, but no accepted pair links it to another video"
     used = tuple((t.a, t.b) for t in timings if (t.a, t.b) in sol.pair_residuals)
     res = np.array([sol.pair_residuals[p][0] for p in used])
-    std = np.array([max(t.offset_std_s, 1e-3) for t in timings if (t.a, t.b) in sol.pair_residuals])
-    z = np.abs(res) / std if len(res) else res
-    weight = np.minimum(1.0, 3.0 / np.maximum(z, 1e-12)) if len(res) else res  # sync.drift's Huber scale 3
+    weight = np.array([sol.pair_weights[p] for p in used])
     return SyncResult(reference, offsets, unc, reasons, tuple(lands), used,
                       (SolveIteration(res, weight),) if len(res) else (), "drift-huber",
                       drift_ppm=drift, drift_std_ppm=drift_std)

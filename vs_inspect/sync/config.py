@@ -155,11 +155,9 @@ class DriftConfig:
 class PoseFreeSyncConfig:
     window_s: float = 2.0
     """A pose-free pair's energy is searched over the offset its tracks gave ± this (seconds)."""
-    workers: int = 0
-    """Processes estimating pose-free pairs at once; 0 = the number of cores (at most the pairs)."""
 
     def __post_init__(self) -> None:
-        check_fields(self, positive=("window_s",), nonnegative=("workers",))
+        check_fields(self, positive=("window_s",))
 
 
 @dataclass(frozen=True)

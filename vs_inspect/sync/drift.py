@@ -12,11 +12,12 @@ started from a breadth-first walk of the pair graph from the reference.
 
 from __future__ import annotations
 
-from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import least_squares
+from scipy.sparse import csr_array
+from scipy.sparse.csgraph import breadth_first_order
 
 
 @dataclass(frozen=True)
@@ -47,18 +48,23 @@ class DriftSolution:
     drift_std_ppm: dict[str, float]
     pair_residuals: dict[tuple[str, str], tuple[float, float]]  # (offset s, log rate) measured - model
     with_drift: bool
+    pair_weights: dict[tuple[str, str], float] = field(default_factory=dict)
+    """Huber weight (0, 1] of each pair's offset residual at the solution (in units of its floored std)."""
 
 
 def _connected(reference: str, pairs: list[PairTiming]) -> list[str]:
-    seen, queue = [reference], deque([reference])
-    while queue:
-        v = queue.popleft()
-        for p in pairs:
-            for x, y in ((p.a, p.b), (p.b, p.a)):
-                if x == v and y not in seen:
-                    seen.append(y)
-                    queue.append(y)
-    return seen
+    """The videos the pairs link to the reference, breadth-first from it: the order in which
+    _initial seeds them, which the robust solve's result can depend on. A video's neighbours are
+    visited in the pairs' order: each pair is stored in both rows of the graph, and a row keeps
+    its entries in that order (csgraph walks a row as stored; tests/sync/test_drift.py checks it)."""
+    names = list(dict.fromkeys([reference, *(v for p in pairs for v in (p.a, p.b))]))
+    idx = {v: i for i, v in enumerate(names)}
+    rows = np.array([idx[v] for p in pairs for v in (p.a, p.b)], dtype=np.int64)
+    cols = np.array([idx[v] for p in pairs for v in (p.b, p.a)], dtype=np.int64)
+    by_row = np.argsort(rows, kind="stable")
+    indptr = np.r_[0, np.cumsum(np.bincount(rows, minlength=len(names)))]
+    graph = csr_array((np.ones(len(rows)), cols[by_row], indptr), shape=(len(names), len(names)))
+    return [names[i] for i in breadth_first_order(graph, 0, directed=True, return_predecessors=False)]
 
 
 def _initial(reference: str, order: list[str], pairs: list[PairTiming], with_drift: bool):
@@ -129,10 +135,12 @@ def solve_offsets_drift(reference: str, pairs: list[PairTiming], with_drift: boo
         std = np.full(len(sol.x), np.nan)
     off_std = {reference: 0.0, **{v: float(std[pos[v]]) for v in free}}
     dr_std = {reference: 0.0, **{v: (float(std[n + pos[v]]) * 1e6 if with_drift else 0.0) for v in free}}
-    resid = {}
+    resid, weight = {}, {}
     for p in used:
         pred = _predicted_offset(p, off, lr)
         resid[(p.a, p.b)] = (float(p.offset_s - pred), float(p.log_rate - (lr[p.b] - lr[p.a])))
+        z = abs(resid[(p.a, p.b)][0]) / max(p.offset_std_s, min_offset_std_s)
+        weight[(p.a, p.b)] = min(1.0, huber_scale / max(z, 1e-12))
     return DriftSolution(reference, {v: float(o) for v, o in off.items()},
                          {v: float(np.expm1(l) * 1e6) for v, l in lr.items()}, off_std, dr_std, resid,
-                         with_drift)
+                         with_drift, weight)

@@ -18,8 +18,8 @@ Stages, each cheap enough for tracks of tens of thousands of frames:
    the inliers among all matches (a short overlap cannot win);
 2. per coarse peak, a finer offset line, then scipy least_squares over (offset, log rate, F as
    R, t of E = [t]x R with the known K) on Sampson distances with a robust loss; the peak whose
-   refined F explains most matches wins; the Jacobian gives the uncertainty;
-3. an (offset, rate) image of the score around the solution, for the recording.
+   refined F explains most matches wins; the Jacobian gives the uncertainty.
+(The recording's (offset, rate) image of a pair is the energy's, sync.rate's, not drawn here.)
 
 Pure numpy/scipy/OpenCV, no I/O.
 """
@@ -51,10 +51,7 @@ class PoseFreeConfig:
     most matches wins."""
     fine_half_width_s: float = 0.4
     fine_step_s: float = 0.04
-    """The offset line examined around each coarse peak, and the image's columns."""
-    rate_half_width_ppm: float = 1000.0
-    rate_step_ppm: float = 200.0
-    """The image's rows, around the estimated rate (the image is for the recording only)."""
+    """The offset line examined around each coarse peak."""
     fine_points: int = 800
     refine_loss_scale_px: float = 2.0
     """soft_l1 scale of the continuous refinement (Sampson px)."""
@@ -80,10 +77,7 @@ class PoseFreePair:
     coarse_offsets_s: np.ndarray  # (S,) coarse grid
     coarse_score: np.ndarray  # (S,) inliers of the nearest calibrated F among all matches (0: overlap too small)
     coarse_score_F: np.ndarray  # (S,) the same for the RANSAC F itself
-    pivot_s: float  # a's local time in the middle of the overlap, about which the image's rows turn
-    fine_offsets_s: np.ndarray  # (U,) tau_a - tau_b at a's time pivot_s (= offset_s at rate 1)
-    fine_rates_ppm: np.ndarray  # (V,) (rate - 1) * 1e6
-    fine_score: np.ndarray  # (V,U) inliers; the (offset, rate) image for the recording
+    pivot_s: float  # a's local time in the middle of the overlap, about which the refinement turns the rate
     b_from_a: np.ndarray | None = None  # (4,4) the relative pose behind F_ab (unit baseline): x_b = R x_a + t
 
     @property
@@ -266,22 +260,9 @@ def estimate_pair(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
     if best is None:
         return None
 
-    # 3. the (offset, rate) image around the solution, rows pivoting about the overlap's middle
-    rates_ppm = (best.rate - 1) * 1e6 + (
-        np.arange(-cfg.rate_half_width_ppm, cfg.rate_half_width_ppm + 1e-9, cfg.rate_step_ppm)
-        if cfg.estimate_rate else np.zeros(1))
-    u0 = best.pivot_s - (best.pivot_s - best.offset_s) / best.rate  # the offset at the pivot
-    cols = u0 + np.arange(-cfg.fine_half_width_s, cfg.fine_half_width_s + 1e-9, cfg.fine_step_s)
-    img = np.zeros((len(rates_ppm), len(cols)), dtype=np.int64)
-    for i, r in enumerate(rates_ppm):
-        rate = 1.0 + r * 1e-6
-        for j, u in enumerate(cols):
-            img[i, j] = pair.score(best.pivot_s - rate * (best.pivot_s - u), rate, cfg.fine_points,
-                                   cfg.threshold_px)[0]
     return PoseFreePair(best.offset_s, best.rate, best.offset_std_s, best.log_rate_std, best.F_ab,
                         best.inlier_share, best.num_matches, best.median_sampson_px,
-                        coarse, coarse_score, coarse_score_F, best.pivot_s, cols, rates_ppm, img,
-                        best.b_from_a)
+                        coarse, coarse_score, coarse_score_F, best.pivot_s, best.b_from_a)
 
 
 @dataclass(frozen=True)
@@ -364,22 +345,33 @@ def fit_at_time_map(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
     """(median Sampson px over inliers, inlier share) of the best E-constrained F with the time
     map held fixed: how well a given (e.g. ground-truth) time map explains the tracks, to compare
     with the estimate's own numbers."""
+    _, median_px, share = fit_F_at_time_map(t_a, xy_a, K_a, t_b, xy_b, K_b, offset_s, rate, config)
+    return median_px, share
+
+
+def fit_F_at_time_map(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
+                      t_b: np.ndarray, xy_b: np.ndarray, K_b: np.ndarray, offset_s: float, rate: float,
+                      config: PoseFreeConfig = PoseFreeConfig()) -> tuple[np.ndarray | None, float, float]:
+    """(F_ab, median Sampson px over inliers, inlier share) of the best E-constrained F with the
+    time map held fixed (MAGSAC, then the continuous refinement of R, t on Sampson distances);
+    F_ab None (and NaN, 0) when too few matches. Inputs as in estimate_pair."""
     cfg = config
     pair = _Pair(t_a, xy_a, t_b, xy_b)
     xa, xb, _ = pair.match(offset_s, rate)
     if len(xa) < 16:
-        return float("nan"), 0.0
+        return None, float("nan"), 0.0
     F0 = _ransac_F(xa, xb, cfg.fine_points * 4, cfg.threshold_px)
     if F0 is None:
-        return float("nan"), 0.0
+        return None, float("nan"), 0.0
     inl = sampson_px(F0, xa, xb) < cfg.threshold_px
     if inl.sum() < 8:
-        return float("nan"), 0.0
+        return None, float("nan"), 0.0
     rotvec, tang = _E_params(F0, K_a, K_b, xa[inl], xb[inl])
     Kai, Kbi = np.linalg.inv(K_a), np.linalg.inv(K_b)
     sel = _uniform(len(xa), cfg.refine_max_points)
     sol = least_squares(lambda p: sampson_px(_F_from_params(p, Kai, Kbi), xa[sel], xb[sel]),
                         np.r_[rotvec, tang], loss="soft_l1", f_scale=cfg.refine_loss_scale_px, max_nfev=200)
-    err = sampson_px(_F_from_params(sol.x, Kai, Kbi), xa, xb)
+    F = _F_from_params(sol.x, Kai, Kbi)
+    err = sampson_px(F, xa, xb)
     inl = err < cfg.threshold_px
-    return (float(np.median(err[inl])) if inl.any() else float("nan")), float(inl.mean())
+    return F, (float(np.median(err[inl])) if inl.any() else float("nan")), float(inl.mean())

@@ -46,36 +46,20 @@ class RateFit:
     landscape: RateLandscape
 
 
-class _RateEnergy:
-    """E(c, rate) of one pair, one PairEnergy per rate (cached: the grid's rows repeat)."""
-
-    def __init__(self, a: PairInput, b: PairInput, pairs: TrackPairs, cfg: LandscapeConfig,
-                 pivot_s: float, scale: float):
-        self.a, self.b, self.pairs, self.cfg = a, b, pairs, cfg
-        self.pivot_s, self.scale = pivot_s, scale
-        self._cache: dict[float, PairEnergy] = {}
-
-    def _pe(self, rate: float) -> PairEnergy:
-        pe = self._cache.get(rate)
-        if pe is None:
-            b = dataclasses.replace(self.b, video=scaled_video(self.b.video, rate))
-            pe = self._cache[rate] = PairEnergy(self.a, b, self.pairs, self.cfg)
-        return pe
-
-    def row(self, cols_s: np.ndarray, rate: float) -> np.ndarray:
-        e, _ = self._pe(rate).energy(cols_s - (rate - 1.0) * self.pivot_s, self.scale)
-        return e
+def _energy_row(a: PairInput, b: PairInput, pairs: TrackPairs, cfg: LandscapeConfig, pivot_s: float,
+                scale: float, cols_s: np.ndarray, rate: float) -> np.ndarray:
+    """E(c, rate) over the pivot offsets cols_s at one rate: b's clock scaled by it (each row of
+    the grid has its own rate, so nothing is worth keeping between rows)."""
+    b = dataclasses.replace(b, video=scaled_video(b.video, rate))
+    e, _ = PairEnergy(a, b, pairs, cfg).energy(cols_s - (rate - 1.0) * pivot_s, scale)
+    return e
 
 
-def fit_rate(a: PairInput, b: PairInput, pairs: TrackPairs, cfg: LandscapeConfig, drift: DriftConfig,
-             offset_s: float, rate0: float, robust_scale: float, num_track_pairs: int) -> RateFit | None:
-    """(Δ, rate) of the pair near (offset_s, rate0) on the pair's energy; None when the grid
-    around it has no energy (no overlap).
-
-    A grid over the pivot offset (the 1-D minimum ± offset_half_width_frames) and the rate
-    (rate0 ± rate_half_width_ppm); sub-cell minima from parabolas (see below). The
-    uncertainties are the landscape-curvature figure of sync.landscape.curvature_uncertainty
-    per axis (var = E* / (n a), n track pairs: rough; NaN when the energy is flat there)."""
+def rate_landscape(a: PairInput, b: PairInput, pairs: TrackPairs, cfg: LandscapeConfig, drift: DriftConfig,
+                   offset_s: float, rate0: float, robust_scale: float) -> RateLandscape | None:
+    """The pair's energy over (pivot offset, rate) around (offset_s, rate0): columns the 1-D
+    minimum ± offset_half_width_frames at the overlap's middle, rows rate0 ± rate_half_width_ppm;
+    None when the grid has no energy (no overlap). What fit_rate searches, and the recording's image."""
     scale = robust_scale if math.isfinite(robust_scale) else 0.0
     step = min(a.video.frame_interval_s, b.video.frame_interval_s * rate0)
     pivot = overlap_pivot_s(a.video, b.video, offset_s, rate0)
@@ -84,10 +68,24 @@ def fit_rate(a: PairInput, b: PairInput, pairs: TrackPairs, cfg: LandscapeConfig
                             drift.offset_columns)
     ppm0 = (rate0 - 1.0) * 1e6
     rates_ppm = ppm0 + np.arange(-drift.rate_half_width_ppm, drift.rate_half_width_ppm + 1e-9, drift.rate_step_ppm)
-    E = _RateEnergy(a, b, pairs, cfg, pivot, scale)
-    img = np.stack([E.row(cols, 1.0 + r * 1e-6) for r in rates_ppm])
+    img = np.stack([_energy_row(a, b, pairs, cfg, pivot, scale, cols, 1.0 + r * 1e-6) for r in rates_ppm])
     if not np.isfinite(img).any():
         return None
+    return RateLandscape(pivot, cols, rates_ppm, img)
+
+
+def fit_rate(a: PairInput, b: PairInput, pairs: TrackPairs, cfg: LandscapeConfig, drift: DriftConfig,
+             offset_s: float, rate0: float, robust_scale: float, num_track_pairs: int) -> RateFit | None:
+    """(Δ, rate) of the pair near (offset_s, rate0) on the pair's energy; None when the grid
+    around it has no energy (no overlap).
+
+    The grid of rate_landscape; sub-cell minima from parabolas (see below). The
+    uncertainties are the landscape-curvature figure of sync.landscape.curvature_uncertainty
+    per axis (var = E* / (n a), n track pairs: rough; NaN when the energy is flat there)."""
+    land = rate_landscape(a, b, pairs, cfg, drift, offset_s, rate0, robust_scale)
+    if land is None:
+        return None
+    pivot, cols, rates_ppm, img = land.pivot_s, land.offsets_s, land.rates_ppm, land.energy
     # per row the sub-column minimum (parabola through its lowest cell and the two beside it);
     # then a parabola over the rows near the lowest: the energy is a mean over terms that enter
     # and leave as the rate turns the time map, so it is noisy cell to cell and flat in the rate
@@ -126,7 +124,6 @@ def fit_rate(a: PairInput, b: PairInput, pairs: TrackPairs, cfg: LandscapeConfig
     c_std = (math.sqrt(max(e_best, 1e-12) / (max(num_track_pairs, 1) * a_c))
              if math.isfinite(a_c) and a_c > 0 else float("nan"))
     rate = 1.0 + ppm * 1e-6
-    land = RateLandscape(pivot, cols, rates_ppm, img)
     return RateFit(float(c - (rate - 1.0) * pivot), rate, pivot, float(c), c_std, u_std, e_best, land)
 
 
