@@ -171,6 +171,10 @@ class CameraConfig:
     """Build static cameras from the moving points' two-view geometry (cues/pairwise.py: per-pair F at the best coarse offset, then one focal per camera and every pose fitted to all pairs at once) when the background reconstruction registers fewer than two cameras, and compare them with a weak one (a static camera left out, or fewer than 2 × min_inliers points per image): the set that leaves the smaller median epipolar distance on the moving points is used."""
     mask_moving: bool = True
     """Estimated cameras: mask out moving regions before feature extraction."""
+    register_every: int = 1
+    """Estimated cameras: every this many frames of a moving camera are registered on their own against the reconstruction (SIFT matched to its nearest reconstructed frames, pycolmap absolute pose; cues/registration.py) instead of slerped between its SfM frames; 0: slerp only."""
+    register_min_inliers: int = 20
+    """Estimated cameras: 2D-3D inliers a frame needs to be registered (fewer: it keeps the slerped pose)."""
 
     def __post_init__(self) -> None:
         if self.features not in CAMERA_FEATURES:
