@@ -435,10 +435,22 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                f"{', '.join(f'{n} {joint.margin[n]:.1f}' for n in weak)})")
         sink.stage_event("cues", msg)
         log.warning(msg)
+    # two moving cameras' Δ only when a third camera is sure too (a closed triangle confirms it):
+    # their per-frame geometry lets wrong tracks fit one wrong offset, and with a single sure
+    # pair nothing checks it (fencing1 with looser moving regions: aria01-aria03 at +2.4 s, truth
+    # +1.5 s, accepted as a clear minimum from its own supporters)
+    triangle = sum(sure.values()) >= 3
+    unconfirmed = sorted(f"{a}__{b}" for (a, b) in found if sure.get(a) and sure.get(b) and not triangle
+                         and cameras[a].is_moving and cameras[b].is_moving)
+    if unconfirmed:
+        msg = (f"geometric track pairs not used for {', '.join(unconfirmed)}: both cameras move and no "
+               f"third camera's offset is sure, so no triangle confirms their Δ")
+        sink.stage_event("cues", msg)
+        log.warning(msg)
     out = dict(pairs)
     for (a, b), (_, gs) in found.items():
         delta = joint.offsets_s[b] - joint.offsets_s[a]
-        both = bool(sure.get(a) and sure.get(b))
+        both = bool(sure.get(a) and sure.get(b)) and f"{a}__{b}" not in unconfirmed
         index = supporters(gs, delta) if both else np.zeros((0, 2), np.int64)
         desc = pairs[(a, b)]
         n_desc = len(desc.index)
