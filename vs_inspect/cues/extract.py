@@ -126,7 +126,10 @@ def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) 
 
         t0 = time.perf_counter()
         # the SfM frames too: registered from their neighbours they check the registration
-        todo = np.union1d(np.arange(0, info.num_frames, cfg.camera.register_every), sfm[0])
+        step = cfg.camera.register_every
+        if cfg.camera.register_max_hz > 0 and info.frame_interval_s > 0:
+            step = max(step, int(np.ceil(1.0 / (info.frame_interval_s * cfg.camera.register_max_hz) - 1e-6)))
+        todo = np.union1d(np.arange(0, info.num_frames, step), sfm[0])
         frame_feats = frame_features(frames, instances if cfg.camera.mask_moving else None, todo,
                                      scale, cfg.camera.max_features)
         timings["frame_features_s"] = timings.get("frame_features_s", 0.0) + time.perf_counter() - t0
