@@ -27,8 +27,9 @@ def test_opencv_sift_converted_matches_colmaps_own_descriptors():
     grey = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
     opt = pycolmap.FeatureExtractionOptions()
     opt.num_threads = 1
-    xy_c, d_c = pycolmap.Sift(opt, pycolmap.Device.cpu).extract(grey.astype(np.float32) / 255.0)
-    d_c = np.round(np.asarray(d_c) * 512).astype(np.float32)  # the database's uint8 values
+    kp_c, d_c = pycolmap.FeatureExtractor.create(opt, pycolmap.Device.cpu).extract_from_uint8_array(grey)
+    xy_c = np.array([[k.x, k.y] for k in kp_c])  # COLMAP: pixel centres at +0.5
+    d_c = np.asarray(d_c.data).astype(np.float32)  # the database's uint8 values
     ff = frame_features(grey[None], None, np.array([0]), (1.0, 1.0), 4096)
     assert ff.desc[0].dtype == np.uint8 and len(ff.desc[0]) > 100
     pairs = cv2.BFMatcher(cv2.NORM_L2).knnMatch(ff.desc[0].astype(np.float32), d_c, k=2)
