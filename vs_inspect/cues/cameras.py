@@ -34,10 +34,11 @@ class EstimatedCamera:
     track: CameraTrack  # full-resolution pinhole K, cam_from_world (4,4) or (T,4,4)
     colmap_camera: object  # pycolmap.Camera at SfM resolution (for undistortion)
     sfm_scale: float  # SfM pixels per full-resolution pixel
-    registered_frames: np.ndarray  # (R,) int, video frames that registered
+    registered_frames: np.ndarray  # (R,) int, video frames with a pose (SfM or registered on their own)
     points_seen: int = 0  # 3D points seen by its best-registered image
     frame_registration: dict | None = None  # a moving camera's frames registered on their own
-    # (registration.py): {"tried", "registered", "refused", "median_inliers", "frames"}
+    # (registration.py): {"tried", "registered", "refused", "median_inliers", "frames",
+    # "check_frames", "check_rotation_deg_median", "check_slerp_rotation_deg_median"}
 
 
 @dataclass(frozen=True)
