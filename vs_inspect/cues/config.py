@@ -171,6 +171,12 @@ class CameraConfig:
     """Build static cameras from the moving points' two-view geometry (cues/pairwise.py: per-pair F at the best coarse offset, then one focal per camera and every pose fitted to all pairs at once) when the background reconstruction registers fewer than two cameras, and compare them with a weak one (a static camera left out, or fewer than 2 × min_inliers points per image): the set that leaves the smaller median epipolar distance on the moving points is used."""
     mask_moving: bool = True
     """Estimated cameras: mask out moving regions before feature extraction."""
+    register_every: int = 1
+    """Estimated cameras: every this many frames of a moving camera are registered on their own against the reconstruction (SIFT matched to its nearest reconstructed frames, pycolmap absolute pose; cues/registration.py) instead of slerped between its SfM frames; 0: slerp only."""
+    register_max_hz: float = 10.0
+    """Estimated cameras: at most about this many frames per second of a moving video are registered (every frame at 10 fps, every 3rd at 30 fps; slerp between them), so that SIFT on every frame of a long 60 fps video does not dominate Stage 0; 0: no limit."""
+    register_min_inliers: int = 20
+    """Estimated cameras: 2D-3D inliers a frame needs to be registered (fewer: it keeps the slerped pose)."""
 
     def __post_init__(self) -> None:
         if self.features not in CAMERA_FEATURES:

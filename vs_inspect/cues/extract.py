@@ -45,6 +45,7 @@ class _VideoCues:
     background_motion_px: float
     moving_fraction: float
     sfm_frames: tuple | None = None  # (indices, BGR images, static masks) for camera estimation
+    frame_features: object | None = None  # registration.FrameFeatures of a moving camera's frames
 
 
 def to_full_px(xy: np.ndarray, scale_xy: tuple[float, float]) -> np.ndarray:
@@ -117,8 +118,23 @@ def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) 
             idx = idx[:1]
         sfm = (idx, imgs, masks)
         timings["sfm_frames_s"] = timings.get("sfm_frames_s", 0.0) + time.perf_counter() - t0
+    frame_feats = None
+    if need_sfm and mode == "moving" and cfg.camera.register_every > 0:
+        # the features to register each frame with (registration.py), found here where the
+        # frames are decoded
+        from .registration import frame_features
+
+        t0 = time.perf_counter()
+        # the SfM frames too: registered from their neighbours they check the registration
+        step = cfg.camera.register_every
+        if cfg.camera.register_max_hz > 0 and info.frame_interval_s > 0:
+            step = max(step, int(np.ceil(1.0 / (info.frame_interval_s * cfg.camera.register_max_hz) - 1e-6)))
+        todo = np.union1d(np.arange(0, info.num_frames, step), sfm[0])
+        frame_feats = frame_features(frames, instances if cfg.camera.mask_moving else None, todo,
+                                     scale, cfg.camera.max_features)
+        timings["frame_features_s"] = timings.get("frame_features_s", 0.0) + time.perf_counter() - t0
     return _VideoCues(info, str(src.path), scale, to_full_px(xy, scale), inst, feats, mode, bg,
-                      moving_fraction, sfm)
+                      moving_fraction, sfm, frame_feats)
 
 
 @dataclass(frozen=True)
@@ -279,6 +295,12 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
     for name, why in stats["dropped"].items():
         if name in vids:
             sink.stage_event("cameras", f"{name}: {why}")
+    for name, r in (stats.get("sfm") or {}).get("frame_registration", {}).items():
+        if name in cameras:  # the moving camera's own poses, each frame registered on its own
+            sink.stage_event("cameras", f"{name}: {r['registered']} of {r['tried']} frames outside the "
+                                        f"reconstruction registered against it (median {r['median_inliers']:.0f} "
+                                        f"inliers, {r['refused']} refused); the rest slerped",
+                             registered=r["registered"], tried=r["tried"], refused=r["refused"])
     stats["registered_cameras"] = len(cameras)
     if cameras:
         sink.cameras(cameras, points, colors)
@@ -317,8 +339,8 @@ def _cue_stats(stats: dict) -> CueStats:
 
 def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
                          stats: dict, sink: Sink, progress: bool) -> dict:
-    """Descriptor pairs plus epipolar-consistency pairs for every pair of known cameras of which
-    at least one is static (a moving one with its per-frame poses).
+    """Descriptor pairs plus epipolar-consistency pairs for every pair of known cameras (a moving
+    one with its per-frame poses).
 
     With three or more such cameras, the vote peaks whose offsets close every triangle
     (Δ_ab + Δ_bc ≈ Δ_ac) are chosen and only their supporters kept. When no choice closes the
@@ -328,8 +350,9 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     """
     from .geometric_pairs import consistent_peaks, geometric_pairs, joint_offsets
 
-    # a moving camera with per-frame poses pairs with every static one (its geometry per frame)
-    todo = [k for k in pairs if not (cameras[k[0]].is_moving and cameras[k[1]].is_moving)]
+    # every pair of cameras: a moving one with its per-frame poses (two moving ones: the
+    # geometry per frame of b and per offset)
+    todo = list(pairs)
     found = {}
     for a, b in tqdm(todo, desc="geometric pairs", unit="pair", disable=not progress, leave=False):
         found[(a, b)] = geometric_pairs(a, b, vids[a].info, vids[b].info, cameras[a], cameras[b],
@@ -415,10 +438,22 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                f"{', '.join(f'{n} {joint.margin[n]:.1f}' for n in weak)})")
         sink.stage_event("cues", msg)
         log.warning(msg)
+    # two moving cameras' Δ only when a third camera is sure too (a closed triangle confirms it):
+    # their per-frame geometry lets wrong tracks fit one wrong offset, and with a single sure
+    # pair nothing checks it (fencing1 with looser moving regions: aria01-aria03 at +2.4 s, truth
+    # +1.5 s, accepted as a clear minimum from its own supporters)
+    triangle = sum(sure.values()) >= 3
+    unconfirmed = sorted(f"{a}__{b}" for (a, b) in found if sure.get(a) and sure.get(b) and not triangle
+                         and cameras[a].is_moving and cameras[b].is_moving)
+    if unconfirmed:
+        msg = (f"geometric track pairs not used for {', '.join(unconfirmed)}: both cameras move and no "
+               f"third camera's offset is sure, so no triangle confirms their Δ")
+        sink.stage_event("cues", msg)
+        log.warning(msg)
     out = dict(pairs)
     for (a, b), (_, gs) in found.items():
         delta = joint.offsets_s[b] - joint.offsets_s[a]
-        both = bool(sure.get(a) and sure.get(b))
+        both = bool(sure.get(a) and sure.get(b)) and f"{a}__{b}" not in unconfirmed
         index = supporters(gs, delta) if both else np.zeros((0, 2), np.int64)
         desc = pairs[(a, b)]
         n_desc = len(desc.index)
@@ -460,10 +495,15 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
     frames = {n: v.sfm_frames for n, v in vids.items() if v.sfm_frames is not None}
     sizes = {n: (v.info.width, v.info.height) for n, v in vids.items()}
     est = estimate_cameras(frames, sizes, {n: v.info.num_frames for n, v in vids.items()},
-                           {n: v.camera_motion == "moving" for n, v in vids.items()}, cfg.camera)
+                           {n: v.camera_motion == "moving" for n, v in vids.items()}, cfg.camera,
+                           frame_features={n: v.frame_features for n, v in vids.items()
+                                           if v.frame_features is not None})
     stats["sfm"] = {"features": est.features, "images": est.num_images, "registered_images": est.num_registered,
                     "registered_frames": {n: c.registered_frames.tolist() for n, c in est.cameras.items()},
                     "image_pairs": list(est.image_pairs)}
+    regs = {n: c.frame_registration for n, c in est.cameras.items() if c.frame_registration is not None}
+    if regs:
+        stats["sfm"]["frame_registration"] = regs
     if est.features == "xfeat":
         stats["sfm"]["xfeat_matcher"] = cfg.camera.xfeat_matcher
     static = [n for n, v in vids.items() if v.camera_motion != "moving"]

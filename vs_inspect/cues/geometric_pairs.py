@@ -32,6 +32,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from ..geometry.epipolar import fundamental_from_cameras
+from ..geometry.sampling import camera_at_frames, camera_between_frames
 from ..geometry.timing import frame_brackets
 from ..types import CameraTrack, TrackPairs, VideoInfo
 from .config import GeometricPairConfig
@@ -65,15 +66,25 @@ class GeometricPairStats:
 
 
 @nb.njit(inline="always")
-def _sampson(xa, i, kk, ww, G, q, l0, l1, l2):
+def _sampson(xa, i, kk, ww, G, g, q, l0, l1, l2):
     """Sampson distance² (px²) of a's point interpolated at (kk, ww) and b's point at its frame q
-    with line l = G[q] x_b."""
+    with line l = G[g, q] x_b."""
     a0 = xa[i, kk, 0] + ww * (xa[i, kk + 1, 0] - xa[i, kk, 0])
     a1 = xa[i, kk, 1] + ww * (xa[i, kk + 1, 1] - xa[i, kk, 1])
-    m0 = G[q, 0, 0] * a0 + G[q, 1, 0] * a1 + G[q, 2, 0]  # line in b: Gᵀ x_a
-    m1 = G[q, 0, 1] * a0 + G[q, 1, 1] * a1 + G[q, 2, 1]
+    m0 = G[g, q, 0, 0] * a0 + G[g, q, 1, 0] * a1 + G[g, q, 2, 0]  # line in b: Gᵀ x_a
+    m1 = G[g, q, 0, 1] * a0 + G[g, q, 1, 1] * a1 + G[g, q, 2, 1]
     num = a0 * l0 + a1 * l1 + l2
-    return num * num / (m0 * m0 + m1 * m1 + l0 * l0 + l1 * l1)  # NaN where a is not seen
+    return num * num / (m0 * m0 + m1 * m1 + l0 * l0 + l1 * l1)  # NaN where a is not seen or G unknown
+
+
+@nb.njit(inline="always")
+def _line_a(xb, j, q, G, g):
+    """Epipolar line in a of b's point at its frame q: G[g, q] x_b."""
+    y0 = xb[j, q, 0]
+    y1 = xb[j, q, 1]
+    return (G[g, q, 0, 0] * y0 + G[g, q, 0, 1] * y1 + G[g, q, 0, 2],
+            G[g, q, 1, 0] * y0 + G[g, q, 1, 1] * y1 + G[g, q, 1, 2],
+            G[g, q, 2, 0] * y0 + G[g, q, 2, 1] * y1 + G[g, q, 2, 2])
 
 
 @nb.njit(parallel=True, cache=True)
@@ -82,8 +93,10 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
     """Per candidate: number of consistent offsets, best offset index, its mean Sampson (px²).
 
     xa (Na,Ta,2) is interpolated at τ_b + Δ_d via (k, w) (D,Tb); xb (Nb,Tb,2) read at its frames.
-    G (Tb,3,3) with x_aᵀ G[q] x_b = 0 at b's frame q (one G repeated for two static cameras; per
-    frame when b moves; NaN where b has no pose); e_b (Tb,3) epipole in b. The fitting moments must spread at least
+    G (Dg,Tb,3,3) with x_aᵀ G[g, q] x_b = 0 at b's frame q, g = d when Dg == D (both cameras move:
+    a's pose depends on the offset too) or g = 0 when Dg == 1 (a static: one G repeated for two
+    static cameras; per frame when b moves); NaN where a pose is unknown; e_b (Dg,Tb,3) epipole
+    in b. The fitting moments must spread at least
     min_sweep px across b's epipolar lines. Candidates consistent at more than max_band offsets
     get best -1. Only every qstep-th frame of b is read (frame counts are of those). The best
     offset has the least mean Sampson over the fitting moments, or with truncated the least mean
@@ -91,6 +104,7 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
     """
     C = cand_a.shape[0]
     D, Tb = k.shape
+    per_d = G.shape[0] > 1  # a's pose changes with the offset: lines computed per (d, q)
     n_cons = np.zeros(C, np.int64)
     best = np.full(C, -1, np.int64)
     best_res = np.full(C, np.inf)
@@ -106,14 +120,13 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
         for q in range(Tb):
             y0 = xb[j, q, 0]
             y1 = xb[j, q, 1]
-            okb[q] = q % qstep == 0 and not (np.isnan(y0) or np.isnan(y1) or np.isnan(G[q, 0, 0]))
+            okb[q] = q % qstep == 0 and not (np.isnan(y0) or np.isnan(y1) or
+                                             (not per_d and np.isnan(G[0, q, 0, 0])))
             if okb[q]:
                 q0 = min(q0, q)
                 q1 = q
                 nvb += 1
-            lb0[q] = G[q, 0, 0] * y0 + G[q, 0, 1] * y1 + G[q, 0, 2]
-            lb1[q] = G[q, 1, 0] * y0 + G[q, 1, 1] * y1 + G[q, 1, 2]
-            lb2[q] = G[q, 2, 0] * y0 + G[q, 2, 1] * y1 + G[q, 2, 2]
+            lb0[q], lb1[q], lb2[q] = _line_a(xb, j, q, G, 0)
         ka0, ka1 = Ta, -1  # a's seen span (interpolation needs frames k and k+1)
         for kk in range(Ta):
             if not np.isnan(xa[i, kk, 0]):
@@ -126,6 +139,7 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
             # k[d] increases with q: skip offsets whose mapped span misses a's span
             if (k[d, q1] >= 0 and k[d, q1] < ka0) or k[d, q0] >= ka1:
                 continue
+            g = d if per_d else 0
             # a few probe moments first: a wrong pair rarely fits more than one of them
             missed = 0
             for m in range(1, 7):
@@ -133,7 +147,11 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
                 kk = k[d, q]
                 if not okb[q] or kk < ka0 or kk >= ka1:
                     continue
-                r = _sampson(xa, i, kk, w[d, q], G, q, lb0[q], lb1[q], lb2[q])
+                if per_d:
+                    l0, l1, l2 = _line_a(xb, j, q, G, g)
+                else:
+                    l0, l1, l2 = lb0[q], lb1[q], lb2[q]
+                r = _sampson(xa, i, kk, w[d, q], G, g, q, l0, l1, l2)
                 if r >= 2.25 * tau2:  # False for NaN (a not seen there)
                     missed += 1
             if missed > 1:
@@ -151,7 +169,11 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
                 kk = k[d, q]
                 if kk < ka0 or kk >= ka1 or not okb[q]:
                     continue
-                r = _sampson(xa, i, kk, w[d, q], G, q, lb0[q], lb1[q], lb2[q])
+                if per_d:
+                    l0, l1, l2 = _line_a(xb, j, q, G, g)
+                else:
+                    l0, l1, l2 = lb0[q], lb1[q], lb2[q]
+                r = _sampson(xa, i, kk, w[d, q], G, g, q, l0, l1, l2)
                 if np.isnan(r):
                     continue
                 n += 1
@@ -163,9 +185,9 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
                 if fit == 0:
                     y0 = xb[j, q, 0]
                     y1 = xb[j, q, 1]
-                    r0 = y1 * e_b[q, 2] - e_b[q, 1]
-                    r1 = e_b[q, 0] - y0 * e_b[q, 2]
-                    r2 = y0 * e_b[q, 1] - y1 * e_b[q, 0]
+                    r0 = y1 * e_b[g, q, 2] - e_b[g, q, 1]
+                    r1 = e_b[g, q, 0] - y0 * e_b[g, q, 2]
+                    r2 = y0 * e_b[g, q, 1] - y1 * e_b[g, q, 0]
                     nn = np.sqrt(r0 * r0 + r1 * r1)
                     if nn > 0:
                         r0 /= nn
@@ -236,6 +258,24 @@ def _per_frame_fundamentals(cam_a: CameraTrack, cam_b: CameraTrack, Tb: int) -> 
     return G
 
 
+def _moving_fundamentals(cam_a: CameraTrack, cam_b: CameraTrack, k: np.ndarray,
+                         w: np.ndarray) -> np.ndarray:
+    """(D,Tb,3,3) G with x_aᵀ G[d, q] x_b = 0 between a at brackets (k, w) (D,Tb) (its pose
+    interpolated as its track points are) and b at its frame q; NaN where either pose is unknown.
+    The same cameras as the energy landscape's (sync/landscape.py, PairEnergy._G_moving)."""
+    D, Tb = k.shape
+    cam_b_at = camera_at_frames(cam_b, np.broadcast_to(np.arange(Tb), (D, Tb)))
+    cam_a_at = camera_between_frames(cam_a, k, w)
+    invalid = ~(cam_a_at.valid & cam_b_at.valid)
+    # K is inverted: a placeholder keeps the batched inverse finite; invalid G are NaN below
+    K_a = np.where(invalid[..., None, None], np.eye(3), cam_a_at.K)
+    K_b = np.where(invalid[..., None, None], np.eye(3), cam_b_at.K)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        G = fundamental_from_cameras(K_a, cam_a_at.cam_from_world, K_b, cam_b_at.cam_from_world)
+    G[invalid] = np.nan
+    return np.ascontiguousarray(G)
+
+
 def _one_to_one(cand_a: np.ndarray, cand_b: np.ndarray, res: np.ndarray) -> np.ndarray:
     """Indices into the candidates: a one-to-one choice of least total residual (Hungarian)."""
     ua, ra = np.unique(cand_a, return_inverse=True)
@@ -257,36 +297,42 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
                     ) -> tuple[TrackPairs, GeometricPairStats]:
     """Track pairs between cameras a and b from epipolar consistency over time.
 
-    At most one of the two cameras may move (per-frame poses); its epipolar geometry is taken
-    per frame. xy_a (Na,Ta,2), xy_b (Nb,Tb,2): undistorted px in the cameras' pinhole models.
+    Either camera may move (per-frame poses): with one moving, its epipolar geometry is taken per
+    frame; with both, per frame of b and per offset (a's pose at the moment b's frame meets,
+    interpolated between its frames as its track points are). xy_a (Na,Ta,2), xy_b (Nb,Tb,2):
+    undistorted px in the cameras' pinhole models.
     """
-    if cam_a.is_moving and cam_b.is_moving:
-        raise ValueError("geometric_pairs needs at least one static camera")
-    if cam_a.is_moving:  # the moving camera is always b inside: Δ_ba = -Δ_ab
+    if cam_a.is_moving and not cam_b.is_moving:  # a moving camera is b inside: Δ_ba = -Δ_ab
         tp, st = geometric_pairs(b, a, info_b, info_a, cam_b, cam_a, xy_b, xy_a, cfg)
         return TrackPairs(a, b, tp.index[:, ::-1].copy(), tp.weight), st.swapped()
     empty = TrackPairs(a, b, np.zeros((0, 2), np.int64), np.zeros(0))
     Tb = xy_b.shape[1]
-    G = _per_frame_fundamentals(cam_a, cam_b, Tb)
-    posed = np.isfinite(G[:, 0, 0])
-    if not posed.any():
-        return empty, GeometricPairStats(0, 0, 0, (), ())
-    diag = float(np.hypot(info_b.width, info_b.height))
-    tau = max(2.0, cfg.tau_diag * diag)
-    u, _, vt = np.linalg.svd(np.where(posed[:, None, None], G, np.eye(3)))
-    e_a, e_b = u[:, :, -1], vt[:, -1]  # (Tb,3) unit null vectors: Gᵀ e_a = 0, G e_b = 0
-    mid = np.nonzero(posed)[0][posed.sum() // 2]  # a moving b's extent is judged at a middle pose
-    ia = _candidates(xy_a, cfg.max_tracks, cfg.min_frames, epipolar_extent(xy_a, e_a[mid]),
-                     cfg.min_sweep_tau * tau)
-    ib = _candidates(xy_b, cfg.max_tracks, cfg.min_frames, epipolar_extent(xy_b, e_b[mid]),
-                     cfg.min_sweep_tau * tau)
-    if not len(ia) or not len(ib):
-        return empty, GeometricPairStats(0, 0, 0, (), ())
     step = 0.5 * min(info_a.frame_interval_s, info_b.frame_interval_s)
     ta, tb = info_a.timestamps_s, info_b.timestamps_s
     lo, hi = ta[0] - tb[-1], ta[-1] - tb[0]
     offsets = np.arange(np.ceil(lo / step), np.floor(hi / step) + 1) * step
     k, w = frame_brackets(ta, tb[None, :] + offsets[:, None])
+    # (Dg,Tb,3,3): one row of G when a is static, one per offset when both move
+    G = _moving_fundamentals(cam_a, cam_b, k, w) if cam_a.is_moving else \
+        _per_frame_fundamentals(cam_a, cam_b, Tb)[None]
+    posed = np.isfinite(G[..., 0, 0])  # (Dg,Tb)
+    if not posed.any():
+        return empty, GeometricPairStats(0, 0, 0, (), ())
+    diag = float(np.hypot(info_b.width, info_b.height))
+    tau = max(2.0, cfg.tau_diag * diag)
+    u, _, vt = np.linalg.svd(np.where(posed[..., None, None], G, np.eye(3)))
+    e_a, e_b = u[..., -1], vt[..., -1, :]  # (Dg,Tb,3) unit null vectors: Gᵀ e_a = 0, G e_b = 0
+    # a moving camera's extent is judged at a middle pose (both moving: the offset nearest 0
+    # that has one)
+    rows = np.nonzero(posed.any(1))[0]
+    g_mid = rows[np.argmin(np.abs(offsets[rows]))] if len(G) > 1 else 0
+    mid = np.nonzero(posed[g_mid])[0][posed[g_mid].sum() // 2]
+    ia = _candidates(xy_a, cfg.max_tracks, cfg.min_frames, epipolar_extent(xy_a, e_a[g_mid, mid]),
+                     cfg.min_sweep_tau * tau)
+    ib = _candidates(xy_b, cfg.max_tracks, cfg.min_frames, epipolar_extent(xy_b, e_b[g_mid, mid]),
+                     cfg.min_sweep_tau * tau)
+    if not len(ia) or not len(ib):
+        return empty, GeometricPairStats(0, 0, 0, (), ())
     qstep = max(1, int(1.0 / (info_b.frame_interval_s * cfg.max_rate_hz))) if cfg.max_rate_hz > 0 else 1
     cand_a = np.repeat(ia, len(ib))
     cand_b = np.tile(ib, len(ia))
@@ -475,14 +521,15 @@ def consistent_at(info_a: VideoInfo, info_b: VideoInfo, cam_a: CameraTrack, cam_
                   tau_px: float, min_share: float, min_frames: int) -> np.ndarray:
     """(P,) bool: the track pairs index (P,2) whose points lie within tau_px (Sampson) of each
     other's epipolar lines at Δ_ab = delta_s in at least min_share of at least min_frames common
-    moments. At most one of the cameras may move."""
-    if cam_a.is_moving:
+    moments. Either camera may move (both: a's pose interpolated at b's frames' moments)."""
+    if cam_a.is_moving and not cam_b.is_moving:
         return consistent_at(info_b, info_a, cam_b, cam_a, xy_b, xy_a, index[:, ::-1], -delta_s,
                              tau_px, min_share, min_frames)
     if not len(index):
         return np.zeros(0, bool)
-    G = _per_frame_fundamentals(cam_a, cam_b, xy_b.shape[1])  # (Tb,3,3)
     k, w = frame_brackets(info_a.timestamps_s, info_b.timestamps_s + delta_s)
+    G = _moving_fundamentals(cam_a, cam_b, k[None], w[None])[0] if cam_a.is_moving else \
+        _per_frame_fundamentals(cam_a, cam_b, xy_b.shape[1])  # (Tb,3,3)
     kc = np.clip(k, 0, max(0, xy_a.shape[1] - 2))
     kn = np.minimum(kc + 1, xy_a.shape[1] - 1)
     xa = xy_a[index[:, 0]][:, kc] + w[None, :, None] * (xy_a[index[:, 0]][:, kn] - xy_a[index[:, 0]][:, kc])

@@ -1,0 +1,61 @@
+"""Stage 0's use of the joint geometric vote (cues/extract.py): two moving cameras' pairs need a
+triangle of sure cameras."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vs_inspect.cues.config import CueConfig
+from vs_inspect.cues.extract import _add_joint_pairs
+from vs_inspect.cues.geometric_pairs import GeometricPairStats, JointChoice
+from vs_inspect.geometry.epipolar import look_at
+from vs_inspect.record.sink import NullSink
+from vs_inspect.types import CameraTrack, TrackPairs
+
+K = np.array([[500.0, 0, 320], [0, 500.0, 240], [0, 0, 1]])
+
+
+class _Events(NullSink):
+    def __init__(self):
+        self.options = None
+        self.messages: list[str] = []
+
+    def stage_event(self, stage, message, **numbers):
+        self.messages.append(message)
+
+
+def _stats(delta_s: float, n: int = 12) -> GeometricPairStats:
+    """n informative candidates (track i of a with track i of b), all voting for delta_s."""
+    idx = np.stack([np.arange(n), np.arange(n)], 1)
+    return GeometricPairStats(n, n, n, (delta_s,), (n,), None, np.array([delta_s]), np.array([float(n)]),
+                              0.1, idx, np.full(n, delta_s), np.ones(n))
+
+
+def _run(moving_b: bool, sure_c: bool):
+    moving = CameraTrack(K, np.stack([look_at([6.0, 0.01 * t, 1.5], [0, 0, 1]) for t in range(50)]))
+    static = CameraTrack(K, look_at([0.0, 6.0, 2.5], [0, 0, 1]))
+    cams = {"a": moving, "b": moving if moving_b else static, "c": moving}
+    offs = {"a": 0.0, "b": 0.4, "c": 1.0}
+    found = {(u, v): (None, _stats(offs[v] - offs[u])) for u, v in (("a", "b"), ("a", "c"), ("b", "c"))}
+    pairs = {k: TrackPairs(*k, np.zeros((0, 2), np.int64)) for k in found}
+    joint = JointChoice(offs, 10.0, {"a": 5.0, "b": 5.0, "c": 5.0 if sure_c else 1.0}, 0.3)
+    sure = {"a": True, "b": True, "c": sure_c}
+    sink, stats = _Events(), {"pairs": {}}
+    out = _add_joint_pairs(pairs, found, joint, sure, cams, {}, {}, CueConfig(), stats, sink)
+    return {k: len(v.index) for k, v in out.items()}, sink.messages
+
+
+def test_two_moving_cameras_need_a_third_sure_camera():
+    used, msgs = _run(moving_b=True, sure_c=False)
+    assert used == {("a", "b"): 0, ("a", "c"): 0, ("b", "c"): 0}
+    assert any("both cameras move and no third camera's offset is sure" in m for m in msgs), msgs
+    # with the third camera sure the triangle confirms every pair: all supporters are used
+    used, msgs = _run(moving_b=True, sure_c=True)
+    assert used == {("a", "b"): 12, ("a", "c"): 12, ("b", "c"): 12}
+    assert not any("no third camera" in m for m in msgs)
+
+
+def test_a_static_camera_pairs_with_a_moving_one_as_before():
+    used, msgs = _run(moving_b=False, sure_c=False)
+    assert used == {("a", "b"): 12, ("a", "c"): 0, ("b", "c"): 0}
+    assert not any("no third camera" in m for m in msgs)

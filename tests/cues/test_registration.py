@@ -1,0 +1,91 @@
+"""Per-frame registration of a moving camera against the reconstruction (cues/registration.py)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np  # noqa: I001  (numpy before pycolmap)
+import pytest
+
+from vs_inspect.cues.registration import Keyframe, colmap_sift, frame_features, register_frames
+from vs_inspect.geometry.epipolar import look_at
+from vs_inspect.signals import import_pycolmap
+
+CLIP = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "visualsync_clips" / "fencing1" \
+    / "fencing_aria01_3_138_2.mp4"
+
+
+@pytest.mark.skipif(not CLIP.exists(), reason="needs ../shared/data/visualsync_clips")
+def test_opencv_sift_converted_matches_colmaps_own_descriptors():
+    """On a real frame, OpenCV's SIFT in COLMAP's L1-root form finds COLMAP's own features: ratio
+    matches land on the keypoint COLMAP found there."""
+    pycolmap = import_pycolmap()
+    cap = cv2.VideoCapture(str(CLIP))
+    ok, img = cap.read()
+    assert ok
+    grey = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
+    opt = pycolmap.FeatureExtractionOptions()
+    opt.num_threads = 1
+    kp_c, d_c = pycolmap.FeatureExtractor.create(opt, pycolmap.Device.cpu).extract_from_uint8_array(grey)
+    xy_c = np.array([[k.x, k.y] for k in kp_c])  # COLMAP: pixel centres at +0.5
+    d_c = np.asarray(d_c.data).astype(np.float32)  # the database's uint8 values
+    ff = frame_features(grey[None], None, np.array([0]), (1.0, 1.0), 4096)
+    assert ff.desc[0].dtype == np.uint8 and len(ff.desc[0]) > 100
+    pairs = cv2.BFMatcher(cv2.NORM_L2).knnMatch(ff.desc[0].astype(np.float32), d_c, k=2)
+    good = [p[0] for p in pairs if len(p) == 2 and p[0].distance < 0.8 * p[1].distance]
+    dist = np.array([np.linalg.norm(ff.xy_full[0][m.queryIdx] + 0.5 - np.asarray(xy_c)[m.trainIdx, :2])
+                     for m in good])
+    assert len(good) > 100 and np.mean(dist < 2.0) > 0.9, (len(good), np.mean(dist < 2.0))
+    # without the conversion (OpenCV's L2 form) the same descriptors match far worse
+    raw = cv2.SIFT_create(4096, contrastThreshold=0.02).detectAndCompute(grey, None)[1]
+    assert np.abs(colmap_sift(raw).astype(float) - raw).mean() > 5.0
+
+
+def _scene(seed: int = 0, n: int = 400):
+    """3D points with descriptors, a keyframe that sees them all, and the camera."""
+    pycolmap = import_pycolmap()
+    rng = np.random.default_rng(seed)
+    cam = pycolmap.Camera(model="SIMPLE_RADIAL", width=640, height=480, params=[500.0, 320.0, 240.0, -0.05])
+    X = rng.uniform([-3, -2, 4], [3, 2, 8], (n, 3))
+    desc = rng.integers(0, 120, (n, 128)).astype(np.float32)
+    return cam, X, desc, [Keyframe(10, desc, X)]
+
+
+def _view(cam, pose, X, desc, rng, noise_px=0.3, outliers=0.3):
+    """Features of a frame at pose: projections (full px = SfM px here) with their descriptors,
+    a share of them replaced by random points, plus unrelated features."""
+    x = np.asarray(cam.img_from_cam((pose[:3, :3] @ X.T + pose[:3, 3:4]).T))[:, :2] - 0.5
+    x += rng.normal(0, noise_px, x.shape)
+    bad = rng.random(len(x)) < outliers
+    x[bad] = rng.uniform([0, 0], [640, 480], (bad.sum(), 2))
+    d = desc + rng.normal(0, 3, desc.shape)
+    extra_d = rng.integers(0, 120, (100, 128))
+    return (np.concatenate([x, rng.uniform([0, 0], [640, 480], (100, 2))]),
+            np.clip(np.concatenate([d, extra_d]), 0, 255).astype(np.uint8))
+
+
+def test_frames_register_to_their_true_pose_and_weak_ones_are_refused():
+    from vs_inspect.cues.registration import FrameFeatures
+
+    cam, X, desc, kfs = _scene()
+    rng = np.random.default_rng(1)
+    truth = {k: look_at([0.05 * k, 0.3, -1.0], [0.02 * k, 0.0, 6.0]) for k in (8, 11, 12)}
+    xys, ds = [], []
+    for k, pose in truth.items():
+        x, d = _view(cam, pose, X, desc, rng)
+        xys.append(x), ds.append(d)
+    # frame 13 sees only 12 of the points: fewer than min_inliers, not registered
+    x, d = _view(cam, truth[12], X[:12], desc[:12], rng, outliers=0.0)
+    xys.append(x[:12]), ds.append(d[:12])
+    feats = FrameFeatures(np.array([8, 11, 12, 13]), xys, ds)
+    reg = register_frames(feats, kfs, cam, 1.0, min_inliers=20)
+    assert reg.tried == 4 and reg.frames.tolist() == [8, 11, 12]
+    for k, pose, n in zip(reg.frames, reg.cam_from_world, reg.inliers):
+        assert n >= 0.6 * len(X)
+        R_err = np.degrees(np.arccos(np.clip((np.trace(pose[:3, :3].T @ truth[k][:3, :3]) - 1) / 2, -1, 1)))
+        C = -pose[:3, :3].T @ pose[:3, 3]
+        C_true = -truth[k][:3, :3].T @ truth[k][:3, 3]
+        assert R_err < 0.2 and np.linalg.norm(C - C_true) < 0.02, (k, R_err, C, C_true)
+    # no keyframes: nothing registered, nothing tried
+    assert len(register_frames(feats, [], cam, 1.0).frames) == 0
