@@ -38,6 +38,22 @@ def test_local_engine_keeps_order_and_raises_as_is():
             list(eng.map(_fails, [1], progress=False))
 
 
+def _pid_and_double(shared, x):
+    return os.getpid(), shared * x
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one core: the local engine does not fork")
+def test_local_engine_forks_marked_items_in_order_and_raises_as_is():
+    """processes=True: forked workers (not this process), results in the items' order, the shared
+    value inherited, an exception raised as it is."""
+    eng = LocalEngine()
+    out = list(eng.map(_pid_and_double, list(range(8)), shared=np.arange(3), progress=False, processes=True))
+    assert [list(v) for _, v in out] == [list(np.arange(3) * x) for x in range(8)]
+    assert os.getpid() not in {pid for pid, _ in out}
+    with pytest.raises(InputError, match="item 2 is bad"):
+        list(eng.map(_fails, [2, 3], progress=False, processes=True))
+
+
 def test_engine_config_rejects_unknown_engine():
     with pytest.raises(ValueError, match="unknown engine 'spark'"):
         EngineConfig("spark")

@@ -21,7 +21,9 @@ imported only when a RayEngine is opened (the `distributed` extra).
 from __future__ import annotations
 
 import logging
+import multiprocessing
 import os
+import signal
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -64,7 +66,10 @@ class Engine:
     name = "base"
 
     def map(self, fn: Callable[[Any, Any], Any], items: Iterable[Any], *, shared: Any = None,
-            desc: str = "", unit: str = "item", progress: bool = True) -> Iterator[Any]:
+            desc: str = "", unit: str = "item", progress: bool = True,
+            processes: bool = False) -> Iterator[Any]:
+        """processes: the items are single-threaded CPU work (no numba threads inside), so the
+        local engine may fork one process per core for them; Ray runs every item as a task."""
         raise NotImplementedError
 
     def close(self) -> None:
@@ -78,13 +83,40 @@ class Engine:
 
 
 class LocalEngine(Engine):
-    """Today's in-process path: one item after another, exceptions as they are."""
+    """In this process, one item after another, exceptions as they are; items marked
+    processes=True in forked processes, one per core (results and exceptions the same)."""
 
     name = "local"
 
-    def map(self, fn, items, *, shared=None, desc="", unit="item", progress=True):
-        for item in tqdm(list(items), desc=desc, unit=unit, disable=not progress, leave=False):
-            yield fn(shared, item)
+    def map(self, fn, items, *, shared=None, desc="", unit="item", progress=True, processes=False):
+        items = list(items)
+        workers = min(len(items), os.cpu_count() or 1) if processes else 1
+        if workers <= 1:
+            for item in tqdm(items, desc=desc, unit=unit, disable=not progress, leave=False):
+                yield fn(shared, item)
+            return
+        global _FORKED
+        _FORKED = (fn, shared)  # inherited by the forked workers: the bundle is never pickled
+        try:
+            with multiprocessing.get_context("fork").Pool(workers, initializer=_forked_init) as pool:
+                yield from tqdm(pool.imap(_forked_call, items), total=len(items), desc=desc, unit=unit,
+                                disable=not progress, leave=False)
+        finally:
+            _FORKED = None
+
+
+_FORKED: tuple[Callable[[Any, Any], Any], Any] | None = None  # (fn, shared) of the running map
+
+
+def _forked_init() -> None:
+    # the pool ends its workers with SIGTERM: the default action, not the CLI's Terminated
+    # handler inherited by the fork (which printed a traceback per worker)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _forked_call(item):
+    fn, shared = _FORKED
+    return fn(shared, item)
 
 
 def _call(fn, shared, item):
@@ -140,7 +172,7 @@ class RayEngine(Engine):
         """CPUs of the cluster (all nodes)."""
         return int(self._ray.cluster_resources().get("CPU", 1))
 
-    def map(self, fn, items, *, shared=None, desc="", unit="item", progress=True):
+    def map(self, fn, items, *, shared=None, desc="", unit="item", progress=True, processes=False):
         ray = self._ray
         items = list(items)
         ref = ray.put(shared)  # once: every task reads it from the object store

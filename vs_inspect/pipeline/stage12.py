@@ -146,13 +146,13 @@ def _pose_free_task(shared: tuple[CueBundle, SyncConfig], item: tuple[str, str])
 def estimate_pose_free_pairs(bundle: CueBundle, chosen: list[tuple[str, str]], cfg: SyncConfig,
                              progress: bool = False, engine: Engine | None = None
                              ) -> dict[tuple[str, str], PoseFreePair | TaskFailed | None]:
-    """sync.posefree over the chosen pose-free pairs, on the engine (default: in this process),
-    in the order of chosen; a pair whose task died with its worker is TaskFailed."""
+    """sync.posefree over the chosen pose-free pairs, on the engine (default: local, one forked
+    process per core), in the order of chosen; a pair whose task died with its worker is TaskFailed."""
     if not chosen:  # nothing to send (a Ray engine would still ship the bundle)
         return {}
     engine = engine or LocalEngine()
     out = engine.map(_pose_free_task, chosen, shared=(bundle, cfg), desc="pose-free pairs", unit="pair",
-                     progress=progress)
+                     progress=progress, processes=True)
     return dict(zip(chosen, out))
 
 
