@@ -31,7 +31,8 @@ import numba as nb
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from ..geometry.epipolar import fundamental_from_cameras
+from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
+from ..geometry.sampling import tracks_between_frames
 from ..geometry.timing import frame_brackets
 from ..types import CameraTrack, TrackPairs, VideoInfo
 from .config import GeometricPairConfig
@@ -483,18 +484,9 @@ def consistent_at(info_a: VideoInfo, info_b: VideoInfo, cam_a: CameraTrack, cam_
         return np.zeros(0, bool)
     G = _per_frame_fundamentals(cam_a, cam_b, xy_b.shape[1])  # (Tb,3,3)
     k, w = frame_brackets(info_a.timestamps_s, info_b.timestamps_s + delta_s)
-    kc = np.clip(k, 0, max(0, xy_a.shape[1] - 2))
-    kn = np.minimum(kc + 1, xy_a.shape[1] - 1)
-    xa = xy_a[index[:, 0]][:, kc] + w[None, :, None] * (xy_a[index[:, 0]][:, kn] - xy_a[index[:, 0]][:, kc])
-    xa[:, k < 0] = np.nan
-    xb = xy_b[index[:, 1]]
-    ha = np.concatenate([xa, np.ones(xa.shape[:-1] + (1,))], -1)
-    hb = np.concatenate([xb, np.ones(xb.shape[:-1] + (1,))], -1)
-    lb = np.einsum("tij,ptj->pti", G, hb)  # lines in a
-    la = np.einsum("tji,ptj->pti", G, ha)  # lines in b
-    num = np.einsum("pti,pti->pt", ha, lb)
+    xa = tracks_between_frames(xy_a, k, w, rows=index[:, 0])  # (P,Tb,2) a at b's moments
     with np.errstate(invalid="ignore", divide="ignore"):
-        d = np.abs(num) / np.sqrt(lb[..., 0] ** 2 + lb[..., 1] ** 2 + la[..., 0] ** 2 + la[..., 1] ** 2)
-        n = np.isfinite(d).sum(1)
-        fit = (d < tau_px).sum(1)
+        r = epipolar_residual(G, xa, xy_b[index[:, 1]], "sampson")  # (P,Tb) px², NaN: not both seen
+        n = np.isfinite(r).sum(1)
+        fit = (r < tau_px * tau_px).sum(1)
     return (n >= min_frames) & (fit >= min_share * np.maximum(n, 1))
