@@ -32,7 +32,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
-from ..geometry.sampling import tracks_between_frames
+from ..geometry.sampling import camera_at_frames, tracks_between_frames
 from ..geometry.timing import frame_brackets
 from ..types import CameraTrack, TrackPairs, VideoInfo
 from .config import GeometricPairConfig
@@ -226,15 +226,10 @@ def _peaks(votes: np.ndarray, count: int, halfwidth: int) -> list[int]:
 
 def _per_frame_fundamentals(cam_a: CameraTrack, cam_b: CameraTrack, Tb: int) -> np.ndarray:
     """(Tb,3,3) G with x_aᵀ G[q] x_b = 0 at b's frame q (a static); NaN where b has no pose."""
-    q = np.arange(Tb)
     if cam_b.num_pose_frames not in (1, Tb):
         raise ValueError(f"camera b has {cam_b.num_pose_frames} poses for {Tb} frames")
-    Kb = cam_b.K_at(q)
-    pb = cam_b.pose_at(q)
-    G = np.stack([fundamental_from_cameras(cam_a.K, cam_a.cam_from_world, Kb[t], pb[t]) for t in q])
-    if cam_b.valid is not None:
-        G[~np.asarray(cam_b.valid, bool)] = np.nan
-    return G
+    b = camera_at_frames(cam_b, np.arange(Tb))  # NaN where b has no pose, and so is G
+    return fundamental_from_cameras(cam_a.K, cam_a.cam_from_world, b.K, b.cam_from_world)
 
 
 def _one_to_one(cand_a: np.ndarray, cand_b: np.ndarray, res: np.ndarray) -> np.ndarray:
