@@ -137,12 +137,8 @@ class GeometricPairConfig:
     """Joint choice: a camera's geometric pairs are used only if its offset beats the best choice that moves it against every other camera (by more than 3 frames) by this much summed vote z-score."""
     joint_filter_descriptor: bool = True
     """Joint choice: keep only the descriptor pairs that are epipolar-consistent (tau, min_inlier_share, min_frames) at the joint Δ (for unsure cameras too: at a wrong Δ few survive, and the pair is refused rather than wrong)."""
-    score: str = "fit"
-    """How a candidate's offsets are compared: fit (mean Sampson over its fitting moments) or truncated (mean of min(Sampson, tau²) over all its common moments, so that misfits count)."""
 
     def __post_init__(self) -> None:
-        if self.score not in ("fit", "truncated"):
-            raise ValueError(f"unknown geometric pair score {self.score!r}: use fit or truncated")
         _check_numbers(self)
 
 

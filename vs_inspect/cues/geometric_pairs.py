@@ -79,7 +79,7 @@ def _sampson(xa, i, kk, ww, G, q, l0, l1, l2):
 
 @nb.njit(parallel=True, cache=True)
 def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_share, max_band,
-                 min_sweep, qstep, truncated):
+                 min_sweep, qstep):
     """Per candidate: number of consistent offsets, best offset index, its mean Sampson (px²).
 
     xa (Na,Ta,2) is interpolated at τ_b + Δ_d via (k, w) (D,Tb); xb (Nb,Tb,2) read at its frames.
@@ -87,8 +87,7 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
     frame when b moves; NaN where b has no pose); e_b (Tb,3) epipole in b. The fitting moments must spread at least
     min_sweep px across b's epipolar lines. Candidates consistent at more than max_band offsets
     get best -1. Only every qstep-th frame of b is read (frame counts are of those). The best
-    offset has the least mean Sampson over the fitting moments, or with truncated the least mean
-    of min(Sampson, tau²) over all common moments (a misfit then counts against an offset).
+    offset has the least mean Sampson over the fitting moments.
     """
     C = cand_a.shape[0]
     D, Tb = k.shape
@@ -142,7 +141,6 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
             n = 0
             fit = 0
             acc = 0.0
-            acc_t = 0.0
             r0 = 0.0  # reference epipolar line in b through the first fitting point
             r1 = 0.0
             r2 = 0.0
@@ -156,7 +154,6 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
                 if np.isnan(r):
                     continue
                 n += 1
-                acc_t += min(r, tau2)
                 if r >= tau2:
                     if n - fit > max_miss:
                         break
@@ -179,7 +176,7 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
                 hi = max(hi, s)
             if n >= min_frames and fit >= min_share * n and hi - lo >= min_sweep:
                 n_cons[c] += 1
-                mean = acc_t / n if truncated else acc / fit
+                mean = acc / fit
                 if mean < best_res[c]:
                     best_res[c] = mean
                     best[c] = d
@@ -292,7 +289,7 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
                                 np.ascontiguousarray(k), np.ascontiguousarray(w), tau * tau,
                                 cfg.min_frames, cfg.min_inlier_share,
                                 max(1, int(cfg.max_band_share * len(offsets))),
-                                cfg.min_sweep_tau * tau, qstep, cfg.score == "truncated")
+                                cfg.min_sweep_tau * tau, qstep)
     informative = best >= 0
     votes = np.bincount(best[informative], minlength=len(offsets)).astype(float)
     peaks = _peaks(votes, cfg.peaks, cfg.peak_halfwidth)
