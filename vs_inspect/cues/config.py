@@ -9,6 +9,7 @@ from ..errors import check_fields
 from .learned import LEARNED_FEATURES, MATCHERS
 
 CAMERA_FEATURES = ("sift",) + LEARNED_FEATURES + ("auto",)
+KEYFRAME_DESCRIPTORS = ("sift",) + LEARNED_FEATURES
 
 
 def _check_numbers(cfg, positive: tuple[str, ...] = (), signed: tuple[str, ...] = ()) -> None:
@@ -104,8 +105,8 @@ class MatchConfig:
     """Keep a track pair only if each track is the other's most voted partner."""
 
     def __post_init__(self) -> None:
-        if self.descriptor not in ("sift",) + LEARNED_FEATURES:
-            raise ValueError(f"unknown keyframe descriptor {self.descriptor!r}: use sift, {', '.join(LEARNED_FEATURES)}")
+        if self.descriptor not in KEYFRAME_DESCRIPTORS:
+            raise ValueError(f"unknown keyframe descriptor {self.descriptor!r}: use {', '.join(KEYFRAME_DESCRIPTORS)}")
         _check_numbers(self, positive=("num_keyframes", "max_features", "ratio"))
 
 
