@@ -63,21 +63,20 @@ class PairRow:
 
 
 class _Sift:
-    """OpenCV SIFT, RootSIFT, ratio 0.8 + mutual check (the pipeline's keyframe matcher)."""
+    """The pipeline's keyframe matcher: its RootSIFT detector, ratio 0.8 + mutual check."""
 
     def __init__(self, top_k: int):
-        self._sift = cv2.SIFT_create(nfeatures=top_k)
+        from ..cues.config import MatchConfig
+        from ..cues.matching import sift_detector
+
+        self._detect = sift_detector(MatchConfig(max_features=top_k))
 
     def features(self, img, mask=None):
         from ..cues.learned import Features
 
-        kps, d = self._sift.detectAndCompute(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY),
-                                             None if mask is None else mask.astype(np.uint8) * 255)
-        if d is None:
-            return Features(np.zeros((0, 2), np.float32), np.zeros((0, 128), np.float32), img.shape[1::-1])
-        d = d.astype(np.float32)
-        d = np.sqrt(d / np.maximum(d.sum(1, keepdims=True), 1e-9))
-        return Features(np.array([k.pt for k in kps], np.float32), d, (img.shape[1], img.shape[0]))
+        xy, d = self._detect(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY),
+                             None if mask is None else mask.astype(np.uint8) * 255)
+        return Features(xy, d, (img.shape[1], img.shape[0]))
 
     def match(self, a, b):
         from ..cues.matching import match_descriptors

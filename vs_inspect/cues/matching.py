@@ -48,7 +48,7 @@ def extract_keyframe_features(frames: np.ndarray, masks: np.ndarray | None, keyf
 
     frames (T,H,W) uint8; masks (T,H,W) bool or None; track_xy (N,T,2) working px.
     """
-    detect = {"sift": _sift_detector, "xfeat": _xfeat_detector}.get(cfg.descriptor, _lightglue_detector)(cfg)
+    detect = {"sift": sift_detector, "xfeat": _xfeat_detector}.get(cfg.descriptor, _lightglue_detector)(cfg)
     size = (int(frames.shape[2]), int(frames.shape[1]))
     kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (max(1, cfg.mask_dilate_px),) * 2)
     fr, xys, descs, trk = [], [], [], []
@@ -77,7 +77,7 @@ def extract_keyframe_features(frames: np.ndarray, masks: np.ndarray | None, keyf
                             np.concatenate(trk), keyframes, size)
 
 
-def _sift_detector(cfg: MatchConfig):
+def sift_detector(cfg: MatchConfig):
     """(gray image, mask or None) -> (M,2) px, (M,128) RootSIFT descriptors."""
     sift = cv2.SIFT_create(nfeatures=cfg.max_features)
 
