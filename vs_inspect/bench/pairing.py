@@ -19,7 +19,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
-from ..geometry.sampling import camera_at_frames, camera_between_frames, tracks_between_frames
+from ..geometry.sampling import (
+    camera_at_frames,
+    camera_between_frames,
+    tracks_between_frames,
+)
 from ..geometry.timing import frame_brackets
 from ..types import CameraTrack, CueBundle
 

@@ -19,7 +19,7 @@ from scipy.spatial import cKDTree
 
 from ..types import TrackPairs
 from .config import MatchConfig
-from .learned import LIGHTGLUE_FEATURES  # matched by their LightGlue, not by nearest neighbours
+from .learned import LIGHTGLUE_FEATURES
 
 log = logging.getLogger(__name__)
 
@@ -134,7 +134,7 @@ def _lightglue_detector(cfg: MatchConfig):
 def _keyframe_matcher(cfg: MatchConfig, fa: KeyframeFeatures, fb: KeyframeFeatures):
     """(indices into a's rows, into b's rows) -> (P,2) matches: the descriptor's LightGlue for
     aliked/disk, else nearest neighbours with the ratio test (and mutual check)."""
-    if cfg.descriptor not in LIGHTGLUE_FEATURES:
+    if cfg.descriptor not in LIGHTGLUE_FEATURES:  # those are matched by their LightGlue
         return lambda sa, sb: match_descriptors(fa.desc[sa], fb.desc[sb], cfg.ratio, cfg.mutual)
     from .learned import Features
 
