@@ -31,6 +31,7 @@ from ..geometry.epipolar import (
     fundamental_from_cameras,
     relative_pose,
 )
+from ..io.calibration import CameraCalibration, undistort_points
 
 METHODS = ("sift", "xfeat-mnn", "xfeat-lighterglue", "aliked-lightglue", "disk-lightglue")
 MAX_SIDE = 1024  # images are downscaled to at most this side before features
@@ -106,9 +107,11 @@ def _inside(mask: np.ndarray, xy: np.ndarray) -> np.ndarray:
 
 
 def _undistort(v: View, xy: np.ndarray) -> np.ndarray:
+    """(M,2) px undistorted as the pipeline does (io.calibration.undistort_points: run to
+    convergence; NaN outside the lens model's valid region)."""
     if v.K is None or not len(xy):
         return xy.astype(np.float64)
-    return cv2.undistortPoints(xy.reshape(-1, 1, 2).astype(np.float64), v.K, v.dist, P=v.K).reshape(-1, 2)
+    return undistort_points(CameraCalibration(v.K, v.dist, v.cam_from_world, None), xy)
 
 
 def _sampson_px(F, xa, xb) -> np.ndarray:
@@ -121,8 +124,16 @@ def _rotation_error_deg(va: View, vb: View, xa: np.ndarray, xb: np.ndarray) -> f
     """Relative rotation b->a from matches (essential matrix in normalized coordinates) vs calibration."""
     if va.K is None or len(xa) < 8:
         return None
-    na = cv2.undistortPoints(xa.reshape(-1, 1, 2).astype(np.float64), va.K, va.dist).reshape(-1, 2)
-    nb = cv2.undistortPoints(xb.reshape(-1, 1, 2).astype(np.float64), vb.K, vb.dist).reshape(-1, 2)
+
+    def normalized(v: View, xy: np.ndarray) -> np.ndarray:
+        u = _undistort(v, xy)
+        return (np.c_[u, np.ones(len(u))] @ np.linalg.inv(v.K).T)[:, :2]
+
+    na, nb = normalized(va, xa), normalized(vb, xb)
+    ok = np.isfinite(na).all(1) & np.isfinite(nb).all(1)
+    if ok.sum() < 8:
+        return None
+    na, nb = na[ok], nb[ok]
     thr = 1.0 / va.K[0, 0]
     E, inl = cv2.findEssentialMat(nb, na, np.eye(3), cv2.RANSAC, 0.9999, thr)
     if E is None or E.shape != (3, 3):
