@@ -91,9 +91,9 @@ def test_unknown_keyframe_descriptor_is_an_error():
 
 
 def test_cli_xfeat_without_the_package_is_a_clear_error(tmp_path, capsys, monkeypatch):
-    import vs_inspect.commands.cues as cues_cmd
+    import vs_inspect.cues.learned as learned
 
-    monkeypatch.setattr(cues_cmd, "xfeat_available", lambda: False)
+    monkeypatch.setattr(learned, "xfeat_available", lambda: False)
     a, b = tmp_path / "a.mp4", tmp_path / "b.mp4"
     code = main(["cues", str(a), str(b), "--sfm-features", "xfeat", "--out", str(tmp_path / "bundle")])
     assert code == 2

@@ -31,6 +31,7 @@ from ..geometry.epipolar import (
     fundamental_from_cameras,
     relative_pose,
 )
+from ..io.calibration import CameraCalibration, undistort_points
 
 METHODS = ("sift", "xfeat-mnn", "xfeat-lighterglue", "aliked-lightglue", "disk-lightglue")
 MAX_SIDE = 1024  # images are downscaled to at most this side before features
@@ -63,21 +64,20 @@ class PairRow:
 
 
 class _Sift:
-    """OpenCV SIFT, RootSIFT, ratio 0.8 + mutual check (the pipeline's keyframe matcher)."""
+    """The pipeline's keyframe matcher: its RootSIFT detector, ratio 0.8 + mutual check."""
 
     def __init__(self, top_k: int):
-        self._sift = cv2.SIFT_create(nfeatures=top_k)
+        from ..cues.config import MatchConfig
+        from ..cues.matching import sift_detector
+
+        self._detect = sift_detector(MatchConfig(max_features=top_k))
 
     def features(self, img, mask=None):
         from ..cues.learned import Features
 
-        kps, d = self._sift.detectAndCompute(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY),
-                                             None if mask is None else mask.astype(np.uint8) * 255)
-        if d is None:
-            return Features(np.zeros((0, 2), np.float32), np.zeros((0, 128), np.float32), img.shape[1::-1])
-        d = d.astype(np.float32)
-        d = np.sqrt(d / np.maximum(d.sum(1, keepdims=True), 1e-9))
-        return Features(np.array([k.pt for k in kps], np.float32), d, (img.shape[1], img.shape[0]))
+        xy, d = self._detect(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY),
+                             None if mask is None else mask.astype(np.uint8) * 255)
+        return Features(xy, d, (img.shape[1], img.shape[0]))
 
     def match(self, a, b):
         from ..cues.matching import match_descriptors
@@ -107,9 +107,11 @@ def _inside(mask: np.ndarray, xy: np.ndarray) -> np.ndarray:
 
 
 def _undistort(v: View, xy: np.ndarray) -> np.ndarray:
+    """(M,2) px undistorted as the pipeline does (io.calibration.undistort_points: run to
+    convergence; NaN outside the lens model's valid region)."""
     if v.K is None or not len(xy):
         return xy.astype(np.float64)
-    return cv2.undistortPoints(xy.reshape(-1, 1, 2).astype(np.float64), v.K, v.dist, P=v.K).reshape(-1, 2)
+    return undistort_points(CameraCalibration(v.K, v.dist, v.cam_from_world, None), xy)
 
 
 def _sampson_px(F, xa, xb) -> np.ndarray:
@@ -122,8 +124,16 @@ def _rotation_error_deg(va: View, vb: View, xa: np.ndarray, xb: np.ndarray) -> f
     """Relative rotation b->a from matches (essential matrix in normalized coordinates) vs calibration."""
     if va.K is None or len(xa) < 8:
         return None
-    na = cv2.undistortPoints(xa.reshape(-1, 1, 2).astype(np.float64), va.K, va.dist).reshape(-1, 2)
-    nb = cv2.undistortPoints(xb.reshape(-1, 1, 2).astype(np.float64), vb.K, vb.dist).reshape(-1, 2)
+
+    def normalized(v: View, xy: np.ndarray) -> np.ndarray:
+        u = _undistort(v, xy)
+        return (np.c_[u, np.ones(len(u))] @ np.linalg.inv(v.K).T)[:, :2]
+
+    na, nb = normalized(va, xa), normalized(vb, xb)
+    ok = np.isfinite(na).all(1) & np.isfinite(nb).all(1)
+    if ok.sum() < 8:
+        return None
+    na, nb = na[ok], nb[ok]
     thr = 1.0 / va.K[0, 0]
     E, inl = cv2.findEssentialMat(nb, na, np.eye(3), cv2.RANSAC, 0.9999, thr)
     if E is None or E.shape != (3, 3):

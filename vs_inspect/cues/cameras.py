@@ -80,6 +80,13 @@ def _mean_pose(poses: np.ndarray) -> np.ndarray:
     return M
 
 
+def camera_features_unavailable(features: str) -> str | None:
+    """Why camera features `features` (CameraConfig.features) cannot run here, or None: the one
+    availability check of the optional learned models, made by Stage 0 before any decoding
+    (pipeline.stage0.check_cue_config) and by estimate_cameras."""
+    return learned_unavailable(features) if features in LEARNED_FEATURES else None
+
+
 def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarray], list[np.ndarray | None]]],
                      sizes: dict[str, tuple[int, int]], num_frames: dict[str, int],
                      moving: dict[str, bool], cfg: CameraConfig = CameraConfig(),
@@ -96,10 +103,8 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
     of a moving video's other frames, each registered against the SIFT reconstruction
     (registration.register_frames) instead of slerped between the SfM frames.
     """
-    if cfg.features in LEARNED_FEATURES and (why := learned_unavailable(cfg.features)):
+    if why := camera_features_unavailable(cfg.features):
         raise ValueError(f"camera features {cfg.features!r}: {why}")
-    if cfg.features not in LEARNED_FEATURES + ("sift", "auto"):
-        raise ValueError(f"unknown camera features {cfg.features!r}")
     first = cfg.features if cfg.features in LEARNED_FEATURES else "sift"
     est = _reconstruct(first, frames_by_video, sizes, num_frames, moving, cfg, workdir, seed,
                        frame_features)

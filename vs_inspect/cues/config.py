@@ -9,6 +9,7 @@ from ..errors import check_fields
 from .learned import LEARNED_FEATURES, MATCHERS
 
 CAMERA_FEATURES = ("sift",) + LEARNED_FEATURES + ("auto",)
+KEYFRAME_DESCRIPTORS = ("sift",) + LEARNED_FEATURES
 
 
 def _check_numbers(cfg, positive: tuple[str, ...] = (), signed: tuple[str, ...] = ()) -> None:
@@ -104,8 +105,8 @@ class MatchConfig:
     """Keep a track pair only if each track is the other's most voted partner."""
 
     def __post_init__(self) -> None:
-        if self.descriptor not in ("sift",) + LEARNED_FEATURES:
-            raise ValueError(f"unknown keyframe descriptor {self.descriptor!r}: use sift, {', '.join(LEARNED_FEATURES)}")
+        if self.descriptor not in KEYFRAME_DESCRIPTORS:
+            raise ValueError(f"unknown keyframe descriptor {self.descriptor!r}: use {', '.join(KEYFRAME_DESCRIPTORS)}")
         _check_numbers(self, positive=("num_keyframes", "max_features", "ratio"))
 
 
@@ -137,12 +138,8 @@ class GeometricPairConfig:
     """Joint choice: a camera's geometric pairs are used only if its offset beats the best choice that moves it against every other camera (by more than 3 frames) by this much summed vote z-score."""
     joint_filter_descriptor: bool = True
     """Joint choice: keep only the descriptor pairs that are epipolar-consistent (tau, min_inlier_share, min_frames) at the joint Δ (for unsure cameras too: at a wrong Δ few survive, and the pair is refused rather than wrong)."""
-    score: str = "fit"
-    """How a candidate's offsets are compared: fit (mean Sampson over its fitting moments) or truncated (mean of min(Sampson, tau²) over all its common moments, so that misfits count)."""
 
     def __post_init__(self) -> None:
-        if self.score not in ("fit", "truncated"):
-            raise ValueError(f"unknown geometric pair score {self.score!r}: use fit or truncated")
         _check_numbers(self)
 
 

@@ -31,8 +31,8 @@ import numba as nb
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from ..geometry.epipolar import fundamental_from_cameras
-from ..geometry.sampling import camera_at_frames, camera_between_frames
+from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
+from ..geometry.sampling import camera_at_frames, camera_between_frames, tracks_between_frames
 from ..geometry.timing import frame_brackets
 from ..types import CameraTrack, TrackPairs, VideoInfo
 from .config import GeometricPairConfig
@@ -89,7 +89,7 @@ def _line_a(xb, j, q, G, g):
 
 @nb.njit(parallel=True, cache=True)
 def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_share, max_band,
-                 min_sweep, qstep, truncated):
+                 min_sweep, qstep):
     """Per candidate: number of consistent offsets, best offset index, its mean Sampson (px²).
 
     xa (Na,Ta,2) is interpolated at τ_b + Δ_d via (k, w) (D,Tb); xb (Nb,Tb,2) read at its frames.
@@ -99,8 +99,7 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
     in b. The fitting moments must spread at least
     min_sweep px across b's epipolar lines. Candidates consistent at more than max_band offsets
     get best -1. Only every qstep-th frame of b is read (frame counts are of those). The best
-    offset has the least mean Sampson over the fitting moments, or with truncated the least mean
-    of min(Sampson, tau²) over all common moments (a misfit then counts against an offset).
+    offset has the least mean Sampson over the fitting moments.
     """
     C = cand_a.shape[0]
     D, Tb = k.shape
@@ -159,7 +158,6 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
             n = 0
             fit = 0
             acc = 0.0
-            acc_t = 0.0
             r0 = 0.0  # reference epipolar line in b through the first fitting point
             r1 = 0.0
             r2 = 0.0
@@ -177,7 +175,6 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
                 if np.isnan(r):
                     continue
                 n += 1
-                acc_t += min(r, tau2)
                 if r >= tau2:
                     if n - fit > max_miss:
                         break
@@ -200,7 +197,7 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
                 hi = max(hi, s)
             if n >= min_frames and fit >= min_share * n and hi - lo >= min_sweep:
                 n_cons[c] += 1
-                mean = acc_t / n if truncated else acc / fit
+                mean = acc / fit
                 if mean < best_res[c]:
                     best_res[c] = mean
                     best[c] = d
@@ -247,15 +244,10 @@ def _peaks(votes: np.ndarray, count: int, halfwidth: int) -> list[int]:
 
 def _per_frame_fundamentals(cam_a: CameraTrack, cam_b: CameraTrack, Tb: int) -> np.ndarray:
     """(Tb,3,3) G with x_aᵀ G[q] x_b = 0 at b's frame q (a static); NaN where b has no pose."""
-    q = np.arange(Tb)
     if cam_b.num_pose_frames not in (1, Tb):
         raise ValueError(f"camera b has {cam_b.num_pose_frames} poses for {Tb} frames")
-    Kb = cam_b.K_at(q)
-    pb = cam_b.pose_at(q)
-    G = np.stack([fundamental_from_cameras(cam_a.K, cam_a.cam_from_world, Kb[t], pb[t]) for t in q])
-    if cam_b.valid is not None:
-        G[~np.asarray(cam_b.valid, bool)] = np.nan
-    return G
+    b = camera_at_frames(cam_b, np.arange(Tb))  # NaN where b has no pose, and so is G
+    return fundamental_from_cameras(cam_a.K, cam_a.cam_from_world, b.K, b.cam_from_world)
 
 
 def _moving_fundamentals(cam_a: CameraTrack, cam_b: CameraTrack, k: np.ndarray,
@@ -342,7 +334,7 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
                                 np.ascontiguousarray(k), np.ascontiguousarray(w), tau * tau,
                                 cfg.min_frames, cfg.min_inlier_share,
                                 max(1, int(cfg.max_band_share * len(offsets))),
-                                cfg.min_sweep_tau * tau, qstep, cfg.score == "truncated")
+                                cfg.min_sweep_tau * tau, qstep)
     informative = best >= 0
     votes = np.bincount(best[informative], minlength=len(offsets)).astype(float)
     peaks = _peaks(votes, cfg.peaks, cfg.peak_halfwidth)
@@ -530,18 +522,9 @@ def consistent_at(info_a: VideoInfo, info_b: VideoInfo, cam_a: CameraTrack, cam_
     k, w = frame_brackets(info_a.timestamps_s, info_b.timestamps_s + delta_s)
     G = _moving_fundamentals(cam_a, cam_b, k[None], w[None])[0] if cam_a.is_moving else \
         _per_frame_fundamentals(cam_a, cam_b, xy_b.shape[1])  # (Tb,3,3)
-    kc = np.clip(k, 0, max(0, xy_a.shape[1] - 2))
-    kn = np.minimum(kc + 1, xy_a.shape[1] - 1)
-    xa = xy_a[index[:, 0]][:, kc] + w[None, :, None] * (xy_a[index[:, 0]][:, kn] - xy_a[index[:, 0]][:, kc])
-    xa[:, k < 0] = np.nan
-    xb = xy_b[index[:, 1]]
-    ha = np.concatenate([xa, np.ones(xa.shape[:-1] + (1,))], -1)
-    hb = np.concatenate([xb, np.ones(xb.shape[:-1] + (1,))], -1)
-    lb = np.einsum("tij,ptj->pti", G, hb)  # lines in a
-    la = np.einsum("tji,ptj->pti", G, ha)  # lines in b
-    num = np.einsum("pti,pti->pt", ha, lb)
+    xa = tracks_between_frames(xy_a, k, w, rows=index[:, 0])  # (P,Tb,2) a at b's moments
     with np.errstate(invalid="ignore", divide="ignore"):
-        d = np.abs(num) / np.sqrt(lb[..., 0] ** 2 + lb[..., 1] ** 2 + la[..., 0] ** 2 + la[..., 1] ** 2)
-        n = np.isfinite(d).sum(1)
-        fit = (d < tau_px).sum(1)
+        r = epipolar_residual(G, xa, xy_b[index[:, 1]], "sampson")  # (P,Tb) px², NaN: not both seen
+        n = np.isfinite(r).sum(1)
+        fit = (r < tau_px * tau_px).sum(1)
     return (n >= min_frames) & (fit >= min_share * np.maximum(n, 1))

