@@ -23,6 +23,7 @@ import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
 from ..errors import InputError
 from ..eval.metrics import evaluate_offsets
@@ -51,6 +52,7 @@ class TimingScene:
     moving: int = 1  # hand-held cameras among them
     variable_rate: int = 0  # static cameras with a variable frame rate
     same_length: bool = True  # every video lasts `seconds` (a fixed workload)
+    max_offset_s: float = 1.5  # start offsets drawn in ± this around cam0 (SceneConfig's default)
     seed: int = 0
 
     @property
@@ -62,7 +64,8 @@ class TimingScene:
         from ..synth.world import SceneConfig
         return SceneConfig(cameras=self.cameras, moving=self.moving, seconds=self.seconds,
                            same_length=self.same_length, width=self.width, height=self.height,
-                           fps=self.fps, variable_rate=self.variable_rate, seed=self.seed)
+                           fps=self.fps, variable_rate=self.variable_rate,
+                           max_offset_s=self.max_offset_s, seed=self.seed)
 
 
 # the bench's "rendered" scene (bench.videos.rendered_scene), as a load reference
@@ -101,6 +104,7 @@ def render(scene: TimingScene, workdir: Path, progress: bool = False) -> Path:
     cfg = scene.scene_config()
     folder = Path(workdir) / (f"timing_{scene.width}x{scene.height}_{scene.seconds:g}s_"
                               f"{scene.fps or 'mixed'}_c{scene.cameras}_s{scene.seed}"
+                              f"{'' if scene.max_offset_s == 1.5 else f'_o{scene.max_offset_s:g}'}"
                               f"{'' if scene.same_length else '_varlen'}")
     if not rendered_with(folder, cfg):
         render_scene(make_scene(cfg), folder, progress=progress)
@@ -143,8 +147,9 @@ def time_sync(folder: Path, out: Path, calibrated: bool, scene_label: str,
         cmd += ["--calib", str(folder / "calibration.json")]
     env = dict(os.environ)
     env["VS_INSPECT_RECORDINGS"] = str(out.parent / "recordings")  # never the caller's ./recordings
-    code, wall, cpu, rss_mb, err = _run_measured(cmd, env, timeout_s)
     result_path = out / "result.json"
+    result_path.unlink(missing_ok=True)  # an earlier run's result must not pass for this one's
+    code, wall, cpu, rss_mb, err = _run_measured(cmd, env, timeout_s)
     if not result_path.is_file():
         last = err.strip().splitlines()[-1] if err.strip() else "no message"
         raise InputError(f"sync wrote no result.json (exit {code}): {last}")
@@ -164,18 +169,24 @@ def _fmt(v: float | None, digits: int = 1) -> str:
     return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.{digits}f}"
 
 
-def format_table(rows: list[TimingRow]) -> str:
-    """A Markdown table, one row per run: stage seconds, the rest of the wall time (start-up,
+def table_header() -> str:
+    return "| " + " | ".join(COLUMNS) + " |\n|" + "---|" * len(COLUMNS)
+
+
+def table_line(r: TimingRow) -> str:
+    """One run as a Markdown table row: stage seconds, the rest of the wall time (start-up,
     recording, writing), wall, CPU, peak memory, resolved videos, errors and the target."""
-    lines = ["| " + " | ".join(COLUMNS) + " |", "|" + "---|" * len(COLUMNS)]
-    for r in rows:
-        staged = sum(r.stages_s.values())
-        target = "-" if r.met is None else f"{'met' if r.met else 'MISSED'} (<{r.target_s:g} s)"
-        cells = [r.scene, r.cameras] + [_fmt(r.stages_s.get(c)) for c, _ in STAGES] + [
-            _fmt(r.wall_s - staged), _fmt(r.wall_s), _fmt(r.cpu_s), _fmt(r.max_rss_mb, 0),
-            f"{r.resolved}/{r.videos}", _fmt(r.median_error_ms, 2), _fmt(r.max_error_ms, 2), target]
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+    staged = sum(r.stages_s.values())
+    target = "-" if r.met is None else f"{'met' if r.met else 'MISSED'} (<{r.target_s:g} s)"
+    cells = [r.scene, r.cameras] + [_fmt(r.stages_s.get(c)) for c, _ in STAGES] + [
+        _fmt(r.wall_s - staged), _fmt(r.wall_s), _fmt(r.cpu_s), _fmt(r.max_rss_mb, 0),
+        f"{r.resolved}/{r.videos}", _fmt(r.median_error_ms, 2), _fmt(r.max_error_ms, 2), target]
+    return "| " + " | ".join(cells) + " |"
+
+
+def format_table(rows: list[TimingRow]) -> str:
+    """A Markdown table, one row per run (table_line)."""
+    return "\n".join([table_header()] + [table_line(r) for r in rows])
 
 
 def ratios(rows: list[TimingRow], reference: list[TimingRow]) -> list[str]:
@@ -192,19 +203,26 @@ def ratios(rows: list[TimingRow], reference: list[TimingRow]) -> list[str]:
 def run_timing_bench(workdir: Path, scene: TimingScene = TimingScene(),
                      modes: tuple[str, ...] = ("estimated", "calibration"), with_reference: bool = False,
                      target_s: float = TARGET_S, extra_args: tuple[str, ...] = (),
-                     timeout_s: float | None = None, progress: bool = False
+                     timeout_s: float | None = None, progress: bool = False,
+                     on_row: Callable[[TimingRow], None] | None = None
                      ) -> tuple[list[TimingRow], list[TimingRow]]:
-    """(rows of the scene, rows of the reference scene or []) for every camera mode."""
+    """(rows of the scene, rows of the reference scene or []) for every camera mode; on_row is
+    called with each row as soon as its run ends (a long benchmark shows what it has)."""
+    def done(row: TimingRow) -> TimingRow:
+        if on_row is not None:
+            on_row(row)
+        return row
+
     for m in modes:
         if m not in ("estimated", "calibration"):
             raise InputError(f"unknown camera mode {m!r}: use estimated or calibration")
     workdir = Path(workdir)
     folder = render(scene, workdir, progress)
-    rows = [time_sync(folder, workdir / f"run_{m}", m == "calibration", scene.label, target_s,
-                      extra_args, timeout_s) for m in modes]
+    rows = [done(time_sync(folder, workdir / f"run_{m}", m == "calibration", scene.label, target_s,
+                           extra_args, timeout_s)) for m in modes]
     ref_rows = []
     if with_reference:
         ref_folder = render(REFERENCE_SCENE, workdir, progress)
-        ref_rows = [time_sync(ref_folder, workdir / f"ref_{m}", m == "calibration",
-                              REFERENCE_SCENE.label, None, extra_args, timeout_s) for m in modes]
+        ref_rows = [done(time_sync(ref_folder, workdir / f"ref_{m}", m == "calibration",
+                                   REFERENCE_SCENE.label, None, extra_args, timeout_s)) for m in modes]
     return rows, ref_rows

@@ -7,7 +7,7 @@ import argparse
 import tempfile
 from pathlib import Path
 
-from ..bench.timing import TARGET_S, TimingScene, format_table, ratios, run_timing_bench
+from ..bench.timing import TARGET_S, TimingScene, ratios, run_timing_bench, table_header, table_line
 from ._common import positive_int
 
 
@@ -38,6 +38,8 @@ def register(sub) -> None:
     p.add_argument("--seconds", type=_positive_float, default=d.seconds, help="length of every video")
     p.add_argument("--fps", type=float, default=d.fps,
                    help="frame rate of every camera; 0 = drawn per camera from 24-60")
+    p.add_argument("--max-offset-s", type=float, default=d.max_offset_s,
+                   help="start offsets are drawn in ± this around cam0")
     p.add_argument("--seed", type=int, default=d.seed, help="seed of the scene")
     p.add_argument("--cameras", nargs="+", choices=("estimated", "calibration"),
                    default=["estimated", "calibration"], help="camera modes to time")
@@ -59,16 +61,20 @@ def run(args: argparse.Namespace) -> int:
     import shlex
 
     scene = TimingScene(width=args.width, height=args.height, seconds=args.seconds,
-                        fps=args.fps or None, seed=args.seed)
+                        fps=args.fps or None, max_offset_s=args.max_offset_s, seed=args.seed)
     extra = tuple(shlex.split(args.sync_args))
+    print(table_header(), flush=True)
+
+    def show(row) -> None:  # each run's line as soon as it ends
+        print(table_line(row), flush=True)
+
     if args.workdir is not None:
         rows, ref = run_timing_bench(args.workdir, scene, tuple(args.cameras), args.reference,
-                                     args.target_s, extra, args.timeout_s)
+                                     args.target_s, extra, args.timeout_s, on_row=show)
     else:
         with tempfile.TemporaryDirectory(prefix="vs-inspect-timing-") as tmp:
             rows, ref = run_timing_bench(Path(tmp), scene, tuple(args.cameras), args.reference,
-                                         args.target_s, extra, args.timeout_s)
-    print(format_table(rows + ref))
+                                         args.target_s, extra, args.timeout_s, on_row=show)
     for line in ratios(rows, ref):
         print(line)
     return 0
