@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
-
 import cv2
+import numpy as np
 
 from vs_inspect.cues import cameras
 from vs_inspect.cues.config import CameraConfig

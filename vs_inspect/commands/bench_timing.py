@@ -7,7 +7,14 @@ import argparse
 import tempfile
 from pathlib import Path
 
-from ..bench.timing import TARGET_S, TimingScene, ratios, run_timing_bench, table_header, table_line
+from ..bench.timing import (
+    TARGET_S,
+    TimingScene,
+    ratios,
+    run_timing_bench,
+    table_header,
+    table_line,
+)
 from ._common import positive_int
 
 
