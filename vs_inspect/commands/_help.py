@@ -19,6 +19,13 @@ EXAMPLES: dict[str, list[tuple[str, str]]] = {
                      "local against Ray on small rigs"),
                     ("vs-inspect bench-scale --engines local --cameras 64 --pairs knn:8",
                      "one engine, one selection")],
+    "bench-timing": [("vs-inspect bench-timing --reference",
+                      "4 x 10 s 720p rendered videos through sync (estimated cameras and with the "
+                      "calibration) against the 3-minute target, with the 480x360 reference"),
+                     ("vs-inspect bench-timing --cameras calibration --workdir /tmp/timing",
+                      "one mode; the rendered scene kept for the next run"),
+                     ("vs-inspect bench-timing --width 160 --height 120 --seconds 2",
+                      "a tiny scene: the table in about a minute")],
     "bench-energy": [("vs-inspect bench-energy", "speed of the landscape against plain numpy")],
     "calibrate-board": [(("vs-inspect calibrate-board cam0.mp4 cam1.mp4 --board charuco.toml "
                           "--out calib.json"), "the rig's cameras; then sync --calib calib.json")],

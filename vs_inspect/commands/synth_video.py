@@ -25,6 +25,8 @@ def register(sub) -> None:
     p.add_argument("--cameras", type=int, default=d.cameras, help="number of cameras (videos)")
     p.add_argument("--moving", type=int, default=d.moving, help="how many are hand-held")
     p.add_argument("--seconds", type=float, default=d.seconds, help="length of the reference video")
+    p.add_argument("--same-length", action="store_true",
+                   help="every video lasts --seconds (else the others get 0.75-1.0 of it)")
     p.add_argument("--seed", type=int, default=d.seed, help="seed of everything random")
     p.add_argument("--width", type=int, default=d.width, help="image width (px)")
     p.add_argument("--height", type=int, default=d.height, help="image height (px)")
@@ -55,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
     if is_complete(out) and not args.force:
         raise InputError(f"{out} already holds a finished scene; pass --force to replace it")
     cfg = SceneConfig(cameras=args.cameras, moving=args.moving, seconds=args.seconds,
+                      same_length=args.same_length,
                       width=args.width, height=args.height, fps=args.fps or None,
                       max_offset_s=args.max_offset_s, variable_rate=args.variable_rate,
                       little_motion=args.little_motion, motion_blur=args.motion_blur,

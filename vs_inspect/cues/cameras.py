@@ -26,6 +26,10 @@ from .learned import LEARNED_FEATURES, learned_unavailable, xfeat_available
 
 log = logging.getLogger(__name__)
 
+# threads of SIFT extraction and matching (the mapper stays on one: with several it registered
+# different cameras from run to run); -1 = all cores
+SFM_THREADS = -1
+
 
 @dataclass(frozen=True)
 class EstimatedCamera:
@@ -139,15 +143,21 @@ def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool
 
     ext = pycolmap.FeatureExtractionOptions()
     ext.sift.max_num_features = cfg.max_features
-    ext.num_threads = 1
+    # images are numbered first, in name order: extraction threads finish in any order, and the
+    # mapper's result depends on the numbering. Each image's features and each pair's matches
+    # and (seeded) verification do not depend on the thread, so the database is the same with
+    # any number of threads (checked in tests/cues/test_cameras.py)
+    ext.num_threads = SFM_THREADS
     ext.sift.estimate_affine_shape = few  # wide baselines between few views: affine + DSP SIFT
     ext.sift.domain_size_pooling = few
+    pycolmap.Database.open(db).close()  # import_images needs the file to exist
+    pycolmap.import_images(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER, options=reader)
     pycolmap.extract_features(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER,
                               reader_options=reader, extraction_options=ext,
                               device=pycolmap.Device.cpu)
     mopt = pycolmap.FeatureMatchingOptions()
     mopt.guided_matching = True
-    mopt.num_threads = 1
+    mopt.num_threads = SFM_THREADS
     pycolmap.match_exhaustive(db, matching_options=mopt, verification_options=_verification(seed),
                               device=pycolmap.Device.cpu)
 

@@ -60,13 +60,21 @@ def _sfm_indices(T: int, moving: bool, cfg) -> np.ndarray:
 
 
 def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) -> _VideoCues:
-    from ..io.video import iter_frames, read_frames
+    from ..io.video import downscale, iter_frames
 
     info = src.info
     t0 = time.perf_counter()
     grey = []
     sink_at = set(np.linspace(0, info.num_frames - 1, max(1, cfg.sink_frames)).round().astype(int).tolist())
-    for k, img in iter_frames(src, max_side=cfg.max_side):
+    # the frames camera estimation may need (static or moving: decided after decoding) are kept
+    # from this one pass instead of decoding the video a second time
+    sfm_keep = (set(_sfm_indices(info.num_frames, False, cfg).tolist())
+                | set(_sfm_indices(info.num_frames, True, cfg).tolist())) if need_sfm else set()
+    sfm_images: dict[int, np.ndarray] = {}
+    for k, full in iter_frames(src, max_side=None):
+        if k in sfm_keep:
+            sfm_images[k] = downscale(full, cfg.camera.max_side)
+        img = downscale(full, cfg.max_side)
         grey.append(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY))
         if k in sink_at and sink.options is not None:
             sink.video_frame(info.name, k, record_frame(img, sink.options))
@@ -99,7 +107,8 @@ def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) 
     if need_sfm:
         t0 = time.perf_counter()
         idx = _sfm_indices(info.num_frames, mode == "moving", cfg)
-        imgs = read_frames(src, idx, max_side=cfg.camera.max_side)
+        imgs = [sfm_images[k] for k in idx.tolist()]
+        del sfm_images
         masks = []
         for k, im in zip(idx, imgs):
             if cfg.camera.mask_moving:

@@ -259,6 +259,12 @@ def _scaled_size(w: int, h: int, max_side: int | None) -> tuple[int, int] | None
     return max(1, round(w * s)), max(1, round(h * s))
 
 
+def downscale(img: np.ndarray, max_side: int | None) -> np.ndarray:
+    """img (H,W[,3]) downscaled (INTER_AREA) so that its longer side is at most max_side px, as
+    iter_frames and read_frames return it (contiguous; unchanged when already small enough)."""
+    return _finish(img, max_side)
+
+
 def _finish(img: np.ndarray, max_side: int | None) -> np.ndarray:
     size = _scaled_size(img.shape[1], img.shape[0], max_side)
     if size is not None:

@@ -57,7 +57,9 @@ def rendered_with(folder: Path, config) -> bool:
         cached = json.loads((Path(folder) / "scene.json").read_text()).get("config")
     except (OSError, ValueError):
         return False
-    return cached == json.loads(json.dumps(asdict(config)))
+    # a scene cached before a SceneConfig field existed was rendered with its default
+    defaults = json.loads(json.dumps(asdict(type(config)())))
+    return isinstance(cached, dict) and {**defaults, **cached} == json.loads(json.dumps(asdict(config)))
 
 
 def apply_look(rgb: np.ndarray, cam: CameraSpec) -> np.ndarray:

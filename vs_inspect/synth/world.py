@@ -561,7 +561,9 @@ class SceneConfig:
     moving: int = 1
     """How many of them are hand-held (smooth walk plus shake)."""
     seconds: float = 8.0
-    """Length of the reference video (cam0); the others get 0.75-1.0 of it."""
+    """Length of the reference video (cam0); the others get 0.75-1.0 of it (unless same_length)."""
+    same_length: bool = False
+    """Every camera records `seconds` (a fixed workload, e.g. for timing)."""
     width: int = 640
     """Image width of every camera (px)."""
     height: int = 480
@@ -680,6 +682,8 @@ def make_scene(cfg: SceneConfig = SceneConfig()) -> Scene:
         W, H = cfg.width, cfg.height
         fps = float(cfg.fps) if cfg.fps else float(rng.choice([24.0, 25.0, 30.0, 50.0, 60.0]))
         seconds = cfg.seconds if i == 0 else cfg.seconds * rng.uniform(0.75, 1.0)
+        if cfg.same_length:  # drawn above all the same, so the rest of the scene does not change
+            seconds = cfg.seconds
         offset = 0.0 if i == 0 else float(rng.uniform(-cfg.max_offset_s, cfg.max_offset_s))
         variable = i in vfr_idx
         ts = _timestamps(rng, seconds, fps, variable)

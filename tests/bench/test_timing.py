@@ -1,0 +1,48 @@
+"""bench-timing on a tiny rendered scene: a real render, real `sync` processes, the table."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+from vs_inspect.bench.timing import COLUMNS, STAGES, TimingRow, format_table
+from vs_inspect.cli import main
+
+
+def _cells(line: str) -> list[str]:
+    return [c.strip() for c in line.strip().strip("|").split("|")]
+
+
+@pytest.mark.timeout(1200)  # a render and a sync process: minutes on a loaded 2-core machine
+def test_tiny_scene_table_and_offsets(tmp_path, capsys):
+    # with the calibration: the table and its bookkeeping are the point, not camera estimation
+    # on small images (its rows are the same code path). 320x240 and 3 s with offsets in ±0.4 s
+    # is about the smallest scene that resolves: at 160x120 (2 s) the views share 0-3 track pairs
+    code = main(["bench-timing", "--width", "320", "--height", "240", "--seconds", "3",
+                 "--max-offset-s", "0.4", "--cameras", "calibration", "--workdir", str(tmp_path),
+                 "--timeout-s", "1000"])
+    assert code == 0
+    lines = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("|")]
+    assert _cells(lines[0]) == list(COLUMNS)
+    rows = [dict(zip(COLUMNS, _cells(ln))) for ln in lines[2:]]
+    assert [r["cameras"] for r in rows] == ["calibration"]
+    for r in rows:
+        assert r["scene"] == "4x3s 320x240 30fps"
+        assert float(r["wall_s"]) > 0 and float(r["cpu_s"]) > 0 and float(r["rss_mb"]) > 50
+        assert float(r["decode"]) >= 0 and float(r["stage1"]) >= 0
+        assert r["target"].split()[0] in ("met", "MISSED")
+    offsets = json.loads((tmp_path / "run_calibration" / "result.json").read_text())["offsets_s"]
+    assert len(offsets) == 4 and all(v is not None and math.isfinite(v) for v in offsets.values()), offsets
+    assert rows[0]["resolved"] == "4/4" and 0 <= float(rows[0]["max_ms"]) < 100  # measured: 12 ms
+
+
+def test_target_needs_every_video_and_the_time():
+    def row(wall, resolved):
+        return TimingRow("s", "estimated", {c: 1.0 for c, _ in STAGES}, 10.0, wall, 5.0, 300.0,
+                         resolved, 4, 1.0, 2.0)
+    assert row(179.0, 4).met and not row(181.0, 4).met and not row(10.0, 3).met
+    table = format_table([row(179.0, 4), row(181.0, 3)]).splitlines()
+    assert _cells(table[2])[-1].startswith("met") and _cells(table[3])[-1].startswith("MISSED")
+    assert _cells(table[2])[COLUMNS.index("other")] == f"{179.0 - len(STAGES):.1f}"

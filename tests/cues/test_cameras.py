@@ -1,0 +1,69 @@
+"""COLMAP's SIFT database does not depend on the number of threads (cues/cameras.SFM_THREADS)."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from vs_inspect.cues import cameras
+from vs_inspect.cues.config import CameraConfig
+from vs_inspect.signals import import_pycolmap
+
+from .scenes import texture
+
+
+def _write_images(folder, masks):
+    """Two 'videos' of one textured wall seen from shifted, slightly zoomed viewpoints; v1's
+    masks (COLMAP's <image>.png) keep features off the right half of its images."""
+    wall = cv2.cvtColor(texture(400, 700, seed=5), cv2.COLOR_GRAY2BGR)
+    for v, (x0, zoom) in enumerate(((0, 1.0), (60, 1.05))):
+        (folder / f"v{v}").mkdir(parents=True)
+        (masks / f"v{v}").mkdir(parents=True)
+        for k in range(4):
+            crop = wall[20:300, x0 + 40 * k: x0 + 40 * k + 360]
+            img = cv2.resize(crop, None, fx=zoom, fy=zoom)[:240, :320]
+            cv2.imwrite(str(folder / f"v{v}" / f"{k:06d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, 95])
+            mask = np.full(img.shape[:2], 255, np.uint8)
+            if v == 1:
+                mask[:, 160:] = 0
+            cv2.imwrite(str(masks / f"v{v}" / f"{k:06d}.jpg.png"), mask)
+
+
+def _database(tmp, threads: int, monkeypatch) -> dict:
+    pycolmap = import_pycolmap()
+    monkeypatch.setattr(cameras, "SFM_THREADS", threads)
+    db = tmp / f"db{threads}.db"
+    reader = pycolmap.ImageReaderOptions()
+    reader.camera_model = "SIMPLE_RADIAL"
+    reader.mask_path = str(tmp / "masks")
+    cameras._sift_database(db, tmp / "images", reader, CameraConfig(max_features=1024), few=False, seed=0)
+    d = pycolmap.Database.open(db)
+    try:
+        images = {im.image_id: im.name for im in d.read_all_images()}
+        feats = {n: (np.asarray(d.read_keypoints(i)), np.asarray(d.read_descriptors(i).data))
+                 for i, n in images.items()}
+        pairs = {pid: np.asarray(m) for pid, m in zip(*d.read_all_matches())}
+        verified = {pid: np.asarray(g.inlier_matches) for pid, g in zip(*d.read_two_view_geometries())}
+    finally:
+        d.close()
+    return {"images": images, "features": feats, "matches": pairs, "verified": verified}
+
+
+def test_sift_database_is_the_same_with_any_number_of_threads(tmp_path, monkeypatch):
+    _write_images(tmp_path / "images", tmp_path / "masks")
+    one, two = _database(tmp_path, 1, monkeypatch), _database(tmp_path, 2, monkeypatch)
+    assert one["images"] == two["images"]  # numbered in name order whatever thread finishes first
+    assert sorted(one["images"].values()) == list(one["images"].values())
+    assert all(len(one["features"][n][0]) > 100 for n in one["images"].values())
+    # the masks still apply to images numbered before extraction (COLMAP: pixel centres at +0.5)
+    assert all((one["features"][n][0][:, 0] < 161).all() for n in one["images"].values() if n.startswith("v1/"))
+    assert any((one["features"][n][0][:, 0] > 200).any() for n in one["images"].values() if n.startswith("v0/"))
+    for n in one["images"].values():
+        np.testing.assert_array_equal(one["features"][n][0], two["features"][n][0])
+        np.testing.assert_array_equal(one["features"][n][1], two["features"][n][1])
+    assert one["matches"].keys() == two["matches"].keys() and len(one["verified"]) > 0
+    for pid in one["matches"]:
+        np.testing.assert_array_equal(one["matches"][pid], two["matches"][pid])
+    assert one["verified"].keys() == two["verified"].keys()
+    for pid in one["verified"]:
+        np.testing.assert_array_equal(one["verified"][pid], two["verified"][pid])
