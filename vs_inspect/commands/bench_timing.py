@@ -15,7 +15,7 @@ from ..bench.timing import (
     table_header,
     table_line,
 )
-from ._common import positive_int
+from .synth_video import add_image_and_clock_options
 
 
 def _positive_float(text: str) -> float:
@@ -40,13 +40,8 @@ def register(sub) -> None:
                                    "(start-up, recording, writing), wall and CPU time and peak "
                                    "memory of the process, the offsets' errors against the truth, "
                                    "and whether the run met the target. Rendering is not timed.")
-    p.add_argument("--width", type=positive_int, default=d.width, help="image width (px)")
-    p.add_argument("--height", type=positive_int, default=d.height, help="image height (px)")
+    add_image_and_clock_options(p, d)
     p.add_argument("--seconds", type=_positive_float, default=d.seconds, help="length of every video")
-    p.add_argument("--fps", type=float, default=d.fps,
-                   help="frame rate of every camera; 0 = drawn per camera from 24-60")
-    p.add_argument("--max-offset-s", type=float, default=d.max_offset_s,
-                   help="start offsets are drawn in ± this around cam0")
     p.add_argument("--seed", type=int, default=d.seed, help="seed of the scene")
     p.add_argument("--cameras", nargs="+", choices=("estimated", "calibration"),
                    default=["estimated", "calibration"], help="camera modes to time")

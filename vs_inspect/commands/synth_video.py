@@ -9,7 +9,18 @@ from pathlib import Path
 from ..errors import InputError
 from ..synth.videos import is_complete, render_scene
 from ..synth.world import SceneConfig, make_scene
-from ._common import add_force_option
+from ._common import add_force_option, positive_int
+
+
+def add_image_and_clock_options(p: argparse.ArgumentParser, d) -> None:
+    """--width, --height, --fps, --max-offset-s of a rendered scene (synth-video, bench-timing),
+    with d's values as defaults (a SceneConfig or a bench.timing.TimingScene)."""
+    p.add_argument("--width", type=positive_int, default=d.width, help="image width (px)")
+    p.add_argument("--height", type=positive_int, default=d.height, help="image height (px)")
+    p.add_argument("--fps", type=float, default=d.fps,
+                   help="frame rate of every camera; 0 = drawn per camera from 24-60")
+    p.add_argument("--max-offset-s", type=float, default=d.max_offset_s,
+                   help="start offsets are drawn in ± this around cam0")
 
 
 def register(sub) -> None:
@@ -28,12 +39,7 @@ def register(sub) -> None:
     p.add_argument("--same-length", action="store_true",
                    help="every video lasts --seconds (else the others get 0.75-1.0 of it)")
     p.add_argument("--seed", type=int, default=d.seed, help="seed of everything random")
-    p.add_argument("--width", type=int, default=d.width, help="image width (px)")
-    p.add_argument("--height", type=int, default=d.height, help="image height (px)")
-    p.add_argument("--fps", type=float, default=d.fps,
-                   help="frame rate of every camera; 0 = drawn per camera from 24-60")
-    p.add_argument("--max-offset-s", type=float, default=d.max_offset_s,
-                   help="start offsets are drawn in ± this around cam0")
+    add_image_and_clock_options(p, d)
     p.add_argument("--variable-rate", type=int, default=d.variable_rate,
                    help="static cameras with a variable frame rate")
     p.add_argument("--little-motion", type=int, default=d.little_motion,
