@@ -15,6 +15,10 @@ os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 os.environ.setdefault("NUMBA_CACHE_DIR", str(REPO / ".cache" / "numba"))
 os.environ.setdefault("XDG_CONFIG_HOME", str(REPO / ".cache" / "xdg-config"))
 os.environ.setdefault("XDG_DATA_HOME", str(REPO / ".cache" / "xdg-data"))
+# whichever test imports ray first: no usage statistics, nodes on 127.0.0.1 (ray reads these at
+# import, and tests/test_engine.py's two-node cluster needs the second one)
+os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
+os.environ.setdefault("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")
 # sync/demo write recordings/<run>.rrd by default; keep the tests' ones out of the checkout
 os.environ.setdefault("VS_INSPECT_RECORDINGS", tempfile.mkdtemp(prefix="vs-inspect-test-recordings-"))
 
