@@ -1,7 +1,7 @@
 """How right Stage 0's cross-view track pairs are on a rendered scene (true cameras and offsets
 known), and what Stage 1 + 2 make of them.
 
-    # the bench's rendered scene (3 static + 1 hand-held camera, 5 s, 480x360)
+    # the bench's rendered scene (3 static + 1 hand-held camera, 5 s, 480x360); --seed N another one
     PYTHONPATH=. python examples/pairing_truth.py rendered --workdir /tmp/vs_scenes
     # the demo's scene (8 s, 640x480, hand-held cam3), each way of choosing geometric pairs
     PYTHONPATH=. python examples/pairing_truth.py demo --geometric triangles
@@ -40,9 +40,10 @@ def main() -> None:
     ap.add_argument("--workdir", type=Path, default=Path("/tmp/vs_pairing_scenes"),
                     help="render into (and reuse finished renderings from) this folder")
     ap.add_argument("--geometric", choices=["joint", "triangles"], default="joint")
+    ap.add_argument("--seed", type=int, default=0, help="the rendered scene's seed (bench: 0)")
     args = ap.parse_args()
-    cfg = RENDERED if args.scene == "rendered" else DEMO_SCENE
-    folder = args.workdir / args.scene
+    cfg = dataclasses.replace(RENDERED, seed=args.seed) if args.scene == "rendered" else DEMO_SCENE
+    folder = args.workdir / (f"rendered_s{args.seed}" if args.scene == "rendered" and args.seed else args.scene)
     if not rendered_with(folder, cfg):
         render_scene(make_scene(cfg), folder, progress=False)
     truth = json.loads((folder / "gt.json").read_text())["offsets_s"]

@@ -84,7 +84,8 @@ def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) 
     timings["decode_s"] = timings.get("decode_s", 0.0) + time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    instances, mode, bg = moving_regions(frames, cfg.motion, cfg.camera_motion.get(info.name))
+    instances, mode, bg = moving_regions(frames, cfg.motion, cfg.camera_motion.get(info.name),
+                                             info.frame_interval_s)
     moving_fraction = float((instances > 0).mean())
     if sink.options is not None:
         for k in sorted(sink_at):

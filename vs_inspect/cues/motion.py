@@ -103,12 +103,23 @@ def _warp_to(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, np.ndarray] 
     return warped, valid
 
 
-def moving_camera_masks(frames: np.ndarray, cfg: MotionConfig) -> np.ndarray:
+def neighbour_gap(cfg: MotionConfig, frame_interval_s: float | None = None) -> int:
+    """d, in frames, between a moving camera's frame and the neighbours it is compared with: at
+    least cfg.neighbour_frames and, when the frame spacing is known, cfg.neighbour_s."""
+    d = max(1, cfg.neighbour_frames)
+    if frame_interval_s is not None and frame_interval_s > 0:
+        d = max(d, int(round(cfg.neighbour_s / frame_interval_s)))
+    return d
+
+
+def moving_camera_masks(frames: np.ndarray, cfg: MotionConfig,
+                        frame_interval_s: float | None = None) -> np.ndarray:
     """(T,H,W) bool moving regions of a moving camera: residual difference after compensating the
-    camera's own motion (a homography to the neighbours t-d and t+d, min of the two differences)."""
+    camera's own motion (a homography to the neighbours t-d and t+d, min of the two differences;
+    d from neighbour_gap)."""
     _check_frames(frames)
     T = frames.shape[0]
-    d = max(1, cfg.neighbour_frames)
+    d = neighbour_gap(cfg, frame_interval_s)
     blur = np.stack([cv2.GaussianBlur(f, (5, 5), 0) for f in frames])
     masks = np.zeros(frames.shape, bool)
     for t in range(T):
@@ -187,10 +198,13 @@ def link_instances(masks: np.ndarray, cfg: MotionConfig) -> np.ndarray:
     return remap[labels].astype(np.int16) if len(uniq) < 32000 else remap[labels]
 
 
-def moving_regions(frames: np.ndarray, cfg: MotionConfig, camera_motion: str | None = None):
-    """(instances (T,H,W) int32, camera_motion, background_motion_px) for one video."""
+def moving_regions(frames: np.ndarray, cfg: MotionConfig, camera_motion: str | None = None,
+                   frame_interval_s: float | None = None):
+    """(instances (T,H,W) int32, camera_motion, background_motion_px) for one video.
+    frame_interval_s: its typical frame spacing (s), when known (a moving camera's neighbours)."""
     mode, bg = decide_camera_motion(frames, cfg)
     if camera_motion in ("static", "moving"):
         mode = camera_motion
-    masks = static_camera_masks(frames, cfg) if mode == "static" else moving_camera_masks(frames, cfg)
+    masks = static_camera_masks(frames, cfg) if mode == "static" else \
+        moving_camera_masks(frames, cfg, frame_interval_s)
     return link_instances(masks, cfg), mode, bg
