@@ -136,8 +136,8 @@ class GeometricPairConfig:
     """Grid steps either side of a peak that count as supporting it."""
     joint: bool = True
     """With three or more cameras, choose every camera's offset at once from all pairs' vote histograms (geometric_pairs.joint_offsets) and keep each pair's supporters of the implied Δ, instead of closing triangles of each pair's top peaks."""
-    joint_min_margin: float = 3.0
-    """Joint choice: a camera's geometric pairs are used only if its offset beats the best choice that moves it against every other camera (by more than 3 frames) by this much summed vote z-score."""
+    joint_min_margin: float = 5.0
+    """Joint choice: a camera's geometric pairs are used only if its offset beats the best choice that moves it against every other camera (by more than 3 frames) by this much summed vote z-score. Measured (README, joint pairing): right cameras had 5.7-850 (one right camera 1.3, refused), the demo's wrong cam2 1.7, 3.0 and 3.3 (52-252 ms off) under three versions of Stage 0; 3 let the last two through."""
     joint_filter_descriptor: bool = True
     """Joint choice: keep only the descriptor pairs that are epipolar-consistent (tau, min_inlier_share, min_frames) at the joint Δ (for unsure cameras too: at a wrong Δ few survive, and the pair is refused rather than wrong)."""
 
