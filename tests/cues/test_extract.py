@@ -38,7 +38,7 @@ def _run(moving_b: bool, sure_c: bool):
     offs = {"a": 0.0, "b": 0.4, "c": 1.0}
     found = {(u, v): (None, _stats(offs[v] - offs[u])) for u, v in (("a", "b"), ("a", "c"), ("b", "c"))}
     pairs = {k: TrackPairs(*k, np.zeros((0, 2), np.int64)) for k in found}
-    joint = JointChoice(offs, 10.0, {"a": 5.0, "b": 5.0, "c": 5.0 if sure_c else 1.0}, 0.3)
+    joint = JointChoice(offs, 10.0, {"a": 5.0, "b": 5.0, "c": 5.0 if sure_c else 1.0})
     sure = {"a": True, "b": True, "c": sure_c}
     sink, stats = _Events(), {"pairs": {}}
     out = _add_joint_pairs(pairs, found, joint, sure, cams, {}, {}, CueConfig(), stats, sink)

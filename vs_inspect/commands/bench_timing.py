@@ -15,17 +15,8 @@ from ..bench.timing import (
     table_header,
     table_line,
 )
+from ._common import positive_float
 from .synth_video import add_image_and_clock_options
-
-
-def _positive_float(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not v > 0:
-        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
-    return v
 
 
 def register(sub) -> None:
@@ -41,7 +32,7 @@ def register(sub) -> None:
                                    "memory of the process, the offsets' errors against the truth, "
                                    "and whether the run met the target. Rendering is not timed.")
     add_image_and_clock_options(p, d)
-    p.add_argument("--seconds", type=_positive_float, default=d.seconds, help="length of every video")
+    p.add_argument("--seconds", type=positive_float, default=d.seconds, help="length of every video")
     p.add_argument("--seed", type=int, default=d.seed, help="seed of the scene")
     p.add_argument("--cameras", nargs="+", choices=("estimated", "calibration"),
                    default=["estimated", "calibration"], help="camera modes to time")
@@ -49,11 +40,11 @@ def register(sub) -> None:
                    help="also time the bench's 480x360 5 s rendered scene in the same run and "
                         "print each run's wall time as a multiple of it (a shared machine's load "
                         "changes the seconds more than the ratio)")
-    p.add_argument("--target-s", type=_positive_float, default=TARGET_S, help="the time target (s)")
+    p.add_argument("--target-s", type=positive_float, default=TARGET_S, help="the time target (s)")
     p.add_argument("--workdir", type=Path, default=None,
                    help="keep the rendered scenes and runs here (reused when rendered with the "
                         "same settings; default: a temporary folder, removed at the end)")
-    p.add_argument("--timeout-s", type=_positive_float, default=None, help="give up on a run after this long")
+    p.add_argument("--timeout-s", type=positive_float, default=None, help="give up on a run after this long")
     p.add_argument("--sync-args", default="", metavar="'ARGS'",
                    help="extra options passed to every sync run, e.g. '--max-side 480'")
     p.set_defaults(func=run)

@@ -25,6 +25,7 @@ from ..errors import InputError, NoUsableVideos
 from ..record.sink import NullSink, Sink
 from ..types import CameraTrack, CueBundle, CueStats, TrackPairs, Tracks, VideoCueStats, VideoInfo
 from .config import CueConfig
+from .learned import LEARNED_FEATURES
 from .matching import (KeyframeFeatures, extract_keyframe_features, keyframe_indices,
                        match_tracks)
 from .motion import moving_regions
@@ -129,7 +130,9 @@ def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) 
         sfm = (idx, imgs, masks)
         timings["sfm_frames_s"] = timings.get("sfm_frames_s", 0.0) + time.perf_counter() - t0
     frame_feats = None
-    if need_sfm and mode == "moving" and cfg.camera.register_every > 0:
+    # only a SIFT reconstruction registers frames (the database holds SIFT descriptors)
+    if need_sfm and mode == "moving" and cfg.camera.register_every > 0 \
+            and cfg.camera.features not in LEARNED_FEATURES:
         # the features to register each frame with (registration.py), found here where the
         # frames are decoded
         from .registration import frame_features
@@ -397,14 +400,9 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
             index = index[gs.pair_peak == pick]
         elif status == "inconsistent":
             index = index[:0]
-        tp = pairs[(a, b)]
-        w_desc = tp.weight if tp.weight is not None else np.ones(len(tp.index))
-        have = {tuple(x) for x in tp.index.tolist()}
-        new = np.array([x for x in index.tolist() if tuple(x) not in have], np.int64).reshape(-1, 2)
-        out[(a, b)] = TrackPairs(a, b, np.concatenate([tp.index, new]),
-                                 np.concatenate([w_desc, np.ones(len(new))]))
+        out[(a, b)], n_new = _merge_pairs(pairs[(a, b)], index)
         info = {"geometric_candidates": gs.candidates, "geometric_informative": gs.informative,
-                "geometric_pairs": int(len(index)), "geometric_new": int(len(new)),
+                "geometric_pairs": int(len(index)), "geometric_new": n_new,
                 "geometric_peaks_s": [round(p, 4) for p in gs.peaks_s],
                 "geometric_peak_votes": list(gs.peak_votes),
                 "geometric_chosen_peak_s": round(gs.peaks_s[pick], 4) if pick is not None else None}
@@ -413,7 +411,7 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
                  if pick is not None else
                  f"vote peaks at {', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s")
         sink.stage_event("cues", f"{a}__{b}: {len(index)} track pairs from epipolar consistency ({which})")
-        log.info("%s__%s: %d geometric track pairs (%d new), %s", a, b, len(index), len(new), which)
+        log.info("%s__%s: %d geometric track pairs (%d new), %s", a, b, len(index), n_new, which)
     return out
 
 
@@ -453,17 +451,18 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
     # pair nothing checks it (fencing1 with looser moving regions: aria01-aria03 at +2.4 s, truth
     # +1.5 s, accepted as a clear minimum from its own supporters)
     triangle = sum(sure.values()) >= 3
-    unconfirmed = sorted(f"{a}__{b}" for (a, b) in found if sure.get(a) and sure.get(b) and not triangle
-                         and cameras[a].is_moving and cameras[b].is_moving)
+    unconfirmed = {(a, b) for (a, b) in found if sure.get(a) and sure.get(b) and not triangle
+                   and cameras[a].is_moving and cameras[b].is_moving}
     if unconfirmed:
-        msg = (f"geometric track pairs not used for {', '.join(unconfirmed)}: both cameras move and no "
+        names = ", ".join(sorted(f"{a}__{b}" for a, b in unconfirmed))
+        msg = (f"geometric track pairs not used for {names}: both cameras move and no "
                f"third camera's offset is sure, so no triangle confirms their Δ")
         sink.stage_event("cues", msg)
         log.warning(msg)
     out = dict(pairs)
     for (a, b), (_, gs) in found.items():
         delta = joint.offsets_s[b] - joint.offsets_s[a]
-        both = bool(sure.get(a) and sure.get(b)) and f"{a}__{b}" not in unconfirmed
+        both = bool(sure.get(a) and sure.get(b)) and (a, b) not in unconfirmed
         index = supporters(gs, delta) if both else np.zeros((0, 2), np.int64)
         desc = pairs[(a, b)]
         n_desc = len(desc.index)

@@ -410,7 +410,6 @@ class JointChoice:
     offsets_s: dict[str, float]  # camera -> offset_s (the first camera's is 0)
     score: float  # Σ over pairs of the vote z-score at the implied Δ_ab
     margin: dict[str, float]  # camera -> score lost by the best choice that moves it by > tol_s
-    tol_s: float
 
 
 def vote_z(st: GeometricPairStats) -> tuple[np.ndarray, np.ndarray]:
@@ -445,11 +444,7 @@ def joint_offsets(found: dict[tuple[str, str], GeometricPairStats], tol_s: float
     zs = {k: vote_z(st) for k, st in found.items()}
 
     def lookup(a: str, b: str, delta: np.ndarray) -> np.ndarray:
-        if (a, b) in zs:
-            offs, z = zs[(a, b)]
-        else:
-            offs, z = zs[(b, a)]
-            delta = -delta
+        offs, z = zs[(a, b)]  # called for the pairs of zs only
         i = np.clip(np.searchsorted(offs, delta), 1, max(1, len(offs) - 1))
         i = np.where(np.abs(offs[i] - delta) < np.abs(offs[i - 1] - delta), i, i - 1)
         inside = (delta >= offs[0] - 1e-9) & (delta <= offs[-1] + 1e-9)
@@ -492,8 +487,7 @@ def joint_offsets(found: dict[tuple[str, str], GeometricPairStats], tol_s: float
         rel = (combo - combo[:, c:c + 1]) - (combo[top] - combo[top, c])
         away = np.all(np.abs(np.delete(rel, c, axis=1)) > tol_s, axis=1)
         margin[n] = float(score[top] - score[away].max()) if away.any() else float("inf")
-    return JointChoice({n: float(combo[top, c]) for c, n in enumerate(names)}, float(score[top]),
-                       margin, tol_s)
+    return JointChoice({n: float(combo[top, c]) for c, n in enumerate(names)}, float(score[top]), margin)
 
 
 def supporters(st: GeometricPairStats, delta_s: float) -> np.ndarray:

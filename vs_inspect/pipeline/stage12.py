@@ -109,7 +109,7 @@ def is_pose_free_pair(bundle: CueBundle, a: str, b: str) -> bool:
     ca, cb = bundle.cameras[a], bundle.cameras[b]
     if ca.is_moving or cb.is_moving:
         return False
-    centre = [-c.cam_from_world[:3, :3].T @ c.cam_from_world[:3, 3] for c in (ca, cb)]
+    centre = [c.centers()[0] for c in (ca, cb)]
     return bool(np.linalg.norm(centre[0] - centre[1]) < 1e-9)
 
 
