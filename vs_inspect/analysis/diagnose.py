@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from ..eval.metrics import offset_errors_ms
-from ..types import RunResult, SyncResult, VideoInfo, frame_length_s
+from ..types import RunResult, SyncResult, VideoInfo
 
 if TYPE_CHECKING:
     from ..io.recording import RecordedVideo
@@ -126,7 +126,7 @@ class Diagnosis:
 
 def _frame_ms(videos: dict[str, RecordedVideo | VideoInfo], name: str) -> float:
     v = videos.get(name)
-    dt = frame_length_s(v.fps, v.duration_s, v.num_frames) if v is not None else math.inf
+    dt = v.frame_length_s if v is not None else math.inf
     return 1000.0 * dt if math.isfinite(dt) else DEFAULT_FRAME_MS
 
 

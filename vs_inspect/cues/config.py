@@ -33,7 +33,7 @@ class MotionConfig:
     neighbour_frames: int = 2
     """Moving camera: compare frame t with t-d and t+d after compensating the camera's motion (d at least this many frames)."""
     neighbour_s: float = 0.08
-    """Moving camera: d also at least this long (s) when the frame rate is known: at 60 fps two frames are too close for slow objects to differ (a rendered hand-held camera at 60 fps had moving regions in 49 of 269 frames and 37 tracks; at 24-30 fps this gives the same d = 2)."""
+    """Moving camera: d also the whole number of frames nearest this (s) when the frame rate is known: at 60 fps two frames are too close for slow objects to differ (a rendered hand-held camera at 60 fps had moving regions in 49 of 269 frames and 37 tracks; at 24-30 fps this gives the same d = 2)."""
     open_px: int = 3
     """Morphological opening (working pixels) that removes speckle."""
     close_px: int = 15

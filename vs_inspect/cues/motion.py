@@ -105,7 +105,8 @@ def _warp_to(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, np.ndarray] 
 
 def neighbour_gap(cfg: MotionConfig, frame_interval_s: float | None = None) -> int:
     """d, in frames, between a moving camera's frame and the neighbours it is compared with: at
-    least cfg.neighbour_frames and, when the frame spacing is known, cfg.neighbour_s."""
+    least cfg.neighbour_frames and, when the frame spacing is known, the whole number of frames
+    nearest cfg.neighbour_s."""
     d = max(1, cfg.neighbour_frames)
     if frame_interval_s is not None and frame_interval_s > 0:
         d = max(d, int(round(cfg.neighbour_s / frame_interval_s)))

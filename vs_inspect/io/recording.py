@@ -192,9 +192,14 @@ class RecordedVideo:
     duration_s: float  # local time of the last frame minus the first, seconds
 
     @property
-    def frame_interval_s(self) -> float:
+    def frame_length_s(self) -> float:
         """types.frame_length_s: 1/fps, else the mean spacing of frames (inf for a single frame)."""
         return frame_length_s(self.fps, self.duration_s, self.num_frames)
+
+    @property
+    def frame_interval_s(self) -> float:
+        """frame_length_s (a recording has no timestamps to take a median of)."""
+        return self.frame_length_s
 
 
 @dataclass

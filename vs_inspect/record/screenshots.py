@@ -202,17 +202,15 @@ def _empty_recording(path: Path) -> Path:
     return path
 
 
-def chosen_and_wrong_ms(rrd: Path, pair: tuple[str, str] | None = None) -> tuple[int, int, str | None]:
-    """(chosen, wrong, pair): the chosen Δ in ms of the pair (default: the one in the first
+def chosen_and_wrong_ms(rrd: Path, pair: tuple[str, str] | None = None) -> tuple[int, int]:
+    """(chosen, wrong): the chosen Δ in ms of the pair (default: the one in the first
     container, the layout's active tab) and an offset a third of the search range away from it."""
-    from ..io.recording import read_recording
+    from ..io.recording import pair_key, read_recording
     from .blueprint import shown_pairs
     rec = read_recording(rrd)
     shown = shown_pairs(rec.meta.get("pairs", []), rec.result)
     if pair is not None:
         shown = [(pair[0], pair[1], None)]
-    key = f"{shown[0][0]}__{shown[0][1]}" if shown else None
-    from ..io.recording import pair_key
     series = rec.landscapes.get(pair_key(shown[0][0], shown[0][1]), {}) if shown else {}
     all_ms = np.concatenate([s.offset_ms for p in rec.landscapes.values() for s in p.values()]) \
         if rec.landscapes else np.zeros(1, np.int64)
@@ -229,7 +227,7 @@ def chosen_and_wrong_ms(rrd: Path, pair: tuple[str, str] | None = None) -> tuple
         chosen = (lo + hi) // 2
     step = max(1, (hi - lo) // 3)
     wrong = chosen + step if chosen + step <= hi else chosen - step
-    return chosen, wrong, key
+    return chosen, wrong
 
 
 def on_screen_views(layout: dict) -> list[str]:
@@ -318,7 +316,7 @@ def take_screenshots(rrd: str | Path, out_dir: str | Path, offsets_ms: dict[str,
     rrd, out_dir = Path(rrd), Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     if offsets_ms is None:
-        chosen, wrong, _ = chosen_and_wrong_ms(rrd, pair)
+        chosen, wrong = chosen_and_wrong_ms(rrd, pair)
         offsets_ms = {"chosen": chosen, "wrong": wrong}
     fulls: dict[str, tuple[int, np.ndarray]] = {}
     with tempfile.TemporaryDirectory(prefix="vs-inspect-shots-") as tmp, \
