@@ -404,6 +404,8 @@ class CueStats:
     timings_s: dict[str, float]  # per Stage 0 step, seconds
     geometric_peaks: str | None = None  # "consistent" | "inconsistent" | ... (None: not run)
     sfm: dict[str, Any] | None = None  # estimated cameras' diagnostics, JSON values (None: calibrated)
+    geometric_joint: dict[str, Any] | None = None  # the joint vote (offsets, margins, cameras used) and
+    # its point-transfer checks of unsure cameras ("transfer": camera -> verdict), JSON values
 
 
 @dataclass(frozen=True)

@@ -59,3 +59,29 @@ def test_a_static_camera_pairs_with_a_moving_one_as_before():
     used, msgs = _run(moving_b=False, sure_c=False)
     assert used == {("a", "b"): 12, ("a", "c"): 0, ("b", "c"): 0}
     assert not any("no third camera" in m for m in msgs)
+
+
+def test_transfer_matches_join_both_source_pairs_in_video_order():
+    """A confirmed camera's tracks that follow a trajectory are paired with both tracks the
+    trajectory came from, in each pair's key order (the camera first or second)."""
+    from vs_inspect.cues.extract import _add_transfer_pairs
+    from vs_inspect.cues.transfer import TransferCheck, TransferLandscape, Trajectories
+
+    # trajectories 0 and 1 from pair (a, c): tracks a3-c5 and a4-c6; the checked camera is b
+    traj = Trajectories(np.zeros((2, 3)), np.zeros(2), np.array([0, 1]),
+                        np.array([[0, 3, 5, 10], [0, 4, 6, 10]]), (("a", "c"),))
+    land = TransferLandscape(np.zeros(1), np.ones(1), np.ones(1, np.int64), np.ones(1, np.int64), 0, 9.0,
+                             np.array([[0, 7], [1, 8]]))
+    pairs = {k: TrackPairs(*k, np.array([[1, 1]])) for k in (("a", "b"), ("a", "c"), ("b", "c"))}
+    stats = {"pairs": {}}
+    checks = {"b": TransferCheck("b", 0.0, land, True, "confirmed")}
+    out = _add_transfer_pairs(pairs, checks, traj, ["a", "b", "c"], stats, NullSink())
+    assert out[("a", "b")].index.tolist() == [[1, 1], [3, 7], [4, 8]]  # a's track, then b's
+    assert out[("b", "c")].index.tolist() == [[1, 1], [7, 5], [8, 6]]  # b's track, then c's
+    assert out[("a", "c")].index.tolist() == [[1, 1]]
+    assert stats["pairs"]["a__b"]["transfer_new"] == 2
+    # an unconfirmed camera gets nothing
+    stats = {"pairs": {}}
+    checks = {"b": TransferCheck("b", 0.0, land, False, "they disagree")}
+    out = _add_transfer_pairs(pairs, checks, traj, ["a", "b", "c"], stats, NullSink())
+    assert all(len(v.index) == 1 for v in out.values())

@@ -76,3 +76,21 @@ def test_eval_prints_frames_and_ppm(tmp_path, capsys):
     assert main(["eval", str(tmp_path / "result.json"), "--gt", str(tmp_path / "gt.json")]) == 0
     out = capsys.readouterr().out
     assert "drift -100.0 ppm (constant-offset result" in out
+
+
+def test_cue_stats_with_the_joint_vote_and_transfer_checks_round_trip():
+    from vs_inspect.io.result import cue_stats_from_dict, cue_stats_to_dict
+    from vs_inspect.types import CueStats, VideoCueStats
+
+    joint = {"offsets_s": {"a": 0.0, "b": 1.25}, "score": 12.5, "margin": {"a": 7.1, "b": 1.3},
+             "used": ["a", "b"], "transfer": {"b": {"joint_offset_s": 1.25, "transfer_offset_s": 1.2667,
+                                                    "z": 9.2, "trajectories": 86, "supporters": 13,
+                                                    "matches": 13, "confirmed": True, "reason": "confirmed"}}}
+    videos = {n: VideoCueStats("v.mp4", "static", 0.1, 0.02, 10, 1, 12, 5) for n in "ab"}
+    c = CueStats("calibration", 2, 20, 5, videos, {"a__b": {"matches": 3}}, {}, {}, "joint", None, joint)
+    d = json.loads(json.dumps(cue_stats_to_dict(c)))
+    assert d["geometric_joint"] == joint
+    back = cue_stats_from_dict(d)
+    assert back.geometric_joint == joint and cue_stats_to_dict(back) == d
+    no_joint = cue_stats_to_dict(CueStats("calibration", 2, 20, 5, videos, {}, {}, {}))
+    assert "geometric_joint" not in no_joint and cue_stats_from_dict(no_joint).geometric_joint is None

@@ -59,3 +59,13 @@ def test_blueprint_opens_on_offsets_with_capped_containers():
     assert left_names[0] == "how to read this recording" and "loop closure" in left_names
     assert "all landscapes" in left_names and "pair graph" in left_names
     assert [v.name for v in _views(right)] == names[:8][: len(names)] + ["3D"]
+
+
+def test_point_transfer_view_only_when_a_check_was_logged():
+    result = SyncResult("a", {"a": 0.0, "b": 0.0}, {}, {}, (), (), ())
+    for origin in (None, "cues/transfer"):
+        left = blueprint(["a", "b"], [], result, {}, transfer_origin=origin).root_container.contents[0]
+        got = [v for v in _views(left) if v.name.startswith("point transfer")]
+        assert len(got) == (origin is not None)
+        if origin:
+            assert str(got[0].origin).strip("/") == "cues/transfer"

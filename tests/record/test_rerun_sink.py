@@ -413,3 +413,26 @@ def test_keyframe_matches_per_pair_are_recorded(tmp_path):
     got = np.array([v[0] for v in tab.column(col).to_pylist()])
     order = np.argsort(np.array(tab.column("keyframe_pair").to_pylist()))
     assert np.array_equal(got[order], counts.ravel())
+
+
+def test_point_transfer_check_is_recorded(tmp_path):
+    """Stage 0's point-transfer check of an unsure camera: its share over the camera's candidate
+    offsets on offset_ms, the joint vote's and the transfer's offsets as points, readable back."""
+    import rerun.chunk as rrc
+
+    offsets = np.arange(-1.0, 1.0, 0.02)
+    share = np.exp(-((offsets - 0.3) / 0.05) ** 2)
+    out = tmp_path / "transfer.rrd"
+    with RerunSink(out, progress=False) as sink:
+        sink.transfer_landscape("cam.2", offsets, share, 0.25, 0.3, False)
+    assert rerun_verify(out, tmp_path).returncode == 0
+    base = "cues/transfer/cam_2"
+    assert {f"{base}/share", f"{base}/joint", f"{base}/peak"} <= chunk_entities(out)
+    store = rrc.RrdReader(str(out)).stream().collect()
+    tab = store.reader("offset_ms", contents=f"/{base}/share").to_arrow_table()
+    col = [c for c in tab.column_names if c.endswith("Scalars:scalars")][0]
+    got = np.array([v[0] for v in tab.column(col).to_pylist()])
+    ms = np.array(tab.column("offset_ms").to_pylist())
+    assert np.allclose(got[np.argsort(ms)], share) and ms.min() == -1000
+    peak = store.reader("offset_ms", contents=f"/{base}/peak").to_arrow_table()
+    assert peak.column("offset_ms").to_pylist() == [300]

@@ -347,7 +347,7 @@ def _cue_stats(stats: dict) -> CueStats:
     return CueStats(stats["camera_source"], stats["registered_cameras"], stats["tracks"],
                     stats["track_pairs"], {n: VideoCueStats(**v) for n, v in stats["videos"].items()},
                     stats["pairs"], stats["dropped"], stats["timings_s"], stats.get("geometric_peaks"),
-                    stats.get("sfm"))
+                    stats.get("sfm"), stats.get("geometric_joint"))
 
 
 def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
@@ -377,7 +377,13 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
         if cfg.geometric.joint else None
     sure = {} if joint is None else {n: m >= cfg.geometric.joint_min_margin for n, m in joint.margin.items()}
     if sum(sure.values()) >= 2:
-        return _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg, stats, sink)
+        checks, traj = {}, None
+        if cfg.geometric.transfer and not all(sure.values()):
+            checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, sink)
+        sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
+        out = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg, stats, sink,
+                               {c: chk.summary(traj.num_trajectories) for c, chk in checks.items()})
+        return _add_transfer_pairs(out, checks, traj, list(vids), stats, sink)
     if joint is not None:
         # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
         # decides (and refuses when the triangles do not close), as before the joint choice
@@ -415,6 +421,81 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     return out
 
 
+def _sure_pairs(found: dict, joint, sure: dict[str, bool], cameras: dict) -> dict:
+    """The supporters of the joint Δ of every pair of two sure cameras (two moving ones only with
+    a third sure camera, as in _add_joint_pairs): the track pairs that point transfer
+    triangulates."""
+    from .geometric_pairs import supporters
+
+    triangle = sum(sure.values()) >= 3
+    out = {}
+    for (a, b), (_, gs) in found.items():
+        if not (sure.get(a) and sure.get(b)):
+            continue
+        if cameras[a].is_moving and cameras[b].is_moving and not triangle:
+            continue
+        index = supporters(gs, joint.offsets_s[b] - joint.offsets_s[a])
+        out[(a, b)] = TrackPairs(a, b, index, np.ones(len(index)))
+    return out
+
+
+def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
+                         vids: dict, cfg: CueConfig, sink: Sink):
+    """({camera: transfer.TransferCheck}, the transfer.Trajectories projected): a check of every
+    camera the joint vote is unsure of, the sure cameras' track pairs triangulated at their joint
+    offsets and projected into it over its candidate offsets (cues/transfer.py)."""
+    from .transfer import confirm_offset, offset_grid, transfer_landscape, triangulate_pairs
+
+    g = cfg.geometric
+    sure_offsets = {n: joint.offsets_s[n] for n, ok in sure.items() if ok}
+    traj = triangulate_pairs({n: v.info for n, v in vids.items()}, cameras,
+                             {n: t.xy for n, t in tracks.items()},
+                             _sure_pairs(found, joint, sure, cameras), sure_offsets)
+    checks = {}
+    for c in sorted(n for n, ok in sure.items() if not ok):
+        info = vids[c].info
+        radius = max(3.0, g.transfer_radius_diag * float(np.hypot(info.width, info.height)))
+        land = transfer_landscape(traj, info, cameras[c], tracks[c].xy,
+                                  offset_grid(traj, info, 0.5 * info.frame_interval_s), radius,
+                                  g.transfer_min_hits)
+        chk = confirm_offset(c, joint.offsets_s[c], land, info.frame_interval_s,
+                             g.transfer_agree_frames, g.transfer_min_z, g.transfer_min_supporters)
+        checks[c] = chk
+        sink.transfer_landscape(c, land.offsets_s, land.share, chk.joint_offset_s, land.offset_s,
+                                chk.confirmed)
+        msg = f"{c}: {chk.reason}"
+        sink.stage_event("cues", msg, camera=c, confirmed=int(chk.confirmed), z=round(land.z, 2),
+                         trajectories=traj.num_trajectories)
+        (log.info if chk.confirmed else log.warning)(msg)
+    return checks, traj
+
+
+def _add_transfer_pairs(pairs: dict, checks: dict, traj, order: list[str], stats: dict,
+                        sink: Sink) -> dict:
+    """pairs plus, for every camera that point transfer confirmed, its tracks that follow a
+    trajectory (of traj, transfer.Trajectories) paired with both tracks the trajectory was
+    triangulated from; order: the videos' order (a pair's key names the earlier one first)."""
+    out = dict(pairs)
+    for c, chk in checks.items():
+        if not chk.confirmed:
+            continue
+        new: dict[tuple[str, str], list] = {}
+        for t, j in chk.landscape.matches.tolist():
+            pair_no, ta, tb, _ = traj.source[t].tolist()
+            a, b = traj.pairs[pair_no]
+            for other, track in ((a, ta), (b, tb)):
+                key = (other, c) if order.index(other) < order.index(c) else (c, other)
+                new.setdefault(key, []).append((track, j) if key[0] == other else (j, track))
+        for key, rows in new.items():
+            if key not in out:
+                continue
+            out[key], n_new = _merge_pairs(out[key], np.unique(np.array(rows, np.int64), axis=0))
+            stats["pairs"].setdefault(f"{key[0]}__{key[1]}", {})["transfer_new"] = int(n_new)
+            sink.stage_event("cues", f"{key[0]}__{key[1]}: {n_new} track pairs from point transfer",
+                             pair=f"{key[0]}__{key[1]}", transfer_new=int(n_new))
+    return out
+
+
 def _merge_pairs(tp: TrackPairs, index: np.ndarray) -> tuple[TrackPairs, int]:
     """Descriptor pairs tp plus the geometric pairs index (P,2) not already in it: (pairs, new)."""
     w_desc = tp.weight if tp.weight is not None else np.ones(len(tp.index))
@@ -425,10 +506,12 @@ def _merge_pairs(tp: TrackPairs, index: np.ndarray) -> tuple[TrackPairs, int]:
 
 
 def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cameras: dict,
-                     tracks: dict, vids: dict, cfg: CueConfig, stats: dict, sink: Sink) -> dict:
+                     tracks: dict, vids: dict, cfg: CueConfig, stats: dict, sink: Sink,
+                     transfer: dict | None = None) -> dict:
     """The supporters of the jointly chosen offsets (geometric_pairs.joint_offsets) for every pair
     of two cameras whose offset won by at least joint_min_margin (sure: camera -> whether it
-    did); nothing for the others. A
+    did, or that point transfer confirmed: transfer holds those checks' summaries, for
+    result.json); nothing for the others. A
     descriptor pair is kept only if it is epipolar-consistent at the joint Δ (with
     joint_filter_descriptor): the descriptor pairs are mostly wrong on small moving objects
     (BENCHMARKS.md), and the joint Δ is the best evidence there is of the moment they share."""
@@ -439,11 +522,14 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                                 "score": round(joint.score, 2),
                                 "margin": {n: round(m, 2) for n, m in joint.margin.items()},
                                 "used": sorted(n for n, ok in sure.items() if ok)}
+    if transfer:
+        stats["geometric_joint"]["transfer"] = transfer
     weak = sorted(n for n, ok in sure.items() if not ok)
     if weak:
         msg = (f"geometric track pairs not used for {', '.join(weak)}: the joint vote prefers their "
                f"offsets by less than {cfg.geometric.joint_min_margin:g} (margins "
-               f"{', '.join(f'{n} {joint.margin[n]:.1f}' for n in weak)})")
+               f"{', '.join(f'{n} {joint.margin[n]:.1f}' for n in weak)})"
+               + ("; point transfer did not confirm them" if transfer else ""))
         sink.stage_event("cues", msg)
         log.warning(msg)
     # two moving cameras' Δ only when a third camera is sure too (a closed triangle confirms it):

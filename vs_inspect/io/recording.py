@@ -44,6 +44,7 @@ SYNC_OFFSETS = "sync/offsets"
 SYNC_SOLVE = "sync/solve"
 SYNC_PAIRS = "sync/pairs"  # every pair's verdict, Δ and reason as one table (failed pairs first)
 SYNC_LOOPS = "sync/loops"  # loop-closure residual Δ_ab + Δ_bc − Δ_ac per triangle of pairs
+CUES_TRANSFER = "cues/transfer"  # Stage 0's point-transfer checks of cameras the joint vote was unsure of
 GUIDE = "guide"  # "how to read this recording" (markdown)
 LOG = "log"
 LOG_DECISIONS = "log/decisions"
@@ -108,6 +109,13 @@ def pair_matches_path(a: str, b: str) -> str:
     """Stage 0's descriptor matches per keyframe pair: a count series on the keyframe_pair
     timeline, and /grid the (keyframes of a, keyframes of b) counts as a tensor."""
     return f"{pair_path(a, b)}/keyframe_matches"
+
+
+def transfer_path(name: str) -> str:
+    """A camera's point-transfer check: series share (of the projected samples that land on
+    their track) over its candidate offset_s on the offset_ms timeline, and points joint (the
+    joint vote's offset) and peak (the transfer's own)."""
+    return f"{CUES_TRANSFER}/{entity_name(name)}"
 
 
 def video_path(name: str) -> str:

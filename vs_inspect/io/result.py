@@ -117,6 +117,8 @@ def cue_stats_to_dict(c: CueStats) -> dict[str, Any]:
         out["geometric_peaks"] = c.geometric_peaks
     if c.sfm is not None:
         out["sfm"] = c.sfm
+    if c.geometric_joint is not None:
+        out["geometric_joint"] = c.geometric_joint
     return out
 
 
@@ -127,7 +129,8 @@ def cue_stats_from_dict(d: dict[str, Any], timings_s: dict[str, float] | None = 
     return CueStats(str(d.get("camera_source", "")), int(d.get("registered_cameras", 0)),
                     int(d.get("tracks", 0)), int(d.get("track_pairs", 0)), videos,
                     dict(d.get("pairs") or {}), dict(d.get("dropped") or {}),
-                    dict(timings_s or {}), d.get("geometric_peaks"), d.get("sfm"))
+                    dict(timings_s or {}), d.get("geometric_peaks"), d.get("sfm"),
+                    d.get("geometric_joint"))
 
 
 def run_result_to_dict(r: RunResult) -> dict[str, Any]:

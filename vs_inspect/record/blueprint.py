@@ -89,7 +89,8 @@ def shown_pairs(pairs_logged: list[str], result: SyncResult | None) -> list[tupl
 def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResult | None,
               pair_views: dict[str, set[str]] | None = None, timeline: str = TIMELINE_OFFSET_MS,
               has_loops: bool = False, range_ms: tuple[int, int] | None = None,
-              sizes: dict[str, tuple[int, int]] | None = None, eye: tuple | None = None):
+              sizes: dict[str, tuple[int, int]] | None = None, eye: tuple | None = None,
+              transfer_origin: str | None = None):
     """The default blueprint.
 
     pairs_logged: "a__b" of every pair in the order they were logged (their order when the result
@@ -98,6 +99,7 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
     triangles of pairs were logged (SYNC_LOOPS). range_ms: the search range on offset_ms, the
     landscape plots' x axis (None: rerun's default). sizes: video -> (width, height) px, the
     bounds of its 2D views. eye: (position, look target, up) of the 3D view (None: rerun's).
+    transfer_origin: where Stage 0's point-transfer checks were logged (None: none were).
     """
     import rerun.blueprint as rrb
     pair_views, sizes = pair_views or {}, sizes or {}
@@ -122,6 +124,9 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
         overview.append(rrb.GraphView(origin=SYNC_GRAPH, name="pair graph"))
         if result.iterations:
             overview.append(rrb.TimeSeriesView(origin=SYNC_SOLVE, name="IRLS solve (timeline: iteration)"))
+    if transfer_origin is not None:
+        overview.append(rrb.TimeSeriesView(origin=transfer_origin, name="point transfer (Stage 0: a camera's offset)",
+                                           time_ranges=_full_range(), plot_legend=rrb.PlotLegend(visible=True)))
     left = rrb.Vertical(rrb.Tabs(*info, active_tab=0), *( [rrb.Tabs(*overview, active_tab=0)] if overview else []),
                         row_shares=[1, 1][: 1 + bool(overview)])
     video_views = [rrb.Spatial2DView(origin=video_path(v), name=v, visual_bounds=_bounds(sizes.get(v)))

@@ -31,7 +31,7 @@ from tqdm import tqdm
 
 from .. import __version__, palette
 from ..io.atomic import json_default, atomic_path
-from ..io.recording import (APPLICATION_ID, GUIDE, LOG_DECISIONS, META_BUNDLE, META_CONFIG,
+from ..io.recording import (APPLICATION_ID, CUES_TRANSFER, GUIDE, LOG_DECISIONS, META_BUNDLE, META_CONFIG,
                             META_RECORDING, META_RESULT, META_VIDEOS, RECORDING_FORMAT,
                             RECORDING_VERSION, SYNC_GRAPH, SYNC_LOOPS, SYNC_OFFSETS, SYNC_PAIRS,
                             VIDEOS, TIMELINE_EVENT, TIMELINE_FRAME, TIMELINE_ITERATION, TIMELINE_KEYFRAME_PAIR,
@@ -39,7 +39,7 @@ from ..io.recording import (APPLICATION_ID, GUIDE, LOG_DECISIONS, META_BUNDLE, M
                             camera_path, camera_trail_path, check_entity_names, entity_name, log_path, pair_decision_path,
                             pair_epipolar_path, pair_landscape_path, pair_matches_path, pair_rate_landscape_path,
                             solve_residual_path,
-                            solve_weight_path, trajectory_path, video_asset_path, video_image_path,
+                            solve_weight_path, trajectory_path, transfer_path, video_asset_path, video_image_path,
                             video_mask_path, video_path, video_still_path,
                             video_tracks_path)
 from ..io.result import run_result_to_dict
@@ -240,6 +240,7 @@ class RerunSink(Sink):
         self._summary: RunResult | None = None
         self._flushed_videos = False
         self._pairs_logged: list[str] = []
+        self._transfer_logged: list[str] = []  # cameras whose point-transfer check was logged
         self._pair_views: dict[str, set[str]] = {}  # "a__b" -> views with data ("landscape", "epipolar")
         self._sweep_frames: dict[str, int] = {}  # video -> frame shown by an epipolar view of it
         self._offset_ms_min: int | None = None  # smallest candidate offset logged (offset_ms)
@@ -344,6 +345,30 @@ class RerunSink(Sink):
                                                        frames_b=np.asarray(frames_b, np.int64)), static=True)
 
     @_timed
+    def transfer_landscape(self, camera: str, offsets_s: np.ndarray, share: np.ndarray,
+                           joint_offset_s: float, transfer_offset_s: float | None, confirmed: bool) -> None:
+        base = transfer_path(camera)
+        self._transfer_logged.append(camera)
+        ms = np.round(np.asarray(offsets_s, np.float64) * 1000.0).astype(np.int64)
+        share = np.asarray(share, np.float64)
+        color = ACCEPTED if confirmed else REJECTED
+        mark = "✓" if confirmed else "✗"
+        self.rec.log(f"{base}/share", rr.SeriesLines(colors=[color], widths=[1.5],
+                                                     names=[f"{mark} {camera}: samples on their track"]), static=True)
+        if len(ms):
+            self.rec.send_columns(f"{base}/share", [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms)],
+                                  rr.Scalars.columns(scalars=share))
+        for what, at, colour, marker in (("joint", joint_offset_s, MINIMA, "circle"),
+                                         ("peak", transfer_offset_s, color, "diamond")):
+            if at is None or not len(ms):
+                continue
+            i = int(np.argmin(np.abs(np.asarray(offsets_s) - at)))
+            self.rec.log(f"{base}/{what}", rr.SeriesPoints(colors=[colour], markers=[marker], marker_sizes=[6.0],
+                                                           names=[f"{camera}: {what} offset"]), static=True)
+            self.rec.send_columns(f"{base}/{what}", [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=[round(at * 1000)])],
+                                  rr.Scalars.columns(scalars=[share[i]]))
+
+    @_timed
     def pair_landscape(self, landscape: PairLandscape, view: PairRecordView | None = None) -> None:
         self._log_landscape(landscape, view)
         if landscape.rate_landscape is not None:
@@ -435,7 +460,7 @@ class RerunSink(Sink):
         return blueprint(names, self._pairs_logged, self._result, self._pair_views, timeline,
                          has_loops=bool(self._view is not None and self._view.triangles), range_ms=rng,
                          sizes={n: (b.info.width, b.info.height) for n, b in self._videos.items()},
-                         eye=self._eye)
+                         eye=self._eye, transfer_origin=CUES_TRANSFER if self._transfer_logged else None)
 
     def abort(self) -> None:
         """Stop writing and delete the temporary file; nothing that looks complete is left."""

@@ -256,16 +256,21 @@ def on_screen_views(layout: dict) -> list[str]:
     return out
 
 
-def activate_pair(layout: dict, a: str, b: str) -> bool:
-    """Make the container of pair a→b the active tab of its Tabs (in place); False if absent."""
-    containers = {k: v["ContainerBlueprint"] for k, v in layout.items()
-                  if k.startswith("/container/") and "ContainerBlueprint" in v}
-    target = next((k for k, c in containers.items() if str(c.get("display_name", "")).endswith(f"{a}→{b}")), None)
+def activate_tab(layout: dict, title: str, suffix: bool = False) -> bool:
+    """Make the container or view titled `title` (or whose title ends with it, suffix=True) the
+    active tab of its Tabs container (in place); False if there is none such."""
+    def named(v: dict) -> bool:
+        name = str(v.get("display_name", ""))
+        return name.endswith(title) if suffix else name == title
+
+    target = next((k for k, v in layout.items() if k.startswith(("/container/", "/view/"))
+                   and named(v.get("ContainerBlueprint") or v.get("ViewBlueprint") or {})), None)
     if target is None:
         return False
     item = target.lstrip("/")
-    for c in containers.values():
-        if c.get("container_kind") == "Tabs" and item in c.get("contents", []):
+    for k, v in layout.items():
+        c = v.get("ContainerBlueprint") if k.startswith("/container/") else None
+        if c and c.get("container_kind") == "Tabs" and item in c.get("contents", []):
             c["active_tab"] = item
             return True
     return False
@@ -298,13 +303,14 @@ def _paint(client, settle_s: float, min_rounds: int = 2, max_rounds: int = 6) ->
 
 def take_screenshots(rrd: str | Path, out_dir: str | Path, offsets_ms: dict[str, int] | None = None,
                      mode: str = "auto", settle_s: float = 1.0,
-                     pair: tuple[str, str] | None = None) -> list[Screenshots]:
+                     pair: tuple[str, str] | None = None, tabs: tuple[str, ...] = ()) -> list[Screenshots]:
     """Open rrd in the native viewer, take a screenshot of the viewer with the time cursor at each
     offset (label -> ms on the offset_ms timeline; default: the chosen Δ of the pair on screen
     and a wrong one), cut out every panel on screen, and measure each panel's ink against the same
     layout over an empty recording. PNGs go to out_dir as <label>.png and <label>/<panel>.png.
     pair: (a, b) whose container is brought to the front (default: the layout's first, a failed
-    pair when there is one).
+    pair when there is one). tabs: titles of views or containers brought to the front of their tabs
+    (e.g. "point transfer (Stage 0: a camera's offset)").
 
     Panels are located once (a screenshot of each panel, found in the whole viewer's), then cut
     from one screenshot per offset: a screenshot costs about a second in software rendering.
@@ -327,8 +333,12 @@ def take_screenshots(rrd: str | Path, out_dir: str | Path, offsets_ms: dict[str,
         opened_on = next((r.current_timeline for r in client.get_state().recordings if r.store_id == store), None)
         layout = client.get_blueprint(store_id=store).blueprint
         if pair is not None:
-            if not activate_pair(layout, *pair):
+            if not activate_tab(layout, f"{pair[0]}→{pair[1]}", suffix=True):
                 raise ValueError(f"no container of pair {pair[0]}→{pair[1]} in the layout")
+        for title in tabs:
+            if not activate_tab(layout, title):
+                raise ValueError(f"no tab titled {title!r} in the layout")
+        if pair is not None or tabs:
             client.set_blueprint(layout, store_id=store)
             _paint(client, settle_s)
         shown = set(on_screen_views(layout))
@@ -377,13 +387,15 @@ def main(argv: list[str] | None = None) -> int:
                    help="offsets (ms on offset_ms) instead of the chosen and a wrong one; repeatable")
     p.add_argument("--pair", nargs=2, metavar=("A", "B"),
                    help="bring this pair's container to the front (default: the first, failed first)")
+    p.add_argument("--tab", action="append", default=[], metavar="TITLE",
+                   help="bring the view or container with this title to the front of its tabs; repeatable")
     args = p.parse_args(argv)
     if shutil.which("ffmpeg") is None:
         print("note: ffmpeg is not on PATH: the native viewer shows no frame of embedded H.264 videos",
               file=sys.stderr)
     offsets = {f"at_{ms}ms": ms for ms in args.at} if args.at else None
     shots = take_screenshots(args.rrd, args.out, offsets, mode=args.mode,
-                             pair=tuple(args.pair) if args.pair else None)
+                             pair=tuple(args.pair) if args.pair else None, tabs=tuple(args.tab))
     bad = 0
     for s in shots:
         print(f"{s.label} (offset_ms = {s.offset_ms}): {s.full}")

@@ -44,6 +44,12 @@ class Sink:
         """Descriptor matches between every keyframe of a (frames_a (Ka,)) and of b (frames_b (Kb,)):
         counts (Ka,Kb) int."""
 
+    def transfer_landscape(self, camera: str, offsets_s: np.ndarray, share: np.ndarray,
+                           joint_offset_s: float, transfer_offset_s: float | None, confirmed: bool) -> None:
+        """Point transfer's check of a camera the joint vote was unsure of (cues/transfer.py):
+        share (D,) of the projected samples that land on their track at each candidate offset_s
+        (D,) of the camera, the joint vote's offset, the transfer's peak and the verdict."""
+
     def cameras(self, cameras: dict[str, CameraTrack], points_world: np.ndarray | None,
                 colors: np.ndarray | None) -> None:
         """Cameras of all videos in one world frame, and the static 3D points (N,3) with (N,3) uint8 colours."""

@@ -1,0 +1,261 @@
+"""A camera's offset from the 3D trajectories of cameras already synchronized (point transfer).
+
+The epipolar cue says only that a point lies on a line; once two or more cameras are
+synchronized, their track pairs triangulate into 3D trajectories X(t) on the global clock, and a
+third camera c must see those points at their projections, not just somewhere on a line. So for
+every candidate offset_s of c, each triangulated sample X(t) is projected into c at its local
+time τ = t − offset_s and compared with c's tracks there (interpolated between the frames around
+τ, as everywhere): a trajectory supports the offset when one and the same track of c follows its
+projection at several moments. The support summed over trajectories forms a landscape over
+c's offset whose peak is far sharper than an epipolar vote's (a point, not a line).
+
+Pure functions of arrays: no I/O, no logging.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..geometry.epipolar import project
+from ..geometry.sampling import camera_at_frames, sample_video
+from ..geometry.timing import frame_brackets
+from ..geometry.triangulate import triangulate_track_pair
+from ..types import CameraTrack, TrackPairs, VideoInfo
+
+_BLOCK_ELEMENTS = 4_000_000  # (offset, sample) brackets held at once
+
+
+@dataclass(frozen=True)
+class Trajectories:
+    """Triangulated samples of the track pairs of synchronized cameras, on the global clock."""
+
+    points_world: np.ndarray  # (S,3) world units
+    time_s: np.ndarray  # (S,) global time of each sample, seconds
+    trajectory: np.ndarray  # (S,) int, which trajectory (row of source) each sample belongs to
+    source: np.ndarray  # (K,4) int: per trajectory (pair number, track of a, track of b, samples)
+    pairs: tuple[tuple[str, str], ...]  # the camera pairs that the pair numbers of source index
+
+    @property
+    def num_trajectories(self) -> int:
+        return len(self.source)
+
+
+def triangulate_pairs(infos: Mapping[str, VideoInfo], cameras: Mapping[str, CameraTrack],
+                      tracks_xy: Mapping[str, np.ndarray],
+                      pairs: Mapping[tuple[str, str], TrackPairs],
+                      offsets_s: Mapping[str, float], min_samples: int = 8,
+                      max_per_pair: int = 300, max_samples: int = 60) -> Trajectories:
+    """Every track pair of two cameras with an offset, triangulated at b's frames (a read at the
+    same global moments); a trajectory keeps the samples that pass geometry.triangulate's filter
+    and is kept when at least min_samples do. At most max_per_pair track pairs per camera pair
+    and max_samples samples per trajectory (each evenly spread), so that a moving camera's
+    projections of every sample at every frame stay small."""
+    pts, times, traj, source, used = [], [], [], [], []
+    for (a, b), tp in sorted(pairs.items()):
+        if a not in offsets_s or b not in offsets_s or tp is None or not len(tp.index):
+            continue
+        idx = tp.index
+        if len(idx) > max_per_pair:
+            idx = idx[np.linspace(0, len(idx) - 1, max_per_pair).round().astype(int)]
+        va, vb = infos[a], infos[b]
+        g = vb.timestamps_s + offsets_s[b]  # global time of b's frames
+        at_b = camera_at_frames(cameras[b], np.arange(vb.num_frames))
+        xb = np.asarray(tracks_xy[b][idx[:, 1]], np.float64)
+        xb[:, ~at_b.valid] = np.nan
+        at_a = sample_video(va.timestamps_s, cameras[a], tracks_xy[a], g - offsets_s[a], rows=idx[:, 0])
+        tri = triangulate_track_pair(at_a.K[None], at_a.cam_from_world[None], at_a.xy,
+                                     at_b.K[None], at_b.cam_from_world[None], xb)
+        n = tri.kept.sum(1)
+        pair_no = len(used)
+        used.append((a, b))
+        for p in np.nonzero(n >= min_samples)[0]:
+            ks = np.nonzero(tri.kept[p])[0]
+            if len(ks) > max_samples:
+                ks = ks[np.linspace(0, len(ks) - 1, max_samples).round().astype(int)]
+            pts.append(tri.points_world[p, ks])
+            times.append(g[ks])
+            traj.append(np.full(len(ks), len(source)))
+            source.append((pair_no, int(idx[p, 0]), int(idx[p, 1]), len(ks)))
+    if not source:
+        return Trajectories(np.zeros((0, 3)), np.zeros(0), np.zeros(0, np.int64),
+                            np.zeros((0, 4), np.int64), tuple(used))
+    return Trajectories(np.concatenate(pts), np.concatenate(times), np.concatenate(traj),
+                        np.array(source, np.int64), tuple(used))
+
+
+@dataclass(frozen=True)
+class TransferLandscape:
+    """Support of camera c's candidate offsets by the projected trajectories."""
+
+    offsets_s: np.ndarray  # (D,) candidate offset_s of c (global time of its local time 0), increasing
+    support: np.ndarray  # (D,) Σ over trajectories of the moments its best track of c follows it
+    overlap: np.ndarray  # (D,) samples whose moment falls inside c's video (and pose)
+    supporters: np.ndarray  # (D,) trajectories followed by one track at >= min_hits moments
+    best: int  # index of the highest support among offsets with enough overlap, -1 if none
+    z: float  # robust z-score of that support over all offsets with enough overlap
+    matches: np.ndarray  # (M,2) int (trajectory, track of c) at the best offset, one-to-one
+
+    @property
+    def offset_s(self) -> float | None:
+        return float(self.offsets_s[self.best]) if self.best >= 0 else None
+
+    @property
+    def share(self) -> np.ndarray:
+        """(D,) support per sample inside c's video: the score the peak is chosen by."""
+        return self.support / np.maximum(self.overlap, 1)
+
+
+def transfer_landscape(traj: Trajectories, info_c: VideoInfo, camera_c: CameraTrack,
+                       xy_c: np.ndarray, offsets_s: np.ndarray, radius_px: float,
+                       min_hits: int = 5, min_overlap_share: float = 0.25,
+                       neighbours: int = 4) -> TransferLandscape:
+    """The support of each candidate offset of camera c (offsets_s (D,), increasing).
+
+    A sample X(t) hits track j of c at offset o when j's point at τ = t − o (linear between the
+    frames around τ) lies within radius_px of X's projection there (the camera's pose read the
+    same way). A trajectory's support at o is the number of hits of its most-hit track, counted
+    when at least min_hits. Offsets whose overlap (samples inside c's video) is below
+    min_overlap_share of the largest overlap are not candidates: a peak resting on a few samples
+    at the edge of the range says little. xy_c (N,T,2): c's tracks, undistorted px.
+    """
+    offsets_s = np.asarray(offsets_s, np.float64)
+    D, S, K = len(offsets_s), len(traj.time_s), traj.num_trajectories
+    Nc, Tc = xy_c.shape[:2]
+    empty = TransferLandscape(offsets_s, np.zeros(D), np.zeros(D, np.int64), np.zeros(D, np.int64),
+                              -1, 0.0, np.zeros((0, 2), np.int64))
+    if D == 0 or S == 0 or Tc < 2:
+        return empty
+    at_c = camera_at_frames(camera_c, np.arange(Tc))
+    X = traj.points_world
+    fixed = None if camera_c.is_moving else project(at_c.K[0], at_c.cam_from_world[0], X)  # (S,2)
+
+    def projected(f: int, rows: np.ndarray) -> np.ndarray:
+        """(Q,2) samples `rows` projected with frame f's pose (a moving camera: computed here,
+        so that no (frames, samples) array is held)."""
+        return fixed[rows] if fixed is not None else project(at_c.K[f], at_c.cam_from_world[f], X[rows])
+    seen = np.isfinite(xy_c[..., 0])  # (N,T)
+    both = [np.nonzero(seen[:, f] & seen[:, f + 1])[0] for f in range(Tc - 1)]
+    trees = [cKDTree(xy_c[b, f]) if len(b) else None for f, b in enumerate(both)]
+    steps = np.linalg.norm(np.diff(xy_c, axis=1), axis=-1)
+    max_step = float(np.nanmax(steps)) if np.isfinite(steps).any() else 0.0
+    reach = radius_px + max_step  # a track within radius at τ is this close at the frame before
+    overlap = np.zeros(D, np.int64)
+    keys = []  # hits as (offset d, trajectory, track j) numbers
+    block = max(1, _BLOCK_ELEMENTS // S)  # offsets per block: bounded memory for long videos
+    for d0 in range(0, D, block):
+        k, w = frame_brackets(info_c.timestamps_s, traj.time_s[None, :] - offsets_s[d0:d0 + block, None])
+        inside = (k >= 0) & at_c.valid[np.clip(k, 0, Tc - 2)] & at_c.valid[np.clip(k + 1, 0, Tc - 1)]
+        overlap[d0:d0 + len(k)] = inside.sum(1)
+        flat = np.flatnonzero(inside)
+        flat = flat[np.argsort(k.ravel()[flat], kind="stable")]
+        bounds = np.searchsorted(k.ravel()[flat], np.arange(Tc))
+        for f in range(Tc - 1):
+            d_idx, s_idx = np.divmod(flat[bounds[f]:bounds[f + 1]], S)
+            if not len(d_idx) or trees[f] is None:
+                continue
+            ww = w[d_idx, s_idx][:, None]
+            p = (1 - ww) * projected(f, s_idx) + ww * projected(f + 1, s_idx)  # (Q,2) at τ
+            good = np.isfinite(p).all(1)
+            d_idx, s_idx, p, ww = d_idx[good], s_idx[good], p[good], ww[good]
+            if not len(p):
+                continue
+            nn = min(neighbours, len(both[f]))
+            dist, cand = trees[f].query(p, k=nn, distance_upper_bound=reach)
+            dist, cand = dist.reshape(len(p), nn), cand.reshape(len(p), nn)
+            for col in range(nn):
+                has = np.isfinite(dist[:, col])
+                if not has.any():
+                    continue
+                j = both[f][cand[has, col]]
+                xj = (1 - ww[has]) * xy_c[j, f] + ww[has] * xy_c[j, f + 1]  # the track at τ
+                hit = np.linalg.norm(xj - p[has], axis=1) <= radius_px
+                dd, ss = d0 + d_idx[has][hit], s_idx[has][hit]
+                keys.append((dd.astype(np.int64) * K + traj.trajectory[ss]) * Nc + j[hit])
+    if not keys:
+        return empty
+    u, count = np.unique(np.concatenate(keys), return_counts=True)
+    dk, jj = u // Nc, u % Nc  # (offset, trajectory) and track
+    # each (offset, trajectory)'s most-hit track
+    order = np.lexsort((-count, dk))
+    first = np.r_[True, dk[order][1:] != dk[order][:-1]]
+    top_dk, top_j, top_n = dk[order][first], jj[order][first], count[order][first]
+    counted = top_n >= min_hits
+    support = np.bincount(top_dk[counted] // K, weights=top_n[counted], minlength=D)
+    supporters = np.bincount(top_dk[counted] // K, minlength=D)
+    share = support / np.maximum(overlap, 1)  # as TransferLandscape.share
+    candidates = overlap >= min_overlap_share * overlap.max()
+    if not candidates.any() or support[candidates].max() <= 0:
+        return TransferLandscape(offsets_s, support, overlap, supporters, -1, 0.0,
+                                 np.zeros((0, 2), np.int64))
+    vals = share[candidates]
+    best = int(np.flatnonzero(candidates)[np.argmax(vals)])
+    med = float(np.median(vals))
+    mad = 1.4826 * float(np.median(np.abs(vals - med)))
+    z = (share[best] - med) / max(mad, 1e-3)
+    # the matches at the best offset: each trajectory's most-hit track, one trajectory per track
+    at = counted & (top_dk // K == best)
+    t_traj, t_j, t_n = top_dk[at] % K, top_j[at], top_n[at]
+    order = np.argsort(-t_n, kind="stable")
+    _, keep = np.unique(t_j[order], return_index=True)
+    keep = order[keep]
+    matches = np.stack([t_traj[keep], t_j[keep]], 1).astype(np.int64)
+    return TransferLandscape(offsets_s, support, overlap, supporters, best, float(z),
+                             matches[np.argsort(matches[:, 0])])
+
+
+def offset_grid(traj: Trajectories, info_c: VideoInfo, step_s: float) -> np.ndarray:
+    """Candidate offsets of c (step_s apart) at which some sample falls inside c's video."""
+    if not len(traj.time_s):
+        return np.zeros(0)
+    lo = traj.time_s.min() - info_c.timestamps_s[-1]
+    hi = traj.time_s.max() - info_c.timestamps_s[0]
+    return np.arange(np.ceil(lo / step_s), np.floor(hi / step_s) + 1) * step_s
+
+
+@dataclass(frozen=True)
+class TransferCheck:
+    """Whether point transfer confirms the offset the joint vote chose for an unsure camera."""
+
+    camera: str
+    joint_offset_s: float  # the joint vote's offset_s of the camera
+    landscape: TransferLandscape
+    confirmed: bool
+    reason: str  # why (or why not), one line
+
+    def summary(self, trajectories: int) -> dict:
+        """JSON values for result.json's cues.geometric_joint.transfer (trajectories: how many
+        were projected)."""
+        land = self.landscape
+        return {"joint_offset_s": round(self.joint_offset_s, 4),
+                "transfer_offset_s": None if land.offset_s is None else round(land.offset_s, 4),
+                "z": round(land.z, 2), "trajectories": int(trajectories),
+                "supporters": int(land.supporters[land.best]) if land.best >= 0 else 0,
+                "matches": int(len(land.matches)), "confirmed": self.confirmed, "reason": self.reason}
+
+
+def confirm_offset(camera: str, joint_offset_s: float, landscape: TransferLandscape,
+                   frame_s: float, agree_frames: float, min_z: float,
+                   min_supporters: int) -> TransferCheck:
+    """The joint vote's offset of `camera` is confirmed when the transfer landscape's own peak
+    lies within agree_frames frames (frame_s each) of it, stands min_z robust z-scores above the
+    landscape and rests on at least min_supporters trajectories. Two different cues (a point on a
+    line for the vote, a point on a point here) rarely agree on the same wrong offset."""
+    o = landscape.offset_s
+    if o is None:
+        return TransferCheck(camera, joint_offset_s, landscape, False,
+                             "no trajectory of the synchronized cameras is followed by a track of it")
+    n = int(landscape.supporters[landscape.best])
+    gap = abs(o - joint_offset_s) / frame_s
+    what = (f"point transfer puts it at {o:+.3f} s ({n} trajectories, z {landscape.z:.1f}), the "
+            f"joint vote at {joint_offset_s:+.3f} s ({gap:.1f} frames apart)")
+    if gap > agree_frames:
+        return TransferCheck(camera, joint_offset_s, landscape, False, f"{what}: they disagree")
+    if landscape.z < min_z:
+        return TransferCheck(camera, joint_offset_s, landscape, False, f"{what}: its peak is not clear (z < {min_z:g})")
+    if n < min_supporters:
+        return TransferCheck(camera, joint_offset_s, landscape, False, f"{what}: too few trajectories (< {min_supporters})")
+    return TransferCheck(camera, joint_offset_s, landscape, True, f"{what}: confirmed")
