@@ -85,3 +85,41 @@ def test_transfer_matches_join_both_source_pairs_in_video_order():
     checks = {"b": TransferCheck("b", 0.0, land, False, "they disagree")}
     out = _add_transfer_pairs(pairs, checks, traj, ["a", "b", "c"], stats, NullSink())
     assert all(len(v.index) == 1 for v in out.values())
+
+
+def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatch):
+    """The triangle fallback with inconsistent peaks adds no geometric pair, and keeps only the
+    descriptor pairs consistent at the joint vote's (unsure) offsets: wrong ones go, right ones
+    stay (alone, unchecked descriptor pairs put cameras 88-1456 ms off, accepted)."""
+    from types import SimpleNamespace
+
+    import vs_inspect.cues.geometric_pairs as gp
+    from vs_inspect.cues.config import GeometricPairConfig
+    from vs_inspect.cues.extract import _add_geometric_pairs
+    from vs_inspect.types import Tracks
+
+    from .test_transfer import _scene
+
+    offsets = {"a": 0.0, "b": 0.42, "c": -0.3}
+    infos, cams, xy, truth_ab, row_of = _scene(offsets)
+    rng = np.random.default_rng(3)
+    pairs = {}
+    for u, v in (("a", "b"), ("a", "c"), ("b", "c")):
+        right = np.array([[row_of[u][p], row_of[v][p]] for p in range(30)])
+        wrong = np.stack([rng.integers(0, 60, 20), rng.integers(0, 60, 20)], 1)
+        wrong = wrong[[tuple(w) not in {tuple(r) for r in right} for w in wrong]]
+        pairs[(u, v)] = TrackPairs(u, v, np.concatenate([right, wrong]))
+    vids = {n: SimpleNamespace(info=infos[n]) for n in "abc"}
+    tracks = {n: Tracks(xy[n], None) for n in "abc"}
+    cfg = CueConfig(geometric=GeometricPairConfig(joint_min_margin=1e9))  # no camera sure
+    monkeypatch.setattr(gp, "consistent_peaks", lambda *a, **k: (None, "inconsistent"))
+    sink, stats = _Events(), {"pairs": {}}
+    out = _add_geometric_pairs(pairs, cams, tracks, vids, cfg, stats, sink, progress=False)
+    assert stats["geometric_peaks"] == "inconsistent"
+    assert any("descriptor pairs kept only where consistent" in m for m in sink.messages)
+    for (u, v), tp in out.items():
+        right = {(row_of[u][p], row_of[v][p]) for p in range(30)}
+        kept = {tuple(x) for x in tp.index.tolist()}
+        assert kept <= right, (u, v, kept - right)  # no wrong pair left, no geometric pair added
+        assert len(kept) >= 15, (u, v, len(kept))
+        assert stats["pairs"][f"{u}__{v}"]["descriptor_pairs_kept"] == len(kept)

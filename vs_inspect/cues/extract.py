@@ -393,9 +393,14 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     chosen, status = consistent_peaks({k: (gs.peaks_s, gs.peak_votes) for k, (_, gs) in found.items()},
                                       3.0 * coarsest)
     stats["geometric_peaks"] = status
+    # the descriptor pairs are unchecked too then: alone they put rendered and demo cameras
+    # 88-1456 ms off and were accepted (README, point transfer); kept only where consistent at the
+    # joint vote's offsets, unsure as they are, so that a wrong offset leaves too few of them
+    filter_desc = status == "inconsistent" and joint is not None and cfg.geometric.joint_filter_descriptor
     if status == "inconsistent":
         msg = ("geometric track pairs not used: the vote peaks of the static camera pairs do not "
-               "close the triangles (Δ_ab + Δ_bc ≠ Δ_ac), so some peaks are wrong")
+               "close the triangles (Δ_ab + Δ_bc ≠ Δ_ac), so some peaks are wrong"
+               + ("; descriptor pairs kept only where consistent at the joint vote's offsets" if filter_desc else ""))
         sink.stage_event("cues", msg)
         log.warning(msg)
     out = dict(pairs)
@@ -406,12 +411,19 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
             index = index[gs.pair_peak == pick]
         elif status == "inconsistent":
             index = index[:0]
-        out[(a, b)], n_new = _merge_pairs(pairs[(a, b)], index)
+        desc = pairs[(a, b)]
+        n_desc = len(desc.index)
+        if filter_desc:
+            desc = _consistent_descriptor_pairs(desc, joint.offsets_s[b] - joint.offsets_s[a], cameras,
+                                                tracks, vids, cfg)
+        out[(a, b)], n_new = _merge_pairs(desc, index)
         info = {"geometric_candidates": gs.candidates, "geometric_informative": gs.informative,
                 "geometric_pairs": int(len(index)), "geometric_new": n_new,
                 "geometric_peaks_s": [round(p, 4) for p in gs.peaks_s],
                 "geometric_peak_votes": list(gs.peak_votes),
                 "geometric_chosen_peak_s": round(gs.peaks_s[pick], 4) if pick is not None else None}
+        if filter_desc:
+            info.update({"descriptor_pairs_kept": int(len(desc.index)), "descriptor_pairs_before": int(n_desc)})
         stats["pairs"].setdefault(f"{a}__{b}", {}).update(info)
         which = (f"peak {gs.peaks_s[pick]:+.3f} s chosen: the peaks of all static pairs close every triangle"
                  if pick is not None else
@@ -496,6 +508,21 @@ def _add_transfer_pairs(pairs: dict, checks: dict, traj, order: list[str], stats
     return out
 
 
+def _consistent_descriptor_pairs(desc: TrackPairs, delta_s: float, cameras: dict, tracks: dict,
+                                 vids: dict, cfg: CueConfig) -> TrackPairs:
+    """The descriptor pairs of (desc.a, desc.b) that are epipolar-consistent at Δ = delta_s
+    (geometric_pairs.consistent_at with the geometric pairs' tolerances)."""
+    from .geometric_pairs import consistent_at
+
+    if not len(desc.index):
+        return desc
+    a, b, g = desc.a, desc.b, cfg.geometric
+    tau = max(2.0, g.tau_diag * float(np.hypot(vids[b].info.width, vids[b].info.height)))
+    ok = consistent_at(vids[a].info, vids[b].info, cameras[a], cameras[b], tracks[a].xy,
+                       tracks[b].xy, desc.index, delta_s, tau, g.min_inlier_share, g.min_frames)
+    return TrackPairs(a, b, desc.index[ok], None if desc.weight is None else desc.weight[ok])
+
+
 def _merge_pairs(tp: TrackPairs, index: np.ndarray) -> tuple[TrackPairs, int]:
     """Descriptor pairs tp plus the geometric pairs index (P,2) not already in it: (pairs, new)."""
     w_desc = tp.weight if tp.weight is not None else np.ones(len(tp.index))
@@ -515,7 +542,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
     descriptor pair is kept only if it is epipolar-consistent at the joint Δ (with
     joint_filter_descriptor): the descriptor pairs are mostly wrong on small moving objects
     (BENCHMARKS.md), and the joint Δ is the best evidence there is of the moment they share."""
-    from .geometric_pairs import consistent_at, supporters
+    from .geometric_pairs import supporters
 
     stats["geometric_peaks"] = "joint"
     stats["geometric_joint"] = {"offsets_s": {n: round(o, 4) for n, o in joint.offsets_s.items()},
@@ -554,12 +581,8 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
         n_desc = len(desc.index)
         # an unsure camera's descriptor pairs are filtered too: at a wrong joint Δ few survive
         # (the pair is then refused for too few pairs) instead of a wrong minimum being accepted
-        if cfg.geometric.joint_filter_descriptor and n_desc:
-            g = cfg.geometric
-            tau = max(2.0, g.tau_diag * float(np.hypot(vids[b].info.width, vids[b].info.height)))
-            ok = consistent_at(vids[a].info, vids[b].info, cameras[a], cameras[b], tracks[a].xy,
-                               tracks[b].xy, desc.index, delta, tau, g.min_inlier_share, g.min_frames)
-            desc = TrackPairs(a, b, desc.index[ok], None if desc.weight is None else desc.weight[ok])
+        if cfg.geometric.joint_filter_descriptor:
+            desc = _consistent_descriptor_pairs(desc, delta, cameras, tracks, vids, cfg)
         out[(a, b)], n_new = _merge_pairs(desc, index)
         stats["pairs"].setdefault(f"{a}__{b}", {}).update({
             "geometric_candidates": gs.candidates, "geometric_informative": gs.informative,
