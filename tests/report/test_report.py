@@ -248,3 +248,35 @@ def test_rejected_pair_panel_and_demo_folder_layout(tmp_path):
     assert "best of a rejected pair" in html and "(chosen)" not in html
     ok = load_report_data(out)
     assert ok.epipolar.accepted is True
+
+
+def test_point_transfer_checks_get_a_figure_with_the_truth(run, tmp_path):
+    """A run whose Stage 0 checked a camera by point transfer (result.json's
+    cues.geometric_joint.transfer) gets transfer.png: one panel per camera, truth from --gt."""
+    import json
+    import shutil
+
+    run_dir, _, scene = run
+    folder = tmp_path / "run"
+    shutil.copytree(run_dir, folder)
+    d = json.loads((folder / "result.json").read_text())
+    offsets = np.round(np.arange(-2.0, 2.0, 0.02), 4)
+    share = np.round(0.02 + 0.2 * np.exp(-((offsets - 0.4) / 0.05) ** 2), 4)
+    check = {"joint_offset_s": 0.42, "transfer_offset_s": 0.4, "z": 9.0, "trajectories": 80,
+             "supporters": 12, "matches": 12, "confirmed": True, "reason": "agree: confirmed",
+             "offsets_s": offsets.tolist(), "share": share.tolist()}
+    d["cues"] = {"camera_source": "calibration", "registered_cameras": 4, "tracks": 0, "track_pairs": 0,
+                 "videos": {}, "pairs": {}, "dropped": {},
+                 "geometric_joint": {"origin": "cam0", "offsets_s": {"cam0": 0.0, "cam1": 0.42},
+                                     "transfer": {"cam1": check}}}
+    (folder / "result.json").write_text(json.dumps(d))
+    data = load_report_data(folder)
+    assert len(data.transfer) == 1
+    t = data.transfer[0]
+    gt = scene.bundle.gt_offsets_s
+    assert t.camera == "cam1" and t.confirmed and t.transfer_offset_s == 0.4
+    assert t.true_offset_s == pytest.approx(gt["cam1"] - gt["cam0"])
+    assert np.allclose(t.share, share)
+    render_report(data, tmp_path / "report")
+    assert "transfer" in _check_images(tmp_path / "report", data)
+    assert "transfer.png" in (tmp_path / "report" / "index.html").read_text()

@@ -23,7 +23,7 @@ from ..geometry.epipolar import (epipolar_lines, epipolar_residual,
 from ..geometry.sampling import camera_at_frames, sample_video
 from ..types import CueBundle, RunResult
 from ..report.data import (CameraView, EpipolarPanel, EpipolarState, Mosaic, MosaicTile, PairView,
-                   ReportData, Trajectory, VideoClock)
+                           ReportData, Trajectory, TransferView, VideoClock)
 
 log = logging.getLogger(__name__)
 
@@ -199,6 +199,23 @@ def _downscale(img: np.ndarray, max_width: int = 480) -> np.ndarray:
     return cv2.resize(img, (max_width, int(round(h * max_width / w))), interpolation=cv2.INTER_AREA)
 
 
+def transfer_views(result: RunResult, gt: dict[str, float] | None) -> tuple[TransferView, ...]:
+    """Stage 0's point-transfer checks as result.json keeps them (cues.geometric_joint.transfer);
+    () when the run made none or has no Stage 0."""
+    joint = (result.cues.geometric_joint if result.cues is not None else None) or {}
+    origin = joint.get("origin")
+    out = []
+    for cam, t in (joint.get("transfer") or {}).items():
+        if "offsets_s" not in t or origin is None:
+            continue
+        truth = gt[cam] - gt[origin] if gt and cam in gt and origin in gt else None
+        out.append(TransferView(cam, np.asarray(t["offsets_s"], float), np.asarray(t["share"], float), origin,
+                                float(t["joint_offset_s"]),
+                                None if t.get("transfer_offset_s") is None else float(t["transfer_offset_s"]), truth,
+                                bool(t["confirmed"]), str(t.get("reason", ""))))
+    return tuple(out)
+
+
 def build_report_data(result: RunResult, bundle: CueBundle | None, *, source: str,
                       gt: dict[str, float] | None = None, video_paths: dict[str, str] | None = None,
                       pair: tuple[str, str] | None = None, frame_reader=None,
@@ -268,7 +285,8 @@ def build_report_data(result: RunResult, bundle: CueBundle | None, *, source: st
         notes.append("no static reconstruction in the input (cue bundles carry cameras and "
                      "tracks only)")
     return ReportData(source, result.reference, videos, offsets, unc, dict(result.unresolved), pairs,
-                      gt, cameras, static_points, static_colors, trajs, panel, mosaic, tuple(notes),
+                      gt, cameras, static_points, static_colors, trajs, panel, mosaic,
+                      transfer_views(result, gt), tuple(notes),
                       {k: float(v) for k, v in result.timings_s.items()})
 
 

@@ -545,7 +545,9 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
     from .geometric_pairs import supporters
 
     stats["geometric_peaks"] = "joint"
-    stats["geometric_joint"] = {"offsets_s": {n: round(o, 4) for n, o in joint.offsets_s.items()},
+    # the joint offsets put the first camera by name at 0 ("origin")
+    stats["geometric_joint"] = {"origin": sorted(joint.offsets_s)[0],
+                                "offsets_s": {n: round(o, 4) for n, o in joint.offsets_s.items()},
                                 "score": round(joint.score, 2),
                                 "margin": {n: round(m, 2) for n, m in joint.margin.items()},
                                 "used": sorted(n for n, ok in sure.items() if ok)}

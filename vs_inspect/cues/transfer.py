@@ -227,14 +227,16 @@ class TransferCheck:
     reason: str  # why (or why not), one line
 
     def summary(self, trajectories: int) -> dict:
-        """JSON values for result.json's cues.geometric_joint.transfer (trajectories: how many
-        were projected)."""
+        """JSON values for result.json's cues.geometric_joint.transfer, the landscape included
+        (trajectories: how many were projected)."""
         land = self.landscape
         return {"joint_offset_s": round(self.joint_offset_s, 4),
                 "transfer_offset_s": None if land.offset_s is None else round(land.offset_s, 4),
                 "z": round(land.z, 2), "trajectories": int(trajectories),
                 "supporters": int(land.supporters[land.best]) if land.best >= 0 else 0,
-                "matches": int(len(land.matches)), "confirmed": self.confirmed, "reason": self.reason}
+                "matches": int(len(land.matches)), "confirmed": self.confirmed, "reason": self.reason,
+                "offsets_s": [round(float(o), 4) for o in land.offsets_s],
+                "share": [round(float(v), 4) for v in land.share]}
 
 
 def confirm_offset(camera: str, joint_offset_s: float, landscape: TransferLandscape,

@@ -30,6 +30,11 @@ CAPTIONS = {
     "epipolar": "Epipolar panel: the same frame of video a; b's matched points at t − Δ give "
                 "epipolar lines in a. At the right offset the lines pass through a's points.",
     "mosaic": "Mosaic: the frame of every video nearest one global moment after sync.",
+    "transfer": "Point transfer (Stage 0): for each camera the joint vote was unsure of, the share "
+                "of the other cameras' triangulated moving points that land on one of its tracks, "
+                "over its candidate offset; star = the transfer's peak, solid line = the joint "
+                "vote's offset, dashed = truth. Green: the two agree and the camera is used; "
+                "vermillion: refused (the reason above each panel).",
 }
 
 
@@ -39,6 +44,8 @@ def available(data: ReportData) -> list[str]:
     if data.cameras:
         keys.append("scene3d")
     keys += ["landscapes", "pair_graph"]
+    if data.transfer:
+        keys.append("transfer")
     if data.videos:
         keys.append("timeline")
     if data.epipolar is not None:

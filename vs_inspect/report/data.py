@@ -149,6 +149,21 @@ class Mosaic:
 
 
 @dataclass(frozen=True)
+class TransferView:
+    """Stage 0's point-transfer check of a camera the joint vote was unsure of (cues/transfer.py)."""
+
+    camera: str
+    offsets_s: np.ndarray  # (D,) candidate offset_s of the camera, seconds, relative to `origin`
+    share: np.ndarray  # (D,) share of the projected samples that land on one of its tracks
+    origin: str  # the camera whose offset the joint vote set to 0
+    joint_offset_s: float  # the joint vote's offset, seconds (same origin)
+    transfer_offset_s: float | None  # the transfer's own peak (None: no trajectory followed)
+    true_offset_s: float | None  # the truth relative to origin, when known
+    confirmed: bool
+    reason: str
+
+
+@dataclass(frozen=True)
 class ReportData:
     """Everything the report draws, already computed."""
 
@@ -166,6 +181,7 @@ class ReportData:
     trajectories: tuple[Trajectory, ...] = ()
     epipolar: EpipolarPanel | None = None
     mosaic: Mosaic | None = None  # only when the video files can be read
+    transfer: tuple[TransferView, ...] = ()  # Stage 0's point-transfer checks (none: nothing unsure)
     notes: tuple[str, ...] = ()  # readable notes on what could not be shown and why
     timings_s: dict[str, float] = field(default_factory=dict)
 

@@ -99,6 +99,9 @@ def _size_px(kind: str, data: ReportData) -> tuple[int, int]:
         return 1600, int(round(150 + 780 * aspect))
     if kind == "scene3d":
         return 1600, 1000
+    if kind == "transfer":
+        rows, cols = landscape_grid_shape(len(data.transfer))
+        return max(760, 420 * cols), 110 + 320 * rows
     if kind == "mosaic":
         rows, cols = _mosaic_grid(len(data.mosaic.tiles) if data.mosaic else 1)
         return 480 * cols, 70 + 320 * rows
@@ -212,6 +215,50 @@ def landscapes(data: ReportData, path: Path, dpi: float = DPI, formats: tuple[st
     # as many legend entries per row as the figure's width holds (about 190 px each)
     ncol = max(1, min(len(handles), _size_px("landscapes", data)[0] // 190))
     fig.legend(handles=handles, loc="outside upper center", ncol=ncol, frameon=False)
+    return _save(fig, path, dpi, formats)
+
+
+# ---- point transfer (Stage 0) ----------------------------------------------------------------
+
+
+def transfer(data: ReportData, path: Path, dpi: float = DPI, formats: tuple[str, ...] = ("png",)) -> Path:
+    """One panel per camera Stage 0's joint vote was unsure of: the share of the other cameras'
+    triangulated samples that land on one of its tracks, over its candidate offset."""
+    fig = _fig("transfer", data)
+    rows, cols = landscape_grid_shape(len(data.transfer))
+    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False)).ravel()
+    for i, ax in enumerate(axes):
+        if i >= len(data.transfer):
+            ax.axis("off")
+            continue
+        t = data.transfer[i]
+        color = ACCEPT if t.confirmed else REJECT
+        ax.set_facecolor(ACCEPT_BG if t.confirmed else REJECT_BG)
+        ax.plot(t.offsets_s, t.share, color=color, lw=1.4)
+        ax.axvline(t.joint_offset_s, color=SOLVED, lw=1.6, label="joint vote")
+        if t.transfer_offset_s is not None:
+            j = int(np.argmin(np.abs(t.offsets_s - t.transfer_offset_s)))
+            ax.plot([t.offsets_s[j]], [t.share[j]], marker="*", ms=13, color=color, mec="k",
+                    ls="none", label="transfer peak")
+        if t.true_offset_s is not None:
+            ax.axvline(t.true_offset_s, color=TRUTH, ls=(0, (4, 3)), lw=1.2, label="truth")
+        if t.transfer_offset_s is not None:  # the peak's neighbourhood, where the two cues are compared
+            zoom = ax.inset_axes([0.03, 0.52, 0.3, 0.44])
+            near = np.abs(t.offsets_s - t.transfer_offset_s) <= 0.25
+            zoom.plot(t.offsets_s[near], t.share[near], color=color, lw=1.2)
+            zoom.axvline(t.joint_offset_s, color=SOLVED, lw=1.4)
+            zoom.plot([t.offsets_s[j]], [t.share[j]], marker="*", ms=10, color=color, mec="k", ls="none")
+            if t.true_offset_s is not None:
+                zoom.axvline(t.true_offset_s, color=TRUTH, ls=(0, (4, 3)), lw=1.0)
+            zoom.set_xlim(t.transfer_offset_s - 0.25, t.transfer_offset_s + 0.25)
+            zoom.tick_params(labelsize=6)
+            zoom.set_title("± 0.25 s", fontsize=6)
+        verdict = "confirmed" if t.confirmed else "refused"
+        ax.set_title(f"{t.camera}: {verdict}\n{_wrap(t.reason, 58)}", fontsize=8, loc="left")
+        ax.set_xlabel(f"offset of {t.camera} with {t.origin} at 0  [s]")
+        if i % cols == 0:
+            ax.set_ylabel("samples on their track (share)")
+        ax.legend(fontsize=7, loc="upper right", frameon=False)
     return _save(fig, path, dpi, formats)
 
 
