@@ -197,3 +197,26 @@ def test_errors_against_the_truth_per_pair():
     cd = next(c for c in checks if c.key == "C__D")
     assert cd.error_ms == pytest.approx(500.0)
     assert all(c.error_ms == pytest.approx(0.0, abs=1e-9) for c in checks if c.key != "C__D")
+
+
+def test_a_blind_video_that_stage0_refused_is_named_with_stage0s_reason():
+    """E's pairs have no track pairs because Stage 0's joint vote was unsure of it and point
+    transfer disagreed (result.json cues.geometric_joint): the suspect says so, not 'does not see
+    the shared motion'."""
+    import dataclasses
+
+    from vs_inspect.analysis.diagnose import CAUSE_NO_PAIRS, diagnose
+    from vs_inspect.types import CueStats
+
+    videos = [VideoInfo.constant_rate(n, 640, 480, 100, 25.0) for n in FIVE_S]
+    plain = next(s for s in diagnose(_planted(), videos).suspects if s.name == "E")
+    assert "does not see the shared motion" in plain.message
+    joint = {"origin": "A", "offsets_s": dict(FIVE_S), "score": 9.0, "used": ["A", "B", "C", "D"],
+             "margin": {"A": 9.0, "B": 8.0, "C": 7.5, "D": 6.0, "E": 3.3},
+             "transfer": {"E": {"reason": "point transfer puts it at +0.150 s, the joint vote at "
+                                          "+0.200 s (2.7 frames apart): they disagree", "confirmed": False}}}
+    cues = CueStats("calibration", 5, 100, 10, {}, {}, {}, {}, "joint", None, joint)
+    e = next(s for s in diagnose(dataclasses.replace(_planted(), cues=cues), videos).suspects if s.name == "E")
+    assert e.cause == CAUSE_NO_PAIRS
+    assert "joint vote was not sure of its offset (margin 3.3)" in e.message
+    assert "they disagree" in e.message and "does not see" not in e.message
