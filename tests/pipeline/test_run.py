@@ -194,3 +194,22 @@ def test_reference_without_camera_gives_its_place_to_a_video_with_one(tmp_path, 
     assert result.unresolved["b"].startswith("the reference, but no accepted pair links it")
     # the run's settings are recorded as given
     assert result.config["sync"]["solve"]["reference"] == reference
+
+
+def test_an_unresolved_video_stage0_was_unsure_of_says_why_first():
+    """A video whose pairs had no track pairs because Stage 0's joint vote was unsure of it (and
+    point transfer did not confirm it) gets that reason before its pairs' ones; a sure video's
+    reason and a dropped video's are left as they are."""
+    from vs_inspect.pipeline.run import _run_result
+    from vs_inspect.types import CueStats, SyncResult
+
+    sync = SyncResult("a", {"a": 0.0, "b": 0.5, "c": None, "d": None}, {}, {
+        "c": "not connected to the reference 'a' through accepted pairs; its pairs: a__c: no cross-view track pairs",
+        "d": "not connected"}, (), (), ())
+    joint = {"origin": "a", "used": ["a", "b", "d"], "margin": {"a": 9.0, "b": 7.0, "c": 1.3, "d": 6.0},
+             "transfer": {"c": {"reason": "they disagree", "confirmed": False}}}
+    stats = CueStats("calibration", 4, 10, 10, {}, {}, {"e": "could not be read"}, {}, "joint", None, joint)
+    r = _run_result(sync, stats, RunInputs(), RunConfig(), None, {})
+    assert r.unresolved["c"].startswith("Stage 0's joint vote was not sure of its offset (margin 1.3), "
+                                        "so it got no geometric track pairs (they disagree); not connected")
+    assert r.unresolved["d"] == "not connected" and r.unresolved["e"] == "could not be read"
