@@ -436,3 +436,35 @@ def test_point_transfer_check_is_recorded(tmp_path):
     assert np.allclose(got[np.argsort(ms)], share) and ms.min() == -1000
     peak = store.reader("offset_ms", contents=f"/{base}/peak").to_arrow_table()
     assert peak.column("offset_ms").to_pylist() == [300]
+
+
+def test_pairing_votes_are_recorded_on_the_pairs_offset_axis(tmp_path):
+    """Stage 0's geometric votes of a pair: z-scores and counts over Δ_ab on offset_ms (the
+    landscape's axis) and the kept Δ as a point; the overview gets a 'pairing votes' tab."""
+    import rerun.chunk as rrc
+
+    offsets = np.arange(-1.0, 1.0, 0.01)
+    votes = np.where(np.abs(offsets - 0.25) < 0.02, 40.0, 2.0)
+    z = (votes - 2.0) / 1.5
+    out = tmp_path / "votes.rrd"
+    with RerunSink(out, progress=False) as sink:
+        sink.pair_votes("a", "b", offsets, votes, z, 0.25)
+        bp = sink.blueprint(["a", "b"])
+    assert rerun_verify(out, tmp_path).returncode == 0
+    assert {"pairs/a__b/votes/z", "pairs/a__b/votes/count", "pairs/a__b/votes/chosen"} <= chunk_entities(out)
+    store = rrc.RrdReader(str(out)).stream().collect()
+    tab = store.reader("offset_ms", contents="/pairs/a__b/votes/count").to_arrow_table()
+    col = [c for c in tab.column_names if c.endswith("Scalars:scalars")][0]
+    ms = np.array(tab.column("offset_ms").to_pylist())
+    got = np.array([v[0] for v in tab.column(col).to_pylist()])[np.argsort(ms)]
+    assert np.array_equal(got, votes) and ms.min() == -1000
+    chosen = store.reader("offset_ms", contents="/pairs/a__b/votes/chosen").to_arrow_table()
+    assert chosen.column("offset_ms").to_pylist() == [250]
+
+    def names(c):
+        import rerun.blueprint as rrb
+        out = []
+        for x in c.contents:
+            out += names(x) if isinstance(x, rrb.Container) else [x.name]
+        return out
+    assert "pairing votes (Stage 0, z per Δ)" in names(bp.root_container)

@@ -411,6 +411,7 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
             index = index[gs.pair_peak == pick]
         elif status == "inconsistent":
             index = index[:0]
+        _log_votes(sink, a, b, gs, gs.peaks_s[pick] if pick is not None else None)
         desc = pairs[(a, b)]
         n_desc = len(desc.index)
         if filter_desc:
@@ -431,6 +432,14 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
         sink.stage_event("cues", f"{a}__{b}: {len(index)} track pairs from epipolar consistency ({which})")
         log.info("%s__%s: %d geometric track pairs (%d new), %s", a, b, len(index), n_new, which)
     return out
+
+
+def _log_votes(sink: Sink, a: str, b: str, gs, chosen_s: float | None) -> None:
+    """The pair's geometric votes over Δ_ab and the Δ whose supporters were kept, to the sink."""
+    from .geometric_pairs import vote_z
+
+    if gs.votes is not None and len(gs.votes):
+        sink.pair_votes(a, b, gs.vote_offsets_s, gs.votes, vote_z(gs)[1], chosen_s)
 
 
 def _sure_pairs(found: dict, joint, sure: dict[str, bool], cameras: dict) -> dict:
@@ -579,6 +588,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
         delta = joint.offsets_s[b] - joint.offsets_s[a]
         both = bool(sure.get(a) and sure.get(b)) and (a, b) not in unconfirmed
         index = supporters(gs, delta) if both else np.zeros((0, 2), np.int64)
+        _log_votes(sink, a, b, gs, delta if both else None)
         desc = pairs[(a, b)]
         n_desc = len(desc.index)
         # an unsure camera's descriptor pairs are filtered too: at a wrong joint Δ few survive

@@ -118,6 +118,13 @@ def transfer_path(name: str) -> str:
     return f"{CUES_TRANSFER}/{entity_name(name)}"
 
 
+def pair_votes_path(a: str, b: str) -> str:
+    """Stage 0's epipolar-consistency votes of the pair over Δ_ab on the offset_ms timeline (the
+    landscape's axis): series z (robust z-scores, what the joint vote sums), count (raw votes)
+    and a point chosen (the Δ Stage 0 kept the supporters of, when it kept any)."""
+    return f"{pair_path(a, b)}/votes"
+
+
 def video_path(name: str) -> str:
     return f"{VIDEOS}/{entity_name(name)}"
 

@@ -16,7 +16,7 @@ import math
 
 from ..io.recording import (GUIDE, LOG, SYNC_GRAPH, SYNC_LOOPS, SYNC_OFFSETS, SYNC_PAIRS, SYNC_SOLVE,
                             TIMELINE_OFFSET_MS, VIDEOS, WORLD, pair_decision_path, pair_epipolar_path,
-                            pair_landscape_path, video_path)
+                            pair_landscape_path, pair_votes_path, video_path)
 from ..types import PairLandscape, SyncResult
 
 MAX_PAIR_CONTAINERS = 12  # pair containers in the middle column; the rest are in the pairs table
@@ -90,7 +90,7 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
               pair_views: dict[str, set[str]] | None = None, timeline: str = TIMELINE_OFFSET_MS,
               has_loops: bool = False, range_ms: tuple[int, int] | None = None,
               sizes: dict[str, tuple[int, int]] | None = None, eye: tuple | None = None,
-              transfer_origin: str | None = None):
+              transfer_origin: str | None = None, votes_logged: list[str] | None = None):
     """The default blueprint.
 
     pairs_logged: "a__b" of every pair in the order they were logged (their order when the result
@@ -100,6 +100,7 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
     landscape plots' x axis (None: rerun's default). sizes: video -> (width, height) px, the
     bounds of its 2D views. eye: (position, look target, up) of the 3D view (None: rerun's).
     transfer_origin: where Stage 0's point-transfer checks were logged (None: none were).
+    votes_logged: "a__b" of the pairs whose geometric pairing votes were logged (Stage 0).
     """
     import rerun.blueprint as rrb
     pair_views, sizes = pair_views or {}, sizes or {}
@@ -124,6 +125,12 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
         overview.append(rrb.GraphView(origin=SYNC_GRAPH, name="pair graph"))
         if result.iterations:
             overview.append(rrb.TimeSeriesView(origin=SYNC_SOLVE, name="IRLS solve (timeline: iteration)"))
+    if votes_logged:
+        overview.append(rrb.TimeSeriesView(
+            origin="/", contents=[f"+ /{pair_votes_path(*k.split('__', 1))}/{part}" for k in votes_logged
+                                  for part in ("z", "chosen")],
+            name="pairing votes (Stage 0, z per Δ)", time_ranges=_full_range(), axis_x=_axis(range_ms),
+            plot_legend=rrb.PlotLegend(visible=True)))
     if transfer_origin is not None:
         overview.append(rrb.TimeSeriesView(origin=transfer_origin, name="point transfer (Stage 0: a camera's offset)",
                                            time_ranges=_full_range(), plot_legend=rrb.PlotLegend(visible=True)))

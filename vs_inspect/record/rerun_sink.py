@@ -37,7 +37,7 @@ from ..io.recording import (APPLICATION_ID, CUES_TRANSFER, GUIDE, LOG_DECISIONS,
                             VIDEOS, TIMELINE_EVENT, TIMELINE_FRAME, TIMELINE_ITERATION, TIMELINE_KEYFRAME_PAIR,
                             TIMELINE_OFFSET_MS, TIMELINE_TIME, WORLD_POINTS, camera_labels_path,
                             camera_path, camera_trail_path, check_entity_names, entity_name, log_path, pair_decision_path,
-                            pair_epipolar_path, pair_landscape_path, pair_matches_path, pair_rate_landscape_path,
+                            pair_epipolar_path, pair_landscape_path, pair_matches_path, pair_rate_landscape_path, pair_votes_path,
                             solve_residual_path,
                             solve_weight_path, trajectory_path, transfer_path, video_asset_path, video_image_path,
                             video_mask_path, video_path, video_still_path,
@@ -241,6 +241,7 @@ class RerunSink(Sink):
         self._flushed_videos = False
         self._pairs_logged: list[str] = []
         self._transfer_logged: list[str] = []  # cameras whose point-transfer check was logged
+        self._votes_logged: list[str] = []  # "a__b" of the pairs whose geometric votes were logged
         self._pair_views: dict[str, set[str]] = {}  # "a__b" -> views with data ("landscape", "epipolar")
         self._sweep_frames: dict[str, int] = {}  # video -> frame shown by an epipolar view of it
         self._offset_ms_min: int | None = None  # smallest candidate offset logged (offset_ms)
@@ -343,6 +344,27 @@ class RerunSink(Sink):
         # which frames the keyframe_pair index k stands for: a's frames_a[k // Kb], b's frames_b[k % Kb]
         self.rec.log(f"{base}/keyframes", rr.AnyValues(frames_a=np.asarray(frames_a, np.int64),
                                                        frames_b=np.asarray(frames_b, np.int64)), static=True)
+
+    @_timed
+    def pair_votes(self, a: str, b: str, offsets_s: np.ndarray, votes: np.ndarray, z: np.ndarray,
+                   chosen_s: float | None) -> None:
+        base = pair_votes_path(a, b)
+        self._votes_logged.append(f"{a}__{b}")
+        ms = np.round(np.asarray(offsets_s, np.float64) * 1000.0).astype(np.int64)
+        z = np.asarray(z, np.float64)
+        self.rec.log(f"{base}/z", rr.SeriesLines(names=[f"{a}→{b}"], widths=[1.2]), static=True)
+        self.rec.log(f"{base}/count", rr.SeriesLines(names=[f"{a}→{b} votes"], widths=[1.0]), static=True)
+        if len(ms):
+            self.rec.send_columns(f"{base}/z", [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms)],
+                                  rr.Scalars.columns(scalars=z))
+            self.rec.send_columns(f"{base}/count", [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms)],
+                                  rr.Scalars.columns(scalars=np.asarray(votes, np.float64)))
+        if chosen_s is not None and len(ms):
+            i = int(np.argmin(np.abs(np.asarray(offsets_s) - chosen_s)))
+            self.rec.log(f"{base}/chosen", rr.SeriesPoints(colors=[ACCEPTED], markers=["diamond"], marker_sizes=[6.0],
+                                                           names=[f"{a}→{b} kept"]), static=True)
+            self.rec.send_columns(f"{base}/chosen", [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=[round(chosen_s * 1000)])],
+                                  rr.Scalars.columns(scalars=[z[i]]))
 
     @_timed
     def transfer_landscape(self, camera: str, offsets_s: np.ndarray, share: np.ndarray,
@@ -460,7 +482,8 @@ class RerunSink(Sink):
         return blueprint(names, self._pairs_logged, self._result, self._pair_views, timeline,
                          has_loops=bool(self._view is not None and self._view.triangles), range_ms=rng,
                          sizes={n: (b.info.width, b.info.height) for n, b in self._videos.items()},
-                         eye=self._eye, transfer_origin=CUES_TRANSFER if self._transfer_logged else None)
+                         eye=self._eye, transfer_origin=CUES_TRANSFER if self._transfer_logged else None,
+                         votes_logged=self._votes_logged)
 
     def abort(self) -> None:
         """Stop writing and delete the temporary file; nothing that looks complete is left."""

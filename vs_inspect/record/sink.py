@@ -44,6 +44,12 @@ class Sink:
         """Descriptor matches between every keyframe of a (frames_a (Ka,)) and of b (frames_b (Kb,)):
         counts (Ka,Kb) int."""
 
+    def pair_votes(self, a: str, b: str, offsets_s: np.ndarray, votes: np.ndarray, z: np.ndarray,
+                   chosen_s: float | None) -> None:
+        """The geometric pairing's votes of pair (a, b) (cues/geometric_pairs.py): informative
+        candidates per Δ_ab (offsets_s (D,) s, votes (D,)), their robust z-scores (D,) that the
+        joint vote sums, and the Δ_ab whose supporters Stage 0 kept (None: none)."""
+
     def transfer_landscape(self, camera: str, offsets_s: np.ndarray, share: np.ndarray,
                            joint_offset_s: float, transfer_offset_s: float | None, confirmed: bool) -> None:
         """Point transfer's check of a camera the joint vote was unsure of (cues/transfer.py):
