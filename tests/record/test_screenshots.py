@@ -126,3 +126,24 @@ def test_every_panel_shows_something_at_the_chosen_and_a_wrong_offset(tmp_path):
     assert t_all < 90, f"recording + screenshots took {t_all:.0f} s"
     if out != tmp_path / "shots":
         shutil.copy(rrd, out / rrd.name)
+
+
+def test_activate_tab_brings_a_titled_view_or_container_to_the_front():
+    from vs_inspect.record.screenshots import activate_tab, on_screen_views
+
+    v1, v2, c1 = "view/" + "1" * 32, "view/" + "2" * 32, "container/" + "3" * 32
+    layout = {
+        "/container/root": {"ContainerBlueprint": {"container_kind": "Horizontal", "contents": [
+            "container/tabs", "container/pairs"]}},
+        "/container/tabs": {"ContainerBlueprint": {"container_kind": "Tabs", "contents": [v1, v2], "active_tab": v1}},
+        "/container/pairs": {"ContainerBlueprint": {"container_kind": "Tabs", "contents": [c1], "active_tab": c1}},
+        f"/{c1}": {"ContainerBlueprint": {"container_kind": "Vertical", "contents": [], "display_name": "✗ a→b"}},
+        f"/{v1}": {"ViewBlueprint": {"display_name": "all landscapes"}},
+        f"/{v2}": {"ViewBlueprint": {"display_name": "point transfer (Stage 0: a camera's offset)"}},
+    }
+    assert on_screen_views(layout) == ["1" * 32]
+    assert activate_tab(layout, "point transfer (Stage 0: a camera's offset)")
+    assert on_screen_views(layout) == ["2" * 32]
+    assert activate_tab(layout, "a→b", suffix=True)
+    assert not activate_tab(layout, "point transfer")  # titles match whole unless suffix=True
+    assert not activate_tab(layout, "no such tab")
