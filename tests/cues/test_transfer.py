@@ -126,3 +126,18 @@ def test_nothing_to_transfer_gives_an_empty_landscape():
     assert land.offset_s is None and len(land.matches) == 0
     chk = confirm_offset("c", 0.0, land, 1 / FPS["c"], 2.0, 5.0, 8)
     assert not chk.confirmed and "no trajectory" in chk.reason
+
+
+def test_many_offsets_thin_the_samples_and_still_find_the_offset(monkeypatch):
+    import vs_inspect.cues.transfer as transfer
+
+    offsets = {"a": 0.0, "b": 0.42, "c": 0.35}
+    infos, cams, xy, truth_ab, _ = _scene(offsets)
+    traj = triangulate_pairs(infos, cams, xy, {("a", "b"): TrackPairs("a", "b", truth_ab)},
+                             {"a": 0.0, "b": 0.42})
+    grid = offset_grid(traj, infos["c"], 0.5 / FPS["c"])
+    full = transfer_landscape(traj, infos["c"], cams["c"], xy["c"], grid, radius_px=3.0)
+    monkeypatch.setattr(transfer, "MAX_BRACKETS", len(grid) * len(traj.time_s) // 3)
+    thin = transfer_landscape(traj, infos["c"], cams["c"], xy["c"], grid, radius_px=3.0, min_hits=3)
+    assert thin.overlap.max() < 0.4 * full.overlap.max()  # a quarter of the samples
+    assert thin.offset_s == pytest.approx(0.35, abs=1.0 / FPS["c"]) and thin.z > 5

@@ -6,8 +6,9 @@ third camera c must see those points at their projections, not just somewhere on
 every candidate offset_s of c, each triangulated sample X(t) is projected into c at its local
 time τ = t − offset_s and compared with c's tracks there (interpolated between the frames around
 τ, as everywhere): a trajectory supports the offset when one and the same track of c follows its
-projection at several moments. The support summed over trajectories forms a landscape over
-c's offset whose peak is far sharper than an epipolar vote's (a point, not a line).
+projection at several moments. The support summed over trajectories, per sample inside c's
+video, forms a landscape over c's offset whose peak is far sharper than an epipolar vote's (a
+point, not a line).
 
 Pure functions of arrays: no I/O, no logging.
 """
@@ -27,6 +28,7 @@ from ..geometry.triangulate import triangulate_track_pair
 from ..types import CameraTrack, TrackPairs, VideoInfo
 
 _BLOCK_ELEMENTS = 4_000_000  # (offset, sample) brackets held at once
+MAX_BRACKETS = 30_000_000  # (offset, sample) brackets evaluated at most (about 12 s; the demo's 15 M: 6 s)
 
 
 @dataclass(frozen=True)
@@ -95,8 +97,8 @@ class TransferLandscape:
     support: np.ndarray  # (D,) Σ over trajectories of the moments its best track of c follows it
     overlap: np.ndarray  # (D,) samples whose moment falls inside c's video (and pose)
     supporters: np.ndarray  # (D,) trajectories followed by one track at >= min_hits moments
-    best: int  # index of the highest support among offsets with enough overlap, -1 if none
-    z: float  # robust z-score of that support over all offsets with enough overlap
+    best: int  # index of the highest share (support / overlap) among offsets with enough overlap, -1 if none
+    z: float  # robust z-score of that share over all offsets with enough overlap
     matches: np.ndarray  # (M,2) int (trajectory, track of c) at the best offset, one-to-one
 
     @property
@@ -113,16 +115,22 @@ def transfer_landscape(traj: Trajectories, info_c: VideoInfo, camera_c: CameraTr
                        xy_c: np.ndarray, offsets_s: np.ndarray, radius_px: float,
                        min_hits: int = 5, min_overlap_share: float = 0.25,
                        neighbours: int = 4) -> TransferLandscape:
-    """The support of each candidate offset of camera c (offsets_s (D,), increasing).
+    """The support of each candidate offset of camera c (offsets_s (D,), increasing), and the
+    offset whose share (support per sample inside c's video) is highest.
 
     A sample X(t) hits track j of c at offset o when j's point at τ = t − o (linear between the
     frames around τ) lies within radius_px of X's projection there (the camera's pose read the
     same way). A trajectory's support at o is the number of hits of its most-hit track, counted
     when at least min_hits. Offsets whose overlap (samples inside c's video) is below
     min_overlap_share of the largest overlap are not candidates: a peak resting on a few samples
-    at the edge of the range says little. xy_c (N,T,2): c's tracks, undistorted px.
+    at the edge of the range says little. xy_c (N,T,2): c's tracks, undistorted px. Beyond
+    MAX_BRACKETS (offsets × samples), the samples are thinned evenly.
     """
     offsets_s = np.asarray(offsets_s, np.float64)
+    stride = -(-len(offsets_s) * len(traj.time_s) // MAX_BRACKETS)
+    if stride > 1:  # long videos: every stride-th sample (each trajectory's samples are consecutive)
+        traj = Trajectories(traj.points_world[::stride], traj.time_s[::stride],
+                            traj.trajectory[::stride], traj.source, traj.pairs)
     D, S, K = len(offsets_s), len(traj.time_s), traj.num_trajectories
     Nc, Tc = xy_c.shape[:2]
     empty = TransferLandscape(offsets_s, np.zeros(D), np.zeros(D, np.int64), np.zeros(D, np.int64),
