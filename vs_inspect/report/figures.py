@@ -189,14 +189,20 @@ def _wrap(text: str, width: int) -> str:
     return "\n".join(textwrap.wrap(text, width))
 
 
-def landscapes(data: ReportData, path: Path, dpi: float = DPI, formats: tuple[str, ...] = ("png",)) -> Path:
-    fig = _fig("landscapes", data)
-    rows, cols = landscape_grid_shape(len(data.pairs))
+def _panels(kind: str, data: ReportData, n: int):
+    """(figure, its first n axes, rows, cols) of a grid of n panels (landscape_grid_shape); the
+    grid's spare axes are hidden."""
+    fig = _fig(kind, data)
+    rows, cols = landscape_grid_shape(n)
     axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False)).ravel()
+    for ax in axes[n:]:
+        ax.axis("off")
+    return fig, axes[:n], rows, cols
+
+
+def landscapes(data: ReportData, path: Path, dpi: float = DPI, formats: tuple[str, ...] = ("png",)) -> Path:
+    fig, axes, rows, cols = _panels("landscapes", data, len(data.pairs))
     for i, ax in enumerate(axes):
-        if i >= len(data.pairs):
-            ax.axis("off")
-            continue
         _landscape_axes(ax, data.pairs[i])
         if i // cols == rows - 1 or i + cols >= len(data.pairs):
             ax.set_xlabel("Δ = offset(b) − offset(a)  [s]")
@@ -224,13 +230,8 @@ def landscapes(data: ReportData, path: Path, dpi: float = DPI, formats: tuple[st
 def transfer(data: ReportData, path: Path, dpi: float = DPI, formats: tuple[str, ...] = ("png",)) -> Path:
     """One panel per camera Stage 0's joint vote was unsure of: the share of the other cameras'
     triangulated samples that land on one of its tracks, over its candidate offset."""
-    fig = _fig("transfer", data)
-    rows, cols = landscape_grid_shape(len(data.transfer))
-    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False)).ravel()
+    fig, axes, _, cols = _panels("transfer", data, len(data.transfer))
     for i, ax in enumerate(axes):
-        if i >= len(data.transfer):
-            ax.axis("off")
-            continue
         t = data.transfer[i]
         color = ACCEPT if t.confirmed else REJECT
         ax.set_facecolor(ACCEPT_BG if t.confirmed else REJECT_BG)
