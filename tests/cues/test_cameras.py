@@ -70,7 +70,7 @@ def test_sift_database_is_nearly_the_same_with_any_number_of_threads(tmp_path, m
     assert one["matches"].keys() == two["matches"].keys() and len(one["verified"]) > 0
     assert one["verified"].keys() == two["verified"].keys()
     # COLMAP's threaded matching is not bit-exact: a CI run once found 575 matches of a pair with
-    # 2 threads against 576 with 1 (not reproduced in 30 runs since); a borderline match at most
+    # 2 threads against 576 with 1 (not reproduced in 16 runs since); a borderline match at most
     for table in ("matches", "verified"):
         for pid, m in one[table].items():
             a, b = {tuple(r) for r in m.tolist()}, {tuple(r) for r in two[table][pid].tolist()}
