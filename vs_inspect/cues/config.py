@@ -139,7 +139,7 @@ class GeometricPairConfig:
     joint_min_margin: float = 5.0
     """Joint choice: a camera's geometric pairs are used only if its offset beats the best choice that moves it against every other camera (by more than 3 frames) by this much summed vote z-score. Measured (README, joint pairing): right cameras had 5.7-850 (one right camera 1.3, refused), the demo's wrong cam2 1.7, 3.0 and 3.3 (52-252 ms off) under three versions of Stage 0; 3 let the last two through."""
     transfer: bool = True
-    """Joint choice with two or more sure cameras: an unsure camera's offset is used when point transfer confirms it (cues/transfer.py: the sure cameras' track pairs triangulated on the global clock and projected into it; a track of it must follow a projection, not just a line). Measured (README, point transfer): rendered seed 0's cam2 (margin 1.3, right) confirmed; the demo's cam2 (margin 3.3, 56 ms off) refused, its transfer peak 3.2 frames away."""
+    """Joint choice with two or more sure cameras: an unsure camera's offset is used when point transfer confirms it (cues/transfer.py: the sure cameras' track pairs triangulated on the global clock and projected into it; a track of it must follow a projection, not just a line). Measured (README, point transfer): rendered seed 0's cam2 (margin 1.3, right) confirmed; the demo's cam2 (margin 3.3, 56 ms off) refused, its transfer peak 2.7 frames away."""
     transfer_radius_diag: float = 0.006
     """Point transfer: a track follows a projected point when within this fraction of the image diagonal (at least 3 px)."""
     transfer_min_hits: int = 5
