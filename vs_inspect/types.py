@@ -407,6 +407,16 @@ class CueStats:
     geometric_joint: dict[str, Any] | None = None  # the joint vote (offsets, margins, cameras used) and
     # its point-transfer checks of unsure cameras ("transfer": camera -> verdict), JSON values
 
+    def joint_refusal(self, video: str) -> str | None:
+        """Why Stage 0 gave `video` no geometric track pairs when its joint vote was unsure of it
+        (with point transfer's verdict), else None (sure, dropped, or no joint vote)."""
+        joint = self.geometric_joint or {}
+        if video not in joint.get("margin", {}) or video in joint.get("used", ()) or video in self.dropped:
+            return None
+        check = (joint.get("transfer") or {}).get(video)
+        return (f"Stage 0's joint vote was not sure of its offset (margin {joint['margin'][video]:.1f}), "
+                f"so it got no geometric track pairs" + (f" ({check['reason']})" if check else ""))
+
 
 @dataclass(frozen=True)
 class RunResult:

@@ -70,3 +70,26 @@ def test_filter_keeps_exact_points_and_drops_misses_behind_and_parallel():
 def test_shape_errors_name_the_shape_received(call, message):
     with pytest.raises(ValueError, match=message):
         call()
+
+
+@pytest.mark.parametrize("at", ["a", "b"])
+def test_over_time_reads_the_other_video_at_the_same_global_moment(at):
+    """A point moving in 3D seen by two static cameras with different clocks and frame rates:
+    triangulated at either video's frames it lands on its true positions."""
+    from vs_inspect.geometry.triangulate import triangulate_over_time
+    from vs_inspect.types import CameraTrack
+
+    K = np.array([[500.0, 0, 320], [0, 500.0, 240], [0, 0, 1]])
+    cam_a, cam_b = CameraTrack(K, look_at([6.0, 0, 1.5], [0, 0, 1])), CameraTrack(K, look_at([0, 6.0, 2.0], [0, 0, 1]))
+    def path(t):  # global time -> 3D
+        return np.stack([np.sin(t), np.cos(0.7 * t), 1.0 + 0.3 * t], -1)
+    ts_a, ts_b = np.arange(40) / 20.0, np.arange(50) / 25.0
+    off_a, off_b = 0.1, 0.5  # b's local 0 is 0.4 s after a's
+    xy_a = project(K, cam_a.cam_from_world, path(ts_a + off_a))[None]
+    xy_b = project(K, cam_b.cam_from_world, path(ts_b + off_b))[None]
+    tri, g = triangulate_over_time(ts_a, cam_a, xy_a, off_a, ts_b, cam_b, xy_b, off_b, np.array([[0, 0]]), at=at)
+    assert np.allclose(g, (ts_a + off_a) if at == "a" else (ts_b + off_b))
+    ok = tri.kept[0]
+    assert ok.sum() >= 20  # the overlap of the two videos
+    # the other video is read linearly between its frames: the error is the path's curvature at most
+    assert np.abs(tri.points_world[0, ok] - path(g[ok])).max() < 0.01

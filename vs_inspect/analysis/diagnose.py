@@ -261,8 +261,8 @@ def diagnose(result: RunResult, videos: Iterable[RecordedVideo | VideoInfo] | No
         if others and sum(c.cause == CAUSE_NO_PAIRS for c in others) / len(others) < 0.5:
             accused.add(v)
             lo, hi = min(c.num_track_pairs for c in cs), max(c.num_track_pairs for c in cs)
-            why = _stage0_refusal(result, v) or ("it does not see the shared motion, or its tracks "
-                                                 "or matches failed")
+            why = (result.cues.joint_refusal(v) if result.cues is not None else None) or \
+                "it does not see the shared motion, or its tracks or matches failed"
             suspects.append(Suspect("video", v, (
                 f"{v}: {CAUSE_NO_PAIRS}: none of its {len(cs)} pairs has enough cross-view track "
                 f"pairs ({f'{lo}-{hi}' if lo != hi else lo} track pairs) while most other pairs do: "
@@ -358,18 +358,6 @@ def diagnose(result: RunResult, videos: Iterable[RecordedVideo | VideoInfo] | No
         else:
             consequences[v] = why
     return Diagnosis(checks, loops, suspects, global_cause, cautious, unexplained, consequences)
-
-
-def _stage0_refusal(result: RunResult, video: str) -> str | None:
-    """Why Stage 0 gave `video` no geometric track pairs, when its joint vote says so (result.json
-    cues.geometric_joint: the camera was not sure, with point transfer's verdict), else None."""
-    joint = (result.cues.geometric_joint if result.cues is not None else None) or {}
-    if not joint or video in joint.get("used", ()) or video not in joint.get("margin", {}):
-        return None
-    why = (f"Stage 0's joint vote was not sure of its offset (margin {joint['margin'][video]:.1f}), "
-           f"so its geometric track pairs were not used")
-    check = (joint.get("transfer") or {}).get(video)
-    return f"{why}; {check['reason']}" if check else why
 
 
 def _video_blame(cause: str | None) -> str:

@@ -10,8 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry.sampling import camera_at_frames, sample_video
-from ..geometry.triangulate import triangulate_track_pair
+from ..geometry.triangulate import triangulate_over_time
 from ..types import CueBundle
 
 MIN_SEGMENT_SAMPLES = 5  # shorter runs of a trajectory are dropped (too short to show motion)
@@ -57,14 +56,9 @@ def triangulate_pair(bundle: CueBundle, a: str, b: str, offset_a_s: float, offse
     if len(idx) > max_tracks:
         idx = idx[np.linspace(0, len(idx) - 1, max_tracks).round().astype(int)]
     va, vb = bundle.video(a), bundle.video(b)
-    g = va.timestamps_s + offset_a_s
-    at_a = camera_at_frames(bundle.cameras[a], np.arange(va.num_frames))  # (Ta,...)
-    xa = bundle.tracks[a].xy[idx[:, 0]].astype(np.float64)  # (P,Ta,2)
-    xa[:, ~at_a.valid] = np.nan
-    at_b = sample_video(vb.timestamps_s, bundle.cameras[b], bundle.tracks[b].xy, g - offset_b_s,
-                        rows=idx[:, 1])
-    tri = triangulate_track_pair(at_a.K[None], at_a.cam_from_world[None], xa,
-                                 at_b.K[None], at_b.cam_from_world[None], at_b.xy)
+    tri, g = triangulate_over_time(va.timestamps_s, bundle.cameras[a], bundle.tracks[a].xy, offset_a_s,
+                                   vb.timestamps_s, bundle.cameras[b], bundle.tracks[b].xy, offset_b_s,
+                                   idx, at="a")
     err = tri.reprojection_px[tri.kept]
     inst = bundle.tracks[a].instance
     inst = inst[idx[:, 0]] if inst is not None else np.full(len(idx), -1)

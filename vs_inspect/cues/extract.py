@@ -442,18 +442,22 @@ def _log_votes(sink: Sink, a: str, b: str, gs, chosen_s: float | None) -> None:
         sink.pair_votes(a, b, gs.vote_offsets_s, gs.votes, vote_z(gs)[1], chosen_s)
 
 
+def _joint_pair_used(a: str, b: str, sure: dict[str, bool], cameras: dict) -> bool:
+    """Whether the joint vote's Δ of pair (a, b) is trusted: both cameras sure, and when both
+    move, a third camera sure too (a closed triangle confirms their Δ; see _add_joint_pairs)."""
+    if not (sure.get(a) and sure.get(b)):
+        return False
+    return not (cameras[a].is_moving and cameras[b].is_moving) or sum(sure.values()) >= 3
+
+
 def _sure_pairs(found: dict, joint, sure: dict[str, bool], cameras: dict) -> dict:
-    """The supporters of the joint Δ of every pair of two sure cameras (two moving ones only with
-    a third sure camera, as in _add_joint_pairs): the track pairs that point transfer
-    triangulates."""
+    """The supporters of the joint Δ of every pair whose Δ is trusted (_joint_pair_used): the
+    track pairs that point transfer triangulates."""
     from .geometric_pairs import supporters
 
-    triangle = sum(sure.values()) >= 3
     out = {}
     for (a, b), (_, gs) in found.items():
-        if not (sure.get(a) and sure.get(b)):
-            continue
-        if cameras[a].is_moving and cameras[b].is_moving and not triangle:
+        if not _joint_pair_used(a, b, sure, cameras):
             continue
         index = supporters(gs, joint.offsets_s[b] - joint.offsets_s[a])
         out[(a, b)] = TrackPairs(a, b, index, np.ones(len(index)))
@@ -554,8 +558,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
     from .geometric_pairs import supporters
 
     stats["geometric_peaks"] = "joint"
-    # the joint offsets put the first camera by name at 0 ("origin")
-    stats["geometric_joint"] = {"origin": sorted(joint.offsets_s)[0],
+    stats["geometric_joint"] = {"origin": joint.origin,
                                 "offsets_s": {n: round(o, 4) for n, o in joint.offsets_s.items()},
                                 "score": round(joint.score, 2),
                                 "margin": {n: round(m, 2) for n, m in joint.margin.items()},
@@ -574,9 +577,8 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
     # their per-frame geometry lets wrong tracks fit one wrong offset, and with a single sure
     # pair nothing checks it (fencing1 with looser moving regions: aria01-aria03 at +2.4 s, truth
     # +1.5 s, accepted as a clear minimum from its own supporters)
-    triangle = sum(sure.values()) >= 3
-    unconfirmed = {(a, b) for (a, b) in found if sure.get(a) and sure.get(b) and not triangle
-                   and cameras[a].is_moving and cameras[b].is_moving}
+    unconfirmed = {(a, b) for (a, b) in found if sure.get(a) and sure.get(b)
+                   and not _joint_pair_used(a, b, sure, cameras)}
     if unconfirmed:
         names = ", ".join(sorted(f"{a}__{b}" for a, b in unconfirmed))
         msg = (f"geometric track pairs not used for {names}: both cameras move and no "
@@ -586,7 +588,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
     out = dict(pairs)
     for (a, b), (_, gs) in found.items():
         delta = joint.offsets_s[b] - joint.offsets_s[a]
-        both = bool(sure.get(a) and sure.get(b)) and (a, b) not in unconfirmed
+        both = _joint_pair_used(a, b, sure, cameras)
         index = supporters(gs, delta) if both else np.zeros((0, 2), np.int64)
         _log_votes(sink, a, b, gs, delta if both else None)
         desc = pairs[(a, b)]

@@ -411,6 +411,11 @@ class JointChoice:
     score: float  # Σ over pairs of the vote z-score at the implied Δ_ab
     margin: dict[str, float]  # camera -> score lost by the best choice that moves it by > tol_s
 
+    @property
+    def origin(self) -> str:
+        """The camera whose offset is 0: the first by name (joint_offsets)."""
+        return min(self.offsets_s)
+
 
 def vote_z(st: GeometricPairStats) -> tuple[np.ndarray, np.ndarray]:
     """(offsets_s (D,), z (D,)): the vote histogram summed over ±halfwidth_s, as robust z-scores

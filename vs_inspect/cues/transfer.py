@@ -22,9 +22,9 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..geometry.epipolar import project
-from ..geometry.sampling import camera_at_frames, sample_video
+from ..geometry.sampling import camera_at_frames
 from ..geometry.timing import frame_brackets
-from ..geometry.triangulate import triangulate_track_pair
+from ..geometry.triangulate import triangulate_over_time
 from ..types import CameraTrack, TrackPairs, VideoInfo
 
 _BLOCK_ELEMENTS = 4_000_000  # (offset, sample) brackets held at once
@@ -63,14 +63,9 @@ def triangulate_pairs(infos: Mapping[str, VideoInfo], cameras: Mapping[str, Came
         idx = tp.index
         if len(idx) > max_per_pair:
             idx = idx[np.linspace(0, len(idx) - 1, max_per_pair).round().astype(int)]
-        va, vb = infos[a], infos[b]
-        g = vb.timestamps_s + offsets_s[b]  # global time of b's frames
-        at_b = camera_at_frames(cameras[b], np.arange(vb.num_frames))
-        xb = np.asarray(tracks_xy[b][idx[:, 1]], np.float64)
-        xb[:, ~at_b.valid] = np.nan
-        at_a = sample_video(va.timestamps_s, cameras[a], tracks_xy[a], g - offsets_s[a], rows=idx[:, 0])
-        tri = triangulate_track_pair(at_a.K[None], at_a.cam_from_world[None], at_a.xy,
-                                     at_b.K[None], at_b.cam_from_world[None], xb)
+        tri, g = triangulate_over_time(infos[a].timestamps_s, cameras[a], tracks_xy[a], offsets_s[a],
+                                       infos[b].timestamps_s, cameras[b], tracks_xy[b], offsets_s[b],
+                                       idx, at="b")  # g: global time of b's frames
         n = tri.kept.sum(1)
         pair_no = len(used)
         used.append((a, b))

@@ -8,6 +8,7 @@ import numpy as np
 
 from ._shapes import check_shape
 from .epipolar import camera_centers
+from .sampling import camera_at_frames, sample_video
 
 MAX_REPROJECTION_PX = 4.0  # a point is kept when it reprojects this close in both views
 MIN_RAY_ANGLE_DEG = 3.0  # ... and when its two viewing rays meet at least at this angle
@@ -60,6 +61,29 @@ def reprojection_error(P: np.ndarray, X: np.ndarray, x: np.ndarray) -> tuple[np.
     with np.errstate(invalid="ignore", divide="ignore"):
         uv = y[..., :2] / y[..., 2:3]
     return np.linalg.norm(uv - np.asarray(x, float), axis=-1), y[..., 2]
+
+
+def triangulate_over_time(timestamps_a: np.ndarray, camera_a, xy_a: np.ndarray, offset_a_s: float,
+                          timestamps_b: np.ndarray, camera_b, xy_b: np.ndarray, offset_b_s: float,
+                          index: np.ndarray, at: str = "a") -> tuple[TwoViewPoints, np.ndarray]:
+    """Track pairs index (P,2) (rows of xy_a (Na,Ta,2), of xy_b) triangulated at the frames of
+    video `at` ("a" or "b"), the other read between its frames at the same global moment
+    (sampling.sample_video); offset_*_s: each video's offset (global time of its local 0).
+    Returns (points (P,T,3) with T the frames of `at`, NaN where a frame has no pose; (T,) the
+    global time of those frames). camera_*: CameraTrack."""
+    if at not in ("a", "b"):
+        raise ValueError(f"at must be 'a' or 'b', got {at!r}")
+    framed, other = (0, 1) if at == "a" else (1, 0)
+    ts, offs = (timestamps_a, timestamps_b), (offset_a_s, offset_b_s)
+    cams, xys = (camera_a, camera_b), (xy_a, xy_b)
+    g = ts[framed] + offs[framed]
+    here = camera_at_frames(cams[framed], np.arange(len(ts[framed])))
+    x_here = np.asarray(xys[framed][index[:, framed]], dtype=np.float64)
+    x_here[:, ~here.valid] = np.nan
+    there = sample_video(ts[other], cams[other], xys[other], g - offs[other], rows=index[:, other])
+    views = {framed: (here.K, here.cam_from_world, x_here), other: (there.K, there.cam_from_world, there.xy)}
+    (K_a, T_a, x_a), (K_b, T_b, x_b) = views[0], views[1]
+    return triangulate_track_pair(K_a[None], T_a[None], x_a, K_b[None], T_b[None], x_b), g
 
 
 @dataclass(frozen=True)

@@ -150,14 +150,10 @@ def _run_result(sync: SyncResult, stats: CueStats | None, inputs: RunInputs, con
         offsets[name] = None
         unc[name] = None
         unresolved[name] = why
-    joint = (stats.geometric_joint if stats is not None else None) or {}
-    for name in unresolved:
-        if name in joint.get("margin", {}) and name not in joint.get("used", ()) and name not in stats.dropped:
-            # its pairs say "no/too few track pairs"; Stage 0 knows why
-            check = (joint.get("transfer") or {}).get(name)
-            unresolved[name] = (f"Stage 0's joint vote was not sure of its offset (margin "
-                                f"{joint['margin'][name]:.1f}), so it got no geometric track pairs"
-                                + (f" ({check['reason']})" if check else "") + f"; {unresolved[name]}")
+    for name in unresolved:  # its pairs say "no/too few track pairs"; Stage 0 may know why
+        why = stats.joint_refusal(name) if stats is not None else None
+        if why:
+            unresolved[name] = f"{why}; {unresolved[name]}"
     if moved_reference is not None:
         unresolved[moved_reference] += (f"; it cannot be the reference, so {sync.reference} is the "
                                          "reference instead")
