@@ -345,50 +345,47 @@ class RerunSink(Sink):
         self.rec.log(f"{base}/keyframes", rr.AnyValues(frames_a=np.asarray(frames_a, np.int64),
                                                        frames_b=np.asarray(frames_b, np.int64)), static=True)
 
+    def _on_offsets(self, path: str, style, ms: np.ndarray, values: np.ndarray) -> None:
+        """A static series style and its values (D,) at ms (D,) on the offset_ms timeline."""
+        self.rec.log(path, style, static=True)
+        if len(ms):
+            self.rec.send_columns(path, [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms)],
+                                  rr.Scalars.columns(scalars=np.asarray(values, np.float64)))
+
     @_timed
     def pair_votes(self, a: str, b: str, offsets_s: np.ndarray, votes: np.ndarray, z: np.ndarray,
                    chosen_s: float | None) -> None:
         base = pair_votes_path(a, b)
         self._votes_logged.append(f"{a}__{b}")
-        ms = np.round(np.asarray(offsets_s, np.float64) * 1000.0).astype(np.int64)
-        z = np.asarray(z, np.float64)
-        self.rec.log(f"{base}/z", rr.SeriesLines(names=[f"{a}→{b}"], widths=[1.2]), static=True)
-        self.rec.log(f"{base}/count", rr.SeriesLines(names=[f"{a}→{b} votes"], widths=[1.0]), static=True)
-        if len(ms):
-            self.rec.send_columns(f"{base}/z", [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms)],
-                                  rr.Scalars.columns(scalars=z))
-            self.rec.send_columns(f"{base}/count", [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms)],
-                                  rr.Scalars.columns(scalars=np.asarray(votes, np.float64)))
+        offsets_s, z = np.asarray(offsets_s, np.float64), np.asarray(z, np.float64)
+        ms = np.round(offsets_s * 1000.0).astype(np.int64)
+        self._on_offsets(f"{base}/z", rr.SeriesLines(names=[f"{a}→{b}"], widths=[1.2]), ms, z)
+        self._on_offsets(f"{base}/count", rr.SeriesLines(names=[f"{a}→{b} votes"], widths=[1.0]), ms, votes)
         if chosen_s is not None and len(ms):
-            i = int(np.argmin(np.abs(np.asarray(offsets_s) - chosen_s)))
-            self.rec.log(f"{base}/chosen", rr.SeriesPoints(colors=[ACCEPTED], markers=["diamond"], marker_sizes=[6.0],
-                                                           names=[f"{a}→{b} kept"]), static=True)
-            self.rec.send_columns(f"{base}/chosen", [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=[round(chosen_s * 1000)])],
-                                  rr.Scalars.columns(scalars=[z[i]]))
+            i = int(np.argmin(np.abs(offsets_s - chosen_s)))
+            self._on_offsets(f"{base}/chosen", rr.SeriesPoints(colors=[ACCEPTED], markers=["diamond"], marker_sizes=[6.0],
+                                                               names=[f"{a}→{b} kept"]),
+                             np.array([round(chosen_s * 1000)]), z[i:i + 1])
 
     @_timed
     def transfer_landscape(self, camera: str, offsets_s: np.ndarray, share: np.ndarray,
                            joint_offset_s: float, transfer_offset_s: float | None, confirmed: bool) -> None:
         base = transfer_path(camera)
         self._transfer_logged.append(camera)
-        ms = np.round(np.asarray(offsets_s, np.float64) * 1000.0).astype(np.int64)
-        share = np.asarray(share, np.float64)
+        offsets_s, share = np.asarray(offsets_s, np.float64), np.asarray(share, np.float64)
+        ms = np.round(offsets_s * 1000.0).astype(np.int64)
         color = ACCEPTED if confirmed else REJECTED
         mark = "✓" if confirmed else "✗"
-        self.rec.log(f"{base}/share", rr.SeriesLines(colors=[color], widths=[1.5],
-                                                     names=[f"{mark} {camera}: samples on their track"]), static=True)
-        if len(ms):
-            self.rec.send_columns(f"{base}/share", [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms)],
-                                  rr.Scalars.columns(scalars=share))
+        self._on_offsets(f"{base}/share", rr.SeriesLines(colors=[color], widths=[1.5],
+                                                         names=[f"{mark} {camera}: samples on their track"]), ms, share)
         for what, at, colour, marker in (("joint", joint_offset_s, MINIMA, "circle"),
                                          ("peak", transfer_offset_s, color, "diamond")):
             if at is None or not len(ms):
                 continue
-            i = int(np.argmin(np.abs(np.asarray(offsets_s) - at)))
-            self.rec.log(f"{base}/{what}", rr.SeriesPoints(colors=[colour], markers=[marker], marker_sizes=[6.0],
-                                                           names=[f"{camera}: {what} offset"]), static=True)
-            self.rec.send_columns(f"{base}/{what}", [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=[round(at * 1000)])],
-                                  rr.Scalars.columns(scalars=[share[i]]))
+            i = int(np.argmin(np.abs(offsets_s - at)))
+            self._on_offsets(f"{base}/{what}", rr.SeriesPoints(colors=[colour], markers=[marker], marker_sizes=[6.0],
+                                                               names=[f"{camera}: {what} offset"]),
+                             np.array([round(at * 1000)]), share[i:i + 1])
 
     @_timed
     def pair_landscape(self, landscape: PairLandscape, view: PairRecordView | None = None) -> None:
