@@ -251,11 +251,15 @@ def _image_pair_matches(db: Path) -> tuple:
 
 
 def _log_into(pycolmap, folder: Path) -> None:
-    """Send pycolmap's (glog) log files into `folder` instead of $TMPDIR."""
+    """Send pycolmap's (glog) log files into `folder` instead of $TMPDIR, and its thousands of
+    lines per reconstruction off stderr unless debug logging is on (`-vv`): pycolmap sets
+    alsologtostderr. Each level gets its own file name: glog names a file prefix + time + pid,
+    and a second level on the same name fails ("Could not create log file: File exists")."""
     try:
         pycolmap.logging.log_dir = str(folder)
+        pycolmap.logging.alsologtostderr = log.isEnabledFor(logging.DEBUG)
         for level in (pycolmap.logging.INFO, pycolmap.logging.WARNING, pycolmap.logging.ERROR):
-            pycolmap.logging.set_log_destination(level, str(folder / "colmap."))
+            pycolmap.logging.set_log_destination(level, str(folder / f"colmap.{level.name}."))
     except (AttributeError, TypeError):  # an older pycolmap without these controls
         pass
 
