@@ -114,8 +114,9 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
     cfg = CueConfig(geometric=GeometricPairConfig(joint_min_margin=1e9))  # no camera sure
     monkeypatch.setattr(gp, "consistent_peaks", lambda *a, **k: (None, "inconsistent"))
     sink, stats = _Events(), {"pairs": {}}
-    out = _add_geometric_pairs(pairs, cams, tracks, vids, cfg, stats, sink, progress=False)
+    out, voted = _add_geometric_pairs(pairs, cams, tracks, vids, cfg, stats, sink, progress=False)
     assert stats["geometric_peaks"] == "inconsistent"
+    assert voted == {}  # no Δ chosen, so none is reported as voted
     assert any("descriptor pairs kept only where consistent" in m for m in sink.messages)
     for (u, v), tp in out.items():
         right = {(row_of[u][p], row_of[v][p]) for p in range(30)}
@@ -123,3 +124,52 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
         assert kept <= right, (u, v, kept - right)  # no wrong pair left, no geometric pair added
         assert len(kept) >= 15, (u, v, len(kept))
         assert stats["pairs"][f"{u}__{v}"]["descriptor_pairs_kept"] == len(kept)
+
+
+def _fallback(fitted: dict[str, float]) -> dict:
+    return {"used": True, "fitted_offsets_s": dict(fitted)}
+
+
+def _videos(names, fps: float = 30.0) -> dict:
+    from types import SimpleNamespace
+    return {n: SimpleNamespace(info=SimpleNamespace(frame_interval_s=1.0 / fps)) for n in names}
+
+
+def test_cameras_from_moving_points_whose_votes_agree_are_kept():
+    from vs_inspect.cues.extract import _check_fitted_offsets
+
+    fb = _fallback({"r": 0.0, "u": 0.5, "v": -1.0})
+    # voted Δ within a frame of the fitted ones (caliscope's case)
+    voted = {("r", "u"): 0.52, ("r", "v"): -1.03, ("u", "v"): -1.5}
+    assert _check_fitted_offsets(fb, voted, _videos("ruv")) == {}
+    assert fb["check"]["verdict"] == "confirmed"
+    assert all(row["agrees"] for row in fb["check"]["pairs"].values())
+
+
+def test_cameras_from_moving_points_contradicted_by_their_votes_are_all_refused():
+    from vs_inspect.cues.extract import _check_fitted_offsets
+
+    # rendered seed 0 with SIFT: fitted at seconds away from where their own votes peak
+    fb = _fallback({"r": 0.0, "u": -2.717, "v": 1.79})
+    voted = {("u", "r"): 0.458, ("u", "v"): -0.133, ("r", "v"): 0.345}
+    refused = _check_fitted_offsets(fb, voted, _videos("ruv"))
+    assert set(refused) == {"r", "u", "v"}
+    assert "contradict" in refused["u"] and "u__r" in refused["u"]
+    assert fb["check"]["verdict"] == "contradicted"
+    # one pair off by 4 frames (tolerance 3) is enough
+    fb = _fallback({"r": 0.0, "u": 0.5, "v": -1.0})
+    voted = {("r", "u"): 0.5, ("r", "v"): -1.0, ("u", "v"): -1.5 + 4 / 30}
+    assert set(_check_fitted_offsets(fb, voted, _videos("ruv"))) == {"r", "u", "v"}
+
+
+def test_camera_from_moving_points_without_an_agreeing_vote_is_refused_alone():
+    from vs_inspect.cues.extract import _check_fitted_offsets
+
+    fb = _fallback({"r": 0.0, "u": 0.5, "v": -1.0})
+    refused = _check_fitted_offsets(fb, {("r", "u"): 0.5}, _videos("ruv"))
+    assert list(refused) == ["v"] and "confirmed" in refused["v"]
+    assert fb["check"]["verdict"] == "partly unconfirmed"
+    # two cameras: nothing to check against, marked so
+    fb = _fallback({"r": 0.0, "u": 0.5})
+    assert _check_fitted_offsets(fb, {("r", "u"): 3.0}, _videos("ru")) == {}
+    assert fb["check"]["verdict"].startswith("unchecked")

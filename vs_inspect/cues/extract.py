@@ -319,12 +319,22 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
         sink.cameras(cameras, points, colors)
     timings["cameras_s"] = time.perf_counter() - t0
 
-    usable = [n for n in names if n in cameras]
     pairs = {k: v for k, v in all_pairs.items() if k[0] in cameras and k[1] in cameras}
     if cfg.geometric.enabled:
         t0 = time.perf_counter()
-        pairs = _add_geometric_pairs(pairs, cameras, tracks, vids, cfg, stats, sink, progress)
+        pairs, voted = _add_geometric_pairs(pairs, cameras, tracks, vids, cfg, stats, sink, progress)
+        fallback = (stats.get("sfm") or {}).get("fallback") or {}
+        if fallback.get("used"):
+            refused = _check_fitted_offsets(fallback, voted, vids)
+            for n, why in refused.items():
+                cameras.pop(n, None)
+                stats["dropped"][n] = why
+                sink.stage_event("cameras", f"{n}: {why}")
+                log.warning("%s: %s", n, why)
+            pairs = {k: v for k, v in pairs.items() if k[0] in cameras and k[1] in cameras}
+            stats["registered_cameras"] = len(cameras)
         timings["geometric_pairs_s"] = time.perf_counter() - t0
+    usable = [n for n in names if n in cameras]
     timings["total_s"] = time.perf_counter() - t_all
     stats["track_pairs"] = int(sum(len(p.index) for p in pairs.values()))
     stats["tracks"] = int(sum(t.num_tracks for t in tracks.values()))
@@ -351,9 +361,9 @@ def _cue_stats(stats: dict) -> CueStats:
 
 
 def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
-                         stats: dict, sink: Sink, progress: bool) -> dict:
+                         stats: dict, sink: Sink, progress: bool) -> tuple[dict, dict]:
     """Descriptor pairs plus epipolar-consistency pairs for every pair of known cameras (a moving
-    one with its per-frame poses).
+    one with its per-frame poses): (the pairs, {(a, b): the Δ_ab whose supporters were added}).
 
     With three or more such cameras, the vote peaks whose offsets close every triangle
     (Δ_ab + Δ_bc ≈ Δ_ac) are chosen and only their supporters kept. When no choice closes the
@@ -383,7 +393,9 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
         sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
         out = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg, stats, sink,
                                {c: chk.summary(traj.num_trajectories) for c, chk in checks.items()})
-        return _add_transfer_pairs(out, checks, traj, list(vids), stats, sink)
+        used = {(a, b): joint.offsets_s[b] - joint.offsets_s[a] for a, b in found
+                if _joint_pair_used(a, b, sure, cameras)}
+        return _add_transfer_pairs(out, checks, traj, list(vids), stats, sink), used
     if joint is not None:
         # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
         # decides (and refuses when the triangles do not close), as before the joint choice
@@ -431,7 +443,50 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
                  f"vote peaks at {', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s")
         sink.stage_event("cues", f"{a}__{b}: {len(index)} track pairs from epipolar consistency ({which})")
         log.info("%s__%s: %d geometric track pairs (%d new), %s", a, b, len(index), n_new, which)
-    return out
+    used = {k: found[k][1].peaks_s[i] for k, i in (chosen or {}).items() if i is not None}
+    return out, used
+
+
+def _check_fitted_offsets(fallback: dict, voted: dict, vids: dict) -> dict[str, str]:
+    """Cameras from the moving points that their own epipolar votes contradict or leave
+    unconfirmed: {camera: reason}; fallback["check"] records every pair's comparison.
+
+    Those cameras were fitted to track pairs aligned at coarse offsets (fitted_offsets_s). Right
+    cameras at right offsets make the votes over all track pairs peak at the same Δ (caliscope:
+    within a frame); cameras fitted to wrong pairs at wrong offsets put the peaks elsewhere
+    (rendered seed 0 with SIFT: seconds away), and Stage 1 then accepts minima at offsets the
+    cameras were never fitted for. Any contradiction refuses every such camera (they were fitted
+    jointly); a camera in no agreeing pair is refused as unconfirmed. Two cameras give no check
+    (their votes peak where their own F was fitted): they pass, marked unchecked."""
+    fitted = fallback["fitted_offsets_s"]
+    if len(fitted) < 3:
+        fallback["check"] = {"verdict": "unchecked (two cameras: no third to confirm their offset)"}
+        return {}
+    tol_s = 3.0 * max(vids[n].info.frame_interval_s for n in fitted)
+    rows, agreeing, contradicted = {}, set(), []
+    for (a, b), delta in sorted(voted.items()):
+        if a not in fitted or b not in fitted:
+            continue
+        expect = fitted[b] - fitted[a]
+        ok = abs(delta - expect) <= tol_s
+        rows[f"{a}__{b}"] = {"fitted_s": round(expect, 4), "voted_s": round(delta, 4), "agrees": ok}
+        if ok:
+            agreeing |= {a, b}
+        else:
+            contradicted.append(f"{a}__{b} fitted at Δ {expect:+.3f} s, voted {delta:+.3f} s")
+    if contradicted:
+        why = ("camera from the moving points refused: its own epipolar votes contradict the offsets "
+               f"it was fitted at ({'; '.join(contradicted)}; tolerance {tol_s:.3f} s), so the track "
+               "pairs it was fitted to were wrong")
+        refused = {n: why for n in fitted}
+    else:
+        refused = {n: ("camera from the moving points refused: no pair of it with a sure epipolar vote "
+                       "confirmed the offset it was fitted at") for n in fitted if n not in agreeing}
+    fallback["check"] = {"tolerance_s": round(tol_s, 4), "pairs": rows,
+                         "verdict": "contradicted" if contradicted else
+                         "confirmed" if not refused else "partly unconfirmed",
+                         "refused": sorted(refused)}
+    return refused
 
 
 def _log_votes(sink: Sink, a: str, b: str, gs, chosen_s: float | None) -> None:
@@ -666,6 +721,9 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
             why += (f"; on the moving points its cameras leave a median epipolar distance of {sfm_px:.1f} px, "
                     f"the moving points' own cameras {fb_px:.1f} px")
         stats["sfm"]["fallback"] = {"reference": ref, "pairs": details, "why": why, "used": bool(use)}
+        if use:  # the offsets the cameras were fitted at, relative to the reference (checked later)
+            stats["sfm"]["fallback"]["fitted_offsets_s"] = {ref: 0.0} | {
+                n: details[n]["coarse_offset_s"] for n in cams if n != ref}
         log.warning("%s; cameras from the moving points: %d (%s)", why, len(cams), "used" if use else "not used")
         if use:
             stats["camera_source"] = "estimated from moving points (two-view geometry)"
