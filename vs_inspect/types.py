@@ -413,6 +413,10 @@ class CueStats:
         joint = self.geometric_joint or {}
         if video not in joint.get("margin", {}) or video in joint.get("used", ()) or video in self.dropped:
             return None
+        if video in joint.get("sure", ()):
+            return (f"Stage 0's joint vote was sure of its offset (margin {joint['margin'][video]:.1f}) but of "
+                    f"{len(joint['sure'])} camera(s) only, so no triangle of sure cameras confirmed it and it "
+                    f"got no geometric track pairs")
         check = (joint.get("transfer") or {}).get(video)
         return (f"Stage 0's joint vote was not sure of its offset (margin {joint['margin'][video]:.1f}), "
                 f"so it got no geometric track pairs" + (f" ({check['reason']})" if check else ""))

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vs_inspect.cues.config import CueConfig
+from vs_inspect.cues.config import CueConfig, GeometricPairConfig
 from vs_inspect.cues.extract import _add_joint_pairs
 from vs_inspect.cues.geometric_pairs import GeometricPairStats, JointChoice
 from vs_inspect.geometry.epipolar import look_at
@@ -31,7 +31,7 @@ def _stats(delta_s: float, n: int = 12) -> GeometricPairStats:
                               0.1, idx, np.full(n, delta_s), np.ones(n))
 
 
-def _run(moving_b: bool, sure_c: bool):
+def _run(moving_b: bool, sure_c: bool, min_sure: int = 3):
     moving = CameraTrack(K, np.stack([look_at([6.0, 0.01 * t, 1.5], [0, 0, 1]) for t in range(50)]))
     static = CameraTrack(K, look_at([0.0, 6.0, 2.5], [0, 0, 1]))
     cams = {"a": moving, "b": moving if moving_b else static, "c": moving}
@@ -41,24 +41,33 @@ def _run(moving_b: bool, sure_c: bool):
     joint = JointChoice(offs, 10.0, {"a": 5.0, "b": 5.0, "c": 5.0 if sure_c else 1.0})
     sure = {"a": True, "b": True, "c": sure_c}
     sink, stats = _Events(), {"pairs": {}}
-    out = _add_joint_pairs(pairs, found, joint, sure, cams, {}, {}, CueConfig(), stats, sink)
-    return {k: len(v.index) for k, v in out.items()}, sink.messages
+    cfg = CueConfig(geometric=GeometricPairConfig(joint_min_sure=min_sure))
+    out = _add_joint_pairs(pairs, found, joint, sure, cams, {}, {}, cfg, stats, sink)
+    return {k: len(v.index) for k, v in out.items()}, sink.messages, stats
 
 
-def test_two_moving_cameras_need_a_third_sure_camera():
-    used, msgs = _run(moving_b=True, sure_c=False)
-    assert used == {("a", "b"): 0, ("a", "c"): 0, ("b", "c"): 0}
-    assert any("both cameras move and no third camera's offset is sure" in m for m in msgs), msgs
+def test_two_sure_cameras_alone_get_no_pairs():
+    """A Δ confirmed by no closed triangle of sure cameras is not used (default joint_min_sure 3)."""
+    for moving_b in (False, True):
+        used, msgs, stats = _run(moving_b=moving_b, sure_c=False)
+        assert used == {("a", "b"): 0, ("a", "c"): 0, ("b", "c"): 0}
+        assert any("sure of 2 camera(s) only" in m for m in msgs), msgs
+        assert stats["geometric_joint"]["sure"] == ["a", "b"] and stats["geometric_joint"]["used"] == []
     # with the third camera sure the triangle confirms every pair: all supporters are used
-    used, msgs = _run(moving_b=True, sure_c=True)
-    assert used == {("a", "b"): 12, ("a", "c"): 12, ("b", "c"): 12}
-    assert not any("no third camera" in m for m in msgs)
+    for moving_b in (False, True):
+        used, msgs, stats = _run(moving_b=moving_b, sure_c=True)
+        assert used == {("a", "b"): 12, ("a", "c"): 12, ("b", "c"): 12}
+        assert not any("camera(s) only" in m for m in msgs)
+        assert stats["geometric_joint"]["used"] == ["a", "b", "c"]
 
 
-def test_a_static_camera_pairs_with_a_moving_one_as_before():
-    used, msgs = _run(moving_b=False, sure_c=False)
+def test_with_the_rule_before_two_moving_cameras_still_need_a_third():
+    """joint_min_sure 2: two sure static-and-moving cameras pair, two moving ones do not."""
+    used, msgs, _ = _run(moving_b=False, sure_c=False, min_sure=2)
     assert used == {("a", "b"): 12, ("a", "c"): 0, ("b", "c"): 0}
-    assert not any("no third camera" in m for m in msgs)
+    used, msgs, _ = _run(moving_b=True, sure_c=False, min_sure=2)
+    assert used == {("a", "b"): 0, ("a", "c"): 0, ("b", "c"): 0}
+    assert any("sure of 2 camera(s) only" in m for m in msgs), msgs
 
 
 def test_transfer_matches_join_both_source_pairs_in_video_order():

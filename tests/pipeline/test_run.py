@@ -213,3 +213,20 @@ def test_an_unresolved_video_stage0_was_unsure_of_says_why_first():
     assert r.unresolved["c"].startswith("Stage 0's joint vote was not sure of its offset (margin 1.3), "
                                         "so it got no geometric track pairs (they disagree); not connected")
     assert r.unresolved["d"] == "not connected" and r.unresolved["e"] == "could not be read"
+
+
+def test_an_unresolved_video_the_joint_vote_was_sure_of_alone_with_one_other_says_so():
+    """Sure of only two cameras, the joint vote's Δ between them is confirmed by no triangle: each
+    unresolved video's reason says that, not that the vote was unsure of it."""
+    from vs_inspect.pipeline.run import _run_result
+    from vs_inspect.types import CueStats, SyncResult
+
+    sync = SyncResult("a", {"a": None, "b": None, "c": None}, {}, {
+        "a": "the reference, but no accepted pair links it", "b": "not connected",
+        "c": "not connected"}, (), (), ())
+    joint = {"origin": "a", "sure": ["a", "b"], "used": [], "margin": {"a": 6.9, "b": 5.3, "c": 0.2}}
+    stats = CueStats("estimated", 3, 10, 10, {}, {}, {}, {}, "joint", None, joint)
+    r = _run_result(sync, stats, RunInputs(), RunConfig(), None, {})
+    assert r.unresolved["b"].startswith("Stage 0's joint vote was sure of its offset (margin 5.3) but of 2 "
+                                        "camera(s) only, so no triangle of sure cameras confirmed it")
+    assert r.unresolved["c"].startswith("Stage 0's joint vote was not sure of its offset (margin 0.2)")

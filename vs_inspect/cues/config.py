@@ -138,6 +138,8 @@ class GeometricPairConfig:
     """With three or more cameras, choose every camera's offset at once from all pairs' vote histograms (geometric_pairs.joint_offsets) and keep each pair's supporters of the implied Δ, instead of closing triangles of each pair's top peaks."""
     joint_min_margin: float = 5.0
     """Joint choice: a camera's geometric pairs are used only if its offset beats the best choice that moves it against every other camera (by more than 3 frames) by this much summed vote z-score. Measured (README, joint pairing): right cameras had 5.7-850 (one right camera 1.3, refused), the demo's wrong cam2 1.7, 3.0 and 3.3 (52-252 ms off) under three versions of Stage 0; 3 let the last two through."""
+    joint_min_sure: int = 3
+    """Joint choice: a pair's Δ is used only when at least this many cameras are sure (after point transfer), so that a closed triangle of sure cameras confirms it. Measured (README, the triangle rule): with only two sure cameras, rendered seed 1 with estimated cameras put cam3 3.7 s off and the all-around scene cam1 141 ms off, both accepted; the one right camera it also refuses was 9.7 ms off. 2 = the rule before (two sure static cameras suffice)."""
     transfer: bool = True
     """Joint choice with two or more sure cameras: an unsure camera's offset is used when point transfer confirms it (cues/transfer.py: the sure cameras' track pairs triangulated on the global clock and projected into it; a track of it must follow a projection, not just a line). Measured (README, point transfer): rendered seed 0's cam2 (margin 1.3, right) confirmed; the demo's cam2 (margin 3.3, 56 ms off) refused, its transfer peak 2.7 frames away."""
     transfer_radius_diag: float = 0.006

@@ -394,7 +394,7 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
         out = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg, stats, sink,
                                {c: chk.summary(traj.num_trajectories) for c, chk in checks.items()})
         used = {(a, b): joint.offsets_s[b] - joint.offsets_s[a] for a, b in found
-                if _joint_pair_used(a, b, sure, cameras)}
+                if _joint_pair_used(a, b, sure, cameras, cfg.geometric.joint_min_sure)}
         return _add_transfer_pairs(out, checks, traj, list(vids), stats, sink), used
     if joint is not None:
         # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
@@ -497,22 +497,30 @@ def _log_votes(sink: Sink, a: str, b: str, gs, chosen_s: float | None) -> None:
         sink.pair_votes(a, b, gs.vote_offsets_s, gs.votes, vote_z(gs)[1], chosen_s)
 
 
-def _joint_pair_used(a: str, b: str, sure: dict[str, bool], cameras: dict) -> bool:
-    """Whether the joint vote's Δ of pair (a, b) is trusted: both cameras sure, and when both
-    move, a third camera sure too (a closed triangle confirms their Δ; see _add_joint_pairs)."""
+def _transfer_source(a: str, b: str, sure: dict[str, bool], cameras: dict) -> bool:
+    """Whether pair (a, b)'s joint Δ may be triangulated for point transfer: both cameras sure,
+    and when both move, a third camera sure too (their per-frame geometry lets wrong tracks fit
+    one wrong offset)."""
     if not (sure.get(a) and sure.get(b)):
         return False
     return not (cameras[a].is_moving and cameras[b].is_moving) or sum(sure.values()) >= 3
 
 
+def _joint_pair_used(a: str, b: str, sure: dict[str, bool], cameras: dict, min_sure: int) -> bool:
+    """Whether the joint vote's Δ of pair (a, b) is trusted: a transfer source, and at least
+    min_sure cameras sure in all (GeometricPairConfig.joint_min_sure: 3 = a closed triangle of
+    sure cameras confirms it; see _add_joint_pairs)."""
+    return _transfer_source(a, b, sure, cameras) and sum(sure.values()) >= min_sure
+
+
 def _sure_pairs(found: dict, joint, sure: dict[str, bool], cameras: dict) -> dict:
-    """The supporters of the joint Δ of every pair whose Δ is trusted (_joint_pair_used): the
-    track pairs that point transfer triangulates."""
+    """The supporters of the joint Δ of every pair that point transfer may triangulate
+    (_transfer_source)."""
     from .geometric_pairs import supporters
 
     out = {}
     for (a, b), (_, gs) in found.items():
-        if not _joint_pair_used(a, b, sure, cameras):
+        if not _transfer_source(a, b, sure, cameras):
             continue
         index = supporters(gs, joint.offsets_s[b] - joint.offsets_s[a])
         out[(a, b)] = TrackPairs(a, b, index, np.ones(len(index)))
@@ -617,7 +625,9 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                                 "offsets_s": {n: round(o, 4) for n, o in joint.offsets_s.items()},
                                 "score": round(joint.score, 2),
                                 "margin": {n: round(m, 2) for n, m in joint.margin.items()},
-                                "used": sorted(n for n, ok in sure.items() if ok)}
+                                "sure": sorted(n for n, ok in sure.items() if ok),
+                                "used": sorted({n for a, b in found for n in (a, b)
+                                                if _joint_pair_used(a, b, sure, cameras, cfg.geometric.joint_min_sure)})}
     if transfer:
         stats["geometric_joint"]["transfer"] = transfer
     weak = sorted(n for n, ok in sure.items() if not ok)
@@ -628,22 +638,23 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                + ("; point transfer did not confirm them" if transfer else ""))
         sink.stage_event("cues", msg)
         log.warning(msg)
-    # two moving cameras' Δ only when a third camera is sure too (a closed triangle confirms it):
-    # their per-frame geometry lets wrong tracks fit one wrong offset, and with a single sure
-    # pair nothing checks it (fencing1 with looser moving regions: aria01-aria03 at +2.4 s, truth
-    # +1.5 s, accepted as a clear minimum from its own supporters)
+    # a Δ only when a third camera is sure too (a closed triangle confirms it): with a single
+    # sure pair nothing checks it, and Stage 1 accepts the minimum its own supporters make
+    # (fencing1 with looser moving regions: aria01-aria03 at +2.4 s, truth +1.5 s; rendered
+    # seed 1 with estimated cameras: cam3 3.7 s off; the all-around scene: cam1 141 ms off)
+    min_sure = cfg.geometric.joint_min_sure
     unconfirmed = {(a, b) for (a, b) in found if sure.get(a) and sure.get(b)
-                   and not _joint_pair_used(a, b, sure, cameras)}
+                   and not _joint_pair_used(a, b, sure, cameras, min_sure)}
     if unconfirmed:
         names = ", ".join(sorted(f"{a}__{b}" for a, b in unconfirmed))
-        msg = (f"geometric track pairs not used for {names}: both cameras move and no "
-               f"third camera's offset is sure, so no triangle confirms their Δ")
+        msg = (f"geometric track pairs not used for {names}: the joint vote is sure of "
+               f"{sum(sure.values())} camera(s) only, so no triangle of sure cameras confirms their Δ")
         sink.stage_event("cues", msg)
         log.warning(msg)
     out = dict(pairs)
     for (a, b), (_, gs) in found.items():
         delta = joint.offsets_s[b] - joint.offsets_s[a]
-        both = _joint_pair_used(a, b, sure, cameras)
+        both = _joint_pair_used(a, b, sure, cameras, min_sure)
         index = supporters(gs, delta) if both else np.zeros((0, 2), np.int64)
         _log_votes(sink, a, b, gs, delta if both else None)
         desc = pairs[(a, b)]
