@@ -533,8 +533,11 @@ def _run_and_terminate(script: str, tmp_path: Path, ready: str = "READY",
                        sig: int = signal.SIGTERM) -> subprocess.CompletedProcess:
     env = {**os.environ, "PYTHONPATH": str(REPO), "TMPDIR": str(tmp_path / "tmp")}
     (tmp_path / "tmp").mkdir(exist_ok=True)
+    # SIGINT at its default in the child: a test run started as a shell's background job ignores
+    # SIGINT, the child would inherit that, and Python installs no KeyboardInterrupt handler then
     proc = subprocess.Popen([sys.executable, "-c", textwrap.dedent(script)], cwd=tmp_path, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.monotonic() + 60
     line = ""
     while time.monotonic() < deadline:

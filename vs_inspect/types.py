@@ -404,12 +404,13 @@ class CueStats:
     timings_s: dict[str, float]  # per Stage 0 step, seconds
     geometric_peaks: str | None = None  # "consistent" | "inconsistent" | ... (None: not run)
     sfm: dict[str, Any] | None = None  # estimated cameras' diagnostics, JSON values (None: calibrated)
-    geometric_joint: dict[str, Any] | None = None  # the joint vote (offsets, margins, cameras used) and
+    geometric_joint: dict[str, Any] | None = None  # the joint vote (offsets, margins, cameras sure and used) and
     # its point-transfer checks of unsure cameras ("transfer": camera -> verdict), JSON values
 
     def joint_refusal(self, video: str) -> str | None:
         """Why Stage 0 gave `video` no geometric track pairs when its joint vote was unsure of it
-        (with point transfer's verdict), else None (sure, dropped, or no joint vote)."""
+        (with point transfer's verdict) or sure of too few cameras to close a triangle, else None
+        (used, dropped, or no joint vote)."""
         joint = self.geometric_joint or {}
         if video not in joint.get("margin", {}) or video in joint.get("used", ()) or video in self.dropped:
             return None
