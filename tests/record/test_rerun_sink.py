@@ -468,3 +468,30 @@ def test_pairing_votes_are_recorded_on_the_pairs_offset_axis(tmp_path):
             out += names(x) if isinstance(x, rrb.Container) else [x.name]
         return out
     assert "pairing votes (Stage 0, z per Δ)" in names(bp.root_container)
+
+
+def test_a_run_that_stops_in_stage0_shows_its_stills_and_reasons_on_offset_ms(tmp_path):
+    """Stage 0 logged votes on offset_ms and then refused every camera (no Stage 1): the videos'
+    stills and Stage 0's events are on offset_ms, where the viewer opens, not only elsewhere."""
+    import rerun.chunk as rrc
+
+    from vs_inspect.types import VideoInfo
+
+    info = VideoInfo("a", 64, 48, 10, np.arange(10) / 10.0, fps=10.0)
+    offsets = np.arange(-0.5, 0.5, 0.1)
+    out = tmp_path / "stage0.rrd"
+    with RerunSink(out, progress=False) as sink:
+        sink.video(info, "a.mp4")
+        for k in range(info.num_frames):
+            sink.video_frame("a", k, np.full((48, 64, 3), 20 * k, np.uint8))
+        sink.pair_votes("a", "b", offsets, np.ones(len(offsets)), np.zeros(len(offsets)), None)
+        sink.stage_event("cameras", "a: camera from the moving points refused")
+    assert rerun_verify(out, tmp_path).returncode == 0
+    store = rrc.RrdReader(str(out)).stream().collect()
+    logs = store.reader("offset_ms", contents="/log/stage0").to_arrow_table()
+    body = [c for c in logs.column_names if c.endswith("TextLog:text")][0]
+    assert [v[0] for v in logs.column(body).to_pylist()] == ["cameras: a: camera from the moving points refused"]
+    assert logs.column("offset_ms").to_pylist() == [-500]
+    still = [e for e in chunk_entities(out) if e.startswith("videos/a/still")]
+    assert still, chunk_entities(out)
+    assert store.reader("offset_ms", contents=f"/{still[0]}").to_arrow_table().num_rows >= 1

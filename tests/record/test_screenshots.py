@@ -147,3 +147,22 @@ def test_activate_tab_brings_a_titled_view_or_container_to_the_front():
     assert activate_tab(layout, "a→b", suffix=True)
     assert not activate_tab(layout, "point transfer")  # titles match whole unless suffix=True
     assert not activate_tab(layout, "no such tab")
+
+
+def test_a_container_with_one_child_given_as_a_string_is_read():
+    """The viewer's blueprint gives a container's single child as a string, not a list (a run
+    that accepted no pair): its view is on screen, and a tab inside it can be activated."""
+    from vs_inspect.record.screenshots import activate_tab, on_screen_views
+
+    v1, v2 = "view/" + "1" * 32, "view/" + "2" * 32
+    layout = {
+        "/container/root": {"ContainerBlueprint": {"container_kind": "Vertical", "contents": [
+            "container/one", "container/tabs"]}},
+        "/container/one": {"ContainerBlueprint": {"container_kind": "Horizontal", "contents": v1}},
+        "/container/tabs": {"ContainerBlueprint": {"container_kind": "Tabs", "contents": v2}},
+        f"/{v1}": {"ViewBlueprint": {"display_name": "videos"}},
+        f"/{v2}": {"ViewBlueprint": {"display_name": "events"}},
+    }
+    assert on_screen_views(layout) == ["1" * 32, "2" * 32]
+    assert activate_tab(layout, "events")
+    assert layout["/container/tabs"]["ContainerBlueprint"]["active_tab"] == v2

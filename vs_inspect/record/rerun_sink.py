@@ -345,9 +345,19 @@ class RerunSink(Sink):
         self.rec.log(f"{base}/keyframes", rr.AnyValues(frames_a=np.asarray(frames_a, np.int64),
                                                        frames_b=np.asarray(frames_b, np.int64)), static=True)
 
+    def _extend_offset_range(self, ms: np.ndarray) -> None:
+        """Widen the range of candidate offsets logged on offset_ms (the stills are logged at its
+        start, and the viewer opens on that timeline when it is not empty)."""
+        if len(ms):
+            lo, hi = int(np.min(ms)), int(np.max(ms))
+            self._offset_ms_min = lo if self._offset_ms_min is None else min(lo, self._offset_ms_min)
+            self._offset_ms_max = hi if self._offset_ms_max is None else max(hi, self._offset_ms_max)
+
     def _on_offsets(self, path: str, style, ms: np.ndarray, values: np.ndarray) -> None:
-        """A static series style and its values (D,) at ms (D,) on the offset_ms timeline."""
+        """A static series style and its values (D,) at ms (D,) on the offset_ms timeline (Stage 0's
+        votes and point transfer: a run that stops before Stage 1 still gets its stills there)."""
         self.rec.log(path, style, static=True)
+        self._extend_offset_range(ms)
         if len(ms):
             self.rec.send_columns(path, [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms)],
                                   rr.Scalars.columns(scalars=np.asarray(values, np.float64)))
@@ -453,6 +463,14 @@ class RerunSink(Sink):
                 "has_result": summary is not None, "options": asdict(self.options),
                 "pairs": self._pairs_logged}), media_type="text/plain"), static=True)
             names = list(self._videos) or (self._bundle.names if self._bundle else [])
+            if not self._pairs_logged and self._notes and self._offset_ms_min is not None:
+                # a run that stopped in Stage 0 has no pair decisions on offset_ms, where the
+                # viewer opens: its events (why each camera was refused) go there too
+                self.rec.reset_time()
+                self.rec.set_time(TIMELINE_OFFSET_MS, sequence=self._offset_ms_min)
+                for note in self._notes:
+                    self.rec.log(log_path("stage0"), rr.TextLog(note, level=rr.TextLogLevel.INFO))
+                self.rec.reset_time()
             self._log_pairs_table()
             self._log_guide(names)
             self.rec.send_blueprint(self.blueprint(names), make_active=True, make_default=True)
@@ -717,10 +735,7 @@ class RerunSink(Sink):
         key = f"{land.a}__{land.b}"
         self._pairs_logged.append(key)
         ms = np.round(np.asarray(land.offsets_s) * 1000.0).astype(np.int64)
-        if len(ms):
-            lo, hi = int(ms.min()), int(ms.max())
-            self._offset_ms_min = lo if self._offset_ms_min is None else min(lo, self._offset_ms_min)
-            self._offset_ms_max = hi if self._offset_ms_max is None else max(hi, self._offset_ms_max)
+        self._extend_offset_range(ms)
         e = np.asarray(land.energy, dtype=np.float64)
         ok = np.isfinite(e)
         color = ACCEPTED if land.decision.accepted else REJECTED

@@ -230,12 +230,19 @@ def chosen_and_wrong_ms(rrd: Path, pair: tuple[str, str] | None = None) -> tuple
     return chosen, wrong
 
 
+def _contents(container: dict) -> list[str]:
+    """A blueprint container's children ("view/<id>" or "container/<id>"): the viewer gives a
+    single child as a string, not a one-element list (a recording whose run accepted no pair)."""
+    contents = container.get("contents", [])
+    return [contents] if isinstance(contents, str) else list(contents)
+
+
 def on_screen_views(layout: dict) -> list[str]:
     """View ids (32 hex digits) that a blueprint (ViewerClient.get_blueprint) puts on screen:
     every view under the root container, but only the active tab of a Tabs container."""
     containers = {k.split("/", 2)[2]: v["ContainerBlueprint"] for k, v in layout.items()
                   if k.startswith("/container/") and "ContainerBlueprint" in v}
-    inside = {c.split("/", 1)[1] for v in containers.values() for c in v.get("contents", [])}
+    inside = {c.split("/", 1)[1] for v in containers.values() for c in _contents(v)}
     roots = [cid for cid in containers if cid not in inside]
     out: list[str] = []
 
@@ -245,7 +252,7 @@ def on_screen_views(layout: dict) -> list[str]:
             out.append(ident.replace("-", ""))
             return
         c = containers.get(ident, {})
-        contents = c.get("contents", [])
+        contents = _contents(c)
         if c.get("container_kind") == "Tabs" and contents:
             contents = [c.get("active_tab") or contents[0]]
         for child in contents:
@@ -270,7 +277,7 @@ def activate_tab(layout: dict, title: str, suffix: bool = False) -> bool:
     item = target.lstrip("/")
     for k, v in layout.items():
         c = v.get("ContainerBlueprint") if k.startswith("/container/") else None
-        if c and c.get("container_kind") == "Tabs" and item in c.get("contents", []):
+        if c and c.get("container_kind") == "Tabs" and item in _contents(c):
             c["active_tab"] = item
             return True
     return False
