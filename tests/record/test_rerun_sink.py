@@ -495,3 +495,22 @@ def test_a_run_that_stops_in_stage0_shows_its_stills_and_reasons_on_offset_ms(tm
     still = [e for e in chunk_entities(out) if e.startswith("videos/a/still")]
     assert still, chunk_entities(out)
     assert store.reader("offset_ms", contents=f"/{still[0]}").to_arrow_table().num_rows >= 1
+
+
+def test_inspect_of_a_run_with_no_pair_says_none_was_evaluated(tmp_path, capsys):
+    """A run that stopped in Stage 0 has no pair: inspect says so and names each video's reason,
+    instead of "every pair is accepted and agrees with the solution"."""
+    from vs_inspect.types import RunResult
+
+    why = "camera from the moving points refused: its own epipolar votes contradict the offsets"
+    result = RunResult("a", {"a": None, "b": None, "c": None}, {"a": None, "b": None, "c": None},
+                       {n: why for n in "abc"}, (), "irls", (), (), {})
+    out = tmp_path / "nopairs.rrd"
+    with RerunSink(out, progress=False) as sink:
+        sink.stage_event("cameras", f"a: {why}")
+        sink.run_summary(result)
+    assert main(["inspect", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "none evaluated: Stage 0 left no pair to search" in text
+    assert "every pair is accepted" not in text
+    assert text.count(why) >= 3

@@ -101,7 +101,9 @@ def run(args: argparse.Namespace) -> int:
 
     print("\ncauses of the failing pairs:")
     failing = [c for c in diag.checks if c.bad]
-    if not failing:
+    if not diag.checks:
+        print("  none evaluated: Stage 0 left no pair to search (each video's reason is above)")
+    elif not failing:
         print("  none: every pair is accepted and agrees with the solution")
     causes: dict[str, list[str]] = {}
     for c in failing:
@@ -111,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
 
     print("\nsuspects:")
     if not diag.suspects:
-        print("  none: no video or pair is to blame" if failing else
+        print("  none: no video or pair is to blame" if failing or not diag.checks else
               "  none: every pair agrees with the solution within its tolerance")
     for s in diag.suspects:
         print(f"  - {s.message}")
