@@ -42,7 +42,7 @@ def _run(moving_b: bool, sure_c: bool, min_sure: int = 3):
     sure = {"a": True, "b": True, "c": sure_c}
     sink, stats = _Events(), {"pairs": {}}
     cfg = CueConfig(geometric=GeometricPairConfig(joint_min_sure=min_sure))
-    out = _add_joint_pairs(pairs, found, joint, sure, cams, {}, {}, cfg, stats, sink)
+    out, _ = _add_joint_pairs(pairs, found, joint, sure, cams, {}, {}, cfg, stats, sink)
     return {k: len(v.index) for k, v in out.items()}, sink.messages, stats
 
 

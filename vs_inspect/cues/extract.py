@@ -391,10 +391,8 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
         if cfg.geometric.transfer and not all(sure.values()):
             checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, sink)
         sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
-        out = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg, stats, sink,
-                               {c: chk.summary(traj.num_trajectories) for c, chk in checks.items()})
-        used = {(a, b): joint.offsets_s[b] - joint.offsets_s[a] for a, b in found
-                if _joint_pair_used(a, b, sure, cameras, cfg.geometric.joint_min_sure)}
+        out, used = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg, stats, sink,
+                                     {c: chk.summary(traj.num_trajectories) for c, chk in checks.items()})
         return _add_transfer_pairs(out, checks, traj, list(vids), stats, sink), used
     if joint is not None:
         # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
@@ -610,24 +608,27 @@ def _merge_pairs(tp: TrackPairs, index: np.ndarray) -> tuple[TrackPairs, int]:
 
 def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cameras: dict,
                      tracks: dict, vids: dict, cfg: CueConfig, stats: dict, sink: Sink,
-                     transfer: dict | None = None) -> dict:
-    """The supporters of the jointly chosen offsets (geometric_pairs.joint_offsets) for every pair
-    of two cameras whose offset won by at least joint_min_margin (sure: camera -> whether it
-    did, or that point transfer confirmed: transfer holds those checks' summaries, for
-    result.json); nothing for the others. A
+                     transfer: dict | None = None) -> tuple[dict, dict]:
+    """(pairs, {(a, b): the joint Δ_ab whose supporters were added}): the supporters of the
+    jointly chosen offsets (geometric_pairs.joint_offsets) for every pair whose Δ is trusted
+    (_joint_pair_used: both cameras' offsets won by at least joint_min_margin, or point transfer
+    confirmed them, and joint_min_sure cameras are sure; sure: camera -> whether it is, transfer:
+    those checks' summaries, for result.json); nothing for the others. A
     descriptor pair is kept only if it is epipolar-consistent at the joint Δ (with
     joint_filter_descriptor): the descriptor pairs are mostly wrong on small moving objects
     (BENCHMARKS.md), and the joint Δ is the best evidence there is of the moment they share."""
     from .geometric_pairs import supporters
 
+    # the pairs whose joint Δ is trusted, and that Δ: the one decision everything below reads
+    used = {(a, b): joint.offsets_s[b] - joint.offsets_s[a] for a, b in found
+            if _joint_pair_used(a, b, sure, cameras, cfg.geometric.joint_min_sure)}
     stats["geometric_peaks"] = "joint"
     stats["geometric_joint"] = {"origin": joint.origin,
                                 "offsets_s": {n: round(o, 4) for n, o in joint.offsets_s.items()},
                                 "score": round(joint.score, 2),
                                 "margin": {n: round(m, 2) for n, m in joint.margin.items()},
                                 "sure": sorted(n for n, ok in sure.items() if ok),
-                                "used": sorted({n for a, b in found for n in (a, b)
-                                                if _joint_pair_used(a, b, sure, cameras, cfg.geometric.joint_min_sure)})}
+                                "used": sorted({n for k in used for n in k})}
     if transfer:
         stats["geometric_joint"]["transfer"] = transfer
     weak = sorted(n for n, ok in sure.items() if not ok)
@@ -642,9 +643,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
     # sure pair nothing checks it, and Stage 1 accepts the minimum its own supporters make
     # (fencing1 with looser moving regions: aria01-aria03 at +2.4 s, truth +1.5 s; rendered
     # seed 1 with estimated cameras: cam3 3.7 s off; the all-around scene: cam1 141 ms off)
-    min_sure = cfg.geometric.joint_min_sure
-    unconfirmed = {(a, b) for (a, b) in found if sure.get(a) and sure.get(b)
-                   and not _joint_pair_used(a, b, sure, cameras, min_sure)}
+    unconfirmed = {(a, b) for (a, b) in found if sure.get(a) and sure.get(b) and (a, b) not in used}
     if unconfirmed:
         names = ", ".join(sorted(f"{a}__{b}" for a, b in unconfirmed))
         msg = (f"geometric track pairs not used for {names}: the joint vote is sure of "
@@ -654,7 +653,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
     out = dict(pairs)
     for (a, b), (_, gs) in found.items():
         delta = joint.offsets_s[b] - joint.offsets_s[a]
-        both = _joint_pair_used(a, b, sure, cameras, min_sure)
+        both = (a, b) in used
         index = supporters(gs, delta) if both else np.zeros((0, 2), np.int64)
         _log_votes(sink, a, b, gs, delta if both else None)
         desc = pairs[(a, b)]
@@ -683,7 +682,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                          margin_b=round(joint.margin[b], 2))
         log.info("%s__%s: %d geometric track pairs (%d new) at the joint Δ %+.3f s", a, b,
                  len(index), n_new, delta)
-    return out
+    return out, used
 
 
 def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: dict):
@@ -732,11 +731,11 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
             why += (f"; on the moving points its cameras leave a median epipolar distance of {sfm_px:.1f} px, "
                     f"the moving points' own cameras {fb_px:.1f} px")
         stats["sfm"]["fallback"] = {"reference": ref, "pairs": details, "why": why, "used": bool(use)}
-        if use:  # the offsets the cameras were fitted at, relative to the reference (checked later)
-            stats["sfm"]["fallback"]["fitted_offsets_s"] = {ref: 0.0} | {
-                n: details[n]["coarse_offset_s"] for n in cams if n != ref}
         log.warning("%s; cameras from the moving points: %d (%s)", why, len(cams), "used" if use else "not used")
         if use:
+            # the offsets the cameras were fitted at, relative to the reference (_check_fitted_offsets)
+            stats["sfm"]["fallback"]["fitted_offsets_s"] = {ref: 0.0} | {
+                n: details[n]["coarse_offset_s"] for n in cams if n != ref}
             stats["camera_source"] = "estimated from moving points (two-view geometry)"
             stats["dropped"].update(reasons)
             for n, reason in reasons.items():

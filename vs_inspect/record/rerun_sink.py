@@ -93,6 +93,11 @@ def annotation_context(max_id: int = 255) -> "rr.AnnotationContext":
     return rr.AnnotationContext(classes)
 
 
+def _offset_ms(offsets_s) -> np.ndarray:
+    """Candidate offsets (D,) s as the offset_ms timeline's integer milliseconds."""
+    return np.round(np.asarray(offsets_s, np.float64) * 1000.0).astype(np.int64)
+
+
 def _num(x: Any) -> float | None:
     return None if x is None or not math.isfinite(float(x)) else float(x)
 
@@ -368,14 +373,14 @@ class RerunSink(Sink):
         base = pair_votes_path(a, b)
         self._votes_logged.append(f"{a}__{b}")
         offsets_s, z = np.asarray(offsets_s, np.float64), np.asarray(z, np.float64)
-        ms = np.round(offsets_s * 1000.0).astype(np.int64)
+        ms = _offset_ms(offsets_s)
         self._on_offsets(f"{base}/z", rr.SeriesLines(names=[f"{a}→{b}"], widths=[1.2]), ms, z)
         self._on_offsets(f"{base}/count", rr.SeriesLines(names=[f"{a}→{b} votes"], widths=[1.0]), ms, votes)
         if chosen_s is not None and len(ms):
             i = int(np.argmin(np.abs(offsets_s - chosen_s)))
             self._on_offsets(f"{base}/chosen", rr.SeriesPoints(colors=[ACCEPTED], markers=["diamond"], marker_sizes=[6.0],
                                                                names=[f"{a}→{b} kept"]),
-                             np.array([round(chosen_s * 1000)]), z[i:i + 1])
+                             _offset_ms([chosen_s]), z[i:i + 1])
 
     @_timed
     def transfer_landscape(self, camera: str, offsets_s: np.ndarray, share: np.ndarray,
@@ -383,7 +388,7 @@ class RerunSink(Sink):
         base = transfer_path(camera)
         self._transfer_logged.append(camera)
         offsets_s, share = np.asarray(offsets_s, np.float64), np.asarray(share, np.float64)
-        ms = np.round(offsets_s * 1000.0).astype(np.int64)
+        ms = _offset_ms(offsets_s)
         color = ACCEPTED if confirmed else REJECTED
         mark = "✓" if confirmed else "✗"
         self._on_offsets(f"{base}/share", rr.SeriesLines(colors=[color], widths=[1.5],
@@ -395,7 +400,7 @@ class RerunSink(Sink):
             i = int(np.argmin(np.abs(offsets_s - at)))
             self._on_offsets(f"{base}/{what}", rr.SeriesPoints(colors=[colour], markers=[marker], marker_sizes=[6.0],
                                                                names=[f"{camera}: {what} offset"]),
-                             np.array([round(at * 1000)]), share[i:i + 1])
+                             _offset_ms([at]), share[i:i + 1])
 
     @_timed
     def pair_landscape(self, landscape: PairLandscape, view: PairRecordView | None = None) -> None:
@@ -734,7 +739,7 @@ class RerunSink(Sink):
         base = pair_landscape_path(land.a, land.b)
         key = f"{land.a}__{land.b}"
         self._pairs_logged.append(key)
-        ms = np.round(np.asarray(land.offsets_s) * 1000.0).astype(np.int64)
+        ms = _offset_ms(land.offsets_s)
         self._extend_offset_range(ms)
         e = np.asarray(land.energy, dtype=np.float64)
         ok = np.isfinite(e)
@@ -839,7 +844,7 @@ class RerunSink(Sink):
             self.rec.log(f"{base}/image", rr.VideoFrameReference(
                 nanoseconds=int(buf.asset_timestamps_ns[sw.frame_a]),
                 video_reference=video_asset_path(land.a)), static=True)
-        ms = np.round(sw.offsets_s * 1000).astype(np.int64)
+        ms = _offset_ms(sw.offsets_s)
         cols_inst = instance_colors(sw.instance)
         # the ramp's far end: the median distance over all offsets shown, so that points are
         # yellow only where they are much closer to their lines than usual (an absolute threshold
