@@ -514,3 +514,25 @@ def test_inspect_of_a_run_with_no_pair_says_none_was_evaluated(tmp_path, capsys)
     assert "none evaluated: Stage 0 left no pair to search" in text
     assert "every pair is accepted" not in text
     assert text.count(why) >= 3
+
+
+def test_the_3d_view_is_left_out_when_no_camera_was_logged(tmp_path):
+    """Stage 0 refused every camera: no 3D view that would open empty; with cameras, it is there."""
+    import rerun.blueprint as rrb
+
+    from vs_inspect.types import CameraTrack
+
+    def views(bp):
+        def walk(c):
+            out = []
+            for x in c.contents:
+                out += walk(x) if isinstance(x, rrb.Container) else [x.name]
+            return out
+        return walk(bp.root_container)
+
+    with RerunSink(tmp_path / "none.rrd", progress=False) as sink:
+        assert "3D" not in views(sink.blueprint(["a"]))
+    K = np.array([[100.0, 0, 32], [0, 100.0, 24], [0, 0, 1]])
+    with RerunSink(tmp_path / "cams.rrd", progress=False) as sink:
+        sink.cameras({"a": CameraTrack(K, np.eye(4))}, None, None)
+        assert "3D" in views(sink.blueprint(["a"]))

@@ -314,9 +314,6 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
                                         f"reconstruction registered against it (median {r['median_inliers']:.0f} "
                                         f"inliers, {r['refused']} refused); the rest slerped",
                              registered=r["registered"], tried=r["tried"], refused=r["refused"])
-    stats["registered_cameras"] = len(cameras)
-    if cameras:
-        sink.cameras(cameras, points, colors)
     timings["cameras_s"] = time.perf_counter() - t0
 
     pairs = {k: v for k, v in all_pairs.items() if k[0] in cameras and k[1] in cameras}
@@ -332,8 +329,10 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
                 sink.stage_event("cameras", f"{n}: {why}")
                 log.warning("%s: %s", n, why)
             pairs = {k: v for k, v in pairs.items() if k[0] in cameras and k[1] in cameras}
-            stats["registered_cameras"] = len(cameras)
         timings["geometric_pairs_s"] = time.perf_counter() - t0
+    stats["registered_cameras"] = len(cameras)
+    if cameras:  # after the moving points' cameras were checked: a refused one is not drawn
+        sink.cameras(cameras, points, colors)
     usable = [n for n in names if n in cameras]
     timings["total_s"] = time.perf_counter() - t_all
     stats["track_pairs"] = int(sum(len(p.index) for p in pairs.values()))

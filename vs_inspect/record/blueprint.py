@@ -90,7 +90,8 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
               pair_views: dict[str, set[str]] | None = None, timeline: str = TIMELINE_OFFSET_MS,
               has_loops: bool = False, range_ms: tuple[int, int] | None = None,
               sizes: dict[str, tuple[int, int]] | None = None, eye: tuple | None = None,
-              transfer_origin: str | None = None, votes_logged: list[str] | None = None):
+              transfer_origin: str | None = None, votes_logged: list[str] | None = None,
+              show_world: bool = True):
     """The default blueprint.
 
     pairs_logged: "a__b" of every pair in the order they were logged (their order when the result
@@ -101,6 +102,8 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
     bounds of its 2D views. eye: (position, look target, up) of the 3D view (None: rerun's).
     transfer_origin: where Stage 0's point-transfer checks were logged (None: none were).
     votes_logged: "a__b" of the pairs whose geometric pairing votes were logged (Stage 0).
+    show_world: whether the 3D view is shown (False: no camera was logged, e.g. Stage 0 refused
+    every one, and the view would open empty).
     """
     import rerun.blueprint as rrb
     pair_views, sizes = pair_views or {}, sizes or {}
@@ -138,12 +141,11 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
                         row_shares=[1, 1][: 1 + bool(overview)])
     video_views = [rrb.Spatial2DView(origin=video_path(v), name=v, visual_bounds=_bounds(sizes.get(v)))
                    for v in video_names[:MAX_VIDEO_VIEWS]]
-    right = rrb.Vertical(
-        rrb.Grid(*video_views, name="videos") if video_views else rrb.TextDocumentView(origin=VIDEOS),
-        rrb.Spatial3DView(origin=WORLD, name="3D",
-                          eye_controls=rrb.EyeControls3D(position=eye[0], look_target=eye[1], eye_up=eye[2])
-                          if eye else None),
-        row_shares=[1, 1])
+    videos = rrb.Grid(*video_views, name="videos") if video_views else rrb.TextDocumentView(origin=VIDEOS)
+    world = [rrb.Spatial3DView(origin=WORLD, name="3D",
+                               eye_controls=rrb.EyeControls3D(position=eye[0], look_target=eye[1], eye_up=eye[2])
+                               if eye else None)] if show_world else []
+    right = rrb.Vertical(videos, *world, row_shares=[1] * (1 + len(world)))
     columns = [left]
     if containers:
         columns.append(rrb.Tabs(*containers, active_tab=0, name="pairs (failed first)"))

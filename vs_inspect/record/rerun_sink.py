@@ -503,7 +503,8 @@ class RerunSink(Sink):
                          has_loops=bool(self._view is not None and self._view.triangles), range_ms=rng,
                          sizes={n: (b.info.width, b.info.height) for n, b in self._videos.items()},
                          eye=self._eye, transfer_origin=CUES_TRANSFER if self._transfer_logged else None,
-                         votes_logged=self._votes_logged)
+                         votes_logged=self._votes_logged,
+                         show_world=bool(self._world_cameras) or self._bundle is not None)
 
     def abort(self) -> None:
         """Stop writing and delete the temporary file; nothing that looks complete is left."""
