@@ -405,15 +405,21 @@ class CueStats:
     geometric_peaks: str | None = None  # "consistent" | "inconsistent" | ... (None: not run)
     sfm: dict[str, Any] | None = None  # estimated cameras' diagnostics, JSON values (None: calibrated)
     geometric_joint: dict[str, Any] | None = None  # the joint vote (offsets, margins, cameras sure and used) and
-    # its point-transfer checks of unsure cameras ("transfer": camera -> verdict), JSON values
+    # its point-transfer checks of unsure cameras ("transfer": camera -> verdict) and of sure ones in
+    # three views ("three_view": camera -> verdict), JSON values
 
     def joint_refusal(self, video: str) -> str | None:
         """Why Stage 0 gave `video` no geometric track pairs when its joint vote was unsure of it
-        (with point transfer's verdict) or sure of too few cameras to close a triangle, else None
+        (with point transfer's verdict), sure of it but refuted in three views, or sure of too few
+        cameras to close a triangle, else None
         (used, dropped, or no joint vote)."""
         joint = self.geometric_joint or {}
         if video not in joint.get("margin", {}) or video in joint.get("used", ()) or video in self.dropped:
             return None
+        three_view = (joint.get("three_view") or {}).get(video)
+        if three_view is not None and not three_view["passed"]:
+            return (f"Stage 0's joint vote was sure of its offset (margin {joint['margin'][video]:.1f}), but "
+                    f"not in three views ({three_view['reason']}), so it got no geometric track pairs")
         if video in joint.get("sure", ()):
             return (f"Stage 0's joint vote was sure of its offset (margin {joint['margin'][video]:.1f}) but of "
                     f"{len(joint['sure'])} camera(s) only, so no triangle of sure cameras confirmed it and it "

@@ -10,7 +10,7 @@ from vs_inspect.cues.extract import _add_joint_pairs
 from vs_inspect.cues.geometric_pairs import GeometricPairStats, JointChoice
 from vs_inspect.geometry.epipolar import look_at
 from vs_inspect.record.sink import NullSink
-from vs_inspect.types import CameraTrack, TrackPairs
+from vs_inspect.types import CameraTrack, CueStats, TrackPairs
 
 K = np.array([[500.0, 0, 320], [0, 500.0, 240], [0, 0, 1]])
 
@@ -133,6 +133,63 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
         assert kept <= right, (u, v, kept - right)  # no wrong pair left, no geometric pair added
         assert len(kept) >= 15, (u, v, len(kept))
         assert stats["pairs"][f"{u}__{v}"]["descriptor_pairs_kept"] == len(kept)
+
+
+def _sure_of_all(monkeypatch, offsets: dict[str, float], camera_source: str = "estimated"):
+    """Stage 0's geometric pairs of the transfer scene (cameras a, b, c, true geometry) with the
+    joint vote replaced by one sure (margin 10) of every camera at `offsets`: (pairs, stats,
+    stage events, the scene's rows of each point)."""
+    from types import SimpleNamespace
+
+    import vs_inspect.cues.geometric_pairs as gp
+    from vs_inspect.cues.extract import _add_geometric_pairs
+    from vs_inspect.types import Tracks
+
+    from .test_transfer import _scene
+
+    infos, cams, xy, _, row_of = _scene({"a": 0.0, "b": 0.42, "c": -0.3})
+    pairs = {k: TrackPairs(*k, np.zeros((0, 2), np.int64)) for k in (("a", "b"), ("a", "c"), ("b", "c"))}
+    monkeypatch.setattr(gp, "joint_offsets", lambda *a, **k: JointChoice(dict(offsets), 30.0, dict.fromkeys(offsets, 10.0)))
+    sink, stats = _Events(), {"pairs": {}, "camera_source": camera_source}
+    out, _ = _add_geometric_pairs(pairs, cams, {n: Tracks(xy[n], None) for n in "abc"},
+                                  {n: SimpleNamespace(info=infos[n]) for n in "abc"}, CueConfig(),
+                                  stats, sink, progress=False)
+    return out, stats, sink.messages, row_of
+
+
+def test_sure_cameras_that_see_each_others_points_keep_their_pairs(monkeypatch):
+    out, stats, msgs, row_of = _sure_of_all(monkeypatch, {"a": 0.0, "b": 0.42, "c": -0.3})
+    three_view = stats["geometric_joint"]["three_view"]
+    assert all(v["passed"] and v["supporters"] >= 10 for v in three_view.values()), three_view
+    assert stats["geometric_joint"]["used"] == ["a", "b", "c"]
+    for (u, v), tp in out.items():
+        right = {(row_of[u][p], row_of[v][p]) for p in range(30)}
+        kept = {tuple(x) for x in tp.index.tolist()}
+        assert len(kept & right) >= 15 and len(kept - right) <= 2, (u, v)
+
+
+def test_sure_cameras_refuted_in_three_views_get_no_pairs(monkeypatch):
+    """The joint vote sure of c at an offset 0.5 s off (as wrong cameras make it): every
+    camera's check uses a pair with c, so all three are refused, with their numbers, and no
+    geometric pair is added (not even by the triangle rule)."""
+    out, stats, msgs, _ = _sure_of_all(monkeypatch, {"a": 0.0, "b": 0.42, "c": 0.2})
+    joint = stats["geometric_joint"]
+    assert not any(v["passed"] for v in joint["three_view"].values()), joint["three_view"]
+    assert joint["sure"] == [] and joint["used"] == [] and stats["geometric_peaks"] == "joint"
+    assert all(len(tp.index) == 0 for tp in out.values())
+    assert any("geometric track pairs not used for a, b, c: the joint vote was sure" in m for m in msgs), msgs
+    cue_stats = CueStats("estimated", 3, 90, 0, {}, stats["pairs"], {}, {}, "joint", None, joint)
+    why = cue_stats.joint_refusal("c")
+    assert "sure of its offset (margin 10.0), but not in three views" in why and "+0.200 s" in why
+
+
+def test_cameras_from_a_calibration_are_not_checked_in_three_views(monkeypatch):
+    """The check is of estimated cameras: a calibration's are used as given, so the joint vote's
+    choice stands unchecked here."""
+    out, stats, msgs, _ = _sure_of_all(monkeypatch, {"a": 0.0, "b": 0.42, "c": 0.2}, "calibration")
+    joint = stats["geometric_joint"]
+    assert "three_view" not in joint and joint["sure"] == ["a", "b", "c"]
+    assert not any("three views" in m for m in msgs)
 
 
 def _fallback(fitted: dict[str, float]) -> dict:

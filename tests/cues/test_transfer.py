@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vs_inspect.cues.transfer import (confirm_offset, offset_grid, transfer_landscape,
-                                      triangulate_pairs)
+from vs_inspect.cues.transfer import (check_in_three_views, confirm_offset, offset_grid,
+                                      transfer_landscape, triangulate_pairs)
 from vs_inspect.geometry.epipolar import look_at, project
 from vs_inspect.types import CameraTrack, TrackPairs, VideoInfo
 
@@ -141,3 +141,25 @@ def test_many_offsets_thin_the_samples_and_still_find_the_offset(monkeypatch):
     thin = transfer_landscape(traj, infos["c"], cams["c"], xy["c"], grid, radius_px=3.0, min_hits=3)
     assert thin.overlap.max() < 0.4 * full.overlap.max()  # a quarter of the samples
     assert thin.offset_s == pytest.approx(0.35, abs=1.0 / FPS["c"]) and thin.z > 5
+
+
+@pytest.mark.parametrize("c_moving", [False, True])
+def test_a_right_camera_at_its_offset_passes_in_three_views_a_wrong_camera_or_offset_does_not(c_moving):
+    offsets = {"a": 0.0, "b": 0.42, "c": 0.35}
+    infos, cams, xy, truth_ab, _ = _scene(offsets, c_moving)
+    traj = triangulate_pairs(infos, cams, xy, {("a", "b"): TrackPairs("a", "b", truth_ab)},
+                             {"a": 0.0, "b": 0.42})
+    right = check_in_three_views("c", 0.35, traj, infos["c"], cams["c"], xy["c"], 3.0, 5, 4, 1 / 3)
+    assert right.passed and right.supporters >= 15 and right.trajectories == traj.num_trajectories
+    assert "agrees in three views" in right.reason
+    # c's camera on the other side of the scene (as a wrong reconstruction puts it), same tracks
+    wrong_cam = CameraTrack(K, look_at([-3.0, 6.0, 4.0], [0, 0, 1]))
+    bad = check_in_three_views("c", 0.35, traj, infos["c"], wrong_cam, xy["c"], 3.0, 5, 4, 1 / 3)
+    assert not bad.passed and bad.supporters < 4
+    assert f"{bad.supporters} of the {traj.num_trajectories} trajectories" in bad.reason
+    assert "disagrees in three views" in bad.reason
+    late = check_in_three_views("c", 0.35 + 0.5, traj, infos["c"], cams["c"], xy["c"], 3.0, 5, 4, 1 / 3)
+    assert not late.passed and late.supporters < right.supporters / 4
+    assert late.best_supporters >= right.supporters - 2 and late.best_offset_s == pytest.approx(0.35, abs=1 / 24)
+    assert f"{late.best_supporters} at " in late.reason
+    assert late.summary()["passed"] is False and late.summary()["joint_offset_s"] == 0.85

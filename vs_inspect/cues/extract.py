@@ -385,13 +385,24 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     joint = joint_offsets({k: gs for k, (_, gs) in found.items()}, 3.0 * coarsest) \
         if cfg.geometric.joint else None
     sure = {} if joint is None else {n: m >= cfg.geometric.joint_min_margin for n, m in joint.margin.items()}
-    if sum(sure.values()) >= 2:
+    three_view = {}
+    # the check is of cameras Stage 0 estimated: a calibration's are given (with one, the tiny
+    # bench-timing scene's right hand-held camera had 3 trajectories followed, wrong ones 0-2)
+    estimated = stats.get("camera_source") != "calibration"
+    if cfg.geometric.three_view_min_supporters > 0 and estimated and sum(sure.values()) >= 3:
+        three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, sink)
+        sure = {n: ok and (n not in three_view or three_view[n].passed) for n, ok in sure.items()}
+    refused = any(not chk.passed for chk in three_view.values())
+    # a camera refused in three views keeps the joint path (no geometric pair for it), instead of
+    # the triangle fallback below choosing among the same cameras' vote peaks
+    if sum(sure.values()) >= 2 or refused:
         checks, traj = {}, None
-        if cfg.geometric.transfer and not all(sure.values()):
+        if cfg.geometric.transfer and not all(sure.values()) and sum(sure.values()) >= 2:
             checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, sink)
         sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
         out, used = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg, stats, sink,
-                                     {c: chk.summary(traj.num_trajectories) for c, chk in checks.items()})
+                                     {c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
+                                     {c: chk.summary() for c, chk in three_view.items()})
         return _add_transfer_pairs(out, checks, traj, list(vids), stats, sink), used
     if joint is not None:
         # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
@@ -524,6 +535,41 @@ def _sure_pairs(found: dict, joint, sure: dict[str, bool], cameras: dict) -> dic
     return out
 
 
+def _transfer_radius_px(info: VideoInfo, g) -> float:
+    """How near a projected point a track of the camera must be (GeometricPairConfig.transfer_radius_diag)."""
+    return max(3.0, g.transfer_radius_diag * float(np.hypot(info.width, info.height)))
+
+
+def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
+                          vids: dict, cfg: CueConfig, sink: Sink) -> dict:
+    """{camera: transfer.ThreeViewCheck} for every sure camera: the other sure cameras' track
+    pairs triangulated at their joint offsets and projected into it at its own. Wrong cameras can
+    make the joint vote sure of wrong offsets, consistent in every triangle (rendered seed 2 with
+    XFeat's cameras: three cameras 0.5-2.8 s off, margins 8.5-23.6), since a line through a
+    wrong epipole still meets some track; a point in a third view rarely does."""
+    from .transfer import check_in_three_views, triangulate_pairs
+
+    g = cfg.geometric
+    infos = {n: v.info for n, v in vids.items()}
+    xy = {n: t.xy for n, t in tracks.items()}
+    checks = {}
+    for c in sorted(n for n, ok in sure.items() if ok):
+        others = {n: ok and n != c for n, ok in sure.items()}
+        traj = triangulate_pairs(infos, cameras, xy, _sure_pairs(found, joint, others, cameras),
+                                 {n: joint.offsets_s[n] for n, ok in others.items() if ok})
+        chk = check_in_three_views(c, joint.offsets_s[c], traj, infos[c], cameras[c], xy[c],
+                                   _transfer_radius_px(infos[c], g), g.transfer_min_hits,
+                                   g.three_view_min_supporters, g.three_view_min_share_of_best)
+        checks[c] = chk
+        sink.three_view_landscape(c, chk.landscape.offsets_s, chk.landscape.supporters, chk.joint_offset_s,
+                                  chk.passed)
+        msg = f"{c}: {chk.reason}"
+        sink.stage_event("cues", msg, camera=c, passed=int(chk.passed), supporters=chk.supporters,
+                         best_supporters=chk.best_supporters, trajectories=chk.trajectories)
+        (log.info if chk.passed else log.warning)(msg)
+    return checks
+
+
 def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
                          vids: dict, cfg: CueConfig, sink: Sink):
     """({camera: transfer.TransferCheck}, the transfer.Trajectories projected): a check of every
@@ -539,10 +585,9 @@ def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dic
     checks = {}
     for c in sorted(n for n, ok in sure.items() if not ok):
         info = vids[c].info
-        radius = max(3.0, g.transfer_radius_diag * float(np.hypot(info.width, info.height)))
         land = transfer_landscape(traj, info, cameras[c], tracks[c].xy,
-                                  offset_grid(traj, info, 0.5 * info.frame_interval_s), radius,
-                                  g.transfer_min_hits)
+                                  offset_grid(traj, info, 0.5 * info.frame_interval_s),
+                                  _transfer_radius_px(info, g), g.transfer_min_hits)
         chk = confirm_offset(c, joint.offsets_s[c], land, info.frame_interval_s,
                              g.transfer_agree_frames, g.transfer_min_z, g.transfer_min_supporters)
         checks[c] = chk
@@ -607,12 +652,12 @@ def _merge_pairs(tp: TrackPairs, index: np.ndarray) -> tuple[TrackPairs, int]:
 
 def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cameras: dict,
                      tracks: dict, vids: dict, cfg: CueConfig, stats: dict, sink: Sink,
-                     transfer: dict | None = None) -> tuple[dict, dict]:
+                     transfer: dict | None = None, three_view: dict | None = None) -> tuple[dict, dict]:
     """(pairs, {(a, b): the joint Δ_ab whose supporters were added}): the supporters of the
     jointly chosen offsets (geometric_pairs.joint_offsets) for every pair whose Δ is trusted
     (_joint_pair_used: both cameras' offsets won by at least joint_min_margin, or point transfer
-    confirmed them, and joint_min_sure cameras are sure; sure: camera -> whether it is, transfer:
-    those checks' summaries, for result.json); nothing for the others. A
+    confirmed them, and joint_min_sure cameras are sure; sure: camera -> whether it is, transfer
+    and three_view: those checks' summaries, for result.json); nothing for the others. A
     descriptor pair is kept only if it is epipolar-consistent at the joint Δ (with
     joint_filter_descriptor): the descriptor pairs are mostly wrong on small moving objects
     (BENCHMARKS.md), and the joint Δ is the best evidence there is of the moment they share."""
@@ -630,7 +675,18 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                                 "used": sorted({n for k in used for n in k})}
     if transfer:
         stats["geometric_joint"]["transfer"] = transfer
-    weak = sorted(n for n, ok in sure.items() if not ok)
+    if three_view:
+        stats["geometric_joint"]["three_view"] = three_view
+    failed = sorted(n for n, chk in (three_view or {}).items() if not chk["passed"] and not sure[n])
+    if failed:
+        seen = ", ".join(f"{n} {three_view[n]['supporters']}" for n in failed)
+        msg = (f"geometric track pairs not used for {', '.join(failed)}: the joint vote was sure of "
+               f"their offsets, but the points the other sure cameras triangulate are not seen there "
+               f"(supporters {seen}; a camera needs {cfg.geometric.three_view_min_supporters}, and "
+               f"{cfg.geometric.three_view_min_share_of_best:.2g} of those at its best offset)")
+        sink.stage_event("cues", msg)
+        log.warning(msg)
+    weak = sorted(n for n, ok in sure.items() if not ok and n not in failed)
     if weak:
         msg = (f"geometric track pairs not used for {', '.join(weak)}: the joint vote prefers their "
                f"offsets by less than {cfg.geometric.joint_min_margin:g} (margins "

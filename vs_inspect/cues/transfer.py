@@ -264,3 +264,53 @@ def confirm_offset(camera: str, joint_offset_s: float, landscape: TransferLandsc
     if n < min_supporters:
         return TransferCheck(camera, joint_offset_s, landscape, False, f"{what}: too few trajectories (< {min_supporters})")
     return TransferCheck(camera, joint_offset_s, landscape, True, f"{what}: confirmed")
+
+
+@dataclass(frozen=True)
+class ThreeViewCheck:
+    """Whether a camera the joint vote is sure of sees, at its joint offset, the points that the
+    other sure cameras' track pairs triangulate to (a check of its camera and offset in three
+    views: the epipolar vote tests a point against a line, two views at a time)."""
+
+    camera: str
+    joint_offset_s: float  # the joint vote's offset_s of the camera
+    trajectories: int  # triangulated from the other sure cameras' track pairs
+    supporters: int  # of those, followed by one track of the camera at joint_offset_s
+    best_supporters: int  # the most followed at any candidate offset
+    best_offset_s: float | None  # where (None: no trajectory followed anywhere)
+    passed: bool
+    reason: str  # why (or why not), one line
+    landscape: TransferLandscape  # over the camera's candidate offsets, the joint offset among them
+
+    def summary(self) -> dict:
+        """JSON values for result.json's cues.geometric_joint.three_view."""
+        return {"joint_offset_s": round(self.joint_offset_s, 4), "trajectories": self.trajectories,
+                "supporters": self.supporters, "best_supporters": self.best_supporters,
+                "best_offset_s": None if self.best_offset_s is None else round(self.best_offset_s, 4),
+                "passed": self.passed, "reason": self.reason}
+
+
+def check_in_three_views(camera: str, joint_offset_s: float, traj: Trajectories, info_c: VideoInfo,
+                         camera_c: CameraTrack, xy_c: np.ndarray, radius_px: float, min_hits: int,
+                         min_supporters: int, min_share_of_best: float) -> ThreeViewCheck:
+    """The camera passes when at least min_supporters of traj (the other sure cameras'
+    trajectories) are followed by one of its tracks (xy_c (N,T,2), undistorted px) at its joint
+    offset, each at min_hits moments within radius_px of the projection, and at least
+    min_share_of_best as many as at the offset (half-frame grid) where most are: a wrong camera
+    leaves few followed anywhere, a wrong offset far fewer than the right one."""
+    grid = np.union1d(offset_grid(traj, info_c, 0.5 * info_c.frame_interval_s), [joint_offset_s])
+    land = transfer_landscape(traj, info_c, camera_c, xy_c, grid, radius_px, min_hits)
+    n = int(land.supporters[np.searchsorted(grid, joint_offset_s)])
+    enough = land.overlap >= 0.25 * land.overlap.max() if len(grid) else np.zeros(0, bool)
+    best = int(np.argmax(np.where(enough, land.supporters, -1))) if enough.any() else -1
+    n_best = int(land.supporters[best]) if best >= 0 else 0
+    at_best = float(grid[best]) if n_best > 0 else None
+    what = (f"{n} of the {traj.num_trajectories} trajectories the other sure cameras triangulate are "
+            f"followed by a track of it at its joint offset {joint_offset_s:+.3f} s"
+            + (f", {n_best} at {at_best:+.3f} s" if at_best is not None and n_best > n else ""))
+    if n < min_supporters or n < min_share_of_best * n_best:
+        bar = max(float(min_supporters), min_share_of_best * n_best)
+        return ThreeViewCheck(camera, joint_offset_s, traj.num_trajectories, n, n_best, at_best, False,
+                              f"{what}; fewer than {bar:g}: its camera or offset disagrees in three views", land)
+    return ThreeViewCheck(camera, joint_offset_s, traj.num_trajectories, n, n_best, at_best, True,
+                          f"{what}: agrees in three views", land)

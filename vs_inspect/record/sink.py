@@ -56,6 +56,12 @@ class Sink:
         share (D,) of the projected samples that land on their track at each candidate offset_s
         (D,) of the camera, the joint vote's offset, the transfer's peak and the verdict."""
 
+    def three_view_landscape(self, camera: str, offsets_s: np.ndarray, supporters: np.ndarray,
+                             joint_offset_s: float, passed: bool) -> None:
+        """The three-view check of a camera the joint vote was sure of (cues/transfer.py,
+        check_in_three_views): supporters (D,) over its candidate offset_s (D,), the joint
+        vote's offset and the verdict."""
+
     def cameras(self, cameras: dict[str, CameraTrack], points_world: np.ndarray | None,
                 colors: np.ndarray | None) -> None:
         """Cameras of all videos in one world frame, and the static 3D points (N,3) with (N,3) uint8 colours."""
