@@ -438,6 +438,39 @@ def test_point_transfer_check_is_recorded(tmp_path):
     assert peak.column("offset_ms").to_pylist() == [300]
 
 
+def _view_names(container) -> list[str]:
+    """The names of every view inside a blueprint container, nested containers included."""
+    import rerun.blueprint as rrb
+    out = []
+    for x in container.contents:
+        out += _view_names(x) if isinstance(x, rrb.Container) else [x.name]
+    return out
+
+
+def test_three_view_check_is_recorded_with_its_own_overview_tab(tmp_path):
+    """Stage 0's three-view check of a sure camera: the trajectories followed over its candidate
+    offsets on offset_ms and the joint offset as a point; the overview gets a tab for it."""
+    import rerun.chunk as rrc
+
+    offsets = np.arange(-1.0, 1.0, 0.02)
+    supporters = np.where(np.abs(offsets - 0.4) < 0.03, 12.0, 1.0)
+    out = tmp_path / "three_view.rrd"
+    with RerunSink(out, progress=False) as sink:
+        sink.three_view_landscape("cam.1", offsets, supporters, -0.5, False)
+        bp = sink.blueprint(["cam.1"])
+    assert rerun_verify(out, tmp_path).returncode == 0
+    base = "cues/three_view/cam_1"
+    assert {f"{base}/supporters", f"{base}/joint"} <= chunk_entities(out)
+    store = rrc.RrdReader(str(out)).stream().collect()
+    tab = store.reader("offset_ms", contents=f"/{base}/supporters").to_arrow_table()
+    col = [c for c in tab.column_names if c.endswith("Scalars:scalars")][0]
+    ms = np.array(tab.column("offset_ms").to_pylist())
+    assert np.array_equal(np.array([v[0] for v in tab.column(col).to_pylist()])[np.argsort(ms)], supporters)
+    joint = store.reader("offset_ms", contents=f"/{base}/joint").to_arrow_table()
+    assert joint.column("offset_ms").to_pylist() == [-500]
+    assert "three-view check (Stage 0: sure cameras)" in _view_names(bp.root_container)
+
+
 def test_pairing_votes_are_recorded_on_the_pairs_offset_axis(tmp_path):
     """Stage 0's geometric votes of a pair: z-scores and counts over Δ_ab on offset_ms (the
     landscape's axis) and the kept Δ as a point; the overview gets a 'pairing votes' tab."""
@@ -460,14 +493,7 @@ def test_pairing_votes_are_recorded_on_the_pairs_offset_axis(tmp_path):
     assert np.array_equal(got, votes) and ms.min() == -1000
     chosen = store.reader("offset_ms", contents="/pairs/a__b/votes/chosen").to_arrow_table()
     assert chosen.column("offset_ms").to_pylist() == [250]
-
-    def names(c):
-        import rerun.blueprint as rrb
-        out = []
-        for x in c.contents:
-            out += names(x) if isinstance(x, rrb.Container) else [x.name]
-        return out
-    assert "pairing votes (Stage 0, z per Δ)" in names(bp.root_container)
+    assert "pairing votes (Stage 0, z per Δ)" in _view_names(bp.root_container)
 
 
 def test_a_run_that_stops_in_stage0_shows_its_stills_and_reasons_on_offset_ms(tmp_path):

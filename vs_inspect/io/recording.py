@@ -45,6 +45,7 @@ SYNC_SOLVE = "sync/solve"
 SYNC_PAIRS = "sync/pairs"  # every pair's verdict, Δ and reason as one table (failed pairs first)
 SYNC_LOOPS = "sync/loops"  # loop-closure residual Δ_ab + Δ_bc − Δ_ac per triangle of pairs
 CUES_TRANSFER = "cues/transfer"  # Stage 0's point-transfer checks of cameras the joint vote was unsure of
+CUES_THREE_VIEW = "cues/three_view"  # Stage 0's three-view checks of cameras the joint vote was sure of
 GUIDE = "guide"  # "how to read this recording" (markdown)
 LOG = "log"
 LOG_DECISIONS = "log/decisions"
@@ -116,6 +117,13 @@ def transfer_path(name: str) -> str:
     their track) over its candidate offset_s on the offset_ms timeline, and points joint (the
     joint vote's offset) and peak (the transfer's own)."""
     return f"{CUES_TRANSFER}/{entity_name(name)}"
+
+
+def three_view_path(name: str) -> str:
+    """A sure camera's three-view check: series supporters (trajectories of the other sure
+    cameras followed by one of its tracks) over its candidate offset_s on the offset_ms
+    timeline, and a point joint at the joint vote's offset."""
+    return f"{CUES_THREE_VIEW}/{entity_name(name)}"
 
 
 def pair_votes_path(a: str, b: str) -> str:

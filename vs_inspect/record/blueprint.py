@@ -90,7 +90,8 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
               pair_views: dict[str, set[str]] | None = None, timeline: str = TIMELINE_OFFSET_MS,
               has_loops: bool = False, range_ms: tuple[int, int] | None = None,
               sizes: dict[str, tuple[int, int]] | None = None, eye: tuple | None = None,
-              transfer_origin: str | None = None, votes_logged: list[str] | None = None,
+              transfer_origin: str | None = None, three_view_origin: str | None = None,
+              votes_logged: list[str] | None = None,
               show_world: bool = True):
     """The default blueprint.
 
@@ -101,6 +102,7 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
     landscape plots' x axis (None: rerun's default). sizes: video -> (width, height) px, the
     bounds of its 2D views. eye: (position, look target, up) of the 3D view (None: rerun's).
     transfer_origin: where Stage 0's point-transfer checks were logged (None: none were).
+    three_view_origin: where Stage 0's three-view checks of sure cameras were logged (None: none were).
     votes_logged: "a__b" of the pairs whose geometric pairing votes were logged (Stage 0).
     show_world: whether the 3D view is shown (False: no camera was logged, e.g. Stage 0 refused
     every one, and the view would open empty).
@@ -136,6 +138,9 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
             plot_legend=rrb.PlotLegend(visible=True)))
     if transfer_origin is not None:
         overview.append(rrb.TimeSeriesView(origin=transfer_origin, name="point transfer (Stage 0: a camera's offset)",
+                                           time_ranges=_full_range(), plot_legend=rrb.PlotLegend(visible=True)))
+    if three_view_origin is not None:
+        overview.append(rrb.TimeSeriesView(origin=three_view_origin, name="three-view check (Stage 0: sure cameras)",
                                            time_ranges=_full_range(), plot_legend=rrb.PlotLegend(visible=True)))
     left = rrb.Vertical(rrb.Tabs(*info, active_tab=0), *( [rrb.Tabs(*overview, active_tab=0)] if overview else []),
                         row_shares=[1, 1][: 1 + bool(overview)])

@@ -31,7 +31,7 @@ from tqdm import tqdm
 
 from .. import __version__, palette
 from ..io.atomic import json_default, atomic_path
-from ..io.recording import (APPLICATION_ID, CUES_TRANSFER, GUIDE, LOG_DECISIONS, META_BUNDLE, META_CONFIG,
+from ..io.recording import (APPLICATION_ID, CUES_THREE_VIEW, CUES_TRANSFER, GUIDE, LOG_DECISIONS, META_BUNDLE, META_CONFIG,
                             META_RECORDING, META_RESULT, META_VIDEOS, RECORDING_FORMAT,
                             RECORDING_VERSION, SYNC_GRAPH, SYNC_LOOPS, SYNC_OFFSETS, SYNC_PAIRS,
                             VIDEOS, TIMELINE_EVENT, TIMELINE_FRAME, TIMELINE_ITERATION, TIMELINE_KEYFRAME_PAIR,
@@ -39,7 +39,7 @@ from ..io.recording import (APPLICATION_ID, CUES_TRANSFER, GUIDE, LOG_DECISIONS,
                             camera_path, camera_trail_path, check_entity_names, entity_name, log_path, pair_decision_path,
                             pair_epipolar_path, pair_landscape_path, pair_matches_path, pair_rate_landscape_path, pair_votes_path,
                             solve_residual_path,
-                            solve_weight_path, trajectory_path, transfer_path, video_asset_path, video_image_path,
+                            solve_weight_path, three_view_path, trajectory_path, transfer_path, video_asset_path, video_image_path,
                             video_mask_path, video_path, video_still_path,
                             video_tracks_path)
 from ..io.result import run_result_to_dict
@@ -246,6 +246,7 @@ class RerunSink(Sink):
         self._flushed_videos = False
         self._pairs_logged: list[str] = []
         self._transfer_logged: list[str] = []  # cameras whose point-transfer check was logged
+        self._three_view_logged: list[str] = []  # cameras whose three-view check was logged
         self._votes_logged: list[str] = []  # "a__b" of the pairs whose geometric votes were logged
         self._pair_views: dict[str, set[str]] = {}  # "a__b" -> views with data ("landscape", "epipolar")
         self._sweep_frames: dict[str, int] = {}  # video -> frame shown by an epipolar view of it
@@ -403,6 +404,24 @@ class RerunSink(Sink):
                              _offset_ms([at]), share[i:i + 1])
 
     @_timed
+    def three_view_landscape(self, camera: str, offsets_s: np.ndarray, supporters: np.ndarray,
+                             joint_offset_s: float, passed: bool) -> None:
+        base = three_view_path(camera)
+        offsets_s, supporters = np.asarray(offsets_s, np.float64), np.asarray(supporters, np.float64)
+        if not len(offsets_s):
+            return
+        self._three_view_logged.append(camera)
+        ms = _offset_ms(offsets_s)
+        color = ACCEPTED if passed else REJECTED
+        self._on_offsets(f"{base}/supporters", rr.SeriesLines(
+            colors=[color], widths=[1.5], names=[f"{'✓' if passed else '✗'} {camera}: trajectories followed"]),
+            ms, supporters)
+        i = int(np.argmin(np.abs(offsets_s - joint_offset_s)))
+        self._on_offsets(f"{base}/joint", rr.SeriesPoints(colors=[MINIMA], markers=["circle"], marker_sizes=[6.0],
+                                                           names=[f"{camera}: joint offset"]),
+                         _offset_ms([joint_offset_s]), supporters[i:i + 1])
+
+    @_timed
     def pair_landscape(self, landscape: PairLandscape, view: PairRecordView | None = None) -> None:
         self._log_landscape(landscape, view)
         if landscape.rate_landscape is not None:
@@ -503,6 +522,7 @@ class RerunSink(Sink):
                          has_loops=bool(self._view is not None and self._view.triangles), range_ms=rng,
                          sizes={n: (b.info.width, b.info.height) for n, b in self._videos.items()},
                          eye=self._eye, transfer_origin=CUES_TRANSFER if self._transfer_logged else None,
+                         three_view_origin=CUES_THREE_VIEW if self._three_view_logged else None,
                          votes_logged=self._votes_logged,
                          show_world=bool(self._world_cameras) or self._bundle is not None)
 
