@@ -167,6 +167,16 @@ def test_most_pairs_failing_for_one_reason_is_a_global_cause():
     assert msg.startswith("most pairs fail (6 of 6") and "the cause is global: no cross-view pairs" in msg
     assert "(3-7 track pairs per pair)" in msg
     assert set(d.consequences) == set(names)  # unresolved, but nobody is blamed
+    assert "three views" not in msg
+    # the same run where Stage 0's three-view check refused three estimated cameras: it says so
+    import dataclasses
+
+    from vs_inspect.types import CueStats
+    three_view = {n: {"passed": n == "cam0", "supporters": 0 if n != "cam0" else 9} for n in names}
+    joint = {"margin": dict.fromkeys(names, 10.0), "sure": ["cam0"], "used": [], "three_view": three_view}
+    cues = CueStats("estimated", 4, 100, 0, {}, {}, {}, {}, "joint", None, joint)
+    msg = diagnose(dataclasses.replace(r, cues=cues)).suspects[0].message
+    assert "Stage 0 refused cam1, cam2, cam3 in three views" in msg and "--calib" in msg
 
 
 def test_a_loop_missing_by_more_than_its_tolerance_is_not_ok():
