@@ -280,3 +280,37 @@ def test_point_transfer_checks_get_a_figure_with_the_truth(run, tmp_path):
     render_report(data, tmp_path / "report")
     assert "transfer" in _check_images(tmp_path / "report", data)
     assert "transfer.png" in (tmp_path / "report" / "index.html").read_text()
+
+
+def test_three_view_checks_get_their_figure(run, tmp_path):
+    """A run whose Stage 0 checked estimated sure cameras in three views (result.json
+    cues.geometric_joint.three_view) gets three_view.png: one panel per camera, the bar each
+    needed, truth from --gt; a run without them does not."""
+    import json
+    import shutil
+
+    run_dir, _, scene = run
+    folder = tmp_path / "run"
+    shutil.copytree(run_dir, folder)
+    assert "three_view" not in available(load_report_data(folder))
+    d = json.loads((folder / "result.json").read_text())
+    offsets = np.round(np.arange(-2.0, 2.0, 0.02), 4)
+    followed = np.where(np.abs(offsets - 0.4) < 0.05, 12, 1)
+    checks = {cam: {"joint_offset_s": joint, "trajectories": 40, "supporters": sup, "best_supporters": 12,
+                    "best_offset_s": 0.4, "needed": 4.0, "passed": sup >= 4, "reason": why,
+                    "offsets_s": offsets.tolist(), "supporters_by_offset": followed.tolist()}
+              for cam, joint, sup, why in (("cam1", 0.42, 12, "agrees in three views"),
+                                           ("cam2", -1.0, 1, "disagrees in three views"))}
+    d["cues"] = {"camera_source": "estimated", "registered_cameras": 4, "tracks": 0, "track_pairs": 0,
+                 "videos": {}, "pairs": {}, "dropped": {},
+                 "geometric_joint": {"origin": "cam0", "offsets_s": {"cam0": 0.0, "cam1": 0.42, "cam2": -1.0},
+                                     "three_view": checks}}
+    (folder / "result.json").write_text(json.dumps(d))
+    data = load_report_data(folder)
+    assert [(t.camera, t.passed) for t in data.three_view] == [("cam1", True), ("cam2", False)]
+    gt = scene.bundle.gt_offsets_s
+    assert data.three_view[1].true_offset_s == pytest.approx(gt["cam2"] - gt["cam0"])
+    assert np.array_equal(data.three_view[0].supporters, followed) and data.three_view[0].needed == 4.0
+    render_report(data, tmp_path / "report")
+    assert "three_view" in _check_images(tmp_path / "report", data)
+    assert "three_view.png" in (tmp_path / "report" / "index.html").read_text()

@@ -23,7 +23,7 @@ from ..geometry.epipolar import (epipolar_lines, epipolar_residual,
 from ..geometry.sampling import camera_at_frames, sample_video
 from ..types import CueBundle, RunResult
 from ..report.data import (CameraView, EpipolarPanel, EpipolarState, Mosaic, MosaicTile, PairView,
-                           ReportData, Trajectory, TransferView, VideoClock)
+                           ReportData, ThreeViewView, Trajectory, TransferView, VideoClock)
 
 log = logging.getLogger(__name__)
 
@@ -216,6 +216,22 @@ def transfer_views(result: RunResult, gt: dict[str, float] | None) -> tuple[Tran
     return tuple(out)
 
 
+def three_view_views(result: RunResult, gt: dict[str, float] | None) -> tuple[ThreeViewView, ...]:
+    """Stage 0's three-view checks as result.json keeps them (cues.geometric_joint.three_view);
+    () when the run made none."""
+    joint = (result.cues.geometric_joint if result.cues is not None else None) or {}
+    origin = joint.get("origin")
+    out = []
+    for cam, t in (joint.get("three_view") or {}).items():
+        if "offsets_s" not in t or origin is None:
+            continue
+        truth = gt[cam] - gt[origin] if gt and cam in gt and origin in gt else None
+        out.append(ThreeViewView(cam, np.asarray(t["offsets_s"], float), np.asarray(t["supporters_by_offset"], float),
+                                 origin, float(t["joint_offset_s"]), float(t["needed"]), truth, bool(t["passed"]),
+                                 str(t.get("reason", ""))))
+    return tuple(out)
+
+
 def build_report_data(result: RunResult, bundle: CueBundle | None, *, source: str,
                       gt: dict[str, float] | None = None, video_paths: dict[str, str] | None = None,
                       pair: tuple[str, str] | None = None, frame_reader=None,
@@ -287,7 +303,7 @@ def build_report_data(result: RunResult, bundle: CueBundle | None, *, source: st
     return ReportData(source, result.reference, videos, offsets, unc, dict(result.unresolved), pairs,
                       gt, cameras, static_points, static_colors, trajs, panel, mosaic,
                       transfer_views(result, gt), tuple(notes),
-                      {k: float(v) for k, v in result.timings_s.items()})
+                      {k: float(v) for k, v in result.timings_s.items()}, three_view_views(result, gt))
 
 
 # ---- the report's data of a run folder or of a recording alone ------------------------------

@@ -278,6 +278,7 @@ class ThreeViewCheck:
     supporters: int  # of those, followed by one track of the camera at joint_offset_s
     best_supporters: int  # the most followed at any candidate offset
     best_offset_s: float | None  # where (None: no trajectory followed anywhere)
+    needed: float  # supporters it needed: min_supporters, or the share of best_supporters if more
     passed: bool
     reason: str  # why (or why not), one line
     landscape: TransferLandscape  # over the camera's candidate offsets, the joint offset among them
@@ -287,7 +288,9 @@ class ThreeViewCheck:
         return {"joint_offset_s": round(self.joint_offset_s, 4), "trajectories": self.trajectories,
                 "supporters": self.supporters, "best_supporters": self.best_supporters,
                 "best_offset_s": None if self.best_offset_s is None else round(self.best_offset_s, 4),
-                "passed": self.passed, "reason": self.reason}
+                "needed": round(self.needed, 2), "passed": self.passed, "reason": self.reason,
+                "offsets_s": [round(float(o), 4) for o in self.landscape.offsets_s],
+                "supporters_by_offset": [int(n) for n in self.landscape.supporters]}
 
 
 def check_in_three_views(camera: str, joint_offset_s: float, traj: Trajectories, info_c: VideoInfo,
@@ -308,9 +311,9 @@ def check_in_three_views(camera: str, joint_offset_s: float, traj: Trajectories,
     what = (f"{n} of the {traj.num_trajectories} trajectories the other sure cameras triangulate are "
             f"followed by a track of it at its joint offset {joint_offset_s:+.3f} s"
             + (f", {n_best} at {at_best:+.3f} s" if at_best is not None and n_best > n else ""))
-    if n < min_supporters or n < min_share_of_best * n_best:
-        bar = max(float(min_supporters), min_share_of_best * n_best)
-        return ThreeViewCheck(camera, joint_offset_s, traj.num_trajectories, n, n_best, at_best, False,
+    bar = max(float(min_supporters), min_share_of_best * n_best)
+    if n < bar:
+        return ThreeViewCheck(camera, joint_offset_s, traj.num_trajectories, n, n_best, at_best, bar, False,
                               f"{what}; fewer than {bar:g}: its camera or offset disagrees in three views", land)
-    return ThreeViewCheck(camera, joint_offset_s, traj.num_trajectories, n, n_best, at_best, True,
+    return ThreeViewCheck(camera, joint_offset_s, traj.num_trajectories, n, n_best, at_best, bar, True,
                           f"{what}: agrees in three views", land)

@@ -35,6 +35,11 @@ CAPTIONS = {
                 "over its candidate offset; star = the transfer's peak, solid line = the joint "
                 "vote's offset, dashed = truth. Green: the two agree and the camera is used; "
                 "vermillion: refused (the reason above each panel).",
+    "three_view": "Three-view check (Stage 0): for each estimated camera the joint vote was sure of, "
+                  "how many of the other sure cameras' triangulated moving points one of its tracks "
+                  "follows, over its candidate offset; solid line = the joint vote's offset, dotted = "
+                  "what it needed there, dashed = truth. Green: passed; vermillion: refused, so the "
+                  "camera got no geometric track pairs (wrong estimated cameras, or a wrong offset).",
 }
 
 
@@ -46,6 +51,8 @@ def available(data: ReportData) -> list[str]:
     keys += ["landscapes", "pair_graph"]
     if data.transfer:
         keys.append("transfer")
+    if data.three_view:
+        keys.append("three_view")
     if data.videos:
         keys.append("timeline")
     if data.epipolar is not None:

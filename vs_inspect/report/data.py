@@ -164,6 +164,22 @@ class TransferView:
 
 
 @dataclass(frozen=True)
+class ThreeViewView:
+    """Stage 0's three-view check of an estimated camera the joint vote was sure of
+    (cues/transfer.py, check_in_three_views)."""
+
+    camera: str
+    offsets_s: np.ndarray  # (D,) candidate offset_s of the camera, seconds, relative to `origin`
+    supporters: np.ndarray  # (D,) trajectories of the other sure cameras followed by one of its tracks
+    origin: str  # the camera whose offset the joint vote set to 0
+    joint_offset_s: float  # the joint vote's offset, seconds (same origin)
+    needed: float  # supporters the joint offset needed
+    true_offset_s: float | None  # the truth relative to origin, when known
+    passed: bool
+    reason: str
+
+
+@dataclass(frozen=True)
 class ReportData:
     """Everything the report draws, already computed."""
 
@@ -184,6 +200,7 @@ class ReportData:
     transfer: tuple[TransferView, ...] = ()  # Stage 0's point-transfer checks (none: nothing unsure)
     notes: tuple[str, ...] = ()  # readable notes on what could not be shown and why
     timings_s: dict[str, float] = field(default_factory=dict)
+    three_view: tuple[ThreeViewView, ...] = ()  # Stage 0's three-view checks (none: no estimated camera sure)
 
     @property
     def names(self) -> list[str]:

@@ -18,6 +18,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
+from matplotlib.ticker import MaxNLocator  # noqa: E402
 
 from .. import palette  # noqa: E402
 from ..errors import InputError  # noqa: E402
@@ -101,6 +102,9 @@ def _size_px(kind: str, data: ReportData) -> tuple[int, int]:
         return 1600, 1000
     if kind == "transfer":
         rows, cols = landscape_grid_shape(len(data.transfer))
+        return max(760, 420 * cols), 110 + 320 * rows
+    if kind == "three_view":
+        rows, cols = landscape_grid_shape(len(data.three_view))
         return max(760, 420 * cols), 110 + 320 * rows
     if kind == "mosaic":
         rows, cols = _mosaic_grid(len(data.mosaic.tiles) if data.mosaic else 1)
@@ -259,6 +263,34 @@ def transfer(data: ReportData, path: Path, dpi: float = DPI, formats: tuple[str,
         ax.set_xlabel(f"offset of {t.camera} with {t.origin} at 0  [s]")
         if i % cols == 0:
             ax.set_ylabel("samples on their track (share)")
+        ax.legend(fontsize=7, loc="upper right", frameon=False)
+    return _save(fig, path, dpi, formats)
+
+
+# ---- three-view check (Stage 0) --------------------------------------------------------------
+
+
+def three_view(data: ReportData, path: Path, dpi: float = DPI, formats: tuple[str, ...] = ("png",)) -> Path:
+    """One panel per estimated camera Stage 0's joint vote was sure of: how many trajectories
+    of the other sure cameras its tracks follow, over its candidate offset, against what the
+    joint offset needed."""
+    fig, axes, _, cols = _panels("three_view", data, len(data.three_view))
+    for i, ax in enumerate(axes):
+        t = data.three_view[i]
+        color = ACCEPT if t.passed else REJECT
+        ax.set_facecolor(ACCEPT_BG if t.passed else REJECT_BG)
+        ax.plot(t.offsets_s, t.supporters, color=color, lw=1.4, drawstyle="steps-mid")
+        ax.axvline(t.joint_offset_s, color=SOLVED, lw=1.6, label="joint vote")
+        ax.axhline(t.needed, color="0.35", ls=":", lw=1.2, label=f"needed ({t.needed:g})")
+        if t.true_offset_s is not None:
+            ax.axvline(t.true_offset_s, color=TRUTH, ls=(0, (4, 3)), lw=1.2, label="truth")
+        ax.set_ylim(bottom=0)
+        ax.yaxis.set_major_locator(MaxNLocator(integer=True))  # counts of trajectories
+        verdict = "passed" if t.passed else "refused"
+        ax.set_title(f"{t.camera}: {verdict}\n{_wrap(t.reason, 58)}", fontsize=8, loc="left")
+        ax.set_xlabel(f"offset of {t.camera} with {t.origin} at 0  [s]")
+        if i % cols == 0:
+            ax.set_ylabel("trajectories followed")
         ax.legend(fontsize=7, loc="upper right", frameon=False)
     return _save(fig, path, dpi, formats)
 
