@@ -199,37 +199,33 @@ def _downscale(img: np.ndarray, max_width: int = 480) -> np.ndarray:
     return cv2.resize(img, (max_width, int(round(h * max_width / w))), interpolation=cv2.INTER_AREA)
 
 
+def _camera_checks(result: RunResult, key: str, gt: dict[str, float] | None):
+    """(camera, check, origin, true offset or None) of each of Stage 0's per-camera checks that
+    result.json keeps with its curve under cues.geometric_joint[key]."""
+    joint = (result.cues.geometric_joint if result.cues is not None else None) or {}
+    origin = joint.get("origin")
+    for cam, t in (joint.get(key) or {}).items():
+        if "offsets_s" in t and origin is not None:
+            yield cam, t, origin, gt[cam] - gt[origin] if gt and cam in gt and origin in gt else None
+
+
 def transfer_views(result: RunResult, gt: dict[str, float] | None) -> tuple[TransferView, ...]:
     """Stage 0's point-transfer checks as result.json keeps them (cues.geometric_joint.transfer);
     () when the run made none or has no Stage 0."""
-    joint = (result.cues.geometric_joint if result.cues is not None else None) or {}
-    origin = joint.get("origin")
-    out = []
-    for cam, t in (joint.get("transfer") or {}).items():
-        if "offsets_s" not in t or origin is None:
-            continue
-        truth = gt[cam] - gt[origin] if gt and cam in gt and origin in gt else None
-        out.append(TransferView(cam, np.asarray(t["offsets_s"], float), np.asarray(t["share"], float), origin,
-                                float(t["joint_offset_s"]),
-                                None if t.get("transfer_offset_s") is None else float(t["transfer_offset_s"]), truth,
-                                bool(t["confirmed"]), str(t.get("reason", ""))))
-    return tuple(out)
+    return tuple(TransferView(cam, np.asarray(t["offsets_s"], float), np.asarray(t["share"], float), origin,
+                              float(t["joint_offset_s"]),
+                              None if t.get("transfer_offset_s") is None else float(t["transfer_offset_s"]), truth,
+                              bool(t["confirmed"]), str(t.get("reason", "")))
+                 for cam, t, origin, truth in _camera_checks(result, "transfer", gt))
 
 
 def three_view_views(result: RunResult, gt: dict[str, float] | None) -> tuple[ThreeViewView, ...]:
     """Stage 0's three-view checks as result.json keeps them (cues.geometric_joint.three_view);
     () when the run made none."""
-    joint = (result.cues.geometric_joint if result.cues is not None else None) or {}
-    origin = joint.get("origin")
-    out = []
-    for cam, t in (joint.get("three_view") or {}).items():
-        if "offsets_s" not in t or origin is None:
-            continue
-        truth = gt[cam] - gt[origin] if gt and cam in gt and origin in gt else None
-        out.append(ThreeViewView(cam, np.asarray(t["offsets_s"], float), np.asarray(t["supporters_by_offset"], float),
-                                 origin, float(t["joint_offset_s"]), float(t["needed"]), truth, bool(t["passed"]),
-                                 str(t.get("reason", ""))))
-    return tuple(out)
+    return tuple(ThreeViewView(cam, np.asarray(t["offsets_s"], float), np.asarray(t["supporters_by_offset"], float),
+                               origin, float(t["joint_offset_s"]), float(t["needed"]), truth, bool(t["passed"]),
+                               str(t.get("reason", "")))
+                 for cam, t, origin, truth in _camera_checks(result, "three_view", gt))
 
 
 def build_report_data(result: RunResult, bundle: CueBundle | None, *, source: str,

@@ -258,13 +258,19 @@ def transfer(data: ReportData, path: Path, dpi: float = DPI, formats: tuple[str,
             zoom.set_xlim(t.transfer_offset_s - 0.25, t.transfer_offset_s + 0.25)
             zoom.tick_params(labelsize=6)
             zoom.set_title("± 0.25 s", fontsize=6)
-        verdict = "confirmed" if t.confirmed else "refused"
-        ax.set_title(f"{t.camera}: {verdict}\n{_wrap(t.reason, 58)}", fontsize=8, loc="left")
-        ax.set_xlabel(f"offset of {t.camera} with {t.origin} at 0  [s]")
-        if i % cols == 0:
-            ax.set_ylabel("samples on their track (share)")
-        ax.legend(fontsize=7, loc="upper right", frameon=False)
+        _label_check(ax, t.camera, t.origin, "confirmed" if t.confirmed else "refused", t.reason,
+                     "samples on their track (share)" if i % cols == 0 else None)
     return _save(fig, path, dpi, formats)
+
+
+def _label_check(ax, camera: str, origin: str, verdict: str, reason: str, ylabel: str | None) -> None:
+    """Title (verdict and reason), axis labels and legend of one camera's Stage 0 check panel
+    (ylabel None: not the first column)."""
+    ax.set_title(f"{camera}: {verdict}\n{_wrap(reason, 58)}", fontsize=8, loc="left")
+    ax.set_xlabel(f"offset of {camera} with {origin} at 0  [s]")
+    if ylabel is not None:
+        ax.set_ylabel(ylabel)
+    ax.legend(fontsize=7, loc="upper right", frameon=False)
 
 
 # ---- three-view check (Stage 0) --------------------------------------------------------------
@@ -286,12 +292,8 @@ def three_view(data: ReportData, path: Path, dpi: float = DPI, formats: tuple[st
             ax.axvline(t.true_offset_s, color=TRUTH, ls=(0, (4, 3)), lw=1.2, label="truth")
         ax.set_ylim(bottom=0)
         ax.yaxis.set_major_locator(MaxNLocator(integer=True))  # counts of trajectories
-        verdict = "passed" if t.passed else "refused"
-        ax.set_title(f"{t.camera}: {verdict}\n{_wrap(t.reason, 58)}", fontsize=8, loc="left")
-        ax.set_xlabel(f"offset of {t.camera} with {t.origin} at 0  [s]")
-        if i % cols == 0:
-            ax.set_ylabel("trajectories followed")
-        ax.legend(fontsize=7, loc="upper right", frameon=False)
+        _label_check(ax, t.camera, t.origin, "passed" if t.passed else "refused", t.reason,
+                     "trajectories followed" if i % cols == 0 else None)
     return _save(fig, path, dpi, formats)
 
 
