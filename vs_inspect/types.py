@@ -408,6 +408,11 @@ class CueStats:
     # its point-transfer checks of unsure cameras ("transfer": camera -> verdict) and of sure ones in
     # three views ("three_view": camera -> verdict), JSON values
 
+    def refused_in_three_views(self) -> list[str]:
+        """The cameras Stage 0's three-view check refused (geometric_joint's "three_view"), by name."""
+        checks = (self.geometric_joint or {}).get("three_view") or {}
+        return sorted(v for v, chk in checks.items() if not chk["passed"])
+
     def joint_refusal(self, video: str) -> str | None:
         """Why Stage 0 gave `video` no geometric track pairs when its joint vote was unsure of it
         (with point transfer's verdict), sure of it but refuted in three views, or sure of too few
@@ -416,8 +421,8 @@ class CueStats:
         joint = self.geometric_joint or {}
         if video not in joint.get("margin", {}) or video in joint.get("used", ()) or video in self.dropped:
             return None
-        three_view = (joint.get("three_view") or {}).get(video)
-        if three_view is not None and not three_view["passed"]:
+        if video in self.refused_in_three_views():
+            three_view = joint["three_view"][video]
             return (f"Stage 0's joint vote was sure of its offset (margin {joint['margin'][video]:.1f}), but "
                     f"not in three views ({three_view['reason']}), so it got no geometric track pairs")
         if video in joint.get("sure", ()):

@@ -340,7 +340,7 @@ def diagnose(result: RunResult, videos: Iterable[RecordedVideo | VideoInfo] | No
         if global_cause == CAUSE_NO_PAIRS:
             counts = [c.num_track_pairs for c in bad if c.cause == CAUSE_NO_PAIRS]
             extra = f" ({min(counts)}-{max(counts)} track pairs per pair)"
-            if refused := _refused_in_three_views(result):
+            if refused := (result.cues.refused_in_three_views() if result.cues is not None else []):
                 stage0 = (f"; Stage 0 refused {', '.join(refused)} in three views (their tracks do not "
                           f"follow the points the other cameras triangulate at the joint vote's offsets), "
                           f"which points to wrong estimated cameras: a calibration (--calib) or other "
@@ -363,12 +363,6 @@ def diagnose(result: RunResult, videos: Iterable[RecordedVideo | VideoInfo] | No
         else:
             consequences[v] = why
     return Diagnosis(checks, loops, suspects, global_cause, cautious, unexplained, consequences)
-
-
-def _refused_in_three_views(result: RunResult) -> list[str]:
-    """The cameras Stage 0's three-view check refused (result.json cues.geometric_joint.three_view)."""
-    joint = (result.cues.geometric_joint or {}) if result.cues is not None else {}
-    return sorted(v for v, chk in (joint.get("three_view") or {}).items() if not chk.get("passed", True))
 
 
 def _video_blame(cause: str | None) -> str:

@@ -28,6 +28,7 @@ from ..geometry.triangulate import triangulate_over_time
 from ..types import CameraTrack, TrackPairs, VideoInfo
 
 _BLOCK_ELEMENTS = 4_000_000  # (offset, sample) brackets held at once
+MIN_OVERLAP_SHARE = 0.25  # offsets with less overlap than this share of the largest are not candidates
 MAX_BRACKETS = 30_000_000  # (offset, sample) brackets evaluated at most (about 12 s; the demo's 15 M: 6 s)
 
 
@@ -108,7 +109,7 @@ class TransferLandscape:
 
 def transfer_landscape(traj: Trajectories, info_c: VideoInfo, camera_c: CameraTrack,
                        xy_c: np.ndarray, offsets_s: np.ndarray, radius_px: float,
-                       min_hits: int = 5, min_overlap_share: float = 0.25,
+                       min_hits: int = 5, min_overlap_share: float = MIN_OVERLAP_SHARE,
                        neighbours: int = 4) -> TransferLandscape:
     """The support of each candidate offset of camera c (offsets_s (D,), increasing), and the
     offset whose share (support per sample inside c's video) is highest.
@@ -304,9 +305,9 @@ def check_in_three_views(camera: str, joint_offset_s: float, traj: Trajectories,
     grid = np.union1d(offset_grid(traj, info_c, 0.5 * info_c.frame_interval_s), [joint_offset_s])
     land = transfer_landscape(traj, info_c, camera_c, xy_c, grid, radius_px, min_hits)
     n = int(land.supporters[np.searchsorted(grid, joint_offset_s)])
-    enough = land.overlap >= 0.25 * land.overlap.max() if len(grid) else np.zeros(0, bool)
-    best = int(np.argmax(np.where(enough, land.supporters, -1))) if enough.any() else -1
-    n_best = int(land.supporters[best]) if best >= 0 else 0
+    enough = land.overlap >= MIN_OVERLAP_SHARE * land.overlap.max()  # the grid holds the joint offset at least
+    best = int(np.argmax(np.where(enough, land.supporters, -1)))
+    n_best = int(land.supporters[best])
     at_best = float(grid[best]) if n_best > 0 else None
     what = (f"{n} of the {traj.num_trajectories} trajectories the other sure cameras triangulate are "
             f"followed by a track of it at its joint offset {joint_offset_s:+.3f} s"
