@@ -123,7 +123,8 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
     cfg = CueConfig(geometric=GeometricPairConfig(joint_min_margin=1e9))  # no camera sure
     monkeypatch.setattr(gp, "consistent_peaks", lambda *a, **k: (None, "inconsistent"))
     sink, stats = _Events(), {"pairs": {}}
-    out, voted = _add_geometric_pairs(pairs, cams, tracks, vids, cfg, stats, sink, progress=False)
+    out, voted = _add_geometric_pairs(pairs, cams, tracks, vids, cfg, stats, sink, progress=False,
+                                      estimated=True)
     assert stats["geometric_peaks"] == "inconsistent"
     assert voted == {}  # no Δ chosen, so none is reported as voted
     assert any("descriptor pairs kept only where consistent" in m for m in sink.messages)
@@ -135,7 +136,7 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
         assert stats["pairs"][f"{u}__{v}"]["descriptor_pairs_kept"] == len(kept)
 
 
-def _sure_of_all(monkeypatch, offsets: dict[str, float], camera_source: str = "estimated"):
+def _sure_of_all(monkeypatch, offsets: dict[str, float], estimated: bool = True):
     """Stage 0's geometric pairs of the transfer scene (cameras a, b, c, true geometry) with the
     joint vote replaced by one sure (margin 10) of every camera at `offsets`: (pairs, stats,
     stage events, the scene's rows of each point)."""
@@ -150,10 +151,10 @@ def _sure_of_all(monkeypatch, offsets: dict[str, float], camera_source: str = "e
     infos, cams, xy, _, row_of = _scene({"a": 0.0, "b": 0.42, "c": -0.3})
     pairs = {k: TrackPairs(*k, np.zeros((0, 2), np.int64)) for k in (("a", "b"), ("a", "c"), ("b", "c"))}
     monkeypatch.setattr(gp, "joint_offsets", lambda *a, **k: JointChoice(dict(offsets), 30.0, dict.fromkeys(offsets, 10.0)))
-    sink, stats = _Events(), {"pairs": {}, "camera_source": camera_source}
+    sink, stats = _Events(), {"pairs": {}}
     out, _ = _add_geometric_pairs(pairs, cams, {n: Tracks(xy[n], None) for n in "abc"},
                                   {n: SimpleNamespace(info=infos[n]) for n in "abc"}, CueConfig(),
-                                  stats, sink, progress=False)
+                                  stats, sink, progress=False, estimated=estimated)
     return out, stats, sink.messages, row_of
 
 
@@ -186,7 +187,7 @@ def test_sure_cameras_refuted_in_three_views_get_no_pairs(monkeypatch):
 def test_cameras_from_a_calibration_are_not_checked_in_three_views(monkeypatch):
     """The check is of estimated cameras: a calibration's are used as given, so the joint vote's
     choice stands unchecked here."""
-    out, stats, msgs, _ = _sure_of_all(monkeypatch, {"a": 0.0, "b": 0.42, "c": 0.2}, "calibration")
+    out, stats, msgs, _ = _sure_of_all(monkeypatch, {"a": 0.0, "b": 0.42, "c": 0.2}, estimated=False)
     joint = stats["geometric_joint"]
     assert "three_view" not in joint and joint["sure"] == ["a", "b", "c"]
     assert not any("three views" in m for m in msgs)

@@ -319,7 +319,8 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
     pairs = {k: v for k, v in all_pairs.items() if k[0] in cameras and k[1] in cameras}
     if cfg.geometric.enabled:
         t0 = time.perf_counter()
-        pairs, voted = _add_geometric_pairs(pairs, cameras, tracks, vids, cfg, stats, sink, progress)
+        pairs, voted = _add_geometric_pairs(pairs, cameras, tracks, vids, cfg, stats, sink, progress,
+                                            estimated=calibration is None)
         fallback = (stats.get("sfm") or {}).get("fallback") or {}
         if fallback.get("used"):
             refused = _check_fitted_offsets(fallback, voted, vids)
@@ -360,9 +361,11 @@ def _cue_stats(stats: dict) -> CueStats:
 
 
 def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
-                         stats: dict, sink: Sink, progress: bool) -> tuple[dict, dict]:
+                         stats: dict, sink: Sink, progress: bool, estimated: bool) -> tuple[dict, dict]:
     """Descriptor pairs plus epipolar-consistency pairs for every pair of known cameras (a moving
     one with its per-frame poses): (the pairs, {(a, b): the Δ_ab whose supporters were added}).
+    estimated: Stage 0 estimated the cameras (no calibration given); only then are sure cameras
+    checked in three views.
 
     With three or more such cameras, the vote peaks whose offsets close every triangle
     (Δ_ab + Δ_bc ≈ Δ_ac) are chosen and only their supporters kept. When no choice closes the
@@ -388,7 +391,6 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     three_view = {}
     # the check is of cameras Stage 0 estimated: a calibration's are given (with one, the tiny
     # bench-timing scene's right hand-held camera had 3 trajectories followed, wrong ones 0-2)
-    estimated = stats.get("camera_source") != "calibration"
     if cfg.geometric.three_view_min_supporters > 0 and estimated and sum(sure.values()) >= 3:
         three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, sink)
         sure = {n: ok and (n not in three_view or three_view[n].passed) for n, ok in sure.items()}
