@@ -150,16 +150,21 @@ def test_planted_failures_are_named_with_their_cause_and_no_innocent_video():
     assert not any(s.name == "A" for s in d.suspects)
 
 
-def test_most_pairs_failing_for_one_reason_is_a_global_cause():
-    from vs_inspect.analysis.diagnose import CAUSE_NO_PAIRS, diagnose
+def _no_pairs_result() -> tuple[RunResult, list[str]]:
+    """Four videos whose six pairs all have too few track pairs (3-7), none resolved."""
     names = ["cam0", "cam1", "cam2", "cam3"]
     pairs = tuple(_pl(a, b, float("nan"), False, f"too few track pairs: only {k} (fewer than 8)",
                       track_pairs=k)
                   for k, (a, b) in zip((3, 4, 5, 6, 7, 3),
                                        [(a, b) for i, a in enumerate(names) for b in names[i + 1:]]))
-    offs = {"cam0": None, "cam1": None, "cam2": None, "cam3": None}
-    r = RunResult("cam0", offs, dict(offs), {n: "no accepted pair" for n in names}, pairs, "irls",
-                  (), (), {})
+    offs = dict.fromkeys(names)
+    return RunResult("cam0", offs, dict(offs), {n: "no accepted pair" for n in names}, pairs, "irls",
+                     (), (), {}), names
+
+
+def test_most_pairs_failing_for_one_reason_is_a_global_cause():
+    from vs_inspect.analysis.diagnose import CAUSE_NO_PAIRS, diagnose
+    r, names = _no_pairs_result()
     d = diagnose(r)
     assert d.global_cause == CAUSE_NO_PAIRS
     assert [s.kind for s in d.suspects] == ["global"]
@@ -177,6 +182,26 @@ def test_most_pairs_failing_for_one_reason_is_a_global_cause():
     cues = CueStats("estimated", 4, 100, 0, {}, {}, {}, {}, "joint", None, joint)
     msg = diagnose(dataclasses.replace(r, cues=cues)).suspects[0].message
     assert "Stage 0 refused cam1, cam2, cam3 in three views" in msg and "--calib" in msg
+    assert "moved" not in msg  # no video statistics, no claim about them
+
+
+def test_no_cross_view_pairs_shows_what_stage0_had_to_pair():
+    """The global "no cross-view pairs" cause gives each video's tracks and moving share, and
+    names the cameras that moved (as on fencing1: three head-worn cameras, 38-91 tracks)."""
+    import dataclasses
+
+    from vs_inspect.analysis.diagnose import diagnose
+    from vs_inspect.types import CueStats, VideoCueStats
+
+    r, names = _no_pairs_result()
+    videos = {n: VideoCueStats(f"{n}.mp4", "moving" if n == "cam3" else "static", 0.0,
+                               0.009 if n == "cam3" else 0.04, 38 if n == "cam3" else 500, 2, 0, 0)
+              for n in names}
+    cues = CueStats("calibration", 4, 1538, 0, videos, {}, {}, {})
+    msg = diagnose(dataclasses.replace(r, cues=cues)).suspects[0].message
+    assert "tracks per video (share of the frames in moving regions): cam0 500 (4.0 %)" in msg
+    assert "cam3 38 (0.9 %)" in msg
+    assert "; cam3 moved: " in msg and "cam0 moved" not in msg and "three views" not in msg
 
 
 def test_a_loop_missing_by_more_than_its_tolerance_is_not_ok():

@@ -345,6 +345,7 @@ def diagnose(result: RunResult, videos: Iterable[RecordedVideo | VideoInfo] | No
                           f"follow the points the other cameras triangulate at the joint vote's offsets), "
                           f"which points to wrong estimated cameras: a calibration (--calib) or other "
                           f"camera features (--sfm-features) may help")
+            stage0 += _tracks_found(result.cues)
         msg = (f"most pairs fail ({len(bad)} of {len(checks)}: {spread}): the cause is global: "
                f"{global_cause}{extra}: {CAUSE_MEANING[global_cause]}; no single video or pair "
                f"is to blame{stage0}")
@@ -363,6 +364,22 @@ def diagnose(result: RunResult, videos: Iterable[RecordedVideo | VideoInfo] | No
         else:
             consequences[v] = why
     return Diagnosis(checks, loops, suspects, global_cause, cautious, unexplained, consequences)
+
+
+def _tracks_found(cues) -> str:
+    """What Stage 0 had to pair, per video: its tracks and how much of its frames moved, and
+    which cameras moved (their moving regions are what one homography per frame pair leaves
+    unexplained: slow objects are missed and parallax is marked)."""
+    if cues is None or not cues.videos:
+        return ""
+    per = ", ".join(f"{n} {v.tracks} ({100 * v.moving_fraction:.1f} %)" for n, v in cues.videos.items())
+    moved = [n for n, v in cues.videos.items() if v.camera_motion == "moving"]
+    out = f"; Stage 0's tracks per video (share of the frames in moving regions): {per}"
+    if moved:
+        out += (f"; {', '.join(moved)} moved: their moving regions are what one homography per frame "
+                f"pair leaves unexplained, which misses slow objects and marks parallax "
+                f"(--camera-motion NAME=static for a camera that did not move)")
+    return out
 
 
 def _video_blame(cause: str | None) -> str:
