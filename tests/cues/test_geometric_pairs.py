@@ -268,3 +268,39 @@ def test_consistent_at_keeps_the_same_points_at_the_right_offset_only():
     assert ok.mean() > 0.8
     assert consistent_at(info_a, info_b, cam_a, cam_b, xy_a, xy_b, wrong, 0.4, 2.0, 0.8, 8).mean() < 0.1
     assert consistent_at(info_a, info_b, cam_a, cam_b, xy_a, xy_b, right, -0.4, 2.0, 0.8, 8).mean() < 0.2
+
+
+def test_points_near_the_epipole_do_not_vote():
+    """b also sees points next to a's camera (a head-worn camera's wearer, seen by the other
+    wearer: fencing1): they sit near the epipole, where every epipolar line passes, so any track
+    of a fits them at some offset. Such moments are not counted; the true pairs still vote."""
+    from dataclasses import replace
+
+    from vs_inspect.cues.config import GeometricPairConfig
+
+    shift = 8
+    info_a, info_b, poses_a, poses_b, xy_a, xy_b, a_of_b = _two_moving(shift)
+    rng = np.random.default_rng(11)
+    T = info_b.num_frames
+    centers_a = np.stack([-p[:3, :3].T @ p[:3, 3] for p in poses_a])  # a's centre, its frame q
+    near = rng.uniform(-0.15, 0.15, (10, 1, 3))
+    heads = centers_a[np.clip(np.arange(T) + shift, 0, T - 1)][None] + near  # at b's moments
+    xy_heads = np.stack([project(K, poses_b[q], heads[:, q]) for q in range(T)], 1)
+    xy_b = np.concatenate([xy_b, xy_heads + rng.normal(0, 0.3, xy_heads.shape)])
+    head_rows = set(range(len(xy_b) - 10, len(xy_b)))
+    cam_a, cam_b = CameraTrack(K, poses_a), CameraTrack(K, poses_b)
+    off = replace(GeometricPairConfig(), epipole_margin_tau=0.0)
+    _, st_off = geometric_pairs("a", "b", info_a, info_b, cam_a, cam_b, xy_a, xy_b, off)
+    tp, st = geometric_pairs("a", "b", info_a, info_b, cam_a, cam_b, xy_a, xy_b)
+    def head_votes(stats):  # (votes of pairs with a head track, the most at one offset)
+        h = np.isin(stats.cand_index[:, 1], list(head_rows))
+        _, n = np.unique(np.round(stats.cand_offset_s[h] * FPS), return_counts=True)
+        return int(h.sum()), int(n.max(initial=0))
+
+    # counted, every head fits every track of a at the offset that puts a's camera beside it
+    voted_off, most_off = head_votes(st_off)
+    voted, most = head_votes(st)
+    assert voted_off >= 50 and most_off >= 50 and voted <= 10 and most <= 3, (voted_off, most_off, voted, most)
+    assert st.peaks_s[0] == pytest.approx(shift / FPS, abs=1.5 / FPS)
+    top = tp.index[st.pair_peak == 0]
+    assert sum(a_of_b.get(int(j)) == int(i) for i, j in top) >= 30

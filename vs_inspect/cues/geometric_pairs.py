@@ -78,6 +78,27 @@ def _sampson(xa, i, kk, ww, G, g, q, l0, l1, l2):
 
 
 @nb.njit(inline="always")
+def _near(x0, x1, e, r2):
+    """(x0, x1) lies within sqrt(r2) px of the homogeneous point e (False when e is at infinity)."""
+    if abs(e[2]) < 1e-12:
+        return False
+    d0 = x0 - e[0] / e[2]
+    d1 = x1 - e[1] / e[2]
+    return d0 * d0 + d1 * d1 < r2
+
+
+@nb.njit(inline="always")
+def _degenerate(xa, i, kk, ww, xb, j, q, e_a, e_b, g, r2):
+    """A moment whose points lie near their epipoles (a's interpolated at (kk, ww), b's at its
+    frame q): every epipolar line passes there, so it fits whatever the offset."""
+    if r2 <= 0.0:
+        return False
+    a0 = xa[i, kk, 0] + ww * (xa[i, kk + 1, 0] - xa[i, kk, 0])
+    a1 = xa[i, kk, 1] + ww * (xa[i, kk + 1, 1] - xa[i, kk, 1])
+    return _near(xb[j, q, 0], xb[j, q, 1], e_b[g, q], r2) or _near(a0, a1, e_a[g, q], r2)
+
+
+@nb.njit(inline="always")
 def _line_a(xb, j, q, G, g):
     """Epipolar line in a of b's point at its frame q: G[g, q] x_b."""
     y0 = xb[j, q, 0]
@@ -88,8 +109,8 @@ def _line_a(xb, j, q, G, g):
 
 
 @nb.njit(parallel=True, cache=True)
-def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_share, max_band,
-                 min_sweep, qstep):
+def _consistency(xa, xb, cand_a, cand_b, G, e_a, e_b, k, w, tau2, min_frames, min_share, max_band,
+                 min_sweep, qstep, epi_r2):
     """Per candidate: number of consistent offsets, best offset index, its mean Sampson (px²).
 
     xa (Na,Ta,2) is interpolated at τ_b + Δ_d via (k, w) (D,Tb); xb (Nb,Tb,2) read at its frames.
@@ -98,8 +119,10 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
     static cameras; per frame when b moves); NaN where a pose is unknown; e_b (Dg,Tb,3) epipole
     in b. The fitting moments must spread at least
     min_sweep px across b's epipolar lines. Candidates consistent at more than max_band offsets
-    get best -1. Only every qstep-th frame of b is read (frame counts are of those). The best
-    offset has the least mean Sampson over the fitting moments.
+    get best -1. Only every qstep-th frame of b is read (frame counts are of those). A fitting
+    moment where a point lies within sqrt(epi_r2) px of its epipole (e_a, e_b) is not counted
+    (checked for fits only: cheaper, and a miss there is a real miss). The best offset has the
+    least mean Sampson over the fitting moments.
     """
     C = cand_a.shape[0]
     D, Tb = k.shape
@@ -178,6 +201,9 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_b, k, w, tau2, min_frames, min_sha
                 if r >= tau2:
                     if n - fit > max_miss:
                         break
+                    continue
+                if _degenerate(xa, i, kk, w[d, q], xb, j, q, e_a, e_b, g, epi_r2):
+                    n -= 1  # it fits because every epipolar line passes there: not counted
                     continue
                 if fit == 0:
                     y0 = xb[j, q, 0]
@@ -330,11 +356,12 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
     cand_b = np.tile(ib, len(ia))
     _, best, res = _consistency(np.ascontiguousarray(xy_a, np.float64),
                                 np.ascontiguousarray(xy_b, np.float64), cand_a, cand_b,
-                                np.ascontiguousarray(G), np.ascontiguousarray(e_b),
+                                np.ascontiguousarray(G), np.ascontiguousarray(e_a),
+                                np.ascontiguousarray(e_b),
                                 np.ascontiguousarray(k), np.ascontiguousarray(w), tau * tau,
                                 cfg.min_frames, cfg.min_inlier_share,
                                 max(1, int(cfg.max_band_share * len(offsets))),
-                                cfg.min_sweep_tau * tau, qstep)
+                                cfg.min_sweep_tau * tau, qstep, (cfg.epipole_margin_tau * tau) ** 2)
     informative = best >= 0
     votes = np.bincount(best[informative], minlength=len(offsets)).astype(float)
     peaks = _peaks(votes, cfg.peaks, cfg.peak_halfwidth)
