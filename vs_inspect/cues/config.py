@@ -127,7 +127,7 @@ class GeometricPairConfig:
     min_sweep_tau: float = 4.0
     """A candidate track must sweep at least this many tau across the epipolar lines (motion along them fits any offset)."""
     epipole_margin_tau: float = 10.0
-    """A moment where either point lies within this many tau of its epipole is not counted: every epipolar line passes there, so any partner fits at any offset (head-worn cameras that see each other's wearer: fencing1's 82 false votes at +0.15 s, README); 0 counts every moment."""
+    """A fitting moment where either point lies within this many tau of its epipole is not counted: every epipolar line passes there, so any partner fits at any offset (head-worn cameras that see each other's wearer: fencing1's 82 false votes at +0.15 s, README); 0 counts every moment."""
     max_tracks: int = 300
     """Longest tracks per video taken as candidates (cost grows with the product)."""
     max_rate_hz: float = 30.0

@@ -116,8 +116,8 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_a, e_b, k, w, tau2, min_frames, mi
     xa (Na,Ta,2) is interpolated at τ_b + Δ_d via (k, w) (D,Tb); xb (Nb,Tb,2) read at its frames.
     G (Dg,Tb,3,3) with x_aᵀ G[g, q] x_b = 0 at b's frame q, g = d when Dg == D (both cameras move:
     a's pose depends on the offset too) or g = 0 when Dg == 1 (a static: one G repeated for two
-    static cameras; per frame when b moves); NaN where a pose is unknown; e_b (Dg,Tb,3) epipole
-    in b. The fitting moments must spread at least
+    static cameras; per frame when b moves); NaN where a pose is unknown; e_a, e_b (Dg,Tb,3) epipoles
+    in a and in b. The fitting moments must spread at least
     min_sweep px across b's epipolar lines. Candidates consistent at more than max_band offsets
     get best -1. Only every qstep-th frame of b is read (frame counts are of those). A fitting
     moment where a point lies within sqrt(epi_r2) px of its epipole (e_a, e_b) is not counted
