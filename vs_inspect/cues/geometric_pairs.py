@@ -66,11 +66,17 @@ class GeometricPairStats:
 
 
 @nb.njit(inline="always")
+def _a_at(xa, i, kk, ww):
+    """a's point i interpolated between its frames kk and kk + 1 (weight ww on kk + 1)."""
+    return (xa[i, kk, 0] + ww * (xa[i, kk + 1, 0] - xa[i, kk, 0]),
+            xa[i, kk, 1] + ww * (xa[i, kk + 1, 1] - xa[i, kk, 1]))
+
+
+@nb.njit(inline="always")
 def _sampson(xa, i, kk, ww, G, g, q, l0, l1, l2):
     """Sampson distance² (px²) of a's point interpolated at (kk, ww) and b's point at its frame q
     with line l = G[g, q] x_b."""
-    a0 = xa[i, kk, 0] + ww * (xa[i, kk + 1, 0] - xa[i, kk, 0])
-    a1 = xa[i, kk, 1] + ww * (xa[i, kk + 1, 1] - xa[i, kk, 1])
+    a0, a1 = _a_at(xa, i, kk, ww)
     m0 = G[g, q, 0, 0] * a0 + G[g, q, 1, 0] * a1 + G[g, q, 2, 0]  # line in b: Gᵀ x_a
     m1 = G[g, q, 0, 1] * a0 + G[g, q, 1, 1] * a1 + G[g, q, 2, 1]
     num = a0 * l0 + a1 * l1 + l2
@@ -93,8 +99,7 @@ def _degenerate(xa, i, kk, ww, xb, j, q, e_a, e_b, g, r2):
     frame q): every epipolar line passes there, so it fits whatever the offset."""
     if r2 <= 0.0:
         return False
-    a0 = xa[i, kk, 0] + ww * (xa[i, kk + 1, 0] - xa[i, kk, 0])
-    a1 = xa[i, kk, 1] + ww * (xa[i, kk + 1, 1] - xa[i, kk, 1])
+    a0, a1 = _a_at(xa, i, kk, ww)
     return _near(xb[j, q, 0], xb[j, q, 1], e_b[g, q], r2) or _near(a0, a1, e_a[g, q], r2)
 
 
