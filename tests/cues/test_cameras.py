@@ -1,7 +1,9 @@
 """Camera estimation: COLMAP's SIFT database hardly depends on the number of threads
 (cues/cameras.SFM_THREADS: the same images and features, matches within a borderline one); the turned matching (CameraConfig.rotations): keypoints found in a
 turned image map back to the image itself, and a view pair whose texture is turned by 90 degrees
-(cameras around a floor) gets its matches only when the second image is also tried turned."""
+(cameras around a floor) gets its matches only when the second image is also tried turned; a
+moving camera's SfM frames are matched sequentially (CameraConfig.sequence_overlap), every pair
+across videos."""
 
 from __future__ import annotations
 
