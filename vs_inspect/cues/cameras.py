@@ -132,18 +132,18 @@ def sfm_image_pairs(names: list[str], moving: dict[str, bool], overlap: int) -> 
     SfM frames: when j - i <= overlap or j - i is a power of two (COLMAP's sequential matching
     with quadratic overlap); overlap 0: every pair.
     """
-    rank: dict[str, int] = {}
-    for video in {n.split("/")[0] for n in names}:
-        for i, n in enumerate(sorted(m for m in names if m.split("/")[0] == video)):
-            rank[n] = i
+    video = {n: n.split("/")[0] for n in names}
+    seen: dict[str, int] = {}
+    rank: dict[str, int] = {}  # place of each frame in its video's sorted frames
+    for n in sorted(names):
+        rank[n] = seen[video[n]] = seen.get(video[n], -1) + 1
     out = []
     for ia, a in enumerate(names):
+        sequential = overlap > 0 and moving.get(video[a], False)
         for b in names[ia + 1:]:
-            video = a.split("/")[0]
-            if overlap > 0 and video == b.split("/")[0] and moving.get(video, False):
-                gap = abs(rank[a] - rank[b])
-                if gap > overlap and gap & (gap - 1):
-                    continue
+            gap = abs(rank[a] - rank[b])
+            if sequential and video[b] == video[a] and gap > overlap and gap & (gap - 1):
+                continue  # neither a neighbour nor a power of two apart
             out.append((a, b))
     return out
 
