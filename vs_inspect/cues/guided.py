@@ -31,6 +31,18 @@ def _int_dot(a, b):
     return s
 
 
+@nb.njit(inline="always")
+def _keep_two(top, best, fit, k, other, d):
+    """Keypoint k's two smallest distances so far, and which keypoint of the other image is nearest."""
+    fit[k] += 1
+    if d < top[k, 0]:
+        top[k, 1] = top[k, 0]
+        top[k, 0] = d
+        best[k] = other
+    elif d < top[k, 1]:
+        top[k, 1] = d
+
+
 @nb.njit(nogil=True, cache=True)
 def _best_two(desc_a, desc_b, xy_a, xy_b, model, homography, max_sq_px):
     """For every keypoint of a (rows) and of b (columns): the nearest and second-nearest
@@ -73,20 +85,8 @@ def _best_two(desc_a, desc_b, xy_a, xy_b, model, homography, max_sq_px):
             if not fits:  # NaN (point at infinity) fails too
                 continue
             d = sq_a[i] + sq_b[j] - 2 * _int_dot(desc_a[i], desc_b[j])
-            fit_a[i] += 1
-            fit_b[j] += 1
-            if d < top_a[i, 0]:
-                top_a[i, 1] = top_a[i, 0]
-                top_a[i, 0] = d
-                best_a[i] = j
-            elif d < top_a[i, 1]:
-                top_a[i, 1] = d
-            if d < top_b[j, 0]:
-                top_b[j, 1] = top_b[j, 0]
-                top_b[j, 0] = d
-                best_b[j] = i
-            elif d < top_b[j, 1]:
-                top_b[j, 1] = d
+            _keep_two(top_a, best_a, fit_a, i, j, d)
+            _keep_two(top_b, best_b, fit_b, j, i, d)
     return best_a, top_a, fit_a, best_b, top_b, fit_b
 
 
