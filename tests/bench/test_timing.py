@@ -46,3 +46,7 @@ def test_target_needs_every_video_and_the_time():
     table = format_table([row(179.0, 4), row(181.0, 3)]).splitlines()
     assert _cells(table[2])[-1].startswith("met") and _cells(table[3])[-1].startswith("MISSED")
     assert _cells(table[2])[COLUMNS.index("other")] == f"{179.0 - len(STAGES):.1f}"
+    # which reconstruction an estimated run used is part of its time
+    with_xfeat = TimingRow("s", "estimated", {}, 10.0, 300.0, 5.0, 300.0, 0, 4, math.nan, math.nan,
+                           sfm_features="xfeat")
+    assert _cells(format_table([with_xfeat]).splitlines()[2])[1] == "estimated (xfeat)"

@@ -88,6 +88,9 @@ class TimingRow:
     max_error_ms: float
     offsets_s: dict[str, float | None] = field(default_factory=dict)
     target_s: float | None = TARGET_S  # None: no target for this scene (the reference)
+    sfm_features: str | None = None  # estimated cameras: what the cameras came from ("sift",
+    # "xfeat" when auto's second try won: it roughly doubles the camera step on 720p, or
+    # "moving points" when the moving points' own two-view geometry replaced the reconstruction)
 
     @property
     def met(self) -> bool | None:
@@ -159,10 +162,12 @@ def time_sync(folder: Path, out: Path, calibrated: bool, scene_label: str,
     m = evaluate_offsets({n: offsets.get(n) for n in truth}, truth, result["reference"])
     t = result.get("timings_s", {})
     stages = {col: float(t[key]) for col, key in STAGES if key in t}
+    sfm = (result.get("cues") or {}).get("sfm") or {}
+    features = "moving points" if (sfm.get("fallback") or {}).get("used") else sfm.get("features")
     return TimingRow(scene_label, "calibration" if calibrated else "estimated", stages,
                      float(t.get("total_s", math.nan)), wall, cpu, rss_mb,
                      sum(1 for n in truth if offsets.get(n) is not None), len(truth),
-                     m.delta_med_ms, m.delta_max_ms, offsets, target_s)
+                     m.delta_med_ms, m.delta_max_ms, offsets, target_s, features)
 
 
 def _fmt(v: float | None, digits: int = 1) -> str:
@@ -178,7 +183,8 @@ def table_line(r: TimingRow) -> str:
     recording, writing), wall, CPU, peak memory, resolved videos, errors and the target."""
     staged = sum(r.stages_s.values())
     target = "-" if r.met is None else f"{'met' if r.met else 'MISSED'} (<{r.target_s:g} s)"
-    cells = [r.scene, r.cameras] + [_fmt(r.stages_s.get(c)) for c, _ in STAGES] + [
+    cameras = f"{r.cameras} ({r.sfm_features})" if r.sfm_features else r.cameras
+    cells = [r.scene, cameras] + [_fmt(r.stages_s.get(c)) for c, _ in STAGES] + [
         _fmt(r.wall_s - staged), _fmt(r.wall_s), _fmt(r.cpu_s), _fmt(r.max_rss_mb, 0),
         f"{r.resolved}/{r.videos}", _fmt(r.median_error_ms, 2), _fmt(r.max_error_ms, 2), target]
     return "| " + " | ".join(cells) + " |"
