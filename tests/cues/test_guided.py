@@ -97,8 +97,8 @@ def test_guided_matching_refuses_wrong_shapes():
 
 def test_guided_rematch_finds_colmaps_own_guided_matches(tmp_path):
     """COLMAP's guided matching on a real database, then cameras._guided_rematch on a copy of it
-    (each pair's stored geometry is the one COLMAP guided its matching with: a fresh verification
-    gives it bit for bit): the same matches."""
+    (each pair's stored geometry is the one COLMAP guided its matching with; on the 720p timing
+    scene's database a fresh verification gave it bit for bit): the same matches."""
     pycolmap = import_pycolmap()
     _write_images(tmp_path / "images", tmp_path / "masks")
     reader = pycolmap.ImageReaderOptions()

@@ -217,7 +217,7 @@ def _guided_rematch(db: Path, sift_options, verification) -> None:
                 for pid, g in zip(pair_ids, geometries) if g.config in by_f | by_h]
         ids = sorted({i for pair, _ in todo for i in pair})
         # copies: the arrays outlive pycolmap's objects and are read from other threads
-        xy = {i: np.array(database.read_keypoints(i)[:, :2], np.float64) for i in ids}
+        xy = {i: np.array(database.read_keypoints(i)[:, :2], np.float32) for i in ids}  # guided.py's type
         desc = {i: np.array(database.read_descriptors(i).data, np.uint8) for i in ids}
 
         def rematch(item):
