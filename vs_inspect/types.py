@@ -413,11 +413,15 @@ class CueStats:
         checks = (self.geometric_joint or {}).get("three_view") or {}
         return sorted(v for v, chk in checks.items() if not chk["passed"])
 
-    def joint_refusal(self, video: str) -> str | None:
-        """Why Stage 0 gave `video` no geometric track pairs when its joint vote was unsure of it
-        (with point transfer's verdict), sure of it but refuted in three views, or sure of too few
-        cameras to close a triangle, else None
-        (used, dropped, or no joint vote)."""
+    def geometric_refusal(self, video: str) -> str | None:
+        """Why Stage 0 gave `video` no geometric track pairs: its pairs with a moving camera had
+        no triangle to check their vote peaks, or its joint vote was unsure of it (with point
+        transfer's verdict), sure of it but refuted in three views, or sure of too few cameras to
+        close a triangle; else None (used, dropped, or no joint vote)."""
+        withheld = [(k, p["geometric_withheld"]) for k, p in self.pairs.items()
+                    if video in k.split("__") and p.get("geometric_withheld")]
+        if withheld and video not in self.dropped:
+            return "Stage 0 gave " + "; ".join(f"{k} no geometric track pairs: {why}" for k, why in withheld)
         joint = self.geometric_joint or {}
         if video not in joint.get("margin", {}) or video in joint.get("used", ()) or video in self.dropped:
             return None

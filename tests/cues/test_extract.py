@@ -180,7 +180,7 @@ def test_sure_cameras_refuted_in_three_views_get_no_pairs(monkeypatch):
     assert all(len(tp.index) == 0 for tp in out.values())
     assert any("geometric track pairs not used for a, b, c: the joint vote was sure" in m for m in msgs), msgs
     cue_stats = CueStats("estimated", 3, 90, 0, {}, stats["pairs"], {}, {}, "joint", None, joint)
-    why = cue_stats.joint_refusal("c")
+    why = cue_stats.geometric_refusal("c")
     assert "sure of its offset (margin 10.0), but not in three views" in why and "+0.200 s" in why
 
 
@@ -240,3 +240,52 @@ def test_camera_from_moving_points_without_an_agreeing_vote_is_refused_alone():
     fb = _fallback({"r": 0.0, "u": 0.5})
     assert _check_fitted_offsets(fb, {("r", "u"): 3.0}, _videos("ru")) == {}
     assert fb["check"]["verdict"].startswith("unchecked")
+
+
+def _lone_pair(monkeypatch, moving_b: bool, **geometric):
+    """Stage 0's geometric pairs of two cameras (no triangle; the joint vote sure of neither):
+    a static, b static or moving, the vote with three peaks and 12 supporters each, 3 descriptor
+    pairs. Returns (pairs, stats, stage events)."""
+    from types import SimpleNamespace
+
+    import vs_inspect.cues.geometric_pairs as gp
+    from vs_inspect.cues.extract import _add_geometric_pairs
+
+    static = CameraTrack(K, look_at([0.0, 6.0, 2.5], [0, 0, 1]))
+    moving = CameraTrack(K, np.stack([look_at([6.0, 0.01 * t, 1.5], [0, 0, 1]) for t in range(50)]))
+    cams = {"a": static, "b": moving if moving_b else static}
+    index = np.stack([np.arange(36), np.arange(36)], 1)
+    stats_ab = GeometricPairStats(900, 60, 36, (0.5, 1.3, -0.7), (12, 12, 12), np.repeat([0, 1, 2], 12))
+    monkeypatch.setattr(gp, "geometric_pairs", lambda *a, **k: (TrackPairs("a", "b", index, np.ones(36)), stats_ab))
+    monkeypatch.setattr(gp, "joint_offsets", lambda *a, **k: JointChoice({"a": 0.0, "b": 0.5}, 1.0,
+                                                                         {"a": 1.0, "b": 1.0}))
+    desc = np.array([[100, 100], [101, 101], [102, 102]])
+    vids = {n: SimpleNamespace(info=SimpleNamespace(frame_interval_s=1 / 30)) for n in "ab"}
+    sink, stats = _Events(), {"pairs": {}}
+    tracks = {n: SimpleNamespace(xy=None) for n in "ab"}  # read by the vote only, replaced here
+    out, _ = _add_geometric_pairs({("a", "b"): TrackPairs("a", "b", desc, np.ones(3))}, cams, tracks, vids,
+                                  CueConfig(geometric=GeometricPairConfig(**geometric)), stats, sink,
+                                  progress=False, estimated=True)
+    return out, stats, sink.messages
+
+
+def test_a_lone_pair_with_a_moving_camera_keeps_only_its_descriptor_pairs(monkeypatch):
+    """No triangle checks the vote peaks of a pair with a moving camera, whose per-frame geometry
+    lets wrong tracks fit a wrong offset (5 of 6 such pairs accepted from video were 0.8-2.4 s
+    off): its geometric pairs are withheld, with the reason, and the run's reason for the video
+    says so. Two static cameras keep every peak's supporters, as before."""
+    out, stats, msgs = _lone_pair(monkeypatch, moving_b=True)
+    assert stats["geometric_peaks"] == "no triangle"
+    assert out[("a", "b")].index.tolist() == [[100, 100], [101, 101], [102, 102]]
+    info = stats["pairs"]["a__b"]
+    assert info["geometric_pairs"] == 0 and "+0.500, +1.300, -0.700 s" in info["geometric_withheld"]
+    assert any(m.startswith("geometric track pairs not used for a__b: no triangle") for m in msgs), msgs
+    cue_stats = CueStats("estimated", 2, 90, 3, {}, stats["pairs"], {}, {}, "no triangle")
+    assert cue_stats.geometric_refusal("b").startswith("Stage 0 gave a__b no geometric track pairs: no triangle")
+    assert cue_stats.geometric_refusal("a") == cue_stats.geometric_refusal("b")
+
+    out, stats, msgs = _lone_pair(monkeypatch, moving_b=True, unchecked_moving=True)  # the rule before
+    assert len(out[("a", "b")].index) == 39 and "geometric_withheld" not in stats["pairs"]["a__b"]
+    out, stats, msgs = _lone_pair(monkeypatch, moving_b=False)
+    assert len(out[("a", "b")].index) == 39 and not any("not used" in m for m in msgs)
+    assert CueStats("estimated", 2, 90, 39, {}, stats["pairs"], {}, {}, "no triangle").geometric_refusal("b") is None

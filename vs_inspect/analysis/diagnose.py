@@ -261,7 +261,7 @@ def diagnose(result: RunResult, videos: Iterable[RecordedVideo | VideoInfo] | No
         if others and sum(c.cause == CAUSE_NO_PAIRS for c in others) / len(others) < 0.5:
             accused.add(v)
             lo, hi = min(c.num_track_pairs for c in cs), max(c.num_track_pairs for c in cs)
-            why = (result.cues.joint_refusal(v) if result.cues is not None else None) or \
+            why = (result.cues.geometric_refusal(v) if result.cues is not None else None) or \
                 "it does not see the shared motion, or its tracks or matches failed"
             suspects.append(Suspect("video", v, (
                 f"{v}: {CAUSE_NO_PAIRS}: none of its {len(cs)} pairs has enough cross-view track "

@@ -136,6 +136,8 @@ class GeometricPairConfig:
     """Vote-histogram peaks whose supporters are kept."""
     peak_halfwidth: int = 2
     """Grid steps either side of a peak that count as supporting it."""
+    unchecked_moving: bool = False
+    """Without a triangle to check a pair's vote peaks (two cameras, or too many pairs to close triangles), add the supporters of every peak of a pair with a moving camera too. Off: such a pair keeps its descriptor pairs only. A moving camera's per-frame geometry lets wrong tracks fit a wrong offset, and Stage 1 accepts the minimum the supporters make. Measured (README, lone moving pairs): from video with estimated cameras, 5 of the 6 such pairs accepted were 0.8-2.4 s off (one right, 11 ms)."""
     joint: bool = True
     """With three or more cameras, choose every camera's offset at once from all pairs' vote histograms (geometric_pairs.joint_offsets) and keep each pair's supporters of the implied Δ, instead of closing triangles of each pair's top peaks."""
     joint_min_margin: float = 5.0

@@ -371,7 +371,8 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     (Δ_ab + Δ_bc ≈ Δ_ac) are chosen and only their supporters kept. When no choice closes the
     triangles, the peaks of at least one pair are all wrong and Stage 1 could not tell (the
     pairs were picked to agree with them), so no geometric pair is added. With two static
-    cameras (no triangle) every kept peak's supporters are added.
+    cameras (no triangle) every kept peak's supporters are added; with a moving camera, none
+    (GeometricPairConfig.unchecked_moving).
     """
     from .geometric_pairs import consistent_peaks, geometric_pairs, joint_offsets
 
@@ -428,10 +429,18 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     out = dict(pairs)
     for (a, b), (gp, gs) in found.items():
         pick = chosen.get((a, b)) if chosen is not None else None  # index of the chosen peak
-        index = gp.index
+        index, withheld = gp.index, None
         if pick is not None:
             index = index[gs.pair_peak == pick]
         elif status == "inconsistent":
+            index = index[:0]
+        elif len(index) and (cameras[a].is_moving or cameras[b].is_moving) and not cfg.geometric.unchecked_moving:
+            msg = (f"geometric track pairs not used for {a}__{b}: no triangle checks its vote peaks "
+                   f"({', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s), and a moving camera's per-frame "
+                   f"geometry lets wrong tracks fit a wrong offset")
+            sink.stage_event("cues", msg, pair=f"{a}__{b}")
+            log.warning(msg)
+            withheld = msg.removeprefix(f"geometric track pairs not used for {a}__{b}: ")
             index = index[:0]
         _log_votes(sink, a, b, gs, gs.peaks_s[pick] if pick is not None else None)
         desc = pairs[(a, b)]
@@ -445,6 +454,8 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
                 "geometric_peaks_s": [round(p, 4) for p in gs.peaks_s],
                 "geometric_peak_votes": list(gs.peak_votes),
                 "geometric_chosen_peak_s": round(gs.peaks_s[pick], 4) if pick is not None else None}
+        if withheld:
+            info["geometric_withheld"] = withheld
         if filter_desc:
             info.update({"descriptor_pairs_kept": int(len(desc.index)), "descriptor_pairs_before": int(n_desc)})
         stats["pairs"].setdefault(f"{a}__{b}", {}).update(info)
@@ -785,8 +796,12 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
                                                                   for n in sfm_static}, pairs, coarse)
             fb_px, n_fb = epipolar_fit_px({n: c for n, c in cams.items() if n in sfm_static}, infos, xy, pairs, coarse)
             use = len(cams) >= len(est.cameras) and n_fb >= n_sfm and fb_px < sfm_px
-            why += (f"; on the moving points its cameras leave a median epipolar distance of {sfm_px:.1f} px, "
-                    f"the moving points' own cameras {fb_px:.1f} px")
+            if n_sfm == 0:  # e.g. one static camera and a moving one: nothing to compare on
+                why += (f"; no pair of its {len(sfm_static)} static camera(s) has enough aligned track pairs "
+                        f"to compare it with the moving points' cameras on, so it is kept")
+            else:
+                why += (f"; on the moving points its cameras leave a median epipolar distance of {sfm_px:.1f} px, "
+                        f"the moving points' own cameras {fb_px:.1f} px")
         stats["sfm"]["fallback"] = {"reference": ref, "pairs": details, "why": why, "used": bool(use)}
         log.warning("%s; cameras from the moving points: %d (%s)", why, len(cams), "used" if use else "not used")
         if use:

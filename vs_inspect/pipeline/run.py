@@ -151,7 +151,7 @@ def _run_result(sync: SyncResult, stats: CueStats | None, inputs: RunInputs, con
         unc[name] = None
         unresolved[name] = why
     for name in unresolved:  # its pairs say "no/too few track pairs"; Stage 0 may know why
-        why = stats.joint_refusal(name) if stats is not None else None
+        why = stats.geometric_refusal(name) if stats is not None else None
         if why:
             unresolved[name] = f"{why}; {unresolved[name]}"
     if moved_reference is not None:
