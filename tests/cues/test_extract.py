@@ -271,8 +271,8 @@ def _lone_pair(monkeypatch, moving_b: bool, **geometric):
 
 def test_a_lone_pair_with_a_moving_camera_keeps_only_its_descriptor_pairs(monkeypatch):
     """No triangle checks the vote peaks of a pair with a moving camera, whose per-frame geometry
-    lets wrong tracks fit a wrong offset (5 of 6 such pairs accepted from video were 0.8-2.4 s
-    off): its geometric pairs are withheld, with the reason, and the run's reason for the video
+    lets wrong tracks fit a wrong offset (9 of 15 such pairs accepted from video were 0.8-2.4 s
+    off, README): its geometric pairs are withheld, with the reason, and the run's reason for the video
     says so. Two static cameras keep every peak's supporters, as before."""
     out, stats, msgs = _lone_pair(monkeypatch, moving_b=True)
     assert stats["geometric_peaks"] == "no triangle"
