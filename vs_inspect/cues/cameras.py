@@ -29,9 +29,12 @@ from .learned import LEARNED_FEATURES, learned_unavailable, xfeat_available
 
 log = logging.getLogger(__name__)
 
-# threads of SIFT extraction and matching (the mapper stays on one: with several it registered
-# different cameras from run to run); -1 = all cores
+# threads of SIFT extraction; -1 = all cores. Matching and the mapper stay on one: with two
+# matching threads, 2 of 10 runs on one database gave other matches (a pair 235 instead of 1058,
+# so another camera model), with one 12 of 12 were identical at about the same wall time; with
+# several mapper threads other cameras registered from run to run
 SFM_THREADS = -1
+SFM_MATCH_THREADS = 1
 
 
 @dataclass(frozen=True)
@@ -173,8 +176,7 @@ def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool
     ext.sift.max_num_features = cfg.max_features
     # images are numbered first, in name order: extraction threads finish in any order, and the
     # mapper's result depends on the numbering. Each image's features do not depend on the
-    # thread; a pair's matches and (seeded) verification almost never do (a CI run once found one
-    # borderline match fewer with 2 threads than with 1; tests/cues/test_cameras.py)
+    # thread (tests/cues/test_cameras.py)
     ext.num_threads = SFM_THREADS
     ext.sift.estimate_affine_shape = few  # wide baselines between few views: affine + DSP SIFT
     ext.sift.domain_size_pooling = few
@@ -184,7 +186,7 @@ def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool
                               reader_options=reader, extraction_options=ext,
                               device=pycolmap.Device.cpu)
     mopt = pycolmap.FeatureMatchingOptions()
-    mopt.num_threads = SFM_THREADS
+    mopt.num_threads = SFM_MATCH_THREADS
     verification = _verification(seed)
     names = sorted(str(p.relative_to(img_dir)) for p in img_dir.glob("*/*.jpg"))
     pairs = sfm_image_pairs(names, moving or {}, cfg.sequence_overlap)
