@@ -435,12 +435,11 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
         elif status == "inconsistent":
             index = index[:0]
         elif len(index) and (cameras[a].is_moving or cameras[b].is_moving) and not cfg.geometric.unchecked_moving:
-            msg = (f"geometric track pairs not used for {a}__{b}: no triangle checks its vote peaks "
-                   f"({', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s), and a moving camera's per-frame "
-                   f"geometry lets wrong tracks fit a wrong offset")
+            withheld = (f"no triangle checks its vote peaks ({', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s), "
+                        f"and a moving camera's per-frame geometry lets wrong tracks fit a wrong offset")
+            msg = f"geometric track pairs not used for {a}__{b}: {withheld}"
             sink.stage_event("cues", msg, pair=f"{a}__{b}")
             log.warning(msg)
-            withheld = msg.removeprefix(f"geometric track pairs not used for {a}__{b}: ")
             index = index[:0]
         _log_votes(sink, a, b, gs, gs.peaks_s[pick] if pick is not None else None)
         desc = pairs[(a, b)]
