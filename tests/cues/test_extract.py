@@ -289,3 +289,49 @@ def test_a_lone_pair_with_a_moving_camera_keeps_only_its_descriptor_pairs(monkey
     out, stats, msgs = _lone_pair(monkeypatch, moving_b=False)
     assert len(out[("a", "b")].index) == 39 and not any("not used" in m for m in msgs)
     assert CueStats("estimated", 2, 90, 39, {}, stats["pairs"], {}, {}, "no triangle").geometric_refusal("b") is None
+
+
+def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig()):
+    """_estimate when the background reconstruction registers nothing and the moving points give
+    a static camera for every video. Returns (cameras, stats)."""
+    from types import SimpleNamespace
+
+    import vs_inspect.cues.cameras as cameras_mod
+    import vs_inspect.cues.pairwise as pairwise_mod
+    from vs_inspect.cues.cameras import CameraEstimate
+    from vs_inspect.cues.extract import _estimate
+
+    no_model = "no reconstruction: too few matches"
+    monkeypatch.setattr(cameras_mod, "estimate_cameras", lambda *a, **k: CameraEstimate(
+        {}, dict.fromkeys(names, no_model), None, None, len(names), 0, "sift"))
+    fitted = {n: CameraTrack(K, look_at([6.0 * np.cos(i), 6.0 * np.sin(i), 2.0], [0, 0, 1]))
+              for i, n in enumerate(names)}
+    details = {n: {"coarse_offset_s": 0.1 * i} for i, n in enumerate(names) if i}
+    monkeypatch.setattr(pairwise_mod, "cameras_from_tracks", lambda *a, **k: (dict(fitted), {}, details))
+    info = SimpleNamespace(width=640, height=480, num_frames=50)
+    vids = {n: SimpleNamespace(sfm_frames=None, info=info, camera_motion="static", frame_features=None,
+                               xy_full=np.zeros((0, 50, 2)), instance=np.zeros(0, np.int64)) for n in names}
+    pairs = {(a, b): TrackPairs(a, b, np.zeros((0, 2), np.int64)) for a, b in zip(names, names[1:])}
+    stats = {"dropped": {}, "camera_source": "estimated"}
+    cams, _, _, _ = _estimate(vids, config, stats, pairs)
+    return cams, stats
+
+
+def test_two_cameras_from_the_moving_points_alone_are_refused(monkeypatch):
+    """Their F and their offset come from the same track pairs and nothing checks them (a sweep of
+    two-camera runs: 7 of 10 accepted seconds off): no camera, each video says why."""
+    cams, stats = _moving_point_cameras(monkeypatch, ["a", "b"])
+    assert cams == {}
+    fb = stats["sfm"]["fallback"]
+    assert fb["used"] is False and "only two cameras came out" in fb["why"]
+    for n in "ab":
+        assert stats["dropped"][n].startswith("no reconstruction: too few matches; from the moving points: "
+                                              "only two cameras came out"), stats["dropped"][n]
+    # three are used (their fitted offsets are then checked against their votes), and so are two
+    # when the config asks for them
+    cams, stats = _moving_point_cameras(monkeypatch, ["a", "b", "c"])
+    assert set(cams) == {"a", "b", "c"} and stats["sfm"]["fallback"]["used"] is True
+    from vs_inspect.cues.config import CameraConfig
+    cams, stats = _moving_point_cameras(monkeypatch, ["a", "b"], CueConfig(
+        camera=CameraConfig(fallback_unchecked_pair=True)))
+    assert set(cams) == {"a", "b"} and stats["sfm"]["fallback"]["fitted_offsets_s"] == {"a": 0.0, "b": 0.1}

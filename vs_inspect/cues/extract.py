@@ -477,7 +477,8 @@ def _check_fitted_offsets(fallback: dict, voted: dict, vids: dict) -> dict[str, 
     (rendered seed 0 with SIFT: seconds away), and Stage 1 then accepts minima at offsets the
     cameras were never fitted for. Any contradiction refuses every such camera (they were fitted
     jointly); a camera in no agreeing pair is refused as unconfirmed. Two cameras give no check
-    (their votes peak where their own F was fitted): they pass, marked unchecked."""
+    (their votes peak where their own F was fitted): they pass, marked unchecked (they are used
+    only with camera.fallback_unchecked_pair; by default _estimate refuses them)."""
     fitted = fallback["fitted_offsets_s"]
     if len(fitted) < 3:
         fallback["check"] = {"verdict": "unchecked (two cameras: no third to confirm their offset)"}
@@ -785,6 +786,14 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
         why = (f"the background reconstruction registered {len(est.cameras)} camera(s)" if len(est.cameras) < 2 else
                f"the background reconstruction rests on few points (fewest {fewest} per image) or left a "
                f"static camera out")
+        if len(cams) == 2 and not cfg.camera.fallback_unchecked_pair:
+            # the coarse offset and F were chosen by the same track pairs; Stage 1 then finds the
+            # minimum they were fitted for, right or wrong, and no third camera can refuse it
+            lone = ("camera could not be registered: only two cameras came out, whose geometry "
+                    "and offset would both come from the same track pairs with no third camera to check them")
+            reasons = reasons | dict.fromkeys(cams, lone)
+            why += f"; {lone.removeprefix('camera could not be registered: ')}"
+            cams = {}
         use = len(cams) >= 2
         if use and len(est.cameras) >= 2:
             # both: keep the one whose cameras explain the moving points better, on the pairs of
