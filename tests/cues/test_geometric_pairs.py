@@ -203,17 +203,36 @@ def test_consistent_peaks_close_every_triangle():
 def test_consistent_peaks_near_tie_decided_by_closure():
     # the peaks of rendered seed 1 (true Δ: a-b -0.740, a-c 0.472, b-c 1.211): a__b's top peak
     # has 81 votes against 78 for the right one; both close within 0.12 s, the right one by 17 ms
-    # against 58 ms
+    # against 58 ms. A fourth camera d (one clear peak per pair, at the truth) gives three more
+    # triangles, so that several closing choices are not a lone triangle's chance closures.
     peaks = {("a", "b"): ((-0.675, -0.75, -0.6333), (81, 78, 73)),
              ("a", "c"): ((0.4833, 0.4417, 0.5417), (166, 141, 124)),
-             ("b", "c"): ((1.2167, 1.3, 1.1333), (225, 160, 154))}
+             ("b", "c"): ((1.2167, 1.3, 1.1333), (225, 160, 154)),
+             ("a", "d"): ((0.9,), (100,)), ("b", "d"): ((1.64,), (100,)), ("c", "d"): ((0.428,), (100,))}
     chosen, status = consistent_peaks(peaks, 0.12)
     assert status == "chosen"
-    assert chosen == {("a", "b"): 1, ("a", "c"): 0, ("b", "c"): 0}
+    assert chosen == {("a", "b"): 1, ("a", "c"): 0, ("b", "c"): 0, ("a", "d"): 0, ("b", "d"): 0, ("c", "d"): 0}
     # a clear vote lead is not overturned by a better closure
     clear = dict(peaks)
     clear[("a", "b")] = ((-0.675, -0.75, -0.6333), (160, 78, 73))
     assert consistent_peaks(clear, 0.12)[0][("a", "b")] == 0
+    # the same three cameras alone: one triangle that several choices close is ambiguous
+    three = {k: v for k, v in peaks.items() if "d" not in k}
+    assert consistent_peaks(three, 0.12) == (None, "ambiguous")
+
+
+def test_consistent_peaks_refuse_a_lone_triangle_closed_by_chance():
+    """The demo with only cam0, cam2 and hand-held cam3 (calibration): two choices close the
+    one triangle, with cam2 0.26 and 0.21 s off (its pair with cam3 has no right peak); taking
+    one reported cam2 192 ms off. The run's peaks, in s (true Δ: -1.119, -0.211, 0.908)."""
+    peaks = {("cam0", "cam2"): ((-1.175, -0.8583, -0.9083), (160, 153, 140)),
+             ("cam0", "cam3"): ((-0.2083, 1.025, 0.9333), (163, 107, 96)),
+             ("cam2", "cam3"): ((-0.825, -0.7167, 0.6917), (99, 98, 91))}
+    assert consistent_peaks(peaks, 0.1) == (None, "ambiguous")
+    # with only the right peaks left, the one closing choice is taken
+    right = {("cam0", "cam2"): ((-1.175,), (160,)), ("cam0", "cam3"): ((-0.2083,), (163,)),
+             ("cam2", "cam3"): ((0.908,), (91,))}
+    assert consistent_peaks(right, 0.1) == ({k: 0 for k in right}, "chosen")
 
 
 def _votes(peaks: dict[float, int], lo: float = -3.0, hi: float = 3.0, step: float = 0.02,

@@ -370,7 +370,8 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     With three or more such cameras, the vote peaks whose offsets close every triangle
     (Δ_ab + Δ_bc ≈ Δ_ac) are chosen and only their supporters kept. When no choice closes the
     triangles, the peaks of at least one pair are all wrong and Stage 1 could not tell (the
-    pairs were picked to agree with them), so no geometric pair is added. With two static
+    pairs were picked to agree with them), so no geometric pair is added; nor when three cameras'
+    one triangle is closed by more than one choice (consistent_peaks: "ambiguous"). With two static
     cameras (no triangle) every kept peak's supporters are added; with a moving camera, none
     (GeometricPairConfig.unchecked_moving).
     """
@@ -419,10 +420,14 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     # the descriptor pairs are unchecked too then: alone they put rendered and demo cameras
     # 88-1456 ms off and were accepted (README, point transfer); kept only where consistent at the
     # joint vote's offsets, unsure as they are, so that a wrong offset leaves too few of them
-    filter_desc = status == "inconsistent" and joint is not None and cfg.geometric.joint_filter_descriptor
-    if status == "inconsistent":
-        msg = ("geometric track pairs not used: the vote peaks of the static camera pairs do not "
-               "close the triangles (Δ_ab + Δ_bc ≠ Δ_ac), so some peaks are wrong"
+    unchecked = status in ("inconsistent", "ambiguous")
+    filter_desc = unchecked and joint is not None and cfg.geometric.joint_filter_descriptor
+    if unchecked:
+        msg = ("geometric track pairs not used: "
+               + ("the vote peaks of the camera pairs do not close the triangles (Δ_ab + Δ_bc ≠ Δ_ac), "
+                  "so some peaks are wrong" if status == "inconsistent" else
+                  "more than one choice of vote peaks closes the one triangle (Δ_ab + Δ_bc ≈ Δ_ac), "
+                  "so its closure does not single out the right peaks")
                + ("; descriptor pairs kept only where consistent at the joint vote's offsets" if filter_desc else ""))
         sink.stage_event("cues", msg)
         log.warning(msg)
@@ -432,7 +437,7 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
         index, withheld = gp.index, None
         if pick is not None:
             index = index[gs.pair_peak == pick]
-        elif status == "inconsistent":
+        elif unchecked:
             index = index[:0]
         elif len(index) and (cameras[a].is_moving or cameras[b].is_moving) and not cfg.geometric.unchecked_moving:
             withheld = (f"no triangle checks its vote peaks ({', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s), "
