@@ -415,14 +415,13 @@ class CueStats:
 
     def geometric_refusal(self, video: str) -> str | None:
         """Why Stage 0 gave `video` no geometric track pairs: its pairs with a moving camera had
-        no triangle to check their vote peaks (a pair of two static cameras then had no track
-        pair at all), or its joint vote was unsure of it (with point
+        no triangle to check their vote peaks, or its joint vote was unsure of it (with point
         transfer's verdict), sure of it but refuted in three views, or sure of too few cameras to
         close a triangle; else None (used, dropped, or no joint vote)."""
-        withheld = [(k, p["geometric_withheld"], "" if p.get("descriptor_pairs_withheld") else "geometric ")
-                    for k, p in self.pairs.items() if video in k.split("__") and p.get("geometric_withheld")]
+        withheld = [(k, p["geometric_withheld"]) for k, p in self.pairs.items()
+                    if video in k.split("__") and p.get("geometric_withheld")]
         if withheld and video not in self.dropped:
-            return "Stage 0 gave " + "; ".join(f"{k} no {kind}track pairs: {why}" for k, why, kind in withheld)
+            return "Stage 0 gave " + "; ".join(f"{k} no geometric track pairs: {why}" for k, why in withheld)
         joint = self.geometric_joint or {}
         if video not in joint.get("margin", {}) or video in joint.get("used", ()) or video in self.dropped:
             return None

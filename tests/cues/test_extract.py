@@ -273,7 +273,7 @@ def test_a_lone_pair_with_a_moving_camera_keeps_only_its_descriptor_pairs(monkey
     """No triangle checks the vote peaks of a pair with a moving camera, whose per-frame geometry
     lets wrong tracks fit a wrong offset (9 of 15 such pairs accepted from video were 0.8-2.4 s
     off, README): its geometric pairs are withheld, with the reason, and the run's reason for the video
-    says so (two static cameras: the test below)."""
+    says so. Two static cameras keep every peak's supporters, as before."""
     out, stats, msgs = _lone_pair(monkeypatch, moving_b=True)
     assert stats["geometric_peaks"] == "no triangle"
     assert out[("a", "b")].index.tolist() == [[100, 100], [101, 101], [102, 102]]
@@ -286,22 +286,7 @@ def test_a_lone_pair_with_a_moving_camera_keeps_only_its_descriptor_pairs(monkey
 
     out, stats, msgs = _lone_pair(monkeypatch, moving_b=True, unchecked_moving=True)  # the rule before
     assert len(out[("a", "b")].index) == 39 and "geometric_withheld" not in stats["pairs"]["a__b"]
-
-
-def test_a_lone_pair_of_two_static_cameras_keeps_no_track_pair(monkeypatch):
-    """Two static cameras alone (GeometricPairConfig.unchecked_static off): neither the vote
-    peaks' supporters nor the descriptor pairs are checked by a third camera, and a sweep had 8
-    of 23 such pairs accepted 2-23 frames off; the pair keeps nothing and the videos say why."""
     out, stats, msgs = _lone_pair(monkeypatch, moving_b=False)
-    assert len(out[("a", "b")].index) == 0
-    info = stats["pairs"]["a__b"]
-    assert info["geometric_pairs"] == 0 and info["descriptor_pairs_withheld"] == 3
-    assert "two static cameras with no third to check them" in info["geometric_withheld"]
-    assert any(m.startswith("no track pairs used for a__b: two static cameras") for m in msgs), msgs
-    why = CueStats("calibration", 2, 90, 0, {}, stats["pairs"], {}, {}, "no triangle").geometric_refusal("b")
-    assert why.startswith("Stage 0 gave a__b no track pairs: two static cameras"), why
-
-    out, stats, msgs = _lone_pair(monkeypatch, moving_b=False, unchecked_static=True)  # the rule before
     assert len(out[("a", "b")].index) == 39 and not any("not used" in m for m in msgs)
     assert CueStats("estimated", 2, 90, 39, {}, stats["pairs"], {}, {}, "no triangle").geometric_refusal("b") is None
 

@@ -138,8 +138,6 @@ class GeometricPairConfig:
     """Grid steps either side of a peak that count as supporting it."""
     unchecked_moving: bool = False
     """Without a triangle to check a pair's vote peaks (two cameras, or too many pairs to close triangles), add the supporters of every peak of a pair with a moving camera too. Off: such a pair keeps its descriptor pairs only. A moving camera's per-frame geometry lets wrong tracks fit a wrong offset, and Stage 1 accepts the minimum the supporters make. Measured (README, "A lone pair with a hand-held camera"): each static camera of the demo and rendered scenes synchronized with the hand-held one alone: with the calibration 9 of 9 such pairs accepted, 4 of them 1.15-1.66 s off (5 within 2-33 ms); with estimated cameras 3 accepted, 2 of them 1.2 and 2.4 s off; all null with this off."""
-    unchecked_static: bool = False
-    """Without a triangle (two cameras, or no third camera with vote peaks), use a pair of two static cameras anyway: its descriptor pairs and every vote peak's supporters. Off: the pair keeps no track pair, so its videos get null with the reason. A safety sweep of two calibrated static cameras (README) had 8 of 23 accepted 2.1-23 frames off with 7-36 ms uncertainty, their landscapes like the right ones' (a moving body's two sides fit a shifted offset); descriptor pairs alone were worse (11 of 14 wrong)."""
     joint: bool = True
     """With three or more cameras, choose every camera's offset at once from all pairs' vote histograms (geometric_pairs.joint_offsets) and keep each pair's supporters of the implied Δ, instead of closing triangles of each pair's top peaks."""
     joint_min_margin: float = 5.0

@@ -371,10 +371,9 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     (Δ_ab + Δ_bc ≈ Δ_ac) are chosen and only their supporters kept. When no choice closes the
     triangles, the peaks of at least one pair are all wrong and Stage 1 could not tell (the
     pairs were picked to agree with them), so no geometric pair is added; nor when three cameras'
-    one triangle is closed by more than one choice (consistent_peaks: "ambiguous"). With no
-    triangle, a pair with a moving camera keeps its descriptor pairs only
-    (GeometricPairConfig.unchecked_moving), and a pair of two static cameras keeps no track pair
-    (GeometricPairConfig.unchecked_static).
+    one triangle is closed by more than one choice (consistent_peaks: "ambiguous"). With two static
+    cameras (no triangle) every kept peak's supporters are added; with a moving camera, none
+    (GeometricPairConfig.unchecked_moving).
     """
     from .geometric_pairs import consistent_peaks, geometric_pairs, joint_offsets
 
@@ -447,18 +446,9 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
             sink.stage_event("cues", msg, pair=f"{a}__{b}")
             log.warning(msg)
             index = index[:0]
+        _log_votes(sink, a, b, gs, gs.peaks_s[pick] if pick is not None else None)
         desc = pairs[(a, b)]
         n_desc = len(desc.index)
-        if status == "no triangle" and not (cameras[a].is_moving or cameras[b].is_moving) \
-                and not cfg.geometric.unchecked_static:
-            withheld = (f"two static cameras with no third to check them: their vote peaks "
-                        f"({', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s) and their descriptor pairs "
-                        f"each fit an offset, and a moving body's two sides fit a shifted one")
-            msg = f"no track pairs used for {a}__{b}: {withheld}"
-            sink.stage_event("cues", msg, pair=f"{a}__{b}")
-            log.warning(msg)
-            index, desc = index[:0], TrackPairs(a, b, desc.index[:0])
-        _log_votes(sink, a, b, gs, gs.peaks_s[pick] if pick is not None else None)
         if filter_desc:
             desc = _consistent_descriptor_pairs(desc, joint.offsets_s[b] - joint.offsets_s[a], cameras,
                                                 tracks, vids, cfg)
@@ -470,8 +460,6 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
                 "geometric_chosen_peak_s": round(gs.peaks_s[pick], 4) if pick is not None else None}
         if withheld:
             info["geometric_withheld"] = withheld
-            if not len(desc.index) and n_desc:
-                info["descriptor_pairs_withheld"] = n_desc
         if filter_desc:
             info.update({"descriptor_pairs_kept": int(len(desc.index)), "descriptor_pairs_before": int(n_desc)})
         stats["pairs"].setdefault(f"{a}__{b}", {}).update(info)
