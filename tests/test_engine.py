@@ -173,9 +173,9 @@ class _Calls(Sink):
 
 def test_corrupt_video_task_is_null_with_its_reason_and_the_rest_finish(ray_cluster, tmp_path):
     """...and a recording sink sees the same calls, in the same order, under both engines. Four
-    readable videos: three alone close one triangle, which several choices of this toy's vote
-    peaks close within its 3-frame (0.3 s) tolerance, so Stage 0 rightly refuses their geometric
-    pairs (consistent_peaks: ambiguous); four give four triangles."""
+    readable videos: three give one triangle, which several choices of this toy's vote peaks
+    close within its 3-frame (0.3 s) tolerance, and Stage 0 refuses a single triangle's choice
+    (consistent_peaks: one triangle); four give four triangles."""
     import json
     videos = [tmp_path / f"v{i}.mp4" for i in range(4)]
     for i, v in enumerate(videos):

@@ -402,7 +402,7 @@ class CueStats:
     pairs: dict[str, dict[str, Any]]  # "a__b" -> counts (matches, snapped, geometric_*), JSON values
     dropped: dict[str, str]  # video -> why it was left out of the bundle
     timings_s: dict[str, float]  # per Stage 0 step, seconds
-    geometric_peaks: str | None = None  # "joint" | "chosen" | "inconsistent" | "ambiguous" | "no triangle" | "too many pairs" (None: not run)
+    geometric_peaks: str | None = None  # "joint" | "chosen" | "inconsistent" | "one triangle" | "no triangle" | "too many pairs" (None: not run)
     sfm: dict[str, Any] | None = None  # estimated cameras' diagnostics, JSON values (None: calibrated)
     geometric_joint: dict[str, Any] | None = None  # the joint vote (offsets, margins, cameras sure and used) and
     # its point-transfer checks of unsure cameras ("transfer": camera -> verdict) and of sure ones in

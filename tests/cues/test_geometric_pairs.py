@@ -187,11 +187,13 @@ def test_sweep_counts_motion_across_epipolar_lines_only():
 
 
 def test_consistent_peaks_close_every_triangle():
-    # true offsets: a 0, b 0.5, c -0.3; the top peak of b__c is wrong (a repeated motion)
+    # true offsets: a 0, b 0.5, c -0.3, d 1.0; the top peak of b__c is wrong (a repeated motion)
     peaks = {("a", "b"): ((0.5, 1.9), (40, 30)),
              ("a", "c"): ((-0.3, 0.8), (35, 33)),
-             ("b", "c"): ((2.0, -0.8), (50, 20))}
-    assert consistent_peaks(peaks, 0.05) == ({("a", "b"): 0, ("a", "c"): 0, ("b", "c"): 1}, "chosen")
+             ("b", "c"): ((2.0, -0.8), (50, 20)),
+             ("a", "d"): ((1.0,), (30,)), ("b", "d"): ((0.5,), (30,)), ("c", "d"): ((1.3,), (30,))}
+    assert consistent_peaks(peaks, 0.05) == ({("a", "b"): 0, ("a", "c"): 0, ("b", "c"): 1, ("a", "d"): 0,
+                                              ("b", "d"): 0, ("c", "d"): 0}, "chosen")
     # two cameras: no triangle, nothing to choose
     assert consistent_peaks({("a", "b"): ((0.5, 1.9), (40, 30))}, 0.05) == (None, "no triangle")
     # no combination closes: some peaks are wrong
@@ -216,23 +218,26 @@ def test_consistent_peaks_near_tie_decided_by_closure():
     clear = dict(peaks)
     clear[("a", "b")] = ((-0.675, -0.75, -0.6333), (160, 78, 73))
     assert consistent_peaks(clear, 0.12)[0][("a", "b")] == 0
-    # the same three cameras alone: one triangle that several choices close is ambiguous
+    # the same three cameras alone: one triangle, too weak a check
     three = {k: v for k, v in peaks.items() if "d" not in k}
-    assert consistent_peaks(three, 0.12) == (None, "ambiguous")
+    assert consistent_peaks(three, 0.12) == (None, "one triangle")
 
 
 def test_consistent_peaks_refuse_a_lone_triangle_closed_by_chance():
-    """The demo with only cam0, cam2 and hand-held cam3 (calibration): two choices close the
-    one triangle, with cam2 0.26 and 0.21 s off (its pair with cam3 has no right peak); taking
-    one reported cam2 192 ms off. The run's peaks, in s (true Δ: -1.119, -0.211, 0.908)."""
+    """Three cameras give one triangle, which wrong peaks close by chance. The demo with only
+    cam0, cam2 and hand-held cam3 (calibration): two choices close it, with cam2 0.26 and 0.21 s
+    off (its pair with cam3 has no right peak); taking one reported cam2 192 ms off. The run's
+    peaks, in s (true Δ: -1.119, -0.211, 0.908)."""
     peaks = {("cam0", "cam2"): ((-1.175, -0.8583, -0.9083), (160, 153, 140)),
              ("cam0", "cam3"): ((-0.2083, 1.025, 0.9333), (163, 107, 96)),
              ("cam2", "cam3"): ((-0.825, -0.7167, 0.6917), (99, 98, 91))}
-    assert consistent_peaks(peaks, 0.1) == (None, "ambiguous")
-    # with only the right peaks left, the one closing choice is taken
-    right = {("cam0", "cam2"): ((-1.175,), (160,)), ("cam0", "cam3"): ((-0.2083,), (163,)),
-             ("cam2", "cam3"): ((0.908,), (91,))}
-    assert consistent_peaks(right, 0.1) == ({k: 0 for k in right}, "chosen")
+    assert consistent_peaks(peaks, 0.1) == (None, "one triangle")
+    # the demo with cam0, cam1 and cam3, estimated cameras: one choice closes, on cam0__cam1's
+    # peaks of 7-9 votes, and put cam1 and cam3 1.14 s off (true Δ: 0.375, -0.211, -0.586)
+    unique = {("cam0", "cam1"): ((1.558, 1.317, 1.792), (9, 8, 7)),
+              ("cam0", "cam3"): ((7.55, 7.125, 0.925), (30, 29, 23)),
+              ("cam1", "cam3"): ((-1.842, -0.575, -3.117), (75, 53, 50))}
+    assert consistent_peaks(unique, 0.1) == (None, "one triangle")
 
 
 def _votes(peaks: dict[float, int], lo: float = -3.0, hi: float = 3.0, step: float = 0.02,

@@ -370,8 +370,8 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     With three or more such cameras, the vote peaks whose offsets close every triangle
     (Δ_ab + Δ_bc ≈ Δ_ac) are chosen and only their supporters kept. When no choice closes the
     triangles, the peaks of at least one pair are all wrong and Stage 1 could not tell (the
-    pairs were picked to agree with them), so no geometric pair is added; nor when three cameras'
-    one triangle is closed by more than one choice (consistent_peaks: "ambiguous"). With two static
+    pairs were picked to agree with them), so no geometric pair is added; nor with three cameras,
+    whose one triangle's closure is too weak a check (consistent_peaks: "one triangle"). With two static
     cameras (no triangle) every kept peak's supporters are added; with a moving camera, none
     (GeometricPairConfig.unchecked_moving).
     """
@@ -420,14 +420,14 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     # the descriptor pairs are unchecked too then: alone they put rendered and demo cameras
     # 88-1456 ms off and were accepted (README, point transfer); kept only where consistent at the
     # joint vote's offsets, unsure as they are, so that a wrong offset leaves too few of them
-    unchecked = status in ("inconsistent", "ambiguous")
+    unchecked = status in ("inconsistent", "one triangle")
     filter_desc = unchecked and joint is not None and cfg.geometric.joint_filter_descriptor
     if unchecked:
         msg = ("geometric track pairs not used: "
                + ("the vote peaks of the camera pairs do not close the triangles (Δ_ab + Δ_bc ≠ Δ_ac), "
                   "so some peaks are wrong" if status == "inconsistent" else
-                  "more than one choice of vote peaks closes the one triangle (Δ_ab + Δ_bc ≈ Δ_ac), "
-                  "so its closure does not single out the right peaks")
+                  "three cameras give one triangle, and its closure (Δ_ab + Δ_bc ≈ Δ_ac) is a single "
+                  "check on 27 choices of vote peaks, some of which close by chance")
                + ("; descriptor pairs kept only where consistent at the joint vote's offsets" if filter_desc else ""))
         sink.stage_event("cues", msg)
         log.warning(msg)
