@@ -127,6 +127,11 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
                                       estimated=True)
     assert stats["geometric_peaks"] == "inconsistent"
     assert voted == {}  # no Δ chosen, so none is reported as voted
+    # each pair and each video's null reason say why it got no geometric pair
+    assert all(p["geometric_withheld"].startswith("the vote peaks of the camera pairs do not close")
+               for p in stats["pairs"].values())
+    why = CueStats("estimated", 3, 90, 0, {}, stats["pairs"], {}, {}, "inconsistent").geometric_refusal("c")
+    assert why.startswith("Stage 0 gave a__c no geometric track pairs: the vote peaks"), why
     assert any("descriptor pairs kept only where consistent" in m for m in sink.messages)
     for (u, v), tp in out.items():
         right = {(row_of[u][p], row_of[v][p]) for p in range(30)}

@@ -422,12 +422,13 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     # joint vote's offsets, unsure as they are, so that a wrong offset leaves too few of them
     unchecked = status in ("inconsistent", "one triangle")
     filter_desc = unchecked and joint is not None and cfg.geometric.joint_filter_descriptor
+    unchecked_why = None
     if unchecked:
-        msg = ("geometric track pairs not used: "
-               + ("the vote peaks of the camera pairs do not close the triangles (Δ_ab + Δ_bc ≠ Δ_ac), "
-                  "so some peaks are wrong" if status == "inconsistent" else
-                  "three cameras give one triangle, and its closure (Δ_ab + Δ_bc ≈ Δ_ac) is a single "
-                  "check on 27 choices of vote peaks, some of which close by chance")
+        unchecked_why = ("the vote peaks of the camera pairs do not close the triangles (Δ_ab + Δ_bc ≠ Δ_ac), "
+                         "so some peaks are wrong" if status == "inconsistent" else
+                         "three cameras give one triangle, and its closure (Δ_ab + Δ_bc ≈ Δ_ac) is a single "
+                         "check on 27 choices of vote peaks, some of which close by chance")
+        msg = (f"geometric track pairs not used: {unchecked_why}"
                + ("; descriptor pairs kept only where consistent at the joint vote's offsets" if filter_desc else ""))
         sink.stage_event("cues", msg)
         log.warning(msg)
@@ -438,7 +439,7 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
         if pick is not None:
             index = index[gs.pair_peak == pick]
         elif unchecked:
-            index = index[:0]
+            index, withheld = index[:0], unchecked_why
         elif len(index) and (cameras[a].is_moving or cameras[b].is_moving) and not cfg.geometric.unchecked_moving:
             withheld = (f"no triangle checks its vote peaks ({', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s), "
                         f"and a moving camera's per-frame geometry lets wrong tracks fit a wrong offset")

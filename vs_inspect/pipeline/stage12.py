@@ -65,7 +65,7 @@ def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig,
         decision = check_inliers(decision, inliers, tau_px, decision_cfg)
         decision = check_track_pairs_at_best(decision, seen, best, decision_cfg)
     if len(tp.index) == 0 and not decision.accepted:
-        decision = PairDecision(False, "no cross-view track pairs (the views share no matched motion)",
+        decision = PairDecision(False, "no cross-view track pairs (no matched motion, or Stage 0 kept none)",
                                 0.0, 0.0, 0, 0, False)
     land = PairLandscape(a, b, raw.offsets_s, raw.energy, raw.support, minima, best, best_e, sigma,
                          len(tp.index), decision, cfg.landscape.residual, raw.robust_scale)
