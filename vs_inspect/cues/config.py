@@ -197,7 +197,7 @@ class CameraConfig:
     fallback_from_tracks: bool = True
     """Build static cameras from the moving points' two-view geometry (cues/pairwise.py: per-pair F at the best coarse offset, then one focal per camera and every pose fitted to all pairs at once) when the background reconstruction registers fewer than two cameras, and compare them with a weak one (a static camera left out, or fewer than 2 × min_inliers points per image): the set that leaves the smaller median epipolar distance on the moving points is used."""
     fallback_unchecked_pair: bool = False
-    """Use cameras from the moving points when only two come out (two videos, or one left out): their geometry and their offset are then fitted to the same track pairs and no third camera checks them. A safety sweep of two-camera runs (README) had 7 of 10 such pairs accepted 0.07-5.4 s off, so by default they are refused with that reason."""
+    """Use cameras from the moving points when only two come out (two videos, or one left out): their geometry and their offset are then fitted to the same track pairs and no third camera checks them. A safety sweep of two-camera runs (README) had 8 of the 11 accepted 0.07-5.4 s off, so by default they are refused with that reason."""
     mask_moving: bool = True
     """Estimated cameras: mask out moving regions before feature extraction."""
     register_every: int = 1
