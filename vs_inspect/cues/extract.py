@@ -795,10 +795,10 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
         if len(cams) == 2 and not cfg.camera.fallback_unchecked_pair:
             # the coarse offset and F were chosen by the same track pairs; Stage 1 then finds the
             # minimum they were fitted for, right or wrong, and no third camera can refuse it
-            lone = ("camera could not be registered: only two cameras came out, whose geometry "
-                    "and offset would both come from the same track pairs with no third camera to check them")
-            reasons = reasons | dict.fromkeys(cams, lone)
-            why += f"; {lone.removeprefix('camera could not be registered: ')}"
+            lone = ("only two cameras came out, whose geometry and offset would both come from the same "
+                    "track pairs with no third camera to check them")
+            reasons = reasons | dict.fromkeys(cams, f"camera could not be registered: {lone}")
+            why += f"; {lone}"
             cams = {}
         use = len(cams) >= 2
         if use and len(est.cameras) >= 2:
