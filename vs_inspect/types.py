@@ -188,6 +188,10 @@ class TrackPairs:
     b: str
     index: np.ndarray  # (P,2) int, (track index in a, track index in b)
     weight: np.ndarray | None = None  # (P,) float, optional confidence per pair
+    # (P,) bool, rows an epipolar vote chose at an offset that no third camera checked (two
+    # cameras): Stage 1 accepts the pair only if the other rows alone give the same minimum;
+    # None = no such row
+    unchecked: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         idx = np.asarray(self.index)
@@ -203,6 +207,12 @@ class TrackPairs:
             if not np.all(np.isfinite(w)) or np.any(w < 0):
                 raise ValueError("weight must be finite and non-negative")
             object.__setattr__(self, "weight", w)
+        if self.unchecked is not None:
+            u = np.asarray(self.unchecked)
+            _require_shape("unchecked", u, (idx.shape[0],))
+            if u.dtype != bool and not np.isin(u, (0, 1)).all():
+                raise ValueError("unchecked must be booleans (0 or 1)")
+            object.__setattr__(self, "unchecked", u.astype(bool))
 
     @property
     def key(self) -> tuple[str, str]:
@@ -276,7 +286,7 @@ class CueBundle:
             return self.pairs[(a, b)]
         if (b, a) in self.pairs:
             tp = self.pairs[(b, a)]
-            return TrackPairs(a, b, tp.index[:, ::-1].copy(), tp.weight)
+            return TrackPairs(a, b, tp.index[:, ::-1].copy(), tp.weight, tp.unchecked)
         return None
 
 

@@ -293,6 +293,9 @@ def test_a_lone_pair_with_a_moving_camera_keeps_only_its_descriptor_pairs(monkey
     assert len(out[("a", "b")].index) == 39 and "geometric_withheld" not in stats["pairs"]["a__b"]
     out, stats, msgs = _lone_pair(monkeypatch, moving_b=False)
     assert len(out[("a", "b")].index) == 39 and not any("not used" in m for m in msgs)
+    # ...marked unchecked (Stage 1 confirms their minimum with the 3 descriptor pairs alone)
+    assert out[("a", "b")].unchecked.tolist() == [False] * 3 + [True] * 36
+    assert stats["pairs"]["a__b"]["geometric_unchecked"] == 36
     assert CueStats("estimated", 2, 90, 39, {}, stats["pairs"], {}, {}, "no triangle").geometric_refusal("b") is None
 
 

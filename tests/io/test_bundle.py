@@ -37,6 +37,22 @@ def test_round_trip_is_exact(good_bundle):
     assert len(vfr) == 1 and "fps" not in vfr[0]
 
 
+def test_unchecked_track_pairs_round_trip_in_either_order(good_bundle, tmp_path):
+    """Stage 0's mark on track pairs no triangle checked reaches Stage 1 through the files."""
+    import dataclasses
+
+    from vs_inspect.types import TrackPairs
+    _, scene = good_bundle
+    key = sorted(scene.bundle.pairs)[0]
+    tp = scene.bundle.pairs[key]
+    mark = np.arange(len(tp.index)) % 3 == 0
+    pairs = {**scene.bundle.pairs, key: TrackPairs(*key, tp.index, tp.weight, mark)}
+    back = read_bundle(write_bundle(dataclasses.replace(scene.bundle, pairs=pairs), tmp_path / "b"))
+    assert back.pairs[key].unchecked.dtype == bool and back.pairs[key].unchecked.tolist() == mark.tolist()
+    assert back.pair(key[1], key[0]).unchecked.tolist() == mark.tolist()
+    assert all(back.pairs[k].unchecked is None for k in back.pairs if k != key)
+
+
 def test_writer_refuses_to_overwrite_and_leaves_no_partial(good_bundle, tmp_path):
     path, scene = good_bundle
     with pytest.raises(FileExistsError):
@@ -87,6 +103,10 @@ CASES = {
                                 "pairs/cam0__cam1.npz", "out of range"),
     "pair file names unknown video": (lambda d: shutil.copy(d / "pairs" / "cam0__cam1.npz", d / "pairs" / "cam0__zz9.npz"),
                                       "pairs/cam0__zz9.npz", "known videos"),
+    "unchecked marks of another length": (set_npz("pairs/cam0__cam1.npz", unchecked=np.zeros(3, bool)),
+                                          "pairs/cam0__cam1.npz", "unchecked"),
+    "unchecked marks not booleans": (set_npz("pairs/cam0__cam1.npz", unchecked=np.full(60, 2)),
+                                     "pairs/cam0__cam1.npz", "booleans"),
     "empty bundle": (set_json(["videos"], []), "bundle.json", "empty bundle"),
     "wrong format": (set_json(["format"], "something"), "bundle.json", "format"),
     "bad fps": (set_json(["videos", 0, "fps"], -3), "bundle.json", "fps"),

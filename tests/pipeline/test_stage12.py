@@ -69,3 +69,72 @@ def test_a_reference_without_an_accepted_pair_is_null_with_a_reason(small):
     assert "planted rejection" in out.unresolved_reason[ref]
     # with its pairs accepted it keeps its 0.0 and no reason
     assert base.offsets_s[ref] == 0.0 and ref not in base.unresolved_reason
+
+
+@pytest.fixture(scope="module")
+def shifted_pair():
+    """Two static 30 fps cameras, and b's tracks once more shifted 30 frames in time: pairing a's
+    tracks with those copies fits Δ_ab + 1 s exactly as the right pairs fit Δ_ab (what a wrong
+    epipolar vote peak of two cameras gives: consistent tracks at a wrong offset)."""
+    import dataclasses
+
+    import numpy as np
+
+    from vs_inspect.types import Tracks
+    sc = make_cue_scene(CueSceneConfig(cameras=2, moving=0, variable_rate=0, seconds=6.0, pairs_per_view_pair=200,
+                                       max_offset_s=0.5, no_match_pairs=0, all_wrong_pair=False,
+                                       wrong_fraction=0.0, fps_choices=(30.0,), seed=3))
+    (a, b), tp = next(iter(sc.bundle.pairs.items()))
+    xy = sc.bundle.tracks[b].xy
+    late = np.full_like(xy, np.nan)
+    late[:, :-30] = xy[:, 30:]
+    tracks = {**sc.bundle.tracks, b: Tracks(np.concatenate([xy, late]))}
+    bundle = dataclasses.replace(sc.bundle, tracks=tracks)
+    truth = sc.bundle.gt_offsets_s[b] - sc.bundle.gt_offsets_s[a]
+    return bundle, a, b, tp.index, len(xy), truth
+
+
+def _with_pairs(bundle, a, b, checked, unchecked):
+    import dataclasses
+
+    import numpy as np
+
+    from vs_inspect.types import TrackPairs
+    index = np.concatenate([checked, unchecked])
+    mark = np.r_[np.zeros(len(checked), bool), np.ones(len(unchecked), bool)]
+    return dataclasses.replace(bundle, pairs={(a, b): TrackPairs(a, b, index, None, mark)})
+
+
+def test_unchecked_track_pairs_need_the_others_to_agree(shifted_pair):
+    """Track pairs marked unchecked (two cameras' epipolar vote, no triangle) decide the pair only
+    when the pair's other track pairs alone find the same minimum (within 2 frames)."""
+    import dataclasses
+
+    import numpy as np
+
+    from vs_inspect.pipeline.stage12 import pair_landscape
+    from vs_inspect.sync.config import DecisionConfig
+    bundle, a, b, right, n_b, truth = shifted_pair
+    assert len(right) >= 160
+    wrong = right[40:160] + np.array([0, n_b])  # the same tracks of a with b's late copies
+    # 120 wrong unchecked pairs outweigh 40 right ones: without the check, the wrong minimum wins
+    lone = _with_pairs(bundle, a, b, right[:40], wrong)
+    off = SyncConfig(decision=DecisionConfig(unchecked_agree_frames=0))
+    land, _ = pair_landscape(lone, a, b, off)
+    assert land.decision.accepted and abs(land.best_offset_s - (truth + 1.0)) < 0.02, land.decision.reason
+    land, _ = pair_landscape(lone, a, b, SyncConfig())
+    assert not land.decision.accepted and abs(land.best_offset_s - (truth + 1.0)) < 0.02
+    assert "found by appearance alone put it at" in land.decision.reason, land.decision.reason
+    others = float(land.decision.reason.split("put it at ")[1].split(" s")[0])  # where the others put it
+    assert abs(others - truth) < 1 / 30, (others, truth)
+    # right unchecked pairs: the other 40 confirm them
+    land, _ = pair_landscape(_with_pairs(bundle, a, b, right[:40], right[40:160]), a, b, SyncConfig())
+    assert land.decision.accepted and abs(land.best_offset_s - truth) < 1 / 30  # a frame (0.5° pose error)
+    assert "confirmed by the 40 track pairs" in land.decision.reason
+    # too few others to have a minimum: refused, with their own reason
+    land, _ = pair_landscape(_with_pairs(bundle, a, b, right[:5], right[40:160]), a, b, SyncConfig())
+    assert not land.decision.accepted and "give no minimum of their own" in land.decision.reason
+    assert "too few track pairs: only 5" in land.decision.reason
+    # no unchecked mark: nothing to confirm
+    plain = dataclasses.replace(lone, pairs={(a, b): dataclasses.replace(lone.pairs[(a, b)], unchecked=None)})
+    assert pair_landscape(plain, a, b, SyncConfig())[0].decision.accepted

@@ -372,8 +372,9 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     triangles, the peaks of at least one pair are all wrong and Stage 1 could not tell (the
     pairs were picked to agree with them), so no geometric pair is added; nor with three cameras,
     whose one triangle's closure is too weak a check (consistent_peaks: "one triangle"). With two static
-    cameras (no triangle) every kept peak's supporters are added; with a moving camera, none
-    (GeometricPairConfig.unchecked_moving).
+    cameras (no triangle) every kept peak's supporters are added, marked TrackPairs.unchecked (Stage 1
+    accepts the pair only if its descriptor pairs alone give the same minimum); with a moving
+    camera, none (GeometricPairConfig.unchecked_moving).
     """
     from .geometric_pairs import consistent_peaks, geometric_pairs, joint_offsets
 
@@ -453,7 +454,8 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
         if filter_desc:
             desc = _consistent_descriptor_pairs(desc, joint.offsets_s[b] - joint.offsets_s[a], cameras,
                                                 tracks, vids, cfg)
-        out[(a, b)], n_new = _merge_pairs(desc, index)
+        # supporters of a peak no triangle chose: Stage 1 must find the pair's minimum without them too
+        out[(a, b)], n_new = _merge_pairs(desc, index, unchecked=pick is None)
         info = {"geometric_candidates": gs.candidates, "geometric_informative": gs.informative,
                 "geometric_pairs": int(len(index)), "geometric_new": n_new,
                 "geometric_peaks_s": [round(p, 4) for p in gs.peaks_s],
@@ -461,6 +463,8 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
                 "geometric_chosen_peak_s": round(gs.peaks_s[pick], 4) if pick is not None else None}
         if withheld:
             info["geometric_withheld"] = withheld
+        if pick is None and n_new:
+            info["geometric_unchecked"] = int(n_new)
         if filter_desc:
             info.update({"descriptor_pairs_kept": int(len(desc.index)), "descriptor_pairs_before": int(n_desc)})
         stats["pairs"].setdefault(f"{a}__{b}", {}).update(info)
@@ -660,13 +664,17 @@ def _consistent_descriptor_pairs(desc: TrackPairs, delta_s: float, cameras: dict
     return TrackPairs(a, b, desc.index[ok], None if desc.weight is None else desc.weight[ok])
 
 
-def _merge_pairs(tp: TrackPairs, index: np.ndarray) -> tuple[TrackPairs, int]:
-    """Descriptor pairs tp plus the geometric pairs index (P,2) not already in it: (pairs, new)."""
+def _merge_pairs(tp: TrackPairs, index: np.ndarray, unchecked: bool = False) -> tuple[TrackPairs, int]:
+    """Descriptor pairs tp plus the geometric pairs index (P,2) not already in it: (pairs, new).
+    unchecked: the new rows are marked TrackPairs.unchecked (no triangle checked their vote peak)."""
     w_desc = tp.weight if tp.weight is not None else np.ones(len(tp.index))
     have = {tuple(x) for x in tp.index.tolist()}
     new = np.array([x for x in index.tolist() if tuple(x) not in have], np.int64).reshape(-1, 2)
+    mark = None
+    if unchecked and len(new):
+        mark = np.concatenate([np.zeros(len(tp.index), bool), np.ones(len(new), bool)])
     return TrackPairs(tp.a, tp.b, np.concatenate([tp.index, new]),
-                      np.concatenate([w_desc, np.ones(len(new))])), len(new)
+                      np.concatenate([w_desc, np.ones(len(new))]), mark), len(new)
 
 
 def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cameras: dict,

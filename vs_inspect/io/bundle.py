@@ -284,9 +284,10 @@ def read_bundle(folder: str | os.PathLike) -> CueBundle:
                 raise BundleError(ppath, "pairs a video with itself")
             if (b, a) in pairs:
                 raise BundleError(ppath, f"pair given twice (also as {b}__{a}.npz)")
-            pdata = _load_npz(ppath, {"index": ((None, 2),), "weight": ((None,),)}, budget)
+            pdata = _load_npz(ppath, {"index": ((None, 2),), "weight": ((None,),), "unchecked": ((None,),)},
+                              budget)
             try:
-                tp = TrackPairs(a, b, _require(ppath, pdata, "index"), pdata.get("weight"))
+                tp = TrackPairs(a, b, _require(ppath, pdata, "index"), pdata.get("weight"), pdata.get("unchecked"))
             except ValueError as exc:
                 raise BundleError(ppath, str(exc)) from None
             for col, n in ((0, a), (1, b)):
@@ -391,6 +392,8 @@ def write_bundle(bundle: CueBundle, folder: str | os.PathLike, overwrite: bool =
             arrays = {"index": tp.index}
             if tp.weight is not None:
                 arrays["weight"] = tp.weight
+            if tp.unchecked is not None:
+                arrays["unchecked"] = tp.unchecked
             np.savez_compressed(tmp / "pairs" / f"{a}__{b}.npz", **arrays)
         if bundle.gt_offsets_s is not None:
             gt: dict = {"offsets_s": bundle.gt_offsets_s}

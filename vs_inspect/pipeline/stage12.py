@@ -48,22 +48,11 @@ def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig,
         side, offsets, rate0 = _pose_free_inputs(bundle, a, b, side, cfg, pose_free)
         # one track followed by both cameras is the evidence here (its F explains most matches)
         decision_cfg = dataclasses.replace(cfg.decision, min_track_pairs=min(cfg.decision.min_track_pairs, 1))
-    raw, pe = compute_landscape(side[a], side[b], tp, cfg.landscape, offsets)
-    decision, minima = decide(raw.energy, raw.support, raw.offsets_s, len(tp.index), decision_cfg)
-    best, best_e, sigma = float("nan"), float("nan"), float("nan")
-    if len(minima):
-        best_idx = int(minima[0])
-        best, best_e = refine_minimum(pe, raw, best_idx)
-        sigma = curvature_uncertainty(raw, best_idx, best_e, len(tp.index))
-        va, vb = bundle.video(a), bundle.video(b)
-        tau_px = cfg.decision.inlier_px_fraction * max(np.hypot(va.width, va.height),
-                                                       np.hypot(vb.width, vb.height))
-        r = pe.residuals(best, kind="sampson")
-        seen = int(np.isfinite(r).any(axis=1).sum()) if r.ndim == 2 else 0
-        r = r[np.isfinite(r)]
-        inliers = float(np.mean(np.sqrt(r) < tau_px)) if r.size else float("nan")
-        decision = check_inliers(decision, inliers, tau_px, decision_cfg)
-        decision = check_track_pairs_at_best(decision, seen, best, decision_cfg)
+    raw, pe, minima, decision, best, best_e, sigma = _decided_landscape(side[a], side[b], tp, cfg, decision_cfg,
+                                                                        offsets)
+    if decision.accepted and tp.unchecked is not None and tp.unchecked.any() and decision_cfg.enabled \
+            and decision_cfg.unchecked_agree_frames > 0:
+        decision = _confirm_without_unchecked(side[a], side[b], tp, cfg, decision_cfg, offsets, decision, best)
     if len(tp.index) == 0 and not decision.accepted:
         decision = PairDecision(False, "no cross-view track pairs (no matched motion, or Stage 0 kept none)",
                                 0.0, 0.0, 0, 0, False)
@@ -94,6 +83,54 @@ def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig,
                                            pivot_offset_std_s=fit.pivot_offset_std_s,
                                            rate_landscape=fit.landscape)
     return land, pe
+
+
+def _decided_landscape(a: PairInput, b: PairInput, tp: TrackPairs, cfg: SyncConfig, decision_cfg,
+                       offsets: np.ndarray | None):
+    """(raw, PairEnergy, minima, decision, best offset_s, its energy, its 1-sigma) of one set of
+    track pairs: the landscape, the decision on it and the checks at its refined minimum."""
+    raw, pe = compute_landscape(a, b, tp, cfg.landscape, offsets)
+    decision, minima = decide(raw.energy, raw.support, raw.offsets_s, len(tp.index), decision_cfg)
+    best, best_e, sigma = float("nan"), float("nan"), float("nan")
+    if len(minima):
+        best_idx = int(minima[0])
+        best, best_e = refine_minimum(pe, raw, best_idx)
+        sigma = curvature_uncertainty(raw, best_idx, best_e, len(tp.index))
+        va, vb = a.video, b.video
+        tau_px = decision_cfg.inlier_px_fraction * max(np.hypot(va.width, va.height),
+                                                       np.hypot(vb.width, vb.height))
+        r = pe.residuals(best, kind="sampson")
+        seen = int(np.isfinite(r).any(axis=1).sum()) if r.ndim == 2 else 0
+        r = r[np.isfinite(r)]
+        inliers = float(np.mean(np.sqrt(r) < tau_px)) if r.size else float("nan")
+        decision = check_inliers(decision, inliers, tau_px, decision_cfg)
+        decision = check_track_pairs_at_best(decision, seen, best, decision_cfg)
+    return raw, pe, minima, decision, best, best_e, sigma
+
+
+def _confirm_without_unchecked(a: PairInput, b: PairInput, tp: TrackPairs, cfg: SyncConfig, decision_cfg,
+                               offsets: np.ndarray | None, decision: PairDecision, best: float) -> PairDecision:
+    """The accepted decision, or a rejection when the pair's other track pairs alone (found by
+    appearance, without assuming an offset) give no accepted minimum within
+    unchecked_agree_frames of the coarser video's frames of best: the unchecked rows were chosen
+    by an epipolar vote at an offset no third camera checked, and two views cannot tell a wrong
+    vote peak from a right one (a moving body's two sides fit a shifted offset)."""
+    keep = ~tp.unchecked
+    alone = TrackPairs(tp.a, tp.b, tp.index[keep], None if tp.weight is None else tp.weight[keep])
+    own, own_best = _decided_landscape(a, b, alone, cfg, decision_cfg, offsets)[3:5]
+    tol_s = decision_cfg.unchecked_agree_frames * max(a.video.frame_interval_s, b.video.frame_interval_s)
+    head = (f"two cameras, no third to check: {int(tp.unchecked.sum())} of the {len(tp.index)} track pairs "
+            f"were chosen by an epipolar vote at an offset no triangle checked, and the "
+            f"{len(alone.index)} found by appearance alone ")
+    if not own.accepted:
+        why = head + f"give no minimum of their own to confirm {best:+.3f} s ({own.reason})"
+    elif abs(own_best - best) > tol_s:
+        why = head + (f"put it at {own_best:+.3f} s, not {best:+.3f} s (more than "
+                      f"{decision_cfg.unchecked_agree_frames:g} frames, {tol_s * 1000:.0f} ms, apart)")
+    else:
+        return dataclasses.replace(decision, reason=decision.reason + f"; confirmed by the {len(alone.index)} "
+                                   f"track pairs found by appearance alone ({own_best:+.3f} s)")
+    return dataclasses.replace(decision, accepted=False, reason=why)
 
 
 MIN_POSE_FREE_INLIERS = 0.5

@@ -66,9 +66,11 @@ class DecisionConfig:
     """Inlier distance for that check, as a fraction of the larger image diagonal (1 % = 14.7 px at 1280x720)."""
     reject_range_edge: bool = True
     """Reject when the best minimum lies on the border of the search range."""
+    unchecked_agree_frames: float = 2.0
+    """A pair with unchecked track pairs (TrackPairs.unchecked: two static cameras, whose epipolar vote no third camera checks) is accepted only if its other track pairs (found by appearance) alone give an accepted minimum within this many frames of the coarser video; 0 = no check. Measured (README, "Two calibrated cameras alone"): of 23 such runs accepted before, 8 were 2-23 frames off; with this check none of those 8 and 4 of the 15 right ones stay accepted, and caliscope's lone pair (its two minima 6 ms apart at 6 fps) is kept."""
 
     def __post_init__(self) -> None:
-        check_fields(self, nonnegative=("min_track_pairs",), positive=("max_minima",),
+        check_fields(self, nonnegative=("min_track_pairs", "unchecked_agree_frames"), positive=("max_minima",),
                      fraction=("min_contrast", "max_second_ratio", "min_rival_support", "min_prominence",
                                "min_inlier_fraction", "inlier_px_fraction", "min_support_fraction"))
 
