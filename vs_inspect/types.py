@@ -334,6 +334,10 @@ class PairLandscape:
     pivot_offset_std_s: float = float("nan")  # its 1-sigma
     rate_landscape: RateLandscape | None = None  # the energy over (Δ, rate), with the drift model
     pose_free: bool = False  # the pair's F came from its tracks (sync.posefree), not from cameras
+    # (D,) energy of the pair's track pairs not marked unchecked, alone, on offsets_s (the check
+    # of TrackPairs.unchecked); None: the check did not run
+    confirm_energy: np.ndarray | None = None
+    confirm_offset_s: float = float("nan")  # that landscape's refined best minimum, s (NaN: none accepted)
 
 
 @dataclass(frozen=True)

@@ -44,6 +44,27 @@ def test_v2_round_trip_with_drift(drift_result, tmp_path):
     assert run_result_to_dict(back) == data
 
 
+def test_the_confirmation_of_unchecked_track_pairs_round_trips(drift_result, tmp_path):
+    """A pair whose unchecked track pairs were checked keeps the others' landscape and minimum;
+    a pair without the check has neither, and a confirm_energy of the wrong length is refused."""
+    import dataclasses
+    _, res = drift_result
+    first = res.pairs[0]
+    confirm = np.where(np.arange(len(first.offsets_s)) % 5 == 0, np.nan, np.linspace(1.0, 2.0, len(first.offsets_s)))
+    pairs = (dataclasses.replace(first, confirm_energy=confirm, confirm_offset_s=0.125),) + tuple(res.pairs[1:])
+    data = json.loads(write_run_result(dataclasses.replace(res, pairs=pairs), tmp_path).read_text())
+    assert data["pairs"][0]["confirm_offset_s"] == 0.125
+    assert all("confirm_offset_s" not in p for p in data["pairs"][1:])
+    back = read_run_result(tmp_path)
+    assert np.array_equal(back.pairs[0].confirm_energy, confirm, equal_nan=True)
+    assert back.pairs[0].confirm_offset_s == 0.125 and back.pairs[1].confirm_energy is None
+    assert run_result_to_dict(back) == data
+    data["pairs"][0]["confirm_energy"] = data["pairs"][0]["confirm_energy"][:3]
+    (tmp_path / "result.json").write_text(json.dumps(data))
+    with pytest.raises(InputError, match="confirm_energy"):
+        read_run_result(tmp_path)
+
+
 def test_v1_file_still_reads(tmp_path):
     v1 = {"format": "vs-inspect-result", "version": 1, "reference": "a",
           "offsets_s": {"a": 0.0, "b": 1.5}, "uncertainty_s": {"a": 0.0, "b": 0.001}, "unresolved": {},

@@ -127,6 +127,9 @@ def test_unchecked_track_pairs_need_the_others_to_agree(shifted_pair):
     assert "found by appearance alone put it at" in land.decision.reason, land.decision.reason
     others = float(land.decision.reason.split("put it at ")[1].split(" s")[0])  # where the others put it
     assert abs(others - truth) < 1 / 30, (others, truth)
+    # their landscape is kept beside the full one, on the same offsets (the recording's grey curve)
+    assert land.confirm_energy.shape == land.offsets_s.shape and abs(land.confirm_offset_s - others) < 1e-3
+    assert abs(land.offsets_s[np.nanargmin(land.confirm_energy)] - truth) < 1 / 30
     # right unchecked pairs: the other 40 confirm them
     land, _ = pair_landscape(_with_pairs(bundle, a, b, right[:40], right[40:160]), a, b, SyncConfig())
     assert land.decision.accepted and abs(land.best_offset_s - truth) < 1 / 30  # a frame (0.5° pose error)
@@ -137,4 +140,5 @@ def test_unchecked_track_pairs_need_the_others_to_agree(shifted_pair):
     assert "too few track pairs: only 5" in land.decision.reason
     # no unchecked mark: nothing to confirm
     plain = dataclasses.replace(lone, pairs={(a, b): dataclasses.replace(lone.pairs[(a, b)], unchecked=None)})
-    assert pair_landscape(plain, a, b, SyncConfig())[0].decision.accepted
+    land, _ = pair_landscape(plain, a, b, SyncConfig())
+    assert land.decision.accepted and land.confirm_energy is None

@@ -496,6 +496,31 @@ def test_pairing_votes_are_recorded_on_the_pairs_offset_axis(tmp_path):
     assert "pairing votes (Stage 0, z per Δ)" in _view_names(bp.root_container)
 
 
+def test_the_appearance_pairs_landscape_is_recorded_beside_the_full_one(planted_run, tmp_path):
+    """A pair whose unchecked track pairs were checked: the landscape of its other track pairs
+    alone (grey) and that landscape's minimum under the pair's landscape, and a row in its decision."""
+    land = next(p for p in planted_run["result"].pairs if len(p.minima_idx))
+    e = np.linspace(3.0, 1.0, len(land.offsets_s))
+    e[::7] = np.nan
+    land = dataclasses.replace(land, confirm_energy=e, confirm_offset_s=float(land.offsets_s[-1]))
+    out = tmp_path / "confirm.rrd"
+    with RerunSink(out, progress=False) as sink:
+        sink.pair_landscape(land)
+    assert rerun_verify(out, tmp_path).returncode == 0
+    base = f"pairs/{land.a}__{land.b}/landscape"
+    assert {f"{base}/appearance_only", f"{base}/appearance_only_best"} <= chunk_entities(out)
+    rec = read_recording(out)
+    key = pair_key(land.a, land.b)
+    series = rec.landscapes[key]["appearance_only"]
+    full = land.energy[np.isfinite(land.energy)]  # drawn over the full landscape's range
+    assert len(series.value) == int(np.isfinite(e).sum())
+    assert np.isclose(series.value.max(), full.max()) and np.isclose(series.value.min(), full.min())
+    assert np.all(np.diff(series.value) < 0)  # the shape kept (a falling line here)
+    assert rec.landscapes[key]["appearance_only_best"].offset_ms.tolist() == [round(land.offsets_s[-1] * 1000)]
+    md = rec.decisions[key]
+    assert f"| appearance pairs alone | minimum {land.offsets_s[-1]:+.4f} s |" in md, md
+
+
 def test_a_run_that_stops_in_stage0_shows_its_stills_and_reasons_on_offset_ms(tmp_path):
     """Stage 0 logged votes on offset_ms and then refused every camera (no Stage 1): the videos'
     stills and Stage 0's events are on offset_ms, where the viewer opens, not only elsewhere."""

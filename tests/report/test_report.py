@@ -314,3 +314,36 @@ def test_three_view_checks_get_their_figure(run, tmp_path):
     render_report(data, tmp_path / "report")
     assert "three_view" in _check_images(tmp_path / "report", data)
     assert "three_view.png" in (tmp_path / "report" / "index.html").read_text()
+
+
+def test_a_pair_checked_without_its_unchecked_track_pairs_shows_that_landscape(run, tmp_path):
+    """The landscape panel of a pair whose unchecked track pairs were checked draws the
+    appearance-matched pairs' own energy (dashed, over the pair's energy range) and its minimum;
+    read from result.json like the rest of the panel."""
+    import dataclasses
+
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from vs_inspect.io.result import read_run_result
+    from vs_inspect.report.figures import _landscape_axes
+    res = read_run_result(run[0])
+    first = res.pairs[0]
+    confirm = np.linspace(5.0, 50.0, len(first.offsets_s))
+    res = dataclasses.replace(res, pairs=(dataclasses.replace(first, confirm_energy=confirm,
+                                                              confirm_offset_s=float(first.offsets_s[0])),)
+                              + tuple(res.pairs[1:]))
+    write_run_result(res, tmp_path / "result.json")
+    from vs_inspect.analysis.report_data import pair_views
+    views = pair_views(read_run_result(tmp_path), None)
+    assert views[0].confirm_energy is not None and views[1].confirm_energy is None
+    fig, ax = plt.subplots()
+    _landscape_axes(ax, views[0])
+    dashed = [ln for ln in ax.get_lines() if ln.get_label() == "appearance pairs alone (rescaled)"]
+    assert len(dashed) == 1
+    y = dashed[0].get_ydata()
+    full = views[0].energy[np.isfinite(views[0].energy)]
+    assert np.isclose(np.nanmin(y), full.min()) and np.isclose(np.nanmax(y), full.max())
+    assert any(np.allclose(ln.get_xdata(), first.offsets_s[0]) for ln in ax.get_lines() if ln.get_linestyle() == ":")
+    plt.close(fig)

@@ -52,7 +52,9 @@ def pair_views(result: RunResult, gt: dict[str, float] | None) -> tuple[PairView
             a, b, offsets, energy, offsets[p.minima_idx], energy[p.minima_idx],
             bool(p.decision.accepted), p.decision.reason, _opt(p.best_offset_s),
             _opt(p.uncertainty_s), solved, true, int(p.num_track_pairs),
-            float(p.decision.contrast) if math.isfinite(p.decision.contrast) else 0.0))
+            float(p.decision.contrast) if math.isfinite(p.decision.contrast) else 0.0,
+            None if p.confirm_energy is None else np.asarray(p.confirm_energy, dtype=np.float64),
+            _opt(p.confirm_offset_s)))
     return tuple(out)
 
 

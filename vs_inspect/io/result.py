@@ -47,6 +47,10 @@ def pair_to_dict(p: PairLandscape, with_landscape: bool = True) -> dict[str, Any
     }
     if p.pose_free:
         out["pose_free"] = True
+    if p.confirm_energy is not None:  # the pair had unchecked track pairs: the others' own minimum
+        out["confirm_offset_s"] = _num(p.confirm_offset_s)
+        if with_landscape:
+            out["confirm_energy"] = [_num(float(x)) for x in p.confirm_energy]
     if math.isfinite(p.log_rate_std) or p.rate_landscape is not None or p.rate != 1.0:
         # the drift model (v2): τ_a = offset_s + rate · τ_b
         out["rate"] = float(p.rate)
@@ -202,7 +206,21 @@ def _pair_from_dict(p: dict[str, Any]) -> PairLandscape:
                          decision, str(p.get("residual", "sampson")), f("robust_scale"),
                          1.0 if math.isnan(rate) else rate, f("drift_std_ppm") * 1e-6,
                          float(p.get("pivot_s", 0.0)), f("pivot_offset_s"), f("pivot_offset_std_s"),
-                         rate_land, bool(p.get("pose_free", False)))
+                         rate_land, bool(p.get("pose_free", False)), _confirm_energy(p, len(offsets)),
+                         f("confirm_offset_s"))
+
+
+def _confirm_energy(p: dict[str, Any], num_offsets: int) -> np.ndarray | None:
+    """A pair's confirm_energy (D,) from its entry: None when the check did not run; without the
+    landscape written (with_landscape off) NaN over the offsets."""
+    if "confirm_offset_s" not in p:
+        return None
+    e = p.get("confirm_energy")
+    if e is None:
+        return np.full(num_offsets, np.nan)
+    if not isinstance(e, list) or len(e) != num_offsets:
+        raise InputError(f"pairs[].confirm_energy must be a list of {num_offsets} numbers (one per offset)")
+    return np.asarray([np.nan if x is None else x for x in e], dtype=np.float64)
 
 
 def run_result_from_dict(d: dict[str, Any], source: str = "result") -> RunResult:

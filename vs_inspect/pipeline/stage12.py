@@ -50,9 +50,11 @@ def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig,
         decision_cfg = dataclasses.replace(cfg.decision, min_track_pairs=min(cfg.decision.min_track_pairs, 1))
     raw, pe, minima, decision, best, best_e, sigma = _decided_landscape(side[a], side[b], tp, cfg, decision_cfg,
                                                                         offsets)
+    confirm = None
     if decision.accepted and tp.unchecked is not None and tp.unchecked.any() and decision_cfg.enabled \
             and decision_cfg.unchecked_agree_frames > 0:
-        decision = _confirm_without_unchecked(side[a], side[b], tp, cfg, decision_cfg, offsets, decision, best)
+        decision, confirm = _confirm_without_unchecked(side[a], side[b], tp, cfg, decision_cfg, offsets, decision,
+                                                       best)
     if len(tp.index) == 0 and not decision.accepted:
         decision = PairDecision(False, "no cross-view track pairs (no matched motion, or Stage 0 kept none)",
                                 0.0, 0.0, 0, 0, False)
@@ -60,6 +62,8 @@ def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig,
                          len(tp.index), decision, cfg.landscape.residual, raw.robust_scale)
     if pose_free_pair:
         land = dataclasses.replace(land, rate=rate0, pose_free=True)
+    if confirm is not None:
+        land = dataclasses.replace(land, confirm_energy=confirm[0], confirm_offset_s=confirm[1])
     if cfg.drift.enabled and math.isfinite(best):
         # b unscaled: the grid starts from (best, rate0) in the pair's own clocks
         side_b = dataclasses.replace(side[b], video=bundle.video(b))
@@ -109,15 +113,18 @@ def _decided_landscape(a: PairInput, b: PairInput, tp: TrackPairs, cfg: SyncConf
 
 
 def _confirm_without_unchecked(a: PairInput, b: PairInput, tp: TrackPairs, cfg: SyncConfig, decision_cfg,
-                               offsets: np.ndarray | None, decision: PairDecision, best: float) -> PairDecision:
-    """The accepted decision, or a rejection when the pair's other track pairs alone (found by
+                               offsets: np.ndarray | None, decision: PairDecision, best: float
+                               ) -> tuple[PairDecision, tuple[np.ndarray, float]]:
+    """(decision, (the other track pairs' energy (D,), their accepted minimum in s or NaN)): the
+    accepted decision, or a rejection when the pair's other track pairs alone (found by
     appearance, without assuming an offset) give no accepted minimum within
     unchecked_agree_frames of the coarser video's frames of best: the unchecked rows were chosen
     by an epipolar vote at an offset no third camera checked, and two views cannot tell a wrong
     vote peak from a right one (a moving body's two sides fit a shifted offset)."""
     keep = ~tp.unchecked
     alone = TrackPairs(tp.a, tp.b, tp.index[keep], None if tp.weight is None else tp.weight[keep])
-    own, own_best = _decided_landscape(a, b, alone, cfg, decision_cfg, offsets)[3:5]
+    raw_alone, _, _, own, own_best, _, _ = _decided_landscape(a, b, alone, cfg, decision_cfg, offsets)
+    shown = (raw_alone.energy, own_best if own.accepted else float("nan"))
     tol_s = decision_cfg.unchecked_agree_frames * max(a.video.frame_interval_s, b.video.frame_interval_s)
     head = (f"two cameras, no third to check: {int(tp.unchecked.sum())} of the {len(tp.index)} track pairs "
             f"were chosen by an epipolar vote at an offset no triangle checked, and the "
@@ -129,8 +136,8 @@ def _confirm_without_unchecked(a: PairInput, b: PairInput, tp: TrackPairs, cfg: 
                       f"{decision_cfg.unchecked_agree_frames:g} frames, {tol_s * 1000:.0f} ms, apart)")
     else:
         return dataclasses.replace(decision, reason=decision.reason + f"; confirmed by the {len(alone.index)} "
-                                   f"track pairs found by appearance alone ({own_best:+.3f} s)")
-    return dataclasses.replace(decision, accepted=False, reason=why)
+                                   f"track pairs found by appearance alone ({own_best:+.3f} s)"), shown
+    return dataclasses.replace(decision, accepted=False, reason=why), shown
 
 
 MIN_POSE_FREE_INLIERS = 0.5

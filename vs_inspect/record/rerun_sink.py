@@ -58,6 +58,7 @@ ACCEPTED, REJECTED = palette.ACCEPTED, palette.REJECTED
 GREY = (150, 150, 150)  # unknown, no data
 MINIMA = (86, 180, 233)  # sky blue
 TRUTH = (240, 228, 66)  # yellow
+APPEARANCE_ONLY = (160, 160, 160)  # grey: a pair's landscape without its unchecked track pairs
 PALETTE = np.array(palette.CATEGORY, dtype=np.uint8)
 # point-to-line distance in the epipolar views: blue (far) through grey to yellow (on the line)
 RAMP = np.array([(70, 90, 210), (150, 150, 160), (253, 234, 69)], dtype=float)  # visible on black
@@ -785,12 +786,41 @@ class RerunSink(Sink):
             self.rec.send_columns(f"{base}/chosen",
                                   [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=[round(land.best_offset_s * 1000)])],
                                   rr.Scalars.columns(scalars=[land.best_energy]))
+        if land.confirm_energy is not None:
+            self._log_confirm_landscape(base, land, ms)
         if view is not None and view.true_offset_s is not None and view.true_energy is not None:
             self.rec.log(f"{base}/truth", rr.SeriesPoints(colors=[TRUTH], names=["true Δ"],
                                                           markers=["cross"], marker_sizes=[7.0]), static=True)
             self.rec.send_columns(f"{base}/truth",
                                   [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=[round(view.true_offset_s * 1000)])],
                                   rr.Scalars.columns(scalars=[view.true_energy]))
+
+    def _log_confirm_landscape(self, base: str, land: PairLandscape, ms: np.ndarray) -> None:
+        """The energy of the pair's track pairs found by appearance alone (its unchecked ones left
+        out), beside the full one: where its minimum lies is what confirmed or refused the pair.
+        Drawn over the full landscape's range (its own robust scale differs, often tenfold), so
+        the two shapes compare; result.json keeps its values."""
+        e = np.asarray(land.confirm_energy, dtype=np.float64)
+        ok = np.isfinite(e)
+        full = np.asarray(land.energy, dtype=np.float64)
+        full = full[np.isfinite(full)]
+        if ok.any() and len(full):
+            lo, span = float(e[ok].min()), float(np.ptp(e[ok]))
+            e = full.min() + (e - lo) / (span if span > 0 else 1.0) * float(np.ptp(full))
+        self.rec.log(f"{base}/appearance_only", rr.SeriesLines(colors=[APPEARANCE_ONLY], widths=[1.0],
+                                                               names=["appearance pairs alone (rescaled)"]),
+                     static=True)
+        if ok.any():
+            self.rec.send_columns(f"{base}/appearance_only", [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms[ok])],
+                                  rr.Scalars.columns(scalars=e[ok]))
+        if math.isfinite(land.confirm_offset_s):
+            at = float(np.interp(land.confirm_offset_s, land.offsets_s[ok], e[ok])) if ok.any() else float("nan")
+            self.rec.log(f"{base}/appearance_only_best",
+                         rr.SeriesPoints(colors=[APPEARANCE_ONLY], names=["its minimum"], markers=["diamond"],
+                                         marker_sizes=[5.0]), static=True)
+            self.rec.send_columns(f"{base}/appearance_only_best",
+                                  [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=[round(land.confirm_offset_s * 1000)])],
+                                  rr.Scalars.columns(scalars=[at]))
 
     def _log_rate_landscape(self, land: PairLandscape, view: PairRecordView | None) -> None:
         base = pair_rate_landscape_path(land.a, land.b)
@@ -822,6 +852,9 @@ class RerunSink(Sink):
                 ("track pairs", str(land.num_track_pairs)),
                 ("residual", land.residual),
                 ("robust scale", f"{land.robust_scale:.4g}")]
+        if land.confirm_energy is not None:  # the grey curve of the landscape
+            rows.append(("appearance pairs alone", f"minimum {_fmt(land.confirm_offset_s, ' s')}"
+                         if math.isfinite(land.confirm_offset_s) else "no accepted minimum"))
         md = (f"## {land.a} → {land.b}: {verdict}\n\n**reason:** {d.reason}\n\n| | |\n|---|---|\n"
               + "\n".join(f"| {k} | {v} |" for k, v in rows)
               + f"\n\n**minima (best first):** {minima or 'none'}\n")

@@ -81,6 +81,10 @@ class PairView:
     true_offset_s: float | None  # Δ_ab from the ground truth, when known
     num_track_pairs: int
     contrast: float  # 1 - E_best / E_median (0 = flat)
+    # (D,) energy of the pair's track pairs found by appearance alone, when its unchecked ones
+    # were checked (PairLandscape.confirm_energy); None otherwise
+    confirm_energy: np.ndarray | None = None
+    confirm_offset_s: float | None = None  # that landscape's accepted minimum (None: none)
 
     @property
     def key(self) -> str:

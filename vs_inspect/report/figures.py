@@ -162,6 +162,8 @@ def _landscape_axes(ax, p: PairView) -> None:
         ax.set_yticks([])
         return
     ax.plot(p.offsets_s, p.energy, color="#3b4cc0" if p.accepted else "#7f7f7f", lw=1.2)
+    if p.confirm_energy is not None:
+        _confirm_curve(ax, p)
     if p.minima_offsets_s.size:
         ax.scatter(p.minima_offsets_s[1:], p.minima_energy[1:], s=28, facecolors="white",
                    edgecolors="#555555", zorder=3, label="other minima")
@@ -185,6 +187,20 @@ def _landscape_axes(ax, p: PairView) -> None:
             va="bottom", ha="left", bbox=dict(boxstyle="round,pad=0.25", fc="white", ec=col, alpha=0.9))
     ax.margins(x=0.01)
     ax.grid(True, alpha=0.3)
+
+
+def _confirm_curve(ax, p: PairView) -> None:
+    """The energy of the pair's appearance-matched track pairs alone (its unchecked ones left
+    out), dashed, drawn over the pair's energy range (its robust scale differs), and its minimum."""
+    e, full = p.confirm_energy, p.energy[np.isfinite(p.energy)]
+    ok = np.isfinite(e)
+    if not ok.any() or not len(full):
+        return
+    span = float(np.ptp(e[ok]))
+    shown = full.min() + (e - e[ok].min()) / (span if span > 0 else 1.0) * float(np.ptp(full))
+    ax.plot(p.offsets_s, shown, color="#555555", lw=1.0, ls="--", label="appearance pairs alone (rescaled)")
+    if p.confirm_offset_s is not None:
+        ax.axvline(p.confirm_offset_s, color="#555555", lw=1.0, ls=":")
 
 
 def _wrap(text: str, width: int) -> str:
@@ -222,6 +238,9 @@ def landscapes(data: ReportData, path: Path, dpi: float = DPI, formats: tuple[st
                           markeredgecolor="k", markersize=10, label="Δ of the global solve"))
     if data.gt_offsets_s:
         handles.append(Line2D([], [], color=TRUTH, ls=(0, (4, 3)), label="true Δ"))
+    if any(p.confirm_energy is not None for p in data.pairs):
+        handles.append(Line2D([], [], color="#555555", lw=1.0, ls="--",
+                              label="appearance pairs alone"))
     # as many legend entries per row as the figure's width holds (about 190 px each)
     ncol = max(1, min(len(handles), _size_px("landscapes", data)[0] // 190))
     fig.legend(handles=handles, loc="outside upper center", ncol=ncol, frameon=False)
