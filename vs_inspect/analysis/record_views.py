@@ -98,6 +98,18 @@ def record_mask(instances: np.ndarray, options: RecordOptions) -> np.ndarray:
     return m
 
 
+def over_range(values: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """values (D,) mapped linearly onto the finite range of reference, so that two energies of
+    different robust scales share one plot (NaN kept); unchanged when either has no finite value."""
+    v = np.asarray(values, dtype=np.float64)
+    ok, ref = np.isfinite(v), np.asarray(reference, dtype=np.float64)
+    ref = ref[np.isfinite(ref)]
+    if not ok.any() or not len(ref):
+        return v
+    span = float(np.ptp(v[ok]))
+    return ref.min() + (v - v[ok].min()) / (span if span > 0 else 1.0) * float(np.ptp(ref))
+
+
 def sweep_offsets(land: PairLandscape, max_offsets: int) -> np.ndarray:
     """(D,) candidate offsets of the pair's epipolar view: all when max_offsets < 0 or enough,
     else an even spread, the best minima and a dense run around the chosen Δ (plus the chosen Δ)."""

@@ -126,7 +126,7 @@ def _confirm_without_unchecked(a: PairInput, b: PairInput, tp: TrackPairs, cfg: 
     raw_alone, _, _, own, own_best, _, _ = _decided_landscape(a, b, alone, cfg, decision_cfg, offsets)
     shown = (raw_alone.energy, own_best if own.accepted else float("nan"))
     tol_s = decision_cfg.unchecked_agree_frames * max(a.video.frame_interval_s, b.video.frame_interval_s)
-    head = (f"two cameras, no third to check: {int(tp.unchecked.sum())} of the {len(tp.index)} track pairs "
+    head = (f"no third camera to check: {int(tp.unchecked.sum())} of the {len(tp.index)} track pairs "
             f"were chosen by an epipolar vote at an offset no triangle checked, and the "
             f"{len(alone.index)} found by appearance alone ")
     if not own.accepted:

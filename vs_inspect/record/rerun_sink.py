@@ -800,13 +800,9 @@ class RerunSink(Sink):
         out), beside the full one: where its minimum lies is what confirmed or refused the pair.
         Drawn over the full landscape's range (its own robust scale differs, often tenfold), so
         the two shapes compare; result.json keeps its values."""
-        e = np.asarray(land.confirm_energy, dtype=np.float64)
+        from ..analysis.record_views import over_range  # not at import: record_views imports record
+        e = over_range(land.confirm_energy, land.energy)
         ok = np.isfinite(e)
-        full = np.asarray(land.energy, dtype=np.float64)
-        full = full[np.isfinite(full)]
-        if ok.any() and len(full):
-            lo, span = float(e[ok].min()), float(np.ptp(e[ok]))
-            e = full.min() + (e - lo) / (span if span > 0 else 1.0) * float(np.ptp(full))
         self.rec.log(f"{base}/appearance_only", rr.SeriesLines(colors=[APPEARANCE_ONLY], widths=[1.0],
                                                                names=["appearance pairs alone (rescaled)"]),
                      static=True)

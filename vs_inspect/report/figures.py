@@ -192,13 +192,10 @@ def _landscape_axes(ax, p: PairView) -> None:
 def _confirm_curve(ax, p: PairView) -> None:
     """The energy of the pair's appearance-matched track pairs alone (its unchecked ones left
     out), dashed, drawn over the pair's energy range (its robust scale differs), and its minimum."""
-    e, full = p.confirm_energy, p.energy[np.isfinite(p.energy)]
-    ok = np.isfinite(e)
-    if not ok.any() or not len(full):
+    from ..analysis.record_views import over_range
+    if not np.isfinite(p.confirm_energy).any():
         return
-    span = float(np.ptp(e[ok]))
-    shown = full.min() + (e - e[ok].min()) / (span if span > 0 else 1.0) * float(np.ptp(full))
-    ax.plot(p.offsets_s, shown, color="#555555", lw=1.0, ls="--", label="appearance pairs alone (rescaled)")
+    ax.plot(p.offsets_s, over_range(p.confirm_energy, p.energy), color="#555555", lw=1.0, ls="--", label="appearance pairs alone (rescaled)")
     if p.confirm_offset_s is not None:
         ax.axvline(p.confirm_offset_s, color="#555555", lw=1.0, ls=":")
 
