@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..analysis.record_views import over_range
 from ..analysis.trajectories import run_trajectories
 from ..errors import InputError
 from ..geometry.epipolar import (epipolar_lines, epipolar_residual,
@@ -53,7 +54,7 @@ def pair_views(result: RunResult, gt: dict[str, float] | None) -> tuple[PairView
             bool(p.decision.accepted), p.decision.reason, _opt(p.best_offset_s),
             _opt(p.uncertainty_s), solved, true, int(p.num_track_pairs),
             float(p.decision.contrast) if math.isfinite(p.decision.contrast) else 0.0,
-            None if p.confirm_energy is None else np.asarray(p.confirm_energy, dtype=np.float64),
+            None if p.confirm_energy is None else over_range(p.confirm_energy, energy),
             _opt(p.confirm_offset_s)))
     return tuple(out)
 

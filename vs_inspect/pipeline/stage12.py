@@ -10,6 +10,7 @@ import dataclasses
 import logging
 import math
 import time
+from typing import NamedTuple
 
 import numpy as np
 
@@ -21,7 +22,8 @@ from ..types import (CameraTrack, CueBundle, PairDecision, PairLandscape, SolveI
                      TrackPairs)
 from ..sync.config import DriftConfig, SolveConfig, SyncConfig
 from ..sync.decision import check_inliers, check_track_pairs_at_best, decide
-from ..sync.landscape import PairInput, compute_landscape, curvature_uncertainty, refine_minimum
+from ..sync.landscape import (PairEnergy, PairInput, RawLandscape, compute_landscape, curvature_uncertainty,
+                              refine_minimum)
 from ..sync.pairs import select_pairs
 from ..sync.drift import PairTiming, solve_offsets_drift
 from ..sync.posefree import PoseFreeConfig, PoseFreePair, estimate_pair
@@ -59,11 +61,12 @@ def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig,
         decision = PairDecision(False, "no cross-view track pairs (no matched motion, or Stage 0 kept none)",
                                 0.0, 0.0, 0, 0, False)
     land = PairLandscape(a, b, raw.offsets_s, raw.energy, raw.support, minima, best, best_e, sigma,
-                         len(tp.index), decision, cfg.landscape.residual, raw.robust_scale)
+                         len(tp.index), decision, cfg.landscape.residual, raw.robust_scale,
+                         confirm_energy=None if confirm is None else confirm.raw.energy,
+                         confirm_offset_s=confirm.best_s if confirm is not None and confirm.decision.accepted
+                         else float("nan"))
     if pose_free_pair:
         land = dataclasses.replace(land, rate=rate0, pose_free=True)
-    if confirm is not None:
-        land = dataclasses.replace(land, confirm_energy=confirm[0], confirm_offset_s=confirm[1])
     if cfg.drift.enabled and math.isfinite(best):
         # b unscaled: the grid starts from (best, rate0) in the pair's own clocks
         side_b = dataclasses.replace(side[b], video=bundle.video(b))
@@ -89,10 +92,22 @@ def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig,
     return land, pe
 
 
+class _Decided(NamedTuple):
+    """One set of track pairs' landscape, the decision on it and its refined minimum."""
+
+    raw: RawLandscape
+    energy_fn: PairEnergy
+    minima: np.ndarray  # (M,) int, indices of significant minima, best first
+    decision: PairDecision
+    best_s: float  # refined best Δ_ab, s (NaN: no minimum)
+    best_energy: float
+    sigma_s: float  # its 1-sigma from the curvature
+
+
 def _decided_landscape(a: PairInput, b: PairInput, tp: TrackPairs, cfg: SyncConfig, decision_cfg,
-                       offsets: np.ndarray | None):
-    """(raw, PairEnergy, minima, decision, best offset_s, its energy, its 1-sigma) of one set of
-    track pairs: the landscape, the decision on it and the checks at its refined minimum."""
+                       offsets: np.ndarray | None) -> _Decided:
+    """The landscape of one set of track pairs, the decision on it and the checks at its refined
+    minimum."""
     raw, pe = compute_landscape(a, b, tp, cfg.landscape, offsets)
     decision, minima = decide(raw.energy, raw.support, raw.offsets_s, len(tp.index), decision_cfg)
     best, best_e, sigma = float("nan"), float("nan"), float("nan")
@@ -109,22 +124,22 @@ def _decided_landscape(a: PairInput, b: PairInput, tp: TrackPairs, cfg: SyncConf
         inliers = float(np.mean(np.sqrt(r) < tau_px)) if r.size else float("nan")
         decision = check_inliers(decision, inliers, tau_px, decision_cfg)
         decision = check_track_pairs_at_best(decision, seen, best, decision_cfg)
-    return raw, pe, minima, decision, best, best_e, sigma
+    return _Decided(raw, pe, minima, decision, best, best_e, sigma)
 
 
 def _confirm_without_unchecked(a: PairInput, b: PairInput, tp: TrackPairs, cfg: SyncConfig, decision_cfg,
                                offsets: np.ndarray | None, decision: PairDecision, best: float
-                               ) -> tuple[PairDecision, tuple[np.ndarray, float]]:
-    """(decision, (the other track pairs' energy (D,), their accepted minimum in s or NaN)): the
-    accepted decision, or a rejection when the pair's other track pairs alone (found by
+                               ) -> tuple[PairDecision, _Decided]:
+    """(decision, the other track pairs' own landscape and decision): the accepted decision, or
+    a rejection when the pair's other track pairs alone (found by
     appearance, without assuming an offset) give no accepted minimum within
     unchecked_agree_frames of the coarser video's frames of best: the unchecked rows were chosen
     by an epipolar vote at an offset no third camera checked, and two views cannot tell a wrong
     vote peak from a right one (a moving body's two sides fit a shifted offset)."""
     keep = ~tp.unchecked
     alone = TrackPairs(tp.a, tp.b, tp.index[keep], None if tp.weight is None else tp.weight[keep])
-    raw_alone, _, _, own, own_best, _, _ = _decided_landscape(a, b, alone, cfg, decision_cfg, offsets)
-    shown = (raw_alone.energy, own_best if own.accepted else float("nan"))
+    confirm = _decided_landscape(a, b, alone, cfg, decision_cfg, offsets)
+    own, own_best = confirm.decision, confirm.best_s
     tol_s = decision_cfg.unchecked_agree_frames * max(a.video.frame_interval_s, b.video.frame_interval_s)
     head = (f"no third camera to check: {int(tp.unchecked.sum())} of the {len(tp.index)} track pairs "
             f"were chosen by an epipolar vote at an offset no triangle checked, and the "
@@ -136,8 +151,8 @@ def _confirm_without_unchecked(a: PairInput, b: PairInput, tp: TrackPairs, cfg: 
                       f"{decision_cfg.unchecked_agree_frames:g} frames, {tol_s * 1000:.0f} ms, apart)")
     else:
         return dataclasses.replace(decision, reason=decision.reason + f"; confirmed by the {len(alone.index)} "
-                                   f"track pairs found by appearance alone ({own_best:+.3f} s)"), shown
-    return dataclasses.replace(decision, accepted=False, reason=why), shown
+                                   f"track pairs found by appearance alone ({own_best:+.3f} s)"), confirm
+    return dataclasses.replace(decision, accepted=False, reason=why), confirm
 
 
 MIN_POSE_FREE_INLIERS = 0.5

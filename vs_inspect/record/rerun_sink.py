@@ -42,6 +42,7 @@ from ..io.recording import (APPLICATION_ID, CUES_THREE_VIEW, CUES_TRANSFER, GUID
                             solve_weight_path, three_view_path, trajectory_path, transfer_path, video_asset_path, video_image_path,
                             video_mask_path, video_path, video_still_path,
                             video_tracks_path)
+from ..analysis.record_views import over_range
 from ..io.result import run_result_to_dict
 from ..types import CameraTrack, CueBundle, PairLandscape, RunResult, SyncResult, VideoInfo
 from .blueprint import MAX_PAIR_CONTAINERS, blueprint, pair_order
@@ -58,7 +59,7 @@ ACCEPTED, REJECTED = palette.ACCEPTED, palette.REJECTED
 GREY = (150, 150, 150)  # unknown, no data
 MINIMA = (86, 180, 233)  # sky blue
 TRUTH = (240, 228, 66)  # yellow
-APPEARANCE_ONLY = (160, 160, 160)  # grey: a pair's landscape without its unchecked track pairs
+APPEARANCE_ONLY = GREY  # a pair's landscape without its unchecked track pairs
 PALETTE = np.array(palette.CATEGORY, dtype=np.uint8)
 # point-to-line distance in the epipolar views: blue (far) through grey to yellow (on the line)
 RAMP = np.array([(70, 90, 210), (150, 150, 160), (253, 234, 69)], dtype=float)  # visible on black
@@ -800,7 +801,6 @@ class RerunSink(Sink):
         out), beside the full one: where its minimum lies is what confirmed or refused the pair.
         Drawn over the full landscape's range (its own robust scale differs, often tenfold), so
         the two shapes compare; result.json keeps its values."""
-        from ..analysis.record_views import over_range  # not at import: record_views imports record
         e = over_range(land.confirm_energy, land.energy)
         ok = np.isfinite(e)
         self.rec.log(f"{base}/appearance_only", rr.SeriesLines(colors=[APPEARANCE_ONLY], widths=[1.0],

@@ -82,7 +82,8 @@ class PairView:
     num_track_pairs: int
     contrast: float  # 1 - E_best / E_median (0 = flat)
     # (D,) energy of the pair's track pairs found by appearance alone, when its unchecked ones
-    # were checked (PairLandscape.confirm_energy); None otherwise
+    # were checked (PairLandscape.confirm_energy), mapped onto energy's range for drawing (its
+    # robust scale differs); None otherwise
     confirm_energy: np.ndarray | None = None
     confirm_offset_s: float | None = None  # that landscape's accepted minimum (None: none)
 

@@ -45,6 +45,7 @@ ACCEPT = palette.hex_of(palette.ACCEPTED)
 REJECT = palette.hex_of(palette.REJECTED)
 TRUTH = "#222222"
 SOLVED = "#CC79A7"  # Okabe-Ito reddish purple: Δ implied by the global solve
+APPEARANCE_ONLY = "#555555"  # a pair's landscape without its unchecked track pairs
 ACCEPT_BG = palette.hex_of(palette.tint(palette.ACCEPTED, 0.1))
 REJECT_BG = palette.hex_of(palette.tint(palette.REJECTED, 0.1))
 plt.rcParams.update({"font.size": 11, "axes.titlesize": 11, "axes.labelsize": 10,
@@ -191,13 +192,13 @@ def _landscape_axes(ax, p: PairView) -> None:
 
 def _confirm_curve(ax, p: PairView) -> None:
     """The energy of the pair's appearance-matched track pairs alone (its unchecked ones left
-    out), dashed, drawn over the pair's energy range (its robust scale differs), and its minimum."""
-    from ..analysis.record_views import over_range
+    out), dashed (already drawn over the pair's energy range), and its minimum, dotted."""
     if not np.isfinite(p.confirm_energy).any():
         return
-    ax.plot(p.offsets_s, over_range(p.confirm_energy, p.energy), color="#555555", lw=1.0, ls="--", label="appearance pairs alone (rescaled)")
+    ax.plot(p.offsets_s, p.confirm_energy, color=APPEARANCE_ONLY, lw=1.0, ls="--",
+            label="appearance pairs alone (rescaled)")
     if p.confirm_offset_s is not None:
-        ax.axvline(p.confirm_offset_s, color="#555555", lw=1.0, ls=":")
+        ax.axvline(p.confirm_offset_s, color=APPEARANCE_ONLY, lw=1.0, ls=":")
 
 
 def _wrap(text: str, width: int) -> str:
@@ -236,8 +237,7 @@ def landscapes(data: ReportData, path: Path, dpi: float = DPI, formats: tuple[st
     if data.gt_offsets_s:
         handles.append(Line2D([], [], color=TRUTH, ls=(0, (4, 3)), label="true Δ"))
     if any(p.confirm_energy is not None for p in data.pairs):
-        handles.append(Line2D([], [], color="#555555", lw=1.0, ls="--",
-                              label="appearance pairs alone"))
+        handles.append(Line2D([], [], color=APPEARANCE_ONLY, lw=1.0, ls="--", label="appearance pairs alone"))
     # as many legend entries per row as the figure's width holds (about 190 px each)
     ncol = max(1, min(len(handles), _size_px("landscapes", data)[0] // 190))
     fig.legend(handles=handles, loc="outside upper center", ncol=ncol, frameon=False)
