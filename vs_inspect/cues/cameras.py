@@ -101,7 +101,8 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
                      sizes: dict[str, tuple[int, int]], num_frames: dict[str, int],
                      moving: dict[str, bool], cfg: CameraConfig = CameraConfig(),
                      workdir: str | None = None, seed: int = 0,
-                     frame_features: dict | None = None, frame_images: dict | None = None) -> CameraEstimate:
+                     frame_features: dict | None = None, frame_images: dict | None = None,
+                     progress: bool = False) -> CameraEstimate:
     """One pycolmap reconstruction of every video's frames.
 
     frames_by_video: name -> (frame indices (F,), BGR images at SfM resolution, static masks
@@ -112,22 +113,22 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
     images; the estimate with more videos wins). frame_features: name -> registration.FrameFeatures
     of a moving video's other frames, each registered against the SIFT reconstruction
     (registration.register_frames) instead of slerped between the SfM frames. frame_images:
-    name -> a function giving a moving video's other frames at SfM resolution, (frame index,
-    BGR image, static mask or None) each, for a learned reconstruction to register them with its
-    own features.
+    name -> (a function giving a moving video's other frames at SfM resolution, (frame index,
+    BGR image, static mask or None) each, and their number), for a learned reconstruction to
+    register them with its own features. progress: progress bars while frames are registered.
     """
     if why := camera_features_unavailable(cfg.features):
         raise ValueError(f"camera features {cfg.features!r}: {why}")
     first = cfg.features if cfg.features in LEARNED_FEATURES else "sift"
     est = _reconstruct(first, frames_by_video, sizes, num_frames, moving, cfg, workdir, seed,
-                       frame_features, frame_images)
+                       frame_features, frame_images, progress)
     if cfg.features == "auto" and est.unregistered and xfeat_available():
         if est.num_images > cfg.auto_xfeat_max_images:
             log.info("SIFT left %d video(s) out; XFeat not tried on %d images (more than %d)",
                      len(est.unregistered), est.num_images, cfg.auto_xfeat_max_images)
             return est
         other = _reconstruct("xfeat", frames_by_video, sizes, num_frames, moving, cfg, workdir, seed,
-                             frame_images=frame_images)
+                             frame_images=frame_images, progress=progress)
         log.info("SIFT registered %d of %d videos, XFeat %d", len(est.cameras), len(frames_by_video),
                  len(other.cameras))
         if len(other.cameras) > len(est.cameras):
@@ -357,7 +358,7 @@ def _log_into(pycolmap, folder: Path) -> None:
 
 def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg: CameraConfig,
                  workdir: str | None, seed: int, frame_features: dict | None = None,
-                 frame_images: dict | None = None) -> CameraEstimate:
+                 frame_images: dict | None = None, progress: bool = False) -> CameraEstimate:
     pycolmap = import_pycolmap()
 
     n_images = sum(len(v[0]) for v in frames_by_video.values())
@@ -449,9 +450,10 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
             if moving[name] and cfg.register_every > 0:
                 # the other frames registered on their own, with features of the database's kind:
                 # replaces the slerp where it succeeds
-                reg = _registration_inputs(rec, db, name, learned, s, frame_features, frame_images)
+                reg = _registration_inputs(rec, db, name, learned, s, frame_features, frame_images, progress)
                 if reg is not None:
-                    fk, poses, reg_info = _register_others(rec, name, *reg, cam, s, fk, poses, cfg, seed)
+                    fk, poses, reg_info = _register_others(rec, name, *reg, cam, s, fk, poses, cfg, seed,
+                                                           progress)
             if moving[name]:
                 T_all = _slerp_poses(fk, poses, num_frames[name])
                 valid = np.zeros(num_frames[name], bool)
@@ -468,11 +470,12 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
 
 
 def _registration_inputs(rec, database: Path, name: str, learned, sfm_scale: float,
-                         frame_features: dict | None, frame_images: dict | None):
+                         frame_features: dict | None, frame_images: dict | None, progress: bool = False):
     """(keyframes, frame features, match) to register a moving video's frames against rec with,
     or None when its frames are not available: SIFT's (frame_features, computed where the video
     was decoded; the database's descriptors) or, for a learned database (learned: (matcher, image
-    id -> descriptors)), the matcher's own features on frame_images."""
+    id -> descriptors)), the matcher's own features on frame_images (name -> (a function giving
+    the frames, their number))."""
     from .registration import (cosine_matches, keyframes_of, learned_frame_features, ratio_matches,
                                sift_descriptors)
 
@@ -484,12 +487,14 @@ def _registration_inputs(rec, database: Path, name: str, learned, sfm_scale: flo
     if not frame_images or name not in frame_images:
         return None
     matcher, descriptors = learned
-    feats = learned_frame_features(frame_images[name](), matcher, sfm_scale)
+    images, total = frame_images[name]
+    label = f"{name}: features to register" if progress else None
+    feats = learned_frame_features(images(), matcher, sfm_scale, label, total)
     return keyframes_of(rec, name, descriptors.__getitem__), feats, cosine_matches()
 
 
 def _register_others(rec, name: str, keyframes, features, match, camera, sfm_scale: float, fk: np.ndarray,
-                     poses: np.ndarray, cfg: CameraConfig, seed: int):
+                     poses: np.ndarray, cfg: CameraConfig, seed: int, progress: bool = False):
     """A moving video's frames outside the reconstruction registered against it: (frames (R,),
     cam_from_world (R,4,4) of the SfM frames and the newly registered ones, report). A frame
     whose rotation is farther from its nearest SfM frame's than a head can turn (10° per frame
@@ -502,7 +507,8 @@ def _register_others(rec, name: str, keyframes, features, match, camera, sfm_sca
         return float(np.degrees((Rotation.from_matrix(Ra) * Rotation.from_matrix(Rb).inv()).magnitude()))
 
     reg = register_frames(features, keyframes, camera, sfm_scale, match=match,
-                          min_inliers=cfg.register_min_inliers, seed=seed)
+                          min_inliers=cfg.register_min_inliers, seed=seed,
+                          progress=f"{name}: registering frames" if progress else None)
     own = np.isin(reg.frames, fk)  # reconstructed frames registered from their neighbours: a check
     keep = ~own
     for r, k in enumerate(reg.frames):

@@ -348,7 +348,7 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
         points = colors = None
     else:
         cameras, tracks, points, colors = _estimate(vids, cfg, stats, all_pairs,
-                                                    {s.info.name: s for s in sources})
+                                                    {s.info.name: s for s in sources}, progress)
     for name, why in stats["dropped"].items():
         if name in vids:
             sink.stage_event("cameras", f"{name}: {why}")
@@ -811,7 +811,8 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
     return out, used
 
 
-def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: dict, sources: dict):
+def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: dict, sources: dict,
+              progress: bool = False):
     from .cameras import estimate_cameras, undistort_with_colmap
     from .pairwise import cameras_from_tracks, epipolar_fit_px
 
@@ -821,8 +822,10 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
                            {n: v.camera_motion == "moving" for n, v in vids.items()}, cfg.camera,
                            frame_features={n: v.frame_features for n, v in vids.items()
                                            if v.frame_features is not None},
-                           frame_images={n: functools.partial(_registration_images, sources[n], v, cfg)
-                                         for n, v in vids.items() if v.register_masks is not None})
+                           frame_images={n: (functools.partial(_registration_images, sources[n], v, cfg),
+                                             len(v.register_masks[0]))
+                                         for n, v in vids.items() if v.register_masks is not None},
+                           progress=progress)
     stats["sfm"] = {"features": est.features, "images": est.num_images, "registered_images": est.num_registered,
                     "registered_frames": {n: c.registered_frames.tolist() for n, c in est.cameras.items()},
                     "image_pairs": list(est.image_pairs)}

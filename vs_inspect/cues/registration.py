@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
+from tqdm import tqdm
 
 from ..signals import import_pycolmap
 
@@ -152,12 +153,15 @@ def cosine_matches(min_cossim: float = 0.82) -> Match:
 
 
 def learned_frame_features(images: Iterable[tuple[int, np.ndarray, np.ndarray | None]], matcher,
-                           sfm_scale: float) -> FrameFeatures:
+                           sfm_scale: float, progress: str | None = None, total: int | None = None
+                           ) -> FrameFeatures:
     """A learned model's features (matcher: learned.XFeatMatcher or LightGlueMatcher) on frames
     at SfM resolution: images yields (frame index, (H,W,3) uint8 BGR, (H,W) bool where features
-    may be found or None); sfm_scale: SfM px per full px, as for the reconstruction's images."""
+    may be found or None); sfm_scale: SfM px per full px, as for the reconstruction's images.
+    progress: a progress bar's label (None: no bar) over total frames."""
     frames, xys, descs = [], [], []
-    for k, img, mask in images:
+    for k, img, mask in tqdm(images, desc=progress, total=total, unit="frame", disable=progress is None,
+                             leave=False):
         f = matcher.features(img, mask)
         frames.append(int(k))
         xys.append((f.keypoints.astype(np.float64) + 0.5) / sfm_scale - 0.5)
@@ -167,13 +171,13 @@ def learned_frame_features(images: Iterable[tuple[int, np.ndarray, np.ndarray | 
 
 def register_frames(features: FrameFeatures, keyframes: list[Keyframe], camera, sfm_scale: float,
                     neighbours: int = 2, match: Match | None = None, min_inliers: int = 15,
-                    max_error_px: float = 4.0, seed: int = 0) -> FrameRegistration:
+                    max_error_px: float = 4.0, seed: int = 0, progress: str | None = None) -> FrameRegistration:
     """Each frame of `features` registered from its matches to the `neighbours` nearest keyframes
     (in frame index) of the same video: `match` (default: SIFT's ratio test, ratio_matches), one
     3D point per feature (its best match), then pycolmap's absolute pose on `camera`
     (pycolmap.Camera at SfM resolution, sfm_scale SfM px per full px). A frame with fewer than
     min_inliers inliers is not registered. A frame that is itself a keyframe is registered from
-    the other keyframes only.
+    the other keyframes only. progress: a progress bar's label (None: no bar).
     """
     pycolmap = import_pycolmap()
 
@@ -188,7 +192,8 @@ def register_frames(features: FrameFeatures, keyframes: list[Keyframe], camera, 
     ref.refine_focal_length = False
     ref.refine_extra_params = False
     frames, poses, inl = [], [], []
-    for k, xy, d in zip(features.frames, features.xy_full, features.desc):
+    for k, xy, d in tqdm(zip(features.frames, features.xy_full, features.desc), desc=progress,
+                         total=len(features.frames), unit="frame", disable=progress is None, leave=False):
         if len(d) < min_inliers:
             continue
         # never its own keyframe: a reconstructed frame is registered from its neighbours, as a
