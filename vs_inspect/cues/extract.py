@@ -81,13 +81,12 @@ def _static_mask(moving: np.ndarray, size: tuple[int, int]) -> np.ndarray:
     return cv2.dilate(m, np.ones((15, 15), np.uint8)) == 0
 
 
-def _learned_registration_possible(cfg) -> bool:
-    """Whether a learned reconstruction may register a moving video's frames: learned features
-    asked for, or auto with XFeat installed (its second try)."""
+def _learned_model_possible(cfg) -> bool:
+    """Whether camera estimation may build a learned reconstruction: learned features asked for,
+    or auto with XFeat installed (its second try)."""
     from .learned import xfeat_available
 
-    return cfg.camera.register_every > 0 and (
-        cfg.camera.features in LEARNED_FEATURES or (cfg.camera.features == "auto" and xfeat_available()))
+    return cfg.camera.features in LEARNED_FEATURES or (cfg.camera.features == "auto" and xfeat_available())
 
 
 def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) -> _VideoCues:
@@ -154,43 +153,39 @@ def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) 
             idx = idx[:1]
         sfm = (idx, imgs, masks)
         timings["sfm_frames_s"] = timings.get("sfm_frames_s", 0.0) + time.perf_counter() - t0
-    frame_feats = None
-    # SIFT's features of the frames to register, for a SIFT reconstruction (its database's kind)
-    if need_sfm and mode == "moving" and cfg.camera.register_every > 0 \
-            and cfg.camera.features not in LEARNED_FEATURES:
-        # the features to register each frame with (registration.py), found here where the
-        # frames are decoded
-        from .registration import frame_features
-
-        t0 = time.perf_counter()
-        frame_feats = frame_features(frames, instances if cfg.camera.mask_moving else None,
-                                     _register_indices(info, cfg), scale, cfg.camera.max_features)
-        timings["frame_features_s"] = timings.get("frame_features_s", 0.0) + time.perf_counter() - t0
-    register_masks = None
-    if need_sfm and mode == "moving" and _learned_registration_possible(cfg):
-        # a learned reconstruction registers these frames with its own features, on the frames
-        # decoded again at SfM resolution only if it is built (cameras.py); their moving regions
-        # are kept here, packed (a bit per pixel)
+    frame_feats = register_masks = None
+    if need_sfm and mode == "moving" and cfg.camera.register_every > 0:
         todo = _register_indices(info, cfg)
-        register_masks = (todo, np.packbits(instances[todo] > 0, axis=-1), int(instances.shape[2]))
+        if cfg.camera.features not in LEARNED_FEATURES:
+            # SIFT's features to register each frame with against a SIFT reconstruction (its
+            # database's kind; registration.py), found here where the frames are decoded
+            from .registration import frame_features
+
+            t0 = time.perf_counter()
+            frame_feats = frame_features(frames, instances if cfg.camera.mask_moving else None, todo, scale,
+                                         cfg.camera.max_features)
+            timings["frame_features_s"] = timings.get("frame_features_s", 0.0) + time.perf_counter() - t0
+        if _learned_model_possible(cfg):
+            # a learned reconstruction registers them with its own features, on the frames
+            # decoded again at SfM resolution only if it is built (cameras.py); their moving
+            # regions are kept here, packed (a bit per pixel)
+            register_masks = (todo, np.packbits(instances[todo] > 0, axis=-1), int(instances.shape[2]))
     return _VideoCues(info, str(src.path), scale, to_full_px(xy, scale), inst, feats, mode, bg,
                       moving_fraction, sfm, frame_feats, register_masks)
 
 
-def _registration_images(src, v: _VideoCues, cfg: CueConfig):
+def _registration_images(src, v: _VideoCues, cfg: CueConfig, chunk: int = 16):
     """(frame index, BGR image at SfM resolution, static mask or None) of v's frames to register
-    (v.register_masks), decoded again from src."""
-    from ..io.video import downscale, iter_frames
+    (v.register_masks), decoded again from src, chunk frames at a time (a long video's frames are
+    never all held at once)."""
+    from ..io.video import read_frames
 
     todo, packed, w = v.register_masks
-    at = {int(k): i for i, k in enumerate(todo)}
-    for k, full in iter_frames(src, max_side=None):
-        if k in at:
-            img = downscale(full, cfg.camera.max_side)
-            moving = np.unpackbits(packed[at[k]], axis=-1, count=w).astype(bool)
-            yield k, img, _static_mask(moving, (img.shape[1], img.shape[0])) if cfg.camera.mask_moving else None
-        if k >= todo[-1]:
-            break
+    for start in range(0, len(todo), chunk):
+        frames = todo[start:start + chunk]
+        for i, (k, img) in enumerate(zip(frames, read_frames(src, frames, cfg.camera.max_side)), start):
+            moving = np.unpackbits(packed[i], axis=-1, count=w).astype(bool)
+            yield int(k), img, _static_mask(moving, (img.shape[1], img.shape[0])) if cfg.camera.mask_moving else None
 
 
 @dataclass(frozen=True)
