@@ -143,3 +143,24 @@ def test_sift_database_matches_only_the_chosen_pairs(tmp_path):
     assert {("v0/000000.jpg", "v0/000001.jpg"), ("v0/000000.jpg", "v0/000002.jpg"),
             ("v1/000000.jpg", "v1/000003.jpg"), ("v0/000000.jpg", "v1/000003.jpg")} <= matched
     assert len(matched) == 8 * 7 // 2 - 1
+
+
+def test_lens_record_undistorts_as_the_tracks_were():
+    """result.json's cues.sfm.lens (plain data) with the camera's K undistorts image points exactly
+    as the estimated camera undistorted the tracks, and the lens is not a no-op."""
+    pycolmap = import_pycolmap()
+    from vs_inspect.cues.cameras import EstimatedCamera, lens_record, undistort_with_colmap, undistort_with_lens
+    from vs_inspect.types import CameraTrack
+    colmap_camera = pycolmap.Camera(model="SIMPLE_RADIAL", width=640, height=360, params=[300.0, 320.0, 180.0, 0.08])
+    K = np.array([[600.0, 0, 639.5], [0, 600.0, 359.5], [0, 0, 1]])
+    cam = EstimatedCamera(CameraTrack(K, np.eye(4)), colmap_camera, 0.5, np.arange(1))
+    xy = np.array([[[10.0, 20.0], [640.0, 360.0]], [[1200.0, 700.0], [np.nan, 5.0]]])
+    lens = lens_record(cam)
+    assert lens == {"model": "SIMPLE_RADIAL", "params": [300.0, 320.0, 180.0, 0.08], "width": 640,
+                    "height": 360, "sfm_scale": 0.5}
+    got = undistort_with_lens(lens, K, xy)
+    np.testing.assert_allclose(got, undistort_with_colmap(cam, xy), atol=1e-9)
+    assert np.isnan(got[1, 1]).all()
+    # k > 0 pushed a corner outwards: undone, it moves inwards by tens of px; the centre stays
+    assert np.linalg.norm(got[0, 0] - [639.5, 359.5]) < np.linalg.norm(xy[0, 0] - [639.5, 359.5]) - 10
+    np.testing.assert_allclose(got[0, 1], [640.0, 360.0], atol=1e-6)

@@ -135,6 +135,7 @@ def test_moving_cameras_of_an_xfeat_model_are_registered_frame_by_frame(shared_d
           "--no-progress", "--no-rrd"])
     sfm = json.loads((out / "result.json").read_text())["cues"]["sfm"]
     assert sfm["features"] == "xfeat"
+    assert set(sfm["lens"]) == set(sfm["registered_frames"])  # every camera's lens, for its other points
     regs = sfm.get("frame_registration", {})
     assert len(regs) >= 2, sfm["registered_frames"]
     for name, r in regs.items():

@@ -550,13 +550,33 @@ def _register_others(rec, name: str, keyframes, features, match, camera, sfm_sca
 
 def undistort_with_colmap(cam: EstimatedCamera, xy: np.ndarray) -> np.ndarray:
     """(...,2) full-resolution OpenCV px through the estimated lens -> pinhole px of cam.track.K."""
+    K = cam.track.K if cam.track.K.ndim == 2 else cam.track.K[0]
+    return _undistort(cam.colmap_camera, cam.sfm_scale, K, xy)
+
+
+def lens_record(cam: EstimatedCamera) -> dict:
+    """The estimated lens as plain data (result.json `cues.sfm.lens`): COLMAP's camera model and
+    parameters at SfM resolution and the SfM scale. With the camera's K (cameras/<video>.npz) it
+    undistorts any image point as the tracks were (undistort_with_lens)."""
+    cc = cam.colmap_camera
+    return {"model": cc.model.name, "params": [float(p) for p in cc.params], "width": int(cc.width),
+            "height": int(cc.height), "sfm_scale": float(cam.sfm_scale)}
+
+
+def undistort_with_lens(lens: dict, K: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """(...,2) full-resolution OpenCV px through a lens_record -> pinhole px of K (3,3)."""
+    pycolmap = import_pycolmap()
+    cc = pycolmap.Camera(model=lens["model"], width=lens["width"], height=lens["height"], params=lens["params"])
+    return _undistort(cc, lens["sfm_scale"], np.asarray(K, np.float64), xy)
+
+
+def _undistort(colmap_camera, sfm_scale: float, K: np.ndarray, xy: np.ndarray) -> np.ndarray:
     shp = xy.shape
     flat = xy.reshape(-1, 2).astype(np.float64)
     ok = np.isfinite(flat).all(1)
     out = np.full_like(flat, np.nan)
     if ok.any():
-        sfm = (flat[ok] + 0.5) * cam.sfm_scale  # COLMAP puts pixel centres at +0.5
-        norm = np.asarray(cam.colmap_camera.cam_from_img(sfm))
-        K = cam.track.K if cam.track.K.ndim == 2 else cam.track.K[0]
+        sfm = (flat[ok] + 0.5) * sfm_scale  # COLMAP puts pixel centres at +0.5
+        norm = np.asarray(colmap_camera.cam_from_img(sfm))
         out[ok] = norm[:, :2] * [K[0, 0], K[1, 1]] + [K[0, 2], K[1, 2]]
     return out.reshape(shp)

@@ -808,7 +808,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
 
 def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: dict, sources: dict,
               progress: bool = False):
-    from .cameras import estimate_cameras, undistort_with_colmap
+    from .cameras import estimate_cameras, lens_record, undistort_with_colmap
     from .pairwise import cameras_from_tracks, epipolar_fit_px
 
     frames = {n: v.sfm_frames for n, v in vids.items() if v.sfm_frames is not None}
@@ -823,7 +823,10 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
                            progress=progress)
     stats["sfm"] = {"features": est.features, "images": est.num_images, "registered_images": est.num_registered,
                     "registered_frames": {n: c.registered_frames.tolist() for n, c in est.cameras.items()},
-                    "image_pairs": list(est.image_pairs)}
+                    "image_pairs": list(est.image_pairs),
+                    # the tracks are undistorted with it; other image points (e.g. an evidence
+                    # script's detections) need it too
+                    "lens": {n: lens_record(c) for n, c in est.cameras.items()}}
     regs = {n: c.frame_registration for n, c in est.cameras.items() if c.frame_registration is not None}
     if regs:
         stats["sfm"]["frame_registration"] = regs
@@ -875,6 +878,7 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
             stats["sfm"]["fallback"]["fitted_offsets_s"] = {ref: 0.0} | {
                 n: details[n]["coarse_offset_s"] for n in cams if n != ref}
             stats["camera_source"] = "estimated from moving points (two-view geometry)"
+            stats["sfm"]["lens"] = {}  # these cameras are pinhole: the tracks stay as they were
             stats["dropped"].update(reasons)
             for n, reason in reasons.items():
                 log.warning("%s: %s", n, reason)

@@ -1,0 +1,62 @@
+"""A worn camera seen by another (geometry/sightings.py): the head camera a sees, against camera
+b's centre projected at b's time t − Δ, gives a landscape whose peak is the true offset."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from vs_inspect.geometry.epipolar import look_at, project
+from vs_inspect.geometry.sightings import best_sighting, sighting_landscape
+
+K = np.array([[500.0, 0, 320], [0, 500.0, 240], [0, 0, 1]])
+
+
+def _scene(true_offset_s: float, seed: int = 0):
+    """a: a slowly turning camera at the origin; b: a wearer walking to and fro 6 m in front of it
+    (10 fps each; b's clip starts true_offset_s after a's, DESIGN.md's convention)."""
+    rng = np.random.default_rng(seed)
+    ts_a = np.arange(80) / 10.0
+    ts_b = np.arange(90) / 10.0
+    pose_a = np.stack([look_at([0, 0, 1.6], [np.sin(0.05 * t), 6.0, 1.6]) for t in ts_a])
+
+    def centre_b(global_s):
+        return np.stack([1.5 * np.sin(0.9 * global_s), 6.0 + 0.5 * np.cos(0.4 * global_s),
+                         1.7 + 0.05 * np.sin(3 * global_s)], -1)
+    pose_b = np.stack([look_at(c, [0, 0, 1.6]) for c in centre_b(ts_b + true_offset_s)])
+    head = project(K, pose_a, centre_b(ts_a)) + rng.normal(0, 1.0, (len(ts_a), 2))
+    head[rng.random(len(ts_a)) < 0.3] = np.nan  # not detected
+    other = rng.random(len(ts_a)) < 0.15  # someone else detected
+    head[other] = rng.uniform([0, 0], [640, 480], (other.sum(), 2))
+    return ts_a, pose_a, ts_b, pose_b, head
+
+
+@pytest.mark.parametrize("true_offset_s", [-1.5, 0.0, 0.7])
+def test_the_sighting_landscape_peaks_at_the_true_offset(true_offset_s):
+    ts_a, pose_a, ts_b, pose_b, head = _scene(true_offset_s)
+    grid = np.arange(-3.0, 3.0 + 1e-9, 0.05)
+    land = sighting_landscape(head, ts_a, K, pose_a, np.ones(len(ts_a), bool), ts_b, pose_b,
+                              np.ones(len(ts_b), bool), grid, radius_px=10.0)
+    best, rival = best_sighting(land, exclude_s=0.3)
+    assert abs(land.offsets_s[best] - true_offset_s) <= 0.05 + 1e-9, land.offsets_s[best]
+    assert land.near[best] >= 0.6 * land.moments[best] and rival <= 0.5 * land.near[best], (land.near[best], rival)
+    assert land.median_px[best] < 3.0
+
+
+def test_invalid_poses_and_frames_outside_b_are_not_counted():
+    ts_a, pose_a, ts_b, pose_b, head = _scene(0.0)
+    valid_b = np.ones(len(ts_b), bool)
+    valid_b[:45] = False  # b has no pose in its first half
+    grid = np.array([0.0, 20.0])  # 20 s: b's clip ends long before
+    land = sighting_landscape(head, ts_a, K, pose_a, np.ones(len(ts_a), bool), ts_b, pose_b, valid_b, grid, 10.0)
+    detected = np.isfinite(head[:, 0])
+    assert land.moments[0] == detected[45:].sum() and land.moments[1] == 0 and np.isnan(land.median_px[1])
+
+
+def test_bad_shapes_are_named():
+    ts_a, pose_a, ts_b, pose_b, head = _scene(0.0)
+    with pytest.raises(ValueError, match=r"head_xy_a must be \(80,2\), got \(79, 2\)"):
+        sighting_landscape(head[:-1], ts_a, K, pose_a, np.ones(80, bool), ts_b, pose_b, np.ones(90, bool),
+                           np.zeros(1), 10.0)
+    with pytest.raises(ValueError, match="radius_px must be positive"):
+        sighting_landscape(head, ts_a, K, pose_a, np.ones(80, bool), ts_b, pose_b, np.ones(90, bool), np.zeros(1), 0)

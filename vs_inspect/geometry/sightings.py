@@ -1,0 +1,77 @@
+"""A worn camera seen by another camera: a timing cue from one point per frame.
+
+A head-worn camera (glasses, a head mount) sits between its wearer's eyes. When camera b's wearer
+is in camera a's view, the head that a sees at its local time t is where b's camera centre was at
+that same moment. With both cameras' poses in one world (one reconstruction), the distance
+between a's head detection and the projection of b's centre at b's local time t − Δ is a
+landscape in Δ = offset_b − offset_a (DESIGN.md's convention) whose minimum is the true offset.
+It needs no cross-view matching: the head is found in a alone, and b contributes its own poses.
+Pure geometry, no I/O; examples/worn_camera_sightings.py measures it on fencing1.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._shapes import check_shape
+from .epipolar import camera_centers, project
+from .timing import frame_brackets
+
+
+@dataclass(frozen=True)
+class SightingLandscape:
+    """Where camera a's head detections sit against camera b's projected centre, per candidate Δ."""
+
+    offsets_s: np.ndarray  # (D,) candidate Δ = offset_b − offset_a, s
+    moments: np.ndarray  # (D,) int, a's frames with a head, a pose, and b's centre (posed) in front of a
+    near: np.ndarray  # (D,) int, of those moments: head within radius_px of b's projected centre
+    median_px: np.ndarray  # (D,) median head-to-centre distance over the moments, px (NaN: none)
+    radius_px: float  # the radius of `near`, px
+
+
+def sighting_landscape(head_xy_a: np.ndarray, timestamps_a_s: np.ndarray, K_a: np.ndarray,
+                       cam_from_world_a: np.ndarray, valid_a: np.ndarray, timestamps_b_s: np.ndarray,
+                       cam_from_world_b: np.ndarray, valid_b: np.ndarray, offsets_s: np.ndarray,
+                       radius_px: float) -> SightingLandscape:
+    """Landscape of camera b's wearer seen by camera a.
+
+    head_xy_a: (T_a,2) undistorted px of the head a sees (NaN: none); timestamps_*_s: (T,) local
+    frame times, s; K_a: (3,3); cam_from_world_*: (T,4,4) per-frame poses in one world, valid_*:
+    (T,) bool; offsets_s: (D,) candidates Δ. b's centre is interpolated linearly between its frames.
+    """
+    T_a = len(check_shape("timestamps_a_s", np.asarray(timestamps_a_s, np.float64), (None,), batched=False))
+    head = check_shape("head_xy_a", np.asarray(head_xy_a, np.float64), (T_a, 2), batched=False)
+    pose_a = check_shape("cam_from_world_a", np.asarray(cam_from_world_a, np.float64), (T_a, 4, 4), batched=False)
+    ts_b = check_shape("timestamps_b_s", np.asarray(timestamps_b_s, np.float64), (None,), batched=False)
+    pose_b = check_shape("cam_from_world_b", np.asarray(cam_from_world_b, np.float64), (len(ts_b), 4, 4),
+                         batched=False)
+    valid_a = check_shape("valid_a", np.asarray(valid_a, bool), (T_a,), batched=False)
+    valid_b = check_shape("valid_b", np.asarray(valid_b, bool), (len(ts_b),), batched=False)
+    offsets = np.asarray(offsets_s, np.float64).reshape(-1)
+    if not radius_px > 0:
+        raise ValueError(f"radius_px must be positive, got {radius_px}")
+    centres_b = camera_centers(pose_b)  # (T_b,3)
+    k, w = frame_brackets(ts_b, np.asarray(timestamps_a_s, np.float64)[None, :] - offsets[:, None])  # (D,T_a)
+    inside = k >= 0
+    k0 = np.where(inside, k, 0)
+    posed = inside & valid_b[k0] & valid_b[np.minimum(k0 + 1, len(ts_b) - 1)]
+    centre = (1 - w)[..., None] * centres_b[k0] + w[..., None] * centres_b[np.minimum(k0 + 1, len(ts_b) - 1)]
+    seen = project(np.asarray(K_a, np.float64), pose_a[None], centre)  # (D,T_a,2), NaN behind a
+    dist = np.linalg.norm(seen - head[None], axis=-1)
+    use = posed & valid_a[None] & np.isfinite(dist)
+    moments = use.sum(1)
+    near = (use & (dist < radius_px)).sum(1)
+    with np.errstate(all="ignore"):
+        median = np.array([np.median(d[u]) if u.any() else np.nan for d, u in zip(dist, use)])
+    return SightingLandscape(offsets, moments.astype(int), near.astype(int), median, float(radius_px))
+
+
+def best_sighting(land: SightingLandscape, exclude_s: float) -> tuple[int, int]:
+    """(index of the candidate with the most heads near b's centre (ties: the smaller median),
+    the most near heads of any candidate farther than exclude_s from it): a peak and its rival."""
+    order = np.lexsort((np.nan_to_num(land.median_px, nan=np.inf), -land.near))
+    best = int(order[0])
+    far = np.abs(land.offsets_s - land.offsets_s[best]) > exclude_s
+    return best, int(land.near[far].max()) if far.any() else 0
