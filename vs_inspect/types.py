@@ -230,10 +230,20 @@ class CueBundle:
     gt_offsets_s: dict[str, float] | None = None  # true offsets when known (DESIGN.md convention)
     pose_free: frozenset[str] = frozenset()  # videos whose camera has K only (cam_from_world a placeholder)
     gt_drift_ppm: dict[str, float] | None = None  # true clock drift when known (gt.json drift_ppm)
+    # per video: (T,2) float64 undistorted px of the head a person detector found in each frame
+    # (NaN: none), the worn-camera sightings' cue (geometry/sightings.py); empty: not detected
+    heads: dict[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         names = [v.name for v in self.videos]
         object.__setattr__(self, "pose_free", frozenset(self.pose_free))
+        heads = {n: np.asarray(xy, dtype=np.float64) for n, xy in self.heads.items()}
+        object.__setattr__(self, "heads", heads)
+        for n, xy in heads.items():
+            if n not in names:
+                raise ValueError(f"heads name unknown video {n!r}")
+            T = next(v.num_frames for v in self.videos if v.name == n)
+            _require_shape(f"heads of {n!r}", xy, (T, 2))
         if not names:
             raise ValueError("bundle has no videos")
         if len(set(names)) != len(names):
@@ -421,6 +431,8 @@ class CueStats:
     geometric_joint: dict[str, Any] | None = None  # the joint vote (offsets, margins, cameras sure and used) and
     # its point-transfer checks of unsure cameras ("transfer": camera -> verdict) and of sure ones in
     # three views ("three_view": camera -> verdict), JSON values
+    heads: dict[str, Any] | None = None  # the person detector's run: frames with a head per video, or
+    # "skipped" with why (None: no camera moved, or turned off)
 
     def refused_in_three_views(self) -> list[str]:
         """The cameras Stage 0's three-view check refused (geometric_joint's "three_view"), by name."""

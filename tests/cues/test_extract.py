@@ -322,7 +322,7 @@ def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig()):
                                instance=np.zeros(0, np.int64)) for n in names}
     pairs = {(a, b): TrackPairs(a, b, np.zeros((0, 2), np.int64)) for a, b in zip(names, names[1:])}
     stats = {"dropped": {}, "camera_source": "estimated"}
-    cams, _, _, _ = _estimate(vids, config, stats, pairs, sources={})
+    cams, _, _, _, _ = _estimate(vids, config, stats, pairs, sources={})
     return cams, stats
 
 

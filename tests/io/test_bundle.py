@@ -53,6 +53,24 @@ def test_unchecked_track_pairs_round_trip_in_either_order(good_bundle, tmp_path)
     assert all(back.pairs[k].unchecked is None for k in back.pairs if k != key)
 
 
+def test_heads_round_trip_and_are_optional(good_bundle, tmp_path):
+    """A person detector's heads (the worn-camera sightings' cue) go through the files exactly;
+    a bundle without them has none, and one of a wrong length names its file."""
+    import dataclasses
+    _, scene = good_bundle
+    T = scene.bundle.video("cam1").num_frames
+    xy = np.full((T, 2), np.nan)
+    xy[::3] = np.arange(2 * len(xy[::3])).reshape(-1, 2) + 0.25
+    back = read_bundle(write_bundle(dataclasses.replace(scene.bundle, heads={"cam1": xy}), tmp_path / "b"))
+    assert list(back.heads) == ["cam1"] and np.array_equal(back.heads["cam1"], xy, equal_nan=True)
+    assert read_bundle(good_bundle[0]).heads == {}
+    bad = corrupt(tmp_path / "b", tmp_path / "bad", set_npz("heads/cam1.npz", xy=np.zeros((T - 1, 2))))
+    with pytest.raises(BundleError, match=r"heads/cam1.npz.*shape"):
+        read_bundle(bad)
+    with pytest.raises(ValueError, match="heads name unknown video 'zz'"):
+        dataclasses.replace(scene.bundle, heads={"zz": xy})
+
+
 def test_writer_refuses_to_overwrite_and_leaves_no_partial(good_bundle, tmp_path):
     path, scene = good_bundle
     with pytest.raises(FileExistsError):

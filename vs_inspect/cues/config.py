@@ -231,6 +231,11 @@ class CueConfig:
     """Per-video override of static/moving (name -> 'static' | 'moving')."""
     sink_frames: int = 8
     """Frames per video sent to the sink (video_frame and dynamic_mask hooks)."""
+    heads: bool = field(default=True, metadata={
+        "flag": "--no-heads", "negate": True,
+        "help": "do not look for people's heads when a camera moves (MediaPipe BlazePose, when installed: "
+                "the worn-camera sightings)"})
+    """When a camera moves, find the head of the most prominent person in every frame of every video (MediaPipe's BlazePose, whose weights ship in the mediapipe 0.10.14 wheel; cues/people.py), undistorted like the tracks: Stage 1 times a pair by the worn camera's wearer seen by the other camera (sync/sightings.py). Skipped, with the reason in result.json, when mediapipe is not installed."""
 
     def __post_init__(self) -> None:
         _check_numbers(self, positive=("max_side",))

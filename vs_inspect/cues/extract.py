@@ -228,11 +228,12 @@ def video_cues_task(task: tuple, src) -> VideoCuesOutcome:
     return VideoCuesOutcome(cues, None, tuple(collect.frames), tuple(collect.masks), timings)
 
 
-def _import_cameras(calibration: dict, vids: dict[str, _VideoCues]) -> tuple[dict, dict, dict]:
-    """(cameras, undistorted tracks, dropped) from an imported calibration."""
+def _import_cameras(calibration: dict, vids: dict[str, _VideoCues]) -> tuple[dict, dict, dict, dict]:
+    """(cameras, undistorted tracks, dropped, {video: undistort (...,2) full px like its tracks})
+    from an imported calibration."""
     from ..io.calibration import fit_to_video, to_camera_track, undistort_points
 
-    cams, tracks, dropped = {}, {}, {}
+    cams, tracks, dropped, undistort = {}, {}, {}, {}
     for name, v in vids.items():
         cal = calibration.get(name)
         if cal is None:
@@ -248,14 +249,19 @@ def _import_cameras(calibration: dict, vids: dict[str, _VideoCues]) -> tuple[dic
                              f"video has {v.info.num_frames} frames")
             continue
         cams[name] = to_camera_track(cal)
-        xy = v.xy_full
-        flat = xy.reshape(-1, 2)
-        ok = np.isfinite(flat).all(1)
-        und = np.full_like(flat, np.nan)
-        if ok.any():
-            und[ok] = undistort_points(cal, flat[ok])
-        tracks[name] = Tracks(und.reshape(xy.shape), v.instance)
-    return cams, tracks, dropped
+        undistort[name] = functools.partial(_undistort_finite, functools.partial(undistort_points, cal))
+        tracks[name] = Tracks(undistort[name](v.xy_full), v.instance)
+    return cams, tracks, dropped, undistort
+
+
+def _undistort_finite(undistort, xy: np.ndarray) -> np.ndarray:
+    """(...,2) px through undistort ((M,2) -> (M,2)), NaN rows kept NaN."""
+    flat = xy.reshape(-1, 2)
+    ok = np.isfinite(flat).all(1)
+    und = np.full_like(flat, np.nan, dtype=np.float64)
+    if ok.any():
+        und[ok] = undistort(flat[ok])
+    return und.reshape(xy.shape)
 
 
 def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueConfig(),
@@ -338,12 +344,12 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
     cameras: dict[str, CameraTrack] = {}
     tracks: dict[str, Tracks] = {}
     if calibration is not None:
-        cameras, tracks, dropped = _import_cameras(calibration, vids)
+        cameras, tracks, dropped, undistort = _import_cameras(calibration, vids)
         stats["dropped"].update(dropped)
         points = colors = None
     else:
-        cameras, tracks, points, colors = _estimate(vids, cfg, stats, all_pairs,
-                                                    {s.info.name: s for s in sources}, progress)
+        cameras, tracks, points, colors, undistort = _estimate(vids, cfg, stats, all_pairs,
+                                                               {s.info.name: s for s in sources}, progress)
     for name, why in stats["dropped"].items():
         if name in vids:
             sink.stage_event("cameras", f"{name}: {why}")
@@ -370,6 +376,11 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
                 log.warning("%s: %s", n, why)
             pairs = {k: v for k, v in pairs.items() if k[0] in cameras and k[1] in cameras}
         timings["geometric_pairs_s"] = time.perf_counter() - t0
+    heads = {}
+    if cfg.heads and any(c.is_moving for c in cameras.values()):
+        t0 = time.perf_counter()
+        heads = _heads(sources, vids, cameras, undistort, cfg, stats, sink, progress)
+        timings["heads_s"] = time.perf_counter() - t0
     stats["registered_cameras"] = len(cameras)
     if cameras:  # after the moving points' cameras were checked: a refused one is not drawn
         sink.cameras(cameras, points, colors)
@@ -385,10 +396,38 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
         raise NoUsableVideos(f"no video could be used: {reasons}", _cue_stats(stats),
                              {s.info.name: str(s.path) for s in sources})
     bundle = CueBundle(tuple(vids[n].info for n in usable), {n: cameras[n] for n in usable},
-                       {n: tracks[n] for n in usable}, pairs)
+                       {n: tracks[n] for n in usable}, pairs, heads={n: h for n, h in heads.items() if n in usable})
     sink.stage_event("cues", "cue extraction finished", tracks=stats["tracks"],
                      track_pairs=stats["track_pairs"], cameras=len(cameras))
     return bundle, _cue_stats(stats)
+
+
+def _heads(sources, vids: dict[str, _VideoCues], cameras: dict, undistort: dict, cfg: CueConfig, stats: dict,
+           sink: Sink, progress: bool) -> dict[str, np.ndarray]:
+    """{video: (T,2) undistorted full-resolution px of the head the person detector found in each
+    frame (NaN: none)}, for every video with a camera, decoded again at working resolution; {} with
+    the reason in stats["heads"] when the detector is not installed."""
+    from ..io.video import iter_frames
+    from .people import detect_landmarks, head_points, heads_unavailable
+
+    why = heads_unavailable()
+    if why:
+        stats["heads"] = {"skipped": why}
+        log.info("worn-camera sightings skipped: %s", why)
+        sink.stage_event("cues", f"worn-camera sightings skipped: {why}")
+        return {}
+    out, found = {}, {}
+    for src in tqdm([s for s in sources if s.info.name in cameras], desc="heads", unit="video",
+                    disable=not progress, leave=False):
+        n = src.info.name
+        frames = (img for _, img in iter_frames(src, max_side=cfg.max_side))
+        raw = to_full_px(head_points(detect_landmarks(frames)), vids[n].scale_xy)
+        out[n] = undistort[n](raw) if n in undistort else raw
+        found[n] = int(np.isfinite(out[n][:, 0]).sum())
+        sink.stage_event("cues", f"{n}: a person's head in {found[n]} of {len(raw)} frames", heads=found[n])
+    stats["heads"] = {"detector": "mediapipe BlazePose (pose_landmark_full)", "frames_with_a_head": found}
+    log.info("heads found: %s", ", ".join(f"{n} {k}" for n, k in found.items()))
+    return out
 
 
 def _cue_stats(stats: dict) -> CueStats:
@@ -396,7 +435,7 @@ def _cue_stats(stats: dict) -> CueStats:
     return CueStats(stats["camera_source"], stats["registered_cameras"], stats["tracks"],
                     stats["track_pairs"], {n: VideoCueStats(**v) for n, v in stats["videos"].items()},
                     stats["pairs"], stats["dropped"], stats["timings_s"], stats.get("geometric_peaks"),
-                    stats.get("sfm"), stats.get("geometric_joint"))
+                    stats.get("sfm"), stats.get("geometric_joint"), stats.get("heads"))
 
 
 def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
@@ -882,7 +921,8 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
             stats["dropped"].update(reasons)
             for n, reason in reasons.items():
                 log.warning("%s: %s", n, reason)
-            return cams, {n: Tracks(vids[n].xy_full, vids[n].instance) for n in cams}, None, None
+            # pinhole cameras: their points are not undistorted
+            return cams, {n: Tracks(vids[n].xy_full, vids[n].instance) for n in cams}, None, None, {}
         if len(est.cameras) < 2:  # neither worked: say why for both
             est = dataclasses.replace(est, unregistered={
                 n: (f"{sfm_why}; from the moving points: {reasons[n].removeprefix('camera could not be registered: ')}"
@@ -890,8 +930,9 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
     stats["dropped"].update(est.unregistered)
     for n, why in est.unregistered.items():
         log.warning("%s: %s", n, why)
-    cameras, tracks = {}, {}
+    cameras, tracks, undistort = {}, {}, {}
     for n, c in est.cameras.items():
         cameras[n] = c.track
-        tracks[n] = Tracks(undistort_with_colmap(c, vids[n].xy_full), vids[n].instance)
-    return cameras, tracks, est.points_world, est.colors
+        undistort[n] = functools.partial(undistort_with_colmap, c)
+        tracks[n] = Tracks(undistort[n](vids[n].xy_full), vids[n].instance)
+    return cameras, tracks, est.points_world, est.colors, undistort

@@ -303,6 +303,17 @@ def read_bundle(folder: str | os.PathLike) -> CueBundle:
         if others:
             log.warning("%s: ignoring files that are not .npz: %s", pair_dir, others)
 
+    heads: dict[str, np.ndarray] = {}
+    head_dir = root / "heads"  # optional: a person detector's heads (the worn-camera sightings)
+    if head_dir.is_dir():
+        by_name = {v.name: v for v in videos}
+        for hpath in sorted(head_dir.glob("*.npz")):
+            if hpath.stem not in by_name:
+                raise BundleError(hpath, f"file name must be <video>.npz with a known video {names}")
+            T = by_name[hpath.stem].num_frames
+            hdata = _load_npz(hpath, {"xy": ((T, 2),)}, budget, f" (video {hpath.stem!r} has num_frames={T} frames)")
+            heads[hpath.stem] = _require(hpath, hdata, "xy")
+
     gt, gt_drift = None, None
     gt_path = root / "gt.json"
     if gt_path.is_file():
@@ -311,7 +322,7 @@ def read_bundle(folder: str | os.PathLike) -> CueBundle:
     # optional per-video key (import-drone): only K is known, the pose is a placeholder
     pose_free = frozenset(str(e["name"]) for e in entries if e.get(POSE_FREE_KEY) is True)
     try:
-        return CueBundle(tuple(videos), cameras, tracks, pairs, gt, pose_free, gt_drift)
+        return CueBundle(tuple(videos), cameras, tracks, pairs, gt, pose_free, gt_drift, heads)
     except ValueError as exc:
         raise BundleError(root, str(exc)) from None
 
@@ -395,6 +406,10 @@ def write_bundle(bundle: CueBundle, folder: str | os.PathLike, overwrite: bool =
             if tp.unchecked is not None:
                 arrays["unchecked"] = tp.unchecked
             np.savez_compressed(tmp / "pairs" / f"{a}__{b}.npz", **arrays)
+        if bundle.heads:
+            (tmp / "heads").mkdir()
+            for name, xy in bundle.heads.items():
+                np.savez_compressed(tmp / "heads" / f"{name}.npz", xy=xy)
         if bundle.gt_offsets_s is not None:
             gt: dict = {"offsets_s": bundle.gt_offsets_s}
             if bundle.gt_drift_ppm is not None:

@@ -123,6 +123,8 @@ def cue_stats_to_dict(c: CueStats) -> dict[str, Any]:
         out["sfm"] = c.sfm
     if c.geometric_joint is not None:
         out["geometric_joint"] = c.geometric_joint
+    if c.heads is not None:
+        out["heads"] = c.heads
     return out
 
 
@@ -134,7 +136,7 @@ def cue_stats_from_dict(d: dict[str, Any], timings_s: dict[str, float] | None = 
                     int(d.get("tracks", 0)), int(d.get("track_pairs", 0)), videos,
                     dict(d.get("pairs") or {}), dict(d.get("dropped") or {}),
                     dict(timings_s or {}), d.get("geometric_peaks"), d.get("sfm"),
-                    d.get("geometric_joint"))
+                    d.get("geometric_joint"), d.get("heads"))
 
 
 def run_result_to_dict(r: RunResult) -> dict[str, Any]:

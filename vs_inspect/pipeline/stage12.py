@@ -28,6 +28,8 @@ from ..sync.pairs import select_pairs
 from ..sync.drift import PairTiming, solve_offsets_drift
 from ..sync.posefree import PoseFreeConfig, PoseFreePair, estimate_pair
 from ..sync.rate import fit_rate, rate_landscape, scaled_video
+from ..sync.sightings import RESIDUAL as SIGHTING
+from ..sync.sightings import sighting_pair
 from ..sync.solve import PairMeasurement, solve_offsets
 
 log = logging.getLogger(__name__)
@@ -301,20 +303,84 @@ def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | 
             sink.stage_event("landscapes", f"{a}__{b}: not evaluated: {land.reason}")
             continue
         lands.append(land)
-        log.info("%s__%s: %s Δ=%+.4f s (%s)", a, b, "accepted" if land.decision.accepted else
+    if cfg.sightings.enabled and bundle.heads:
+        lands = _with_sightings(bundle, lands, cfg, sink)
+    for land in lands:
+        log.info("%s__%s: %s Δ=%+.4f s (%s)", land.a, land.b, "accepted" if land.decision.accepted else
                  "rejected", land.best_offset_s, land.decision.reason)
         sink.pair_landscape(land, None if sink.options is None else
-                            pair_record_view(bundle, land, sink.options, sink.image_frames(a)))
+                            pair_record_view(bundle, land, sink.options, sink.image_frames(land.a)))
     timings["stage1_s"] = time.perf_counter() - t0
 
     t1 = time.perf_counter()
-    result = (solve_stage2_drift(bundle, lands, cfg.solve, cfg.drift) if cfg.drift.enabled else
-              solve_stage2(bundle, lands, cfg.solve))
+    chain = cfg.sightings.max_chain
+    result = (solve_stage2_drift(bundle, lands, cfg.solve, cfg.drift, chain) if cfg.drift.enabled else
+              solve_stage2(bundle, lands, cfg.solve, chain))
     timings["stage2_s"] = time.perf_counter() - t1
     result = dataclasses.replace(result, timings_s=timings)
     sink.sync_result(result, None if sink.options is None else
                      run_record_view(bundle, result, sink.options))
     return result
+
+
+def _with_sightings(bundle: CueBundle, lands: list[PairLandscape], cfg: SyncConfig,
+                    sink: Sink) -> list[PairLandscape]:
+    """lands, where a worn camera's sightings (sync/sightings.py) time a pair whose track pairs gave
+    no accepted offset: an accepted sighting landscape takes the pair's place (its reason says
+    what the track pairs gave); a rejected one is kept for a pair that had no landscape, and
+    otherwise adds its reason to the pair's."""
+    out = list(lands)
+    names = bundle.names
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            mine = [k for k, p in enumerate(out) if {p.a, p.b} == {a, b}]
+            if any(out[k].decision.accepted for k in mine):
+                continue
+            land = sighting_pair(bundle, a, b, cfg)
+            if land is None:
+                continue
+            if mine and land.decision.accepted:
+                land = dataclasses.replace(land, decision=dataclasses.replace(
+                    land.decision, reason=f"{land.decision.reason}; its track pairs: {out[mine[0]].decision.reason}"))
+                out[mine[0]] = land
+            elif not mine:
+                out.append(land)
+            else:  # both refused: the pair's reason gives both
+                old = out[mine[0]]
+                out[mine[0]] = dataclasses.replace(old, decision=dataclasses.replace(
+                    old.decision, reason=f"{old.decision.reason}; {land.decision.reason}"))
+    return out
+
+
+def _long_sighting_chains(lands, reference: str, max_chain: int) -> dict[str, str]:
+    """{video: why} for the videos whose offset would rest on more than max_chain worn-camera
+    sighting pairs in a chain from the reference."""
+    return {v: _with_its_pairs(lands, v, (
+        f"its offset would rest on {hops} worn-camera sightings in a chain from the reference (at most "
+        f"{max_chain}): each is about a frame off, all the same way (README), so their errors add up"))
+        for v, hops in _sighting_hops(lands, reference).items() if hops > max_chain}
+
+
+def _sighting_hops(lands, reference: str) -> dict[str, int]:
+    """{video: fewest worn-camera sighting pairs on a chain of accepted pairs from the reference}
+    (0-1 breadth-first search: a sighting pair counts 1, an epipolar pair 0)."""
+    from collections import deque
+
+    edges: dict[str, list[tuple[str, int]]] = {}
+    for p in lands:
+        if p.decision.accepted and math.isfinite(p.best_offset_s):
+            w = int(p.residual == SIGHTING)
+            edges.setdefault(p.a, []).append((p.b, w))
+            edges.setdefault(p.b, []).append((p.a, w))
+    hops = {reference: 0}
+    todo = deque([reference])
+    while todo:
+        v = todo.popleft()
+        for u, w in edges.get(v, []):
+            if hops[v] + w < hops.get(u, 1 << 30):
+                hops[u] = hops[v] + w
+                (todo.appendleft if w == 0 else todo.append)(u)
+    return hops
 
 
 def _with_its_pairs(lands, v: str, why: str) -> str:
@@ -326,7 +392,7 @@ def _with_its_pairs(lands, v: str, why: str) -> str:
 
 
 def solve_stage2(bundle: CueBundle, lands: list[PairLandscape] | tuple[PairLandscape, ...],
-                 solve: SolveConfig = SolveConfig()) -> SyncResult:
+                 solve: SolveConfig = SolveConfig(), max_sighting_chain: int = 1) -> SyncResult:
     """Stage 2: per-video offsets from the accepted pairs' landscapes (robust global solve).
 
     The benchmark's Stage 2 ablations (plain least squares, the filter off, fewer pairs) call this
@@ -350,6 +416,9 @@ def solve_stage2(bundle: CueBundle, lands: list[PairLandscape] | tuple[PairLands
 
     reasons = {v: _with_its_pairs(lands, v, why) for v, why in out.unresolved_reason.items()}
     offsets, unc = dict(out.offsets_s), dict(out.uncertainty_s)
+    for v, why in _long_sighting_chains(lands, reference, max_sighting_chain).items():
+        if offsets.get(v) is not None:
+            offsets[v], unc[v], reasons[v] = None, None, why
     if len(names) > 1 and not any(reference in (m.a, m.b) for m in meas):
         # its 0.0 is a definition, not a measurement: with no accepted pair it says nothing
         offsets[reference], unc[reference] = None, None
@@ -360,7 +429,8 @@ def solve_stage2(bundle: CueBundle, lands: list[PairLandscape] | tuple[PairLands
 
 
 def solve_stage2_drift(bundle: CueBundle, lands: list[PairLandscape] | tuple[PairLandscape, ...],
-                       solve: SolveConfig = SolveConfig(), drift: DriftConfig = DriftConfig()) -> SyncResult:
+                       solve: SolveConfig = SolveConfig(), drift: DriftConfig = DriftConfig(),
+                       max_sighting_chain: int = 1) -> SyncResult:
     """Stage 2 with clock drift: per-video offset_s and drift from the accepted pairs' (Δ at the
     pivot, rate) (sync.drift: robust, the reference fixed at offset 0 and drift 0)."""
     names = bundle.names
@@ -395,6 +465,10 @@ def solve_stage2_drift(bundle: CueBundle, lands: list[PairLandscape] | tuple[Pai
         else:
             reasons[v] = _with_its_pairs(lands, v, "no chain of accepted pairs links it to the reference "
                                          + reference)
+    for v, why in _long_sighting_chains(lands, reference, max_sighting_chain).items():
+        if offsets.get(v) is not None:
+            offsets[v] = unc[v] = drift[v] = drift_std[v] = None
+            reasons[v] = why
     if len(names) > 1 and not timings:
         offsets[reference] = unc[reference] = drift[reference] = drift_std[reference] = None
         reasons[reference] = "the reference, but no accepted pair links it to another video"

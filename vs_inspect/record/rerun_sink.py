@@ -1038,7 +1038,9 @@ one.{capped}
 
 - *landscape*: the energy E(Δ) of the pair, low where the epipolar constraint holds. The diamond is
   the chosen Δ, circles the significant minima, a cross the true Δ when known. A rejected pair usually shows no clear single
-  minimum, or its minimum sits at the edge of the search range.
+  minimum, or its minimum sits at the edge of the search range. A pair timed by a worn camera's
+  wearer seen in the other video (its decision says "worn camera sightings") shows 1 − the share
+  of heads on the worn camera's centre instead, 0 at the peak; it has no epipolar view.
 - *epipolar*: one frame of a with the epipolar lines of b's matched points at the cursor's Δ
   (lines in the colour of their moving instance). Points are a's matched points: **yellow** when
   their line passes through them, **blue** when far (scaled to the median distance of this

@@ -163,6 +163,29 @@ class PoseFreeSyncConfig:
 
 
 @dataclass(frozen=True)
+class SightingConfig:
+    enabled: bool = field(default=True, metadata={
+        "flag": "--no-sightings", "negate": True,
+        "help": "do not time pairs with a worn camera by its wearer seen by the other camera "
+                "(the bundle's heads; README, \"A worn camera seen by another\")"})
+    """Time a pair whose track pairs gave no accepted offset by a moving camera's wearer seen in the other camera (the bundle's heads: sync/sightings.py)."""
+    radius_fraction: float = 0.015
+    """A head counts as on the worn camera's centre within this fraction of the viewer's image diagonal (10.9 px at 512x512)."""
+    min_sightings: int = 8
+    """The peak needs at least this many heads on the centre (both directions of the pair together)."""
+    max_rival_ratio: float = 0.34
+    """Rejected when an offset farther than rival_frames from the peak has more than this fraction of its heads."""
+    rival_frames: float = 3.0
+    """Frames of the coarser video beyond which another offset is a rival of the peak."""
+    max_chain: int = 1
+    """A video's offset may rest on at most this many sighting pairs in a chain from the reference (through accepted pairs; epipolar ones do not count): on fencing1 each was 0.75-1.5 frames off, all the same way, so two in a chain put a camera 2.5 frames off (README)."""
+
+    def __post_init__(self) -> None:
+        check_fields(self, nonnegative=("max_chain",), positive=("radius_fraction", "min_sightings", "rival_frames"),
+                     fraction=("max_rival_ratio",))
+
+
+@dataclass(frozen=True)
 class SyncConfig:
     landscape: LandscapeConfig = LandscapeConfig()
     decision: DecisionConfig = DecisionConfig()
@@ -170,4 +193,5 @@ class SyncConfig:
     pairs: PairSelection = PairSelection()
     drift: DriftConfig = DriftConfig()
     pose_free: PoseFreeSyncConfig = PoseFreeSyncConfig()
+    sightings: SightingConfig = SightingConfig()
 

@@ -1,0 +1,106 @@
+"""Stage 1 for a pair with a worn camera: its wearer seen by the other camera.
+
+When camera b moves (worn on a head) and camera a's person detector found a head in its frames
+(CueBundle.heads), the heads that sit on b's camera centre projected at b's time t − Δ count for
+Δ (geometry/sightings.py); both directions of a pair add up. The pair's landscape is the share of
+the most such heads at any Δ that each Δ lacks (0 at the peak), and its decision asks for a single
+clear peak: at least `min_sightings` heads, and no offset farther than `rival_frames` from it with
+more than `max_rival_ratio` of them. The result is a PairLandscape like any other pair's
+(residual "sighting", no track pairs), so Stage 2, result.json and the recording take it as they
+take the epipolar ones. It is used for a pair whose track pairs gave no accepted offset.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..geometry.sightings import sighting_landscape
+from ..types import CueBundle, PairDecision, PairLandscape
+from .config import SyncConfig
+from .landscape import search_offsets
+
+RESIDUAL = "sighting"
+
+
+def sighting_directions(bundle: CueBundle, a: str, b: str) -> list[tuple[str, str]]:
+    """(viewer, worn) of the pair that can be measured: the worn camera moves (its per-frame
+    centres), the viewer has heads, both have real poses in one world (not pose-free)."""
+    out = []
+    for viewer, worn in ((a, b), (b, a)):
+        if (viewer in bundle.heads and bundle.cameras[worn].is_moving
+                and not {viewer, worn} & bundle.pose_free
+                and np.isfinite(bundle.heads[viewer][:, 0]).any()):
+            out.append((viewer, worn))
+    return out
+
+
+def sighting_pair(bundle: CueBundle, a: str, b: str, cfg: SyncConfig) -> PairLandscape | None:
+    """The pair's sighting landscape and decision (None: no direction can be measured)."""
+    directions = sighting_directions(bundle, a, b)
+    va, vb = bundle.video(a), bundle.video(b)
+    offsets = search_offsets(va, vb, cfg.landscape)
+    if not directions or len(offsets) == 0:
+        return None
+    sc = cfg.sightings
+    near = np.zeros(len(offsets), int)
+    moments = np.zeros(len(offsets), int)
+    radius = {}
+    for viewer, worn in directions:
+        cv, cw = bundle.cameras[viewer], bundle.cameras[worn]
+        v_info, w_info = bundle.video(viewer), bundle.video(worn)
+        radius[viewer] = sc.radius_fraction * math.hypot(v_info.width, v_info.height)
+        K = cv.K if cv.K.ndim == 2 else cv.K[0]
+        pose_v = cv.cam_from_world if cv.is_moving else np.broadcast_to(cv.cam_from_world, (v_info.num_frames, 4, 4))
+        valid_v = cv.valid if cv.valid is not None else np.ones(v_info.num_frames, bool)
+        valid_w = cw.valid if cw.valid is not None else np.ones(w_info.num_frames, bool)
+        # Δ of (viewer, worn) is Δ_ab when the viewer is a, -Δ_ab when it is b
+        sign = 1.0 if viewer == a else -1.0
+        land = sighting_landscape(bundle.heads[viewer], v_info.timestamps_s, K, pose_v, valid_v,
+                                  w_info.timestamps_s, cw.cam_from_world, valid_w, sign * offsets, radius[viewer])
+        near += land.near
+        moments += land.moments
+    return _decided(a, b, offsets, near, moments, sc, min(va.frame_interval_s, vb.frame_interval_s),
+                    max(va.frame_interval_s, vb.frame_interval_s), directions, radius)
+
+
+def _decided(a, b, offsets, near, moments, sc, fine_s, coarse_s, directions, radius) -> PairLandscape:
+    top = int(near.max())
+    energy = 1.0 - near / max(top, 1)
+    energy = np.where(moments > 0, energy, np.nan)
+    best = int(np.argmax(near))
+    # the peak's run of equal counts: its middle is the offset (a plateau has no sharper point)
+    lo = hi = best
+    while lo > 0 and near[lo - 1] == top:
+        lo -= 1
+    while hi < len(near) - 1 and near[hi + 1] == top:
+        hi += 1
+    best_s = float(0.5 * (offsets[lo] + offsets[hi]))
+    far = np.abs(offsets - best_s) > sc.rival_frames * coarse_s
+    rival = int(near[far].max()) if far.any() else 0
+    half = offsets[near >= 0.5 * top] if top else offsets[:0]
+    # the half-height width over √(heads): heads scatter about the peak like samples of it
+    # at least a frame of the coarser video: on fencing1 the peaks were 0.75-1.5 frames off the
+    # truth, all the same way, whatever head landmarks were used (README)
+    uncertainty = coarse_s
+    if top and len(half):
+        uncertainty = float(max(uncertainty, (half.max() - half.min()) / (2.0 * math.sqrt(top))))
+    edge = lo == 0 or hi == len(near) - 1
+    who = "; ".join(f"{v} sees {w}'s wearer" for v, w in directions)
+    if top < sc.min_sightings:
+        ok, why = False, f"worn camera sightings: {top} heads at most on a worn camera's centre ({who}), need {sc.min_sightings}"
+    elif rival > sc.max_rival_ratio * top:
+        ok, why = False, (f"worn camera sightings ambiguous: {top} heads at Δ={best_s:+.3f} s, {rival} at an offset "
+                          f"more than {sc.rival_frames:g} frames away ({who})")
+    elif edge:
+        ok, why = False, f"worn camera sightings peak on the border of the search range ({who})"
+    else:
+        ok, why = True, (f"worn camera sightings: {top} heads within "
+                         f"{', '.join(sorted({f'{r:.1f} px' for r in radius.values()}))} of the worn camera's centre at "
+                         f"Δ={best_s:+.3f} s, {rival} at any other offset ({who})")
+    decision = PairDecision(accepted=ok, reason=why, contrast=1.0 - rival / max(top, 1),
+                            second_depth_ratio=rival / max(top, 1), num_minima=1 + int(rival > 0),
+                            num_pareto_minima=1, at_range_edge=edge, support_fraction=float(top / max(moments[best], 1)))
+    return PairLandscape(a, b, offsets, energy, moments, np.array([best]), best_s, 0.0, uncertainty,
+                         0, decision, residual=RESIDUAL)
