@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from vs_inspect.geometry.epipolar import look_at, project
-from vs_inspect.geometry.sightings import best_sighting, sighting_landscape
+from vs_inspect.geometry.sightings import sighting_landscape, sighting_peak
 
 K = np.array([[500.0, 0, 320], [0, 500.0, 240], [0, 0, 1]])
 
@@ -37,10 +37,21 @@ def test_the_sighting_landscape_peaks_at_the_true_offset(true_offset_s):
     grid = np.arange(-3.0, 3.0 + 1e-9, 0.05)
     land = sighting_landscape(head, ts_a, K, pose_a, np.ones(len(ts_a), bool), ts_b, pose_b,
                               np.ones(len(ts_b), bool), grid, radius_px=10.0)
-    best, rival = best_sighting(land, exclude_s=0.3)
-    assert abs(land.offsets_s[best] - true_offset_s) <= 0.05 + 1e-9, land.offsets_s[best]
-    assert land.near[best] >= 0.6 * land.moments[best] and rival <= 0.5 * land.near[best], (land.near[best], rival)
-    assert land.median_px[best] < 3.0
+    peak, lo, hi, rival = sighting_peak(land.offsets_s, land.near, exclude_s=0.3)
+    assert abs(peak - true_offset_s) <= 0.05 + 1e-9, peak
+    assert land.near[lo] == land.near[hi] == land.near.max()
+    assert land.near[lo] >= 0.6 * land.moments[lo] and rival <= 0.5 * land.near[lo], (land.near[lo], rival)
+    at = lambda s: land.median_px[np.argmin(np.abs(land.offsets_s - s))]  # noqa: E731
+    assert at(peak) < 8.0 and at(peak) < 0.25 * min(at(peak - 0.5), at(peak + 0.5))
+
+
+def test_the_peak_is_the_middle_of_its_plateau_and_the_rival_lies_beyond_the_exclusion():
+    offsets = np.arange(10) * 0.1
+    near = np.array([0, 3, 1, 5, 9, 9, 9, 2, 0, 4])
+    peak, lo, hi, rival = sighting_peak(offsets, near, exclude_s=0.25)
+    assert (lo, hi) == (4, 6) and peak == pytest.approx(0.5)
+    assert rival == 4  # beyond 0.25 s of 0.5: 0.0-0.2 s (0, 3, 1) and 0.8-0.9 s (0, 4)
+
 
 
 def test_invalid_poses_and_frames_outside_b_are_not_counted():

@@ -68,10 +68,17 @@ def sighting_landscape(head_xy_a: np.ndarray, timestamps_a_s: np.ndarray, K_a: n
     return SightingLandscape(offsets, moments.astype(int), near.astype(int), median, float(radius_px))
 
 
-def best_sighting(land: SightingLandscape, exclude_s: float) -> tuple[int, int]:
-    """(index of the candidate with the most heads near b's centre (ties: the smaller median),
-    the most near heads of any candidate farther than exclude_s from it): a peak and its rival."""
-    order = np.lexsort((np.nan_to_num(land.median_px, nan=np.inf), -land.near))
-    best = int(order[0])
-    far = np.abs(land.offsets_s - land.offsets_s[best]) > exclude_s
-    return best, int(land.near[far].max()) if far.any() else 0
+def sighting_peak(offsets_s: np.ndarray, near: np.ndarray, exclude_s: float) -> tuple[float, int, int, int]:
+    """(peak Δ s, first and last index of its plateau, rival): the peak is the middle of the run of
+    candidates around the first maximum of near (D,) that share its count (a plateau has no sharper
+    point); the rival is the largest count farther than exclude_s from the peak."""
+    near = np.asarray(near)
+    top = int(near.max()) if len(near) else 0
+    lo = hi = int(np.argmax(near)) if len(near) else 0
+    while lo > 0 and near[lo - 1] == top:
+        lo -= 1
+    while hi < len(near) - 1 and near[hi + 1] == top:
+        hi += 1
+    peak = float(0.5 * (offsets_s[lo] + offsets_s[hi]))
+    far = np.abs(np.asarray(offsets_s) - peak) > exclude_s
+    return peak, lo, hi, int(near[far].max()) if far.any() else 0

@@ -178,7 +178,7 @@ class SightingConfig:
     rival_frames: float = 3.0
     """Frames of the coarser video beyond which another offset is a rival of the peak."""
     max_chain: int = 1
-    """A video's offset may rest on at most this many sighting pairs in a chain from the reference (through accepted pairs; epipolar ones do not count): on fencing1 each was 0.75-1.5 frames off, all the same way, so two in a chain put a camera 2.5 frames off (README)."""
+    """A video's offset may rest on at most this many sighting pairs in a chain from the reference (through accepted pairs; epipolar ones do not count): on fencing1 both were late, by 1.0 and 1.5 frames, so two in a chain put a camera 2.5 frames off (README)."""
 
     def __post_init__(self) -> None:
         check_fields(self, nonnegative=("max_chain",), positive=("radius_fraction", "min_sightings", "rival_frames"),

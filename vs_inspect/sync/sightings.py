@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from ..geometry.sightings import sighting_landscape
+from ..geometry.sightings import sighting_landscape, sighting_peak
 from ..types import CueBundle, PairDecision, PairLandscape
 from .config import SyncConfig
 from .landscape import search_offsets
@@ -69,20 +69,12 @@ def _decided(a, b, offsets, near, moments, sc, fine_s, coarse_s, directions, rad
     top = int(near.max())
     energy = 1.0 - near / max(top, 1)
     energy = np.where(moments > 0, energy, np.nan)
-    best = int(np.argmax(near))
-    # the peak's run of equal counts: its middle is the offset (a plateau has no sharper point)
-    lo = hi = best
-    while lo > 0 and near[lo - 1] == top:
-        lo -= 1
-    while hi < len(near) - 1 and near[hi + 1] == top:
-        hi += 1
-    best_s = float(0.5 * (offsets[lo] + offsets[hi]))
-    far = np.abs(offsets - best_s) > sc.rival_frames * coarse_s
-    rival = int(near[far].max()) if far.any() else 0
+    best_s, lo, hi, rival = sighting_peak(offsets, near, sc.rival_frames * coarse_s)
+    best = int(np.argmin(np.abs(offsets - best_s)))
     half = offsets[near >= 0.5 * top] if top else offsets[:0]
     # the half-height width over √(heads): heads scatter about the peak like samples of it
-    # at least a frame of the coarser video: on fencing1 the peaks were 0.75-1.5 frames off the
-    # truth, all the same way, whatever head landmarks were used (README)
+    # at least a frame of the coarser video: on fencing1 both peaks were late, by 1.0 and 1.5
+    # frames, whatever head landmarks were used (README)
     uncertainty = coarse_s
     if top and len(half):
         uncertainty = float(max(uncertainty, (half.max() - half.min()) / (2.0 * math.sqrt(top))))
