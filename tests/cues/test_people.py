@@ -60,3 +60,35 @@ def test_fencing1_is_timed_by_its_wearers_seen_in_the_other_glasses(shared_data,
     assert set(found) == {a01, a02, a03} and min(found.values()) >= 20, found
     heads = read_bundle(out / "cues").heads
     assert {n: int(np.isfinite(h[:, 0]).sum()) for n, h in heads.items()} == found
+
+
+def test_a_video_whose_heads_cannot_be_found_is_named_and_the_others_kept(monkeypatch):
+    """A failure of the second decoding pass (or the detector) on one video costs that video its
+    heads only; the run goes on and result.json names it."""
+    from types import SimpleNamespace
+
+    import vs_inspect.io.video as video_mod
+    from vs_inspect.cues.extract import _heads
+    from vs_inspect.record.sink import NullSink
+
+    T = 4
+
+    def landmarks(frames):
+        frames = list(frames)
+        if frames[0] is None:
+            raise RuntimeError("the decoder gave up")
+        lm = np.full((len(frames), 33, 3), np.nan)
+        lm[:, 0] = [10.0, 20.0, 0.9]  # the nose only
+        return lm
+    monkeypatch.setattr(people, "heads_unavailable", lambda: None)
+    monkeypatch.setattr(people, "detect_landmarks", landmarks)
+    monkeypatch.setattr(video_mod, "iter_frames", lambda src, max_side=None: ((k, src.frame) for k in range(T)))
+    sources = [SimpleNamespace(info=SimpleNamespace(name="a"), frame=np.zeros((4, 4, 3), np.uint8)),
+               SimpleNamespace(info=SimpleNamespace(name="b"), frame=None)]
+    vids = {n: SimpleNamespace(info=SimpleNamespace(num_frames=T), scale_xy=(2.0, 2.0)) for n in "ab"}
+    stats: dict = {}
+    heads = _heads(sources, vids, {"a": None, "b": None}, {}, SimpleNamespace(max_side=640), stats, NullSink(), False)
+    assert list(heads) == ["a"]
+    np.testing.assert_allclose(heads["a"], np.tile([20.5, 40.5], (T, 1)))  # working px x2, centres kept
+    assert stats["heads"]["frames_with_a_head"] == {"a": T}
+    assert stats["heads"]["failed"] == {"b": "RuntimeError: the decoder gave up"}

@@ -416,16 +416,28 @@ def _heads(sources, vids: dict[str, _VideoCues], cameras: dict, undistort: dict,
         log.info("worn-camera sightings skipped: %s", why)
         sink.stage_event("cues", f"worn-camera sightings skipped: {why}")
         return {}
-    out, found = {}, {}
+    out, found, failed = {}, {}, {}
     for src in tqdm([s for s in sources if s.info.name in cameras], desc="heads", unit="video",
                     disable=not progress, leave=False):
         n = src.info.name
-        frames = (img for _, img in iter_frames(src, max_side=cfg.max_side))
-        raw = to_full_px(head_points(detect_landmarks(frames)), vids[n].scale_xy)
+        try:
+            landmarks = detect_landmarks(img for _, img in iter_frames(src, max_side=cfg.max_side))
+        except (InputError, OSError, ValueError, RuntimeError) as exc:  # this decoding pass failed
+            failed[n] = f"{type(exc).__name__}: {exc}"
+            continue
+        if len(landmarks) != vids[n].info.num_frames:
+            failed[n] = f"decoded {len(landmarks)} frames again, not {vids[n].info.num_frames}"
+            continue
+        raw = to_full_px(head_points(landmarks), vids[n].scale_xy)
         out[n] = undistort[n](raw) if n in undistort else raw
         found[n] = int(np.isfinite(out[n][:, 0]).sum())
         sink.stage_event("cues", f"{n}: a person's head in {found[n]} of {len(raw)} frames", heads=found[n])
+    for n, why in failed.items():
+        log.warning("%s: no heads: %s", n, why)
+        sink.stage_event("cues", f"{n}: no heads: {why}")
     stats["heads"] = {"detector": "mediapipe BlazePose (pose_landmark_full)", "frames_with_a_head": found}
+    if failed:
+        stats["heads"]["failed"] = failed
     log.info("heads found: %s", ", ".join(f"{n} {k}" for n, k in found.items()))
     return out
 
