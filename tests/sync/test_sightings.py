@@ -91,3 +91,16 @@ def test_an_offset_rests_on_one_sighting_at_most():
     assert res.offsets_s["c"] is None and "2 worn-camera sightings in a chain" in res.unresolved_reason["c"]
     two = sync_bundle(bundle, SyncConfig(sightings=SightingConfig(max_chain=2)), progress=False)
     assert two.offsets_s["c"] == pytest.approx(TRUE_C_S, abs=0.1)
+
+
+def test_the_benchmark_ablations_keep_a_sighting_pair():
+    """The bench's filter-off ablation re-decides epipolar landscapes only, and its pair subsets
+    may pick a pair that only a sighting timed."""
+    from vs_inspect.bench.suite import without_filter
+    from vs_inspect.pipeline.stage12 import solve_stage2
+
+    b = _bundle()
+    lands = list(sync_bundle(b, progress=False).pairs)
+    kept = without_filter(lands)
+    assert [p.decision for p in kept] == [p.decision for p in lands]
+    assert solve_stage2(b, kept).offsets_s["b"] == pytest.approx(TRUE_B_S, abs=0.05)

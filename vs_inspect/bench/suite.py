@@ -26,6 +26,7 @@ from ..sync.config import DecisionConfig, LandscapeConfig, PairSelection, SolveC
 from ..sync.decision import decide
 from ..sync.pairs import select_pairs
 from ..pipeline.stage12 import solve_stage2, sync_bundle
+from ..sync.sightings import RESIDUAL as SIGHTING
 from ..types import PairLandscape
 from .datasets import BenchData
 
@@ -140,10 +141,14 @@ def failed(data: BenchData, method: str, variant: str, exc: BaseException, **ext
 
 
 def without_filter(lands: list[PairLandscape]) -> list[PairLandscape]:
-    """The same landscapes decided with the spurious-pair filter off (best minimum unchanged)."""
+    """The same landscapes decided with the spurious-pair filter off (best minimum unchanged); a
+    worn-camera sighting pair keeps its own decision (the filter is the epipolar landscapes')."""
     off = DecisionConfig(enabled=False)
     out = []
     for land in lands:
+        if land.residual == SIGHTING:
+            out.append(land)
+            continue
         d, _ = decide(land.energy, land.support, land.offsets_s, land.num_track_pairs, off)
         out.append(dataclasses.replace(land, decision=d))
     return out
@@ -193,7 +198,9 @@ def run_dataset(data: BenchData, opts: PlanOptions, stage0_s: float = float("nan
         a100, a500 = stage1_pairwise(data, lands)
         rows.append(Row(data.name, data.group, "vs_inspect", "stage1-only", a100, a500, float("nan"),
                         float("nan"), float("nan"), 0, len(bundle.gt_offsets_s)))
-        has = {k for k, v in bundle.pairs.items() if len(v.index)}
+        # candidates: the pairs with track pairs, and those a worn-camera sighting timed
+        has = {k for k, v in bundle.pairs.items() if len(v.index)} | {(p.a, p.b) for p in lands
+                                                                       if p.residual == SIGHTING}
         by = {(p.a, p.b): p for p in lands}
         for mode in PAIR_MODES:
             for seed in opts.pair_seeds:
