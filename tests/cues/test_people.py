@@ -64,7 +64,8 @@ def test_fencing1_is_timed_by_its_wearers_seen_in_the_other_glasses(shared_data,
 
 def test_a_video_whose_heads_cannot_be_found_is_named_and_the_others_kept(monkeypatch):
     """A failure of the second decoding pass (or the detector) on one video costs that video its
-    heads only; the run goes on and result.json names it."""
+    heads only; the run goes on and result.json names it. At most about 10 frames a second are
+    looked at."""
     from types import SimpleNamespace
 
     import vs_inspect.io.video as video_mod
@@ -82,13 +83,20 @@ def test_a_video_whose_heads_cannot_be_found_is_named_and_the_others_kept(monkey
         return lm
     monkeypatch.setattr(people, "heads_unavailable", lambda: None)
     monkeypatch.setattr(people, "detect_landmarks", landmarks)
-    monkeypatch.setattr(video_mod, "iter_frames", lambda src, max_side=None: ((k, src.frame) for k in range(T)))
-    sources = [SimpleNamespace(info=SimpleNamespace(name="a"), frame=np.zeros((4, 4, 3), np.uint8)),
-               SimpleNamespace(info=SimpleNamespace(name="b"), frame=None)]
-    vids = {n: SimpleNamespace(info=SimpleNamespace(num_frames=T), scale_xy=(2.0, 2.0)) for n in "ab"}
+    monkeypatch.setattr(video_mod, "iter_frames", lambda src, step=1, max_side=None: (
+        (k, src.frame) for k in range(0, src.info.num_frames, step)))
+    frame = np.zeros((4, 4, 3), np.uint8)
+    infos = {"a": SimpleNamespace(name="a", num_frames=T, frame_interval_s=0.1),
+             "b": SimpleNamespace(name="b", num_frames=T, frame_interval_s=0.1),
+             "c": SimpleNamespace(name="c", num_frames=7, frame_interval_s=1 / 30)}
+    sources = [SimpleNamespace(info=infos[n], frame=None if n == "b" else frame) for n in "abc"]
+    vids = {n: SimpleNamespace(info=infos[n], scale_xy=(2.0, 2.0)) for n in "abc"}
     stats: dict = {}
-    heads = _heads(sources, vids, {"a": None, "b": None}, {}, SimpleNamespace(max_side=640), stats, NullSink(), False)
-    assert list(heads) == ["a"]
+    heads = _heads(sources, vids, dict.fromkeys("abc"), {}, SimpleNamespace(max_side=640, heads_max_hz=10.0),
+                   stats, NullSink(), False)
+    assert list(heads) == ["a", "c"]
     np.testing.assert_allclose(heads["a"], np.tile([20.5, 40.5], (T, 1)))  # working px x2, centres kept
-    assert stats["heads"]["frames_with_a_head"] == {"a": T}
+    # at 30 fps every third frame is looked at (at most about 10 a second), NaN between
+    assert np.flatnonzero(np.isfinite(heads["c"][:, 0])).tolist() == [0, 3, 6]
+    assert stats["heads"]["frames_with_a_head"] == {"a": T, "c": 3}
     assert stats["heads"]["failed"] == {"b": "RuntimeError: the decoder gave up"}

@@ -235,7 +235,9 @@ class CueConfig:
         "flag": "--no-heads", "negate": True,
         "help": "do not look for people's heads when a camera moves (MediaPipe BlazePose, when installed: "
                 "the worn-camera sightings)"})
-    """When a camera moves, find the head of the most prominent person in every frame of every video (MediaPipe's BlazePose, whose weights ship in the mediapipe 0.10.14 wheel; cues/people.py), undistorted like the tracks: Stage 1 times a pair by the worn camera's wearer seen by the other camera (sync/sightings.py). Skipped, with the reason in result.json, when mediapipe is not installed."""
+    """When a camera moves, find the head of the most prominent person in the frames of every video (MediaPipe's BlazePose, whose weights ship in the mediapipe 0.10.14 wheel; cues/people.py), undistorted like the tracks: Stage 1 times a pair by the worn camera's wearer seen by the other camera (sync/sightings.py). Skipped, with the reason in result.json, when mediapipe is not installed."""
+    heads_max_hz: float = 10.0
+    """Heads are looked for in at most about this many frames per second of a video (every frame at 10 fps, every 3rd at 30 fps, NaN between): a head moves little in a tenth of a second, and BlazePose costs about 15-20 ms a frame; 0: every frame."""
 
     def __post_init__(self) -> None:
         _check_numbers(self, positive=("max_side",))

@@ -68,10 +68,15 @@ def _register_indices(info: VideoInfo, cfg) -> np.ndarray:
     """A moving video's frames to register against the reconstruction (cues/registration.py):
     every cfg.camera.register_every-th, at most about register_max_hz per second, and the SfM
     frames too (registered from their neighbours they check the registration)."""
-    step = cfg.camera.register_every
-    if cfg.camera.register_max_hz > 0 and info.frame_interval_s > 0:
-        step = max(step, int(np.ceil(1.0 / (info.frame_interval_s * cfg.camera.register_max_hz) - 1e-6)))
+    step = max(cfg.camera.register_every, _frame_step(info, cfg.camera.register_max_hz))
     return np.union1d(np.arange(0, info.num_frames, step), _sfm_indices(info.num_frames, True, cfg))
+
+
+def _frame_step(info: VideoInfo, max_hz: float) -> int:
+    """Every how many frames a video is sampled at most about max_hz times a second (0: every frame)."""
+    if max_hz > 0 and info.frame_interval_s > 0:
+        return max(1, int(np.ceil(1.0 / (info.frame_interval_s * max_hz) - 1e-6)))
+    return 1
 
 
 def _static_mask(moving: np.ndarray, size: tuple[int, int]) -> np.ndarray:
@@ -420,15 +425,20 @@ def _heads(sources, vids: dict[str, _VideoCues], cameras: dict, undistort: dict,
     for src in tqdm([s for s in sources if s.info.name in cameras], desc="heads", unit="video",
                     disable=not progress, leave=False):
         n = src.info.name
+        info = vids[n].info
+        step = _frame_step(info, cfg.heads_max_hz)
+        todo = np.arange(0, info.num_frames, step)
         try:
-            landmarks = detect_landmarks(img for _, img in iter_frames(src, max_side=cfg.max_side))
+            landmarks = detect_landmarks(img for _, img in iter_frames(src, step=step, max_side=cfg.max_side))
         except (InputError, OSError, ValueError, RuntimeError) as exc:  # this decoding pass failed
             failed[n] = f"{type(exc).__name__}: {exc}"
             continue
-        if len(landmarks) != vids[n].info.num_frames:
-            failed[n] = f"decoded {len(landmarks)} frames again, not {vids[n].info.num_frames}"
+        if len(landmarks) != len(todo):
+            failed[n] = f"decoded {len(landmarks)} frames again, not {len(todo)}"
             continue
-        raw = to_full_px(head_points(landmarks), vids[n].scale_xy)
+        heads = np.full((info.num_frames, 2), np.nan)
+        heads[todo] = head_points(landmarks)
+        raw = to_full_px(heads, vids[n].scale_xy)
         out[n] = undistort[n](raw) if n in undistort else raw
         found[n] = int(np.isfinite(out[n][:, 0]).sum())
         sink.stage_event("cues", f"{n}: a person's head in {found[n]} of {len(raw)} frames", heads=found[n])
