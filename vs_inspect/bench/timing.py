@@ -35,7 +35,7 @@ STAGES = (("decode", "stage0_decode_s"), ("motion", "stage0_motion_s"),
           ("track", "stage0_tracking_s"), ("feat", "stage0_features_s"),
           ("sfm_img", "stage0_sfm_frames_s"), ("match", "stage0_matching_s"),
           ("cams", "stage0_cameras_s"), ("geo", "stage0_geometric_pairs_s"),
-          ("stage1", "stage1_s"), ("stage2", "stage2_s"))
+          ("heads", "stage0_heads_s"), ("stage1", "stage1_s"), ("stage2", "stage2_s"))
 COLUMNS = ("scene", "cameras") + tuple(c for c, _ in STAGES) + (
     "other", "wall_s", "cpu_s", "rss_mb", "resolved", "med_ms", "max_ms", "target")
 
