@@ -237,13 +237,6 @@ class CueBundle:
     def __post_init__(self) -> None:
         names = [v.name for v in self.videos]
         object.__setattr__(self, "pose_free", frozenset(self.pose_free))
-        heads = {n: np.asarray(xy, dtype=np.float64) for n, xy in self.heads.items()}
-        object.__setattr__(self, "heads", heads)
-        for n, xy in heads.items():
-            if n not in names:
-                raise ValueError(f"heads name unknown video {n!r}")
-            T = next(v.num_frames for v in self.videos if v.name == n)
-            _require_shape(f"heads of {n!r}", xy, (T, 2))
         if not names:
             raise ValueError("bundle has no videos")
         if len(set(names)) != len(names):
@@ -279,6 +272,13 @@ class CueBundle:
                         f"pair {a}__{b}: track index {hi if hi >= nt else lo} out of range "
                         f"for {n!r} with {nt} tracks"
                     )
+        heads = {n: np.asarray(xy, dtype=np.float64) for n, xy in self.heads.items()}
+        object.__setattr__(self, "heads", heads)
+        for n, xy in heads.items():
+            if n not in names:
+                raise ValueError(f"heads name unknown video {n!r}")
+            T = next(v.num_frames for v in self.videos if v.name == n)
+            _require_shape(f"heads of {n!r}", xy, (T, 2))
 
     @property
     def names(self) -> list[str]:

@@ -30,7 +30,8 @@ def heads_unavailable() -> str | None:
     pose solution and the two BlazePose models shipped in its wheel."""
     spec = importlib.util.find_spec("mediapipe")
     if spec is None or not spec.submodule_search_locations:
-        return "head detection needs mediapipe 0.10.14 (its wheel ships BlazePose): see the README's install notes"
+        return ("head detection needs mediapipe 0.10.14, whose wheel ships BlazePose: make setup installs it "
+                "(pip install --no-deps mediapipe==0.10.14, then absl-py flatbuffers 'protobuf>=4.25.3,<5')")
     root = Path(next(iter(spec.submodule_search_locations)))
     missing = [m for m in _MODELS if not (root / m).is_file()]
     if missing:

@@ -2,9 +2,8 @@
 
 When camera b moves (worn on a head) and camera a's person detector found a head in its frames
 (CueBundle.heads), the heads that sit on b's camera centre projected at b's time t − Δ count for
-Δ (geometry/sightings.py); both directions of a pair add up. The pair's landscape is the share of
-the most such heads at any Δ that each Δ lacks (0 at the peak), and its decision asks for a single
-clear peak: at least `min_sightings` heads, and no offset farther than `rival_frames` from it with
+Δ (geometry/sightings.py); both directions of a pair add up. The pair's energy is 1 − (heads at
+Δ) / (heads at the peak), 0 at the peak, and its decision asks for a single clear peak: at least `min_sightings` heads, and no offset farther than `rival_frames` from it with
 more than `max_rival_ratio` of them. The result is a PairLandscape like any other pair's
 (residual "sighting", no track pairs), so Stage 2, result.json and the recording take it as they
 take the epipolar ones. It is used for a pair whose track pairs gave no accepted offset.
@@ -61,20 +60,20 @@ def sighting_pair(bundle: CueBundle, a: str, b: str, cfg: SyncConfig) -> PairLan
                                   w_info.timestamps_s, cw.cam_from_world, valid_w, sign * offsets, radius[viewer])
         near += land.near
         moments += land.moments
-    return _decided(a, b, offsets, near, moments, sc, min(va.frame_interval_s, vb.frame_interval_s),
-                    max(va.frame_interval_s, vb.frame_interval_s), directions, radius)
+    return _decided(a, b, offsets, near, moments, sc, max(va.frame_interval_s, vb.frame_interval_s),
+                    directions, radius)
 
 
-def _decided(a, b, offsets, near, moments, sc, fine_s, coarse_s, directions, radius) -> PairLandscape:
+def _decided(a, b, offsets, near, moments, sc, coarse_s, directions, radius) -> PairLandscape:
     top = int(near.max())
     energy = 1.0 - near / max(top, 1)
     energy = np.where(moments > 0, energy, np.nan)
     best_s, lo, hi, rival = sighting_peak(offsets, near, sc.rival_frames * coarse_s)
     best = int(np.argmin(np.abs(offsets - best_s)))
+    # the half-height width over √(heads) (heads scatter about the peak like samples of it), at
+    # least a frame of the coarser video: on fencing1 both peaks were late, by 1.0 and 1.5 frames,
+    # whatever head landmarks were used (README)
     half = offsets[near >= 0.5 * top] if top else offsets[:0]
-    # the half-height width over √(heads): heads scatter about the peak like samples of it
-    # at least a frame of the coarser video: on fencing1 both peaks were late, by 1.0 and 1.5
-    # frames, whatever head landmarks were used (README)
     uncertainty = coarse_s
     if top and len(half):
         uncertainty = float(max(uncertainty, (half.max() - half.min()) / (2.0 * math.sqrt(top))))
