@@ -347,3 +347,30 @@ def test_a_pair_checked_without_its_unchecked_track_pairs_shows_that_landscape(r
     assert np.isclose(np.nanmin(y), full.min()) and np.isclose(np.nanmax(y), full.max())
     assert any(np.allclose(ln.get_xdata(), first.offsets_s[0]) for ln in ax.get_lines() if ln.get_linestyle() == ":")
     plt.close(fig)
+
+
+def test_a_sighting_pair_says_what_its_curve_is(tmp_path):
+    """A pair timed by worn-camera sightings draws 1 − the share of heads, not an epipolar energy:
+    its panel says so, read back from result.json."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from vs_inspect.analysis.report_data import pair_views
+    from vs_inspect.io.result import read_run_result
+    from vs_inspect.report.figures import _landscape_axes
+    from vs_inspect.types import PairDecision, PairLandscape, RunResult
+
+    offsets = np.arange(-10, 11) * 0.1
+    energy = 1.0 - np.exp(-((offsets - 0.3) / 0.15) ** 2)
+    land = PairLandscape("a", "b", offsets, energy, np.full(21, 40), np.array([13]), 0.3, 0.0, 0.1, 0,
+                         PairDecision(True, "worn camera sightings: 20 heads ...", 0.9, 0.1, 2, 1, False),
+                         residual="sighting")
+    run = RunResult("a", {"a": 0.0, "b": 0.3}, {"a": 0.0, "b": 0.1}, {}, (land,), "irls", (("a", "b"),), (), {})
+    write_run_result(run, tmp_path / "result.json")
+    (view,) = pair_views(read_run_result(tmp_path), None)
+    assert view.residual == "sighting" and view.accepted
+    fig, ax = plt.subplots()
+    _landscape_axes(ax, view)
+    assert any("worn-camera sightings" in t.get_text() for t in ax.texts)
+    plt.close(fig)

@@ -55,7 +55,7 @@ def pair_views(result: RunResult, gt: dict[str, float] | None) -> tuple[PairView
             _opt(p.uncertainty_s), solved, true, int(p.num_track_pairs),
             float(p.decision.contrast) if math.isfinite(p.decision.contrast) else 0.0,
             None if p.confirm_energy is None else over_range(p.confirm_energy, energy),
-            _opt(p.confirm_offset_s)))
+            _opt(p.confirm_offset_s), p.residual))
     return tuple(out)
 
 

@@ -86,6 +86,7 @@ class PairView:
     # robust scale differs); None otherwise
     confirm_energy: np.ndarray | None = None
     confirm_offset_s: float | None = None  # that landscape's accepted minimum (None: none)
+    residual: str = "sampson"  # what the energy measures; "sighting": 1 − the share of heads on a worn camera's centre
 
     @property
     def key(self) -> str:

@@ -155,7 +155,9 @@ def _landscape_axes(ax, p: PairView) -> None:
         side.set_edgecolor(col)
         side.set_linewidth(2.0)
     mark = "accepted" if p.accepted else "REJECTED"
-    ax.set_title(f"{p.a} – {p.b}   {mark}", color=col, fontweight="bold", loc="left", fontsize=11)
+    # long names (e.g. VisualSync clip names) would run into the next panel's title: two lines
+    sep = " – " if len(p.a) + len(p.b) <= 36 else " –\n"
+    ax.set_title(f"{p.a}{sep}{p.b}   {mark}", color=col, fontweight="bold", loc="left", fontsize=11)
     if p.offsets_s.size == 0 or not np.isfinite(p.energy).any():
         ax.text(0.5, 0.5, "no landscape\n" + _wrap(p.reason, 44), ha="center", va="center",
                 transform=ax.transAxes, fontsize=8.5, color=REJECT)
@@ -178,6 +180,8 @@ def _landscape_axes(ax, p: PairView) -> None:
         ax.plot([p.solved_offset_s], [0.0], marker="^", ms=10, color=SOLVED, mec="black", mew=0.6,
                 transform=ax.get_xaxis_transform(), clip_on=False, zorder=5)
     txt = f"Δ = {_fmt(p.chosen_offset_s)}"
+    if p.residual == "sighting":  # not an epipolar energy: say what the curve is
+        txt += "\nworn-camera sightings:\n1 − share of heads on its centre"
     if p.error_ms is not None:
         txt += f"\nerror vs truth {p.error_ms:.1f} ms"
     if p.disagreement_ms is not None and p.disagreement_ms > 100.0:
