@@ -22,10 +22,11 @@ from pathlib import Path
 import numpy as np
 
 from vs_inspect.bench.videos import clip_truth
-from vs_inspect.geometry.sightings import sighting_landscape, sighting_peak
+from vs_inspect.geometry.sightings import sighting_peak
 from vs_inspect.io.bundle import read_bundle
 from vs_inspect.sync.config import LandscapeConfig
 from vs_inspect.sync.landscape import search_offsets
+from vs_inspect.sync.sightings import direction_landscape
 
 
 def main() -> int:
@@ -50,19 +51,13 @@ def main() -> int:
     for a in names:
         if a not in bundle.heads:
             continue
-        ca, va = bundle.cameras[a], infos[a]
-        K_a = ca.K if ca.K.ndim == 2 else ca.K[0]
-        pose_a = ca.cam_from_world if ca.is_moving else np.broadcast_to(ca.cam_from_world, (va.num_frames, 4, 4))
-        head = bundle.heads[a]
+        va, head = infos[a], bundle.heads[a]
         for b in names:
-            cb, vb = bundle.cameras[b], infos[b]
-            if b == a or not cb.is_moving:
+            vb = infos[b]
+            if b == a or not bundle.cameras[b].is_moving:
                 continue
             grid = search_offsets(va, vb, LandscapeConfig())  # Stage 1's candidates, Δ of (a, b)
-            valid_a = ca.valid if ca.valid is not None else np.ones(va.num_frames, bool)
-            valid_b = cb.valid if cb.valid is not None else np.ones(vb.num_frames, bool)
-            land = sighting_landscape(head, va.timestamps_s, K_a, pose_a, valid_a, vb.timestamps_s,
-                                      cb.cam_from_world, valid_b, grid, args.radius_px)
+            land = direction_landscape(bundle, a, b, grid, args.radius_px)
             coarse_s = max(va.frame_interval_s, vb.frame_interval_s)
             true_d = truth[b] - truth[a] if truth else None
             if land.near.max() == 0:

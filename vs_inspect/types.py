@@ -230,8 +230,9 @@ class CueBundle:
     gt_offsets_s: dict[str, float] | None = None  # true offsets when known (DESIGN.md convention)
     pose_free: frozenset[str] = frozenset()  # videos whose camera has K only (cam_from_world a placeholder)
     gt_drift_ppm: dict[str, float] | None = None  # true clock drift when known (gt.json drift_ppm)
-    # per video: (T,2) float64 undistorted px of the head a person detector found in each frame
-    # (NaN: none), the worn-camera sightings' cue (geometry/sightings.py); empty: not detected
+    # per video: (T,2) float64 undistorted px of the head a person detector found in a frame
+    # (NaN: none, or not looked at), the worn-camera sightings' cue (geometry/sightings.py);
+    # empty: not detected
     heads: dict[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:

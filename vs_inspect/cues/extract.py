@@ -254,19 +254,9 @@ def _import_cameras(calibration: dict, vids: dict[str, _VideoCues]) -> tuple[dic
                              f"video has {v.info.num_frames} frames")
             continue
         cams[name] = to_camera_track(cal)
-        undistort[name] = functools.partial(_undistort_finite, functools.partial(undistort_points, cal))
+        undistort[name] = functools.partial(undistort_points, cal)  # (...,2), NaN kept
         tracks[name] = Tracks(undistort[name](v.xy_full), v.instance)
     return cams, tracks, dropped, undistort
-
-
-def _undistort_finite(undistort, xy: np.ndarray) -> np.ndarray:
-    """(...,2) px through undistort ((M,2) -> (M,2)), NaN rows kept NaN."""
-    flat = xy.reshape(-1, 2)
-    ok = np.isfinite(flat).all(1)
-    und = np.full_like(flat, np.nan, dtype=np.float64)
-    if ok.any():
-        und[ok] = undistort(flat[ok])
-    return und.reshape(xy.shape)
 
 
 def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueConfig(),
@@ -409,9 +399,10 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
 
 def _heads(sources, vids: dict[str, _VideoCues], cameras: dict, undistort: dict, cfg: CueConfig, stats: dict,
            sink: Sink, progress: bool) -> dict[str, np.ndarray]:
-    """{video: (T,2) undistorted full-resolution px of the head the person detector found in each
-    frame (NaN: none)}, for every video with a camera, decoded again at working resolution; {} with
-    the reason in stats["heads"] when the detector is not installed."""
+    """{video: (T,2) undistorted full-resolution px of the head the person detector found in a
+    frame (NaN: none, or a frame beyond cfg.heads_max_hz not looked at)}, for every video with a
+    camera, decoded again at working resolution; {} with the reason in stats["heads"] when the
+    detector is not installed."""
     from ..io.video import iter_frames
     from .people import detect_landmarks, head_points, heads_unavailable
 

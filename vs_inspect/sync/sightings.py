@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from ..geometry.sightings import sighting_landscape, sighting_peak
+from ..geometry.sightings import SightingLandscape, sighting_landscape, sighting_peak
 from ..types import CueBundle, PairDecision, PairLandscape
 from .config import SyncConfig
 from .landscape import search_offsets
@@ -35,6 +35,21 @@ def sighting_directions(bundle: CueBundle, a: str, b: str) -> list[tuple[str, st
     return out
 
 
+def direction_landscape(bundle: CueBundle, viewer: str, worn: str, offsets_s: np.ndarray,
+                        radius_px: float) -> SightingLandscape:
+    """geometry.sighting_landscape of the worn camera's wearer seen by the viewer, over candidate
+    Δ = offset_s[worn] − offset_s[viewer] (the viewer's heads; a static viewer's one pose for
+    every frame; absent valid masks: every pose valid)."""
+    cv, cw = bundle.cameras[viewer], bundle.cameras[worn]
+    v_info, w_info = bundle.video(viewer), bundle.video(worn)
+    K = cv.K if cv.K.ndim == 2 else cv.K[0]
+    pose_v = cv.cam_from_world if cv.is_moving else np.broadcast_to(cv.cam_from_world, (v_info.num_frames, 4, 4))
+    valid_v = cv.valid if cv.valid is not None else np.ones(v_info.num_frames, bool)
+    valid_w = cw.valid if cw.valid is not None else np.ones(w_info.num_frames, bool)
+    return sighting_landscape(bundle.heads[viewer], v_info.timestamps_s, K, pose_v, valid_v,
+                              w_info.timestamps_s, cw.cam_from_world, valid_w, offsets_s, radius_px)
+
+
 def sighting_pair(bundle: CueBundle, a: str, b: str, cfg: SyncConfig) -> PairLandscape | None:
     """The pair's sighting landscape and decision (None: no direction can be measured)."""
     directions = sighting_directions(bundle, a, b)
@@ -47,17 +62,11 @@ def sighting_pair(bundle: CueBundle, a: str, b: str, cfg: SyncConfig) -> PairLan
     moments = np.zeros(len(offsets), int)
     radius = {}
     for viewer, worn in directions:
-        cv, cw = bundle.cameras[viewer], bundle.cameras[worn]
-        v_info, w_info = bundle.video(viewer), bundle.video(worn)
+        v_info = bundle.video(viewer)
         radius[viewer] = sc.radius_fraction * math.hypot(v_info.width, v_info.height)
-        K = cv.K if cv.K.ndim == 2 else cv.K[0]
-        pose_v = cv.cam_from_world if cv.is_moving else np.broadcast_to(cv.cam_from_world, (v_info.num_frames, 4, 4))
-        valid_v = cv.valid if cv.valid is not None else np.ones(v_info.num_frames, bool)
-        valid_w = cw.valid if cw.valid is not None else np.ones(w_info.num_frames, bool)
         # Δ of (viewer, worn) is Δ_ab when the viewer is a, -Δ_ab when it is b
         sign = 1.0 if viewer == a else -1.0
-        land = sighting_landscape(bundle.heads[viewer], v_info.timestamps_s, K, pose_v, valid_v,
-                                  w_info.timestamps_s, cw.cam_from_world, valid_w, sign * offsets, radius[viewer])
+        land = direction_landscape(bundle, viewer, worn, sign * offsets, radius[viewer])
         near += land.near
         moments += land.moments
     return _decided(a, b, offsets, near, moments, sc, max(va.frame_interval_s, vb.frame_interval_s),
