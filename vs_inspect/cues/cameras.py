@@ -396,6 +396,7 @@ def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg:
         opts.mapper.init_min_num_inliers = cfg.min_inliers
         opts.mapper.abs_pose_min_num_inliers = max(10, cfg.min_inliers // 2)
         opts.mapper.init_min_tri_angle = 4.0
+        opts.structure_less_registration_fallback = cfg.structure_less_fallback
         if cfg.light_bundle_adjustment:  # global BAs of every point were most of the mapping time
             opts.ba_local_max_num_iterations = 10
             opts.ba_global_max_num_iterations = 20
