@@ -3,7 +3,7 @@
 turned image map back to the image itself, and a view pair whose texture is turned by 90 degrees
 (cameras around a floor) gets its matches only when the second image is also tried turned; a
 moving camera's SfM frames are matched sequentially (CameraConfig.sequence_overlap), every pair
-across videos."""
+across videos; COLMAP's mapper runs without structure-less registration unless asked."""
 
 from __future__ import annotations
 
@@ -164,3 +164,26 @@ def test_lens_record_undistorts_as_the_tracks_were():
     # k > 0 pushed a corner outwards: undone, it moves inwards by tens of px; the centre stays
     assert np.linalg.norm(got[0, 0] - [639.5, 359.5]) < np.linalg.norm(xy[0, 0] - [639.5, 359.5]) - 10
     np.testing.assert_allclose(got[0, 1], [640.0, 360.0], atol=1e-6)
+
+
+def test_mapper_runs_without_structure_less_registration_unless_asked(tmp_path, monkeypatch):
+    """CameraConfig.structure_less_fallback reaches COLMAP's mapper (off by default: each failed
+    structure-less try cost a global bundle adjustment, README)."""
+    pycolmap = import_pycolmap()
+    seen = []
+    real = pycolmap.incremental_mapping
+
+    def observed(database, images, out, options):
+        seen.append(options.structure_less_registration_fallback)
+        return real(database, images, out, options)
+
+    monkeypatch.setattr(pycolmap, "incremental_mapping", observed)
+    wall = cv2.cvtColor(texture(400, 700, seed=5), cv2.COLOR_GRAY2BGR)
+    frames = {"a": (np.array([0]), [np.ascontiguousarray(wall[20:260, 40:360])], [None]),
+              "b": (np.array([0]), [np.ascontiguousarray(wall[30:270, 100:420])], [None])}
+    sizes = {"a": (320, 240), "b": (320, 240)}
+    for fallback in (False, True):
+        cfg = CameraConfig(features="sift", max_features=1024, structure_less_fallback=fallback)
+        estimate_cameras(frames, sizes, {"a": 1, "b": 1}, {"a": False, "b": False}, cfg, workdir=str(tmp_path))
+    assert seen == [False, True]
+    assert CameraConfig().structure_less_fallback is False
