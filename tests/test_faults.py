@@ -612,8 +612,8 @@ def test_sigterm_during_sfm_removes_the_scratch_folder(tmp_path):
         img = numpy.zeros((64, 64, 3), numpy.uint8)
         frames = {"a": ([0, 1, 2], [img] * 3, [None] * 3), "b": ([0, 1, 2], [img] * 3, [None] * 3)}
         try:
-            c._reconstruct("sift", frames, {"a": (64, 64), "b": (64, 64)}, {"a": 3, "b": 3},
-                           set(), CameraConfig(), None, 0)
+            c.estimate_cameras(frames, {"a": (64, 64), "b": (64, 64)}, {"a": 3, "b": 3},
+                               {"a": False, "b": False}, CameraConfig(features="sift"), None, 0)
         except Terminated:
             sys.exit(143)
     """

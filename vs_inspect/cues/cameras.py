@@ -8,6 +8,7 @@ frames registers in the largest model gets no camera, with the reason.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import shutil
@@ -120,20 +121,27 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
     if why := camera_features_unavailable(cfg.features):
         raise ValueError(f"camera features {cfg.features!r}: {why}")
     first = cfg.features if cfg.features in LEARNED_FEATURES else "sift"
-    est = _reconstruct(first, frames_by_video, sizes, num_frames, moving, cfg, workdir, seed,
-                       frame_features, frame_images, progress)
-    if cfg.features == "auto" and est.unregistered and xfeat_available():
-        if est.num_images > cfg.auto_xfeat_max_images:
-            log.info("SIFT left %d video(s) out; XFeat not tried on %d images (more than %d)",
-                     len(est.unregistered), est.num_images, cfg.auto_xfeat_max_images)
-            return est
-        other = _reconstruct("xfeat", frames_by_video, sizes, num_frames, moving, cfg, workdir, seed,
-                             frame_images=frame_images, progress=progress)
-        log.info("SIFT registered %d of %d videos, XFeat %d", len(est.cameras), len(frames_by_video),
-                 len(other.cameras))
-        if len(other.cameras) > len(est.cameras):
-            est = other
-    return est
+    inputs = (frames_by_video, num_frames, moving, cfg, seed)
+    registration = dict(frame_features=frame_features, frame_images=frame_images, progress=progress)
+    # a moving camera's frames are registered only against the model that is kept: on the 720p
+    # timing scene SIFT's lost to XFeat's after 10 s of registering frames against it
+    with _scratch(workdir) as tmp:
+        model = _build_model(first, frames_by_video, sizes, moving, cfg, tmp, seed)
+        est = _estimate_from(model, *inputs, register=False)
+        if cfg.features == "auto" and est.unregistered and xfeat_available():
+            if est.num_images > cfg.auto_xfeat_max_images:
+                log.info("SIFT left %d video(s) out; XFeat not tried on %d images (more than %d)",
+                         len(est.unregistered), est.num_images, cfg.auto_xfeat_max_images)
+            else:
+                with _scratch(workdir) as other_tmp:
+                    other = _build_model("xfeat", frames_by_video, sizes, moving, cfg, other_tmp, seed)
+                    other_est = _estimate_from(other, *inputs, register=False)
+                    log.info("SIFT registered %d of %d videos, XFeat %d", len(est.cameras),
+                             len(frames_by_video), len(other_est.cameras))
+                    if len(other_est.cameras) > len(est.cameras):
+                        return _estimate_from(other, *inputs, **registration)
+                _log_into(import_pycolmap(), tmp)  # XFeat's scratch folder is gone
+        return _estimate_from(model, *inputs, **registration)
 
 
 def sfm_image_pairs(names: list[str], moving: dict[str, bool], overlap: int) -> list[tuple[str, str]]:
@@ -356,118 +364,152 @@ def _log_into(pycolmap, folder: Path) -> None:
         pass
 
 
-def _reconstruct(features: str, frames_by_video, sizes, num_frames, moving, cfg: CameraConfig,
-                 workdir: str | None, seed: int, frame_features: dict | None = None,
-                 frame_images: dict | None = None, progress: bool = False) -> CameraEstimate:
+@contextlib.contextmanager
+def _scratch(workdir: str | None):
+    """A scratch folder for one reconstruction (images, masks, database, COLMAP's logs), removed
+    afterwards."""
+    tmp = Path(tempfile.mkdtemp(prefix="vs_inspect_sfm_", dir=workdir))
+    try:
+        yield tmp
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+@dataclass(frozen=True)
+class _Model:
+    """One reconstruction of the SfM frames, its database still in the scratch folder (a moving
+    camera's frames are registered against it from there)."""
+
+    features: str  # "sift" or a learned kind
+    recs: dict  # every model COLMAP made (index -> pycolmap.Reconstruction)
+    rec: object | None  # the model with the most videos, None when COLMAP made none
+    database: Path
+    learned: tuple | None  # (matcher, image id -> descriptors) of a learned database
+    scales: dict[str, float]  # video -> SfM pixels per full-resolution pixel
+    num_images: int
+    image_pairs: tuple  # _image_pair_matches
+
+
+def _videos_in(rec) -> set[str]:
+    return {rec.images[i].name.split("/")[0] for i in rec.reg_image_ids()}
+
+
+def _build_model(features: str, frames_by_video, sizes, moving, cfg: CameraConfig, tmp: Path,
+                 seed: int) -> _Model:
     pycolmap = import_pycolmap()
 
     n_images = sum(len(v[0]) for v in frames_by_video.values())
-    tmp = Path(tempfile.mkdtemp(prefix="vs_inspect_sfm_", dir=workdir))
-    try:
-        _log_into(pycolmap, tmp)  # COLMAP's log files go to the scratch folder, removed below
-        img_dir, mask_dir = tmp / "images", tmp / "masks"
-        scales: dict[str, float] = {}
-        for name, (idx, images, masks) in frames_by_video.items():
-            (img_dir / name).mkdir(parents=True)
-            (mask_dir / name).mkdir(parents=True)
-            for k, img, m in zip(idx, images, masks):
-                fn = f"{int(k):06d}.jpg"
-                cv2.imwrite(str(img_dir / name / fn), img, [cv2.IMWRITE_JPEG_QUALITY, 95])
-                mm = np.full(img.shape[:2], 255, np.uint8) if m is None else (m.astype(np.uint8) * 255)
-                cv2.imwrite(str(mask_dir / name / (fn + ".png")), mm)
-            scales[name] = images[0].shape[1] / sizes[name][0] if images else 1.0
-        db = tmp / "database.db"
-        reader = pycolmap.ImageReaderOptions()
-        reader.camera_model = "SIMPLE_RADIAL"
-        reader.mask_path = str(mask_dir)
-        pycolmap.set_random_seed(seed)  # COLMAP's RANSAC in matching and mapping
-        learned = None  # (matcher, image id -> descriptors) of a learned database
-        if features in LEARNED_FEATURES:
-            learned = _learned_database(features, db, img_dir, mask_dir, reader, cfg, seed, moving)
-        else:
-            _sift_database(db, img_dir, reader, cfg, few=n_images <= 16, seed=seed, moving=moving)
-        image_pairs = _image_pair_matches(db)
-        opts = pycolmap.IncrementalPipelineOptions()
-        opts.random_seed = seed
-        # one thread everywhere and a fixed seed: with several threads COLMAP registered
-        # different cameras from run to run on the same input; same input, same offsets.
-        opts.num_threads = 1
-        opts.min_model_size = 2
-        opts.mapper.init_min_num_inliers = cfg.min_inliers
-        opts.mapper.abs_pose_min_num_inliers = max(10, cfg.min_inliers // 2)
-        opts.mapper.init_min_tri_angle = 4.0
-        opts.structure_less_registration_fallback = cfg.structure_less_fallback
-        if cfg.light_bundle_adjustment:  # global BAs of every point were most of the mapping time
-            opts.ba_local_max_num_iterations = 10
-            opts.ba_global_max_num_iterations = 20
-            opts.mapper.ba_global_ignore_redundant_points3D = True
-        out = tmp / "sparse"
-        out.mkdir()
-        recs = pycolmap.incremental_mapping(db, img_dir, out, opts)
-        if not recs:
-            return CameraEstimate({}, {n: "no reconstruction: too few matches between the frames "
-                                         "of the videos (static background)" for n in frames_by_video},
-                                  None, None, n_images, 0, features, image_pairs)
-
-        def videos_in(rec):
-            return {rec.images[i].name.split("/")[0] for i in rec.reg_image_ids()}
-
-        rec = max(recs.values(), key=lambda r: (len(videos_in(r)), r.num_reg_images()))
+    _log_into(pycolmap, tmp)  # COLMAP's log files go to the scratch folder, removed with it
+    img_dir, mask_dir = tmp / "images", tmp / "masks"
+    scales: dict[str, float] = {}
+    for name, (idx, images, masks) in frames_by_video.items():
+        (img_dir / name).mkdir(parents=True)
+        (mask_dir / name).mkdir(parents=True)
+        for k, img, m in zip(idx, images, masks):
+            fn = f"{int(k):06d}.jpg"
+            cv2.imwrite(str(img_dir / name / fn), img, [cv2.IMWRITE_JPEG_QUALITY, 95])
+            mm = np.full(img.shape[:2], 255, np.uint8) if m is None else (m.astype(np.uint8) * 255)
+            cv2.imwrite(str(mask_dir / name / (fn + ".png")), mm)
+        scales[name] = images[0].shape[1] / sizes[name][0] if images else 1.0
+    db = tmp / "database.db"
+    reader = pycolmap.ImageReaderOptions()
+    reader.camera_model = "SIMPLE_RADIAL"
+    reader.mask_path = str(mask_dir)
+    pycolmap.set_random_seed(seed)  # COLMAP's RANSAC in matching and mapping
+    learned = None
+    if features in LEARNED_FEATURES:
+        learned = _learned_database(features, db, img_dir, mask_dir, reader, cfg, seed, moving)
+    else:
+        _sift_database(db, img_dir, reader, cfg, few=n_images <= 16, seed=seed, moving=moving)
+    image_pairs = _image_pair_matches(db)
+    opts = pycolmap.IncrementalPipelineOptions()
+    opts.random_seed = seed
+    # one thread everywhere and a fixed seed: with several threads COLMAP registered
+    # different cameras from run to run on the same input; same input, same offsets.
+    opts.num_threads = 1
+    opts.min_model_size = 2
+    opts.mapper.init_min_num_inliers = cfg.min_inliers
+    opts.mapper.abs_pose_min_num_inliers = max(10, cfg.min_inliers // 2)
+    opts.mapper.init_min_tri_angle = 4.0
+    opts.structure_less_registration_fallback = cfg.structure_less_fallback
+    if cfg.light_bundle_adjustment:  # global BAs of every point were most of the mapping time
+        opts.ba_local_max_num_iterations = 10
+        opts.ba_global_max_num_iterations = 20
+        opts.mapper.ba_global_ignore_redundant_points3D = True
+    out = tmp / "sparse"
+    out.mkdir()
+    recs = pycolmap.incremental_mapping(db, img_dir, out, opts)
+    rec = max(recs.values(), key=lambda r: (len(_videos_in(r)), r.num_reg_images())) if recs else None
+    if rec is not None:
         log.info("%s reconstruction: %d videos, %d images, %d points, reprojection %.2f px, track length %.2f, "
-                 "observations per image %s", features, len(videos_in(rec)), rec.num_reg_images(),
+                 "observations per image %s", features, len(_videos_in(rec)), rec.num_reg_images(),
                  rec.num_points3D(), rec.compute_mean_reprojection_error(), rec.compute_mean_track_length(),
                  sorted(rec.images[i].num_points3D for i in rec.reg_image_ids()))
-        cams: dict[str, EstimatedCamera] = {}
-        unreg: dict[str, str] = {}
-        # video -> [(frame, cam_from_world (4,4), pycolmap camera, 3D points seen)]
-        per_video: dict[str, list[tuple[int, np.ndarray, object, int]]] = {n: [] for n in frames_by_video}
-        for iid in rec.reg_image_ids():
-            im = rec.images[iid]
-            folder, fn = im.name.split("/")
-            per_video[folder].append((int(Path(fn).stem), _pose_matrix(im.cam_from_world()),
-                                      rec.cameras[im.camera_id], im.num_points3D))
-        for name, regs in per_video.items():
-            if not regs:
-                others = [f"{len(videos_in(r))} videos / {r.num_reg_images()} images"
-                          for r in recs.values() if name in videos_in(r) and r is not rec]
-                where = f" (it registered only in a separate model: {others[0]})" if others else ""
-                unreg[name] = (f"camera could not be registered: none of its {len(frames_by_video[name][0])} "
-                               f"frames joined the common reconstruction{where}")
-                continue
-            seen = max(r[3] for r in regs)
-            if seen < cfg.min_inliers:
-                # a pose resting on a handful of points is a guess: leave the camera out, the
-                # fallback from the moving points may do better
-                unreg[name] = (f"camera registered on only {seen} 3D points (fewer than {cfg.min_inliers}): "
-                               f"not trusted")
-                continue
-            fk = np.array([r[0] for r in regs])
-            poses = np.stack([r[1] for r in regs])
-            cam = regs[0][2]
-            s = scales[name]
-            f, cx, cy = cam.focal_length, cam.principal_point_x, cam.principal_point_y
-            K = np.array([[f / s, 0, (cx / s) - 0.5], [0, f / s, (cy / s) - 0.5], [0, 0, 1.0]])
-            reg_info = None
-            if moving[name] and cfg.register_every > 0:
-                # the other frames registered on their own, with features of the database's kind:
-                # replaces the slerp where it succeeds
-                reg = _registration_inputs(rec, db, name, learned, s, frame_features, frame_images, progress)
-                if reg is not None:
-                    fk, poses, reg_info = _register_others(rec, name, *reg, cam, s, fk, poses, cfg, seed,
-                                                           progress)
-            if moving[name]:
-                T_all = _slerp_poses(fk, poses, num_frames[name])
-                valid = np.zeros(num_frames[name], bool)
-                valid[fk.min():fk.max() + 1] = True
-                track = CameraTrack(K, T_all, valid)
-            else:
-                track = CameraTrack(K, _mean_pose(poses))
-            cams[name] = EstimatedCamera(track, cam, s, np.sort(fk), int(seen), reg_info)
-        pts = np.array([p.xyz for p in rec.points3D.values()]) if rec.num_points3D() else None
-        cols = np.array([p.color for p in rec.points3D.values()], np.uint8) if rec.num_points3D() else None
-        return CameraEstimate(cams, unreg, pts, cols, n_images, rec.num_reg_images(), features, image_pairs)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+    return _Model(features, dict(recs), rec, db, learned, scales, n_images, image_pairs)
+
+
+def _estimate_from(model: _Model, frames_by_video, num_frames, moving, cfg: CameraConfig, seed: int,
+                   frame_features: dict | None = None, frame_images: dict | None = None,
+                   progress: bool = False, register: bool = True) -> CameraEstimate:
+    """Every video's camera in the model, or the reason it has none. register: a moving camera's
+    other frames are registered against the model on their own (cfg.register_every); else its
+    poses are slerped between its SfM frames."""
+    rec = model.rec
+    if rec is None:
+        return CameraEstimate({}, {n: "no reconstruction: too few matches between the frames "
+                                      "of the videos (static background)" for n in frames_by_video},
+                              None, None, model.num_images, 0, model.features, model.image_pairs)
+    cams: dict[str, EstimatedCamera] = {}
+    unreg: dict[str, str] = {}
+    # video -> [(frame, cam_from_world (4,4), pycolmap camera, 3D points seen)]
+    per_video: dict[str, list[tuple[int, np.ndarray, object, int]]] = {n: [] for n in frames_by_video}
+    for iid in rec.reg_image_ids():
+        im = rec.images[iid]
+        folder, fn = im.name.split("/")
+        per_video[folder].append((int(Path(fn).stem), _pose_matrix(im.cam_from_world()),
+                                  rec.cameras[im.camera_id], im.num_points3D))
+    for name, regs in per_video.items():
+        if not regs:
+            others = [f"{len(_videos_in(r))} videos / {r.num_reg_images()} images"
+                      for r in model.recs.values() if name in _videos_in(r) and r is not rec]
+            where = f" (it registered only in a separate model: {others[0]})" if others else ""
+            unreg[name] = (f"camera could not be registered: none of its {len(frames_by_video[name][0])} "
+                           f"frames joined the common reconstruction{where}")
+            continue
+        seen = max(r[3] for r in regs)
+        if seen < cfg.min_inliers:
+            # a pose resting on a handful of points is a guess: leave the camera out, the
+            # fallback from the moving points may do better
+            unreg[name] = (f"camera registered on only {seen} 3D points (fewer than {cfg.min_inliers}): "
+                           f"not trusted")
+            continue
+        fk = np.array([r[0] for r in regs])
+        poses = np.stack([r[1] for r in regs])
+        cam = regs[0][2]
+        s = model.scales[name]
+        f, cx, cy = cam.focal_length, cam.principal_point_x, cam.principal_point_y
+        K = np.array([[f / s, 0, (cx / s) - 0.5], [0, f / s, (cy / s) - 0.5], [0, 0, 1.0]])
+        reg_info = None
+        if register and moving[name] and cfg.register_every > 0:
+            # the other frames registered on their own, with features of the database's kind:
+            # replaces the slerp where it succeeds
+            reg = _registration_inputs(rec, model.database, name, model.learned, s, frame_features,
+                                       frame_images, progress)
+            if reg is not None:
+                fk, poses, reg_info = _register_others(rec, name, *reg, cam, s, fk, poses, cfg, seed,
+                                                       progress)
+        if moving[name]:
+            T_all = _slerp_poses(fk, poses, num_frames[name])
+            valid = np.zeros(num_frames[name], bool)
+            valid[fk.min():fk.max() + 1] = True
+            track = CameraTrack(K, T_all, valid)
+        else:
+            track = CameraTrack(K, _mean_pose(poses))
+        cams[name] = EstimatedCamera(track, cam, s, np.sort(fk), int(seen), reg_info)
+    pts = np.array([p.xyz for p in rec.points3D.values()]) if rec.num_points3D() else None
+    cols = np.array([p.color for p in rec.points3D.values()], np.uint8) if rec.num_points3D() else None
+    return CameraEstimate(cams, unreg, pts, cols, model.num_images, rec.num_reg_images(), model.features,
+                          model.image_pairs)
 
 
 def _registration_inputs(rec, database: Path, name: str, learned, sfm_scale: float,
