@@ -396,6 +396,8 @@ def _videos_in(rec) -> set[str]:
 
 def _build_model(features: str, frames_by_video, sizes, moving, cfg: CameraConfig, tmp: Path,
                  seed: int) -> _Model:
+    """The SfM frames written into tmp, their features matched into COLMAP's database (SIFT or a
+    learned kind) and mapped; the model with the most videos is the one used."""
     pycolmap = import_pycolmap()
 
     n_images = sum(len(v[0]) for v in frames_by_video.values())
