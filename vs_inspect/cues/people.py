@@ -72,22 +72,20 @@ def detect_landmarks(frames_bgr: Iterable[np.ndarray]) -> np.ndarray:
         raise RuntimeError(why)
     import cv2
 
-    with _quiet_native_logs():
-        import mediapipe as mp
-
-        pose = mp.solutions.pose.Pose(static_image_mode=False, model_complexity=1, smooth_landmarks=False)
-        with warnings.catch_warnings():
-            warnings.filterwarnings("ignore", message="SymbolDatabase.GetPrototype", category=UserWarning)
-            pose.process(np.zeros((64, 64, 3), np.uint8))  # its models start (and log) here; no one is found
     rows = []
-    try:
-        with warnings.catch_warnings():  # its protobuf 4 code calls a deprecated protobuf function
-            warnings.filterwarnings("ignore", message="SymbolDatabase.GetPrototype", category=UserWarning)
+    with warnings.catch_warnings():  # its protobuf 4 code calls a deprecated protobuf function
+        warnings.filterwarnings("ignore", message="SymbolDatabase.GetPrototype", category=UserWarning)
+        with _quiet_native_logs():
+            import mediapipe as mp
+
+            pose = mp.solutions.pose.Pose(static_image_mode=False, model_complexity=1, smooth_landmarks=False)
+            pose.process(np.zeros((64, 64, 3), np.uint8))  # its models start (and log) here; no one is found
+        try:
             for bgr in frames_bgr:
                 h, w = bgr.shape[:2]
                 found = pose.process(cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)).pose_landmarks
                 rows.append(np.array([[p.x * w, p.y * h, p.visibility] for p in found.landmark])
                             if found else np.full((33, 3), np.nan))
-    finally:
-        pose.close()
+        finally:
+            pose.close()
     return np.stack(rows) if rows else np.zeros((0, 33, 3))
