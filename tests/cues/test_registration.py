@@ -89,6 +89,17 @@ def test_frames_register_to_their_true_pose_and_weak_ones_are_refused():
         assert R_err < 0.2 and np.linalg.norm(C - C_true) < 0.02, (k, R_err, C, C_true)
     # no keyframes: nothing registered, nothing tried
     assert len(register_frames(feats, [], cam, 1.0).frames) == 0
+    # a check before each frame (a cancelled side build) stops the loop where it raises
+    seen = []
+
+    def check():
+        seen.append(len(seen))
+        if len(seen) == 3:
+            raise InterruptedError("cancelled")
+
+    with pytest.raises(InterruptedError):
+        register_frames(feats, kfs, cam, 1.0, min_inliers=20, check=check)
+    assert seen == [0, 1, 2]
 
 
 def test_learned_descriptors_register_by_mutual_cosine_matches():

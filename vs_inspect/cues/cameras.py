@@ -127,11 +127,16 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
     registration = dict(frame_features=frame_features, frame_images=frame_images, progress=progress)
     n_images = sum(len(v[0]) for v in frames_by_video.values())
     xfeat_possible = cfg.features == "auto" and xfeat_available() and n_images <= cfg.auto_xfeat_max_images
-    # a moving camera's frames are registered only against the model that is kept: on the 720p
-    # timing scene SIFT's lost to XFeat's after 10 s of registering frames against it
-    with _scratch(workdir) as tmp, _SideModel(
-            lambda side_tmp, cancel: _build_model("xfeat", frames_by_video, sizes, moving, cfg, side_tmp, seed,
-                                                  cancel=cancel), workdir) as xfeat:
+    # a moving camera's frames are registered against SIFT's model only once it is kept (on the
+    # 720p timing scene SIFT's lost to XFeat's after 10 s of registering frames against it); XFeat's
+    # registers them on the side thread (cancel given) while SIFT's still maps: that core is idle
+    # then, and the work is cancelled when SIFT's model is kept
+    def xfeat_model(side_tmp: Path, cancel: _Cancel | None) -> tuple[_Model, CameraEstimate | None]:
+        other = _build_model("xfeat", frames_by_video, sizes, moving, cfg, side_tmp, seed, cancel=cancel)
+        return other, None if cancel is None else _estimate_from(other, *inputs, frame_features=frame_features,
+                                                                 frame_images=frame_images, cancel=cancel)
+
+    with _scratch(workdir) as tmp, _SideModel(xfeat_model, workdir) as xfeat:
         _log_into(import_pycolmap(), tmp)  # COLMAP's log files (both models') go to the scratch folder
         model = _build_model(first, frames_by_video, sizes, moving, cfg, tmp, seed,
                              before_mapping=xfeat.start if xfeat_possible else None)
@@ -141,19 +146,20 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
                 log.info("SIFT left %d video(s) out; XFeat not tried on %d images (more than %d)",
                          len(est.unregistered), est.num_images, cfg.auto_xfeat_max_images)
             else:
-                other = xfeat.result()
-                other_est = _estimate_from(other, *inputs, register=False)
+                other, registered = xfeat.result()
+                other_est = registered if registered is not None else _estimate_from(other, *inputs, register=False)
                 log.info("SIFT registered %d of %d videos, XFeat %d", len(est.cameras),
                          len(frames_by_video), len(other_est.cameras))
                 if len(other_est.cameras) > len(est.cameras):
-                    return _estimate_from(other, *inputs, **registration)
+                    return registered if registered is not None else _estimate_from(other, *inputs, **registration)
         xfeat.close()  # not used: stopped before the frames are registered
         return _estimate_from(model, *inputs, **registration)
 
 
 class _Cancel:
-    """Stops a model being built on another thread: checked between images and image pairs;
-    COLMAP's mapping stops through its token (it raises InterruptedError within ms)."""
+    """Stops a model being built on another thread: checked between images, image pairs and
+    registered frames; COLMAP's mapping stops through its token (it raises InterruptedError
+    within ms)."""
 
     def __init__(self):
         self._event = threading.Event()
@@ -167,16 +173,22 @@ class _Cancel:
         if self._event.is_set():
             raise InterruptedError("model building cancelled")
 
+    def each(self, items):
+        """items, checked before each one."""
+        for item in items:
+            self.check()
+            yield item
+
 
 class _SideModel:
     """A second model built on a thread of its own while the first one maps: COLMAP's mapper runs
     on one thread (repeatable cameras) and releases the GIL, so the other core is free then.
-    start(): begin building (in a scratch folder of its own); result(): wait for the model (built
-    here and now when it was not started); leaving the with block cancels an unfinished build,
-    waits for its thread, then removes its folder. On one core it is only built when asked for.
+    start(): begin building (in a scratch folder of its own); result(): wait for what build
+    returned (built here and now, with cancel None, when it was not started); close() or leaving
+    the with block cancels an unfinished build, waits for its thread, then removes its folder. On one core it is only built when asked for.
     COLMAP's random generator is per thread, so the model is the one a build here would give."""
 
-    def __init__(self, build: Callable[[Path, _Cancel], _Model], workdir: str | None):
+    def __init__(self, build: Callable[[Path, _Cancel | None], object], workdir: str | None):
         self._build, self._workdir = build, workdir
         self._stack = contextlib.ExitStack()
         self._future = None
@@ -200,7 +212,7 @@ class _SideModel:
         self._stack.callback(cancel.cancel)  # on leaving: cancel first, then the pool waits, then tmp goes
         self._future = pool.submit(self._build, tmp, cancel)
 
-    def result(self) -> _Model:
+    def result(self):
         if self._future is None:
             return self._build(self._stack.enter_context(_scratch(self._workdir)), None)
         return self._future.result()
@@ -524,10 +536,10 @@ def _build_model(features: str, frames_by_video, sizes, moving, cfg: CameraConfi
 
 def _estimate_from(model: _Model, frames_by_video, num_frames, moving, cfg: CameraConfig, seed: int,
                    frame_features: dict | None = None, frame_images: dict | None = None,
-                   progress: bool = False, register: bool = True) -> CameraEstimate:
+                   progress: bool = False, register: bool = True, cancel: _Cancel | None = None) -> CameraEstimate:
     """Every video's camera in the model, or the reason it has none. register: a moving camera's
     other frames are registered against the model on their own (cfg.register_every); else its
-    poses are slerped between its SfM frames."""
+    poses are slerped between its SfM frames. cancel: checked per registered frame."""
     rec = model.rec
     if rec is None:
         return CameraEstimate({}, {n: "no reconstruction: too few matches between the frames "
@@ -568,10 +580,10 @@ def _estimate_from(model: _Model, frames_by_video, num_frames, moving, cfg: Came
             # the other frames registered on their own, with features of the database's kind:
             # replaces the slerp where it succeeds
             reg = _registration_inputs(rec, model.database, name, model.learned, s, frame_features,
-                                       frame_images, progress)
+                                       frame_images, progress, cancel)
             if reg is not None:
                 fk, poses, reg_info = _register_others(rec, name, *reg, cam, s, fk, poses, cfg, seed,
-                                                       progress)
+                                                       progress, cancel)
         if moving[name]:
             T_all = _slerp_poses(fk, poses, num_frames[name])
             valid = np.zeros(num_frames[name], bool)
@@ -587,7 +599,8 @@ def _estimate_from(model: _Model, frames_by_video, num_frames, moving, cfg: Came
 
 
 def _registration_inputs(rec, database: Path, name: str, learned, sfm_scale: float,
-                         frame_features: dict | None, frame_images: dict | None, progress: bool = False):
+                         frame_features: dict | None, frame_images: dict | None, progress: bool = False,
+                         cancel: _Cancel | None = None):
     """(keyframes, frame features, match) to register a moving video's frames against rec with,
     or None when its frames are not available: SIFT's (frame_features, computed where the video
     was decoded; the database's descriptors) or, for a learned database (learned: (matcher, image
@@ -606,12 +619,14 @@ def _registration_inputs(rec, database: Path, name: str, learned, sfm_scale: flo
     matcher, descriptors = learned
     images, total = frame_images[name]
     label = f"{name}: features to register" if progress else None
-    feats = learned_frame_features(images(), matcher, sfm_scale, label, total)
+    frames = images() if cancel is None else cancel.each(images())
+    feats = learned_frame_features(frames, matcher, sfm_scale, label, total)
     return keyframes_of(rec, name, descriptors.__getitem__), feats, cosine_matches()
 
 
 def _register_others(rec, name: str, keyframes, features, match, camera, sfm_scale: float, fk: np.ndarray,
-                     poses: np.ndarray, cfg: CameraConfig, seed: int, progress: bool = False):
+                     poses: np.ndarray, cfg: CameraConfig, seed: int, progress: bool = False,
+                     cancel: _Cancel | None = None):
     """A moving video's frames outside the reconstruction registered against it: (frames (R,),
     cam_from_world (R,4,4) of the SfM frames and the newly registered ones, report). A frame
     whose rotation is farther from its nearest SfM frame's than a head can turn (10° per frame
@@ -625,7 +640,8 @@ def _register_others(rec, name: str, keyframes, features, match, camera, sfm_sca
 
     reg = register_frames(features, keyframes, camera, sfm_scale, match=match,
                           min_inliers=cfg.register_min_inliers, seed=seed,
-                          progress=f"{name}: registering frames" if progress else None)
+                          progress=f"{name}: registering frames" if progress else None,
+                          check=None if cancel is None else cancel.check)
     own = np.isin(reg.frames, fk)  # reconstructed frames registered from their neighbours: a check
     keep = ~own
     for r, k in enumerate(reg.frames):

@@ -171,13 +171,15 @@ def learned_frame_features(images: Iterable[tuple[int, np.ndarray, np.ndarray | 
 
 def register_frames(features: FrameFeatures, keyframes: list[Keyframe], camera, sfm_scale: float,
                     neighbours: int = 2, match: Match | None = None, min_inliers: int = 15,
-                    max_error_px: float = 4.0, seed: int = 0, progress: str | None = None) -> FrameRegistration:
+                    max_error_px: float = 4.0, seed: int = 0, progress: str | None = None,
+                    check: Callable[[], None] | None = None) -> FrameRegistration:
     """Each frame of `features` registered from its matches to the `neighbours` nearest keyframes
     (in frame index) of the same video: `match` (default: SIFT's ratio test, ratio_matches), one
     3D point per feature (its best match), then pycolmap's absolute pose on `camera`
     (pycolmap.Camera at SfM resolution, sfm_scale SfM px per full px). A frame with fewer than
     min_inliers inliers is not registered. A frame that is itself a keyframe is registered from
-    the other keyframes only. progress: a progress bar's label (None: no bar).
+    the other keyframes only. progress: a progress bar's label (None: no bar). check: called before
+    each frame; it raises to stop (a cancelled build).
     """
     pycolmap = import_pycolmap()
 
@@ -194,6 +196,8 @@ def register_frames(features: FrameFeatures, keyframes: list[Keyframe], camera, 
     frames, poses, inl = [], [], []
     for k, xy, d in tqdm(zip(features.frames, features.xy_full, features.desc), desc=progress,
                          total=len(features.frames), unit="frame", disable=progress is None, leave=False):
+        if check is not None:
+            check()
         if len(d) < min_inliers:
             continue
         # never its own keyframe: a reconstructed frame is registered from its neighbours, as a
