@@ -127,7 +127,8 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
     inputs = (frames_by_video, num_frames, moving, cfg, seed)
     registration = dict(frame_features=frame_features, frame_images=frame_images, progress=progress)
     n_images = sum(len(v[0]) for v in frames_by_video.values())
-    xfeat_possible = cfg.features == "auto" and xfeat_available() and n_images <= cfg.auto_xfeat_max_images
+    xfeat_wanted = cfg.features == "auto" and xfeat_available()  # when SIFT's model leaves a video out
+    xfeat_possible = xfeat_wanted and n_images <= cfg.auto_xfeat_max_images
     # a moving camera's frames are registered against SIFT's model only once it is kept (on the
     # 720p timing scene SIFT's lost to XFeat's after 10 s of registering frames against it); XFeat's
     # registers them on the side thread (cancel given) while SIFT's still maps: that core is idle
@@ -142,7 +143,7 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
         model = _build_model(first, frames_by_video, sizes, moving, cfg, tmp, seed,
                              before_mapping=xfeat.start if xfeat_possible else None)
         est = _estimate_from(model, *inputs, register=False)
-        if cfg.features == "auto" and est.unregistered and xfeat_available():
+        if est.unregistered and xfeat_wanted:
             if not xfeat_possible:
                 log.info("SIFT left %d video(s) out; XFeat not tried on %d images (more than %d)",
                          len(est.unregistered), est.num_images, cfg.auto_xfeat_max_images)
