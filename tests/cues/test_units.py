@@ -72,6 +72,33 @@ def test_instances_link_two_blobs_over_time():
     assert set(np.unique(inst)) == {0} | ids_a | ids_b
 
 
+def test_instances_beyond_int16_keep_distinct_ids():
+    # a long video with many short-lived regions: more than 32767 instances. The ids used to be
+    # held per pixel as int16 in volumes this large (2**26 pixels or more) and wrapped around
+    T, H, W = 1100, 240, 256
+    assert T * H * W >= 2**26
+    rng = np.random.default_rng(3)
+    masks = np.zeros((T, H, W), bool)
+    cells = rng.permuted(np.tile(np.arange(144), (T, 1)), axis=1)[:, :60]  # 60 of 12 x 12 cells a frame
+    for t in range(T):
+        for c in cells[t]:
+            y, x = 4 + 20 * (c // 12), 4 + 20 * (c % 12)
+            masks[t, y:y + 3, x:x + 3] = True
+    # a dot links to the previous frame's dot in the same cell (IoU 1): count instances the slow way
+    starts = sum(len(set(cells[t]) - (set(cells[t - 1]) if t else set())) for t in range(T))
+    assert starts > 32767
+    inst = link_instances(masks, MotionConfig())
+    assert inst.dtype == np.int32 and int(inst.max()) == starts
+    assert len(np.unique(inst)) == starts + 1
+    # every dot carries one id, and a dot seen again in the next frame keeps it
+    t, c = 500, cells[500][0]
+    y, x = 4 + 20 * (c // 12), 4 + 20 * (c % 12)
+    dot = inst[t, y:y + 3, x:x + 3]
+    assert (dot == dot[0, 0]).all() and dot[0, 0] > 0
+    if c in cells[t + 1]:
+        assert inst[t + 1, y, x] == dot[0, 0]
+
+
 def test_klt_tracks_follow_the_blob():
     v = (2.5, 1.25)
     frames, truth, offs = blob_sequence(T=20, velocity=v)

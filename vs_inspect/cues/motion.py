@@ -146,10 +146,9 @@ def link_instances(masks: np.ndarray, cfg: MotionConfig) -> np.ndarray:
 
     Connected regions of consecutive frames that overlap (IoU >= link_iou) belong to one
     instance; a region that overlaps several earlier instances merges them (union-find), so
-    an object that splits and re-joins keeps one id.
+    an object that splits and re-joins keeps one id. Overlaps are counted per region pair, not
+    per pixel id, so any number of instances keeps distinct ids.
     """
-    T = masks.shape[0]
-    labels = np.zeros(masks.shape, np.int32 if masks.shape[0] * masks[0].size < 2**26 else np.int16)
     parent: list[int] = [0]
 
     def find(i: int) -> int:
@@ -158,25 +157,35 @@ def link_instances(masks: np.ndarray, cfg: MotionConfig) -> np.ndarray:
             i = parent[i]
         return i
 
-    prev = None
-    for t in range(T):
-        n, lab = cv2.connectedComponents(masks[t].astype(np.uint8), connectivity=8)
-        lab = lab.astype(np.int64)
-        cur_ids = np.zeros(n, np.int64)
-        area = np.bincount(lab.ravel(), minlength=n)
-        links: dict[int, list[int]] = {}
-        if prev is not None and n > 1:
-            both = (lab > 0) & (prev > 0)
+    def components(t: int) -> tuple[int, np.ndarray]:
+        return cv2.connectedComponents(masks[t].astype(np.uint8), connectivity=8, ltype=cv2.CV_32S)
+
+    # first pass: each frame's regions get a union-find node (the ids stay per region, so the
+    # whole video is never held as labels); the second pass writes the final ids
+    node_of_region: list[np.ndarray] = []
+    prev_lab = prev_node = None
+    for t in range(masks.shape[0]):
+        n, lab = components(t)
+        node = np.zeros(n, np.int64)
+        iou_ok = None
+        if prev_lab is not None and n > 1 and len(prev_node) > 1:
+            both = (lab > 0) & (prev_lab > 0)
             if both.any():
-                m = int(prev.max()) + 1
-                key, cnt = np.unique(lab[both] * m + prev[both], return_counts=True)
-                prev_area = np.bincount(prev.ravel(), minlength=m)
-                for k, c in zip(key.tolist(), cnt.tolist()):
-                    ci, pi = divmod(k, m)
-                    if c / (area[ci] + prev_area[pi] - c) >= cfg.link_iou:
-                        links.setdefault(ci, []).append(pi)
+                m = len(prev_node)
+                # overlap of each region with each earlier instance (its regions pooled, as the
+                # earlier frame's pixels carry their instance's node)
+                pair = np.bincount(lab[both].astype(np.int64) * m + prev_lab[both], minlength=n * m).reshape(n, m)
+                instances, of_region = np.unique(prev_node, return_inverse=True)
+                overlap = np.zeros((n, len(instances)), np.int64)
+                np.add.at(overlap.T, of_region, pair.T)
+                area = np.bincount(lab.ravel(), minlength=n)
+                prev_area = np.zeros(len(instances), np.int64)
+                np.add.at(prev_area, of_region, np.bincount(prev_lab.ravel(), minlength=m))
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    iou = overlap / (area[:, None] + prev_area[None, :] - overlap)
+                iou_ok = (overlap > 0) & (iou >= cfg.link_iou) & (instances > 0)[None, :]
         for c in range(1, n):
-            ids = links.get(c, [])
+            ids = instances[iou_ok[c]].tolist() if iou_ok is not None else []
             if ids:
                 root = find(ids[0])
                 for other in ids[1:]:
@@ -184,24 +193,27 @@ def link_instances(masks: np.ndarray, cfg: MotionConfig) -> np.ndarray:
                     if r != root:
                         parent[max(r, root)] = min(r, root)
                         root = min(r, root)
-                cur_ids[c] = root
+                node[c] = root
             else:
                 parent.append(len(parent))
-                cur_ids[c] = len(parent) - 1
-        cur = cur_ids[lab]
-        labels[t] = cur
-        prev = cur
-    roots = np.array([find(i) for i in range(len(parent))], np.int32)
-    labels = roots[labels]
-    uniq = np.unique(labels)
-    remap = np.zeros(int(uniq.max()) + 1, np.int32)
-    remap[uniq[uniq > 0]] = np.arange(1, int((uniq > 0).sum()) + 1)
-    return remap[labels].astype(np.int16) if len(uniq) < 32000 else remap[labels]
+                node[c] = len(parent) - 1
+        node_of_region.append(node)
+        prev_lab, prev_node = lab, node
+    roots = np.array([find(i) for i in range(len(parent))], np.int64)
+    used = np.unique(roots[1:])
+    final = np.zeros(len(parent), np.int64)
+    final[1:] = np.searchsorted(used, roots[1:]) + 1
+    out = np.zeros(masks.shape, np.int16 if len(used) + 1 < 32000 else np.int32)
+    for t, node in enumerate(node_of_region):
+        n, lab = components(t)
+        out[t] = final[node].astype(out.dtype)[lab]
+    return out
 
 
 def moving_regions(frames: np.ndarray, cfg: MotionConfig, camera_motion: str | None = None,
                    frame_interval_s: float | None = None):
-    """(instances (T,H,W) int32, camera_motion, background_motion_px) for one video.
+    """(instances (T,H,W) int16, int32 if many (link_instances), camera_motion, background_motion_px)
+    for one video.
     frame_interval_s: its typical frame spacing (s), when known (a moving camera's neighbours)."""
     mode, bg = decide_camera_motion(frames, cfg)
     if camera_motion in ("static", "moving"):
