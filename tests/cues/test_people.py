@@ -74,7 +74,7 @@ def test_a_video_whose_heads_cannot_be_found_is_named_and_the_others_kept(monkey
 
     T = 4
 
-    def landmarks(frames):
+    def landmarks(frames, pose=None):
         frames = list(frames)
         if frames[0] is None:
             raise RuntimeError("the decoder gave up")
@@ -100,3 +100,90 @@ def test_a_video_whose_heads_cannot_be_found_is_named_and_the_others_kept(monkey
     assert np.flatnonzero(np.isfinite(heads["c"][:, 0])).tolist() == [0, 3, 6]
     assert stats["heads"]["frames_with_a_head"] == {"a": T, "c": 3}
     assert stats["heads"]["failed"] == {"b": "RuntimeError: the decoder gave up"}
+
+
+class _FakePose:
+    """A started tracker: a person whose nose is at the frame's first pixel value (x) and 20 px."""
+
+    def __init__(self, log: list):
+        self.log, self.closed = log, False
+
+    def process(self, rgb):
+        from types import SimpleNamespace
+
+        import threading
+        self.log.append(threading.current_thread().name)
+        lm = [SimpleNamespace(x=float(rgb[0, 0, 0]) / rgb.shape[1], y=20.0 / rgb.shape[0],
+                              visibility=0.9 if k == 0 else 0.1) for k in range(33)]
+        return SimpleNamespace(pose_landmarks=SimpleNamespace(landmark=lm))
+
+    def close(self):
+        self.closed = True
+
+
+def _fake_videos(monkeypatch, frames_of, poses: list, seen: list):
+    """Three videos whose frames frames_of(name, k) gives, decoded by a stand-in for iter_frames,
+    and trackers that record where they ran."""
+    from types import SimpleNamespace
+
+    import vs_inspect.io.video as video_mod
+
+    monkeypatch.setattr(people, "heads_unavailable", lambda: None)
+    monkeypatch.setattr(people, "start_pose", lambda: poses.append(_FakePose(seen)) or poses[-1])
+    monkeypatch.setattr(video_mod, "iter_frames", lambda src, step=1, max_side=None: (
+        (k, frames_of(src.info.name, k)) for k in range(0, src.info.num_frames, step)))
+    infos = {n: SimpleNamespace(name=n, num_frames=6, frame_interval_s=0.1) for n in "abc"}
+    sources = [SimpleNamespace(info=infos[n]) for n in "abc"]
+    vids = {n: SimpleNamespace(info=infos[n], scale_xy=(1.0, 1.0)) for n in "abc"}
+    return sources, vids, SimpleNamespace(max_side=640, heads_max_hz=10.0)
+
+
+def test_heads_found_ahead_on_their_own_thread_are_the_heads_found_after(monkeypatch):
+    from vs_inspect.cues.extract import _heads, _HeadsAhead
+    from vs_inspect.record.sink import NullSink
+
+    def frame(name, k):
+        return np.full((8, 10, 3), 1 + k + 10 * "abc".index(name), np.uint8)
+    poses, seen = [], []
+    sources, vids, cfg = _fake_videos(monkeypatch, frame, poses, seen)
+    after = _heads(sources, vids, dict.fromkeys("abc"), {}, cfg, {}, NullSink(), False)
+    assert set(seen) == {"MainThread"} and len(seen) == 18 and all(p.closed for p in poses)
+    poses.clear(), seen.clear()
+    stats: dict = {}
+    with _HeadsAhead(sources, vids, cfg) as ahead:
+        assert len(poses) == 3  # the trackers start on the calling thread
+        found = _heads(sources, vids, dict.fromkeys("abc"), {}, cfg, stats, NullSink(), False, ahead)
+    assert len(seen) == 18 and all(name.startswith("heads") for name in seen), set(seen)
+    assert all(p.closed for p in poses)
+    assert found.keys() == after.keys() == set("abc")
+    for n in "abc":
+        np.testing.assert_array_equal(found[n], after[n])
+    np.testing.assert_allclose(found["b"][:, 0], 11 + np.arange(6))  # the nose at the frame's value
+    assert stats["heads"]["frames_with_a_head"] == {"a": 6, "b": 6, "c": 6}
+
+
+def test_leaving_stops_the_heads_thread_and_closes_every_tracker(monkeypatch):
+    """Heads that turn out not to be needed (no camera moves in the end, or an error) cost at most
+    the frame being looked at: the thread stops there, and the trackers of videos it never
+    reached are closed unused."""
+    import threading
+
+    from vs_inspect.cues.extract import _HeadsAhead
+
+    first, release = threading.Event(), threading.Event()
+
+    def frame(name, k):
+        if name == "a" and k == 1:
+            first.set()
+            release.wait(10)  # the thread is inside video a when the caller leaves
+        return np.zeros((8, 10, 3), np.uint8)
+    poses, seen = [], []
+    sources, vids, cfg = _fake_videos(monkeypatch, frame, poses, seen)
+    ahead = _HeadsAhead(sources, vids, cfg)
+    with ahead:
+        assert first.wait(10)
+        threading.Timer(0.3, release.set).start()  # after leaving has told the thread to stop
+    assert len(seen) == 1 and seen[0].startswith("heads")  # a's frame 0 only: stopped before frame 1
+    assert len(poses) == 3 and all(p.closed for p in poses)
+    with pytest.raises(InterruptedError):
+        ahead.landmarks("a")

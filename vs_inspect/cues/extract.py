@@ -9,11 +9,15 @@ used, NoUsableVideos carries those reasons instead of a bundle.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 import itertools
 import logging
+import os
+import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import cv2
@@ -322,60 +326,65 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
             sink.stage_event("cues", f"{src.info.name}: {msg}")
             log.warning("%s: %s", src.info.name, msg)
 
-    t0 = time.perf_counter()
-    all_pairs: dict[tuple[str, str], TrackPairs] = {}
-    for a, b in tqdm(list(itertools.combinations([n for n in names if n in vids], 2)), desc="cross-view pairs", unit="pair",
-                     disable=not progress, leave=False):
-        tp, ps = match_tracks(a, b, vids[a].features, vids[b].features, vids[a].instance,
-                              vids[b].instance, cfg.match)
-        all_pairs[(a, b)] = tp
-        sink.pair_matches(a, b, vids[a].features.keyframes, vids[b].features.keyframes, ps.keyframe_matches)
-        stats["pairs"][f"{a}__{b}"] = {"matches": ps.matches, "snapped": ps.snapped,
-                                       "instance_pairs": ps.instance_pairs, "track_pairs": ps.track_pairs}
-        log.info("%s__%s: %d matches, %d snapped, %d instance pairs, %d track pairs",
-                 a, b, ps.matches, ps.snapped, ps.instance_pairs, ps.track_pairs)
-    timings["matching_s"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    cameras: dict[str, CameraTrack] = {}
-    tracks: dict[str, Tracks] = {}
-    if calibration is not None:
-        cameras, tracks, dropped, undistort = _import_cameras(calibration, vids)
-        stats["dropped"].update(dropped)
-        points = colors = None
-    else:
-        cameras, tracks, points, colors, undistort = _estimate(vids, cfg, stats, all_pairs,
-                                                               {s.info.name: s for s in sources}, progress)
-    for name, why in stats["dropped"].items():
-        if name in vids:
-            sink.stage_event("cameras", f"{name}: {why}")
-    for name, r in (stats.get("sfm") or {}).get("frame_registration", {}).items():
-        if name in cameras:  # the moving camera's own poses, each frame registered on its own
-            sink.stage_event("cameras", f"{name}: {r['registered']} of {r['tried']} frames outside the "
-                                        f"reconstruction registered against it (median {r['median_inliers']:.0f} "
-                                        f"inliers, {r['refused']} refused); the rest slerped",
-                             registered=r["registered"], tried=r["tried"], refused=r["refused"])
-    timings["cameras_s"] = time.perf_counter() - t0
+    # a camera seen moving: the heads are found on a thread of their own meanwhile (the cameras'
+    # COLMAP mapping keeps one core; the heads are only used when a camera moves in the end)
+    ahead = _HeadsAhead.start(sources, vids, cfg) \
+        if cfg.heads and any(v.camera_motion == "moving" for v in vids.values()) else None
+    with ahead or contextlib.nullcontext():
+        t0 = time.perf_counter()
+        all_pairs: dict[tuple[str, str], TrackPairs] = {}
+        for a, b in tqdm(list(itertools.combinations([n for n in names if n in vids], 2)), desc="cross-view pairs",
+                         unit="pair", disable=not progress, leave=False):
+            tp, ps = match_tracks(a, b, vids[a].features, vids[b].features, vids[a].instance,
+                                  vids[b].instance, cfg.match)
+            all_pairs[(a, b)] = tp
+            sink.pair_matches(a, b, vids[a].features.keyframes, vids[b].features.keyframes, ps.keyframe_matches)
+            stats["pairs"][f"{a}__{b}"] = {"matches": ps.matches, "snapped": ps.snapped,
+                                           "instance_pairs": ps.instance_pairs, "track_pairs": ps.track_pairs}
+            log.info("%s__%s: %d matches, %d snapped, %d instance pairs, %d track pairs",
+                     a, b, ps.matches, ps.snapped, ps.instance_pairs, ps.track_pairs)
+        timings["matching_s"] = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        cameras: dict[str, CameraTrack] = {}
+        tracks: dict[str, Tracks] = {}
+        if calibration is not None:
+            cameras, tracks, dropped, undistort = _import_cameras(calibration, vids)
+            stats["dropped"].update(dropped)
+            points = colors = None
+        else:
+            cameras, tracks, points, colors, undistort = _estimate(vids, cfg, stats, all_pairs,
+                                                                   {s.info.name: s for s in sources}, progress)
+        for name, why in stats["dropped"].items():
+            if name in vids:
+                sink.stage_event("cameras", f"{name}: {why}")
+        for name, r in (stats.get("sfm") or {}).get("frame_registration", {}).items():
+            if name in cameras:  # the moving camera's own poses, each frame registered on its own
+                sink.stage_event("cameras", f"{name}: {r['registered']} of {r['tried']} frames outside the "
+                                            f"reconstruction registered against it (median {r['median_inliers']:.0f} "
+                                            f"inliers, {r['refused']} refused); the rest slerped",
+                                 registered=r["registered"], tried=r["tried"], refused=r["refused"])
+        timings["cameras_s"] = time.perf_counter() - t0
 
-    pairs = {k: v for k, v in all_pairs.items() if k[0] in cameras and k[1] in cameras}
-    if cfg.geometric.enabled:
-        t0 = time.perf_counter()
-        pairs, voted = _add_geometric_pairs(pairs, cameras, tracks, vids, cfg, stats, sink, progress,
-                                            estimated=calibration is None)
-        fallback = (stats.get("sfm") or {}).get("fallback") or {}
-        if fallback.get("used"):
-            refused = _check_fitted_offsets(fallback, voted, vids)
-            for n, why in refused.items():
-                cameras.pop(n, None)
-                stats["dropped"][n] = why
-                sink.stage_event("cameras", f"{n}: {why}")
-                log.warning("%s: %s", n, why)
-            pairs = {k: v for k, v in pairs.items() if k[0] in cameras and k[1] in cameras}
-        timings["geometric_pairs_s"] = time.perf_counter() - t0
-    heads = {}
-    if cfg.heads and any(c.is_moving for c in cameras.values()):
-        t0 = time.perf_counter()
-        heads = _heads(sources, vids, cameras, undistort, cfg, stats, sink, progress)
-        timings["heads_s"] = time.perf_counter() - t0
+        pairs = {k: v for k, v in all_pairs.items() if k[0] in cameras and k[1] in cameras}
+        if cfg.geometric.enabled:
+            t0 = time.perf_counter()
+            pairs, voted = _add_geometric_pairs(pairs, cameras, tracks, vids, cfg, stats, sink, progress,
+                                                estimated=calibration is None)
+            fallback = (stats.get("sfm") or {}).get("fallback") or {}
+            if fallback.get("used"):
+                refused = _check_fitted_offsets(fallback, voted, vids)
+                for n, why in refused.items():
+                    cameras.pop(n, None)
+                    stats["dropped"][n] = why
+                    sink.stage_event("cameras", f"{n}: {why}")
+                    log.warning("%s: %s", n, why)
+                pairs = {k: v for k, v in pairs.items() if k[0] in cameras and k[1] in cameras}
+            timings["geometric_pairs_s"] = time.perf_counter() - t0
+        heads = {}
+        if cfg.heads and any(c.is_moving for c in cameras.values()):
+            t0 = time.perf_counter()
+            heads = _heads(sources, vids, cameras, undistort, cfg, stats, sink, progress, ahead)
+            timings["heads_s"] = time.perf_counter() - t0
     stats["registered_cameras"] = len(cameras)
     if cameras:  # after the moving points' cameras were checked: a refused one is not drawn
         sink.cameras(cameras, points, colors)
@@ -397,14 +406,83 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
     return bundle, _cue_stats(stats)
 
 
+def _video_landmarks(src, info: VideoInfo, cfg: CueConfig, pose=None, stop: threading.Event | None = None
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """(frames looked at (K,), their (K,33,3) BlazePose landmarks) of one video decoded again at
+    working resolution, at most about cfg.heads_max_hz frames a second. pose: a started tracker
+    (people.start_pose) or None; stop: set to end early (InterruptedError)."""
+    from ..io.video import iter_frames
+    from .people import detect_landmarks
+
+    def frames():
+        for _, img in iter_frames(src, step=step, max_side=cfg.max_side):
+            if stop is not None and stop.is_set():
+                raise InterruptedError("heads no longer needed")
+            yield img
+    step = _frame_step(info, cfg.heads_max_hz)
+    return np.arange(0, info.num_frames, step), detect_landmarks(frames(), pose)
+
+
+class _HeadsAhead:
+    """Every readable video's landmarks (_video_landmarks), found one video after another on a
+    thread of their own while the cameras are estimated and the geometric pairs voted. The
+    trackers are started here, on the calling thread (their start-up silences stderr). Leaving
+    the with block stops the thread at its next frame and waits for it."""
+
+    def __init__(self, sources, vids: dict[str, _VideoCues], cfg: CueConfig):
+        from .people import start_pose
+
+        self._stop = threading.Event()
+        self._pool = ThreadPoolExecutor(1, thread_name_prefix="heads")
+        self._poses, self._jobs = {}, {}
+        try:
+            for src in sources:
+                n = src.info.name
+                if n in vids:
+                    self._poses[n] = start_pose()
+                    self._jobs[n] = self._pool.submit(_video_landmarks, src, vids[n].info, cfg, self._poses[n],
+                                                      self._stop)
+        except BaseException:
+            self.__exit__()
+            raise
+
+    @classmethod
+    def start(cls, sources, vids: dict[str, _VideoCues], cfg: CueConfig) -> _HeadsAhead | None:
+        """None where it would not help or cannot run: one core, or no detector installed."""
+        from .people import heads_unavailable
+
+        if (os.cpu_count() or 1) < 2 or heads_unavailable():
+            return None
+        try:
+            return cls(sources, vids, cfg)
+        except (RuntimeError, OSError, ValueError) as exc:  # _heads then says, per video, what fails
+            log.warning("heads not found ahead: a tracker did not start (%s: %s)", type(exc).__name__, exc)
+            return None
+
+    def landmarks(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+        """_video_landmarks of that video (waits for them; raises what they raised)."""
+        return self._jobs[name].result()
+
+    def __enter__(self) -> _HeadsAhead:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        for n, job in self._jobs.items():
+            if job.cancel():  # never started: its tracker is closed here
+                self._poses[n].close()
+        self._pool.shutdown(wait=True)
+        for n in self._poses.keys() - self._jobs.keys():  # started before a failure, never submitted
+            self._poses[n].close()
+
+
 def _heads(sources, vids: dict[str, _VideoCues], cameras: dict, undistort: dict, cfg: CueConfig, stats: dict,
-           sink: Sink, progress: bool) -> dict[str, np.ndarray]:
+           sink: Sink, progress: bool, ahead: _HeadsAhead | None = None) -> dict[str, np.ndarray]:
     """{video: (T,2) undistorted full-resolution px of the head the person detector found in a
     frame (NaN: none, or a frame beyond cfg.heads_max_hz not looked at)}, for every video with a
-    camera, decoded again at working resolution; {} with the reason in stats["heads"] when the
-    detector is not installed."""
-    from ..io.video import iter_frames
-    from .people import detect_landmarks, head_points, heads_unavailable
+    camera, decoded again at working resolution (or taken from ahead); {} with the reason in
+    stats["heads"] when the detector is not installed."""
+    from .people import head_points, heads_unavailable
 
     why = heads_unavailable()
     if why:
@@ -417,10 +495,8 @@ def _heads(sources, vids: dict[str, _VideoCues], cameras: dict, undistort: dict,
                     disable=not progress, leave=False):
         n = src.info.name
         info = vids[n].info
-        step = _frame_step(info, cfg.heads_max_hz)
-        todo = np.arange(0, info.num_frames, step)
         try:
-            landmarks = detect_landmarks(img for _, img in iter_frames(src, step=step, max_side=cfg.max_side))
+            todo, landmarks = ahead.landmarks(n) if ahead is not None else _video_landmarks(src, info, cfg)
         except (InputError, OSError, ValueError, RuntimeError) as exc:  # this decoding pass failed
             failed[n] = f"{type(exc).__name__}: {exc}"
             continue

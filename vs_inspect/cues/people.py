@@ -64,28 +64,40 @@ def _quiet_native_logs() -> Iterator[None]:
         os.close(saved)
 
 
-def detect_landmarks(frames_bgr: Iterable[np.ndarray]) -> np.ndarray:
-    """(T,33,3) BlazePose landmarks (x, y in the frames' px, visibility) of one video's frames in
-    order, NaN where no person was found. Raises RuntimeError with heads_unavailable()'s reason."""
+def start_pose():
+    """A BlazePose tracker, started, for one video's frames (detect_landmarks). Its start-up writes
+    native notes to the process's stderr (fd 2), which is silenced meanwhile: start trackers on the
+    thread that logs, before other work runs beside them; their frames may then go to any thread.
+    Raises RuntimeError with heads_unavailable()'s reason."""
     why = heads_unavailable()
     if why:
         raise RuntimeError(why)
+    # its protobuf 4 code calls a deprecated protobuf function at start-up and on frames, from
+    # whichever thread runs them; ignored for the process (warnings.catch_warnings is not thread-safe)
+    warnings.filterwarnings("ignore", message="SymbolDatabase.GetPrototype", category=UserWarning)
+    with _quiet_native_logs():
+        import mediapipe as mp
+
+        pose = mp.solutions.pose.Pose(static_image_mode=False, model_complexity=1, smooth_landmarks=False)
+        pose.process(np.zeros((64, 64, 3), np.uint8))  # its models start (and log) here; no one is found
+    return pose
+
+
+def detect_landmarks(frames_bgr: Iterable[np.ndarray], pose=None) -> np.ndarray:
+    """(T,33,3) BlazePose landmarks (x, y in the frames' px, visibility) of one video's frames in
+    order, NaN where no person was found. pose: a tracker from start_pose, used for these frames
+    only and closed here (None: one is started here). Raises RuntimeError with
+    heads_unavailable()'s reason."""
     import cv2
 
+    pose = pose if pose is not None else start_pose()
     rows = []
-    with warnings.catch_warnings():  # its protobuf 4 code calls a deprecated protobuf function
-        warnings.filterwarnings("ignore", message="SymbolDatabase.GetPrototype", category=UserWarning)
-        with _quiet_native_logs():
-            import mediapipe as mp
-
-            pose = mp.solutions.pose.Pose(static_image_mode=False, model_complexity=1, smooth_landmarks=False)
-            pose.process(np.zeros((64, 64, 3), np.uint8))  # its models start (and log) here; no one is found
-        try:
-            for bgr in frames_bgr:
-                h, w = bgr.shape[:2]
-                found = pose.process(cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)).pose_landmarks
-                rows.append(np.array([[p.x * w, p.y * h, p.visibility] for p in found.landmark])
-                            if found else np.full((33, 3), np.nan))
-        finally:
-            pose.close()
+    try:
+        for bgr in frames_bgr:
+            h, w = bgr.shape[:2]
+            found = pose.process(cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)).pose_landmarks
+            rows.append(np.array([[p.x * w, p.y * h, p.visibility] for p in found.landmark])
+                        if found else np.full((33, 3), np.nan))
+    finally:
+        pose.close()
     return np.stack(rows) if rows else np.zeros((0, 33, 3))
