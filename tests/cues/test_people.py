@@ -41,12 +41,19 @@ def test_without_mediapipe_stage0_says_why_and_finds_no_heads(monkeypatch):
 
 
 @pytest.mark.skipif(people.heads_unavailable() is not None, reason=str(people.heads_unavailable()))
-def test_fencing1_is_timed_by_its_wearers_seen_in_the_other_glasses(shared_data, tmp_path):
+def test_fencing1_is_timed_by_its_wearers_seen_in_the_other_glasses(shared_data, tmp_path, monkeypatch):
+    import threading
+
     paths = sorted((shared_data / "visualsync_clips" / "fencing1").glob("*.mp4"))
     if len(paths) != 3:
         pytest.skip("fencing1 clips not in the shared data")
     out = tmp_path / "out"
+    where, detect = [], people.detect_landmarks
+    monkeypatch.setattr(people, "detect_landmarks", lambda frames, pose=None: (
+        where.append(threading.current_thread().name), detect(frames, pose))[1])
     main(["sync", *map(str, paths), "--out", str(out), "--no-progress", "--no-rrd"])
+    # the glasses are seen moving: their heads are found beside the cameras, on a thread of their own
+    assert len(where) == 3 and all(name.startswith("heads") for name in where), where
     res = json.loads((out / "result.json").read_text())
     truth = clip_truth(paths)
     a01, a02, a03 = (p.stem for p in paths)
@@ -150,10 +157,12 @@ def test_heads_found_ahead_on_their_own_thread_are_the_heads_found_after(monkeyp
     assert set(seen) == {"MainThread"} and len(seen) == 18 and all(p.closed for p in poses)
     poses.clear(), seen.clear()
     stats: dict = {}
+    monkeypatch.setattr(_HeadsAhead, "max_videos", 2)  # each tracker holds memory till its video is done
     with _HeadsAhead(sources, vids, cfg) as ahead:
-        assert len(poses) == 3  # the trackers start on the calling thread
+        assert len(poses) == 2  # the trackers start on the calling thread
         found = _heads(sources, vids, dict.fromkeys("abc"), {}, cfg, stats, NullSink(), False, ahead)
-    assert len(seen) == 18 and all(name.startswith("heads") for name in seen), set(seen)
+    assert len(seen) == 18 and all(name.startswith("heads") for name in seen[:12]), set(seen)
+    assert set(seen[12:]) == {"MainThread"}  # c's heads: found by _heads itself, as before
     assert all(p.closed for p in poses)
     assert found.keys() == after.keys() == set("abc")
     for n in "abc":

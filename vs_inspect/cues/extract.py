@@ -424,10 +424,14 @@ def _video_landmarks(src, info: VideoInfo, cfg: CueConfig, pose=None, stop: thre
 
 
 class _HeadsAhead:
-    """Every readable video's landmarks (_video_landmarks), found one video after another on a
-    thread of their own while the cameras are estimated and the geometric pairs voted. The
-    trackers are started here, on the calling thread (their start-up silences stderr). Leaving
-    the with block stops the thread at its next frame and waits for it."""
+    """The landmarks (_video_landmarks) of the first max_videos readable videos, found one video
+    after another on a thread of their own while the cameras are estimated and the geometric
+    pairs voted. The trackers are started here, on the calling thread (their start-up silences
+    stderr), each holding some 80 MB until its video is done: hence the cap; _heads finds the
+    other videos' heads itself. Leaving the with block stops the thread at its next frame and
+    waits for it."""
+
+    max_videos = 4
 
     def __init__(self, sources, vids: dict[str, _VideoCues], cfg: CueConfig):
         from .people import start_pose
@@ -438,7 +442,7 @@ class _HeadsAhead:
         try:
             for src in sources:
                 n = src.info.name
-                if n in vids:
+                if n in vids and len(self._jobs) < self.max_videos:
                     self._poses[n] = start_pose()
                     self._jobs[n] = self._pool.submit(_video_landmarks, src, vids[n].info, cfg, self._poses[n],
                                                       self._stop)
@@ -459,9 +463,10 @@ class _HeadsAhead:
             log.warning("heads not found ahead: a tracker did not start (%s: %s)", type(exc).__name__, exc)
             return None
 
-    def landmarks(self, name: str) -> tuple[np.ndarray, np.ndarray]:
-        """_video_landmarks of that video (waits for them; raises what they raised)."""
-        return self._jobs[name].result()
+    def landmarks(self, name: str) -> tuple[np.ndarray, np.ndarray] | None:
+        """_video_landmarks of that video (waits for them; raises what they raised), None when it
+        was not among the videos looked at here."""
+        return self._jobs[name].result() if name in self._jobs else None
 
     def __enter__(self) -> _HeadsAhead:
         return self
@@ -496,7 +501,8 @@ def _heads(sources, vids: dict[str, _VideoCues], cameras: dict, undistort: dict,
         n = src.info.name
         info = vids[n].info
         try:
-            todo, landmarks = ahead.landmarks(n) if ahead is not None else _video_landmarks(src, info, cfg)
+            done = ahead.landmarks(n) if ahead is not None else None
+            todo, landmarks = done if done is not None else _video_landmarks(src, info, cfg)
         except (InputError, OSError, ValueError, RuntimeError) as exc:  # this decoding pass failed
             failed[n] = f"{type(exc).__name__}: {exc}"
             continue
