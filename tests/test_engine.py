@@ -54,6 +54,27 @@ def test_local_engine_forks_marked_items_in_order_and_raises_as_is():
         list(eng.map(_fails, [2, 3], progress=False, processes=True))
 
 
+def _thread_and_double(shared, x):
+    import threading
+    import time
+
+    time.sleep(0.05 * (3 - x % 3))  # later items finish first
+    return threading.current_thread().name, shared * x
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one core: the local engine runs items one by one")
+def test_local_engine_runs_items_marked_threads_two_at_a_time_in_order():
+    """threads=True: two worker threads of this process, results in the items' order whatever
+    finishes first, an exception raised as it is."""
+    eng = LocalEngine()
+    out = list(eng.map(_thread_and_double, list(range(6)), shared=10, progress=False, threads=True))
+    assert [v for _, v in out] == [10 * x for x in range(6)]
+    names = {name for name, _ in out}
+    assert len(names) == 2 and all(n.startswith("engine") for n in names), names
+    with pytest.raises(InputError, match="item 2 is bad"):
+        list(eng.map(_fails, [2, 3], progress=False, threads=True))
+
+
 def test_engine_config_rejects_unknown_engine():
     with pytest.raises(ValueError, match="unknown engine 'spark'"):
         EngineConfig("spark")

@@ -20,11 +20,13 @@ imported only when a RayEngine is opened (the `distributed` extra).
 
 from __future__ import annotations
 
+import functools
 import logging
 import multiprocessing
 import os
 import signal
 from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -67,9 +69,12 @@ class Engine:
 
     def map(self, fn: Callable[[Any, Any], Any], items: Iterable[Any], *, shared: Any = None,
             desc: str = "", unit: str = "item", progress: bool = True,
-            processes: bool = False) -> Iterator[Any]:
+            processes: bool = False, threads: bool = False) -> Iterator[Any]:
         """processes: the items are single-threaded CPU work (no numba threads inside), so the
-        local engine may fork one process per core for them; Ray runs every item as a task."""
+        local engine may fork one process per core for them. threads: the items release the GIL
+        for most of their work (OpenCV, numpy) and share no state, so the local engine runs two at
+        a time on threads (not more: each holds its own data, a video's frames). Ray runs every
+        item as a task."""
         raise NotImplementedError
 
     def close(self) -> None:
@@ -84,13 +89,20 @@ class Engine:
 
 class LocalEngine(Engine):
     """In this process, one item after another, exceptions as they are; items marked
-    processes=True in forked processes, one per core (results and exceptions the same)."""
+    processes=True in forked processes, one per core, and threads=True on two threads (results
+    and exceptions the same)."""
 
     name = "local"
 
-    def map(self, fn, items, *, shared=None, desc="", unit="item", progress=True, processes=False):
+    def map(self, fn, items, *, shared=None, desc="", unit="item", progress=True, processes=False,
+            threads=False):
         items = list(items)
-        workers = min(len(items), os.cpu_count() or 1) if processes else 1
+        workers = min(len(items), os.cpu_count() or 1) if processes or threads else 1
+        if threads and not processes and workers > 1:
+            with ThreadPoolExecutor(min(workers, 2), thread_name_prefix="engine") as pool:
+                yield from tqdm(pool.map(functools.partial(fn, shared), items), total=len(items), desc=desc,
+                                unit=unit, disable=not progress, leave=False)
+            return
         if workers <= 1:
             for item in tqdm(items, desc=desc, unit=unit, disable=not progress, leave=False):
                 yield fn(shared, item)
@@ -172,7 +184,8 @@ class RayEngine(Engine):
         """CPUs of the cluster (all nodes)."""
         return int(self._ray.cluster_resources().get("CPU", 1))
 
-    def map(self, fn, items, *, shared=None, desc="", unit="item", progress=True, processes=False):
+    def map(self, fn, items, *, shared=None, desc="", unit="item", progress=True, processes=False,
+            threads=False):
         ray = self._ray
         items = list(items)
         ref = ray.put(shared)  # once: every task reads it from the object store

@@ -344,3 +344,32 @@ def test_two_cameras_from_the_moving_points_alone_are_refused(monkeypatch):
     cams, stats = _moving_point_cameras(monkeypatch, ["a", "b"], CueConfig(
         camera=CameraConfig(fallback_unchecked_pair=True)))
     assert set(cams) == {"a", "b"} and stats["sfm"]["fallback"]["fitted_offsets_s"] == {"a": 0.0, "b": 0.1}
+
+
+def test_videos_own_cues_run_two_at_a_time_on_threads_with_sift_keyframes_only():
+    """Each video's own cues share no state with SIFT keyframes, so the local engine may run two
+    on threads; learned keyframe descriptors set torch's process-wide thread count per call, so
+    their videos run one after another."""
+    from types import SimpleNamespace
+
+    import pytest
+
+    from vs_inspect.cues.config import MatchConfig
+    from vs_inspect.cues.extract import extract_cues
+    from vs_inspect.engine import LocalEngine
+
+    class Stop(Exception):
+        pass
+
+    class Spy(LocalEngine):
+        def map(self, fn, items, **options):
+            asked.append(options.get("threads"))
+            raise Stop
+
+    asked: list = []
+    sources = [SimpleNamespace(info=SimpleNamespace(name=n)) for n in "ab"]
+    for descriptor in ("sift", "xfeat"):
+        with pytest.raises(Stop):
+            extract_cues(sources, cfg=CueConfig(match=MatchConfig(descriptor=descriptor)), engine=Spy(),
+                         progress=False)
+    assert asked == [True, False]

@@ -36,6 +36,8 @@ STAGES = (("decode", "stage0_decode_s"), ("motion", "stage0_motion_s"),
           ("sfm_img", "stage0_sfm_frames_s"), ("match", "stage0_matching_s"),
           ("cams", "stage0_cameras_s"), ("geo", "stage0_geometric_pairs_s"),
           ("heads", "stage0_heads_s"), ("stage1", "stage1_s"), ("stage2", "stage2_s"))
+# a video's own steps: their seconds are sums over the videos, which may run two at a time
+PER_VIDEO = ("decode", "motion", "track", "feat", "sfm_img")
 COLUMNS = ("scene", "cameras") + tuple(c for c, _ in STAGES) + (
     "other", "wall_s", "cpu_s", "rss_mb", "resolved", "med_ms", "max_ms", "target")
 
@@ -88,6 +90,7 @@ class TimingRow:
     max_error_ms: float
     offsets_s: dict[str, float | None] = field(default_factory=dict)
     target_s: float | None = TARGET_S  # None: no target for this scene (the reference)
+    videos_s: float | None = None  # wall time of the videos' own steps together (None: not recorded)
     sfm_features: str | None = None  # estimated cameras: what the cameras came from ("sift",
     # "xfeat" when auto's second try won: it roughly doubles the camera step on 720p, or
     # "moving points" when the moving points' own two-view geometry replaced the reconstruction)
@@ -167,7 +170,9 @@ def time_sync(folder: Path, out: Path, calibrated: bool, scene_label: str,
     return TimingRow(scene_label, "calibration" if calibrated else "estimated", stages,
                      float(t.get("total_s", math.nan)), wall, cpu, rss_mb,
                      sum(1 for n in truth if offsets.get(n) is not None), len(truth),
-                     m.delta_med_ms, m.delta_max_ms, offsets, target_s, features)
+                     m.delta_med_ms, m.delta_max_ms, offsets, target_s,
+                     videos_s=float(t["stage0_videos_s"]) if "stage0_videos_s" in t else None,
+                     sfm_features=features)
 
 
 def _fmt(v: float | None, digits: int = 1) -> str:
@@ -180,8 +185,10 @@ def table_header() -> str:
 
 def table_line(r: TimingRow) -> str:
     """One run as a Markdown table row: stage seconds, the rest of the wall time (start-up,
-    recording, writing), wall, CPU, peak memory, resolved videos, errors and the target."""
-    staged = sum(r.stages_s.values())
+    recording, writing: the videos' own steps counted by their wall time together when it is
+    known), wall, CPU, peak memory, resolved videos, errors and the target."""
+    per_video = sum(v for c, v in r.stages_s.items() if c in PER_VIDEO)
+    staged = sum(r.stages_s.values()) - per_video + (per_video if r.videos_s is None else r.videos_s)
     target = "-" if r.met is None else f"{'met' if r.met else 'MISSED'} (<{r.target_s:g} s)"
     cameras = f"{r.cameras} ({r.sfm_features})" if r.sfm_features else r.cameras
     cells = [r.scene, cameras] + [_fmt(r.stages_s.get(c)) for c, _ in STAGES] + [
