@@ -62,6 +62,14 @@ def _thread_and_double(shared, x):
     return threading.current_thread().name, shared * x
 
 
+def _record_start(started, x):
+    import time
+
+    started.append(x)
+    time.sleep(0.1)
+    return x
+
+
 @pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one core: the local engine runs items one by one")
 def test_local_engine_runs_items_marked_threads_two_at_a_time_in_order():
     """threads=True: two worker threads of this process, results in the items' order whatever
@@ -73,6 +81,12 @@ def test_local_engine_runs_items_marked_threads_two_at_a_time_in_order():
     assert len(names) == 2 and all(n.startswith("engine") for n in names), names
     with pytest.raises(InputError, match="item 2 is bad"):
         list(eng.map(_fails, [2, 3], progress=False, threads=True))
+    # a caller that stops early: the items not yet started are not run
+    started = []
+    items = eng.map(_record_start, list(range(20)), shared=started, progress=False, threads=True)
+    next(items)
+    items.close()
+    assert 2 <= len(started) < 20, started
 
 
 def test_engine_config_rejects_unknown_engine():

@@ -99,9 +99,12 @@ class LocalEngine(Engine):
         items = list(items)
         workers = min(len(items), os.cpu_count() or 1) if processes or threads else 1
         if threads and not processes and workers > 1:
-            with ThreadPoolExecutor(min(workers, 2), thread_name_prefix="engine") as pool:
+            pool = ThreadPoolExecutor(min(workers, 2), thread_name_prefix="engine")
+            try:
                 yield from tqdm(pool.map(functools.partial(fn, shared), items), total=len(items), desc=desc,
                                 unit=unit, disable=not progress, leave=False)
+            finally:  # left early (an error, Ctrl-C): the items not started are not run
+                pool.shutdown(wait=True, cancel_futures=True)
             return
         if workers <= 1:
             for item in tqdm(items, desc=desc, unit=unit, disable=not progress, leave=False):
