@@ -4,6 +4,7 @@ triangle of sure cameras."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from vs_inspect.cues.config import CueConfig, GeometricPairConfig
 from vs_inspect.cues.extract import _add_joint_pairs
@@ -351,8 +352,6 @@ def test_videos_own_cues_run_two_at_a_time_on_threads_with_sift_keyframes_only()
     on threads; learned keyframe descriptors set torch's process-wide thread count per call, so
     their videos run one after another."""
     from types import SimpleNamespace
-
-    import pytest
 
     from vs_inspect.cues.config import MatchConfig
     from vs_inspect.cues.extract import extract_cues

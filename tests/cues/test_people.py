@@ -6,6 +6,8 @@ would chain two sightings, is null with that reason."""
 from __future__ import annotations
 
 import json
+import threading
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -42,8 +44,6 @@ def test_without_mediapipe_stage0_says_why_and_finds_no_heads(monkeypatch):
 
 @pytest.mark.skipif(people.heads_unavailable() is not None, reason=str(people.heads_unavailable()))
 def test_fencing1_is_timed_by_its_wearers_seen_in_the_other_glasses(shared_data, tmp_path, monkeypatch):
-    import threading
-
     paths = sorted((shared_data / "visualsync_clips" / "fencing1").glob("*.mp4"))
     if len(paths) != 3:
         pytest.skip("fencing1 clips not in the shared data")
@@ -116,9 +116,6 @@ class _FakePose:
         self.log, self.closed = log, False
 
     def process(self, rgb):
-        from types import SimpleNamespace
-
-        import threading
         self.log.append(threading.current_thread().name)
         lm = [SimpleNamespace(x=float(rgb[0, 0, 0]) / rgb.shape[1], y=20.0 / rgb.shape[0],
                               visibility=0.9 if k == 0 else 0.1) for k in range(33)]
@@ -131,8 +128,6 @@ class _FakePose:
 def _fake_videos(monkeypatch, frames_of, poses: list, seen: list):
     """Three videos whose frames frames_of(name, k) gives, decoded by a stand-in for iter_frames,
     and trackers that record where they ran."""
-    from types import SimpleNamespace
-
     import vs_inspect.io.video as video_mod
 
     monkeypatch.setattr(people, "heads_unavailable", lambda: None)
@@ -175,8 +170,6 @@ def test_leaving_stops_the_heads_thread_and_closes_every_tracker(monkeypatch):
     """Heads that turn out not to be needed (no camera moves in the end, or an error) cost at most
     the frame being looked at: the thread stops there, and the trackers of videos it never
     reached are closed unused."""
-    import threading
-
     from vs_inspect.cues.extract import _HeadsAhead
 
     first, release = threading.Event(), threading.Event()
