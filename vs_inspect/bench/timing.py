@@ -187,8 +187,8 @@ def table_line(r: TimingRow) -> str:
     """One run as a Markdown table row: stage seconds, the rest of the wall time (start-up,
     recording, writing: the videos' own steps counted by their wall time together when it is
     known), wall, CPU, peak memory, resolved videos, errors and the target."""
-    per_video = sum(v for c, v in r.stages_s.items() if c in PER_VIDEO)
-    staged = sum(r.stages_s.values()) - per_video + (per_video if r.videos_s is None else r.videos_s)
+    per_video = sum(v for c, v in r.stages_s.items() if c in PER_VIDEO) if r.videos_s is None else r.videos_s
+    staged = per_video + sum(v for c, v in r.stages_s.items() if c not in PER_VIDEO)
     target = "-" if r.met is None else f"{'met' if r.met else 'MISSED'} (<{r.target_s:g} s)"
     cameras = f"{r.cameras} ({r.sfm_features})" if r.sfm_features else r.cameras
     cells = [r.scene, cameras] + [_fmt(r.stages_s.get(c)) for c, _ in STAGES] + [

@@ -333,8 +333,9 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
 
     # the per-video steps' times are sums over videos, which may run two at a time: this is the wall time
     timings["videos_s"] = time.perf_counter() - t_videos
-    # a camera seen moving: the heads are found on a thread of their own meanwhile (the cameras'
-    # COLMAP mapping keeps one core; the heads are only used when a camera moves in the end)
+    # a camera seen moving: the heads are found on a thread of their own while the cameras are
+    # estimated (COLMAP's mapping keeps one core) and the geometric pairs voted; they are only
+    # used when a camera moves in the end
     ahead = _HeadsAhead.start(sources, vids, cfg) \
         if cfg.heads and any(v.camera_motion == "moving" for v in vids.values()) else None
     with ahead or contextlib.nullcontext():
@@ -421,12 +422,13 @@ def _video_landmarks(src, info: VideoInfo, cfg: CueConfig, pose=None, stop: thre
     from ..io.video import iter_frames
     from .people import detect_landmarks
 
+    step = _frame_step(info, cfg.heads_max_hz)
+
     def frames():
         for _, img in iter_frames(src, step=step, max_side=cfg.max_side):
             if stop is not None and stop.is_set():
                 raise InterruptedError("heads no longer needed")
             yield img
-    step = _frame_step(info, cfg.heads_max_hz)
     return np.arange(0, info.num_frames, step), detect_landmarks(frames(), pose)
 
 
@@ -484,8 +486,6 @@ class _HeadsAhead:
             if job.cancel():  # never started: its tracker is closed here
                 self._poses[n].close()
         self._pool.shutdown(wait=True)
-        for n in self._poses.keys() - self._jobs.keys():  # started before a failure, never submitted
-            self._poses[n].close()
 
 
 def _heads(sources, vids: dict[str, _VideoCues], cameras: dict, undistort: dict, cfg: CueConfig, stats: dict,
