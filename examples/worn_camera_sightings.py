@@ -6,8 +6,9 @@ sit on the other, worn camera's projected centre, both directions together (sync
 This script shows each direction on its own, per ordered pair (a sees the wearer of b): the peak
 Δ (the middle of the run of candidates with the most heads within --radius-px of b's projected
 centre, as Stage 1 takes it), its rival farther than --exclude-frames away, the median distance
-at the peak, and the error against the truth of VisualSync clip names. It reads a finished run's
-cues only.
+at the peak, and the error against the truth of VisualSync clip names; then the peak refined as
+Stage 1 refines an accepted one (sync/sightings.refine_peak: one constant shift between the heads
+and b's centre fitted with Δ) with its error and the shift. It reads a finished run's cues only.
 
     vs-inspect sync ../shared/data/visualsync_clips/fencing1/*.mp4 --out /tmp/f1 --no-rrd
     PYTHONPATH=. python examples/worn_camera_sightings.py /tmp/f1
@@ -26,7 +27,8 @@ from vs_inspect.geometry.sightings import sighting_peak
 from vs_inspect.io.bundle import read_bundle
 from vs_inspect.sync.config import LandscapeConfig
 from vs_inspect.sync.landscape import search_offsets
-from vs_inspect.sync.sightings import direction_landscape
+from vs_inspect.sync.config import SightingConfig
+from vs_inspect.sync.sightings import direction_landscape, refine_peak
 
 
 def main() -> int:
@@ -47,7 +49,7 @@ def main() -> int:
     except Exception:  # not VisualSync clip names: no truth column
         truth = None
     print(f"{'a sees the wearer of b':58s} {'heads':>5s} {'best Δ s':>9s} {'near':>5s} {'rival':>5s} "
-          f"{'median px':>9s} {'true Δ s':>9s} {'error frames':>12s}")
+          f"{'median px':>9s} {'true Δ s':>9s} {'error frames':>12s} {'fitted Δ s':>10s} {'error':>6s}  shift")
     for a in names:
         if a not in bundle.heads:
             continue
@@ -67,9 +69,14 @@ def main() -> int:
             peak, lo, _, rival = sighting_peak(land.offsets_s, land.near, args.exclude_frames * coarse_s)
             at = int(np.argmin(np.abs(land.offsets_s - peak)))
             err = f"{(peak - true_d) / coarse_s:+.1f}" if truth else "-"
+            # Stage 1's refinement of an accepted peak, this direction alone
+            fitted, note = refine_peak(bundle, a, [(a, b)], peak, coarse_s, {a: args.radius_px},
+                                       SightingConfig().refine_frames)
+            shift = note.split("(", 1)[1].split(";")[0] if note.startswith("refined") else "not refined"
+            fitted_err = f"{(fitted - true_d) / coarse_s:+.1f}" if truth else "-"
             print(f"{a + ' sees ' + b:58s} {int(np.isfinite(head[:, 0]).sum()):5d} {peak:+9.2f} "
                   f"{land.near[lo]:5d} {rival:5d} {land.median_px[at]:9.1f} "
-                  f"{'' if true_d is None else f'{true_d:+9.2f}':>9s} {err:>12s}")
+                  f"{'' if true_d is None else f'{true_d:+9.2f}':>9s} {err:>12s} {fitted:+10.3f} {fitted_err:>6s}  {shift}")
     return 0
 
 

@@ -357,7 +357,7 @@ def _long_sighting_chains(lands, reference: str, max_chain: int) -> dict[str, st
     sighting pairs in a chain from the reference."""
     return {v: _with_its_pairs(lands, v, (
         f"its offset would rest on {hops} worn-camera sightings in a chain from the reference (at most "
-        f"{max_chain}): on fencing1 each was 1.0-1.5 frames late (README), so their errors add up"))
+        f"{max_chain}): on fencing1 each was 0.6 frames late, the same way (README), so their errors add up"))
         for v, hops in _sighting_hops(lands, reference).items() if hops > max_chain}
 
 
