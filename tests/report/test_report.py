@@ -349,9 +349,11 @@ def test_a_pair_checked_without_its_unchecked_track_pairs_shows_that_landscape(r
     plt.close(fig)
 
 
-def test_a_sighting_pair_says_what_its_curve_is(tmp_path):
+@pytest.mark.parametrize("refitted", [False, True])
+def test_a_sighting_pair_says_what_its_curve_is(tmp_path, refitted):
     """A pair timed by worn-camera sightings draws 1 − the share of heads, not an epipolar energy:
-    its panel says so, read back from result.json."""
+    its panel says so, read back from result.json, and says when Δ was refitted off the counted
+    peak (sync/sightings.refine_peak's note)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -364,7 +366,9 @@ def test_a_sighting_pair_says_what_its_curve_is(tmp_path):
     offsets = np.arange(-10, 11) * 0.1
     energy = 1.0 - np.exp(-((offsets - 0.3) / 0.15) ** 2)
     land = PairLandscape("a", "b", offsets, energy, np.full(21, 40), np.array([13]), 0.3, 0.0, 0.1, 0,
-                         PairDecision(True, "worn camera sightings: 20 heads ...", 0.9, 0.1, 2, 1, False),
+                         PairDecision(True, "worn camera sightings: 20 heads ..." + (
+                             "; refined to Δ=+0.280 s by a constant shift between the heads and the worn camera's "
+                             "centre (a: (+3.0, +2.0) px; rms 2.0 px)" if refitted else ""), 0.9, 0.1, 2, 1, False),
                          residual="sighting")
     run = RunResult("a", {"a": 0.0, "b": 0.3}, {"a": 0.0, "b": 0.1}, {}, (land,), "irls", (("a", "b"),), (), {})
     write_run_result(run, tmp_path / "result.json")
@@ -373,4 +377,5 @@ def test_a_sighting_pair_says_what_its_curve_is(tmp_path):
     fig, ax = plt.subplots()
     _landscape_axes(ax, view)
     assert any("worn-camera sightings" in t.get_text() for t in ax.texts)
+    assert any("refitted with a head-to-camera shift" in t.get_text() for t in ax.texts) == refitted
     plt.close(fig)

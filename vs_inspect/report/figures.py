@@ -182,6 +182,8 @@ def _landscape_axes(ax, p: PairView) -> None:
     txt = f"Δ = {_fmt(p.chosen_offset_s)}"
     if p.residual == "sighting":  # not an epipolar energy: say what the curve is
         txt += "\nworn-camera sightings:\n1 − share of heads on its centre"
+        if "refined to" in p.reason:  # sync/sightings.refine_peak moved Δ off the counted peak
+            txt += "\nΔ refitted with a head-to-camera shift"
     if p.error_ms is not None:
         txt += f"\nerror vs truth {p.error_ms:.1f} ms"
     if p.disagreement_ms is not None and p.disagreement_ms > 100.0:
