@@ -25,9 +25,8 @@ import numpy as np
 from vs_inspect.bench.videos import clip_truth
 from vs_inspect.geometry.sightings import sighting_peak
 from vs_inspect.io.bundle import read_bundle
-from vs_inspect.sync.config import LandscapeConfig
+from vs_inspect.sync.config import LandscapeConfig, SightingConfig
 from vs_inspect.sync.landscape import search_offsets
-from vs_inspect.sync.config import SightingConfig
 from vs_inspect.sync.sightings import direction_landscape, refine_peak
 
 
@@ -70,9 +69,11 @@ def main() -> int:
             at = int(np.argmin(np.abs(land.offsets_s - peak)))
             err = f"{(peak - true_d) / coarse_s:+.1f}" if truth else "-"
             # Stage 1's refinement of an accepted peak, this direction alone
-            fitted, note = refine_peak(bundle, a, [(a, b)], peak, coarse_s, {a: args.radius_px},
-                                       SightingConfig().refine_frames)
-            shift = note.split("(", 1)[1].split(";")[0] if note.startswith("refined") else "not refined"
+            fit = refine_peak(bundle, a, [(a, b)], peak, coarse_s, {a: args.radius_px},
+                              SightingConfig().refine_frames)
+            fitted = fit.offset_s
+            shift = (f"({fit.shift_px[a][0]:+.1f}, {fit.shift_px[a][1]:+.1f}) px, rms {fit.rms_px:.1f} px"
+                     if fit.refined else "not refined")
             fitted_err = f"{(fitted - true_d) / coarse_s:+.1f}" if truth else "-"
             print(f"{a + ' sees ' + b:58s} {int(np.isfinite(head[:, 0]).sum()):5d} {peak:+9.2f} "
                   f"{land.near[lo]:5d} {rival:5d} {land.median_px[at]:9.1f} "

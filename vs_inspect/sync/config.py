@@ -178,13 +178,13 @@ class SightingConfig:
     rival_frames: float = 3.0
     """Frames of the coarser video beyond which another offset is a rival of the peak."""
     refine_frames: float = 2.0
-    """An accepted peak's Δ is fitted again within this many frames of the coarser video, with one constant image shift between the heads and the worn camera's centre (the head is not the camera: on fencing1 the peaks were 1.0 and 1.5 frames late without it, 0.5 with it; README); 0: the peak as counted."""
+    """An accepted peak's Δ is fitted again within this many frames of the coarser video, with one constant image shift between the heads and the worn camera's centre (the head is not the camera: on fencing1 the peaks were 1.0 and 1.5 frames late without it, 0.6 with it; README); 0: the peak as counted."""
     max_chain: int = 1
     """A video's offset may rest on at most this many sighting pairs in a chain from the reference (through accepted pairs; epipolar ones do not count): on fencing1 both were late, by 0.6 frames each once refined (1.0 and 1.5 before), so two in a chain put a camera 1.2 frames off (2.5 before; README)."""
 
     def __post_init__(self) -> None:
-        check_fields(self, nonnegative=("max_chain", "refine_frames"), positive=("radius_fraction", "min_sightings", "rival_frames"),
-                     fraction=("max_rival_ratio",))
+        check_fields(self, nonnegative=("max_chain", "refine_frames"),
+                     positive=("radius_fraction", "min_sightings", "rival_frames"), fraction=("max_rival_ratio",))
 
 
 @dataclass(frozen=True)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -88,40 +89,57 @@ def sighting_pair(bundle: CueBundle, a: str, b: str, cfg: SyncConfig) -> PairLan
     land = _decided(a, b, offsets, near, moments, sc, coarse_s, directions, radius)
     if not land.decision.accepted or sc.refine_frames <= 0:
         return land
-    best_s, note = refine_peak(bundle, a, directions, land.best_offset_s, coarse_s, radius, sc.refine_frames)
-    best = int(np.argmin(np.abs(offsets - best_s)))
-    return dataclasses.replace(land, best_offset_s=best_s, minima_idx=np.array([best]),
-                               decision=dataclasses.replace(land.decision, reason=f"{land.decision.reason}; {note}"))
+    peak = refine_peak(bundle, a, directions, land.best_offset_s, coarse_s, radius, sc.refine_frames)
+    best = int(np.argmin(np.abs(offsets - peak.offset_s)))
+    return dataclasses.replace(land, best_offset_s=peak.offset_s, minima_idx=np.array([best]), decision=dataclasses.replace(
+        land.decision, reason=f"{land.decision.reason}; {peak.note()}"))
+
+
+@dataclass(frozen=True)
+class RefinedPeak:
+    """A sighting peak fitted again with one constant shift between heads and camera (refine_peak)."""
+
+    offset_s: float  # Δ_ab, s; the peak as counted when not refined
+    refined: bool  # False: the fit's best Δ lay on the window's border, or too few heads stayed posed
+    shift_px: dict[str, np.ndarray]  # {viewer: (2,) mean head − worn camera's centre at offset_s, px}
+    rms_px: float  # rms distance of the heads from centre + shift at offset_s, px (NaN: not refined)
+    window_frames: float  # the fit's half window, frames of the coarser video
+
+    def note(self) -> str:
+        """One clause for the pair's reason."""
+        if not self.refined:
+            return (f"not refined by a constant head-to-centre shift (the fit's best Δ lies on the border of "
+                    f"±{self.window_frames:g} frames, or too few heads stay posed)")
+        said = ", ".join(f"{v}: ({s[0]:+.1f}, {s[1]:+.1f}) px" for v, s in self.shift_px.items())
+        return (f"refined to Δ={self.offset_s:+.3f} s by a constant shift between the heads and the worn camera's "
+                f"centre ({said}; rms {self.rms_px:.1f} px)")
 
 
 def refine_peak(bundle: CueBundle, a: str, directions, peak_s: float, coarse_s: float, radius: dict[str, float],
-             window_frames: float) -> tuple[float, str]:
-    """(Δ_ab, what was done): the peak's Δ fitted again with one constant image shift per direction
-    between its heads and the worn camera's centre (geometry.sighting_shift_fit, the heads within
-    twice the radius at the peak), on a tenth-of-a-frame grid within window_frames of the peak.
-    The peak as it was when the fit's minimum lies on the window's border or no Δ keeps 80 % of a
-    direction's heads posed."""
+                window_frames: float) -> RefinedPeak:
+    """The peak's Δ_ab fitted again with one constant image shift per direction between its heads
+    and the worn camera's centre (geometry.sighting_shift_fit, the heads within twice the radius at
+    the peak), on a tenth-of-a-frame grid within window_frames of the peak. The peak as it was
+    when the fit's minimum lies on the window's border or no Δ keeps 80 % of a direction's heads
+    posed."""
     fine = peak_s + coarse_s * np.arange(-window_frames, window_frames + 1e-9, 0.1)
     sum_sq = np.zeros(len(fine))
     moments = np.zeros(len(fine), int)
     enough = np.ones(len(fine), bool)
-    shifts = []
+    shifts = {}
     for viewer, worn in directions:
         sign = 1.0 if viewer == a else -1.0  # the viewer's Δ is Δ_ab when it is a, -Δ_ab when it is b
         fit = direction_shift_fit(bundle, viewer, worn, sign * peak_s, sign * fine, radius[viewer])
         enough &= fit.moments >= 0.8 * fit.chosen.sum()
         sum_sq += np.nan_to_num(fit.sum_sq_px2)
         moments += fit.moments
-        shifts.append((viewer, fit.shift_px))
+        shifts[viewer] = fit.shift_px
     with np.errstate(all="ignore"):
         cost = np.where(enough & (moments > 0), sum_sq / moments, np.inf)
     i = int(np.argmin(cost))
     if not np.isfinite(cost[i]) or i in (0, len(fine) - 1):
-        return peak_s, (f"not refined by a constant head-to-centre shift (the fit's best Δ lies on the border "
-                        f"of ±{window_frames:g} frames, or too few heads stay posed)")
-    said = ", ".join(f"{v}: ({s[i, 0]:+.1f}, {s[i, 1]:+.1f}) px" for v, s in shifts)
-    return float(fine[i]), (f"refined to Δ={fine[i]:+.3f} s by a constant shift between the heads and the worn "
-                            f"camera's centre ({said}; rms {math.sqrt(cost[i]):.1f} px)")
+        return RefinedPeak(float(peak_s), False, {}, float("nan"), window_frames)
+    return RefinedPeak(float(fine[i]), True, {v: s[i] for v, s in shifts.items()}, math.sqrt(cost[i]), window_frames)
 
 
 def _decided(a, b, offsets, near, moments, sc, coarse_s, directions, radius) -> PairLandscape:
