@@ -62,3 +62,20 @@ def test_quick_numbers_equal_the_full_run_rows(quick, shared_data):
         got, want = r.accuracy(), full[key].accuracy()
         assert all((a == b) or (isinstance(a, float) and math.isnan(a) and math.isnan(b))
                    for a, b in zip(got, want)), (key, got, want)
+
+
+def test_tables_from_runs_of_different_commits_say_which_rows_came_from_which(quick, tmp_path):
+    """--from-json of two runs made at different commits (the clips rerun after a change): the
+    Machine line names each file's commit, not the first one's alone; one commit stays as it was."""
+    _, _, data, _ = quick
+    for name, commit in (("full.json", "aaaaaaa"), ("clips.json", "bbbbbbb"), ("same.json", "aaaaaaa")):
+        (tmp_path / name).write_text(json.dumps({**data, "machine": {**data["machine"], "git_commit": commit}}))
+    import io
+    from contextlib import redirect_stdout
+    with redirect_stdout(io.StringIO()):
+        assert main(["bench", "--from-json", str(tmp_path / "full.json"), str(tmp_path / "clips.json"),
+                     "--out", str(tmp_path / "two.md")]) == 0
+        assert main(["bench", "--from-json", str(tmp_path / "full.json"), str(tmp_path / "same.json"),
+                     "--out", str(tmp_path / "one.md")]) == 0
+    assert "git_commit aaaaaaa (full.json), bbbbbbb (clips.json)," in (tmp_path / "two.md").read_text()
+    assert "git_commit aaaaaaa," in (tmp_path / "one.md").read_text()

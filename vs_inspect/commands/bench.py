@@ -48,7 +48,7 @@ def register(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if args.from_json is not None:
-        rows, skipped, walls, cmds, info = [], [], [], [], None
+        rows, skipped, walls, cmds, info, commits = [], [], [], [], None, {}
         for f in args.from_json:  # a dataset in a later file replaces its rows from earlier files
             if not f.is_file():
                 raise InputError(f"{f} not found")
@@ -60,6 +60,9 @@ def run(args: argparse.Namespace) -> int:
             walls.append(d.get("wall_s") or float("nan"))
             cmds.append(d.get("command", "vs-inspect bench"))
             info = info or d.get("machine")
+            commits[f.name] = (d.get("machine") or {}).get("git_commit")
+        if info is not None and len(set(commits.values())) > 1:  # rows of different code: say which is which
+            info = {**info, "git_commit": ", ".join(f"{c} ({n})" for n, c in commits.items())}
         print(to_text(rows, skipped))
         cmd = "; ".join(f"{c} --json {f.name}" for c, f in zip(cmds, args.from_json))
         write_outputs(rows, skipped, max(walls), cmd, args.out, None, info)
