@@ -131,3 +131,21 @@ def test_a_head_beside_the_worn_camera_is_fitted_out_of_the_offset(seed, viewer_
     narrow = sync_bundle(b, SyncConfig(sightings=SightingConfig(refine_frames=0.2)), progress=False)
     assert b_after_a(narrow) == pytest.approx(b_after_a(counted))
     assert "not refined" in narrow.pairs[0].decision.reason
+
+
+def test_a_direction_without_heads_on_the_centre_gives_no_shift():
+    """Both cameras 'move' (a's poses per frame), so b's heads are looked at too; they are someone
+    else's, never on a's centre: the refit and its reason name a's shift only (no NaN)."""
+    b = _bundle(seed=0)
+    t = b.video("a").timestamps_s
+    head = b.heads["a"] + np.array([12.0, 0.0])
+    head[(t < 1.5) | (t > 4.5)] = np.nan
+    pose_a = np.broadcast_to(b.cameras["a"].cam_from_world, (len(t), 4, 4)).copy()
+    others = np.tile([600.0, 40.0], (b.video("b").num_frames, 1))  # b sees someone in a corner
+    b = dataclasses.replace(b, heads={"a": head, "b": others},
+                            cameras={**b.cameras, "a": CameraTrack(K, pose_a)})
+    res = sync_bundle(b, progress=False)
+    (land,) = res.pairs
+    assert b.cameras["a"].is_moving and "b sees a's wearer" in land.decision.reason
+    assert res.offsets_s["b"] == pytest.approx(TRUE_B_S, abs=0.02), land.decision.reason
+    assert "(a: (" in land.decision.reason and "b: (" not in land.decision.reason and "nan" not in land.decision.reason

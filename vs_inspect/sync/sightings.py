@@ -133,7 +133,8 @@ def refine_peak(bundle: CueBundle, a: str, directions, peak_s: float, coarse_s: 
         enough &= fit.moments >= 0.8 * fit.chosen.sum()
         sum_sq += np.nan_to_num(fit.sum_sq_px2)
         moments += fit.moments
-        shifts[viewer] = fit.shift_px
+        if fit.chosen.any():  # a direction whose heads are never near the centre has no shift
+            shifts[viewer] = fit.shift_px
     with np.errstate(all="ignore"):
         cost = np.where(enough & (moments > 0), sum_sq / moments, np.inf)
     i = int(np.argmin(cost))
