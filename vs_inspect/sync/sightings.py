@@ -11,9 +11,8 @@ take the epipolar ones. It is used for a pair whose track pairs gave no accepted
 
 from __future__ import annotations
 
-import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -91,8 +90,8 @@ def sighting_pair(bundle: CueBundle, a: str, b: str, cfg: SyncConfig) -> PairLan
         return land
     peak = refine_peak(bundle, a, directions, land.best_offset_s, coarse_s, radius, sc.refine_frames)
     best = int(np.argmin(np.abs(offsets - peak.offset_s)))
-    return dataclasses.replace(land, best_offset_s=peak.offset_s, minima_idx=np.array([best]), decision=dataclasses.replace(
-        land.decision, reason=f"{land.decision.reason}; {peak.note()}"))
+    decision = replace(land.decision, reason=f"{land.decision.reason}; {peak.note()}")
+    return replace(land, best_offset_s=peak.offset_s, minima_idx=np.array([best]), decision=decision)
 
 
 @dataclass(frozen=True)
