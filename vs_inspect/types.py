@@ -432,8 +432,9 @@ class CueStats:
     geometric_joint: dict[str, Any] | None = None  # the joint vote (offsets, margins, cameras sure and used) and
     # its point-transfer checks of unsure cameras ("transfer": camera -> verdict) and of sure ones in
     # three views ("three_view": camera -> verdict), JSON values
-    heads: dict[str, Any] | None = None  # the person detector's run: frames with a head per video, or
-    # "skipped" with why (None: no camera moved, or turned off)
+    heads: dict[str, Any] | None = None  # the person detector's run: frames with a head per video, the
+    # seconds of those found beside the cameras ("found_ahead_s"), or "skipped" with why (None: no
+    # camera moved, or turned off)
 
     def refused_in_three_views(self) -> list[str]:
         """The cameras Stage 0's three-view check refused (geometric_joint's "three_view"), by name."""

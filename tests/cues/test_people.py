@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import threading
+import time
 from types import SimpleNamespace
 
 import numpy as np
@@ -145,6 +146,8 @@ def test_heads_found_ahead_on_their_own_thread_are_the_heads_found_after(monkeyp
     from vs_inspect.record.sink import NullSink
 
     def frame(name, k):
+        if name == "b":
+            time.sleep(0.05)  # b's frames are slow: its time on the heads thread shows it
         return np.full((8, 10, 3), 1 + k + 10 * "abc".index(name), np.uint8)
     poses, seen = [], []
     sources, vids, cfg = _fake_videos(monkeypatch, frame, poses, seen)
@@ -164,6 +167,8 @@ def test_heads_found_ahead_on_their_own_thread_are_the_heads_found_after(monkeyp
         np.testing.assert_array_equal(found[n], after[n])
     np.testing.assert_allclose(found["b"][:, 0], 11 + np.arange(6))  # the nose at the frame's value
     assert stats["heads"]["frames_with_a_head"] == {"a": 6, "b": 6, "c": 6}
+    spent = stats["heads"]["found_ahead_s"]  # the heads thread's own time, per video found ahead
+    assert spent.keys() == {"a", "b"} and spent["b"] >= 0.3 > spent["a"] >= 0.0, spent
 
 
 def test_leaving_stops_the_heads_thread_and_closes_every_tracker(monkeypatch):

@@ -447,17 +447,28 @@ class _HeadsAhead:
 
         self._stop = threading.Event()
         self._pool = ThreadPoolExecutor(1, thread_name_prefix="heads")
-        self._poses, self._jobs = {}, {}
+        self._poses, self._jobs, self._seconds = {}, {}, {}
         try:
             for src in sources:
                 n = src.info.name
                 if n in vids and len(self._jobs) < self.max_videos:
                     self._poses[n] = start_pose()
-                    self._jobs[n] = self._pool.submit(_video_landmarks, src, vids[n].info, cfg, self._poses[n],
-                                                      self._stop)
+                    self._jobs[n] = self._pool.submit(self._timed, n, src, vids[n].info, cfg)
         except BaseException:
             self.__exit__()
             raise
+
+    def _timed(self, name: str, src, info: VideoInfo, cfg: CueConfig) -> tuple[np.ndarray, np.ndarray]:
+        t0 = time.perf_counter()
+        try:
+            return _video_landmarks(src, info, cfg, self._poses[name], self._stop)
+        finally:
+            self._seconds[name] = time.perf_counter() - t0
+
+    def seconds(self) -> dict[str, float]:
+        """{video: seconds its heads took on the heads thread} of the videos done (or stopped) so
+        far: that time overlaps the cameras and geometric pairs, so no stage's time shows it."""
+        return dict(self._seconds)
 
     @classmethod
     def start(cls, sources, vids: dict[str, _VideoCues], cfg: CueConfig) -> _HeadsAhead | None:
@@ -526,6 +537,8 @@ def _heads(sources, vids: dict[str, _VideoCues], cameras: dict, undistort: dict,
         log.warning("%s: no heads: %s", n, why)
         sink.stage_event("cues", f"{n}: no heads: {why}")
     stats["heads"] = {"detector": "mediapipe BlazePose (pose_landmark_full)", "frames_with_a_head": found}
+    if ahead is not None and (spent := ahead.seconds()):
+        stats["heads"]["found_ahead_s"] = {n: round(t, 3) for n, t in spent.items()}
     if failed:
         stats["heads"]["failed"] = failed
     log.info("heads found: %s", ", ".join(f"{n} {k}" for n, k in found.items()))
