@@ -361,14 +361,15 @@ def test_a_sighting_pair_says_what_its_curve_is(tmp_path, refitted):
     from vs_inspect.analysis.report_data import pair_views
     from vs_inspect.io.result import read_run_result
     from vs_inspect.report.figures import _landscape_axes
+    from vs_inspect.sync.sightings import RefinedPeak
     from vs_inspect.types import PairDecision, PairLandscape, RunResult
 
     offsets = np.arange(-10, 11) * 0.1
     energy = 1.0 - np.exp(-((offsets - 0.3) / 0.15) ** 2)
     land = PairLandscape("a", "b", offsets, energy, np.full(21, 40), np.array([13]), 0.3, 0.0, 0.1, 0,
                          PairDecision(True, "worn camera sightings: 20 heads ..." + (
-                             "; refined to Δ=+0.280 s by a constant shift between the heads and the worn camera's "
-                             "centre (a: (+3.0, +2.0) px; rms 2.0 px)" if refitted else ""), 0.9, 0.1, 2, 1, False),
+                             f"; {RefinedPeak(0.28, True, {'a': np.array([3.0, 2.0])}, 2.0, 2.0).note()}"
+                             if refitted else ""), 0.9, 0.1, 2, 1, False),
                          residual="sighting")
     run = RunResult("a", {"a": 0.0, "b": 0.3}, {"a": 0.0, "b": 0.1}, {}, (land,), "irls", (("a", "b"),), (), {})
     write_run_result(run, tmp_path / "result.json")

@@ -48,7 +48,8 @@ def _centre_seen(timestamps_a_s: np.ndarray, K_a: np.ndarray, cam_from_world_a: 
     return project(np.asarray(K_a, np.float64), cam_from_world_a[None], centre), posed
 
 
-def _checked(head_xy_a, timestamps_a_s, cam_from_world_a, valid_a, timestamps_b_s, cam_from_world_b, valid_b):
+def _checked_inputs(head_xy_a, timestamps_a_s, cam_from_world_a, valid_a, timestamps_b_s, cam_from_world_b, valid_b):
+    """The arrays as float64 / bool, their shapes checked (ValueError naming the wrong one)."""
     T_a = len(check_shape("timestamps_a_s", np.asarray(timestamps_a_s, np.float64), (None,), batched=False))
     head = check_shape("head_xy_a", np.asarray(head_xy_a, np.float64), (T_a, 2), batched=False)
     pose_a = check_shape("cam_from_world_a", np.asarray(cam_from_world_a, np.float64), (T_a, 4, 4), batched=False)
@@ -70,8 +71,8 @@ def sighting_landscape(head_xy_a: np.ndarray, timestamps_a_s: np.ndarray, K_a: n
     frame times, s; K_a: (3,3); cam_from_world_*: (T,4,4) per-frame poses in one world, valid_*:
     (T,) bool; offsets_s: (D,) candidates Δ. b's centre is interpolated linearly between its frames.
     """
-    head, pose_a, valid_a, ts_b, pose_b, valid_b = _checked(head_xy_a, timestamps_a_s, cam_from_world_a, valid_a,
-                                                            timestamps_b_s, cam_from_world_b, valid_b)
+    head, pose_a, valid_a, ts_b, pose_b, valid_b = _checked_inputs(
+        head_xy_a, timestamps_a_s, cam_from_world_a, valid_a, timestamps_b_s, cam_from_world_b, valid_b)
     offsets = np.asarray(offsets_s, np.float64).reshape(-1)
     if not radius_px > 0:
         raise ValueError(f"radius_px must be positive, got {radius_px}")
@@ -110,8 +111,8 @@ def sighting_shift_fit(head_xy_a: np.ndarray, timestamps_a_s: np.ndarray, K_a: n
     wearer moves one way, the offset that brings the centre nearest the heads is then a frame or
     so off (fencing1, README); leaving the shift free takes that side out of Δ.
     """
-    head, pose_a, valid_a, ts_b, pose_b, valid_b = _checked(head_xy_a, timestamps_a_s, cam_from_world_a, valid_a,
-                                                            timestamps_b_s, cam_from_world_b, valid_b)
+    head, pose_a, valid_a, ts_b, pose_b, valid_b = _checked_inputs(
+        head_xy_a, timestamps_a_s, cam_from_world_a, valid_a, timestamps_b_s, cam_from_world_b, valid_b)
     if not radius_px > 0:
         raise ValueError(f"radius_px must be positive, got {radius_px}")
     offsets = np.asarray(offsets_s, np.float64).reshape(-1)
