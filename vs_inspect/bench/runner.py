@@ -14,7 +14,7 @@ import os
 import platform
 import time
 from collections import defaultdict
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -140,10 +140,28 @@ def _variant_family(v: str) -> str:
     return v.split("/seed=")[0]
 
 
-def aggregate(rows: list[Row]) -> dict:
-    """{(group, method, family): [rows]} with pair seeds folded into their family."""
-    agg: dict = defaultdict(list)
+def failed_variants(rows: list[Row]) -> list[Row]:
+    """A failed row for each vs_inspect variant that a dataset did not get because its default run
+    failed (Stage 0 or Stage 1 raised, so nothing was left to vary), for every variant that another
+    dataset of its group ran. Without them a variant's mean would leave out the datasets that the
+    default's mean counts as failed: on the clips, where two of four scenes give no cue bundle, LS
+    and the spurious-pair filter off had looked twice as good as the default."""
+    ran: dict[str, set[str]] = defaultdict(set)
     for r in rows:
+        if r.method == "vs_inspect" and r.variant != "default":
+            ran[r.group].add(r.variant)
+    have = {r.key for r in rows}
+    nan = float("nan")
+    return [replace(r, variant=v, stage0_s=nan, stage1_s=nan, stage2_s=nan, peak_mb=nan)
+            for r in rows if r.method == "vs_inspect" and r.variant == "default" and r.error
+            for v in sorted(ran[r.group]) if (r.dataset, r.method, v) not in have]
+
+
+def aggregate(rows: list[Row]) -> dict:
+    """{(group, method, family): [rows]} with pair seeds folded into their family; a dataset whose
+    default run failed counts as failed in every variant of its group (failed_variants)."""
+    agg: dict = defaultdict(list)
+    for r in rows + failed_variants(rows):
         agg[(r.group, r.method, _variant_family(r.variant))].append(r)
     return agg
 
@@ -322,7 +340,9 @@ def to_markdown(rows: list[Row], skipped: list[Skipped], wall_s: float, command:
         "over every pair of videos (a pair with an unresolved video counts as wrong), δ_mean / δ_med = "
         "per-video error in ms against the reference video (resolved videos only; `unresolved` says how "
         "many have no offset), δ_med in frames of the dataset's typical frame interval. Values are means "
-        "over the runs of a group (datasets × seeds). Times: stage 0 = cue extraction from video, stage 1 = "
+        "over the runs of a group (datasets × seeds); a dataset whose default run failed (e.g. Stage 0 gave no "
+        "cue bundle) counts as failed in every variant of its group, so that each setting is averaged over the "
+        "same datasets. Times: stage 0 = cue extraction from video, stage 1 = "
         "pair landscapes (peers: pair scores), stage 2 = global solve; `–` where a variant reuses the default "
         "run's Stage 1. Peak MB = peak traced Python/numpy memory of one run (tracemalloc).", "",
         "Data: `cue/<level>` = cue-level synthetic scenes (vs_inspect.synth.cues, 5 cameras of which 2 "
