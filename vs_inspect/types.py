@@ -22,6 +22,24 @@ def frame_length_s(fps: float | None, duration_s: float, num_frames: int) -> flo
     return duration_s / (num_frames - 1) if num_frames > 1 and duration_s > 0 else float("inf")
 
 
+def pairs_by_reason(items: list[tuple[str, str]], verb: str = "", max_names: int = 6) -> list[str]:
+    """'k1, k2 and k3<verb>: reason' once per distinct reason, in the order the reasons first come,
+    from (pair name, reason) items; past max_names pairs the rest are counted ('… and 5 more').
+    A video's pairs often share one reason word for word, and repeating it made a null's
+    explanation hard to read."""
+    names: dict[str, list[str]] = {}
+    for name, why in items:
+        names.setdefault(why, []).append(name)
+    out = []
+    for why, ks in names.items():
+        if len(ks) > max_names:
+            listed = ", ".join(ks[:max_names]) + f" and {len(ks) - max_names} more"
+        else:
+            listed = ks[0] if len(ks) == 1 else ", ".join(ks[:-1]) + " and " + ks[-1]
+        out.append(f"{listed}{verb}: {why}")
+    return out
+
+
 def _require_shape(name: str, array: np.ndarray, shape: tuple) -> None:
     """Raise ValueError unless array matches shape (None = any length)."""
     ok = array.ndim == len(shape) and all(s is None or s == d for s, d in zip(shape, array.shape))
@@ -449,7 +467,7 @@ class CueStats:
         withheld = [(k, p["geometric_withheld"]) for k, p in self.pairs.items()
                     if video in k.split("__") and p.get("geometric_withheld")]
         if withheld and video not in self.dropped:
-            return "Stage 0 gave " + "; ".join(f"{k} no geometric track pairs: {why}" for k, why in withheld)
+            return "Stage 0 gave " + "; ".join(pairs_by_reason(withheld, " no geometric track pairs"))
         joint = self.geometric_joint or {}
         if video not in joint.get("margin", {}) or video in joint.get("used", ()) or video in self.dropped:
             return None

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -213,6 +214,32 @@ def test_an_unresolved_video_stage0_was_unsure_of_says_why_first():
     assert r.unresolved["c"].startswith("Stage 0's joint vote was not sure of its offset (margin 1.3), "
                                         "so it got no geometric track pairs (they disagree); not connected")
     assert r.unresolved["d"] == "not connected" and r.unresolved["e"] == "could not be read"
+
+
+def test_an_unresolved_videos_pairs_that_share_a_reason_say_it_once():
+    """Stage 0's withheld geometric pairs and Stage 1's pair decisions: a reason that several of a
+    video's pairs share is given once, with the pairs named together (the 720p timing scene's
+    reasons had repeated one sentence three times each, 840-1065 characters)."""
+    from vs_inspect.pipeline.run import _run_result
+    from vs_inspect.pipeline.stage12 import _with_its_pairs
+    from vs_inspect.types import CueStats, SyncResult
+
+    why = "the vote peaks of the camera pairs do not close the triangles"
+    pairs = {k: {"geometric_withheld": why} for k in ("a__c", "b__c", "c__d")}
+    stats = CueStats("estimated", 4, 10, 10, {}, pairs, {}, {}, "inconsistent")
+    sync = SyncResult("a", {"a": 0.0, "b": 0.5, "c": None, "d": 0.2}, {}, {"c": "not connected"}, (), (), ())
+    r = _run_result(sync, stats, RunInputs(), RunConfig(), None, {})
+    assert r.unresolved["c"] == f"Stage 0 gave a__c, b__c and c__d no geometric track pairs: {why}; not connected"
+
+    def land(a, b, reason):  # the fields _with_its_pairs reads of a PairLandscape
+        return SimpleNamespace(a=a, b=b, decision=SimpleNamespace(reason=reason))
+
+    lands = [land("a", "c", "no cross-view track pairs"), land("b", "c", "too few track pairs: only 3"),
+             land("c", "d", "no cross-view track pairs"), land("a", "b", "accepted")]
+    assert _with_its_pairs(lands, "c", "not connected") == (
+        "not connected; its pairs: a__c and c__d: no cross-view track pairs; b__c: too few track pairs: only 3")
+    five = [land("c", f"v{i}", f"reason {i}") for i in range(5)]
+    assert _with_its_pairs(five, "c", "x").endswith("c__v2: reason 2; and 2 more reason(s)")
 
 
 def test_an_unresolved_video_the_joint_vote_was_sure_of_alone_with_one_other_says_so():

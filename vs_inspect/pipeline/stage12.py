@@ -19,7 +19,7 @@ from ..engine import Engine, LocalEngine, TaskFailed
 from ..errors import InputError
 from ..record.sink import NullSink, Sink
 from ..types import (CameraTrack, CueBundle, PairDecision, PairLandscape, SolveIteration, SyncResult,
-                     TrackPairs)
+                     TrackPairs, pairs_by_reason)
 from ..sync.config import DriftConfig, SolveConfig, SyncConfig
 from ..sync.decision import check_inliers, check_track_pairs_at_best, decide
 from ..sync.landscape import (PairEnergy, PairInput, RawLandscape, compute_landscape, curvature_uncertainty,
@@ -384,11 +384,14 @@ def _sighting_hops(lands, reference: str) -> dict[str, int]:
 
 
 def _with_its_pairs(lands, v: str, why: str) -> str:
-    """why, followed by the decisions of v's first three evaluated pairs."""
-    mine = [p for p in lands if v in (p.a, p.b)]
+    """why, followed by the decisions of v's evaluated pairs, each distinct reason once with the
+    pairs it holds for (at most three reasons)."""
+    mine = [(f"{p.a}__{p.b}", p.decision.reason) for p in lands if v in (p.a, p.b)]
     if not mine:
         return why + " (no pair with it was evaluated)"
-    return why + "; its pairs: " + "; ".join(f"{p.a}__{p.b}: {p.decision.reason}" for p in mine[:3])
+    grouped = pairs_by_reason(mine)
+    more = f"; and {len(grouped) - 3} more reason(s)" if len(grouped) > 3 else ""
+    return why + "; its pairs: " + "; ".join(grouped[:3]) + more
 
 
 def solve_stage2(bundle: CueBundle, lands: list[PairLandscape] | tuple[PairLandscape, ...],
