@@ -56,6 +56,29 @@ def test_decisions_carry_the_evidence_behind_the_best_minimum(small):
             assert d.support_fraction >= 0.4 and d.track_pairs_at_best >= 8
 
 
+def test_stage1_refuses_a_pair_whose_minimum_is_wider_than_the_bound(small):
+    """The width check runs on every epipolar pair at its refined minimum: with a bound under the
+    narrowest accepted minimum every such pair is refused, each with its own width; by default
+    (a frame) the right pairs of this scene stay accepted."""
+    import dataclasses
+
+    from vs_inspect.sync.config import DecisionConfig
+
+    bundle, base = small
+    info = {v.name: v for v in bundle.videos}
+    accepted = [land for land in base.pairs if land.decision.accepted]
+    assert accepted
+    frames = [land.uncertainty_s / max(info[land.a].frame_interval_s, info[land.b].frame_interval_s)
+              for land in accepted]
+    assert max(frames) <= 1.0
+    tight = dataclasses.replace(SyncConfig(), decision=DecisionConfig(max_uncertainty_frames=0.5 * min(frames)))
+    res = sync_bundle(bundle, tight, progress=False)
+    by = {(land.a, land.b): land for land in res.pairs}
+    for land in accepted:
+        d = by[(land.a, land.b)].decision
+        assert not d.accepted and "is too wide to time the pair" in d.reason, d.reason
+
+
 def test_a_reference_without_an_accepted_pair_is_null_with_a_reason(small):
     import dataclasses
     bundle, base = small

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from vs_inspect.sync.config import DecisionConfig
-from vs_inspect.sync.decision import check_track_pairs_at_best, decide, support_fraction
+from vs_inspect.sync.decision import check_track_pairs_at_best, check_uncertainty, decide, support_fraction
 from vs_inspect.types import PairDecision
 
 OFFS = np.linspace(-1, 1, 201)
@@ -81,3 +81,22 @@ def test_enough_track_pairs_at_the_best_offset_keeps_the_decision():
     refused = PairDecision(False, "flat landscape", 0.1, 0.0, 1, 1, False)
     assert check_track_pairs_at_best(refused, 2, 0.0, DecisionConfig()).reason == "flat landscape"
     assert check_track_pairs_at_best(ACCEPTED, 2, 0.0, DecisionConfig(enabled=False)).accepted
+
+
+def test_a_minimum_wider_than_a_frame_is_refused_with_its_width():
+    """1-sigma 50 ms at 30 fps is 1.5 frames: refused, whatever the shape said; 30 ms (0.9 frame)
+    stays accepted, and so does a minimum whose curvature is unknown (NaN)."""
+    ok = PairDecision(True, "single clear minimum", 0.8, 0.0, 1, 1, False)
+    frame = 1 / 30
+    wide = check_uncertainty(ok, 0.050, -1.604, frame, DecisionConfig())
+    assert not wide.accepted
+    assert wide.reason == ("its minimum at -1.604 s is too wide to time the pair: 1-sigma 50 ms, 1.5 frames "
+                           "of the coarser video (more than 1)")
+    assert check_uncertainty(ok, 0.030, 0.0, frame, DecisionConfig()) == ok
+    assert check_uncertainty(ok, float("nan"), 0.0, frame, DecisionConfig()) == ok
+    # the filter off, the check off (0) or a looser bound keep it; a rejection keeps its own reason
+    assert check_uncertainty(ok, 0.050, 0.0, frame, DecisionConfig(enabled=False)).accepted
+    assert check_uncertainty(ok, 0.050, 0.0, frame, DecisionConfig(max_uncertainty_frames=0)).accepted
+    assert check_uncertainty(ok, 0.050, 0.0, frame, DecisionConfig(max_uncertainty_frames=2)).accepted
+    no = PairDecision(False, "ambiguous", 0.8, 0.9, 3, 3, False)
+    assert check_uncertainty(no, 0.050, 0.0, frame, DecisionConfig()) == no

@@ -69,8 +69,12 @@ class DecisionConfig:
     unchecked_agree_frames: float = 2.0
     """A pair with unchecked track pairs (TrackPairs.unchecked: two static cameras, whose epipolar vote no third camera checks) is accepted only if its other track pairs (found by appearance) alone give an accepted minimum within this many frames of the coarser video; 0 = no check. Measured (README, "Two calibrated cameras alone"): of 23 such runs accepted before, 8 were 2-23 frames off; with this check none of those 8 and 4 of the 15 right ones stay accepted; on caliscope's real webcams all 6 pairs alone stay accepted (within 0.88 frame at 6 fps; the two minima 1-31 ms apart)."""
 
+    max_uncertainty_frames: float = 1.0
+    """Reject when the best minimum's 1-sigma (from its curvature and the number of track pairs) is wider than this many frames of the coarser video; 0 = no check. Such a minimum cannot time the pair to a frame. Measured (README, "Too wide a minimum"): every accepted pair of the cue scenes (148 pairs, 5 seeds × 3 difficulties), caliscope, the clips and 11 rendered scenes with estimated cameras had at most 0.72 frame; the two over a frame were 1.4 and 34.5 frames off."""
+
     def __post_init__(self) -> None:
-        check_fields(self, nonnegative=("min_track_pairs", "unchecked_agree_frames"), positive=("max_minima",),
+        check_fields(self, nonnegative=("min_track_pairs", "unchecked_agree_frames", "max_uncertainty_frames"),
+                     positive=("max_minima",),
                      fraction=("min_contrast", "max_second_ratio", "min_rival_support", "min_prominence",
                                "min_inlier_fraction", "inlier_px_fraction", "min_support_fraction"))
 

@@ -88,6 +88,21 @@ def check_track_pairs_at_best(decision: PairDecision, seen: int, offset_s: float
     return out
 
 
+def check_uncertainty(decision: PairDecision, sigma_s: float, offset_s: float, frame_s: float,
+                      cfg: DecisionConfig) -> PairDecision:
+    """Reject a pair accepted so far whose best minimum's 1-sigma sigma_s is wider than
+    cfg.max_uncertainty_frames frames of frame_s (the coarser video's): a shallow, wide minimum
+    over few track pairs does not time the pair to a frame, however alone it stands (a wrong
+    descriptor pair set with estimated cameras gave one 1.15 s off with 2.3 frames of 1-sigma).
+    NaN (no curvature at the minimum) is left to the other checks."""
+    limit = cfg.max_uncertainty_frames * frame_s
+    if decision.accepted and cfg.enabled and limit > 0 and np.isfinite(sigma_s) and sigma_s > limit:
+        return replace(decision, accepted=False, reason=(
+            f"its minimum at {offset_s:+.3f} s is too wide to time the pair: 1-sigma {1000 * sigma_s:.0f} ms, "
+            f"{sigma_s / frame_s:.1f} frames of the coarser video (more than {cfg.max_uncertainty_frames:g})"))
+    return decision
+
+
 def support_fraction(support: np.ndarray, energy: np.ndarray, best: int) -> tuple[float, float]:
     """(terms at the minimum / the landscape's usual overlap, that usual overlap): the usual
     overlap is the median term count over the offsets that have an energy."""
