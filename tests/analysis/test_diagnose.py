@@ -255,3 +255,17 @@ def test_a_blind_video_that_stage0_refused_is_named_with_stage0s_reason():
     assert e.cause == CAUSE_NO_PAIRS
     assert "joint vote was not sure of its offset (margin 3.3)" in e.message
     assert "they disagree" in e.message and "does not see" not in e.message
+
+
+def test_a_pair_refused_as_too_wide_is_given_that_cause():
+    """The width check's own reason (built by sync.decision) is read as its cause, not left
+    without one."""
+    from vs_inspect.analysis.diagnose import CAUSE_MEANING, CAUSE_WIDE, _cause_of_reason
+    from vs_inspect.sync.config import DecisionConfig
+    from vs_inspect.sync.decision import check_uncertainty
+    from vs_inspect.types import PairDecision
+
+    ok = PairDecision(True, "single clear minimum", 0.8, 0.0, 1, 1, False)
+    refused = check_uncertainty(ok, 0.077, -1.604, 1 / 30, DecisionConfig())
+    assert not refused.accepted
+    assert _cause_of_reason(refused.reason) == CAUSE_WIDE and CAUSE_WIDE in CAUSE_MEANING

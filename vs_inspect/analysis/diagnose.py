@@ -43,6 +43,7 @@ CAUSE_LOOPS = "inconsistent offsets around loops"
 CAUSE_EDGE = "minimum at the edge of the search range"
 CAUSE_AMBIGUOUS = "ambiguous landscape"
 CAUSE_SUPPORT = "little overlap at the minimum"
+CAUSE_WIDE = "too wide a minimum"
 CAUSE_SOLUTION = "disagrees with the solution"
 
 CAUSE_MEANING = {
@@ -58,6 +59,8 @@ CAUSE_MEANING = {
                 "wrong",
     CAUSE_AMBIGUOUS: "two offsets fit alike: repetitive motion or wrong matches",
     CAUSE_SUPPORT: "the best offset rests on little overlap of the two videos' tracks: a chance dip",
+    CAUSE_WIDE: "the best minimum is wider than a frame: too few track pairs or too shallow a dip to "
+                "time the pair (with estimated cameras, their error can also flatten it)",
     CAUSE_SOLUTION: "the pair's own offset disagrees with the one the other pairs imply",
 }
 
@@ -144,6 +147,8 @@ def _cause_of_reason(reason: str) -> str | None:
         return CAUSE_AMBIGUOUS
     if "supported by" in r or "overlap" in r:
         return CAUSE_SUPPORT
+    if "too wide" in r:
+        return CAUSE_WIDE
     return None
 
 
