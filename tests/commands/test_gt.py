@@ -1,5 +1,6 @@
 """--gt FILE on sync, inspect and report: every video's error against the truth, in ms and in
-frames, from a bundle that carries no truth of its own."""
+frames, from a bundle that carries no truth of its own (sync also keeps it with the result and
+draws it in the recording)."""
 
 from __future__ import annotations
 
@@ -43,7 +44,12 @@ def test_sync_gt_prints_errors_in_ms_and_frames(synced, capsys):
     out = capsys.readouterr().out
     assert "error_ms" in out and "frames" in out
     result = read_run_result(root / "out")
-    assert result.gt_offsets_s is None  # the bundle had no truth: the errors come from --gt
+    # the bundle had no truth: --gt's is kept with the result and drawn in the recording
+    assert result.gt_offsets_s == pytest.approx(truth)
+    from vs_inspect.io.recording import read_recording
+    rec = read_recording(root / "run.rrd")
+    assert rec.gt_offsets_s == pytest.approx(truth)
+    assert any("truth" in series for series in rec.landscapes.values())
     errs = offset_errors_ms(result.offsets_s, truth, result.reference)
     rows = _rows(out, truth)
     assert set(rows) == set(truth)

@@ -99,8 +99,11 @@ def test_videos_in_and_the_unreadable_one_is_null_with_its_reason(tmp_path):
     cal.write_text(json.dumps(cams))
     sink = SummarySink()
     result = run([a, b, c], sink=sink, calibration=cal, bundle_out=tmp_path / "out" / "cues",
-                 progress=False)
+                 progress=False, truth_offsets_s={"a": 0.0, "b": 0.3, "c": 1.0})
     assert list(result.offsets_s)[:2] == ["a", "b"] and result.offsets_s["c"] is None
+    # the truth given (--gt) is the cue bundle's and the result's, for the videos with cues
+    assert result.gt_offsets_s == {"a": 0.0, "b": 0.3}
+    assert read_bundle(tmp_path / "out" / "cues").gt_offsets_s == {"a": 0.0, "b": 0.3}
     assert result.unresolved["c"].startswith("could not be opened")
     assert result.cues is not None and "c" in result.cues.dropped
     assert set(result.cues.videos) == {"a", "b"}

@@ -97,11 +97,12 @@ def run_config(args: argparse.Namespace) -> RunConfig:
     return cfg
 
 
-def add_gt_option(p: argparse.ArgumentParser) -> None:
-    """--gt FILE: true offsets, so that the command shows every error against them."""
+def add_gt_option(p: argparse.ArgumentParser, also: str = "") -> None:
+    """--gt FILE: true offsets, so that the command shows every error against them (also: what
+    else the command does with them)."""
     p.add_argument("--gt", type=Path, default=None, metavar="FILE",
                    help="true offsets (a gt.json: {\"offsets_s\": {\"cam0\": 0.0, ...}}): show each "
-                        "video's error in ms and in frames against them")
+                        "video's error in ms and in frames against them" + also)
 
 
 def load_gt(path: Path | None, names: list[str], reference: str) -> dict[str, float] | None:

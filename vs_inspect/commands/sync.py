@@ -27,7 +27,8 @@ def register(sub) -> None:
     p.add_argument("--out", type=Path, required=True, help="output folder for result.json")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     add_force_option(p)
-    add_gt_option(p)
+    add_gt_option(p, "; they are also kept in result.json (and the written cue bundle) and drawn "
+                     "in the recording, as each pair's true Δ")
     add_config_file_option(p)
     add_sync_options(p)
     add_record_options(p)
@@ -68,12 +69,16 @@ def run(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace, cfg, out: Path) -> int:
     progress = not args.no_progress
+    truth = None
+    if args.gt is not None:  # the recording draws each pair's true Δ, and result.json keeps it
+        from ..io.bundle import read_gt
+        truth = read_gt(args.gt)
     with open_sink(args, out, cfg.record, progress=progress) as sink:
         if args.bundle:
-            result = run_pipeline(args.bundle, cfg, sink, progress=progress)
+            result = run_pipeline(args.bundle, cfg, sink, progress=progress, truth_offsets_s=truth)
         else:
             result = run_pipeline(args.videos, cfg, sink, calibration=args.calib, fps=args.fps,
-                                  bundle_out=out / "cues", progress=progress)
+                                  bundle_out=out / "cues", progress=progress, truth_offsets_s=truth)
     # after the recording is complete: result.json last, so its presence means a finished run
     cfg.save(out / "config.json")
     try:

@@ -30,7 +30,8 @@ PathLike = str | os.PathLike
 def run(inputs: CueBundle | PathLike | Sequence[PathLike], config: RunConfig = RunConfig(),
         sink: Sink | None = None, *, calibration: PathLike | None = None, fps: float | None = None,
         bundle_out: PathLike | None = None, progress: bool = True,
-        recorded_inputs: RunInputs | None = None, engine: Engine | None = None) -> RunResult:
+        recorded_inputs: RunInputs | None = None, engine: Engine | None = None,
+        truth_offsets_s: dict[str, float] | None = None) -> RunResult:
     """Synchronize: one offset per input video (None with the reason when it has none).
 
     inputs: a cue bundle (CueBundle, or the path of its folder) for Stage 1 + 2, or a list of
@@ -39,6 +40,10 @@ def run(inputs: CueBundle | PathLike | Sequence[PathLike], config: RunConfig = R
     extracted cue bundle there (replacing it; videos only). sink: receives every stage's
     results and, last, sink.run_summary(result). recorded_inputs: what result.json's "input"
     says (default: the paths given).
+
+    truth_offsets_s: the true offsets when known (--gt): the bundle's (and the written cue
+    bundle's) truth, so that the recording draws the true Δ of every pair and the result keeps it;
+    it replaces a bundle's own gt.json.
 
     config.engine says where Stage 0's per-video and Stage 1's per-pair work runs (this process,
     or Ray tasks); Stage 2, the sink and the result are the driver's, the same either way.
@@ -50,19 +55,20 @@ def run(inputs: CueBundle | PathLike | Sequence[PathLike], config: RunConfig = R
     """
     if engine is not None:
         return _run(inputs, config, sink or NullSink(), engine, calibration, fps, bundle_out, progress,
-                    recorded_inputs)
+                    recorded_inputs, truth_offsets_s)
     with open_engine(config.engine) as opened:
         return _run(inputs, config, sink or NullSink(), opened, calibration, fps, bundle_out, progress,
-                    recorded_inputs)
+                    recorded_inputs, truth_offsets_s)
 
 
 def _run(inputs, config: RunConfig, sink: Sink, engine: Engine, calibration, fps, bundle_out,
-         progress: bool, recorded_inputs: RunInputs | None) -> RunResult:
+         progress: bool, recorded_inputs: RunInputs | None, truth_offsets_s: dict[str, float] | None
+         ) -> RunResult:
     t0 = time.perf_counter()
     if isinstance(inputs, CueBundle) or isinstance(inputs, (str, os.PathLike)):
         if calibration is not None or fps is not None or bundle_out is not None:
             raise InputError("calibration, fps and bundle_out apply to videos, not to a cue bundle")
-        bundle, stats, videos = _read_bundle(inputs), None, {}
+        bundle, stats, videos = _with_truth(_read_bundle(inputs), truth_offsets_s), None, {}
         where = RunInputs(bundle=str(inputs)) if not isinstance(inputs, CueBundle) else RunInputs()
         stage0_timings: dict[str, float] = {}
     else:
@@ -74,6 +80,7 @@ def _run(inputs, config: RunConfig, sink: Sink, engine: Engine, calibration, fps
                                      recorded_inputs, time.perf_counter() - t0)
             sink.run_summary(result)
             return result
+        bundle = _with_truth(bundle, truth_offsets_s)
         if bundle_out is not None:
             from ..io.bundle import write_bundle
             write_bundle(bundle, bundle_out, overwrite=True)
@@ -90,6 +97,14 @@ def _run(inputs, config: RunConfig, sink: Sink, engine: Engine, calibration, fps
         result = dataclasses.replace(result, gt_drift_ppm=bundle.gt_drift_ppm, **_drift_of(sync, stats))
     sink.run_summary(result)
     return result
+
+
+def _with_truth(bundle: CueBundle, truth_offsets_s: dict[str, float] | None) -> CueBundle:
+    """The bundle with the given true offsets of its videos (unchanged without any)."""
+    if not truth_offsets_s:
+        return bundle
+    known = {n: float(truth_offsets_s[n]) for n in bundle.names if n in truth_offsets_s}
+    return dataclasses.replace(bundle, gt_offsets_s=known or None)
 
 
 def _read_bundle(inputs: CueBundle | PathLike) -> CueBundle:
