@@ -259,3 +259,29 @@ def _die_on_two(shared, x):
     if x == 2:
         os._exit(1)  # the worker process dies, as on a segfault or an OOM kill
     return x
+
+
+def _ignore_sigterm() -> None:
+    import signal
+
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+
+
+def test_a_forked_worker_that_misses_its_sigterm_is_killed_not_waited_for():
+    """Pool.terminate waits for its workers without a limit; stop_pool kills those still alive
+    after the grace period (here: workers that ignore SIGTERM, as a worker that missed it)."""
+    import multiprocessing
+    import time
+
+    from vs_inspect.engine import stop_pool
+
+    before = set(multiprocessing.active_children())
+    pool = multiprocessing.get_context("fork").Pool(2, initializer=_ignore_sigterm)
+    workers = [p for p in multiprocessing.active_children() if p not in before]
+    assert len(workers) == 2 and pool.apply(int, ("7",)) == 7
+    busy = pool.apply_async(time.sleep, (60,))  # a worker that neither dies nor takes its sentinel
+    time.sleep(0.5)
+    t0 = time.monotonic()
+    stop_pool(pool, workers, grace_s=1.0)
+    assert time.monotonic() - t0 < 20  # terminate alone waits out the 60 s
+    assert all(p.exitcode is not None for p in workers) and not busy.ready()

@@ -113,14 +113,37 @@ class LocalEngine(Engine):
         global _FORKED
         _FORKED = (fn, shared)  # inherited by the forked workers: the bundle is never pickled
         try:
-            with multiprocessing.get_context("fork").Pool(workers, initializer=_forked_init) as pool:
+            before = set(multiprocessing.active_children())
+            pool = multiprocessing.get_context("fork").Pool(workers, initializer=_forked_init)
+            mine = [p for p in multiprocessing.active_children() if p not in before]
+            try:
                 yield from tqdm(pool.imap(_forked_call, items), total=len(items), desc=desc, unit=unit,
                                 disable=not progress, leave=False)
+            finally:
+                stop_pool(pool, mine)
         finally:
             _FORKED = None
 
 
 _FORKED: tuple[Callable[[Any, Any], Any], Any] | None = None  # (fn, shared) of the running map
+
+
+def stop_pool(pool, workers: list, grace_s: float = 10.0) -> None:
+    """pool.terminate(), which sends each worker SIGTERM and then waits for them without a limit:
+    workers still alive grace_s later are killed (SIGKILL) so that it returns. A fork-pool worker
+    once missed its SIGTERM in CI and the test suite waited for it until its timeout (the worker
+    idle in its task loop, the driver in terminate's join)."""
+    import threading
+
+    stopper = threading.Thread(target=pool.terminate, name="pool-terminate", daemon=True)
+    stopper.start()
+    stopper.join(grace_s)
+    if stopper.is_alive():
+        left = [p for p in workers if p.exitcode is None]
+        log.warning("%d forked worker(s) still alive %.0f s after SIGTERM: killed", len(left), grace_s)
+        for p in left:
+            p.kill()
+        stopper.join()
 
 
 def _forked_init() -> None:
