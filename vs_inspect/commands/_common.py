@@ -111,8 +111,13 @@ def load_gt(path: Path | None, names: list[str], reference: str) -> dict[str, fl
     if path is None:
         return None
     from ..io.bundle import read_gt
-    gt = read_gt(path, names)
-    if reference not in gt:
+    return gt_with_reference(read_gt(path, names), path, reference)
+
+
+def gt_with_reference(gt: dict[str, float] | None, path: Path | None, reference: str) -> dict[str, float] | None:
+    """gt (read from the --gt file path) when it gives the reference's true offset (errors are
+    measured after aligning the reference), else an InputError; None stays None."""
+    if gt is not None and reference not in gt:
         raise InputError(f"--gt {path}: no true offset for the reference video {reference!r} "
                          "(errors are measured relative to it)")
     return gt

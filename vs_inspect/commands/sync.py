@@ -9,7 +9,7 @@ from ..errors import InputError, VsInspectError
 from ..io.result import write_run_result
 from ..pipeline import run as run_pipeline
 from ._common import (add_config_file_option, add_cue_options, add_force_option, add_gt_option,
-                      add_sync_options, check_output_folder, load_gt, print_run, run_config)
+                      add_sync_options, check_output_folder, gt_with_reference, print_run, run_config)
 from ._record import add_record_options, check_rrd_path, describe, open_sink
 
 
@@ -50,29 +50,28 @@ def run(args: argparse.Namespace) -> int:
     # after the whole run; an earlier run's result is replaced only with --force
     check_output_folder(out, args.force)
     check_rrd_path(args, out)
+    truth = None
     if args.gt is not None:  # a missing, malformed or mismatched truth fails now, not after the run
         from ..io.bundle import read_gt, read_video_infos
         names = ([v.name for v in read_video_infos(args.bundle)] if args.bundle else
                  [p.name if p.is_dir() else p.stem for p in map(Path, args.videos)])
-        read_gt(args.gt, names)
+        truth = read_gt(args.gt, names)
     if args.videos and not args.no_rrd:  # names are known now: refuse a recording collision early
         from ..io.recording import check_entity_names
         check_entity_names([p.name if p.is_dir() else p.stem for p in map(Path, args.videos)])
     fresh = not out.exists()
     try:
-        return _run(args, cfg, out)
+        return _run(args, cfg, out, truth)
     except BaseException:
         if fresh and out.is_dir() and not any(out.iterdir()):
             out.rmdir()  # a failed run leaves no empty --out behind
         raise
 
 
-def _run(args: argparse.Namespace, cfg, out: Path) -> int:
+def _run(args: argparse.Namespace, cfg, out: Path, truth: dict[str, float] | None) -> int:
+    """truth: --gt's offsets, read once by run(): the recording draws each pair's true Δ, and
+    result.json keeps it."""
     progress = not args.no_progress
-    truth = None
-    if args.gt is not None:  # the recording draws each pair's true Δ, and result.json keeps it
-        from ..io.bundle import read_gt
-        truth = read_gt(args.gt)
     with open_sink(args, out, cfg.record, progress=progress) as sink:
         if args.bundle:
             result = run_pipeline(args.bundle, cfg, sink, progress=progress, truth_offsets_s=truth)
@@ -91,8 +90,8 @@ def _run(args: argparse.Namespace, cfg, out: Path) -> int:
         shutil.rmtree(out / "cues")
     if describe(sink):
         print(describe(sink))
-    truth = load_gt(args.gt, list(result.offsets_s), result.reference)
-    print_run(result, path, truth=truth, frame_s=_frame_intervals(args.bundle or out / "cues"))
+    print_run(result, path, truth=gt_with_reference(truth, args.gt, result.reference),
+              frame_s=_frame_intervals(args.bundle or out / "cues"))
     return exit_code(result)
 
 

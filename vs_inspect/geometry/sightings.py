@@ -48,8 +48,12 @@ def _centre_seen(timestamps_a_s: np.ndarray, K_a: np.ndarray, cam_from_world_a: 
     return project(np.asarray(K_a, np.float64), cam_from_world_a[None], centre), posed
 
 
-def _checked_inputs(head_xy_a, timestamps_a_s, cam_from_world_a, valid_a, timestamps_b_s, cam_from_world_b, valid_b):
-    """The arrays as float64 / bool, their shapes checked (ValueError naming the wrong one)."""
+def _checked_inputs(head_xy_a, timestamps_a_s, cam_from_world_a, valid_a, timestamps_b_s, cam_from_world_b, valid_b,
+                    radius_px: float):
+    """The arrays as float64 / bool, their shapes and the radius checked (ValueError naming the
+    wrong one)."""
+    if not radius_px > 0:
+        raise ValueError(f"radius_px must be positive, got {radius_px}")
     T_a = len(check_shape("timestamps_a_s", np.asarray(timestamps_a_s, np.float64), (None,), batched=False))
     head = check_shape("head_xy_a", np.asarray(head_xy_a, np.float64), (T_a, 2), batched=False)
     pose_a = check_shape("cam_from_world_a", np.asarray(cam_from_world_a, np.float64), (T_a, 4, 4), batched=False)
@@ -72,10 +76,8 @@ def sighting_landscape(head_xy_a: np.ndarray, timestamps_a_s: np.ndarray, K_a: n
     (T,) bool; offsets_s: (D,) candidates Δ. b's centre is interpolated linearly between its frames.
     """
     head, pose_a, valid_a, ts_b, pose_b, valid_b = _checked_inputs(
-        head_xy_a, timestamps_a_s, cam_from_world_a, valid_a, timestamps_b_s, cam_from_world_b, valid_b)
+        head_xy_a, timestamps_a_s, cam_from_world_a, valid_a, timestamps_b_s, cam_from_world_b, valid_b, radius_px)
     offsets = np.asarray(offsets_s, np.float64).reshape(-1)
-    if not radius_px > 0:
-        raise ValueError(f"radius_px must be positive, got {radius_px}")
     seen, posed = _centre_seen(timestamps_a_s, K_a, pose_a, ts_b, pose_b, valid_b, offsets)
     dist = np.linalg.norm(seen - head[None], axis=-1)
     use = posed & valid_a[None] & np.isfinite(dist)
@@ -112,9 +114,7 @@ def sighting_shift_fit(head_xy_a: np.ndarray, timestamps_a_s: np.ndarray, K_a: n
     so off (fencing1, README); leaving the shift free takes that side out of Δ.
     """
     head, pose_a, valid_a, ts_b, pose_b, valid_b = _checked_inputs(
-        head_xy_a, timestamps_a_s, cam_from_world_a, valid_a, timestamps_b_s, cam_from_world_b, valid_b)
-    if not radius_px > 0:
-        raise ValueError(f"radius_px must be positive, got {radius_px}")
+        head_xy_a, timestamps_a_s, cam_from_world_a, valid_a, timestamps_b_s, cam_from_world_b, valid_b, radius_px)
     offsets = np.asarray(offsets_s, np.float64).reshape(-1)
     seen, posed = _centre_seen(timestamps_a_s, K_a, pose_a, ts_b, pose_b, valid_b,
                                np.concatenate([[float(peak_s)], offsets]))
