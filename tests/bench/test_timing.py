@@ -48,6 +48,9 @@ def test_target_needs_every_video_and_the_time():
     assert row(179.0, 4).met and not row(181.0, 4).met and not row(10.0, 3).met
     table = format_table([row(179.0, 4), row(181.0, 3)]).splitlines()
     assert _cells(table[2])[-1].startswith("met") and _cells(table[3])[-1].startswith("MISSED")
+    assert _cells(table[3])[-1] == "MISSED (<180 s)"
+    # in time but a video unresolved: the row says which half of the target failed
+    assert _cells(format_table([row(10.0, 3)]).splitlines()[2])[-1] == "MISSED: in time (<180 s), 3/4 resolved"
     assert _cells(table[2])[COLUMNS.index("other")] == f"{179.0 - len(STAGES):.1f}"
     # the videos' own steps (1 s each here) took 2 s together
     overlapped = dataclasses.replace(row(179.0, 4), videos_s=2.0)
