@@ -23,6 +23,7 @@ from __future__ import annotations
 import functools
 import logging
 import multiprocessing
+import threading
 import os
 import signal
 from collections.abc import Callable, Iterable, Iterator
@@ -133,8 +134,6 @@ def stop_pool(pool, workers: list, grace_s: float = 10.0) -> None:
     workers still alive grace_s later are killed (SIGKILL) so that it returns. A fork-pool worker
     once missed its SIGTERM in CI and the test suite waited for it until its timeout (the worker
     idle in its task loop, the driver in terminate's join)."""
-    import threading
-
     stopper = threading.Thread(target=pool.terminate, name="pool-terminate", daemon=True)
     stopper.start()
     stopper.join(grace_s)

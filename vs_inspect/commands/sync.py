@@ -50,15 +50,15 @@ def run(args: argparse.Namespace) -> int:
     # after the whole run; an earlier run's result is replaced only with --force
     check_output_folder(out, args.force)
     check_rrd_path(args, out)
+    video_names = [p.name if p.is_dir() else p.stem for p in map(Path, args.videos)]
     truth = None
     if args.gt is not None:  # a missing, malformed or mismatched truth fails now, not after the run
         from ..io.bundle import read_gt, read_video_infos
-        names = ([v.name for v in read_video_infos(args.bundle)] if args.bundle else
-                 [p.name if p.is_dir() else p.stem for p in map(Path, args.videos)])
+        names = [v.name for v in read_video_infos(args.bundle)] if args.bundle else video_names
         truth = read_gt(args.gt, names)
     if args.videos and not args.no_rrd:  # names are known now: refuse a recording collision early
         from ..io.recording import check_entity_names
-        check_entity_names([p.name if p.is_dir() else p.stem for p in map(Path, args.videos)])
+        check_entity_names(video_names)
     fresh = not out.exists()
     try:
         return _run(args, cfg, out, truth)
