@@ -260,3 +260,22 @@ def test_an_unresolved_video_the_joint_vote_was_sure_of_alone_with_one_other_say
     assert r.unresolved["b"].startswith("Stage 0's joint vote was sure of its offset (margin 5.3) but of 2 "
                                         "camera(s) only, so no triangle of sure cameras confirmed it")
     assert r.unresolved["c"].startswith("Stage 0's joint vote was not sure of its offset (margin 0.2)")
+
+
+def test_an_unresolved_video_whose_own_pair_contradicted_the_joint_vote_says_so():
+    """The joint vote chose a's offset, but a pair of a's voted elsewhere (dissent): a's reason
+    says so, with point transfer's verdict; the videos it was used for keep their offsets."""
+    from vs_inspect.pipeline.run import _run_result
+    from vs_inspect.types import CueStats, SyncResult
+
+    sync = SyncResult("b", {"a": None, "b": 0.0, "c": 0.4, "d": -0.2}, {}, {
+        "a": "the reference, but no accepted pair links it"}, (), (), ())
+    why = "its pairs vote for other offsets than the joint choice: a__b has 0.23 of its top peak's votes"
+    joint = {"origin": "a", "sure": ["b", "c", "d"], "used": ["b", "c", "d"],
+             "margin": {"a": 6.1, "b": 33.0, "c": 36.5, "d": 19.6}, "dissent": {"a": why},
+             "transfer": {"a": {"reason": "point transfer puts it at +1.167 s: they disagree"}}}
+    stats = CueStats("estimated", 4, 10, 10, {}, {}, {}, {}, "joint", None, joint)
+    r = _run_result(sync, stats, RunInputs(), RunConfig(), None, {})
+    assert r.unresolved["a"].startswith(f"Stage 0's joint vote chose its offset (margin 6.1), but {why}, so it "
+                                        "got no geometric track pairs (point transfer puts it at +1.167 s")
+    assert r.offsets_s == {"a": None, "b": 0.0, "c": 0.4, "d": -0.2} and set(r.unresolved) == {"a"}

@@ -590,17 +590,33 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     if cfg.geometric.three_view_min_supporters > 0 and estimated and sum(sure.values()) >= 3:
         three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, sink)
         sure = {n: ok and (n not in three_view or three_view[n].passed) for n, ok in sure.items()}
-    refused = any(not chk.passed for chk in three_view.values())
-    # a camera refused in three views keeps the joint path (no geometric pair for it), instead of
-    # the triangle fallback below choosing among the same cameras' vote peaks
+    dissent = {}
+    # after the three-view check, which triangulates the pairs of the cameras sure then (without
+    # the hand-held camera this refuses, stop 43's sweep seed 1 left its static cam2 too few
+    # trajectories); estimated cameras only: with a calibration a right pair had 0.35
+    if cfg.geometric.joint_min_pair_share > 0 and estimated and joint is not None:
+        from .geometric_pairs import dissenting_cameras
+
+        dissent = dissenting_cameras({k: gs for k, (_, gs) in found.items()}, joint, sure,
+                                     cfg.geometric.joint_min_pair_share)
+        for n, why in dissent.items():
+            sure[n] = False
+            msg = f"joint vote not sure of {n}: {why}"
+            sink.stage_event("cues", msg)
+            log.warning(msg)
+    refused = bool(dissent) or any(not chk.passed for chk in three_view.values())
+    # a camera refused (by its pairs or in three views) keeps the joint path (no geometric pair
+    # for it), instead of the triangle fallback below choosing among the same cameras' vote peaks
     if sum(sure.values()) >= 2 or refused:
         checks, traj = {}, None
         if cfg.geometric.transfer and not all(sure.values()) and sum(sure.values()) >= 2:
-            checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, sink)
+            # not of a camera its own pairs contradict: point transfer projects into the same
+            # camera, and confirmed stop 43's hand-held one 4.4 frames off (its lens is biased)
+            checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, sink, set(dissent))
         sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
         out, used = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg, stats, sink,
                                      {c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
-                                     {c: chk.summary() for c, chk in three_view.items()})
+                                     {c: chk.summary() for c, chk in three_view.items()}, dissent)
         return _add_transfer_pairs(out, checks, traj, list(vids), stats, sink), used
     if joint is not None:
         # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
@@ -787,10 +803,11 @@ def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: di
 
 
 def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
-                         vids: dict, cfg: CueConfig, sink: Sink):
+                         vids: dict, cfg: CueConfig, sink: Sink, skip=frozenset()):
     """({camera: transfer.TransferCheck}, the transfer.Trajectories projected): a check of every
-    camera the joint vote is unsure of, the sure cameras' track pairs triangulated at their joint
-    offsets and projected into it over its candidate offsets (cues/transfer.py)."""
+    camera the joint vote is unsure of (but those of skip), the sure cameras' track pairs
+    triangulated at their joint offsets and projected into it over its candidate offsets
+    (cues/transfer.py)."""
     from .transfer import confirm_offset, offset_grid, transfer_landscape, triangulate_pairs
 
     g = cfg.geometric
@@ -799,7 +816,7 @@ def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dic
                              {n: t.xy for n, t in tracks.items()},
                              _sure_pairs(found, joint, sure, cameras), sure_offsets)
     checks = {}
-    for c in sorted(n for n, ok in sure.items() if not ok):
+    for c in sorted(n for n, ok in sure.items() if not ok and n not in skip):
         info = vids[c].info
         land = transfer_landscape(traj, info, cameras[c], tracks[c].xy,
                                   offset_grid(traj, info, 0.5 * info.frame_interval_s),
@@ -872,12 +889,14 @@ def _merge_pairs(tp: TrackPairs, index: np.ndarray, unchecked: bool = False) -> 
 
 def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cameras: dict,
                      tracks: dict, vids: dict, cfg: CueConfig, stats: dict, sink: Sink,
-                     transfer: dict | None = None, three_view: dict | None = None) -> tuple[dict, dict]:
+                     transfer: dict | None = None, three_view: dict | None = None,
+                     dissent: dict | None = None) -> tuple[dict, dict]:
     """(pairs, {(a, b): the joint Δ_ab whose supporters were added}): the supporters of the
     jointly chosen offsets (geometric_pairs.joint_offsets) for every pair whose Δ is trusted
     (_joint_pair_used: both cameras' offsets won by at least joint_min_margin, or point transfer
     confirmed them, and joint_min_sure cameras are sure; sure: camera -> whether it is, transfer
-    and three_view: those checks' summaries, for result.json); nothing for the others. A
+    and three_view: those checks' summaries, dissent: {camera: why its pairs contradict it}, for
+    result.json); nothing for the others. A
     descriptor pair is kept only if it is epipolar-consistent at the joint Δ (with
     joint_filter_descriptor): the descriptor pairs are mostly wrong on small moving objects
     (BENCHMARKS.md), and the joint Δ is the best evidence there is of the moment they share."""
@@ -897,6 +916,8 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
         stats["geometric_joint"]["transfer"] = transfer
     if three_view:
         stats["geometric_joint"]["three_view"] = three_view
+    if dissent:
+        stats["geometric_joint"]["dissent"] = dict(dissent)
     failed = sorted(n for n, chk in (three_view or {}).items() if not chk["passed"] and not sure[n])
     if failed:
         seen = ", ".join(f"{n} {three_view[n]['supporters']}" for n in failed)
@@ -906,7 +927,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                f"{cfg.geometric.three_view_min_share_of_best:.2g} of those at its best offset)")
         sink.stage_event("cues", msg)
         log.warning(msg)
-    weak = sorted(n for n, ok in sure.items() if not ok and n not in failed)
+    weak = sorted(n for n, ok in sure.items() if not ok and n not in failed and n not in (dissent or {}))
     if weak:
         msg = (f"geometric track pairs not used for {', '.join(weak)}: the joint vote prefers their "
                f"offsets by less than {cfg.geometric.joint_min_margin:g} (margins "

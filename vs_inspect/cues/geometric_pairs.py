@@ -534,6 +534,44 @@ def joint_offsets(found: dict[tuple[str, str], GeometricPairStats], tol_s: float
     return JointChoice({n: float(combo[top, c]) for c, n in enumerate(names)}, float(score[top]), margin)
 
 
+def joint_vote_share(st: GeometricPairStats, delta_s: float) -> float:
+    """The pair's votes at Δ_ab = delta_s (candidates whose best offset lies within halfwidth_s)
+    over the votes of its own highest peak: 1 when the joint choice takes the pair's top peak,
+    near 0 when the pair votes for another Δ and hardly at all for this one (1 with no votes)."""
+    if st.cand_offset_s is None or not st.peak_votes or max(st.peak_votes) <= 0:
+        return 1.0
+    at = int((np.abs(st.cand_offset_s - delta_s) <= st.halfwidth_s + 1e-9).sum())
+    return min(1.0, at / max(st.peak_votes))
+
+
+def dissenting_cameras(found: dict[tuple[str, str], GeometricPairStats], joint: JointChoice,
+                       sure: dict[str, bool], min_share: float) -> dict[str, str]:
+    """Sure cameras that a pair of theirs with another sure camera contradicts: {camera: reason}.
+
+    A pair contradicts the joint choice when its votes at the implied Δ_ab are below min_share
+    of its own top peak's (joint_vote_share). The joint choice outvotes a single pair's false
+    peak, but it is also outvoted itself when a camera's pairs disagree with each other (a
+    periodic motion lets two of a camera's pairs agree on a wrong offset that the third rejects),
+    so such a camera is not sure. Each contradicting pair blames one of its two cameras: the one
+    in most contradicting pairs, then the one of smaller margin, until no sure pair contradicts."""
+    share = {k: joint_vote_share(st, joint.offsets_s[k[1]] - joint.offsets_s[k[0]])
+             for k, st in found.items() if sure.get(k[0]) and sure.get(k[1])}
+    low = {k: s for k, s in share.items() if s < min_share}
+    out: dict[str, str] = {}
+    while low:
+        count: dict[str, int] = {}
+        for a, b in low:
+            count[a], count[b] = count.get(a, 0) + 1, count.get(b, 0) + 1
+        cam = max(count, key=lambda n: (count[n], -joint.margin.get(n, 0.0), n))
+        mine = sorted((k, s) for k, s in low.items() if cam in k)
+        out[cam] = ("its pairs vote for other offsets than the joint choice: "
+                    + ", ".join(f"{a}__{b} has {s:.2f} of its top peak's votes at the joint "
+                                f"Δ {joint.offsets_s[b] - joint.offsets_s[a]:+.3f} s" for (a, b), s in mine)
+                    + f" (fewer than {min_share:g})")
+        low = {k: s for k, s in low.items() if cam not in k}
+    return out
+
+
 def supporters(st: GeometricPairStats, delta_s: float) -> np.ndarray:
     """(P,2) track pairs whose best offset lies within halfwidth_s of delta_s, one partner per
     track (the one-to-one choice of least total residual)."""
