@@ -87,9 +87,16 @@ def test_a_reference_without_an_accepted_pair_is_null_with_a_reason(small):
         p, decision=dataclasses.replace(p.decision, accepted=False, reason="planted rejection"))
         for p in base.pairs]
     out = solve_stage2(bundle, lands)
-    assert out.reference == ref and out.offsets_s[ref] is None and out.uncertainty_s[ref] is None
+    assert out.offsets_s[ref] is None and out.uncertainty_s[ref] is None
     assert out.unresolved_reason[ref].startswith("the reference, but no accepted pair links it")
     assert "planted rejection" in out.unresolved_reason[ref]
+    # the videos that accepted pairs still link are timed against the first of them instead
+    new = bundle.names[1]
+    assert out.reference == new and f"{new}, of the largest group" in out.unresolved_reason[ref]
+    assert out.offsets_s[new] == 0.0
+    assert None not in base.offsets_s.values()
+    for v in bundle.names[2:]:
+        assert out.offsets_s[v] == pytest.approx(base.offsets_s[v] - base.offsets_s[new], abs=0.01)
     # with its pairs accepted it keeps its 0.0 and no reason
     assert base.offsets_s[ref] == 0.0 and ref not in base.unresolved_reason
 
@@ -165,3 +172,25 @@ def test_unchecked_track_pairs_need_the_others_to_agree(shifted_pair):
     plain = dataclasses.replace(lone, pairs={(a, b): dataclasses.replace(lone.pairs[(a, b)], unchecked=None)})
     land, _ = pair_landscape(plain, a, b, SyncConfig())
     assert land.decision.accepted and land.confirm_energy is None
+
+
+def test_the_drift_solve_also_times_the_videos_against_a_linked_reference(small):
+    import dataclasses
+
+    from vs_inspect.pipeline.stage12 import solve_stage2_drift
+    from vs_inspect.sync.config import DriftConfig
+    bundle, _ = small
+    cfg = dataclasses.replace(SyncConfig(), drift=DriftConfig(enabled=True))
+    base = sync_bundle(bundle, cfg, progress=False)
+    ref, new = bundle.names[0], bundle.names[1]
+    lands = [p if ref not in (p.a, p.b) else dataclasses.replace(
+        p, decision=dataclasses.replace(p.decision, accepted=False, reason="planted rejection"))
+        for p in base.pairs]
+    out = solve_stage2_drift(bundle, lands, cfg.solve, cfg.drift)
+    assert out.reference == new and out.offsets_s[ref] is None and out.drift_ppm[ref] is None
+    assert out.unresolved_reason[ref].startswith("the reference, but no accepted pair links it")
+    assert f"{new}, of the largest group" in out.unresolved_reason[ref]
+    assert None not in base.offsets_s.values() and out.offsets_s[new] == 0.0
+    for v in bundle.names[2:]:
+        assert out.offsets_s[v] == pytest.approx(base.offsets_s[v] - base.offsets_s[new], abs=0.01)
+

@@ -4,7 +4,7 @@ import pytest
 from vs_inspect.sync.config import DecisionConfig, PairSelection
 from vs_inspect.sync.decision import decide, local_minima
 from vs_inspect.sync.pairs import select_pairs
-from vs_inspect.sync.solve import PairMeasurement, huber_weights, solve_offsets
+from vs_inspect.sync.solve import PairMeasurement, huber_weights, linked_reference, solve_offsets
 
 OFFS = np.linspace(-1, 1, 201)
 
@@ -124,6 +124,17 @@ def test_unconnected_video_gets_null_and_a_reason():
     out = solve_offsets(["a", "b", "c"], "a", [m("a", "b", 0.4)])
     assert out.offsets_s == {"a": 0.0, "b": pytest.approx(0.4), "c": None}
     assert "not connected" in out.unresolved_reason["c"]
+
+
+def test_a_reference_no_accepted_pair_reaches_gives_way_to_the_largest_linked_group():
+    names = ["a", "b", "c", "d", "e"]
+    assert linked_reference(names, "a", [("a", "b"), ("c", "d")]) == "a"  # linked: kept
+    assert linked_reference(names, "a", [("b", "c"), ("d", "e"), ("c", "e")]) == "b"
+    assert linked_reference(names, "a", [("d", "e"), ("b", "c"), ("b", "d")]) == "b"
+    assert linked_reference(names, "a", [("c", "d"), ("b", "e"), ("d", "e")]) == "b"  # first by name order
+    assert linked_reference(names, "a", [("d", "e"), ("b", "c")]) == "b"  # a tie: the first video
+    assert linked_reference(names, "c", [("d", "e"), ("a", "b"), ("a", "e")]) == "a"
+    assert linked_reference(names, "a", []) == "a"  # nothing linked: nothing to move to
 
 
 def test_reference_must_be_a_video():

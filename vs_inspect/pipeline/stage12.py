@@ -30,7 +30,7 @@ from ..sync.posefree import PoseFreeConfig, PoseFreePair, estimate_pair
 from ..sync.rate import fit_rate, rate_landscape, scaled_video
 from ..sync.sightings import RESIDUAL as SIGHTING
 from ..sync.sightings import sighting_pair
-from ..sync.solve import PairMeasurement, solve_offsets
+from ..sync.solve import PairMeasurement, linked_reference, solve_offsets
 
 log = logging.getLogger(__name__)
 
@@ -385,6 +385,14 @@ def _sighting_hops(lands, reference: str) -> dict[str, int]:
     return hops
 
 
+def _unlinked_reference(wanted: str, reference: str) -> str:
+    """Why the wanted reference has no offset (reference: the one used instead, or itself)."""
+    why = "the reference, but no accepted pair links it to another video, so no offset was measured against it"
+    if reference != wanted:
+        why += f"; {reference}, of the largest group of videos that accepted pairs link, is the reference instead"
+    return why
+
+
 def _with_its_pairs(lands, v: str, why: str) -> str:
     """why, followed by the decisions of v's evaluated pairs, each distinct reason once with the
     pairs it holds for (at most three reasons)."""
@@ -417,6 +425,7 @@ def solve_stage2(bundle: CueBundle, lands: list[PairLandscape] | tuple[PairLands
             floor = step / math.sqrt(12.0)  # the grid's own resolution if the curvature is unknown
             sigma = land.uncertainty_s if math.isfinite(land.uncertainty_s) else floor
             meas.append(PairMeasurement(land.a, land.b, land.best_offset_s, max(sigma, 1e-6)))
+    wanted, reference = reference, linked_reference(names, reference, [(m.a, m.b) for m in meas])
     out = solve_offsets(names, reference, meas, solve.solver, delta, solve.max_iterations)
 
     reasons = {v: _with_its_pairs(lands, v, why) for v, why in out.unresolved_reason.items()}
@@ -424,11 +433,10 @@ def solve_stage2(bundle: CueBundle, lands: list[PairLandscape] | tuple[PairLands
     for v, why in _long_sighting_chains(lands, reference, max_sighting_chain).items():
         if offsets.get(v) is not None:
             offsets[v], unc[v], reasons[v] = None, None, why
-    if len(names) > 1 and not any(reference in (m.a, m.b) for m in meas):
+    if len(names) > 1 and not any(wanted in (m.a, m.b) for m in meas):
         # its 0.0 is a definition, not a measurement: with no accepted pair it says nothing
-        offsets[reference], unc[reference] = None, None
-        reasons[reference] = _with_its_pairs(lands, reference, "the reference, but no accepted pair links it "
-                                             "to another video, so no offset was measured against it")
+        offsets[wanted], unc[wanted] = None, None
+        reasons[wanted] = _with_its_pairs(lands, wanted, _unlinked_reference(wanted, reference))
     return SyncResult(reference, offsets, unc, reasons, tuple(lands),
                       out.pairs, out.iterations, solve.solver)
 
@@ -457,6 +465,7 @@ def solve_stage2_drift(bundle: CueBundle, lands: list[PairLandscape] | tuple[Pai
         # a rate the pair cannot tell is left to the other pairs and the drift prior
         timings.append(PairTiming(land.a, land.b, off, math.log(land.rate), std,
                                   lstd if math.isfinite(lstd) else 1.0, pivot))
+    wanted, reference = reference, linked_reference(names, reference, [(t.a, t.b) for t in timings])
     sol = solve_offsets_drift(reference, timings, with_drift=True, drift_prior_ppm=drift.prior_ppm)
     offsets: dict[str, float | None] = {v: None for v in names}
     unc: dict[str, float | None] = {v: None for v in names}
@@ -474,9 +483,9 @@ def solve_stage2_drift(bundle: CueBundle, lands: list[PairLandscape] | tuple[Pai
         if offsets.get(v) is not None:
             offsets[v] = unc[v] = drift[v] = drift_std[v] = None
             reasons[v] = why
-    if len(names) > 1 and not timings:
-        offsets[reference] = unc[reference] = drift[reference] = drift_std[reference] = None
-        reasons[reference] = "the reference, but no accepted pair links it to another video"
+    if len(names) > 1 and not any(wanted in (t.a, t.b) for t in timings):
+        offsets[wanted] = unc[wanted] = drift[wanted] = drift_std[wanted] = None
+        reasons[wanted] = _with_its_pairs(lands, wanted, _unlinked_reference(wanted, reference))
     used = tuple((t.a, t.b) for t in timings if (t.a, t.b) in sol.pair_residuals)
     res = np.array([sol.pair_residuals[p][0] for p in used])
     weight = np.array([sol.pair_weights[p] for p in used])

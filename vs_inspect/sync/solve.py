@@ -37,6 +37,17 @@ class SolveOutput:
     pairs: tuple[tuple[str, str], ...]  # measurements used, in residual order
 
 
+def linked_reference(names: list[str], reference: str, pairs: list[tuple[str, str]]) -> str:
+    """The reference, or, when none of pairs (the accepted ones, (a, b)) links it to another
+    video, the first video (in names' order) of the largest group of videos the pairs link:
+    offsets against a reference that no pair reaches would all be unknown, while that group's are
+    measured."""
+    if not pairs or any(reference in p for p in pairs):
+        return reference
+    label = _components(names, pairs)
+    return names[int(np.argmax(np.bincount(label)[label]))]  # argmax: the first of the largest group
+
+
 def huber_weights(residual: np.ndarray, delta: float) -> np.ndarray:
     """IRLS weights of the Huber loss: 1 inside ±delta, delta/|r| outside."""
     a = np.abs(residual)
@@ -79,21 +90,24 @@ def solve_offsets(names: list[str], reference: str, measurements: list[PairMeasu
                        out.iterations, out.pairs)
 
 
-def _components(names: list[str], measurements: list[PairMeasurement]) -> np.ndarray:
-    """(V,) connected-component label of each video in the graph of the measurements."""
+def _components(names: list[str], pairs: list[tuple[str, str]]) -> np.ndarray:
+    """(V,) connected-component label of each video in the graph of the pairs (a, b)."""
     pos = {n: i for i, n in enumerate(names)}
-    if not measurements:
+    if not pairs:
         return np.arange(len(names))
-    g = coo_matrix((np.ones(len(measurements)),
-                    ([pos[m.a] for m in measurements], [pos[m.b] for m in measurements])),
+    g = coo_matrix((np.ones(len(pairs)), ([pos[a] for a, _ in pairs], [pos[b] for _, b in pairs])),
                    shape=(len(names), len(names)))
     return connected_components(g, directed=False)[1]
 
 
+def _ends(measurements: list[PairMeasurement]) -> list[tuple[str, str]]:
+    return [(m.a, m.b) for m in measurements]
+
+
 def _bridges(names: list[str], measurements: list[PairMeasurement]) -> np.ndarray:
     """(E,) bool: removing this measurement splits its component (a handful of videos: brute force)."""
-    n_before = len(np.unique(_components(names, measurements)))
-    return np.array([len(np.unique(_components(names, measurements[:i] + measurements[i + 1:]))) > n_before
+    n_before = len(np.unique(_components(names, _ends(measurements))))
+    return np.array([len(np.unique(_components(names, _ends(measurements[:i] + measurements[i + 1:])))) > n_before
                      for i in range(len(measurements))], bool)
 
 
@@ -104,7 +118,7 @@ def _solve(names: list[str], reference: str, measurements: list[PairMeasurement]
     offsets: dict[str, float | None] = {v: None for v in names}
     unc: dict[str, float | None] = {v: None for v in names}
     reasons: dict[str, str] = {}
-    label = _components(names, measurements)
+    label = _components(names, _ends(measurements))
     comp = {v for v in names if label[pos[v]] == label[pos[reference]]}
     for v in names:
         if v not in comp:
