@@ -210,6 +210,10 @@ class TrackPairs:
     # cameras): Stage 1 accepts the pair only if the other rows alone give the same minimum;
     # None = no such row
     unchecked: np.ndarray | None = None
+    # Δ_ab (s) at which Stage 0 kept every row, each consistent with the cameras' epipolar
+    # geometry there (the joint vote's Δ): Stage 1 refuses a minimum far from it; None = the rows
+    # were not all chosen at one Δ
+    chosen_at_offset_s: float | None = None
 
     def __post_init__(self) -> None:
         idx = np.asarray(self.index)
@@ -231,6 +235,11 @@ class TrackPairs:
             if u.dtype != bool and not np.isin(u, (0, 1)).all():
                 raise ValueError("unchecked must be booleans (0 or 1)")
             object.__setattr__(self, "unchecked", u.astype(bool))
+        if self.chosen_at_offset_s is not None:
+            d = float(self.chosen_at_offset_s)
+            if not np.isfinite(d):
+                raise ValueError("chosen_at_offset_s must be a finite number of seconds")
+            object.__setattr__(self, "chosen_at_offset_s", d)
 
     @property
     def key(self) -> tuple[str, str]:
@@ -315,7 +324,8 @@ class CueBundle:
             return self.pairs[(a, b)]
         if (b, a) in self.pairs:
             tp = self.pairs[(b, a)]
-            return TrackPairs(a, b, tp.index[:, ::-1].copy(), tp.weight, tp.unchecked)
+            return TrackPairs(a, b, tp.index[:, ::-1].copy(), tp.weight, tp.unchecked,
+                              None if tp.chosen_at_offset_s is None else -tp.chosen_at_offset_s)
         return None
 
 

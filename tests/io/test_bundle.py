@@ -53,6 +53,24 @@ def test_unchecked_track_pairs_round_trip_in_either_order(good_bundle, tmp_path)
     assert all(back.pairs[k].unchecked is None for k in back.pairs if k != key)
 
 
+def test_the_delta_track_pairs_were_chosen_at_round_trips_with_its_sign_in_either_order(good_bundle, tmp_path):
+    """Stage 0's Δ_ab at which it kept a pair's track pairs reaches Stage 1 through the files; read
+    the other way round it is Δ_ba = -Δ_ab."""
+    import dataclasses
+
+    from vs_inspect.types import TrackPairs
+    _, scene = good_bundle
+    key = sorted(scene.bundle.pairs)[0]
+    tp = scene.bundle.pairs[key]
+    pairs = {**scene.bundle.pairs, key: TrackPairs(*key, tp.index, tp.weight, None, -0.5167)}
+    back = read_bundle(write_bundle(dataclasses.replace(scene.bundle, pairs=pairs), tmp_path / "b"))
+    assert back.pairs[key].chosen_at_offset_s == -0.5167
+    assert back.pair(key[1], key[0]).chosen_at_offset_s == 0.5167
+    assert all(back.pairs[k].chosen_at_offset_s is None for k in back.pairs if k != key)
+    with pytest.raises(ValueError, match="chosen_at_offset_s"):
+        TrackPairs(*key, tp.index, None, None, float("nan"))
+
+
 def test_heads_round_trip_and_are_optional(good_bundle, tmp_path):
     """A person detector's heads (the worn-camera sightings' cue) go through the files exactly;
     a bundle without them has none, and one of a wrong length names its file."""
@@ -125,6 +143,10 @@ CASES = {
                                           "pairs/cam0__cam1.npz", "unchecked"),
     "unchecked marks not booleans": (set_npz("pairs/cam0__cam1.npz", unchecked=np.full(60, 2)),
                                      "pairs/cam0__cam1.npz", "booleans"),
+    "chosen offset not a number": (set_npz("pairs/cam0__cam1.npz", chosen_at_offset_s=np.float64("nan")),
+                                   "pairs/cam0__cam1.npz", "chosen_at_offset_s"),
+    "chosen offset not one number": (set_npz("pairs/cam0__cam1.npz", chosen_at_offset_s=np.zeros(2)),
+                                     "pairs/cam0__cam1.npz", "chosen_at_offset_s"),
     "empty bundle": (set_json(["videos"], []), "bundle.json", "empty bundle"),
     "wrong format": (set_json(["format"], "something"), "bundle.json", "format"),
     "bad fps": (set_json(["videos", 0, "fps"], -3), "bundle.json", "fps"),

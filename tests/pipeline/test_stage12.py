@@ -194,3 +194,18 @@ def test_the_drift_solve_also_times_the_videos_against_a_linked_reference(small)
     for v in bundle.names[2:]:
         assert out.offsets_s[v] == pytest.approx(base.offsets_s[v] - base.offsets_s[new], abs=0.01)
 
+
+def test_a_pair_whose_minimum_is_far_from_where_stage0_chose_its_track_pairs_is_refused(small):
+    import dataclasses
+
+    bundle, base = small
+    land = next(p for p in base.pairs if p.decision.accepted)
+    tp = bundle.pairs[(land.a, land.b)]
+    for shift_s, accepted in ((0.01, True), (0.5, False)):
+        moved = dataclasses.replace(tp, chosen_at_offset_s=land.best_offset_s + shift_s)
+        out = sync_bundle(dataclasses.replace(bundle, pairs={**bundle.pairs, (land.a, land.b): moved}),
+                          SyncConfig(), progress=False)
+        got = next(p for p in out.pairs if (p.a, p.b) == (land.a, land.b))
+        assert got.decision.accepted == accepted, got.decision.reason
+        assert got.best_offset_s == pytest.approx(land.best_offset_s)
+        assert ("at which Stage 0 kept its track pairs" in got.decision.reason) != accepted

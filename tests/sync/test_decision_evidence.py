@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from vs_inspect.sync.config import DecisionConfig
-from vs_inspect.sync.decision import check_track_pairs_at_best, check_uncertainty, decide, support_fraction
+from vs_inspect.sync.decision import (check_chosen_offset, check_track_pairs_at_best, check_uncertainty, decide,
+                                      support_fraction)
 from vs_inspect.types import PairDecision
 
 OFFS = np.linspace(-1, 1, 201)
@@ -100,3 +101,23 @@ def test_a_minimum_wider_than_a_frame_is_refused_with_its_width():
     assert check_uncertainty(ok, 0.050, 0.0, frame, DecisionConfig(max_uncertainty_frames=2)).accepted
     no = PairDecision(False, "ambiguous", 0.8, 0.9, 3, 3, False)
     assert check_uncertainty(no, 0.050, 0.0, frame, DecisionConfig()) == no
+
+
+def test_a_minimum_far_from_the_delta_its_track_pairs_were_chosen_at_is_refused():
+    """Track pairs kept at Δ -0.517 s (consistent with the cameras there) whose minimum is at
+    -0.633 s, 3.5 frames away at 30 fps: refused; 1.5 frames away, or no such Δ, stays accepted."""
+    ok = PairDecision(True, "single clear minimum", 0.8, 0.0, 1, 1, False)
+    frame = 1 / 30
+    far = check_chosen_offset(ok, -0.6333, -0.5167, frame, DecisionConfig())
+    assert not far.accepted
+    assert far.reason == ("its minimum at -0.633 s lies 3.5 frames from the Δ -0.517 s at which Stage 0 kept its "
+                          "track pairs (more than 2): each was consistent with the cameras there, so the track "
+                          "pairs and the cameras disagree")
+    assert check_chosen_offset(ok, -0.5667, -0.5167, frame, DecisionConfig()) == ok
+    assert check_chosen_offset(ok, -0.6333, None, frame, DecisionConfig()) == ok
+    # the filter off, the check off (0) or a looser bound keep it; a rejection keeps its own reason
+    assert check_chosen_offset(ok, -0.6333, -0.5167, frame, DecisionConfig(enabled=False)).accepted
+    assert check_chosen_offset(ok, -0.6333, -0.5167, frame, DecisionConfig(chosen_agree_frames=0)).accepted
+    assert check_chosen_offset(ok, -0.6333, -0.5167, frame, DecisionConfig(chosen_agree_frames=4)).accepted
+    no = PairDecision(False, "ambiguous", 0.8, 0.9, 3, 3, False)
+    assert check_chosen_offset(no, -0.6333, -0.5167, frame, DecisionConfig()) == no

@@ -665,6 +665,9 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
                                                 tracks, vids, cfg)
         # supporters of a peak no triangle chose: Stage 1 must find the pair's minimum without them too
         out[(a, b)], n_new = _merge_pairs(desc, index, unchecked=pick is None)
+        if filter_desc and not len(index):  # every row chosen at the joint vote's Δ
+            out[(a, b)] = dataclasses.replace(out[(a, b)],
+                                              chosen_at_offset_s=joint.offsets_s[b] - joint.offsets_s[a])
         info = {"geometric_candidates": gs.candidates, "geometric_informative": gs.informative,
                 "geometric_pairs": int(len(index)), "geometric_new": n_new,
                 "geometric_peaks_s": [round(p, 4) for p in gs.peaks_s],
@@ -852,6 +855,7 @@ def _add_transfer_pairs(pairs: dict, checks: dict, traj, order: list[str], stats
         for key, rows in new.items():
             if key not in out:
                 continue
+            # the new rows follow trajectories at the transfer's offset, not the joint Δ
             out[key], n_new = _merge_pairs(out[key], np.unique(np.array(rows, np.int64), axis=0))
             stats["pairs"].setdefault(f"{key[0]}__{key[1]}", {})["transfer_new"] = int(n_new)
             sink.stage_event("cues", f"{key[0]}__{key[1]}: {n_new} track pairs from point transfer",
@@ -959,6 +963,8 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
         if cfg.geometric.joint_filter_descriptor:
             desc = _consistent_descriptor_pairs(desc, delta, cameras, tracks, vids, cfg)
         out[(a, b)], n_new = _merge_pairs(desc, index)
+        if cfg.geometric.joint_filter_descriptor or not n_desc:  # every row chosen at delta
+            out[(a, b)] = dataclasses.replace(out[(a, b)], chosen_at_offset_s=delta)
         stats["pairs"].setdefault(f"{a}__{b}", {}).update({
             "geometric_candidates": gs.candidates, "geometric_informative": gs.informative,
             "geometric_pairs": int(len(index)), "geometric_new": int(n_new),

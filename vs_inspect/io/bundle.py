@@ -284,10 +284,12 @@ def read_bundle(folder: str | os.PathLike) -> CueBundle:
                 raise BundleError(ppath, "pairs a video with itself")
             if (b, a) in pairs:
                 raise BundleError(ppath, f"pair given twice (also as {b}__{a}.npz)")
-            pdata = _load_npz(ppath, {"index": ((None, 2),), "weight": ((None,),), "unchecked": ((None,),)},
-                              budget)
+            pdata = _load_npz(ppath, {"index": ((None, 2),), "weight": ((None,),), "unchecked": ((None,),),
+                                      "chosen_at_offset_s": ((),)}, budget)
+            chosen = pdata.get("chosen_at_offset_s")
             try:
-                tp = TrackPairs(a, b, _require(ppath, pdata, "index"), pdata.get("weight"), pdata.get("unchecked"))
+                tp = TrackPairs(a, b, _require(ppath, pdata, "index"), pdata.get("weight"), pdata.get("unchecked"),
+                                None if chosen is None else float(chosen))
             except ValueError as exc:
                 raise BundleError(ppath, str(exc)) from None
             for col, n in ((0, a), (1, b)):
@@ -405,6 +407,8 @@ def write_bundle(bundle: CueBundle, folder: str | os.PathLike, overwrite: bool =
                 arrays["weight"] = tp.weight
             if tp.unchecked is not None:
                 arrays["unchecked"] = tp.unchecked
+            if tp.chosen_at_offset_s is not None:
+                arrays["chosen_at_offset_s"] = np.float64(tp.chosen_at_offset_s)
             np.savez_compressed(tmp / "pairs" / f"{a}__{b}.npz", **arrays)
         if bundle.heads:
             (tmp / "heads").mkdir()

@@ -21,7 +21,8 @@ from ..record.sink import NullSink, Sink
 from ..types import (CameraTrack, CueBundle, PairDecision, PairLandscape, SolveIteration, SyncResult,
                      TrackPairs, pairs_by_reason)
 from ..sync.config import DriftConfig, SolveConfig, SyncConfig
-from ..sync.decision import check_inliers, check_track_pairs_at_best, check_uncertainty, decide
+from ..sync.decision import (check_chosen_offset, check_inliers, check_track_pairs_at_best, check_uncertainty,
+                             decide)
 from ..sync.landscape import (PairEnergy, PairInput, RawLandscape, compute_landscape, curvature_uncertainty,
                               refine_minimum)
 from ..sync.pairs import select_pairs
@@ -126,8 +127,9 @@ def _decided_landscape(a: PairInput, b: PairInput, tp: TrackPairs, cfg: SyncConf
         inliers = float(np.mean(np.sqrt(r) < tau_px)) if r.size else float("nan")
         decision = check_inliers(decision, inliers, tau_px, decision_cfg)
         decision = check_track_pairs_at_best(decision, seen, best, decision_cfg)
-        decision = check_uncertainty(decision, sigma, best, max(va.frame_interval_s, vb.frame_interval_s),
-                                     decision_cfg)
+        frame_s = max(va.frame_interval_s, vb.frame_interval_s)
+        decision = check_uncertainty(decision, sigma, best, frame_s, decision_cfg)
+        decision = check_chosen_offset(decision, best, tp.chosen_at_offset_s, frame_s, decision_cfg)
     return _Decided(raw, pe, minima, decision, best, best_e, sigma)
 
 

@@ -69,11 +69,14 @@ class DecisionConfig:
     unchecked_agree_frames: float = 2.0
     """A pair with unchecked track pairs (TrackPairs.unchecked: two static cameras, whose epipolar vote no third camera checks) is accepted only if its other track pairs (found by appearance) alone give an accepted minimum within this many frames of the coarser video; 0 = no check. Measured (README, "Two calibrated cameras alone"): of 23 such runs accepted before, 8 were 2-23 frames off; with this check none of those 8 and 4 of the 15 right ones stay accepted; on caliscope's real webcams all 6 pairs alone stay accepted (within 0.88 frame at 6 fps; the two minima 1-31 ms apart)."""
 
+    chosen_agree_frames: float = 2.0
+    """Reject when the best minimum lies more than this many frames of the coarser video from the Δ at which Stage 0 kept the pair's track pairs (TrackPairs.chosen_at_offset_s: the joint vote's Δ, each pair consistent with the cameras there); 0 = no check. Measured (README, "A camera its own pairs contradict"): over the 18 scenes of stop 43's sweep with estimated cameras (stops 44 and 45) and the 720p timing scene with its calibration, 80 accepted pairs within 0.88 frame of that Δ; the two wrong pairs resting only on descriptor pairs kept at it 3.5 and 34.1 frames from it."""
     max_uncertainty_frames: float = 1.0
     """Reject when the best minimum's 1-sigma (from its curvature and the number of track pairs) is wider than this many frames of the coarser video; 0 = no check. Such a minimum cannot time the pair to a frame. Measured (README, "Narrow-arc rendered scenes"): the 148 accepted pairs of the cue scenes were at most 0.69 frame wide, caliscope's and blenderbox's narrower; of 52 accepted pairs in 18 rendered runs with estimated cameras the 44 within 2 frames of the truth were at most 0.72 frame wide, and the 3 wider than a frame were 4.4-36 frames off."""
 
     def __post_init__(self) -> None:
-        check_fields(self, nonnegative=("min_track_pairs", "unchecked_agree_frames", "max_uncertainty_frames"),
+        check_fields(self, nonnegative=("min_track_pairs", "unchecked_agree_frames", "chosen_agree_frames",
+                                        "max_uncertainty_frames"),
                      positive=("max_minima",),
                      fraction=("min_contrast", "max_second_ratio", "min_rival_support", "min_prominence",
                                "min_inlier_fraction", "inlier_px_fraction", "min_support_fraction"))

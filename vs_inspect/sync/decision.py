@@ -103,6 +103,27 @@ def check_uncertainty(decision: PairDecision, sigma_s: float, offset_s: float, f
     return decision
 
 
+def check_chosen_offset(decision: PairDecision, offset_s: float, chosen_at_offset_s: float | None,
+                        frame_s: float, cfg: DecisionConfig) -> PairDecision:
+    """Reject a pair accepted so far whose best minimum offset_s lies more than
+    cfg.chosen_agree_frames frames of frame_s (the coarser video's) from the Δ at which Stage 0
+    kept its track pairs (TrackPairs.chosen_at_offset_s; None: no such Δ, no check). Each of
+    them was consistent with the cameras' epipolar geometry there, so a minimum elsewhere means
+    the track pairs and the cameras disagree (estimated cameras all refused in three views put
+    one 3.5 frames from it, 3.5 frames off the truth)."""
+    limit = cfg.chosen_agree_frames * frame_s
+    if not (decision.accepted and cfg.enabled and limit > 0 and chosen_at_offset_s is not None
+            and np.isfinite(offset_s)):
+        return decision
+    gap = abs(offset_s - chosen_at_offset_s)
+    if gap <= limit:
+        return decision
+    return replace(decision, accepted=False, reason=(
+        f"its minimum at {offset_s:+.3f} s lies {gap / frame_s:.1f} frames from the Δ {chosen_at_offset_s:+.3f} s "
+        f"at which Stage 0 kept its track pairs (more than {cfg.chosen_agree_frames:g}): each was consistent with "
+        f"the cameras there, so the track pairs and the cameras disagree"))
+
+
 def support_fraction(support: np.ndarray, energy: np.ndarray, best: int) -> tuple[float, float]:
     """(terms at the minimum / the landscape's usual overlap, that usual overlap): the usual
     overlap is the median term count over the offsets that have an energy."""
