@@ -473,7 +473,8 @@ class CueStats:
         """Why Stage 0 gave `video` no geometric track pairs: its pairs with a moving camera had
         no triangle to check their vote peaks, or its joint vote was unsure of it (with point
         transfer's verdict), sure of it but refuted in three views or by a pair of its own
-        (dissent), or sure of too few cameras to close a triangle; else None (used, dropped, or no joint vote)."""
+        (dissent), or sure of too few cameras to close a triangle; else None (used, dropped, or no
+        joint vote)."""
         withheld = [(k, p["geometric_withheld"]) for k, p in self.pairs.items()
                     if video in k.split("__") and p.get("geometric_withheld")]
         if withheld and video not in self.dropped:
@@ -486,10 +487,9 @@ class CueStats:
             return (f"Stage 0's joint vote was sure of its offset (margin {joint['margin'][video]:.1f}), but "
                     f"not in three views ({three_view['reason']}), so it got no geometric track pairs")
         dissent = (joint.get("dissent") or {}).get(video)
-        if dissent:
-            check = (joint.get("transfer") or {}).get(video)
+        if dissent:  # point transfer does not check such a camera (extract._add_geometric_pairs)
             return (f"Stage 0's joint vote chose its offset (margin {joint['margin'][video]:.1f}), but {dissent}, "
-                    f"so it got no geometric track pairs" + (f" ({check['reason']})" if check else ""))
+                    f"so it got no geometric track pairs")
         if video in joint.get("sure", ()):
             return (f"Stage 0's joint vote was sure of its offset (margin {joint['margin'][video]:.1f}) but of "
                     f"{len(joint['sure'])} camera(s) only, so no triangle of sure cameras confirmed it and it "

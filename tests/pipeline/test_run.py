@@ -264,7 +264,7 @@ def test_an_unresolved_video_the_joint_vote_was_sure_of_alone_with_one_other_say
 
 def test_an_unresolved_video_whose_own_pair_contradicted_the_joint_vote_says_so():
     """The joint vote chose a's offset, but a pair of a's voted elsewhere (dissent): a's reason
-    says so, with point transfer's verdict; the videos it was used for keep their offsets."""
+    says so; the videos it was used for keep their offsets."""
     from vs_inspect.pipeline.run import _run_result
     from vs_inspect.types import CueStats, SyncResult
 
@@ -272,10 +272,9 @@ def test_an_unresolved_video_whose_own_pair_contradicted_the_joint_vote_says_so(
         "a": "the reference, but no accepted pair links it"}, (), (), ())
     why = "its pairs vote for other offsets than the joint choice: a__b has 0.23 of its top peak's votes"
     joint = {"origin": "a", "sure": ["b", "c", "d"], "used": ["b", "c", "d"],
-             "margin": {"a": 6.1, "b": 33.0, "c": 36.5, "d": 19.6}, "dissent": {"a": why},
-             "transfer": {"a": {"reason": "point transfer puts it at +1.167 s: they disagree"}}}
+             "margin": {"a": 6.1, "b": 33.0, "c": 36.5, "d": 19.6}, "dissent": {"a": why}}
     stats = CueStats("estimated", 4, 10, 10, {}, {}, {}, {}, "joint", None, joint)
     r = _run_result(sync, stats, RunInputs(), RunConfig(), None, {})
     assert r.unresolved["a"].startswith(f"Stage 0's joint vote chose its offset (margin 6.1), but {why}, so it "
-                                        "got no geometric track pairs (point transfer puts it at +1.167 s")
+                                        "got no geometric track pairs; the reference, but no accepted pair")
     assert r.offsets_s == {"a": None, "b": 0.0, "c": 0.4, "d": -0.2} and set(r.unresolved) == {"a"}

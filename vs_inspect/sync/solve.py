@@ -101,6 +101,7 @@ def _components(names: list[str], pairs: list[tuple[str, str]]) -> np.ndarray:
 
 
 def _ends(measurements: list[PairMeasurement]) -> list[tuple[str, str]]:
+    """The (a, b) of each measurement."""
     return [(m.a, m.b) for m in measurements]
 
 
