@@ -23,9 +23,9 @@ from __future__ import annotations
 import functools
 import logging
 import multiprocessing
-import threading
 import os
 import signal
+import threading
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field

@@ -612,7 +612,8 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
         if cfg.geometric.transfer and not all(sure.values()) and sum(sure.values()) >= 2:
             # not of a camera its own pairs contradict: point transfer projects into the same
             # camera, and confirmed stop 43's hand-held one 4.4 frames off (its lens is biased)
-            checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, sink, set(dissent))
+            checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, sink,
+                                                frozenset(dissent))
         sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
         out, used = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg, stats, sink,
                                      {c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
@@ -664,10 +665,9 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
             desc = _consistent_descriptor_pairs(desc, joint.offsets_s[b] - joint.offsets_s[a], cameras,
                                                 tracks, vids, cfg)
         # supporters of a peak no triangle chose: Stage 1 must find the pair's minimum without them too
-        out[(a, b)], n_new = _merge_pairs(desc, index, unchecked=pick is None)
-        if filter_desc and not len(index):  # every row chosen at the joint vote's Δ
-            out[(a, b)] = dataclasses.replace(out[(a, b)],
-                                              chosen_at_offset_s=joint.offsets_s[b] - joint.offsets_s[a])
+        # with no geometric pair, every row was kept at the joint vote's Δ
+        kept_at = joint.offsets_s[b] - joint.offsets_s[a] if filter_desc and not len(index) else None
+        out[(a, b)], n_new = _merge_pairs(desc, index, unchecked=pick is None, chosen_at_offset_s=kept_at)
         info = {"geometric_candidates": gs.candidates, "geometric_informative": gs.informative,
                 "geometric_pairs": int(len(index)), "geometric_new": n_new,
                 "geometric_peaks_s": [round(p, 4) for p in gs.peaks_s],
@@ -806,7 +806,7 @@ def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: di
 
 
 def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
-                         vids: dict, cfg: CueConfig, sink: Sink, skip=frozenset()):
+                         vids: dict, cfg: CueConfig, sink: Sink, skip: frozenset[str] = frozenset()):
     """({camera: transfer.TransferCheck}, the transfer.Trajectories projected): a check of every
     camera the joint vote is unsure of (but those of skip), the sure cameras' track pairs
     triangulated at their joint offsets and projected into it over its candidate offsets
@@ -855,7 +855,7 @@ def _add_transfer_pairs(pairs: dict, checks: dict, traj, order: list[str], stats
         for key, rows in new.items():
             if key not in out:
                 continue
-            # the new rows follow trajectories at the transfer's offset, not the joint Δ
+            # no chosen_at_offset_s: the new rows follow trajectories at the transfer's offset
             out[key], n_new = _merge_pairs(out[key], np.unique(np.array(rows, np.int64), axis=0))
             stats["pairs"].setdefault(f"{key[0]}__{key[1]}", {})["transfer_new"] = int(n_new)
             sink.stage_event("cues", f"{key[0]}__{key[1]}: {n_new} track pairs from point transfer",
@@ -878,9 +878,11 @@ def _consistent_descriptor_pairs(desc: TrackPairs, delta_s: float, cameras: dict
     return TrackPairs(a, b, desc.index[ok], None if desc.weight is None else desc.weight[ok])
 
 
-def _merge_pairs(tp: TrackPairs, index: np.ndarray, unchecked: bool = False) -> tuple[TrackPairs, int]:
+def _merge_pairs(tp: TrackPairs, index: np.ndarray, unchecked: bool = False,
+                 chosen_at_offset_s: float | None = None) -> tuple[TrackPairs, int]:
     """Descriptor pairs tp plus the geometric pairs index (P,2) not already in it: (pairs, new).
-    unchecked: the new rows are marked TrackPairs.unchecked (no triangle checked their vote peak)."""
+    unchecked: the new rows are marked TrackPairs.unchecked (no triangle checked their vote peak);
+    chosen_at_offset_s: the Δ_ab at which every row of both was kept (TrackPairs), if one was."""
     w_desc = tp.weight if tp.weight is not None else np.ones(len(tp.index))
     have = {tuple(x) for x in tp.index.tolist()}
     new = np.array([x for x in index.tolist() if tuple(x) not in have], np.int64).reshape(-1, 2)
@@ -888,7 +890,7 @@ def _merge_pairs(tp: TrackPairs, index: np.ndarray, unchecked: bool = False) -> 
     if unchecked and len(new):
         mark = np.concatenate([np.zeros(len(tp.index), bool), np.ones(len(new), bool)])
     return TrackPairs(tp.a, tp.b, np.concatenate([tp.index, new]),
-                      np.concatenate([w_desc, np.ones(len(new))]), mark), len(new)
+                      np.concatenate([w_desc, np.ones(len(new))]), mark, chosen_at_offset_s), len(new)
 
 
 def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cameras: dict,
@@ -904,7 +906,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
     descriptor pair is kept only if it is epipolar-consistent at the joint Δ (with
     joint_filter_descriptor): the descriptor pairs are mostly wrong on small moving objects
     (BENCHMARKS.md), and the joint Δ is the best evidence there is of the moment they share."""
-    from .geometric_pairs import supporters
+    from .geometric_pairs import supporters, votes_at
 
     # the pairs whose joint Δ is trusted, and that Δ: the one decision everything below reads
     used = {(a, b): joint.offsets_s[b] - joint.offsets_s[a] for a, b in found
@@ -962,17 +964,15 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
         # (the pair is then refused for too few pairs) instead of a wrong minimum being accepted
         if cfg.geometric.joint_filter_descriptor:
             desc = _consistent_descriptor_pairs(desc, delta, cameras, tracks, vids, cfg)
-        out[(a, b)], n_new = _merge_pairs(desc, index)
-        if cfg.geometric.joint_filter_descriptor or not n_desc:  # every row chosen at delta
-            out[(a, b)] = dataclasses.replace(out[(a, b)], chosen_at_offset_s=delta)
+        every = cfg.geometric.joint_filter_descriptor or not n_desc  # every row kept at delta
+        out[(a, b)], n_new = _merge_pairs(desc, index, chosen_at_offset_s=delta if every else None)
         stats["pairs"].setdefault(f"{a}__{b}", {}).update({
             "geometric_candidates": gs.candidates, "geometric_informative": gs.informative,
             "geometric_pairs": int(len(index)), "geometric_new": int(n_new),
             "geometric_peaks_s": [round(p, 4) for p in gs.peaks_s],
             "geometric_peak_votes": list(gs.peak_votes), "geometric_joint_delta_s": round(delta, 4),
             "descriptor_pairs_kept": int(len(desc.index)), "descriptor_pairs_before": int(n_desc)})
-        votes = int((np.abs(gs.cand_offset_s - delta) <= gs.halfwidth_s + 1e-9).sum()) \
-            if gs.cand_offset_s is not None else 0
+        votes = votes_at(gs, delta)
         stats["pairs"][f"{a}__{b}"].update({"geometric_joint_votes": votes,
                                             "geometric_joint_margin": [round(joint.margin[a], 2),
                                                                        round(joint.margin[b], 2)]})

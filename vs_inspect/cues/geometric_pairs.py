@@ -534,14 +534,25 @@ def joint_offsets(found: dict[tuple[str, str], GeometricPairStats], tol_s: float
     return JointChoice({n: float(combo[top, c]) for c, n in enumerate(names)}, float(score[top]), margin)
 
 
+def _voting_for(st: GeometricPairStats, delta_s: float) -> np.ndarray:
+    """(M,) bool: the informative candidates whose best offset lies within halfwidth_s of delta_s."""
+    if st.cand_offset_s is None:
+        return np.zeros(0, bool)
+    return np.abs(st.cand_offset_s - delta_s) <= st.halfwidth_s + 1e-9
+
+
+def votes_at(st: GeometricPairStats, delta_s: float) -> int:
+    """The pair's votes at Δ_ab = delta_s: informative candidates whose best offset is that close."""
+    return int(_voting_for(st, delta_s).sum())
+
+
 def joint_vote_share(st: GeometricPairStats, delta_s: float) -> float:
     """The pair's votes at Δ_ab = delta_s (candidates whose best offset lies within halfwidth_s)
     over the votes of its own highest peak: 1 when the joint choice takes the pair's top peak,
     near 0 when the pair votes for another Δ and hardly at all for this one (1 with no votes)."""
     if st.cand_offset_s is None or not st.peak_votes or max(st.peak_votes) <= 0:
         return 1.0
-    at = int((np.abs(st.cand_offset_s - delta_s) <= st.halfwidth_s + 1e-9).sum())
-    return min(1.0, at / max(st.peak_votes))
+    return min(1.0, votes_at(st, delta_s) / max(st.peak_votes))
 
 
 def dissenting_cameras(found: dict[tuple[str, str], GeometricPairStats], joint: JointChoice,
@@ -577,7 +588,7 @@ def supporters(st: GeometricPairStats, delta_s: float) -> np.ndarray:
     track (the one-to-one choice of least total residual)."""
     if st.cand_index is None or not len(st.cand_index):
         return np.zeros((0, 2), np.int64)
-    sel = np.nonzero(np.abs(st.cand_offset_s - delta_s) <= st.halfwidth_s + 1e-9)[0]
+    sel = np.nonzero(_voting_for(st, delta_s))[0]
     if not len(sel):
         return np.zeros((0, 2), np.int64)
     sel = sel[_one_to_one(st.cand_index[sel, 0], st.cand_index[sel, 1], st.cand_res[sel])]
