@@ -8,6 +8,8 @@
     PYTHONPATH=. python examples/bench_stage0.py speed
     # rendered scenes with their exact calibration, with and without the geometric track pairs
     PYTHONPATH=. python examples/bench_stage0.py rendered --seeds 0 1 2
+    # scenes whose cameras share a view (arcs of 30-90°), estimated cameras: offsets over 2 frames
+    PYTHONPATH=. python examples/bench_stage0.py arcs [--scenes a60_c4m1_s12 ...] [--tuning] --workdir W
     # caliscope, visualsync and rendered take the track settings too, e.g. the tracks of before:
     PYTHONPATH=. python examples/bench_stage0.py rendered --seeds 0 1 2 --klt-window 21 --no-anchor
 
@@ -260,6 +262,54 @@ def bench_rendered(args) -> None:
               f"median error {med:.1f} ms (null counted as infinite)")
 
 
+def bench_arcs(args) -> None:
+    """Rendered scenes on arcs of 30-90° (vs_inspect.bench.arcs) with estimated cameras, the
+    whole pipeline as `vs-inspect sync VIDEOS` runs it: every offset's error in frames, and how
+    many are over 2 frames (the safety target)."""
+    from vs_inspect.bench.arcs import HELD_OUT_SCENES, TUNING_SCENES, frame_errors, parse_scene, summarize
+    from vs_inspect.pipeline.stage0 import run_stage0
+    from vs_inspect.synth.videos import render_scene, rendered_with
+    from vs_inspect.synth.world import make_scene
+
+    names = args.scenes or (TUNING_SCENES if args.tuning else HELD_OUT_SCENES)
+    try:
+        scenes = [parse_scene(n) for n in names]
+    except ValueError as exc:
+        raise SystemExit(f"bench_stage0.py arcs: {exc}") from None
+    all_errors: list[float | None] = []
+    print("| scene | reference | offsets (frames; null = unresolved) | stage 0 s | sync s |")
+    print("| --- | --- | --- | --- | --- |")
+    with (contextlib.nullcontext(args.workdir) if args.workdir else tempfile.TemporaryDirectory()) as tmp:
+        for sc in scenes:
+            folder = Path(tmp) / sc.name
+            if not rendered_with(folder, sc.scene_config()):
+                render_scene(make_scene(sc.scene_config()), folder, progress=False)
+            truth = json.loads((folder / "gt.json").read_text())["offsets_s"]
+            videos = sorted(folder.glob("cam*.mp4"))
+            t0 = time.perf_counter()
+            try:
+                bundle, _, _ = run_stage0(videos, None, None, CueConfig(), progress=False)
+            except InputError as exc:
+                errors = {v: None for v in truth if v != "cam0"}
+                all_errors.extend(errors.values())
+                print(f"| {sc.name} | - | Stage 0 failed: {exc} | {time.perf_counter() - t0:.1f} | - |", flush=True)
+                continue
+            t1 = time.perf_counter()
+            res = sync_bundle(bundle, progress=False)
+            t2 = time.perf_counter()
+            errors = frame_errors(res.reference, res.offsets_s, truth)
+            all_errors.extend(errors.values())
+            shown = ", ".join(f"{v} " + ("null" if e is None else f"{e:+.2f}" + (" **over 2**" if abs(e) > 2 else ""))
+                              for v, e in errors.items())
+            print(f"| {sc.name} | {res.reference} | {shown} | {t1 - t0:.1f} | {t2 - t1:.1f} |", flush=True)
+    s = summarize(all_errors)
+    med = "-" if s.median_abs_frames is None else f"{s.median_abs_frames:.2f}"
+    mx = "-" if s.max_abs_frames is None else f"{s.max_abs_frames:.2f}"
+    print(f"\n{len(scenes)} scenes, {s.offsets} offsets: {s.resolved} resolved ({s.within_1} within 1 frame, "
+          f"{s.within_2} at 1-2 frames, **{s.over_2} over 2 frames**), {s.offsets - s.resolved} null; "
+          f"|error| median {med}, max {mx} frames")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="what", required=True)
@@ -281,6 +331,13 @@ def main() -> None:
     r = sub.add_parser("rendered")
     r.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
     r.add_argument("--workdir", type=Path, help="render into (and reuse finished renderings from) this "
+                   "folder instead of a temporary one")
+    a = sub.add_parser("arcs", help="rendered scenes whose cameras share a view, estimated cameras")
+    a.add_argument("--scenes", nargs="+", metavar="NAME",
+                   help="scenes a<arc>_c<cameras>m<hand-held>_s<seed> (default: the 12 held-out seeds 10-21)")
+    a.add_argument("--tuning", action="store_true",
+                   help="stop 43's 14 scenes, on which the rules were built, instead of the held-out ones")
+    a.add_argument("--workdir", type=Path, help="render into (and reuse finished renderings from) this "
                    "folder instead of a temporary one")
     for p in (c, v):
         p.add_argument("--features", choices=["sift", "xfeat", "auto"], default=CameraConfig.features,
@@ -305,7 +362,7 @@ def main() -> None:
     args = ap.parse_args()
     logging.basicConfig(level=logging.INFO if args.v else logging.WARNING)
     {"caliscope": bench_caliscope, "visualsync": bench_visualsync, "speed": bench_speed,
-     "rendered": bench_rendered}[args.what](args)
+     "rendered": bench_rendered, "arcs": bench_arcs}[args.what](args)
 
 
 if __name__ == "__main__":
