@@ -9,7 +9,7 @@
     # rendered scenes with their exact calibration, with and without the geometric track pairs
     PYTHONPATH=. python examples/bench_stage0.py rendered --seeds 0 1 2
     # scenes whose cameras share a view (arcs of 30-90°), estimated cameras: offsets over 2 frames
-    PYTHONPATH=. python examples/bench_stage0.py arcs [--scenes a60_c4m1_s12 ...] [--tuning] --workdir W
+    PYTHONPATH=. python examples/bench_stage0.py arcs [--scenes a60_c4m1_s12 ...] [--tuning] [--calibrated] --workdir W
     # caliscope, visualsync and rendered take the track settings too, e.g. the tracks of before:
     PYTHONPATH=. python examples/bench_stage0.py rendered --seeds 0 1 2 --klt-window 21 --no-anchor
 
@@ -263,9 +263,9 @@ def bench_rendered(args) -> None:
 
 
 def bench_arcs(args) -> None:
-    """Rendered scenes on arcs of 30-90° (vs_inspect.bench.arcs) with estimated cameras, the
-    whole pipeline as `vs-inspect sync VIDEOS` runs it: every offset's error in frames, and how
-    many are over 2 frames (the safety target)."""
+    """Rendered scenes on arcs of 30-90° (vs_inspect.bench.arcs) with estimated cameras (or with
+    --calibrated, the scene's exact calibration), the whole pipeline as `vs-inspect sync VIDEOS`
+    runs it: every offset's error in frames, and how many are over 2 frames (the safety target)."""
     from vs_inspect.bench.arcs import HELD_OUT_SCENES, TUNING_SCENES, frame_errors, parse_scene, summarize
     from vs_inspect.pipeline.stage0 import run_stage0
     from vs_inspect.synth.videos import render_scene, rendered_with
@@ -288,7 +288,8 @@ def bench_arcs(args) -> None:
             videos = sorted(folder.glob("cam*.mp4"))
             t0 = time.perf_counter()
             try:
-                bundle, _, _ = run_stage0(videos, None, None, CueConfig(), progress=False)
+                calib = folder / "calibration.json" if args.calibrated else None
+                bundle, _, _ = run_stage0(videos, calib, None, CueConfig(), progress=False)
             except InputError as exc:
                 errors = {v: None for v in truth if v != "cam0"}
                 all_errors.extend(errors.values())
@@ -337,6 +338,7 @@ def main() -> None:
                    help="scenes a<arc>_c<cameras>m<hand-held>_s<seed> (default: the 12 held-out seeds 10-21)")
     a.add_argument("--tuning", action="store_true",
                    help="stop 43's 14 scenes, on which the rules were built, instead of the held-out ones")
+    a.add_argument("--calibrated", action="store_true", help="with each scene's exact calibration")
     a.add_argument("--workdir", type=Path, help="render into (and reuse finished renderings from) this "
                    "folder instead of a temporary one")
     for p in (c, v):
