@@ -39,6 +39,7 @@ import numpy as np  # noqa: F401  (before pycolmap)
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
+from vs_inspect.bench.arcs import HELD_OUT_SCENES, TUNING_SCENES, frame_errors, parse_scene, summarize  # noqa: E402
 from vs_inspect.bench.datasets import corner_sync_bias_s, load_caliscope, read_caliscope_frame_times  # noqa: E402
 from vs_inspect.cues import CueConfig, MatchConfig, extract_cues  # noqa: E402
 from vs_inspect.cues.config import CameraConfig, GeometricPairConfig, TrackConfig  # noqa: E402
@@ -88,14 +89,9 @@ def run(paths, calib, cfg=CueConfig()):
 
 
 def errors_ms(res, truth: dict[str, float]) -> dict[str, float | None]:
-    ref = res.reference
-    out = {}
-    for v, t in truth.items():
-        if v == ref:
-            continue
-        est = res.offsets_s.get(v)
-        out[v] = None if est is None else 1000 * abs((est - res.offsets_s[ref]) - (t - truth[ref]))
-    return out
+    """|error| in ms of every non-reference video's offset (None: unresolved)."""
+    err = frame_errors(res.reference, res.offsets_s, truth, fps=1000.0)  # "frames" of 1 ms
+    return {v: None if e is None else abs(e) for v, e in err.items()}
 
 
 def format_ms(err: dict[str, float | None]) -> str:
@@ -266,10 +262,8 @@ def bench_arcs(args) -> None:
     """Rendered scenes on arcs of 30-90° (vs_inspect.bench.arcs) with estimated cameras (or with
     --calibrated, the scene's exact calibration), the whole pipeline as `vs-inspect sync VIDEOS`
     runs it: every offset's error in frames, and how many are over 2 frames (the safety target)."""
-    from vs_inspect.bench.arcs import HELD_OUT_SCENES, TUNING_SCENES, frame_errors, parse_scene, summarize
     from vs_inspect.pipeline.stage0 import run_stage0
-    from vs_inspect.synth.videos import render_scene, rendered_with
-    from vs_inspect.synth.world import make_scene
+    from vs_inspect.synth.videos import render_unless_cached
 
     names = args.scenes or (TUNING_SCENES if args.tuning else HELD_OUT_SCENES)
     try:
@@ -281,9 +275,8 @@ def bench_arcs(args) -> None:
     print("| --- | --- | --- | --- | --- |")
     with (contextlib.nullcontext(args.workdir) if args.workdir else tempfile.TemporaryDirectory()) as tmp:
         for sc in scenes:
-            folder = Path(tmp) / sc.name
-            if not rendered_with(folder, sc.scene_config()):
-                render_scene(make_scene(sc.scene_config()), folder, progress=False)
+            folder, scene_cfg = Path(tmp) / sc.name, sc.scene_config()
+            render_unless_cached(folder, scene_cfg, progress=False)
             truth = json.loads((folder / "gt.json").read_text())["offsets_s"]
             videos = sorted(folder.glob("cam*.mp4"))
             t0 = time.perf_counter()
@@ -292,13 +285,13 @@ def bench_arcs(args) -> None:
                 bundle, _, _ = run_stage0(videos, calib, None, CueConfig(camera=camera_config(args)),
                                           progress=False)
             except InputError as exc:
-                all_errors.extend(frame_errors(sorted(truth)[0], {}, truth).values())  # cam0 the reference; all null
+                all_errors.extend([None] * (len(truth) - 1))  # every offset but the reference's null
                 print(f"| {sc.name} | - | Stage 0 failed: {exc} | {time.perf_counter() - t0:.1f} | - |", flush=True)
                 continue
             t1 = time.perf_counter()
             res = sync_bundle(bundle, progress=False)
             t2 = time.perf_counter()
-            errors = frame_errors(res.reference, res.offsets_s, truth)
+            errors = frame_errors(res.reference, res.offsets_s, truth, scene_cfg.fps)
             all_errors.extend(errors.values())
             shown = ", ".join(f"{v} " + ("null" if e is None else f"{e:+.2f}" + (" **over 2**" if abs(e) > 2 else ""))
                               for v, e in errors.items())
@@ -307,7 +300,7 @@ def bench_arcs(args) -> None:
     med = "-" if s.median_abs_frames is None else f"{s.median_abs_frames:.2f}"
     mx = "-" if s.max_abs_frames is None else f"{s.max_abs_frames:.2f}"
     print(f"\n{len(scenes)} scenes, {s.offsets} offsets: {s.resolved} resolved ({s.within_1} within 1 frame, "
-          f"{s.within_2} at 1-2 frames, **{s.over_2} over 2 frames**), {s.offsets - s.resolved} null; "
+          f"{s.from_1_to_2} at 1-2 frames, **{s.over_2} over 2 frames**), {s.offsets - s.resolved} null; "
           f"|error| median {med}, max {mx} frames")
 
 

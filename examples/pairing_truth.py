@@ -27,8 +27,8 @@ from vs_inspect.io.calibration import load_calibration, to_camera_track
 from vs_inspect.pipeline.config import RunConfig
 from vs_inspect.pipeline.run import run
 from vs_inspect.pipeline.stage0 import run_stage0
-from vs_inspect.synth.videos import render_scene, rendered_with
-from vs_inspect.synth.world import SceneConfig, make_scene
+from vs_inspect.synth.videos import render_unless_cached
+from vs_inspect.synth.world import SceneConfig
 
 RENDERED = SceneConfig(cameras=4, moving=1, seconds=5.0, width=480, height=360, fps=None,
                        variable_rate=1, seed=0)  # bench.videos.rendered_scene(0)
@@ -44,8 +44,7 @@ def main() -> None:
     args = ap.parse_args()
     cfg = dataclasses.replace(RENDERED, seed=args.seed) if args.scene == "rendered" else DEMO_SCENE
     folder = args.workdir / (f"rendered_s{args.seed}" if args.scene == "rendered" and args.seed else args.scene)
-    if not rendered_with(folder, cfg):
-        render_scene(make_scene(cfg), folder, progress=False)
+    render_unless_cached(folder, cfg, progress=False)
     truth = json.loads((folder / "gt.json").read_text())["offsets_s"]
     videos = sorted(folder.glob("cam*.mp4"))
     cue = CueConfig()

@@ -31,17 +31,17 @@ def test_frame_errors_against_the_results_reference():
     truth = {"cam0": 0.0, "cam1": 0.5, "cam2": -1.0}
     # cam1 is the reference used; cam2 one frame late against it, cam0 unresolved
     offsets = {"cam0": None, "cam1": 0.0, "cam2": -1.5 + 1 / 30}
-    err = frame_errors("cam1", offsets, truth)
+    err = frame_errors("cam1", offsets, truth, fps=30.0)
     assert err["cam0"] is None
     assert err["cam2"] == pytest.approx(1.0)
     assert "cam1" not in err
     # a reference without an offset leaves nothing resolved
-    assert frame_errors("cam0", offsets, truth) == {"cam1": None, "cam2": None}
+    assert frame_errors("cam0", offsets, truth, fps=30.0) == {"cam1": None, "cam2": None}
 
 
 def test_summarize_counts_the_offsets_over_two_frames():
     s = summarize([0.2, -0.9, 1.5, -2.5, None, 36.6])
-    assert (s.offsets, s.resolved, s.within_1, s.within_2, s.over_2) == (6, 5, 2, 1, 2)
+    assert (s.offsets, s.resolved, s.within_1, s.from_1_to_2, s.over_2) == (6, 5, 2, 1, 2)
     assert s.median_abs_frames == pytest.approx(1.5)
     assert s.max_abs_frames == pytest.approx(36.6)
     empty = summarize([None, None])

@@ -14,7 +14,6 @@ import statistics
 from dataclasses import dataclass
 
 SCENE_SECONDS = 6.0
-FPS = 30.0
 _NAME = re.compile(r"a(\d+)_c(\d+)m(\d+)_s(\d+)")
 
 # stop 43's sweep, which the rules of stops 43-45 were built on (its square-pixel scenes need a
@@ -57,11 +56,11 @@ def parse_scene(name: str) -> ArcScene:
 
 
 def frame_errors(reference: str, offsets_s: dict[str, float | None], truth_s: dict[str, float],
-                 fps: float = FPS) -> dict[str, float | None]:
-    """Signed error of every non-reference video's offset in frames (None: unresolved)."""
+                 fps: float) -> dict[str, float | None]:
+    """Signed error of every non-reference video's offset in frames of 1/fps s (None: unresolved)."""
     out: dict[str, float | None] = {}
     ref_s = offsets_s.get(reference)
-    for v, t in sorted(truth_s.items()):
+    for v, t in truth_s.items():
         if v == reference:
             continue
         est = offsets_s.get(v)
@@ -74,7 +73,7 @@ class ArcSummary:
     offsets: int  # non-reference videos over all scenes
     resolved: int
     within_1: int  # |error| <= 1 frame
-    within_2: int  # 1 < |error| <= 2 frames
+    from_1_to_2: int  # 1 < |error| <= 2 frames
     over_2: int  # |error| > 2 frames: the safety target says 0
     median_abs_frames: float | None  # over the resolved offsets
     max_abs_frames: float | None
@@ -83,7 +82,7 @@ class ArcSummary:
 def summarize(errors: list[float | None]) -> ArcSummary:
     got = [abs(e) for e in errors if e is not None]
     return ArcSummary(offsets=len(errors), resolved=len(got),
-                      within_1=sum(e <= 1 for e in got), within_2=sum(1 < e <= 2 for e in got),
+                      within_1=sum(e <= 1 for e in got), from_1_to_2=sum(1 < e <= 2 for e in got),
                       over_2=sum(e > 2 for e in got),
                       median_abs_frames=statistics.median(got) if got else None,
                       max_abs_frames=max(got) if got else None)

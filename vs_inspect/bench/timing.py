@@ -104,16 +104,14 @@ class TimingRow:
 
 def render(scene: TimingScene, workdir: Path, progress: bool = False) -> Path:
     """The scene's folder in workdir, rendered unless a finished rendering of it is there."""
-    from ..synth.videos import render_scene, rendered_with
-    from ..synth.world import make_scene
+    from ..synth.videos import render_unless_cached
 
     cfg = scene.scene_config()
     folder = Path(workdir) / (f"timing_{scene.width}x{scene.height}_{scene.seconds:g}s_"
                               f"{scene.fps or 'mixed'}_c{scene.cameras}_s{scene.seed}"
                               f"{'' if scene.max_offset_s == 1.5 else f'_o{scene.max_offset_s:g}'}"
                               f"{'' if scene.same_length else '_varlen'}")
-    if not rendered_with(folder, cfg):
-        render_scene(make_scene(cfg), folder, progress=progress)
+    render_unless_cached(folder, cfg, progress=progress)
     return folder
 
 

@@ -106,14 +106,13 @@ def rendered_scene(seed: int, workdir: Path, cue_config=None) -> tuple[BenchData
 
     from ..io.calibration import load_calibration, to_camera_track
     from ..io.video import open_video
-    from ..synth.videos import render_scene, rendered_with
-    from ..synth.world import SceneConfig, make_scene
+    from ..synth.videos import render_unless_cached
+    from ..synth.world import SceneConfig
 
     cfg = SceneConfig(cameras=4, moving=1, seconds=5.0, width=480, height=360, fps=None,
                       variable_rate=1, seed=seed)
     folder = Path(workdir) / f"rendered_s{seed}"
-    if not rendered_with(folder, cfg):
-        render_scene(make_scene(cfg), folder, progress=False)
+    render_unless_cached(folder, cfg, progress=False)
     truth = json.loads((folder / "gt.json").read_text())["offsets_s"]
     srcs = [open_video(p) for p in sorted(folder.glob("cam*.mp4"))]
     calib = load_calibration(folder / "calibration.json", [s.info.name for s in srcs])

@@ -34,7 +34,7 @@ from ..io.bundle import write_bundle
 from ..io.atomic import atomic_path, write_json_atomic, write_text_atomic
 from ..io.video import VideoWriter
 from ..types import CameraTrack, CueBundle, TrackPairs, Tracks, VideoInfo
-from .world import CameraSpec, Scene, observe_points
+from .world import CameraSpec, Scene, make_scene, observe_points
 
 log = logging.getLogger(__name__)
 
@@ -60,6 +60,15 @@ def rendered_with(folder: Path, config) -> bool:
     # a scene cached before a SceneConfig field existed was rendered with its default
     defaults = json.loads(json.dumps(asdict(type(config)())))
     return isinstance(cached, dict) and {**defaults, **cached} == json.loads(json.dumps(asdict(config)))
+
+
+def render_unless_cached(folder: Path, config, progress: bool = True) -> bool:
+    """Render the scene of this SceneConfig into folder unless a finished rendering of it is there
+    (rendered_with). Returns True if it rendered."""
+    if rendered_with(folder, config):
+        return False
+    render_scene(make_scene(config), folder, progress=progress)
+    return True
 
 
 def apply_look(rgb: np.ndarray, cam: CameraSpec) -> np.ndarray:
