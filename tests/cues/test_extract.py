@@ -307,14 +307,12 @@ def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig()):
     a static camera for every video. Returns (cameras, stats)."""
     from types import SimpleNamespace
 
-    import vs_inspect.cues.cameras as cameras_mod
     import vs_inspect.cues.pairwise as pairwise_mod
     from vs_inspect.cues.cameras import CameraEstimate
     from vs_inspect.cues.extract import _estimate
 
     no_model = "no reconstruction: too few matches"
-    monkeypatch.setattr(cameras_mod, "estimate_cameras", lambda *a, **k: CameraEstimate(
-        {}, dict.fromkeys(names, no_model), None, None, len(names), 0, "sift"))
+    est = CameraEstimate({}, dict.fromkeys(names, no_model), None, None, len(names), 0, "sift")
     fitted = {n: CameraTrack(K, look_at([6.0 * np.cos(i), 6.0 * np.sin(i), 2.0], [0, 0, 1]))
               for i, n in enumerate(names)}
     details = {n: {"coarse_offset_s": 0.1 * i} for i, n in enumerate(names) if i}
@@ -325,8 +323,7 @@ def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig()):
                                instance=np.zeros(0, np.int64)) for n in names}
     pairs = {(a, b): TrackPairs(a, b, np.zeros((0, 2), np.int64)) for a, b in zip(names, names[1:])}
     stats = {"dropped": {}, "camera_source": "estimated"}
-    cams, _, _, _, _ = _estimate(vids, config, stats, pairs, sources={})
-    return cams, stats
+    return _estimate(vids, config, stats, pairs, est).cameras, stats
 
 
 def test_two_cameras_from_the_moving_points_alone_are_refused(monkeypatch):

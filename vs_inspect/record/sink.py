@@ -99,5 +99,32 @@ class Sink:
             self.abort()
 
 
+class DeferredSink(Sink):
+    """Holds Stage 0's pairing reports (pair votes, three-view and transfer landscapes, events)
+    for one candidate set of cameras, so that only the set kept reaches the real sink: replay().
+    options are the real sink's, so the same views are computed."""
+
+    def __init__(self, options: RecordOptions | None):
+        self.options = options
+        self._calls: list[tuple[str, tuple, dict]] = []
+
+    def pair_votes(self, *args, **kwargs) -> None:
+        self._calls.append(("pair_votes", args, kwargs))
+
+    def transfer_landscape(self, *args, **kwargs) -> None:
+        self._calls.append(("transfer_landscape", args, kwargs))
+
+    def three_view_landscape(self, *args, **kwargs) -> None:
+        self._calls.append(("three_view_landscape", args, kwargs))
+
+    def stage_event(self, *args, **kwargs) -> None:
+        self._calls.append(("stage_event", args, kwargs))
+
+    def replay(self, sink: Sink) -> None:
+        """Every held report, in order, to sink."""
+        for name, args, kwargs in self._calls:
+            getattr(sink, name)(*args, **kwargs)
+
+
 class NullSink(Sink):
     """Records nothing (the default)."""
