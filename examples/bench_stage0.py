@@ -271,8 +271,8 @@ def bench_arcs(args) -> None:
     except ValueError as exc:
         raise SystemExit(f"bench_stage0.py arcs: {exc}") from None
     all_errors: list[float | None] = []
-    print("| scene | reference | offsets (frames; null = unresolved) | stage 0 s | sync s |")
-    print("| --- | --- | --- | --- | --- |")
+    print("| scene | reference | offsets (frames; null = unresolved) | cameras | stage 0 s | sync s |")
+    print("| --- | --- | --- | --- | --- | --- |")
     with (contextlib.nullcontext(args.workdir) if args.workdir else tempfile.TemporaryDirectory()) as tmp:
         for sc in scenes:
             folder, scene_cfg = Path(tmp) / sc.name, sc.scene_config()
@@ -282,11 +282,11 @@ def bench_arcs(args) -> None:
             t0 = time.perf_counter()
             try:
                 calib = folder / "calibration.json" if args.calibrated else None
-                bundle, _, _ = run_stage0(videos, calib, None, CueConfig(camera=camera_config(args)),
-                                          progress=False)
+                bundle, stats, _ = run_stage0(videos, calib, None, CueConfig(camera=camera_config(args)),
+                                              progress=False)
             except InputError as exc:
                 all_errors.extend([None] * (len(truth) - 1))  # every offset but the reference's null
-                print(f"| {sc.name} | - | Stage 0 failed: {exc} | {time.perf_counter() - t0:.1f} | - |", flush=True)
+                print(f"| {sc.name} | - | Stage 0 failed: {exc} | - | {time.perf_counter() - t0:.1f} | - |", flush=True)
                 continue
             t1 = time.perf_counter()
             res = sync_bundle(bundle, progress=False)
@@ -295,13 +295,25 @@ def bench_arcs(args) -> None:
             all_errors.extend(errors.values())
             shown = ", ".join(f"{v} " + ("null" if e is None else f"{e:+.2f}" + (" **over 2**" if abs(e) > 2 else ""))
                               for v, e in errors.items())
-            print(f"| {sc.name} | {res.reference} | {shown} | {t1 - t0:.1f} | {t2 - t1:.1f} |", flush=True)
+            print(f"| {sc.name} | {res.reference} | {shown} | {camera_models(stats)} | {t1 - t0:.1f} | {t2 - t1:.1f} |",
+                  flush=True)
     s = summarize(all_errors)
     med = "-" if s.median_abs_frames is None else f"{s.median_abs_frames:.2f}"
     mx = "-" if s.max_abs_frames is None else f"{s.max_abs_frames:.2f}"
     print(f"\n{len(scenes)} scenes, {s.offsets} offsets: {s.resolved} resolved ({s.within_1} within 1 frame, "
           f"{s.from_1_to_2} at 1-2 frames, **{s.over_2} over 2 frames**), {s.offsets - s.resolved} null; "
           f"|error| median {med}, max {mx} frames")
+
+
+def camera_models(stats) -> str:
+    """Where a run's cameras came from: "calibration", the features of the model kept, and with
+    two models tried how many videos the joint vote trusted on each ("xfeat (sift 0, xfeat 4)")."""
+    sfm = stats.sfm or {}
+    if not sfm:
+        return stats.camera_source
+    tried = sfm.get("models") or []
+    counts = ", ".join(f"{m['features']} {len(m['trusted'])}" for m in tried)
+    return sfm["features"] + (f" ({counts})" if counts else "")
 
 
 def main() -> None:
