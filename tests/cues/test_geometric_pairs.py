@@ -11,6 +11,7 @@ from vs_inspect.cues.geometric_pairs import (
     JointChoice,
     consistent_at,
     consistent_peaks,
+    disputed_by_other_model,
     dissenting_cameras,
     epipolar_extent,
     geometric_pairs,
@@ -373,3 +374,26 @@ def test_a_camera_whose_pair_votes_elsewhere_is_not_sure():
     # a share at the bar passes; unsure cameras are not judged; 0.5 of 100 votes at the joint Δ
     assert dissenting_cameras({**agree, ("a", "b"): _voted({-0.9: 100, 0.3: 50})}, joint, sure, 0.5) == {}
     assert dissenting_cameras(found, joint, {**sure, "b": False}, 0.5) == {}
+
+
+def test_a_camera_no_peak_of_the_other_model_meets_is_disputed():
+    # stop 47's tuning scene s4 in small: XFeat's joint vote puts d 0.53 s off; SIFT's peaks of d's
+    # pairs lie far from XFeat's Δ, while one pair of each other camera has a SIFT peak at its Δ
+    joint = JointChoice({"a": 0.0, "b": -1.383, "c": -1.4, "d": -0.867}, 87.0,
+                        {"a": 6.4, "b": 8.8, "c": 24.4, "d": 15.6})
+    sure = dict.fromkeys("abcd", True)
+    sift = {("a", "b"): (0.717, 0.2), ("a", "c"): (-2.483,), ("a", "d"): (-4.283, -0.067),
+            ("b", "c"): (-0.017, 0.067), ("b", "d"): (-0.1, 0.017), ("c", "d"): (1.9, -0.033)}
+    out = disputed_by_other_model(joint, sure, sift, 0.067, "SIFT's model")
+    # a is disputed too: SIFT's camera a was wrong, so none of its pairs' peaks meets XFeat's Δ
+    assert sorted(out) == ["a", "d"]
+    assert out["d"].startswith("SIFT's model's vote peaks of its pairs lie more than 0.067 s from the joint Δ")
+    assert "b__d Δ +0.516 s, peaks -0.100, +0.017 s" in out["d"]
+    # one agreeing pair is enough, for both its cameras
+    assert disputed_by_other_model(joint, sure, {**sift, ("a", "d"): (-0.85,)}, 0.067) == {}
+    # no opinion (the other model voted on none of its pairs, or only with unsure cameras): kept
+    no_d = {k: v for k, v in sift.items() if "d" not in k}
+    assert sorted(disputed_by_other_model(joint, sure, no_d, 0.067)) == ["a"]
+    assert sorted(disputed_by_other_model(joint, sure, {**sift, ("b", "d"): (), ("c", "d"): (),
+                                                        ("a", "d"): ()}, 0.067)) == ["a"]
+    assert sorted(disputed_by_other_model(joint, {**sure, "a": False}, sift, 0.067)) == ["d"]
