@@ -383,7 +383,8 @@ class _Events(NullSink):
         self.messages.append(message)
 
 
-def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: bool = True):
+def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: bool = True,
+                       second_fails: bool = False):
     """extract._estimated_cameras on three videos with two camera models ("sift" first, "xfeat"
     second) whose pairing trusts the videos of `trusted`. Returns (kept set, stats, sink, votes
     seen as (kind, other_peaks, other))."""
@@ -408,6 +409,8 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
 
         def second(self):
             assert second_allowed, "the second model was asked for"
+            if second_fails:
+                raise RuntimeError("XFeat ran out of memory")
             return SimpleNamespace(features="xfeat")
 
     seen = []
@@ -457,3 +460,10 @@ def test_first_camera_model_is_kept_on_a_tie_and_alone_when_it_trusts_every_vide
     kept, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b", "c"}}, second_allowed=False)
     assert [s[0] for s in seen] == ["sift"] and "models" not in stats["sfm"]
     assert sink.messages == ["voted on sift"]
+
+
+def test_a_second_camera_model_that_fails_leaves_the_first_standing(monkeypatch):
+    kept, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b"}}, second_fails=True)
+    assert kept.used == {"a", "b"} and [s[0] for s in seen] == ["sift"]
+    why = "the second camera model failed (RuntimeError: XFeat ran out of memory); SIFT's kept"
+    assert stats["sfm"]["models_failed"] == why and sink.messages == ["voted on sift", why]

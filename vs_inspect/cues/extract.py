@@ -1059,23 +1059,28 @@ def _estimated_cameras(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict,
                                     for n, v in vids.items() if v.register_masks is not None},
                       progress=progress) as models:
 
-        def attempt(est, other_peaks=None, other=""):
-            tried = _copy_stats(stats)
+        def attempt(est, other_peaks=None, other="") -> tuple[str, _CameraSet]:
+            own = _copy_stats(stats)
             events = DeferredSink(sink.options)
-            cams = _estimate(vids, cfg, tried, all_pairs, est)
-            out = _vote_on_cameras(cams, vids, all_pairs, cfg, tried, events, progress, estimated=True,
+            cams = _estimate(vids, cfg, own, all_pairs, est)
+            out = _vote_on_cameras(cams, vids, all_pairs, cfg, own, events, progress, estimated=True,
                                    other_peaks=other_peaks, other=other)
-            return dataclasses.replace(out, stats=tried, events=events), est.features
+            return est.features, dataclasses.replace(out, stats=own, events=events)
 
-        kept, kind = attempt(models.first())
-        tried = [(kind, kept)]
-        if cfg.geometric.enabled and kept.used < set(vids) and (est := models.second()) is not None:
-            log.info("the joint vote trusted %d of %d videos on %s's cameras: trying %s's model",
-                     len(kept.used), len(vids), kind.upper(), est.features.upper())
-            other, other_kind = attempt(est, kept.peaks, f"{kind.upper()}'s model")
-            tried.append((other_kind, other))
-            if len(other.used) > len(kept.used):
-                kept, kind = other, other_kind
+        kind, kept = attempt(models.first())
+        tried, failed = [(kind, kept)], None
+        if cfg.geometric.enabled and kept.used < set(vids):
+            try:
+                est = models.second()
+                if est is not None:
+                    log.info("the joint vote trusted %d of %d videos on %s's cameras: trying %s's model",
+                             len(kept.used), len(vids), kind.upper(), est.features.upper())
+                    tried.append(attempt(est, kept.peaks, f"{kind.upper()}'s model"))
+            except Exception as exc:  # a second opinion that fails leaves the first standing
+                failed = f"the second camera model failed ({type(exc).__name__}: {exc}); {kind.upper()}'s kept"
+                log.warning("%s", failed)
+            if len(tried) > 1 and len(tried[1][1].used) > len(kept.used):
+                kind, kept = tried[1]
     kept.events.replay(sink)
     stats.clear()
     stats.update(kept.stats)
@@ -1086,6 +1091,9 @@ def _estimated_cameras(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict,
                + ", ".join(f"{len(c.used)} video(s) on {k.upper()}'s" for k, c in tried))
         sink.stage_event("cameras", msg)
         log.info(msg)
+    if failed:
+        stats["sfm"]["models_failed"] = failed
+        sink.stage_event("cameras", failed)
     return kept
 
 
