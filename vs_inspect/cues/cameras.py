@@ -169,8 +169,8 @@ class CameraModels:
     def _xfeat_model(self, side_tmp: Path, cancel: _Cancel | None) -> tuple[_Model, CameraEstimate | None]:
         # a moving camera's frames are registered against SIFT's model only once it is kept (on the
         # 720p timing scene SIFT's lost to XFeat's after 10 s of registering frames against it);
-        # XFeat's registers them on the side thread (cancel given) while SIFT's still maps: that
-        # core is idle then
+        # XFeat's registers them on the side thread (cancel given), started while SIFT's maps (that
+        # core is idle then) and going on while SIFT's cameras are paired, until second() or the end
         other = _build_model("xfeat", self._frames, self._sizes, self._moving, self._cfg, side_tmp, self._seed,
                              cancel=cancel)
         return other, None if cancel is None else _estimate_from(other, *self._inputs, cancel=cancel,
@@ -200,8 +200,6 @@ class CameraModels:
             if len(other_est.cameras) > len(est.cameras):
                 self._chose_xfeat = True
                 return self._xfeat_estimate()
-        if not self._xfeat_possible:
-            self._xfeat.close()  # nothing to wait for
         return _estimate_from(model, *self._inputs, **self._registration)
 
     def second(self) -> CameraEstimate | None:
