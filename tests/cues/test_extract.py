@@ -373,16 +373,6 @@ def test_videos_own_cues_run_two_at_a_time_on_threads_with_sift_keyframes_only()
     assert asked == [True, False]
 
 
-class _Events(NullSink):
-    """Keeps the stage events' messages."""
-
-    def __init__(self):
-        self.messages = []
-
-    def stage_event(self, stage, message, **numbers):
-        self.messages.append(message)
-
-
 def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: bool = True,
                        second_fails: bool = False):
     """extract._estimated_cameras on three videos with two camera models ("sift" first, "xfeat"

@@ -109,7 +109,7 @@ def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarra
     """One pycolmap reconstruction of every video's frames: CameraModels(...).first()."""
     with CameraModels(frames_by_video, sizes, num_frames, moving, cfg, workdir, seed, frame_features,
                       frame_images, progress) as models:
-        return models.first()
+        return models.first(second_wanted=False)
 
 
 class CameraModels:
@@ -185,7 +185,9 @@ class CameraModels:
         other, registered = self._xfeat_result()
         return registered if registered is not None else _estimate_from(other, *self._inputs, **self._registration)
 
-    def first(self) -> CameraEstimate:
+    def first(self, second_wanted: bool = True) -> CameraEstimate:
+        """The estimate to use. second_wanted False: second() will not be asked for, so an
+        unneeded XFeat build stops before SIFT's frames are registered."""
         cfg = self._cfg
         kind = cfg.features if cfg.features in LEARNED_FEATURES else "sift"
         model = self._first_model = _build_model(
@@ -200,6 +202,8 @@ class CameraModels:
             if len(other_est.cameras) > len(est.cameras):
                 self._chose_xfeat = True
                 return self._xfeat_estimate()
+        if not second_wanted:
+            self._xfeat.close()
         return _estimate_from(model, *self._inputs, **self._registration)
 
     def second(self) -> CameraEstimate | None:

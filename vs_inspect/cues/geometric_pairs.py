@@ -593,10 +593,10 @@ def disputed_by_other_model(joint: JointChoice, sure: dict[str, bool],
     A sure camera is kept when one of its pairs with another sure camera has a peak of the other
     model within tol_s of the joint Δ_ab; a camera none of whose such pairs the other model voted
     on has no opinion against it and is kept. Two reconstructions from different features
-    rarely err alike: stop 47's held-out and tuning scenes, XFeat's joint vote sure of a hand-held
-    camera 16 frames off (three-view check passed) while SIFT's peaks of its pairs lay 13-25
-    frames from that Δ; every camera right where XFeat's model won had such a peak within 2
-    frames."""
+    rarely err alike: on stop 47's arcs scenes XFeat's joint vote was sure of a hand-held camera
+    16 frames off (three-view check passed) while SIFT's peaks of its pairs lay 15-24 frames from
+    that Δ; of the right cameras where XFeat's model won, all but two (whose SIFT cameras were
+    wrong) had such a peak within 2 frames."""
     out: dict[str, str] = {}
     for cam in sorted(n for n, ok in sure.items() if ok):
         voted = {}
