@@ -124,8 +124,8 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
     cfg = CueConfig(geometric=GeometricPairConfig(joint_min_margin=1e9))  # no camera sure
     monkeypatch.setattr(gp, "consistent_peaks", lambda *a, **k: (None, "inconsistent"))
     sink, stats = _Events(), {"pairs": {}}
-    out, voted = _add_geometric_pairs(pairs, cams, tracks, vids, cfg, stats, sink, progress=False,
-                                      estimated=True)
+    got = _add_geometric_pairs(pairs, cams, tracks, vids, cfg, stats, sink, progress=False, estimated=True)
+    out, voted = got.pairs, got.voted
     assert stats["geometric_peaks"] == "inconsistent"
     assert voted == {}  # no Δ chosen, so none is reported as voted
     # each pair and each video's null reason say why it got no geometric pair
@@ -160,9 +160,9 @@ def _sure_of_all(monkeypatch, offsets: dict[str, float], estimated: bool = True)
     pairs = {k: TrackPairs(*k, np.zeros((0, 2), np.int64)) for k in (("a", "b"), ("a", "c"), ("b", "c"))}
     monkeypatch.setattr(gp, "joint_offsets", lambda *a, **k: JointChoice(dict(offsets), 30.0, dict.fromkeys(offsets, 10.0)))
     sink, stats = _Events(), {"pairs": {}}
-    out, _ = _add_geometric_pairs(pairs, cams, {n: Tracks(xy[n], None) for n in "abc"},
-                                  {n: SimpleNamespace(info=infos[n]) for n in "abc"}, CueConfig(),
-                                  stats, sink, progress=False, estimated=estimated)
+    out = _add_geometric_pairs(pairs, cams, {n: Tracks(xy[n], None) for n in "abc"},
+                               {n: SimpleNamespace(info=infos[n]) for n in "abc"}, CueConfig(),
+                               stats, sink, progress=False, estimated=estimated).pairs
     return out, stats, sink.messages, row_of
 
 
@@ -271,9 +271,9 @@ def _lone_pair(monkeypatch, moving_b: bool, **geometric):
     vids = {n: SimpleNamespace(info=SimpleNamespace(frame_interval_s=1 / 30)) for n in "ab"}
     sink, stats = _Events(), {"pairs": {}}
     tracks = {n: SimpleNamespace(xy=None) for n in "ab"}  # read by the vote only, replaced here
-    out, _ = _add_geometric_pairs({("a", "b"): TrackPairs("a", "b", desc, np.ones(3))}, cams, tracks, vids,
-                                  CueConfig(geometric=GeometricPairConfig(**geometric)), stats, sink,
-                                  progress=False, estimated=True)
+    out = _add_geometric_pairs({("a", "b"): TrackPairs("a", "b", desc, np.ones(3))}, cams, tracks, vids,
+                               CueConfig(geometric=GeometricPairConfig(**geometric)), stats, sink,
+                               progress=False, estimated=True).pairs
     return out, stats, sink.messages
 
 

@@ -532,11 +532,20 @@ def _cue_stats(stats: dict) -> CueStats:
                     stats.get("sfm"), stats.get("geometric_joint"), stats.get("heads"))
 
 
+@dataclass(frozen=True)
+class _GeometricPairing:
+    """What _add_geometric_pairs made of one set of cameras."""
+
+    pairs: dict  # (a, b) -> TrackPairs: the descriptor pairs kept plus the geometric ones
+    voted: dict  # (a, b) -> the Δ_ab (s) whose supporters were added
+    peaks_s: dict  # (a, b) -> tuple of the pair's vote peaks Δ_ab (s), as the vote found them
+
+
 def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
                          stats: dict, sink: Sink, progress: bool, estimated: bool,
-                         other_peaks: dict | None = None, other: str = "") -> tuple[dict, dict]:
+                         other_peaks: dict | None = None, other: str = "") -> _GeometricPairing:
     """Descriptor pairs plus epipolar-consistency pairs for every pair of known cameras (a moving
-    one with its per-frame poses): (the pairs, {(a, b): the Δ_ab whose supporters were added}).
+    one with its per-frame poses), the Δ_ab whose supporters were added and every pair's vote peaks.
     estimated: Stage 0 estimated the cameras (no calibration given); only then are sure cameras
     checked in three views. other_peaks: (a, b) -> the vote peaks of another camera model (named
     other), which a sure camera's joint offset must meet in one of its pairs
@@ -560,6 +569,7 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     for a, b in tqdm(todo, desc="geometric pairs", unit="pair", disable=not progress, leave=False):
         found[(a, b)] = geometric_pairs(a, b, vids[a].info, vids[b].info, cameras[a], cameras[b],
                                         tracks[a].xy, tracks[b].xy, cfg.geometric)
+    peaks_s = {k: tuple(gs.peaks_s) for k, (_, gs) in found.items()}
     coarsest = max((vids[n].info.frame_interval_s for k in found for n in k), default=0.0)
     # each of a triangle's three peaks is located to about ±1 frame (its support window), so
     # right peaks close within about 3 frames, while wrong ones miss by far more
@@ -611,7 +621,7 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
         out, used = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg, stats, sink,
                                      {c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
                                      {c: chk.summary() for c, chk in three_view.items()}, dissent)
-        return _add_transfer_pairs(out, checks, traj, list(vids), stats, sink), used
+        return _GeometricPairing(_add_transfer_pairs(out, checks, traj, list(vids), stats, sink), used, peaks_s)
     if joint is not None:
         # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
         # decides (and refuses when the triangles do not close), as before the joint choice
@@ -679,7 +689,7 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
         sink.stage_event("cues", f"{a}__{b}: {len(index)} track pairs from epipolar consistency ({which})")
         log.info("%s__%s: %d geometric track pairs (%d new), %s", a, b, len(index), n_new, which)
     used = {k: found[k][1].peaks_s[i] for k, i in (chosen or {}).items() if i is not None}
-    return out, used
+    return _GeometricPairing(out, used, peaks_s)
 
 
 def _check_fitted_offsets(fallback: dict, voted: dict, vids: dict) -> dict[str, str]:
@@ -1022,8 +1032,9 @@ def _vote_on_cameras(cams: _CameraSet, vids: dict, all_pairs: dict, cfg: CueConf
     used, peaks, voting_s = frozenset(), {}, 0.0
     if cfg.geometric.enabled:
         t0 = time.perf_counter()
-        pairs, voted = _add_geometric_pairs(pairs, cameras, cams.tracks, vids, cfg, stats, sink, progress,
-                                            estimated=estimated, other_peaks=other_peaks, other=other)
+        pairing = _add_geometric_pairs(pairs, cameras, cams.tracks, vids, cfg, stats, sink, progress,
+                                       estimated=estimated, other_peaks=other_peaks, other=other)
+        pairs, voted = pairing.pairs, pairing.voted
         fallback = (stats.get("sfm") or {}).get("fallback") or {}
         if fallback.get("used"):
             refused = _check_fitted_offsets(fallback, voted, vids)
@@ -1034,8 +1045,7 @@ def _vote_on_cameras(cams: _CameraSet, vids: dict, all_pairs: dict, cfg: CueConf
                 log.warning("%s: %s", n, why)
             pairs = {k: v for k, v in pairs.items() if k[0] in cameras and k[1] in cameras}
         used = frozenset(n for k in voted for n in k if n in cameras)
-        peaks = {(a, b): tuple(stats["pairs"].get(f"{a}__{b}", {}).get("geometric_peaks_s", ()))
-                 for a, b in pairs}
+        peaks = {k: pairing.peaks_s.get(k, ()) for k in pairs}
         voting_s = time.perf_counter() - t0
     return dataclasses.replace(cams, cameras=cameras, pairs=pairs, used=used, peaks=peaks, voting_s=voting_s)
 
