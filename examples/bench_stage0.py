@@ -9,7 +9,7 @@
     # rendered scenes with their exact calibration, with and without the geometric track pairs
     PYTHONPATH=. python examples/bench_stage0.py rendered --seeds 0 1 2
     # scenes whose cameras share a view (arcs of 30-90°), estimated cameras: offsets over 2 frames
-    PYTHONPATH=. python examples/bench_stage0.py arcs [--scenes a60_c4m1_s12 ...] [--tuning] [--calibrated] [--features F] --workdir W
+    PYTHONPATH=. python examples/bench_stage0.py arcs [--scenes a60_c4m1_s12 ...] [--set held-out|tuning|held-out-2] [--calibrated] [--features F] --workdir W
     # caliscope, visualsync and rendered take the track settings too, e.g. the tracks of before:
     PYTHONPATH=. python examples/bench_stage0.py rendered --seeds 0 1 2 --klt-window 21 --no-anchor
 
@@ -39,7 +39,7 @@ import numpy as np  # noqa: F401  (before pycolmap)
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from vs_inspect.bench.arcs import HELD_OUT_SCENES, TUNING_SCENES, frame_errors, parse_scene, summarize  # noqa: E402
+from vs_inspect.bench.arcs import SCENE_SETS, frame_errors, parse_scene, summarize  # noqa: E402
 from vs_inspect.bench.datasets import corner_sync_bias_s, load_caliscope, read_caliscope_frame_times  # noqa: E402
 from vs_inspect.cues import CueConfig, MatchConfig, extract_cues  # noqa: E402
 from vs_inspect.cues.config import CameraConfig, GeometricPairConfig, TrackConfig  # noqa: E402
@@ -265,7 +265,7 @@ def bench_arcs(args) -> None:
     from vs_inspect.pipeline.stage0 import run_stage0
     from vs_inspect.synth.videos import render_unless_cached
 
-    names = args.scenes or (TUNING_SCENES if args.tuning else HELD_OUT_SCENES)
+    names = args.scenes or SCENE_SETS["tuning" if args.tuning else args.set]
     try:
         scenes = [parse_scene(n) for n in names]
     except ValueError as exc:
@@ -341,8 +341,10 @@ def main() -> None:
     a = sub.add_parser("arcs", help="rendered scenes whose cameras share a view, estimated cameras")
     a.add_argument("--scenes", nargs="+", metavar="NAME",
                    help="scenes a<arc>_c<cameras>m<hand-held>_s<seed> (default: the 12 held-out seeds 10-21)")
-    a.add_argument("--tuning", action="store_true",
-                   help="stop 43's 14 scenes, on which the rules were built, instead of the held-out ones")
+    a.add_argument("--set", choices=sorted(SCENE_SETS), default="held-out",
+                   help="held-out: seeds 10-21 (stop 46); tuning: stop 43's 14 scenes, on which the rules "
+                        "of stops 43-45 were built; held-out-2: seeds 22-33, rendered after stop 47's rules")
+    a.add_argument("--tuning", action="store_true", help="the same as --set tuning")
     a.add_argument("--calibrated", action="store_true", help="with each scene's exact calibration")
     a.add_argument("--workdir", type=Path, help="render into (and reuse finished renderings from) this "
                    "folder instead of a temporary one")

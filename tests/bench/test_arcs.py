@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from vs_inspect.bench.arcs import HELD_OUT_SCENES, TUNING_SCENES, frame_errors, parse_scene, summarize
+from vs_inspect.bench.arcs import SCENE_SETS, frame_errors, parse_scene, summarize
 
 
 def test_parse_scene_and_its_rendering_settings():
@@ -22,9 +22,15 @@ def test_parse_scene_refuses_bad_names(name, says):
         parse_scene(name)
 
 
-def test_held_out_scenes_share_no_seed_with_the_tuning_ones():
-    seeds = lambda names: {parse_scene(n).seed for n in names}  # noqa: E731
-    assert not seeds(HELD_OUT_SCENES) & seeds(TUNING_SCENES)
+def test_the_scene_sets_share_no_seed():
+    seeds = {k: {parse_scene(n).seed for n in names} for k, names in SCENE_SETS.items()}
+    for a in seeds:
+        for b in seeds:
+            assert a == b or not seeds[a] & seeds[b], (a, b)
+    assert seeds["held-out-2"] == set(range(22, 34))
+    # the second held-out set mixes arcs and cameras as the first does
+    kinds = {k: sorted(n.rsplit("_s", 1)[0] for n in SCENE_SETS[k]) for k in ("held-out", "held-out-2")}
+    assert kinds["held-out"] == kinds["held-out-2"]
 
 
 def test_frame_errors_against_the_results_reference():

@@ -25,6 +25,11 @@ TUNING_SCENES = ("a30_c4m1_s9", "a45_c4m1_s4", "a45_c4m1_s5", "a60_c3m0_s0", "a6
 HELD_OUT_SCENES = ("a30_c4m1_s10", "a45_c4m1_s11", "a60_c4m1_s12", "a60_c4m1_s13", "a90_c4m1_s14",
                    "a60_c3m0_s15", "a45_c5m2_s16", "a30_c3m1_s17", "a60_c4m1_s18", "a90_c4m0_s19",
                    "a45_c4m1_s20", "a60_c5m2_s21")
+# seeds no rule was measured on when stop 47's were (stop 48): held-out's mix of arcs and cameras
+HELD_OUT_2_SCENES = ("a30_c4m1_s22", "a45_c4m1_s23", "a60_c4m1_s24", "a60_c4m1_s25", "a90_c4m1_s26",
+                     "a60_c3m0_s27", "a45_c5m2_s28", "a30_c3m1_s29", "a60_c4m1_s30", "a90_c4m0_s31",
+                     "a45_c4m1_s32", "a60_c5m2_s33")
+SCENE_SETS = {"held-out": HELD_OUT_SCENES, "tuning": TUNING_SCENES, "held-out-2": HELD_OUT_2_SCENES}
 
 
 @dataclass(frozen=True)
