@@ -12,7 +12,6 @@ import contextlib
 import logging
 import os
 import shutil
-import sys
 import tempfile
 import threading
 from collections.abc import Callable
@@ -244,16 +243,6 @@ class _Cancel:
             yield item
 
 
-def _lowest_thread_priority() -> None:
-    """The calling thread (and the threads it starts, e.g. torch's) at nice 19. Linux only: there
-    a thread's id names it to setpriority; elsewhere nothing is changed."""
-    if sys.platform.startswith("linux"):
-        try:
-            os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), 19)
-        except OSError as exc:  # e.g. a sandbox that forbids it: the build just competes as before
-            log.debug("side model keeps its priority: %s", exc)
-
-
 class _SideModel:
     """A second model built on a thread of its own while the first one maps: COLMAP's mapper runs
     on one thread (repeatable cameras) and releases the GIL, so the other core is free then.
@@ -285,13 +274,7 @@ class _SideModel:
         cancel = _Cancel()
         pool = self._stack.enter_context(ThreadPoolExecutor(1, thread_name_prefix="side-model"))
         self._stack.callback(cancel.cancel)  # on leaving: cancel first, then the pool waits, then tmp goes
-        self._future = pool.submit(self._build_aside, tmp, cancel)
-
-    def _build_aside(self, tmp: Path, cancel: _Cancel):
-        # the lowest priority: the model may go unused, so it takes only the time the first
-        # model's path leaves idle (its mapping is one thread; the pairing after it uses both cores)
-        _lowest_thread_priority()
-        return self._build(tmp, cancel)
+        self._future = pool.submit(self._build, tmp, cancel)
 
     def result(self):
         if self._future is None:
