@@ -128,6 +128,22 @@ def test_nothing_to_transfer_gives_an_empty_landscape():
     assert not chk.confirmed and "no trajectory" in chk.reason
 
 
+def test_tracks_near_the_projections_but_never_within_the_radius_give_an_empty_landscape():
+    # held-out-2 scene a90_c4m1_s26 (stop 48): tracks within reach of the projections (the radius
+    # plus the largest step of a track) but none within the radius made an empty set of hits,
+    # which raised IndexError
+    infos, cams, xy, truth_ab, _ = _scene({"a": 0.0, "b": 0.42, "c": 0.2})
+    traj = triangulate_pairs(infos, cams, xy, {("a", "b"): TrackPairs("a", "b", truth_ab)},
+                             {"a": 0.0, "b": 0.42})
+    jumper = np.full((1, T, 2), np.nan)
+    jumper[0, :2] = [[-5000.0, 0.0], [-5000.0, 10000.0]]  # a 10000 px step: every track within reach
+    xy_c = np.concatenate([xy["c"] + 2000.0, jumper])  # and none near a projection
+    land = transfer_landscape(traj, infos["c"], cams["c"], xy_c, offset_grid(traj, infos["c"], 0.5 / FPS["c"]),
+                              radius_px=3.0)
+    assert land.offset_s is None and len(land.matches) == 0 and not land.support.any()
+    assert not confirm_offset("c", 0.2, land, 1 / FPS["c"], 2.0, 5.0, 8).confirmed
+
+
 def test_many_offsets_thin_the_samples_and_still_find_the_offset(monkeypatch):
     import vs_inspect.cues.transfer as transfer
 

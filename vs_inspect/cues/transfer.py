@@ -179,9 +179,10 @@ def transfer_landscape(traj: Trajectories, info_c: VideoInfo, camera_c: CameraTr
                 hit = np.linalg.norm(xj - p[has], axis=1) <= radius_px
                 dd, ss = d0 + d_idx[has][hit], s_idx[has][hit]
                 keys.append((dd.astype(np.int64) * K + traj.trajectory[ss]) * Nc + j[hit])
-    if not keys:
+    hits = np.concatenate(keys) if keys else np.zeros(0, np.int64)
+    if not len(hits):  # no sample within the radius of a track (tracks within reach are not hits)
         return empty
-    u, count = np.unique(np.concatenate(keys), return_counts=True)
+    u, count = np.unique(hits, return_counts=True)
     dk, jj = u // Nc, u % Nc  # (offset, trajectory) and track
     # each (offset, trajectory)'s most-hit track
     order = np.lexsort((-count, dk))
