@@ -384,16 +384,37 @@ def test_a_camera_no_peak_of_the_other_model_meets_is_disputed():
     sure = dict.fromkeys("abcd", True)
     sift = {("a", "b"): (0.717, 0.2), ("a", "c"): (-2.483,), ("a", "d"): (-4.283, -0.067),
             ("b", "c"): (-0.017, 0.067), ("b", "d"): (-0.1, 0.017), ("c", "d"): (1.9, -0.033)}
-    out = disputed_by_other_model(joint, sure, sift, 0.067, "SIFT's model")
+    out, overruled = disputed_by_other_model(joint, sure, sift, 0.067, "SIFT's model")
     # a is disputed too: SIFT's camera a was wrong, so none of its pairs' peaks meets XFeat's Δ
-    assert sorted(out) == ["a", "d"]
+    assert sorted(out) == ["a", "d"] and overruled == {}
     assert out["d"].startswith("SIFT's model's vote peaks of its pairs lie more than 0.067 s from the joint Δ")
     assert "b__d Δ +0.516 s, peaks -0.100, +0.017 s" in out["d"]
+
+    def disputed(*args, **kwargs):
+        return sorted(disputed_by_other_model(*args, **kwargs)[0])
+
     # one agreeing pair is enough, for both its cameras
-    assert disputed_by_other_model(joint, sure, {**sift, ("a", "d"): (-0.85,)}, 0.067) == {}
+    assert disputed(joint, sure, {**sift, ("a", "d"): (-0.85,)}, 0.067) == []
     # no opinion (the other model voted on none of its pairs, or only with unsure cameras): kept
     no_d = {k: v for k, v in sift.items() if "d" not in k}
-    assert sorted(disputed_by_other_model(joint, sure, no_d, 0.067)) == ["a"]
-    assert sorted(disputed_by_other_model(joint, sure, {**sift, ("b", "d"): (), ("c", "d"): (),
-                                                        ("a", "d"): ()}, 0.067)) == ["a"]
-    assert sorted(disputed_by_other_model(joint, {**sure, "a": False}, sift, 0.067)) == ["d"]
+    assert disputed(joint, sure, no_d, 0.067) == ["a"]
+    assert disputed(joint, sure, {**sift, ("b", "d"): (), ("c", "d"): (), ("a", "d"): ()}, 0.067) == ["a"]
+    assert disputed(joint, {**sure, "a": False}, sift, 0.067) == ["d"]
+
+
+def test_a_disputed_camera_its_own_three_view_check_backs_is_kept():
+    # s4's three-view shares: a (right, its SIFT camera wrong) follows 113 of its best offset's 120
+    # trajectories at the joint offset; d (16 frames off) 67 of 183
+    joint = JointChoice({"a": 0.0, "b": -1.383, "c": -1.4, "d": -0.867}, 87.0,
+                        {"a": 6.4, "b": 8.8, "c": 24.4, "d": 15.6})
+    sure = dict.fromkeys("abcd", True)
+    sift = {("a", "b"): (0.717, 0.2), ("a", "c"): (-2.483,), ("a", "d"): (-4.283, -0.067),
+            ("b", "c"): (-0.017, 0.067), ("b", "d"): (-0.1, 0.017), ("c", "d"): (1.9, -0.033)}
+    shares = {"a": 113 / 120, "b": 1.0, "c": 1.0, "d": 67 / 183}
+    out, overruled = disputed_by_other_model(joint, sure, sift, 0.067, "SIFT's model", shares, 0.8)
+    assert sorted(out) == ["d"] and sorted(overruled) == ["a"]
+    assert "overruled: its three-view check follows 0.94 of its best offset's trajectories" in overruled["a"]
+    # at the bar it is kept; without a share (no three-view check) or without a bar, disputed
+    assert sorted(disputed_by_other_model(joint, sure, sift, 0.067, "", {"a": 0.8}, 0.8)[1]) == ["a"]
+    assert sorted(disputed_by_other_model(joint, sure, sift, 0.067, "", {"d": 0.9}, 0.8)[0]) == ["a"]
+    assert sorted(disputed_by_other_model(joint, sure, sift, 0.067, "", shares)[0]) == ["a", "d"]

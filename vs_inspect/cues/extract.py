@@ -599,8 +599,14 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
     if other_peaks is not None and estimated and joint is not None:
         from .geometric_pairs import disputed_by_other_model
 
-        disputed = disputed_by_other_model(joint, sure, other_peaks,
-                                           cfg.geometric.other_model_agree_frames * coarsest, other)
+        shares = {n: chk.supporters / chk.best_supporters for n, chk in three_view.items() if chk.best_supporters}
+        disputed, overruled = disputed_by_other_model(joint, sure, other_peaks,
+                                                      cfg.geometric.other_model_agree_frames * coarsest, other,
+                                                      shares, cfg.geometric.other_model_overrule_share)
+        for n, why in overruled.items():
+            msg = f"joint vote still sure of {n}: {why}"
+            sink.stage_event("cues", msg)
+            log.info(msg)
         for n, why in disputed.items():
             sure[n] = False
             dissent[n] = why

@@ -585,9 +585,10 @@ def dissenting_cameras(found: dict[tuple[str, str], GeometricPairStats], joint: 
 
 def disputed_by_other_model(joint: JointChoice, sure: dict[str, bool],
                             other_peaks: dict[tuple[str, str], tuple[float, ...]], tol_s: float,
-                            other: str = "the other camera model") -> dict[str, str]:
+                            other: str = "the other camera model", three_view_share: dict[str, float] | None = None,
+                            overrule_share: float | None = None) -> tuple[dict[str, str], dict[str, str]]:
     """Sure cameras whose joint offsets the vote peaks of another camera model contradict:
-    {camera: reason}.
+    ({camera: reason} disputed, {camera: reason} whose dispute its own three-view check overrules).
 
     other_peaks: (a, b) -> the vote peaks Δ_ab (s) of the pair with the other model's cameras.
     A sure camera is kept when one of its pairs with another sure camera has a peak of the other
@@ -596,18 +597,30 @@ def disputed_by_other_model(joint: JointChoice, sure: dict[str, bool],
     rarely err alike: on stop 47's arcs scenes XFeat's joint vote was sure of a hand-held camera
     16 frames off (three-view check passed) while SIFT's peaks of its pairs lay 15-24 frames from
     that Δ; of the right cameras where XFeat's model won, all but two (whose SIFT cameras were
-    wrong) had such a peak within 2 frames."""
+    wrong) had such a peak within 2 frames.
+
+    three_view_share: camera -> trajectories its tracks follow at its joint offset over those
+    followed at its best offset (transfer.ThreeViewCheck). A contradicted camera with at least
+    overrule_share (None: none) is kept, its dispute overruled: the other model's cameras can be the wrong
+    ones (stop 48: the four right cameras so contradicted had 0.88-1.00, the wrong one 0.37)."""
     out: dict[str, str] = {}
+    overruled: dict[str, str] = {}
     for cam in sorted(n for n, ok in sure.items() if ok):
         voted = {}
         for (a, b), peaks in other_peaks.items():
             if cam in (a, b) and sure.get(a) and sure.get(b) and len(peaks):
                 voted[(a, b)] = (joint.offsets_s[b] - joint.offsets_s[a], peaks)
         if voted and not any(min(abs(p - d) for p in peaks) <= tol_s for d, peaks in voted.values()):
-            out[cam] = (f"{other}'s vote peaks of its pairs lie more than {tol_s:.3f} s from the joint Δ: "
-                        + "; ".join(f"{a}__{b} Δ {d:+.3f} s, peaks {', '.join(f'{p:+.3f}' for p in peaks)} s"
-                                    for (a, b), (d, peaks) in sorted(voted.items())))
-    return out
+            why = (f"{other}'s vote peaks of its pairs lie more than {tol_s:.3f} s from the joint Δ: "
+                   + "; ".join(f"{a}__{b} Δ {d:+.3f} s, peaks {', '.join(f'{p:+.3f}' for p in peaks)} s"
+                               for (a, b), (d, peaks) in sorted(voted.items())))
+            share = (three_view_share or {}).get(cam)
+            if share is not None and overrule_share is not None and share >= overrule_share:
+                overruled[cam] = (f"{why}; overruled: its three-view check follows {share:.2f} of its best "
+                                  f"offset's trajectories at the joint offset (at least {overrule_share:g})")
+            else:
+                out[cam] = why
+    return out, overruled
 
 
 def supporters(st: GeometricPairStats, delta_s: float) -> np.ndarray:
