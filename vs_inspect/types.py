@@ -459,7 +459,8 @@ class CueStats:
     sfm: dict[str, Any] | None = None  # estimated cameras' diagnostics, JSON values (None: calibrated)
     geometric_joint: dict[str, Any] | None = None  # the joint vote (offsets, margins, cameras sure and used) and
     # its point-transfer checks of unsure cameras ("transfer": camera -> verdict) and of sure ones in
-    # three views ("three_view": camera -> verdict), JSON values
+    # three views ("three_view": camera -> verdict), JSON values; "dissent": camera -> why it was made
+    # unsure, "overruled": camera -> why another camera model's dispute of it was overruled
     heads: dict[str, Any] | None = None  # the person detector's run: frames with a head per video, the
     # seconds of those found beside the cameras ("found_ahead_s"), or "skipped" with why (None: no
     # camera moved, or turned off)

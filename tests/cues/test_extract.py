@@ -144,10 +144,11 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
         assert stats["pairs"][f"{u}__{v}"]["descriptor_pairs_kept"] == len(kept)
 
 
-def _sure_of_all(monkeypatch, offsets: dict[str, float], estimated: bool = True):
+def _sure_of_all(monkeypatch, offsets: dict[str, float], estimated: bool = True, other_peaks: dict | None = None,
+                 cfg: CueConfig = CueConfig()):
     """Stage 0's geometric pairs of the transfer scene (cameras a, b, c, true geometry) with the
-    joint vote replaced by one sure (margin 10) of every camera at `offsets`: (pairs, stats,
-    stage events, the scene's rows of each point)."""
+    joint vote replaced by one sure (margin 10) of every camera at `offsets` (other_peaks: a first
+    camera model's vote peaks): (pairs, stats, stage events, the scene's rows of each point)."""
     from types import SimpleNamespace
 
     import vs_inspect.cues.geometric_pairs as gp
@@ -161,8 +162,9 @@ def _sure_of_all(monkeypatch, offsets: dict[str, float], estimated: bool = True)
     monkeypatch.setattr(gp, "joint_offsets", lambda *a, **k: JointChoice(dict(offsets), 30.0, dict.fromkeys(offsets, 10.0)))
     sink, stats = _Events(), {"pairs": {}}
     out = _add_geometric_pairs(pairs, cams, {n: Tracks(xy[n], None) for n in "abc"},
-                               {n: SimpleNamespace(info=infos[n]) for n in "abc"}, CueConfig(),
-                               stats, sink, progress=False, estimated=estimated).pairs
+                               {n: SimpleNamespace(info=infos[n]) for n in "abc"}, cfg,
+                               stats, sink, progress=False, estimated=estimated, other_peaks=other_peaks,
+                               other="SIFT's model").pairs
     return out, stats, sink.messages, row_of
 
 
@@ -190,6 +192,26 @@ def test_sure_cameras_refuted_in_three_views_get_no_pairs(monkeypatch):
     cue_stats = CueStats("estimated", 3, 90, 0, {}, stats["pairs"], {}, {}, "joint", None, joint)
     why = cue_stats.geometric_refusal("c")
     assert "sure of its offset (margin 10.0), but not in three views" in why and "+0.200 s" in why
+
+
+def test_cameras_another_model_disputes_are_kept_when_their_three_view_checks_back_them(monkeypatch):
+    """Right cameras whose first model's vote peaks all lie far off (its cameras were wrong, as
+    SIFT's on held-out-2 s22): each one's three-view check follows nearly all its best offset's
+    trajectories at its joint offset, so the dispute is overruled, with the reason in
+    result.json; with overruling off (stop 47), none stays sure and no pair is used."""
+    offsets = {"a": 0.0, "b": 0.42, "c": -0.3}
+    far = {("a", "b"): (2.0,), ("a", "c"): (-3.0,), ("b", "c"): (1.5,)}
+    out, stats, msgs, _ = _sure_of_all(monkeypatch, offsets, other_peaks=far)
+    joint = stats["geometric_joint"]
+    assert joint["used"] == ["a", "b", "c"] and "dissent" not in joint
+    assert sorted(joint["overruled"]) == ["a", "b", "c"]
+    assert all("overruled: its three-view check follows" in why for why in joint["overruled"].values())
+    assert sum("joint vote still sure of" in m for m in msgs) == 3
+    cfg = CueConfig(geometric=GeometricPairConfig(other_model_overrule_share=2.0))
+    out, stats, msgs, _ = _sure_of_all(monkeypatch, offsets, other_peaks=far, cfg=cfg)
+    joint = stats["geometric_joint"]
+    assert joint["used"] == [] and sorted(joint["dissent"]) == ["a", "b", "c"] and "overruled" not in joint
+    assert all(len(tp.index) == 0 for tp in out.values())
 
 
 def test_cameras_from_a_calibration_are_not_checked_in_three_views(monkeypatch):

@@ -376,14 +376,19 @@ def test_a_camera_whose_pair_votes_elsewhere_is_not_sure():
     assert dissenting_cameras(found, joint, {**sure, "b": False}, 0.5) == {}
 
 
-def test_a_camera_no_peak_of_the_other_model_meets_is_disputed():
-    # stop 47's tuning scene s4 in small: XFeat's joint vote puts d 0.53 s off; SIFT's peaks of d's
-    # pairs lie far from XFeat's Δ, while one pair of each other camera has a SIFT peak at its Δ
+def _s4_in_small():
+    """Stop 47's tuning scene s4 in small: XFeat's joint vote puts d 0.53 s off; SIFT's peaks of
+    d's pairs lie far from XFeat's Δ, while one pair of each other camera has a SIFT peak at its
+    Δ. (joint, sure, SIFT's peaks)."""
     joint = JointChoice({"a": 0.0, "b": -1.383, "c": -1.4, "d": -0.867}, 87.0,
                         {"a": 6.4, "b": 8.8, "c": 24.4, "d": 15.6})
-    sure = dict.fromkeys("abcd", True)
     sift = {("a", "b"): (0.717, 0.2), ("a", "c"): (-2.483,), ("a", "d"): (-4.283, -0.067),
             ("b", "c"): (-0.017, 0.067), ("b", "d"): (-0.1, 0.017), ("c", "d"): (1.9, -0.033)}
+    return joint, dict.fromkeys("abcd", True), sift
+
+
+def test_a_camera_no_peak_of_the_other_model_meets_is_disputed():
+    joint, sure, sift = _s4_in_small()
     out, overruled = disputed_by_other_model(joint, sure, sift, 0.067, "SIFT's model")
     # a is disputed too: SIFT's camera a was wrong, so none of its pairs' peaks meets XFeat's Δ
     assert sorted(out) == ["a", "d"] and overruled == {}
@@ -405,11 +410,7 @@ def test_a_camera_no_peak_of_the_other_model_meets_is_disputed():
 def test_a_disputed_camera_its_own_three_view_check_backs_is_kept():
     # s4's three-view shares: a (right, its SIFT camera wrong) follows 113 of its best offset's 120
     # trajectories at the joint offset; d (16 frames off) 67 of 183
-    joint = JointChoice({"a": 0.0, "b": -1.383, "c": -1.4, "d": -0.867}, 87.0,
-                        {"a": 6.4, "b": 8.8, "c": 24.4, "d": 15.6})
-    sure = dict.fromkeys("abcd", True)
-    sift = {("a", "b"): (0.717, 0.2), ("a", "c"): (-2.483,), ("a", "d"): (-4.283, -0.067),
-            ("b", "c"): (-0.017, 0.067), ("b", "d"): (-0.1, 0.017), ("c", "d"): (1.9, -0.033)}
+    joint, sure, sift = _s4_in_small()
     shares = {"a": 113 / 120, "b": 1.0, "c": 1.0, "d": 67 / 183}
     out, overruled = disputed_by_other_model(joint, sure, sift, 0.067, "SIFT's model", shares, 0.8)
     assert sorted(out) == ["d"] and sorted(overruled) == ["a"]

@@ -596,6 +596,7 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
             msg = f"joint vote not sure of {n}: {why}"
             sink.stage_event("cues", msg)
             log.warning(msg)
+    overruled = {}  # camera -> why the other model's dispute of it was overruled
     if other_peaks is not None and estimated and joint is not None:
         from .geometric_pairs import disputed_by_other_model
 
@@ -627,6 +628,8 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
         out, used = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg, stats, sink,
                                      {c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
                                      {c: chk.summary() for c, chk in three_view.items()}, dissent)
+        if overruled:
+            stats["geometric_joint"]["overruled"] = dict(overruled)
         return _GeometricPairing(_add_transfer_pairs(out, checks, traj, list(vids), stats, sink), used, peaks_s)
     if joint is not None:
         # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
