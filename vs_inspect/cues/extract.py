@@ -625,11 +625,9 @@ def _add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, c
             checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, sink,
                                                 frozenset(dissent))
         sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
-        out, used = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg, stats, sink,
-                                     {c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
-                                     {c: chk.summary() for c, chk in three_view.items()}, dissent)
-        if overruled:
-            stats["geometric_joint"]["overruled"] = dict(overruled)
+        said = _JointChecks({c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
+                            {c: chk.summary() for c, chk in three_view.items()}, dissent, overruled)
+        out, used = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg, stats, sink, said)
         return _GeometricPairing(_add_transfer_pairs(out, checks, traj, list(vids), stats, sink), used, peaks_s)
     if joint is not None:
         # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
@@ -905,16 +903,24 @@ def _merge_pairs(tp: TrackPairs, index: np.ndarray, unchecked: bool = False,
                       np.concatenate([w_desc, np.ones(len(new))]), mark, chosen_at_offset_s), len(new)
 
 
+@dataclass(frozen=True)
+class _JointChecks:
+    """What the checks after the joint vote said of its cameras, kept in result.json."""
+
+    transfer: dict = dataclasses.field(default_factory=dict)  # camera -> point transfer's summary
+    three_view: dict = dataclasses.field(default_factory=dict)  # camera -> the three-view check's summary
+    dissent: dict = dataclasses.field(default_factory=dict)  # camera -> why its pairs (or the other model) contradict it
+    overruled: dict = dataclasses.field(default_factory=dict)  # camera -> why the other model's dispute was overruled
+
+
 def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cameras: dict,
                      tracks: dict, vids: dict, cfg: CueConfig, stats: dict, sink: Sink,
-                     transfer: dict | None = None, three_view: dict | None = None,
-                     dissent: dict | None = None) -> tuple[dict, dict]:
+                     said: _JointChecks = _JointChecks()) -> tuple[dict, dict]:
     """(pairs, {(a, b): the joint Δ_ab whose supporters were added}): the supporters of the
     jointly chosen offsets (geometric_pairs.joint_offsets) for every pair whose Δ is trusted
     (_joint_pair_used: both cameras' offsets won by at least joint_min_margin, or point transfer
-    confirmed them, and joint_min_sure cameras are sure; sure: camera -> whether it is, transfer
-    and three_view: those checks' summaries, dissent: {camera: why its pairs contradict it}, for
-    result.json); nothing for the others. A
+    confirmed them, and joint_min_sure cameras are sure; sure: camera -> whether it is, said:
+    what the checks after the vote said, for result.json); nothing for the others. A
     descriptor pair is kept only if it is epipolar-consistent at the joint Δ (with
     joint_filter_descriptor): the descriptor pairs are mostly wrong on small moving objects
     (BENCHMARKS.md), and the joint Δ is the best evidence there is of the moment they share."""
@@ -930,13 +936,11 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                                 "margin": {n: round(m, 2) for n, m in joint.margin.items()},
                                 "sure": sorted(n for n, ok in sure.items() if ok),
                                 "used": sorted({n for k in used for n in k})}
-    if transfer:
-        stats["geometric_joint"]["transfer"] = transfer
-    if three_view:
-        stats["geometric_joint"]["three_view"] = three_view
-    if dissent:
-        stats["geometric_joint"]["dissent"] = dict(dissent)
-    failed = sorted(n for n, chk in (three_view or {}).items() if not chk["passed"] and not sure[n])
+    for key in ("transfer", "three_view", "dissent", "overruled"):
+        if getattr(said, key):
+            stats["geometric_joint"][key] = dict(getattr(said, key))
+    three_view, dissent, transfer = said.three_view, said.dissent, said.transfer
+    failed = sorted(n for n, chk in three_view.items() if not chk["passed"] and not sure[n])
     if failed:
         seen = ", ".join(f"{n} {three_view[n]['supporters']}" for n in failed)
         msg = (f"geometric track pairs not used for {', '.join(failed)}: the joint vote was sure of "
@@ -945,7 +949,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                f"{cfg.geometric.three_view_min_share_of_best:.2g} of those at its best offset)")
         sink.stage_event("cues", msg)
         log.warning(msg)
-    weak = sorted(n for n, ok in sure.items() if not ok and n not in failed and n not in (dissent or {}))
+    weak = sorted(n for n, ok in sure.items() if not ok and n not in failed and n not in dissent)
     if weak:
         msg = (f"geometric track pairs not used for {', '.join(weak)}: the joint vote prefers their "
                f"offsets by less than {cfg.geometric.joint_min_margin:g} (margins "
