@@ -11,7 +11,7 @@ from vs_inspect.cues.config import MatchConfig, MotionConfig, TrackConfig
 from vs_inspect.cues.extract import to_full_px
 from vs_inspect.cues.learned import xfeat_available
 from vs_inspect.cues.matching import (extract_keyframe_features, keyframe_indices,
-                                      match_descriptors, match_tracks)
+                                      match_by_sorting, match_descriptors, match_tracks)
 from vs_inspect.cues.motion import (decide_camera_motion, link_instances, moving_camera_masks,
                                     moving_regions, neighbour_gap, static_camera_masks)
 from vs_inspect.cues.tracking import track_points
@@ -186,22 +186,6 @@ def test_match_descriptors_ratio_and_mutual():
     assert perm[0] not in m2[:, 0]
 
 
-def _match_by_sorting(da, db, ratio, mutual):
-    """match_descriptors as it was written before its sort-free path (the reference)."""
-    sim = da @ db.T
-    top2 = np.argpartition(-sim, 1, axis=1)[:, :2]
-    s2 = np.take_along_axis(sim, top2, axis=1)
-    order = np.argsort(-s2, axis=1)
-    best = np.take_along_axis(top2, order[:, :1], axis=1)[:, 0]
-    s_best = np.take_along_axis(s2, order[:, :1], axis=1)[:, 0]
-    s_second = np.take_along_axis(s2, order[:, 1:], axis=1)[:, 0]
-    ok = np.sqrt(np.maximum(2 - 2 * s_best, 0)) < ratio * np.sqrt(np.maximum(2 - 2 * s_second, 0))
-    if mutual:
-        ok &= np.argmax(sim, axis=0)[best] == np.arange(len(da))
-    ia = np.nonzero(ok)[0]
-    return np.stack([ia, best[ia]], axis=1).astype(np.int64)
-
-
 @pytest.mark.parametrize("ratio", [0.8, 0.95, 1.0])
 @pytest.mark.parametrize("mutual", [True, False])
 def test_match_descriptors_same_pairs_as_by_sorting(ratio, mutual):
@@ -216,7 +200,7 @@ def test_match_descriptors_same_pairs_as_by_sorting(ratio, mutual):
         a /= np.linalg.norm(a, axis=1, keepdims=True)
         b /= np.linalg.norm(b, axis=1, keepdims=True)
         np.testing.assert_array_equal(match_descriptors(a, b, ratio, mutual),
-                                      _match_by_sorting(a, b, ratio, mutual), err_msg=f"trial {trial}")
+                                      match_by_sorting(a @ b.T, ratio, mutual), err_msg=f"trial {trial}")
 
 
 @pytest.mark.parametrize("descriptor", ["sift", pytest.param("xfeat", marks=pytest.mark.skipif(

@@ -148,8 +148,13 @@ def match_descriptors(da: np.ndarray, db: np.ndarray, ratio: float, mutual: bool
     if len(da) < 1 or len(db) < 2:
         return np.zeros((0, 2), np.int64)
     sim = da @ db.T  # unit vectors: squared distance = 2 - 2 sim
-    if ratio <= 1.0:
-        return _match_fast(sim, ratio, mutual)
+    return _match_fast(sim, ratio, mutual) if ratio <= 1.0 else match_by_sorting(sim, ratio, mutual)
+
+
+def match_by_sorting(sim: np.ndarray, ratio: float, mutual: bool) -> np.ndarray:
+    """match_descriptors from (Na,Nb) similarities of unit vectors by sorting each row's two
+    best: any ratio (a ratio over 1 keeps rows whose two best are near ties); the reference the
+    sort-free path (_match_fast) is tested against."""
     top2 = np.argpartition(-sim, 1, axis=1)[:, :2]
     s2 = np.take_along_axis(sim, top2, axis=1)
     order = np.argsort(-s2, axis=1)
@@ -161,7 +166,7 @@ def match_descriptors(da: np.ndarray, db: np.ndarray, ratio: float, mutual: bool
     ok = d1 < ratio * d2
     if mutual:
         back = np.argmax(sim, axis=0)
-        ok &= back[best] == np.arange(len(da))
+        ok &= back[best] == np.arange(len(sim))
     ia = np.nonzero(ok)[0]
     return np.stack([ia, best[ia]], axis=1).astype(np.int64)
 
