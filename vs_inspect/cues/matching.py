@@ -152,9 +152,9 @@ def match_descriptors(da: np.ndarray, db: np.ndarray, ratio: float, mutual: bool
 
 
 def match_by_sorting(sim: np.ndarray, ratio: float, mutual: bool) -> np.ndarray:
-    """match_descriptors from (Na,Nb) similarities of unit vectors by sorting each row's two
-    best: any ratio (a ratio over 1 keeps rows whose two best are near ties); the reference the
-    sort-free path (_match_fast) is tested against."""
+    """match_descriptors from (Na,Nb) similarities of unit vectors (Nb >= 2) by sorting each
+    row's two best, for any ratio; the reference the sort-free path (_match_fast) is tested
+    against."""
     top2 = np.argpartition(-sim, 1, axis=1)[:, :2]
     s2 = np.take_along_axis(sim, top2, axis=1)
     order = np.argsort(-s2, axis=1)
