@@ -936,9 +936,8 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                                 "margin": {n: round(m, 2) for n, m in joint.margin.items()},
                                 "sure": sorted(n for n, ok in sure.items() if ok),
                                 "used": sorted({n for k in used for n in k})}
-    for key in ("transfer", "three_view", "dissent", "overruled"):
-        if getattr(said, key):
-            stats["geometric_joint"][key] = dict(getattr(said, key))
+    # copies (asdict), in field order; an empty check is left out
+    stats["geometric_joint"].update({key: value for key, value in dataclasses.asdict(said).items() if value})
     three_view, dissent, transfer = said.three_view, said.dissent, said.transfer
     failed = sorted(n for n, chk in three_view.items() if not chk["passed"] and not sure[n])
     if failed:
