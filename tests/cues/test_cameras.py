@@ -343,4 +343,12 @@ def test_camera_models_third_is_aliked_on_thinned_frames_built_once(tmp_path, mo
                 CameraConfig(features="sift", max_features=1024)):
         with cameras.CameraModels(*args, off, workdir=str(tmp_path)) as models:
             models.first(second_wanted=False)
-            assert models.third() is None
+            assert models.third() is None and models.third_skipped is None
+    # SfM images over auto_aliked_max_pixels: none, and why
+    large = CameraConfig(features="auto", max_features=1024, auto_xfeat_max_images=0,
+                         auto_aliked_max_pixels=320 * 240 - 1)
+    with cameras.CameraModels(*args, large, workdir=str(tmp_path)) as models:
+        models.first(second_wanted=False)
+        assert models.third() is None
+        assert models.third_skipped.startswith("ALIKED's model not tried: SfM images of 76800 pixels")
+    assert [b[0] for b in builds].count("aliked") == 1

@@ -425,9 +425,14 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
                 raise RuntimeError("XFeat ran out of memory")
             return SimpleNamespace(features="xfeat")
 
+        third_skipped = None
+
         def third(self):
             assert second_allowed, "the third model was asked for"
-            return SimpleNamespace(features="aliked") if "aliked" in trusted else None
+            if "aliked" in trusted:
+                return SimpleNamespace(features="aliked")
+            self.third_skipped = "ALIKED's model not tried: large images"
+            return None
 
     seen = []
 
@@ -493,10 +498,18 @@ def test_third_camera_model_is_tried_when_the_kept_set_leaves_a_video_untrusted(
     # when XFeat's set trusts every video, ALIKED's is not tried
     _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": {"a"}, "xfeat": {"a", "b", "c"}, "aliked": set()})
     assert [s[0] for s in seen] == ["sift", "xfeat"] and stats["sfm"]["features"] == "xfeat"
+    assert "models_skipped" not in stats["sfm"]
+    # a third model skipped says why, in result.json and to the recording, after the choice
+    _, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a"}, "xfeat": {"a", "b"}})
+    assert [s[0] for s in seen] == ["sift", "xfeat"]
+    assert stats["sfm"]["models_skipped"] == "ALIKED's model not tried: large images"
+    assert sink.messages[-1] == "ALIKED's model not tried: large images"
 
 
 def test_a_second_camera_model_that_fails_leaves_the_first_standing(monkeypatch):
     kept, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b"}}, second_fails=True)
     assert kept.used == {"a", "b"} and [s[0] for s in seen] == ["sift"]
     why = "the second camera model failed (RuntimeError: XFeat ran out of memory); SIFT's kept"
-    assert stats["sfm"]["models_failed"] == why and sink.messages == ["voted on sift", why]
+    # the third model is still asked for (here it is skipped)
+    assert stats["sfm"]["models_failed"] == why
+    assert sink.messages == ["voted on sift", why, "ALIKED's model not tried: large images"]

@@ -174,6 +174,7 @@ class CameraModels:
         self._chose_xfeat = False
         self._second_done = False
         self._third_done = False
+        self.third_skipped: str | None = None  # why third() built no model though asked for
         self._xfeat_built = None  # (XFeat's _Model, its registered estimate or None) once awaited
 
     def __enter__(self) -> CameraModels:
@@ -227,15 +228,22 @@ class CameraModels:
         return _estimate_from(model, *self._inputs, **self._registration)
 
     def third(self) -> CameraEstimate | None:
-        """ALIKED + LightGlue's estimate (once; None when not aliked_tried_last): cfg.auto_aliked_frames
-        of a moving camera's SfM frames, cfg.auto_aliked_max_features per image, its other frames
-        registered with ALIKED's features. Built here, on this thread."""
+        """ALIKED + LightGlue's estimate (once; None when not aliked_tried_last, or, the reason in
+        third_skipped, when an SfM image has more than cfg.auto_aliked_max_pixels pixels):
+        cfg.auto_aliked_frames of a moving camera's SfM frames, cfg.auto_aliked_max_features per
+        image, its other frames registered with ALIKED's features. Built here, on this thread."""
         if self._first_model is None:
             raise RuntimeError("CameraModels.third() before first()")
         cfg = self._cfg
         if self._third_done or not aliked_tried_last(cfg):
             return None
         self._third_done = True
+        pixels = max((im.shape[0] * im.shape[1] for _, images, _ in self._frames.values() for im in images), default=0)
+        if pixels > cfg.auto_aliked_max_pixels:
+            self.third_skipped = (f"ALIKED's model not tried: SfM images of {pixels} pixels (more than "
+                                  f"{cfg.auto_aliked_max_pixels}; --sfm-features aliked builds it)")
+            log.info("%s", self.third_skipped)
+            return None
         cfg = replace(cfg, features="aliked", max_features=cfg.auto_aliked_max_features,
                       moving_frames=cfg.auto_aliked_frames)
         frames = fewer_frames(self._frames, self._moving, cfg.auto_aliked_frames)

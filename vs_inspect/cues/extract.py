@@ -1114,6 +1114,7 @@ def _estimated_cameras(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict,
                 continue
             if len(tried[-1][1].used) > len(kept.used):
                 kind, kept = tried[-1]
+        skipped = models.third_skipped
     kept.events.replay(sink)
     stats.clear()
     stats.update(kept.stats)
@@ -1127,6 +1128,9 @@ def _estimated_cameras(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict,
     if failed:
         stats["sfm"]["models_failed"] = "; ".join(failed)
         sink.stage_event("cameras", stats["sfm"]["models_failed"])
+    if skipped:
+        stats["sfm"]["models_skipped"] = skipped
+        sink.stage_event("cameras", skipped)
     return kept
 
 
