@@ -351,4 +351,11 @@ def test_camera_models_third_is_aliked_on_thinned_frames_built_once(tmp_path, mo
         models.first(second_wanted=False)
         assert models.third() is None
         assert models.third_skipped.startswith("ALIKED's model not tried: SfM images of 76800 pixels")
+    # more image pairs than auto_aliked_max_pairs (3 across + 3 within the hand-held camera's 3 frames = 6 > 5)
+    few_pairs = CameraConfig(features="auto", max_features=1024, auto_xfeat_max_images=0, auto_aliked_frames=3,
+                             auto_aliked_max_pairs=5)
+    with cameras.CameraModels(*args, few_pairs, workdir=str(tmp_path)) as models:
+        models.first(second_wanted=False)
+        assert models.third() is None
+        assert models.third_skipped.startswith("ALIKED's model not tried: 6 image pairs to match (more than 5")
     assert [b[0] for b in builds].count("aliked") == 1

@@ -229,7 +229,8 @@ class CameraModels:
 
     def third(self) -> CameraEstimate | None:
         """ALIKED + LightGlue's estimate (once; None when not aliked_tried_last, or, the reason in
-        third_skipped, when an SfM image has more than cfg.auto_aliked_max_pixels pixels):
+        third_skipped, when an SfM image has more than cfg.auto_aliked_max_pixels pixels or there
+        are more than cfg.auto_aliked_max_pairs image pairs to match):
         cfg.auto_aliked_frames of a moving camera's SfM frames, cfg.auto_aliked_max_features per
         image, its other frames registered with ALIKED's features. Built here, on this thread."""
         if self._first_model is None:
@@ -247,6 +248,13 @@ class CameraModels:
         cfg = replace(cfg, features="aliked", max_features=cfg.auto_aliked_max_features,
                       moving_frames=cfg.auto_aliked_frames)
         frames = fewer_frames(self._frames, self._moving, cfg.auto_aliked_frames)
+        names = [f"{n}/{int(k):06d}.jpg" for n, (idx, _, _) in frames.items() for k in idx]
+        pairs = len(sfm_image_pairs(names, self._moving, cfg.sequence_overlap))
+        if pairs > cfg.auto_aliked_max_pairs:
+            self.third_skipped = (f"ALIKED's model not tried: {pairs} image pairs to match (more than "
+                                  f"{cfg.auto_aliked_max_pairs}; --sfm-features aliked builds it)")
+            log.info("%s", self.third_skipped)
+            return None
         tmp = self._stack.enter_context(_scratch(self._workdir))
         model = _build_model("aliked", frames, self._sizes, self._moving, cfg, tmp, self._seed)
         _, num_frames, moving, _, seed = self._inputs

