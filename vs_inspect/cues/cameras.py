@@ -239,22 +239,20 @@ class CameraModels:
         if self._third_done or not aliked_tried_last(cfg):
             return None
         self._third_done = True
-        pixels = max((im.shape[0] * im.shape[1] for _, images, _ in self._frames.values() for im in images), default=0)
-        if pixels > cfg.auto_aliked_max_pixels:
-            self.third_skipped = (f"ALIKED's model not tried: SfM images of {pixels} pixels (more than "
-                                  f"{cfg.auto_aliked_max_pixels}; --sfm-features aliked builds it)")
+        frames = fewer_frames(self._frames, self._moving, cfg.auto_aliked_frames)
+        pixels = max((im.shape[0] * im.shape[1] for _, images, _ in frames.values() for im in images), default=0)
+        names = [f"{n}/{int(k):06d}.jpg" for n, (idx, _, _) in frames.items() for k in idx]
+        pairs = len(sfm_image_pairs(names, self._moving, cfg.sequence_overlap))
+        too_much = (f"SfM images of {pixels} pixels (more than {cfg.auto_aliked_max_pixels}"
+                    if pixels > cfg.auto_aliked_max_pixels else
+                    f"{pairs} image pairs to match (more than {cfg.auto_aliked_max_pairs}"
+                    if pairs > cfg.auto_aliked_max_pairs else None)
+        if too_much:
+            self.third_skipped = f"ALIKED's model not tried: {too_much}; --sfm-features aliked builds it)"
             log.info("%s", self.third_skipped)
             return None
         cfg = replace(cfg, features="aliked", max_features=cfg.auto_aliked_max_features,
                       moving_frames=cfg.auto_aliked_frames)
-        frames = fewer_frames(self._frames, self._moving, cfg.auto_aliked_frames)
-        names = [f"{n}/{int(k):06d}.jpg" for n, (idx, _, _) in frames.items() for k in idx]
-        pairs = len(sfm_image_pairs(names, self._moving, cfg.sequence_overlap))
-        if pairs > cfg.auto_aliked_max_pairs:
-            self.third_skipped = (f"ALIKED's model not tried: {pairs} image pairs to match (more than "
-                                  f"{cfg.auto_aliked_max_pairs}; --sfm-features aliked builds it)")
-            log.info("%s", self.third_skipped)
-            return None
         tmp = self._stack.enter_context(_scratch(self._workdir))
         model = _build_model("aliked", frames, self._sizes, self._moving, cfg, tmp, self._seed)
         _, num_frames, moving, _, seed = self._inputs
