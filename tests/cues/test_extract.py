@@ -396,10 +396,11 @@ def test_videos_own_cues_run_two_at_a_time_on_threads_with_sift_keyframes_only()
 
 
 def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: bool = True,
-                       second_fails: bool = False):
+                       second_fails: bool = False, registered: dict[str, str] | None = None):
     """extract._estimated_cameras on three videos with camera models ("sift" first, "xfeat"
     second, "aliked" third when `trusted` names it, else none) whose pairing trusts the videos of
-    `trusted`. Returns (kept set, stats, sink, votes seen as (kind, other_peaks, other))."""
+    `trusted`; each model has a camera for the videos `registered` names for it (default: all).
+    Returns (kept set, stats, sink, votes seen as (kind, other_peaks, other))."""
     import dataclasses
     from types import SimpleNamespace
 
@@ -438,7 +439,10 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
 
     def estimate(vids, cfg, stats, pairs, est):
         stats["sfm"] = {"features": est.features}
-        return ex._CameraSet({n: CameraTrack(K, look_at([6.0, 0, 2.0], [0, 0, 1])) for n in vids}, {}, None, None, {})
+        names = (registered or {}).get(est.features, "".join(vids))
+        stats["dropped"].update({n: f"{est.features} matched too little; the moving points' cameras refused"
+                                 for n in vids if n not in names})
+        return ex._CameraSet({n: CameraTrack(K, look_at([6.0, 0, 2.0], [0, 0, 1])) for n in names}, {}, None, None, {})
 
     def vote(cams, vids, all_pairs, cfg, stats, sink, progress, estimated, other_peaks=None, other=""):
         kind = stats["sfm"]["features"]
@@ -504,6 +508,21 @@ def test_third_camera_model_is_tried_when_the_kept_set_leaves_a_video_untrusted(
     assert [s[0] for s in seen] == ["sift", "xfeat"]
     assert stats["sfm"]["models_skipped"] == "ALIKED's model not tried: large images"
     assert sink.messages[-1] == "ALIKED's model not tried: large images"
+
+
+def test_a_video_without_a_camera_says_what_every_model_made_of_it(monkeypatch):
+    # SIFT's set (kept on the tie) has no camera for c, XFeat's registered it, ALIKED's did not
+    kept, stats, _, _ = _two_camera_models(monkeypatch, {"sift": {"a", "b"}, "xfeat": {"a"}, "aliked": {"b"}},
+                                           registered={"sift": "ab", "xfeat": "abc", "aliked": "ab"})
+    assert stats["sfm"]["features"] == "sift" and "c" not in kept.cameras
+    assert stats["dropped"] == {"c": (
+        "sift matched too little; the moving points' cameras refused (also tried: XFEAT's model registered it, "
+        "but its set was not kept (its joint vote trusted 1 video(s)); ALIKED's model: aliked matched too little)")}
+    # with one model tried (XFeat's failed, ALIKED's skipped), the reason is the model's own
+    _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b"}}, registered={"sift": "ab"},
+                                           second_fails=True)
+    assert [s[0] for s in seen] == ["sift"]
+    assert stats["dropped"] == {"c": "sift matched too little; the moving points' cameras refused"}
 
 
 def test_a_second_camera_model_that_fails_leaves_the_first_standing(monkeypatch):

@@ -1118,6 +1118,7 @@ def _estimated_cameras(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict,
     kept.events.replay(sink)
     stats.clear()
     stats.update(kept.stats)
+    _note_other_models(stats["dropped"], kept, [(k, c) for k, c in tried if c is not kept], vids)
     if len(tried) > 1:
         stats["sfm"]["models"] = [{"features": k, "cameras": len(c.cameras), "trusted": sorted(c.used),
                                    "kept": c is kept} for k, c in tried]
@@ -1132,6 +1133,23 @@ def _estimated_cameras(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict,
         stats["sfm"]["models_skipped"] = skipped
         sink.stage_event("cameras", skipped)
     return kept
+
+
+def _note_other_models(dropped: dict[str, str], kept: _CameraSet, others: list[tuple[str, _CameraSet]],
+                       vids: dict) -> None:
+    """Adds to the reason of each video the kept set has no camera for what the other models tried
+    made of it, so a null says whether any model could place its camera."""
+    for n in [n for n in dropped if n in vids and n not in kept.cameras]:
+        notes = []
+        for kind, c in others:
+            if n in c.cameras:
+                notes.append(f"{kind.upper()}'s model registered it, but its set was not kept "
+                             f"(its joint vote trusted {len(c.used)} video(s))")
+            else:  # the reason's first clause: the rest repeats for every model (the moving points' cameras)
+                why = c.stats["dropped"].get(n, "no camera").split("; ")[0]
+                notes.append(f"{kind.upper()}'s model: {why}")
+        if notes:
+            dropped[n] += f" (also tried: {'; '.join(notes)})"
 
 
 def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: dict, est) -> _CameraSet:
