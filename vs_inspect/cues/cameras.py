@@ -241,12 +241,13 @@ class CameraModels:
         self._third_done = True
         frames = fewer_frames(self._frames, self._moving, cfg.auto_aliked_frames)
         pixels = max((im.shape[0] * im.shape[1] for _, images, _ in frames.values() for im in images), default=0)
-        names = [f"{n}/{int(k):06d}.jpg" for n, (idx, _, _) in frames.items() for k in idx]
+        names = [f"{n}/{_sfm_image_file(k)}" for n, (idx, _, _) in frames.items() for k in idx]
         pairs = len(sfm_image_pairs(names, self._moving, cfg.sequence_overlap))
-        too_much = (f"SfM images of {pixels} pixels (more than {cfg.auto_aliked_max_pixels}"
-                    if pixels > cfg.auto_aliked_max_pixels else
-                    f"{pairs} image pairs to match (more than {cfg.auto_aliked_max_pairs}"
-                    if pairs > cfg.auto_aliked_max_pairs else None)
+        too_much = None
+        if pixels > cfg.auto_aliked_max_pixels:
+            too_much = f"SfM images of {pixels} pixels (more than {cfg.auto_aliked_max_pixels}"
+        elif pairs > cfg.auto_aliked_max_pairs:
+            too_much = f"{pairs} image pairs to match (more than {cfg.auto_aliked_max_pairs}"
         if too_much:
             self.third_skipped = f"ALIKED's model not tried: {too_much}; --sfm-features aliked builds it)"
             log.info("%s", self.third_skipped)
@@ -332,6 +333,11 @@ class _SideModel:
         if self._future is None:
             return self._build(self._stack.enter_context(_scratch(self._workdir)), None)
         return self._future.result()
+
+
+def _sfm_image_file(frame_index) -> str:
+    """The file an SfM frame is written to in its video's folder; zero-padded, so name order is frame order."""
+    return f"{int(frame_index):06d}.jpg"
 
 
 def sfm_image_pairs(names: list[str], moving: dict[str, bool], overlap: int) -> list[tuple[str, str]]:
@@ -605,7 +611,7 @@ def _build_model(features: str, frames_by_video, sizes, moving, cfg: CameraConfi
         (img_dir / name).mkdir(parents=True)
         (mask_dir / name).mkdir(parents=True)
         for k, img, m in zip(idx, images, masks):
-            fn = f"{int(k):06d}.jpg"
+            fn = _sfm_image_file(k)
             cv2.imwrite(str(img_dir / name / fn), img, [cv2.IMWRITE_JPEG_QUALITY, 95])
             mm = np.full(img.shape[:2], 255, np.uint8) if m is None else (m.astype(np.uint8) * 255)
             cv2.imwrite(str(mask_dir / name / (fn + ".png")), mm)
