@@ -398,8 +398,9 @@ def test_videos_own_cues_run_two_at_a_time_on_threads_with_sift_keyframes_only()
 def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: bool = True,
                        second_fails: bool = False, registered: dict[str, str] | None = None):
     """extract._estimated_cameras on three videos with camera models ("sift" first, "xfeat"
-    second, "aliked" third when `trusted` names it, else none) whose pairing trusts the videos of
-    `trusted`; each model has a camera for the videos `registered` names for it (default: all).
+    second, "aliked" third when `trusted` names it, else none; the moving points' cameras, when
+    `trusted` names "moving points", are used) whose pairing trusts the videos of `trusted`; each
+    model has a camera for the videos `registered` names for it (default: all).
     Returns (kept set, stats, sink, votes seen as (kind, other_peaks, other))."""
     import dataclasses
     from types import SimpleNamespace
@@ -437,10 +438,15 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
 
     seen = []
 
-    def estimate(vids, cfg, stats, pairs, est):
-        stats["sfm"] = {"features": est.features}
-        names = (registered or {}).get(est.features, "".join(vids))
-        stats["dropped"].update({n: f"{est.features} matched too little; the moving points' cameras refused"
+    def estimate(vids, cfg, stats, pairs, est, from_tracks=False):
+        kind = ex.MOVING_POINTS if from_tracks else est.features
+        stats["sfm"] = {"features": kind}
+        if from_tracks:  # the moving points' cameras, used when the test's trusted names them
+            stats["sfm"]["fallback"] = {"used": kind in trusted}
+            if kind not in trusted:
+                return ex._CameraSet({}, {}, None, None, {})
+        names = (registered or {}).get(kind, "".join(vids))
+        stats["dropped"].update({n: f"{kind} matched too little; the moving points' cameras refused"
                                  for n in vids if n not in names})
         return ex._CameraSet({n: CameraTrack(K, look_at([6.0, 0, 2.0], [0, 0, 1])) for n in names}, {}, None, None, {})
 
@@ -532,3 +538,32 @@ def test_a_second_camera_model_that_fails_leaves_the_first_standing(monkeypatch)
     # the third model is still asked for (here it is skipped)
     assert stats["sfm"]["models_failed"] == why
     assert sink.messages == ["voted on sift", why, "ALIKED's model not tried: large images"]
+
+
+def test_the_moving_points_cameras_are_tried_when_no_model_is_trusted_for_any_video(monkeypatch):
+    """Every model placed the cameras and the joint vote trusted nothing on any: the moving points'
+    own cameras are tried last and kept when the vote trusts a video on them (held-out-2's s26,
+    README stop 52)."""
+    kept, stats, sink, seen = _two_camera_models(
+        monkeypatch, {"sift": set(), "xfeat": set(), "aliked": set(), "moving points": {"a", "b"}},
+        registered={"moving points": "ab"})
+    assert [s[0] for s in seen] == ["sift", "xfeat", "aliked", "moving points"]
+    assert stats["sfm"]["features"] == "moving points" and kept.used == {"a", "b"}
+    assert [(m["features"], m["kept"]) for m in stats["sfm"]["models"]] == [
+        ("sift", False), ("xfeat", False), ("aliked", False), ("moving points", True)]
+    assert sink.messages[-1] == ("camera models: the moving points' kept; the joint vote trusted 0 video(s) on "
+                                 "SIFT's, 0 video(s) on XFEAT's, 0 video(s) on ALIKED's, 2 video(s) on the moving "
+                                 "points'")
+    # the video they have no camera for says what the models made of it
+    assert stats["dropped"]["c"].startswith("moving points matched too little")
+    assert "SIFT's model registered it, but its set was not kept" in stats["dropped"]["c"]
+    # trusted on none of them either: the first model's set stays, the attempt is listed
+    _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": set(), "xfeat": set(), "moving points": set()})
+    assert stats["sfm"]["features"] == "sift" and seen[-1][0] == "moving points"
+    assert [m["features"] for m in stats["sfm"]["models"]] == ["sift", "xfeat", "moving points"]
+    # not used (they explained the points worse): not listed
+    _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": set(), "xfeat": set()})
+    assert [m["features"] for m in stats["sfm"]["models"]] == ["sift", "xfeat"]
+    # a model trusted for some video: not tried
+    _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": {"a"}, "xfeat": set(), "moving points": {"a", "b"}})
+    assert "moving points" not in [s[0] for s in seen] and stats["sfm"]["features"] == "sift"

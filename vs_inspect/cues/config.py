@@ -217,6 +217,10 @@ class CameraConfig:
     """Estimated cameras: inlier matches needed to start the reconstruction (half that to add an image); a camera whose images each see fewer 3D points is left out as not trusted."""
     fallback_from_tracks: bool = True
     """Build static cameras from the moving points' two-view geometry (cues/pairwise.py: per-pair F at the best coarse offset, then one focal per camera and every pose fitted to all pairs at once) when the background reconstruction registers fewer than two cameras, and compare them with a weak one (a static camera left out, or fewer than 2 × min_inliers points per image): the set that leaves the smaller median epipolar distance on the moving points is used."""
+    fallback_joint_offsets: bool = True
+    """Cameras from the moving points: with three or more static cameras that share track pairs, choose their coarse offsets together (cues/pairwise.joint_offsets: every pair's F inlier share summed, triangles closed) instead of each camera's best offset with the reference alone. On held-out-2's 90° s26 and s31 the reference's pairs alone put cameras 0.6-4.5 s off; together, all 5 came within 0.02 s (README, stop 52)."""
+    fallback_when_untrusted: bool = True
+    """Also try the moving points' cameras (fallback_from_tracks) when every background model tried placed the static cameras, yet the joint vote trusted no video on any of them; they may leave a video the models placed without a camera (e.g. a hand-held one), and are kept only when the joint vote trusts a video on them (README, stop 52)."""
     fallback_unchecked_pair: bool = False
     """Use cameras from the moving points when only two come out (two videos, or one left out): their geometry and their offset are then fitted to the same track pairs and no third camera checks them. A safety sweep of two-camera runs (README) had 8 of the 11 accepted 0.07-5.4 s off, so by default they are refused with that reason."""
     mask_moving: bool = True

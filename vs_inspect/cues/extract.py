@@ -39,6 +39,13 @@ from .tracking import track_points
 
 log = logging.getLogger(__name__)
 
+MOVING_POINTS = "moving points"  # the kind of the camera set _estimate builds from the moving points alone
+
+
+def _owner(kind: str) -> str:
+    """Whose cameras a set of `kind` are, for messages: "SIFT's", "the moving points'"."""
+    return "the moving points'" if kind == MOVING_POINTS else f"{kind.upper()}'s"
+
 
 @dataclass
 class _VideoCues:
@@ -1085,15 +1092,18 @@ def _estimated_cameras(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict,
                                     for n, v in vids.items() if v.register_masks is not None},
                       progress=progress) as models:
 
-        def attempt(est, other_peaks=None, other="") -> tuple[str, _CameraSet]:
+        def attempt(est, other_peaks=None, other="", from_tracks=False) -> tuple[str, _CameraSet] | None:
             own = _copy_stats(stats)
             events = DeferredSink(sink.options)
-            cams = _estimate(vids, cfg, own, all_pairs, est)
+            cams = _estimate(vids, cfg, own, all_pairs, est, from_tracks)
+            if from_tracks and not (own["sfm"].get("fallback") or {}).get("used"):
+                return None  # est's own cameras again, already voted on
             out = _vote_on_cameras(cams, vids, all_pairs, cfg, own, events, progress, estimated=True,
                                    other_peaks=other_peaks, other=other)
             return est.features, dataclasses.replace(out, stats=own, events=events)
 
-        kind, kept = attempt(models.first())
+        kept_est = models.first()
+        kind, kept = attempt(kept_est)
         first_kind, first_peaks = kind, kept.peaks
         tried, failed = [(kind, kept)], []
         for which, build in (("second", models.second), ("third", models.third)):
@@ -1113,7 +1123,17 @@ def _estimated_cameras(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict,
                 log.warning("%s", failed[-1])
                 continue
             if len(tried[-1][1].used) > len(kept.used):
-                kind, kept = tried[-1]
+                (kind, kept), kept_est = tried[-1], est
+        if (cfg.geometric.enabled and cfg.camera.fallback_when_untrusted and cfg.camera.fallback_from_tracks
+                and not kept.used
+                and not any(c.stats["sfm"].get("fallback") for _, c in tried)):
+            # every model placed the static cameras, and none was trusted: the moving points' own cameras
+            log.info("the joint vote trusted no video on any camera model: trying the moving points' cameras")
+            points = attempt(kept_est, from_tracks=True)
+            if points is not None:
+                tried.append((MOVING_POINTS, points[1]))
+                if points[1].used:
+                    kind, kept = tried[-1]
         skipped = models.third_skipped
     kept.events.replay(sink)
     stats.clear()
@@ -1122,8 +1142,8 @@ def _estimated_cameras(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict,
     if len(tried) > 1:
         stats["sfm"]["models"] = [{"features": k, "cameras": len(c.cameras), "trusted": sorted(c.used),
                                    "kept": c is kept} for k, c in tried]
-        msg = (f"camera models: {kind.upper()}'s kept; the joint vote trusted "
-               + ", ".join(f"{len(c.used)} video(s) on {k.upper()}'s" for k, c in tried))
+        msg = (f"camera models: {_owner(kind)} kept; the joint vote trusted "
+               + ", ".join(f"{len(c.used)} video(s) on {_owner(k)}" for k, c in tried))
         sink.stage_event("cameras", msg)
         log.info(msg)
     if failed:
@@ -1142,19 +1162,23 @@ def _note_other_models(dropped: dict[str, str], kept: _CameraSet, others: list[t
     for n in [n for n in dropped if n in vids and n not in kept.cameras]:
         notes = []
         for kind, c in others:
+            whose = f"{_owner(kind)} {'cameras' if kind == MOVING_POINTS else 'model'}"
             if n in c.cameras:
-                notes.append(f"{kind.upper()}'s model registered it, but its set was not kept "
+                notes.append(f"{whose} registered it, but its set was not kept "
                              f"(its joint vote trusted {len(c.used)} video(s))")
             else:  # the reason's first clause: the rest repeats for every model (the moving points' cameras)
                 why = c.stats["dropped"].get(n, "no camera").split("; ")[0]
-                notes.append(f"{kind.upper()}'s model: {why}")
+                notes.append(f"{whose}: {why}")
         if notes:
             dropped[n] += f" (also tried: {'; '.join(notes)})"
 
 
-def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: dict, est) -> _CameraSet:
+def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: dict, est,
+              from_tracks: bool = False) -> _CameraSet:
     """The cameras of est (cameras.CameraEstimate) and the tracks undistorted with them, or the
-    cameras the moving points give when est is weak and theirs explain the points better."""
+    cameras the moving points give when their cameras explain the points better and est is weak,
+    or from_tracks (the joint vote trusted no video on est's cameras; the moving points' cameras
+    may then be fewer)."""
     from .cameras import lens_record, undistort_with_colmap
     from .pairwise import cameras_from_tracks, epipolar_fit_px
 
@@ -1175,15 +1199,24 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
     fewest = min((c.points_seen for c in est.cameras.values()), default=0)
     weak = len(est.cameras) < 2 or any(n not in est.cameras for n in static) or \
         fewest < 2 * cfg.camera.min_inliers
-    if weak and cfg.camera.fallback_from_tracks and len(static) >= 2:
+    if (weak or from_tracks) and cfg.camera.fallback_from_tracks and len(static) >= 2:
         ref = max(vids, key=lambda n: sum(len(p.index) for k, p in pairs.items() if n in k))
         infos = {n: v.info for n, v in vids.items()}
         xy = {n: v.xy_full for n, v in vids.items()}
         cams, reasons, details = cameras_from_tracks(
-            ref, infos, xy, pairs, {n: v.camera_motion == "moving" for n, v in vids.items()})
-        why = (f"the background reconstruction registered {len(est.cameras)} camera(s)" if len(est.cameras) < 2 else
-               f"the background reconstruction rests on few points (fewest {fewest} per image) or left a "
-               f"static camera out")
+            ref, infos, xy, pairs, {n: v.camera_motion == "moving" for n, v in vids.items()},
+            joint=cfg.camera.fallback_joint_offsets)
+        if from_tracks:  # the background did reconstruct; these cameras are the static ones only
+            reasons = {n: ("camera could not be registered: a moving camera, and the moving points give "
+                           "static cameras only" if vids[n].camera_motion == "moving" else why)
+                       for n, why in reasons.items()}
+        if len(est.cameras) < 2:
+            why = f"the background reconstruction registered {len(est.cameras)} camera(s)"
+        elif weak:
+            why = (f"the background reconstruction rests on few points (fewest {fewest} per image) or left a "
+                   f"static camera out")
+        else:
+            why = "the joint vote trusted no video on any camera model's cameras"
         if len(cams) == 2 and not cfg.camera.fallback_unchecked_pair:
             # the coarse offset and F were chosen by the same track pairs; Stage 1 then finds the
             # minimum they were fitted for, right or wrong, and no third camera can refuse it
@@ -1201,7 +1234,7 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
             sfm_px, n_sfm = epipolar_fit_px(sfm_static, infos, {n: undistort_with_colmap(est.cameras[n], xy[n])
                                                                   for n in sfm_static}, pairs, coarse)
             fb_px, n_fb = epipolar_fit_px({n: c for n, c in cams.items() if n in sfm_static}, infos, xy, pairs, coarse)
-            use = len(cams) >= len(est.cameras) and n_fb >= n_sfm and fb_px < sfm_px
+            use = (len(cams) >= len(est.cameras) or from_tracks) and n_fb >= n_sfm and fb_px < sfm_px
             if n_sfm == 0:  # e.g. one static camera and a moving one: nothing to compare on
                 why += (f"; no pair of its {len(sfm_static)} static camera(s) has enough aligned track pairs "
                         f"to compare it with the moving points' cameras on, so it is kept")

@@ -3,7 +3,8 @@ reconstruct (wide baselines, textureless or repetitive walls).
 
 For a reference video r and each other static video v: search the time offset whose aligned
 track pairs (x_r(t + Δ), x_v(t)) give the most consistent fundamental matrix (RANSAC inlier
-share, as in unsynchronized two-view geometry), self-calibrate one focal length per pair (the f
+share, as in unsynchronized two-view geometry; with three or more static cameras the offsets of
+all of them together, every pair's share summed with its triangles closed), self-calibrate one focal length per pair (the f
 that makes K_vᵀ F K_r closest to an essential matrix, principal points at the image centres),
 decompose into a relative pose, and fix the scale of every pair from points triangulated on the
 reference's tracks. With three or more cameras, one focal per camera and every pose are then
@@ -73,19 +74,41 @@ def _focal_from_F(F: np.ndarray, ca: np.ndarray, cb: np.ndarray, size: float) ->
     return float(best_f)
 
 
-def search_pair(xy_r, info_r, xy_v, info_v, index, min_corr: int = 40, thresh_px: float = 2.0,
-                max_corr: int = 2000, seed: int = 0,
-                min_share_of_max: float = 0.5) -> PairGeometry | None:
-    """Best coarse offset and F between r and v from their track pairs."""
+@dataclass(frozen=True)
+class OffsetCurve:
+    """How well one F explains a pair's aligned track pairs at each coarse offset Δ_ab (offsets
+    with at least min_share_of_max of the largest overlap only: a few correspondences fit any F)."""
+
+    offsets_s: np.ndarray  # (K,) Δ_ab, seconds, increasing on the finer video's frame step
+    step_s: float  # the grid step, seconds
+    share: np.ndarray  # (K,) MAGSAC inlier share of the best F at each offset
+    count: np.ndarray  # (K,) aligned correspondences used at each offset
+    F: tuple  # K (3,3) arrays, x_b^T F x_a = 0 (full-resolution px)
+
+    def at(self, delta_s: np.ndarray) -> np.ndarray:
+        """share at the grid offsets nearest delta_s (any shape); NaN off the curve."""
+        d = np.asarray(delta_s, np.float64)
+        last = len(self.offsets_s) - 1
+        right = np.clip(np.searchsorted(self.offsets_s, d), 0, last)
+        left = np.clip(right - 1, 0, last)
+        k = np.where(np.abs(self.offsets_s[left] - d) <= np.abs(self.offsets_s[right] - d), left, right)
+        near = np.abs(self.offsets_s[k] - d) <= 0.5 * self.step_s + 1e-9
+        return np.where(near, self.share[k], np.nan)
+
+
+def offset_curve(xy_a, info_a, xy_b, info_b, index, min_corr: int = 40, thresh_px: float = 2.0,
+                 max_corr: int = 2000, seed: int = 0, min_share_of_max: float = 0.5) -> OffsetCurve | None:
+    """The pair's OffsetCurve from its track pairs (index (P,2): track of a, track of b), or None
+    when no offset aligns min_corr correspondences that one F can be fitted to."""
     if len(index) < 8:
         return None
-    step = min(info_r.frame_interval_s, info_v.frame_interval_s)
-    lo = info_r.timestamps_s[0] - info_v.timestamps_s[-1]
-    hi = info_r.timestamps_s[-1] - info_v.timestamps_s[0]
+    step = min(info_a.frame_interval_s, info_b.frame_interval_s)
+    lo = info_a.timestamps_s[0] - info_b.timestamps_s[-1]
+    hi = info_a.timestamps_s[-1] - info_b.timestamps_s[0]
     rng = np.random.default_rng(seed)
     cands = []
     for d in np.arange(lo, hi + step / 2, step):
-        A, B, _ = aligned_correspondences(xy_r, info_r, xy_v, info_v, index, d)
+        A, B, _ = aligned_correspondences(xy_a, info_a, xy_b, info_b, index, d)
         if len(A) < min_corr:
             continue
         if len(A) > max_corr:
@@ -98,35 +121,78 @@ def search_pair(xy_r, info_r, xy_v, info_v, index, min_corr: int = 40, thresh_px
             continue
         if F is None or F.shape != (3, 3):
             continue
-        cands.append((float(inl.mean()), d, F, len(A)))
+        cands.append((float(d), float(inl.mean()), len(A), F))
     if not cands:
         return None
-    # a few correspondences fit any F: only offsets with at least half the largest overlap count
-    n_max = max(c[3] for c in cands)
-    share, d, F, n = max((c for c in cands if c[3] >= min_share_of_max * n_max), key=lambda c: c[0])
+    n_max = max(c[2] for c in cands)
+    kept = [c for c in cands if c[2] >= min_share_of_max * n_max]
+    return OffsetCurve(np.array([c[0] for c in kept]), step, np.array([c[1] for c in kept]),
+                       np.array([c[2] for c in kept]), tuple(c[3] for c in kept))
+
+
+def _geometry_at(curve: OffsetCurve, k: int, info_r: VideoInfo, info_v: VideoInfo) -> PairGeometry:
+    """The PairGeometry of curve's offset k, with a focal self-calibrated from its F."""
     ca = np.array([(info_r.width - 1) / 2, (info_r.height - 1) / 2])
     cb = np.array([(info_v.width - 1) / 2, (info_v.height - 1) / 2])
+    F = curve.F[k]
     f = _focal_from_F(F, ca, cb, float(max(info_r.width, info_r.height, info_v.width, info_v.height)))
-    return PairGeometry(float(d), F, share, n, f)
+    return PairGeometry(float(curve.offsets_s[k]), F, float(curve.share[k]), int(curve.count[k]), f)
+
+
+def search_pair(xy_r, info_r, xy_v, info_v, index, **kwargs) -> PairGeometry | None:
+    """Best coarse offset and F between r and v from their track pairs (offset_curve's options)."""
+    curve = offset_curve(xy_r, info_r, xy_v, info_v, index, **kwargs)
+    return None if curve is None else _geometry_at(curve, int(np.argmax(curve.share)), info_r, info_v)
+
+
+def joint_offsets(ref: str, curves: dict[tuple[str, str], OffsetCurve], max_grid: int = 4_000_000
+                  ) -> tuple[dict[str, float], float] | None:
+    """Coarse offsets Δ_rv of every camera v with a curve against ref that together explain the
+    most: the sum of every pair's inlier share at Δ_uv = Δ_rv − Δ_ru (a triangle must close, so a
+    wrong peak of one pair is outvoted by the two pairs that go round it). ({v: Δ_rv}, the summed
+    share), or None with fewer than two such cameras or no pair between them; searched over every
+    combination of ref's curves' grid offsets while there are at most max_grid."""
+    others = sorted(v for (a, v) in curves if a == ref)
+    linked = [k for k in curves if ref not in k and k[0] in others and k[1] in others]
+    if len(others) < 2 or not linked:
+        return None
+    grids = [curves[(ref, v)].offsets_s for v in others]
+    if np.prod([float(len(g)) for g in grids]) > max_grid:
+        return None
+    mesh = np.meshgrid(*grids, indexing="ij")
+    total = sum(curves[(ref, v)].share.reshape([-1 if i == j else 1 for j in range(len(others))])
+                for i, v in enumerate(others))
+    total = np.broadcast_to(total, mesh[0].shape).copy()
+    for a, b in linked:
+        s = curves[(a, b)].at(mesh[others.index(b)] - mesh[others.index(a)])
+        total += np.nan_to_num(s, nan=-np.inf)  # a pair with too little overlap there: not a candidate
+    best = np.unravel_index(int(np.argmax(total)), total.shape)
+    if not np.isfinite(total[best]):
+        return None
+    return {v: float(grids[i][best[i]]) for i, v in enumerate(others)}, float(total[best])
 
 
 def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.ndarray],
                         pairs: dict[tuple[str, str], TrackPairs], moving: dict[str, bool],
-                        refine: bool = True, min_inlier_share: float = 0.2, max_median_fraction: float = 0.01
-                        ) -> tuple[dict[str, CameraTrack], dict[str, str], dict[str, dict]]:
+                        refine: bool = True, min_inlier_share: float = 0.2, max_median_fraction: float = 0.01,
+                        joint: bool = True) -> tuple[dict[str, CameraTrack], dict[str, str], dict[str, dict]]:
     """Static cameras in the reference's camera frame: (cameras, unregistered reasons, details).
 
     A camera needs min_inlier_share of its correspondences with the reference within 2 px of the
     best F (right offsets score higher than wrong ones; the measured shares are in BENCHMARKS.md).
+    joint: with two or more other static cameras that share track pairs, the coarse offsets are
+    chosen together (joint_offsets: every pair's curve, triangles closed) instead of each
+    camera's best with the reference alone; details["joint_offsets"] names the cameras it moved.
     refine: with three or more cameras, fit every focal and pose to all pairs at once
     (refine_cameras; details["joint_fit"] says how well); when the fit leaves the median track
     pair farther than max_median_fraction of the image diagonal from its epipolar line (Stage 1's
     inlier tolerance), no camera is returned."""
-    cams: dict[str, CameraTrack] = {}
     reasons: dict[str, str] = {}
     details: dict[str, dict] = {}
     found: dict[str, tuple] = {}  # name -> (PairGeometry, aligned correspondences with ref)
     info_r = infos[ref]
+    curves: dict[tuple[str, str], OffsetCurve] = {}  # (ref, v) and (u, v) of the other static cameras
+    index: dict[str, np.ndarray] = {}  # v -> its track pairs with ref, ref's track first
     for v in infos:
         if v == ref:
             continue
@@ -141,8 +207,30 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
             reasons[v] = (f"camera could not be registered: background did not reconstruct and only "
                           f"{0 if idx is None else len(idx)} track pairs with {ref}")
             continue
-        g = search_pair(xy[ref], info_r, xy[v], infos[v], idx)
-        if g is None or g.inlier_share < min_inlier_share:
+        curve = offset_curve(xy[ref], info_r, xy[v], infos[v], idx)
+        if curve is None:
+            reasons[v] = ("camera could not be registered: no consistent two-view geometry from the "
+                          f"moving points shared with {ref}")
+            continue
+        curves[(ref, v)], index[v] = curve, idx
+    chosen = {v: float(curves[(ref, v)].offsets_s[np.argmax(curves[(ref, v)].share)]) for v in index}
+    if joint and len(index) >= 2:
+        for (a, b), tp in sorted(pairs.items()):
+            if a in index and b in index and len(tp.index) >= 8:
+                curve = offset_curve(xy[a], infos[a], xy[b], infos[b], tp.index)
+                if curve is not None:
+                    curves[(a, b)] = curve
+        together = joint_offsets(ref, curves)
+        if together is not None:
+            alone, (chosen, score) = chosen, together
+            details["joint_offsets"] = {
+                "pairs": len(curves), "summed_share": round(score, 3),
+                "moved": {v: {"alone_s": round(alone[v], 4), "together_s": round(chosen[v], 4)}
+                          for v in chosen if abs(chosen[v] - alone[v]) > 1e-9}}
+    for v, idx in index.items():
+        curve = curves[(ref, v)]
+        g = _geometry_at(curve, int(np.argmin(np.abs(curve.offsets_s - chosen[v]))), info_r, infos[v])
+        if g.inlier_share < min_inlier_share:
             reasons[v] = ("camera could not be registered: no consistent two-view geometry from the "
                           f"moving points shared with {ref}")
             continue
