@@ -191,8 +191,8 @@ def test_cameras_from_tracks_moves_a_camera_whose_pair_with_the_reference_peaks_
         return curve
 
     monkeypatch.setattr(pairwise, "offset_curve", with_a_false_peak)
-    _, _, alone = pairwise.cameras_from_tracks("c0", infos, xy, pairs, moving, joint=False)
-    assert alone["c1"]["coarse_offset_s"] == pytest.approx(false_peak)
+    alone = pairwise.search_pair(xy["c0"], infos["c0"], xy["c1"], infos["c1"], pairs[("c0", "c1")].index)
+    assert alone.offset_s == pytest.approx(false_peak)
     cams, reasons, details = pairwise.cameras_from_tracks("c0", infos, xy, pairs, moving)
     assert not reasons and set(cams) == set(names)
     for i, v in enumerate(names[1:], 1):
@@ -201,3 +201,15 @@ def test_cameras_from_tracks_moves_a_camera_whose_pair_with_the_reference_peaks_
     assert details["joint_offsets"]["moved"] == {"c1": {"alone_s": pytest.approx(false_peak),
                                                         "together_s": pytest.approx(RING_STARTS_S[1])}}
     assert details["joint_fit"]["median_px_after"] < 0.1
+
+
+def test_joint_offsets_on_a_grid_too_large_to_score_whole_refines_a_coarser_one():
+    """Over max_grid combinations, every k-th offset is scored, then each camera refined on its
+    full grid: the same answer as the full search here."""
+    curves = {("r", "a"): _curve({2.0: 0.62, 0.5: 0.55, 0.6: 0.5, 0.4: 0.5}),
+              ("r", "b"): _curve({1.0: 0.60, 0.9: 0.5, 1.1: 0.5}),
+              ("a", "b"): _curve({0.5: 0.58, 0.4: 0.5, 0.6: 0.5})}
+    full = pairwise.joint_offsets("r", curves)
+    coarse = pairwise.joint_offsets("r", curves, max_grid=400)  # 61 x 61 offsets: every 4th
+    assert full[0] == pytest.approx({"a": 0.5, "b": 1.0})
+    assert coarse[0] == pytest.approx(full[0]) and coarse[1] == pytest.approx(full[1])

@@ -145,31 +145,42 @@ def search_pair(xy_r, info_r, xy_v, info_v, index, **kwargs) -> PairGeometry | N
     return None if curve is None else _geometry_at(curve, int(np.argmax(curve.share)), info_r, info_v)
 
 
-def joint_offsets(ref: str, curves: dict[tuple[str, str], OffsetCurve], max_grid: int = 4_000_000
+def joint_offsets(ref: str, curves: dict[tuple[str, str], OffsetCurve], max_grid: int = 2_000_000
                   ) -> tuple[dict[str, float], float] | None:
     """Coarse offsets Δ_rv of every camera v with a curve against ref that together explain the
     most: the sum of every pair's inlier share at Δ_uv = Δ_rv − Δ_ru (a triangle must close, so a
     wrong peak of one pair is outvoted by the two pairs that go round it). ({v: Δ_rv}, the summed
-    share), or None with fewer than two such cameras or no pair between them; searched over every
-    combination of ref's curves' grid offsets while there are at most max_grid."""
+    share), or None with fewer than two such cameras or no pair between them. Every combination of
+    ref's curves' grid offsets is scored while there are at most max_grid; beyond, every k-th
+    offset, then each camera's offset refined on its full grid with the others held."""
     others = sorted(v for (a, v) in curves if a == ref)
     linked = [k for k in curves if ref not in k and k[0] in others and k[1] in others]
     if len(others) < 2 or not linked:
         return None
     grids = [curves[(ref, v)].offsets_s for v in others]
-    if np.prod([float(len(g)) for g in grids]) > max_grid:
-        return None
-    mesh = np.meshgrid(*grids, indexing="ij")
-    total = sum(curves[(ref, v)].share.reshape([-1 if i == j else 1 for j in range(len(others))])
-                for i, v in enumerate(others))
-    total = np.broadcast_to(total, mesh[0].shape).copy()
-    for a, b in linked:
-        s = curves[(a, b)].at(mesh[others.index(b)] - mesh[others.index(a)])
-        total += np.nan_to_num(s, nan=-np.inf)  # a pair with too little overlap there: not a candidate
+    stride = 1
+    while np.prod([float(len(g[::stride])) for g in grids]) > max_grid:
+        stride += 1
+
+    def score(mesh: list[np.ndarray]) -> np.ndarray:
+        total = sum(curves[(ref, v)].at(m) for v, m in zip(others, mesh))
+        for a, b in linked:  # a pair with too little overlap there: NaN, not a candidate
+            total = total + curves[(a, b)].at(mesh[others.index(b)] - mesh[others.index(a)])
+        return np.nan_to_num(total, nan=-np.inf)
+
+    mesh = np.meshgrid(*[g[::stride] for g in grids], indexing="ij")
+    total = score(mesh)
     best = np.unravel_index(int(np.argmax(total)), total.shape)
-    if not np.isfinite(total[best]):
+    chosen = [float(m[best]) for m in mesh]
+    for _ in range(3 if stride > 1 else 0):
+        for i, g in enumerate(grids):
+            near = g[np.abs(g - chosen[i]) <= stride * curves[(ref, others[i])].step_s + 1e-9]
+            s_near = score([near if j == i else np.full(len(near), c) for j, c in enumerate(chosen)])
+            chosen[i] = float(near[int(np.argmax(s_near))])
+    best_score = float(score([np.array([c]) for c in chosen])[0])
+    if not np.isfinite(best_score):
         return None
-    return {v: float(grids[i][best[i]]) for i, v in enumerate(others)}, float(total[best])
+    return dict(zip(others, chosen)), best_score
 
 
 def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.ndarray],
