@@ -324,9 +324,11 @@ def test_a_lone_pair_with_a_moving_camera_keeps_only_its_descriptor_pairs(monkey
     assert CueStats("estimated", 2, 90, 39, {}, stats["pairs"], {}, {}, "no triangle").geometric_refusal("b") is None
 
 
-def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig()):
+def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), memo: dict | None = None,
+                          calls: list | None = None):
     """_estimate when the background reconstruction registers nothing and the moving points give
-    a static camera for every video. Returns (cameras, stats)."""
+    a static camera for every video (memo: _estimate's; calls: gets one entry per fit). Returns
+    (cameras, stats)."""
     from types import SimpleNamespace
 
     import vs_inspect.cues.pairwise as pairwise_mod
@@ -338,14 +340,35 @@ def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig()):
     fitted = {n: CameraTrack(K, look_at([6.0 * np.cos(i), 6.0 * np.sin(i), 2.0], [0, 0, 1]))
               for i, n in enumerate(names)}
     details = {n: {"coarse_offset_s": 0.1 * i} for i, n in enumerate(names) if i}
-    monkeypatch.setattr(pairwise_mod, "cameras_from_tracks", lambda *a, **k: (dict(fitted), {}, details))
+    def fit(*a, **k):
+        (calls if calls is not None else []).append(k)
+        return dict(fitted), {}, details
+
+    monkeypatch.setattr(pairwise_mod, "cameras_from_tracks", fit)
     info = SimpleNamespace(width=640, height=480, num_frames=50)
     vids = {n: SimpleNamespace(sfm_frames=None, info=info, camera_motion="static", frame_features=None,
                                register_masks=None, xy_full=np.zeros((0, 50, 2)),
                                instance=np.zeros(0, np.int64)) for n in names}
     pairs = {(a, b): TrackPairs(a, b, np.zeros((0, 2), np.int64)) for a, b in zip(names, names[1:])}
     stats = {"dropped": {}, "camera_source": "estimated"}
-    return _estimate(vids, config, stats, pairs, est).cameras, stats
+    return _estimate(vids, config, stats, pairs, est, memo=memo).cameras, stats
+
+
+def test_the_moving_points_cameras_are_fitted_once_for_every_model(monkeypatch):
+    """They depend on the track pairs only, not on the model: with a memo, a second model's
+    _estimate reuses them (the same cameras and details), and the config's joint choice is passed."""
+    from vs_inspect.cues.config import CameraConfig
+
+    memo, calls = {}, []
+    first, stats1 = _moving_point_cameras(monkeypatch, ["a", "b", "c"], memo=memo, calls=calls)
+    again, stats2 = _moving_point_cameras(monkeypatch, ["a", "b", "c"], memo=memo, calls=calls)
+    assert len(calls) == 1 and calls[0]["joint"] is True
+    assert set(again) == set(first) == {"a", "b", "c"}
+    assert all(np.array_equal(again[n].cam_from_world, first[n].cam_from_world) for n in first)
+    assert stats2["sfm"]["fallback"] == stats1["sfm"]["fallback"]
+    _moving_point_cameras(monkeypatch, ["a", "b", "c"], CueConfig(camera=CameraConfig(fallback_joint_offsets=False)),
+                          calls=calls)
+    assert len(calls) == 2 and calls[1]["joint"] is False
 
 
 def test_two_cameras_from_the_moving_points_alone_are_refused(monkeypatch):
@@ -438,7 +461,7 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
 
     seen = []
 
-    def estimate(vids, cfg, stats, pairs, est, from_tracks=False):
+    def estimate(vids, cfg, stats, pairs, est, from_tracks=False, memo=None):
         kind = ex.MOVING_POINTS if from_tracks else est.features
         stats["sfm"] = {"features": kind}
         if from_tracks:  # the moving points' cameras, used when the test's trusted names them

@@ -1092,10 +1092,12 @@ def _estimated_cameras(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict,
                                     for n, v in vids.items() if v.register_masks is not None},
                       progress=progress) as models:
 
+        memo: dict = {}
+
         def attempt(est, other_peaks=None, other="", from_tracks=False) -> tuple[str, _CameraSet] | None:
             own = _copy_stats(stats)
             events = DeferredSink(sink.options)
-            cams = _estimate(vids, cfg, own, all_pairs, est, from_tracks)
+            cams = _estimate(vids, cfg, own, all_pairs, est, from_tracks, memo)
             if from_tracks and not (own["sfm"].get("fallback") or {}).get("used"):
                 return None  # est's own cameras again, already voted on
             out = _vote_on_cameras(cams, vids, all_pairs, cfg, own, events, progress, estimated=True,
@@ -1174,11 +1176,12 @@ def _note_other_models(dropped: dict[str, str], kept: _CameraSet, others: list[t
 
 
 def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: dict, est,
-              from_tracks: bool = False) -> _CameraSet:
+              from_tracks: bool = False, memo: dict | None = None) -> _CameraSet:
     """The cameras of est (cameras.CameraEstimate) and the tracks undistorted with them, or the
     cameras the moving points give when their cameras explain the points better and est is weak,
     or from_tracks (the joint vote trusted no video on est's cameras; the moving points' cameras
-    may then be fewer)."""
+    may then be fewer). memo: kept between calls on the same videos and pairs, so that the moving
+    points' cameras, which do not depend on est, are fitted once."""
     from .cameras import lens_record, undistort_with_colmap
     from .pairwise import cameras_from_tracks, epipolar_fit_px
 
@@ -1203,9 +1206,14 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
         ref = max(vids, key=lambda n: sum(len(p.index) for k, p in pairs.items() if n in k))
         infos = {n: v.info for n, v in vids.items()}
         xy = {n: v.xy_full for n, v in vids.items()}
-        cams, reasons, details = cameras_from_tracks(
-            ref, infos, xy, pairs, {n: v.camera_motion == "moving" for n, v in vids.items()},
-            joint=cfg.camera.fallback_joint_offsets)
+        if memo is not None and "from_tracks" in memo:  # the same track pairs for every model
+            cams, reasons, details = copy.deepcopy(memo["from_tracks"])
+        else:
+            cams, reasons, details = cameras_from_tracks(
+                ref, infos, xy, pairs, {n: v.camera_motion == "moving" for n, v in vids.items()},
+                joint=cfg.camera.fallback_joint_offsets)
+            if memo is not None:
+                memo["from_tracks"] = copy.deepcopy((cams, reasons, details))
         if from_tracks:  # the background did reconstruct; these cameras are the static ones only
             reasons = {n: ("camera could not be registered: a moving camera, and the moving points give "
                            "static cameras only" if vids[n].camera_motion == "moving" else why)
