@@ -1216,8 +1216,8 @@ def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: d
                 memo["from_tracks"] = copy.deepcopy((cams, reasons, details))
         if from_tracks:  # the background did reconstruct; these cameras are the static ones only
             reasons = {n: ("camera could not be registered: a moving camera, and the moving points give "
-                           "static cameras only" if vids[n].camera_motion == "moving" else why)
-                       for n, why in reasons.items()}
+                           "static cameras only" if vids[n].camera_motion == "moving" else reason)
+                       for n, reason in reasons.items()}
         if len(est.cameras) < 2:
             why = f"the background reconstruction registered {len(est.cameras)} camera(s)"
         elif weak:
