@@ -1102,7 +1102,8 @@ def _estimated_cameras(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict,
                 return None  # est's own cameras again, already voted on
             out = _vote_on_cameras(cams, vids, all_pairs, cfg, own, events, progress, estimated=True,
                                    other_peaks=other_peaks, other=other)
-            return est.features, dataclasses.replace(out, stats=own, events=events)
+            kind = MOVING_POINTS if from_tracks else est.features
+            return kind, dataclasses.replace(out, stats=own, events=events)
 
         kept_est = models.first()
         kind, kept = attempt(kept_est)
@@ -1133,9 +1134,9 @@ def _estimated_cameras(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict,
             log.info("the joint vote trusted no video on any camera model: trying the moving points' cameras")
             points = attempt(kept_est, from_tracks=True)
             if points is not None:
-                tried.append((MOVING_POINTS, points[1]))
+                tried.append(points)
                 if points[1].used:
-                    kind, kept = tried[-1]
+                    kind, kept = points
         skipped = models.third_skipped
     kept.events.replay(sink)
     stats.clear()
