@@ -146,13 +146,14 @@ def search_pair(xy_r, info_r, xy_v, info_v, index, **kwargs) -> PairGeometry | N
 
 
 def joint_offsets(ref: str, curves: dict[tuple[str, str], OffsetCurve], max_grid: int = 2_000_000
-                  ) -> tuple[dict[str, float], float] | None:
+                  ) -> tuple[dict[str, int], float] | None:
     """Coarse offsets Δ_rv of every camera v with a curve against ref that together explain the
     most: the sum of every pair's inlier share at Δ_uv = Δ_rv − Δ_ru (a triangle must close, so a
-    wrong peak of one pair is outvoted by the two pairs that go round it). ({v: Δ_rv}, the summed
-    share), or None with fewer than two such cameras or no pair between them. Every combination of
-    ref's curves' grid offsets is scored while there are at most max_grid; beyond, every k-th
-    offset, then each camera's offset refined on its full grid with the others held."""
+    wrong peak of one pair is outvoted by the two pairs that go round it). ({v: index of Δ_rv in
+    curves[(ref, v)].offsets_s}, the summed share), or None with fewer than two such cameras or no
+    pair between them. Every combination of ref's curves' grid offsets is scored while there are at
+    most max_grid; beyond, every k-th offset, then each camera's offset refined on its full grid
+    with the others held."""
     others = sorted(v for (a, v) in curves if a == ref)
     linked = [k for k in curves if ref not in k and k[0] in others and k[1] in others]
     if len(others) < 2 or not linked:
@@ -162,21 +163,22 @@ def joint_offsets(ref: str, curves: dict[tuple[str, str], OffsetCurve], max_grid
     while np.prod([float(len(g[::stride])) for g in grids]) > max_grid:
         stride += 1
 
-    def score(mesh: list[np.ndarray]) -> np.ndarray:
-        total = sum(curves[(ref, v)].at(m) for v, m in zip(others, mesh))
+    def score(ks: list[np.ndarray]) -> np.ndarray:  # ks: each camera's grid indices, broadcast together
+        mesh = [g[k] for g, k in zip(grids, ks)]
+        total = sum(curves[(ref, v)].share[k] for v, k in zip(others, ks))
         for a, b in linked:  # a pair with too little overlap there: NaN, not a candidate
             total = total + curves[(a, b)].at(mesh[others.index(b)] - mesh[others.index(a)])
         return np.nan_to_num(total, nan=-np.inf)
 
-    mesh = np.meshgrid(*[g[::stride] for g in grids], indexing="ij")
-    total = score(mesh)
+    ks = np.meshgrid(*[np.arange(0, len(g), stride) for g in grids], indexing="ij")
+    total = score(ks)
     best = np.unravel_index(int(np.argmax(total)), total.shape)
-    chosen = [float(m[best]) for m in mesh]
+    chosen = [int(k[best]) for k in ks]
     for _ in range(3 if stride > 1 else 0):
         for i, g in enumerate(grids):
-            near = g[np.abs(g - chosen[i]) <= stride * curves[(ref, others[i])].step_s + 1e-9]
+            near = np.nonzero(np.abs(g - g[chosen[i]]) <= stride * curves[(ref, others[i])].step_s + 1e-9)[0]
             s_near = score([near if j == i else np.full(len(near), c) for j, c in enumerate(chosen)])
-            chosen[i] = float(near[int(np.argmax(s_near))])
+            chosen[i] = int(near[int(np.argmax(s_near))])
     best_score = float(score([np.array([c]) for c in chosen])[0])
     if not np.isfinite(best_score):
         return None
@@ -224,7 +226,7 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
                           f"moving points shared with {ref}")
             continue
         curves[(ref, v)], index[v] = curve, idx
-    chosen = {v: float(curves[(ref, v)].offsets_s[np.argmax(curves[(ref, v)].share)]) for v in index}
+    chosen = {v: int(np.argmax(curves[(ref, v)].share)) for v in index}  # v -> index on its curve with ref
     if joint and len(index) >= 2:
         for (a, b), tp in sorted(pairs.items()):
             if a in index and b in index and len(tp.index) >= 8:
@@ -236,11 +238,11 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
             alone, (chosen, score) = chosen, together
             details["joint_offsets"] = {
                 "pairs": len(curves), "summed_share": round(score, 3),
-                "moved": {v: {"alone_s": round(alone[v], 4), "together_s": round(chosen[v], 4)}
-                          for v in chosen if abs(chosen[v] - alone[v]) > 1e-9}}
+                "moved": {v: {"alone_s": round(float(curves[(ref, v)].offsets_s[alone[v]]), 4),
+                              "together_s": round(float(curves[(ref, v)].offsets_s[chosen[v]]), 4)}
+                          for v in chosen if chosen[v] != alone[v]}}
     for v, idx in index.items():
-        curve = curves[(ref, v)]
-        g = _geometry_at(curve, int(np.argmin(np.abs(curve.offsets_s - chosen[v]))), info_r, infos[v])
+        g = _geometry_at(curves[(ref, v)], chosen[v], info_r, infos[v])
         if g.inlier_share < min_inlier_share:
             reasons[v] = ("camera could not be registered: no consistent two-view geometry from the "
                           f"moving points shared with {ref}")
