@@ -488,7 +488,7 @@ class CueStats:
             return (f"Stage 0's joint vote was sure of its offset (margin {joint['margin'][video]:.1f}), but "
                     f"not in three views ({three_view['reason']}), so it got no geometric track pairs")
         dissent = (joint.get("dissent") or {}).get(video)
-        if dissent:  # point transfer does not check such a camera (extract._add_geometric_pairs)
+        if dissent:  # point transfer does not check such a camera (cues/joint_vote.add_geometric_pairs)
             return (f"Stage 0's joint vote chose its offset (margin {joint['margin'][video]:.1f}), but {dissent}, "
                     f"so it got no geometric track pairs")
         if video in joint.get("sure", ()):

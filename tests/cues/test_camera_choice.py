@@ -1,0 +1,253 @@
+"""Stage 0's choice of cameras when none are given (cues/camera_choice.py): the moving points'
+cameras fitted once and refused alone in pairs; later camera models tried, kept or not."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vs_inspect.cues.config import CueConfig
+from vs_inspect.geometry.epipolar import look_at
+from vs_inspect.types import CameraTrack, TrackPairs
+
+from .stage0_fakes import K
+from .stage0_fakes import Events as _Events
+
+def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), memo: dict | None = None,
+                          calls: list | None = None):
+    """_estimate when the background reconstruction registers nothing and the moving points give
+    a static camera for every video (memo: _estimate's; calls: gets one entry per fit). Returns
+    (cameras, stats)."""
+    from types import SimpleNamespace
+
+    import vs_inspect.cues.pairwise as pairwise_mod
+    from vs_inspect.cues.cameras import CameraEstimate
+    from vs_inspect.cues.camera_choice import _estimate
+
+    no_model = "no reconstruction: too few matches"
+    est = CameraEstimate({}, dict.fromkeys(names, no_model), None, None, len(names), 0, "sift")
+    fitted = {n: CameraTrack(K, look_at([6.0 * np.cos(i), 6.0 * np.sin(i), 2.0], [0, 0, 1]))
+              for i, n in enumerate(names)}
+    details = {n: {"coarse_offset_s": 0.1 * i} for i, n in enumerate(names) if i}
+    def fit(*a, **k):
+        (calls if calls is not None else []).append(k)
+        return dict(fitted), {}, details
+
+    monkeypatch.setattr(pairwise_mod, "cameras_from_tracks", fit)
+    info = SimpleNamespace(width=640, height=480, num_frames=50)
+    vids = {n: SimpleNamespace(sfm_frames=None, info=info, camera_motion="static", frame_features=None,
+                               register_masks=None, xy_full=np.zeros((0, 50, 2)),
+                               instance=np.zeros(0, np.int64)) for n in names}
+    pairs = {(a, b): TrackPairs(a, b, np.zeros((0, 2), np.int64)) for a, b in zip(names, names[1:])}
+    stats = {"dropped": {}, "camera_source": "estimated"}
+    return _estimate(vids, config, stats, pairs, est, memo=memo).cameras, stats
+
+
+def test_the_moving_points_cameras_are_fitted_once_for_every_model(monkeypatch):
+    """They depend on the track pairs only, not on the model: with a memo, a second model's
+    _estimate reuses them (the same cameras and details), and the config's joint choice is passed."""
+    from vs_inspect.cues.config import CameraConfig
+
+    memo, calls = {}, []
+    first, stats1 = _moving_point_cameras(monkeypatch, ["a", "b", "c"], memo=memo, calls=calls)
+    again, stats2 = _moving_point_cameras(monkeypatch, ["a", "b", "c"], memo=memo, calls=calls)
+    assert len(calls) == 1 and calls[0]["joint"] is True
+    assert set(again) == set(first) == {"a", "b", "c"}
+    assert all(np.array_equal(again[n].cam_from_world, first[n].cam_from_world) for n in first)
+    assert stats2["sfm"]["fallback"] == stats1["sfm"]["fallback"]
+    _moving_point_cameras(monkeypatch, ["a", "b", "c"], CueConfig(camera=CameraConfig(fallback_joint_offsets=False)),
+                          calls=calls)
+    assert len(calls) == 2 and calls[1]["joint"] is False
+
+
+def test_two_cameras_from_the_moving_points_alone_are_refused(monkeypatch):
+    """Their F and their offset come from the same track pairs and nothing checks them (a sweep of
+    two-camera runs: 8 of the 11 accepted were 0.07-5.4 s off): no camera, each video says why."""
+    cams, stats = _moving_point_cameras(monkeypatch, ["a", "b"])
+    assert cams == {}
+    fb = stats["sfm"]["fallback"]
+    assert fb["used"] is False and "only two cameras came out" in fb["why"]
+    for n in "ab":
+        assert stats["dropped"][n].startswith("no reconstruction: too few matches; from the moving points: "
+                                              "only two cameras came out"), stats["dropped"][n]
+    # three are used (their fitted offsets are then checked against their votes), and so are two
+    # when the config asks for them
+    cams, stats = _moving_point_cameras(monkeypatch, ["a", "b", "c"])
+    assert set(cams) == {"a", "b", "c"} and stats["sfm"]["fallback"]["used"] is True
+    from vs_inspect.cues.config import CameraConfig
+    cams, stats = _moving_point_cameras(monkeypatch, ["a", "b"], CueConfig(
+        camera=CameraConfig(fallback_unchecked_pair=True)))
+    assert set(cams) == {"a", "b"} and stats["sfm"]["fallback"]["fitted_offsets_s"] == {"a": 0.0, "b": 0.1}
+
+
+def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: bool = True,
+                       second_fails: bool = False, registered: dict[str, str] | None = None):
+    """camera_choice.estimated_cameras on three videos with camera models ("sift" first, "xfeat"
+    second, "aliked" third when `trusted` names it, else none; the moving points' cameras, when
+    `trusted` names "moving points", are used) whose pairing trusts the videos of `trusted`; each
+    model has a camera for the videos `registered` names for it (default: all).
+    Returns (kept set, stats, sink, votes seen as (kind, other_peaks, other))."""
+    import dataclasses
+    from types import SimpleNamespace
+
+    import vs_inspect.cues.cameras as cameras_mod
+    import vs_inspect.cues.camera_choice as ex
+
+    class Models:
+        def __init__(self, *args, **kwargs):
+            pass
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            pass
+
+        def first(self):
+            return SimpleNamespace(features="sift")
+
+        def second(self):
+            assert second_allowed, "the second model was asked for"
+            if second_fails:
+                raise RuntimeError("XFeat ran out of memory")
+            return SimpleNamespace(features="xfeat")
+
+        third_skipped = None
+
+        def third(self):
+            assert second_allowed, "the third model was asked for"
+            if "aliked" in trusted:
+                return SimpleNamespace(features="aliked")
+            self.third_skipped = "ALIKED's model not tried: large images"
+            return None
+
+    seen = []
+
+    def estimate(vids, cfg, stats, pairs, est, from_tracks=False, memo=None):
+        kind = ex.MOVING_POINTS if from_tracks else est.features
+        stats["sfm"] = {"features": kind}
+        if from_tracks:  # the moving points' cameras, used when the test's trusted names them
+            stats["sfm"]["fallback"] = {"used": kind in trusted}
+            if kind not in trusted:
+                return ex.CameraSet({}, {}, None, None, {})
+        names = (registered or {}).get(kind, "".join(vids))
+        stats["dropped"].update({n: f"{kind} matched too little; the moving points' cameras refused"
+                                 for n in vids if n not in names})
+        return ex.CameraSet({n: CameraTrack(K, look_at([6.0, 0, 2.0], [0, 0, 1])) for n in names}, {}, None, None, {})
+
+    def vote(cams, vids, all_pairs, cfg, stats, sink, progress, estimated, other_peaks=None, other=""):
+        kind = stats["sfm"]["features"]
+        seen.append((kind, other_peaks, other))
+        sink.stage_event("cues", f"voted on {kind}")
+        return dataclasses.replace(cams, pairs={}, used=frozenset(trusted[kind]),
+                                   peaks={("a", "b"): (0.1,) if kind == "sift" else (0.2,)})
+
+    monkeypatch.setattr(cameras_mod, "CameraModels", Models)
+    monkeypatch.setattr(ex, "_estimate", estimate)
+    monkeypatch.setattr(ex, "vote_on_cameras", vote)
+    info = SimpleNamespace(width=640, height=480, num_frames=50)
+    vids = {n: SimpleNamespace(sfm_frames=None, info=info, camera_motion="static", frame_features=None,
+                               register_masks=None) for n in "abc"}
+    timings = {}
+    stats = {"dropped": {}, "camera_source": "estimated", "timings_s": timings}
+    sink = _Events()
+    kept = ex.estimated_cameras(vids, CueConfig(), stats, {}, {}, sink, progress=False)
+    assert stats["timings_s"] is timings  # the caller's timings stay the ones written to
+    return kept, stats, sink, seen
+
+
+def test_second_camera_model_is_kept_when_its_joint_vote_trusts_more_videos(monkeypatch):
+    kept, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b"}, "xfeat": {"a", "b", "c"}})
+    assert kept.used == {"a", "b", "c"} and stats["sfm"]["features"] == "xfeat"
+    # XFeat's sure cameras were held to SIFT's vote peaks
+    assert seen == [("sift", None, ""), ("xfeat", {("a", "b"): (0.1,)}, "SIFT's model")]
+    assert stats["sfm"]["models"] == [{"features": "sift", "cameras": 3, "trusted": ["a", "b"], "kept": False},
+                                      {"features": "xfeat", "cameras": 3, "trusted": ["a", "b", "c"], "kept": True}]
+    # only the kept set's reports reach the sink, then the choice
+    assert sink.messages[0] == "voted on xfeat" and "voted on sift" not in sink.messages
+    assert sink.messages[-1] == ("camera models: XFEAT's kept; the joint vote trusted 2 video(s) on SIFT's, "
+                                 "3 video(s) on XFEAT's")
+
+
+def test_first_camera_model_is_kept_on_a_tie_and_alone_when_it_trusts_every_video(monkeypatch):
+    kept, stats, sink, _ = _two_camera_models(monkeypatch, {"sift": {"a", "b"}, "xfeat": {"b", "c"}})
+    assert stats["sfm"]["features"] == "sift" and [m["kept"] for m in stats["sfm"]["models"]] == [True, False]
+    assert "voted on sift" in sink.messages and "voted on xfeat" not in sink.messages
+    kept, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b", "c"}}, second_allowed=False)
+    assert [s[0] for s in seen] == ["sift"] and "models" not in stats["sfm"]
+    assert sink.messages == ["voted on sift"]
+
+
+def test_third_camera_model_is_tried_when_the_kept_set_leaves_a_video_untrusted(monkeypatch):
+    kept, stats, _, seen = _two_camera_models(
+        monkeypatch, {"sift": {"a"}, "xfeat": {"a", "b"}, "aliked": {"a", "b", "c"}})
+    assert kept.used == {"a", "b", "c"} and stats["sfm"]["features"] == "aliked"
+    # ALIKED's sure cameras are held to the first (SIFT's) vote peaks, as XFeat's were
+    assert seen[1:] == [("xfeat", {("a", "b"): (0.1,)}, "SIFT's model"),
+                        ("aliked", {("a", "b"): (0.1,)}, "SIFT's model")]
+    assert [(m["features"], m["kept"]) for m in stats["sfm"]["models"]] == [
+        ("sift", False), ("xfeat", False), ("aliked", True)]
+    # a third set trusting no more than the kept one is not kept
+    kept, stats, _, _ = _two_camera_models(monkeypatch, {"sift": {"a"}, "xfeat": {"a", "b"}, "aliked": {"b", "c"}})
+    assert stats["sfm"]["features"] == "xfeat" and kept.used == {"a", "b"}
+    # when XFeat's set trusts every video, ALIKED's is not tried
+    _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": {"a"}, "xfeat": {"a", "b", "c"}, "aliked": set()})
+    assert [s[0] for s in seen] == ["sift", "xfeat"] and stats["sfm"]["features"] == "xfeat"
+    assert "models_skipped" not in stats["sfm"]
+    # a third model skipped says why, in result.json and to the recording, after the choice
+    _, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a"}, "xfeat": {"a", "b"}})
+    assert [s[0] for s in seen] == ["sift", "xfeat"]
+    assert stats["sfm"]["models_skipped"] == "ALIKED's model not tried: large images"
+    assert sink.messages[-1] == "ALIKED's model not tried: large images"
+
+
+def test_a_video_without_a_camera_says_what_every_model_made_of_it(monkeypatch):
+    # SIFT's set (kept on the tie) has no camera for c, XFeat's registered it, ALIKED's did not
+    kept, stats, _, _ = _two_camera_models(monkeypatch, {"sift": {"a", "b"}, "xfeat": {"a"}, "aliked": {"b"}},
+                                           registered={"sift": "ab", "xfeat": "abc", "aliked": "ab"})
+    assert stats["sfm"]["features"] == "sift" and "c" not in kept.cameras
+    assert stats["dropped"] == {"c": (
+        "sift matched too little; the moving points' cameras refused (also tried: XFEAT's model registered it, "
+        "but its set was not kept (its joint vote trusted 1 video(s)); ALIKED's model: aliked matched too little)")}
+    # with one model tried (XFeat's failed, ALIKED's skipped), the reason is the model's own
+    _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b"}}, registered={"sift": "ab"},
+                                           second_fails=True)
+    assert [s[0] for s in seen] == ["sift"]
+    assert stats["dropped"] == {"c": "sift matched too little; the moving points' cameras refused"}
+
+
+def test_a_second_camera_model_that_fails_leaves_the_first_standing(monkeypatch):
+    kept, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b"}}, second_fails=True)
+    assert kept.used == {"a", "b"} and [s[0] for s in seen] == ["sift"]
+    why = "the second camera model failed (RuntimeError: XFeat ran out of memory); SIFT's kept"
+    # the third model is still asked for (here it is skipped)
+    assert stats["sfm"]["models_failed"] == why
+    assert sink.messages == ["voted on sift", why, "ALIKED's model not tried: large images"]
+
+
+def test_the_moving_points_cameras_are_tried_when_no_model_is_trusted_for_any_video(monkeypatch):
+    """Every model placed the cameras and the joint vote trusted nothing on any: the moving points'
+    own cameras are tried last and kept when the vote trusts a video on them (held-out-2's s26,
+    README stop 52)."""
+    kept, stats, sink, seen = _two_camera_models(
+        monkeypatch, {"sift": set(), "xfeat": set(), "aliked": set(), "moving points": {"a", "b"}},
+        registered={"moving points": "ab"})
+    assert [s[0] for s in seen] == ["sift", "xfeat", "aliked", "moving points"]
+    assert stats["sfm"]["features"] == "moving points" and kept.used == {"a", "b"}
+    assert [(m["features"], m["kept"]) for m in stats["sfm"]["models"]] == [
+        ("sift", False), ("xfeat", False), ("aliked", False), ("moving points", True)]
+    assert sink.messages[-1] == ("camera models: the moving points' kept; the joint vote trusted 0 video(s) on "
+                                 "SIFT's, 0 video(s) on XFEAT's, 0 video(s) on ALIKED's, 2 video(s) on the moving "
+                                 "points'")
+    # the video they have no camera for says what the models made of it
+    assert stats["dropped"]["c"].startswith("moving points matched too little")
+    assert "SIFT's model registered it, but its set was not kept" in stats["dropped"]["c"]
+    # trusted on none of them either: the first model's set stays, the attempt is listed
+    _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": set(), "xfeat": set(), "moving points": set()})
+    assert stats["sfm"]["features"] == "sift" and seen[-1][0] == "moving points"
+    assert [m["features"] for m in stats["sfm"]["models"]] == ["sift", "xfeat", "moving points"]
+    # not used (they explained the points worse): not listed
+    _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": set(), "xfeat": set()})
+    assert [m["features"] for m in stats["sfm"]["models"]] == ["sift", "xfeat"]
+    # a model trusted for some video: not tried
+    _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": {"a"}, "xfeat": set(), "moving points": {"a", "b"}})
+    assert "moving points" not in [s[0] for s in seen] and stats["sfm"]["features"] == "sift"

@@ -1,0 +1,495 @@
+"""Stage 0's joint vote on one set of cameras: which cross-view track pairs Stage 1 gets.
+
+For every pair of cameras, geometric_pairs votes for the offsets at which track pairs stay on
+their epipolar lines. Here those votes become decisions: the offsets of all cameras chosen
+together (or the peaks that close every triangle), which cameras are sure of theirs (their own
+pairs, the three-view checks of cues/transfer.py and another camera model's peaks agree), the
+supporters of the trusted offsets added to the descriptor pairs, and a camera fitted to the
+moving points at an offset its votes refuse taken out. Every decision is reported to the sink.
+No I/O.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+from dataclasses import dataclass
+
+import numpy as np
+from tqdm import tqdm
+
+from ..record.sink import Sink
+from ..types import TrackPairs, VideoInfo
+from .config import CueConfig
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class GeometricPairing:
+    """What add_geometric_pairs made of one set of cameras."""
+
+    pairs: dict  # (a, b) -> TrackPairs: the descriptor pairs kept plus the geometric ones
+    voted: dict  # (a, b) -> the Δ_ab (s) whose supporters were added
+    peaks_s: dict  # (a, b) -> tuple of the pair's vote peaks Δ_ab (s), as the vote found them
+
+
+def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
+                        stats: dict, sink: Sink, progress: bool, estimated: bool,
+                        other_peaks: dict | None = None, other: str = "") -> GeometricPairing:
+    """Descriptor pairs plus epipolar-consistency pairs for every pair of known cameras (a moving
+    one with its per-frame poses), the Δ_ab whose supporters were added and every pair's vote peaks.
+    estimated: Stage 0 estimated the cameras (no calibration given); only then are sure cameras
+    checked in three views. other_peaks: (a, b) -> the vote peaks of another camera model (named
+    other), which a sure camera's joint offset must meet in one of its pairs
+    (geometric_pairs.disputed_by_other_model).
+
+    With three or more such cameras, the vote peaks whose offsets close every triangle
+    (Δ_ab + Δ_bc ≈ Δ_ac) are chosen and only their supporters kept. When no choice closes the
+    triangles, the peaks of at least one pair are all wrong and Stage 1 could not tell (the
+    pairs were picked to agree with them), so no geometric pair is added; nor with three cameras,
+    whose one triangle's closure is too weak a check (consistent_peaks: "one triangle"). With two static
+    cameras (no triangle) every kept peak's supporters are added, marked TrackPairs.unchecked (Stage 1
+    accepts the pair only if its descriptor pairs alone give the same minimum); with a moving
+    camera, none (GeometricPairConfig.unchecked_moving).
+    """
+    from .geometric_pairs import consistent_peaks, geometric_pairs, joint_offsets
+
+    # every pair of cameras: a moving one with its per-frame poses (two moving ones: the
+    # geometry per frame of b and per offset)
+    todo = list(pairs)
+    found = {}
+    for a, b in tqdm(todo, desc="geometric pairs", unit="pair", disable=not progress, leave=False):
+        found[(a, b)] = geometric_pairs(a, b, vids[a].info, vids[b].info, cameras[a], cameras[b],
+                                        tracks[a].xy, tracks[b].xy, cfg.geometric)
+    peaks_s = {k: tuple(gs.peaks_s) for k, (_, gs) in found.items()}
+    coarsest = max((vids[n].info.frame_interval_s for k in found for n in k), default=0.0)
+    # each of a triangle's three peaks is located to about ±1 frame (its support window), so
+    # right peaks close within about 3 frames, while wrong ones miss by far more
+    joint = joint_offsets({k: gs for k, (_, gs) in found.items()}, 3.0 * coarsest) \
+        if cfg.geometric.joint else None
+    sure = {} if joint is None else {n: m >= cfg.geometric.joint_min_margin for n, m in joint.margin.items()}
+    three_view = {}
+    # the check is of cameras Stage 0 estimated: a calibration's are given (with one, the tiny
+    # bench-timing scene's right hand-held camera had 3 trajectories followed, wrong ones 0-2)
+    if cfg.geometric.three_view_min_supporters > 0 and estimated and sum(sure.values()) >= 3:
+        three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, sink)
+        sure = {n: ok and (n not in three_view or three_view[n].passed) for n, ok in sure.items()}
+    dissent = {}
+    # after the three-view check, which triangulates the pairs of the cameras sure then (without
+    # the hand-held camera this refuses, stop 43's sweep seed 1 left its static cam2 too few
+    # trajectories); estimated cameras only: with a calibration a right pair had 0.35
+    if cfg.geometric.joint_min_pair_share > 0 and estimated and joint is not None:
+        from .geometric_pairs import dissenting_cameras
+
+        dissent = dissenting_cameras({k: gs for k, (_, gs) in found.items()}, joint, sure,
+                                     cfg.geometric.joint_min_pair_share)
+        for n, why in dissent.items():
+            sure[n] = False
+            msg = f"joint vote not sure of {n}: {why}"
+            sink.stage_event("cues", msg)
+            log.warning(msg)
+    overruled = {}  # camera -> why the other model's dispute of it was overruled
+    if other_peaks is not None and estimated and joint is not None:
+        from .geometric_pairs import disputed_by_other_model
+
+        shares = {n: chk.supporters / chk.best_supporters for n, chk in three_view.items() if chk.best_supporters}
+        disputed, overruled = disputed_by_other_model(joint, sure, other_peaks,
+                                                      cfg.geometric.other_model_agree_frames * coarsest, other,
+                                                      shares, cfg.geometric.other_model_overrule_share)
+        for n, why in overruled.items():
+            msg = f"joint vote still sure of {n}: {why}"
+            sink.stage_event("cues", msg)
+            log.info(msg)
+        for n, why in disputed.items():
+            sure[n] = False
+            dissent[n] = why
+            msg = f"joint vote not sure of {n}: {why}"
+            sink.stage_event("cues", msg)
+            log.warning(msg)
+    refused = bool(dissent) or any(not chk.passed for chk in three_view.values())
+    # a camera refused (by its pairs or in three views) keeps the joint path (no geometric pair
+    # for it), instead of the triangle fallback below choosing among the same cameras' vote peaks
+    if sum(sure.values()) >= 2 or refused:
+        checks, traj = {}, None
+        if cfg.geometric.transfer and not all(sure.values()) and sum(sure.values()) >= 2:
+            # not of a camera its own pairs contradict: point transfer projects into the same
+            # camera, and confirmed stop 43's hand-held one 4.4 frames off (its lens is biased)
+            checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, sink,
+                                                frozenset(dissent))
+        sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
+        said = _JointChecks({c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
+                            {c: chk.summary() for c, chk in three_view.items()}, dissent, overruled)
+        out, used = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg, stats, sink, said)
+        return GeometricPairing(_add_transfer_pairs(out, checks, traj, list(vids), stats, sink), used, peaks_s)
+    if joint is not None:
+        # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
+        # decides (and refuses when the triangles do not close), as before the joint choice
+        sink.stage_event("cues", "joint vote sure of fewer than two cameras (margins "
+                         + ", ".join(f"{n} {m:.1f}" for n, m in joint.margin.items())
+                         + "): geometric peaks chosen by triangle closure")
+    chosen, status = consistent_peaks({k: (gs.peaks_s, gs.peak_votes) for k, (_, gs) in found.items()},
+                                      3.0 * coarsest)
+    stats["geometric_peaks"] = status
+    # the descriptor pairs are unchecked too then: alone they put rendered and demo cameras
+    # 88-1456 ms off and were accepted (README, point transfer); kept only where consistent at the
+    # joint vote's offsets, unsure as they are, so that a wrong offset leaves too few of them
+    unchecked = status in ("inconsistent", "one triangle")
+    filter_desc = unchecked and joint is not None and cfg.geometric.joint_filter_descriptor
+    unchecked_why = None
+    if unchecked:
+        unchecked_why = ("the vote peaks of the camera pairs do not close the triangles (Δ_ab + Δ_bc ≠ Δ_ac), "
+                         "so some peaks are wrong" if status == "inconsistent" else
+                         "three cameras give one triangle, and its closure (Δ_ab + Δ_bc ≈ Δ_ac) is a single "
+                         "check on 27 choices of vote peaks, some of which close by chance")
+        msg = (f"geometric track pairs not used: {unchecked_why}"
+               + ("; descriptor pairs kept only where consistent at the joint vote's offsets" if filter_desc else ""))
+        sink.stage_event("cues", msg)
+        log.warning(msg)
+    out = dict(pairs)
+    for (a, b), (gp, gs) in found.items():
+        pick = chosen.get((a, b)) if chosen is not None else None  # index of the chosen peak
+        index, withheld = gp.index, None
+        if pick is not None:
+            index = index[gs.pair_peak == pick]
+        elif unchecked:
+            index, withheld = index[:0], unchecked_why
+        elif len(index) and (cameras[a].is_moving or cameras[b].is_moving) and not cfg.geometric.unchecked_moving:
+            withheld = (f"no triangle checks its vote peaks ({', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s), "
+                        f"and a moving camera's per-frame geometry lets wrong tracks fit a wrong offset")
+            msg = f"geometric track pairs not used for {a}__{b}: {withheld}"
+            sink.stage_event("cues", msg, pair=f"{a}__{b}")
+            log.warning(msg)
+            index = index[:0]
+        _log_votes(sink, a, b, gs, gs.peaks_s[pick] if pick is not None else None)
+        desc = pairs[(a, b)]
+        n_desc = len(desc.index)
+        if filter_desc:
+            desc = _consistent_descriptor_pairs(desc, joint.offsets_s[b] - joint.offsets_s[a], cameras,
+                                                tracks, vids, cfg)
+        # supporters of a peak no triangle chose: Stage 1 must find the pair's minimum without them too
+        # with no geometric pair, every row was kept at the joint vote's Δ
+        kept_at = joint.offsets_s[b] - joint.offsets_s[a] if filter_desc and not len(index) else None
+        out[(a, b)], n_new = _merge_pairs(desc, index, unchecked=pick is None, chosen_at_offset_s=kept_at)
+        info = {"geometric_candidates": gs.candidates, "geometric_informative": gs.informative,
+                "geometric_pairs": int(len(index)), "geometric_new": n_new,
+                "geometric_peaks_s": [round(p, 4) for p in gs.peaks_s],
+                "geometric_peak_votes": list(gs.peak_votes),
+                "geometric_chosen_peak_s": round(gs.peaks_s[pick], 4) if pick is not None else None}
+        if withheld:
+            info["geometric_withheld"] = withheld
+        if pick is None and n_new:
+            info["geometric_unchecked"] = int(n_new)
+        if filter_desc:
+            info.update({"descriptor_pairs_kept": int(len(desc.index)), "descriptor_pairs_before": int(n_desc)})
+        stats["pairs"].setdefault(f"{a}__{b}", {}).update(info)
+        which = (f"peak {gs.peaks_s[pick]:+.3f} s chosen: the peaks of all static pairs close every triangle"
+                 if pick is not None else
+                 f"vote peaks at {', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s")
+        sink.stage_event("cues", f"{a}__{b}: {len(index)} track pairs from epipolar consistency ({which})")
+        log.info("%s__%s: %d geometric track pairs (%d new), %s", a, b, len(index), n_new, which)
+    used = {k: found[k][1].peaks_s[i] for k, i in (chosen or {}).items() if i is not None}
+    return GeometricPairing(out, used, peaks_s)
+
+
+def check_fitted_offsets(fallback: dict, voted: dict, vids: dict) -> dict[str, str]:
+    """Cameras from the moving points that their own epipolar votes contradict or leave
+    unconfirmed: {camera: reason}; fallback["check"] records every pair's comparison.
+
+    Those cameras were fitted to track pairs aligned at coarse offsets (fitted_offsets_s). Right
+    cameras at right offsets make the votes over all track pairs peak at the same Δ (caliscope:
+    within a frame); cameras fitted to wrong pairs at wrong offsets put the peaks elsewhere
+    (rendered seed 0 with SIFT: seconds away), and Stage 1 then accepts minima at offsets the
+    cameras were never fitted for. Any contradiction refuses every such camera (they were fitted
+    jointly); a camera in no agreeing pair is refused as unconfirmed. Two cameras give no check
+    (their votes peak where their own F was fitted): they pass, marked unchecked (they are used
+    only with camera.fallback_unchecked_pair; by default _estimate refuses them)."""
+    fitted = fallback["fitted_offsets_s"]
+    if len(fitted) < 3:
+        fallback["check"] = {"verdict": "unchecked (two cameras: no third to confirm their offset)"}
+        return {}
+    tol_s = 3.0 * max(vids[n].info.frame_interval_s for n in fitted)
+    rows, agreeing, contradicted = {}, set(), []
+    for (a, b), delta in sorted(voted.items()):
+        if a not in fitted or b not in fitted:
+            continue
+        expect = fitted[b] - fitted[a]
+        ok = abs(delta - expect) <= tol_s
+        rows[f"{a}__{b}"] = {"fitted_s": round(expect, 4), "voted_s": round(delta, 4), "agrees": ok}
+        if ok:
+            agreeing |= {a, b}
+        else:
+            contradicted.append(f"{a}__{b} fitted at Δ {expect:+.3f} s, voted {delta:+.3f} s")
+    if contradicted:
+        why = ("camera from the moving points refused: its own epipolar votes contradict the offsets "
+               f"it was fitted at ({'; '.join(contradicted)}; tolerance {tol_s:.3f} s), so the track "
+               "pairs it was fitted to were wrong")
+        refused = {n: why for n in fitted}
+    else:
+        refused = {n: ("camera from the moving points refused: no pair of it with a sure epipolar vote "
+                       "confirmed the offset it was fitted at") for n in fitted if n not in agreeing}
+    fallback["check"] = {"tolerance_s": round(tol_s, 4), "pairs": rows,
+                         "verdict": "contradicted" if contradicted else
+                         "confirmed" if not refused else "partly unconfirmed",
+                         "refused": sorted(refused)}
+    return refused
+
+
+def _log_votes(sink: Sink, a: str, b: str, gs, chosen_s: float | None) -> None:
+    """The pair's geometric votes over Δ_ab and the Δ whose supporters were kept, to the sink."""
+    from .geometric_pairs import vote_z
+
+    if gs.votes is not None and len(gs.votes):
+        sink.pair_votes(a, b, gs.vote_offsets_s, gs.votes, vote_z(gs)[1], chosen_s)
+
+
+def _transfer_source(a: str, b: str, sure: dict[str, bool], cameras: dict) -> bool:
+    """Whether pair (a, b)'s joint Δ may be triangulated for point transfer: both cameras sure,
+    and when both move, a third camera sure too (their per-frame geometry lets wrong tracks fit
+    one wrong offset)."""
+    if not (sure.get(a) and sure.get(b)):
+        return False
+    return not (cameras[a].is_moving and cameras[b].is_moving) or sum(sure.values()) >= 3
+
+
+def _joint_pair_used(a: str, b: str, sure: dict[str, bool], cameras: dict, min_sure: int) -> bool:
+    """Whether the joint vote's Δ of pair (a, b) is trusted: a transfer source, and at least
+    min_sure cameras sure in all (GeometricPairConfig.joint_min_sure: 3 = a closed triangle of
+    sure cameras confirms it; see _add_joint_pairs)."""
+    return _transfer_source(a, b, sure, cameras) and sum(sure.values()) >= min_sure
+
+
+def _sure_pairs(found: dict, joint, sure: dict[str, bool], cameras: dict) -> dict:
+    """The supporters of the joint Δ of every pair that point transfer may triangulate
+    (_transfer_source)."""
+    from .geometric_pairs import supporters
+
+    out = {}
+    for (a, b), (_, gs) in found.items():
+        if not _transfer_source(a, b, sure, cameras):
+            continue
+        index = supporters(gs, joint.offsets_s[b] - joint.offsets_s[a])
+        out[(a, b)] = TrackPairs(a, b, index, np.ones(len(index)))
+    return out
+
+
+def _transfer_radius_px(info: VideoInfo, g) -> float:
+    """How near a projected point a track of the camera must be (GeometricPairConfig.transfer_radius_diag)."""
+    return max(3.0, g.transfer_radius_diag * float(np.hypot(info.width, info.height)))
+
+
+def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
+                          vids: dict, cfg: CueConfig, sink: Sink) -> dict:
+    """{camera: transfer.ThreeViewCheck} for every sure camera: the other sure cameras' track
+    pairs triangulated at their joint offsets and projected into it at its own. Wrong cameras can
+    make the joint vote sure of wrong offsets, consistent in every triangle (rendered seed 2 with
+    XFeat's cameras: three cameras 0.5-2.8 s off, margins 8.5-23.6), since a line through a
+    wrong epipole still meets some track; a point in a third view rarely does."""
+    from .transfer import check_in_three_views, triangulate_pairs
+
+    g = cfg.geometric
+    infos = {n: v.info for n, v in vids.items()}
+    xy = {n: t.xy for n, t in tracks.items()}
+    checks = {}
+    for c in sorted(n for n, ok in sure.items() if ok):
+        others = {n: ok and n != c for n, ok in sure.items()}
+        traj = triangulate_pairs(infos, cameras, xy, _sure_pairs(found, joint, others, cameras),
+                                 {n: joint.offsets_s[n] for n, ok in others.items() if ok})
+        chk = check_in_three_views(c, joint.offsets_s[c], traj, infos[c], cameras[c], xy[c],
+                                   _transfer_radius_px(infos[c], g), g.transfer_min_hits,
+                                   g.three_view_min_supporters, g.three_view_min_share_of_best)
+        checks[c] = chk
+        sink.three_view_landscape(c, chk.landscape.offsets_s, chk.landscape.supporters, chk.joint_offset_s,
+                                  chk.passed)
+        msg = f"{c}: {chk.reason}"
+        sink.stage_event("cues", msg, camera=c, passed=int(chk.passed), supporters=chk.supporters,
+                         best_supporters=chk.best_supporters, trajectories=chk.trajectories)
+        (log.info if chk.passed else log.warning)(msg)
+    return checks
+
+
+def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
+                         vids: dict, cfg: CueConfig, sink: Sink, skip: frozenset[str] = frozenset()):
+    """({camera: transfer.TransferCheck}, the transfer.Trajectories projected): a check of every
+    camera the joint vote is unsure of (but those of skip), the sure cameras' track pairs
+    triangulated at their joint offsets and projected into it over its candidate offsets
+    (cues/transfer.py)."""
+    from .transfer import confirm_offset, offset_grid, transfer_landscape, triangulate_pairs
+
+    g = cfg.geometric
+    sure_offsets = {n: joint.offsets_s[n] for n, ok in sure.items() if ok}
+    traj = triangulate_pairs({n: v.info for n, v in vids.items()}, cameras,
+                             {n: t.xy for n, t in tracks.items()},
+                             _sure_pairs(found, joint, sure, cameras), sure_offsets)
+    checks = {}
+    for c in sorted(n for n, ok in sure.items() if not ok and n not in skip):
+        info = vids[c].info
+        land = transfer_landscape(traj, info, cameras[c], tracks[c].xy,
+                                  offset_grid(traj, info, 0.5 * info.frame_interval_s),
+                                  _transfer_radius_px(info, g), g.transfer_min_hits)
+        chk = confirm_offset(c, joint.offsets_s[c], land, info.frame_interval_s,
+                             g.transfer_agree_frames, g.transfer_min_z, g.transfer_min_supporters)
+        checks[c] = chk
+        sink.transfer_landscape(c, land.offsets_s, land.share, chk.joint_offset_s, land.offset_s,
+                                chk.confirmed)
+        msg = f"{c}: {chk.reason}"
+        sink.stage_event("cues", msg, camera=c, confirmed=int(chk.confirmed), z=round(land.z, 2),
+                         trajectories=traj.num_trajectories)
+        (log.info if chk.confirmed else log.warning)(msg)
+    return checks, traj
+
+
+def _add_transfer_pairs(pairs: dict, checks: dict, traj, order: list[str], stats: dict,
+                        sink: Sink) -> dict:
+    """pairs plus, for every camera that point transfer confirmed, its tracks that follow a
+    trajectory (of traj, transfer.Trajectories) paired with both tracks the trajectory was
+    triangulated from; order: the videos' order (a pair's key names the earlier one first)."""
+    out = dict(pairs)
+    for c, chk in checks.items():
+        if not chk.confirmed:
+            continue
+        new: dict[tuple[str, str], list] = {}
+        for t, j in chk.landscape.matches.tolist():
+            pair_no, ta, tb, _ = traj.source[t].tolist()
+            a, b = traj.pairs[pair_no]
+            for other, track in ((a, ta), (b, tb)):
+                key = (other, c) if order.index(other) < order.index(c) else (c, other)
+                new.setdefault(key, []).append((track, j) if key[0] == other else (j, track))
+        for key, rows in new.items():
+            if key not in out:
+                continue
+            # no chosen_at_offset_s: the new rows follow trajectories at the transfer's offset
+            out[key], n_new = _merge_pairs(out[key], np.unique(np.array(rows, np.int64), axis=0))
+            stats["pairs"].setdefault(f"{key[0]}__{key[1]}", {})["transfer_new"] = int(n_new)
+            sink.stage_event("cues", f"{key[0]}__{key[1]}: {n_new} track pairs from point transfer",
+                             pair=f"{key[0]}__{key[1]}", transfer_new=int(n_new))
+    return out
+
+
+def _consistent_descriptor_pairs(desc: TrackPairs, delta_s: float, cameras: dict, tracks: dict,
+                                 vids: dict, cfg: CueConfig) -> TrackPairs:
+    """The descriptor pairs of (desc.a, desc.b) that are epipolar-consistent at Δ = delta_s
+    (geometric_pairs.consistent_at with the geometric pairs' tolerances)."""
+    from .geometric_pairs import consistent_at
+
+    if not len(desc.index):
+        return desc
+    a, b, g = desc.a, desc.b, cfg.geometric
+    tau = max(2.0, g.tau_diag * float(np.hypot(vids[b].info.width, vids[b].info.height)))
+    ok = consistent_at(vids[a].info, vids[b].info, cameras[a], cameras[b], tracks[a].xy,
+                       tracks[b].xy, desc.index, delta_s, tau, g.min_inlier_share, g.min_frames)
+    return TrackPairs(a, b, desc.index[ok], None if desc.weight is None else desc.weight[ok])
+
+
+def _merge_pairs(tp: TrackPairs, index: np.ndarray, unchecked: bool = False,
+                 chosen_at_offset_s: float | None = None) -> tuple[TrackPairs, int]:
+    """Descriptor pairs tp plus the geometric pairs index (P,2) not already in it: (pairs, new).
+    unchecked: the new rows are marked TrackPairs.unchecked (no triangle checked their vote peak);
+    chosen_at_offset_s: the Δ_ab at which every row of both was kept (TrackPairs), if one was."""
+    w_desc = tp.weight if tp.weight is not None else np.ones(len(tp.index))
+    have = {tuple(x) for x in tp.index.tolist()}
+    new = np.array([x for x in index.tolist() if tuple(x) not in have], np.int64).reshape(-1, 2)
+    mark = None
+    if unchecked and len(new):
+        mark = np.concatenate([np.zeros(len(tp.index), bool), np.ones(len(new), bool)])
+    return TrackPairs(tp.a, tp.b, np.concatenate([tp.index, new]),
+                      np.concatenate([w_desc, np.ones(len(new))]), mark, chosen_at_offset_s), len(new)
+
+
+@dataclass(frozen=True)
+class _JointChecks:
+    """What the checks after the joint vote said of its cameras, kept in result.json."""
+
+    transfer: dict = dataclasses.field(default_factory=dict)  # camera -> point transfer's summary
+    three_view: dict = dataclasses.field(default_factory=dict)  # camera -> the three-view check's summary
+    dissent: dict = dataclasses.field(default_factory=dict)  # camera -> why its pairs (or the other model) contradict it
+    overruled: dict = dataclasses.field(default_factory=dict)  # camera -> why the other model's dispute was overruled
+
+
+def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cameras: dict,
+                     tracks: dict, vids: dict, cfg: CueConfig, stats: dict, sink: Sink,
+                     said: _JointChecks = _JointChecks()) -> tuple[dict, dict]:
+    """(pairs, {(a, b): the joint Δ_ab whose supporters were added}): the supporters of the
+    jointly chosen offsets (geometric_pairs.joint_offsets) for every pair whose Δ is trusted
+    (_joint_pair_used: both cameras' offsets won by at least joint_min_margin, or point transfer
+    confirmed them, and joint_min_sure cameras are sure; sure: camera -> whether it is, said:
+    what the checks after the vote said, for result.json); nothing for the others. A
+    descriptor pair is kept only if it is epipolar-consistent at the joint Δ (with
+    joint_filter_descriptor): the descriptor pairs are mostly wrong on small moving objects
+    (BENCHMARKS.md), and the joint Δ is the best evidence there is of the moment they share."""
+    from .geometric_pairs import supporters, votes_at
+
+    # the pairs whose joint Δ is trusted, and that Δ: the one decision everything below reads
+    used = {(a, b): joint.offsets_s[b] - joint.offsets_s[a] for a, b in found
+            if _joint_pair_used(a, b, sure, cameras, cfg.geometric.joint_min_sure)}
+    stats["geometric_peaks"] = "joint"
+    stats["geometric_joint"] = {"origin": joint.origin,
+                                "offsets_s": {n: round(o, 4) for n, o in joint.offsets_s.items()},
+                                "score": round(joint.score, 2),
+                                "margin": {n: round(m, 2) for n, m in joint.margin.items()},
+                                "sure": sorted(n for n, ok in sure.items() if ok),
+                                "used": sorted({n for k in used for n in k})}
+    # copies (asdict), in field order; an empty check is left out
+    stats["geometric_joint"].update({key: value for key, value in dataclasses.asdict(said).items() if value})
+    three_view, dissent, transfer = said.three_view, said.dissent, said.transfer
+    failed = sorted(n for n, chk in three_view.items() if not chk["passed"] and not sure[n])
+    if failed:
+        seen = ", ".join(f"{n} {three_view[n]['supporters']}" for n in failed)
+        msg = (f"geometric track pairs not used for {', '.join(failed)}: the joint vote was sure of "
+               f"their offsets, but the points the other sure cameras triangulate are not seen there "
+               f"(supporters {seen}; a camera needs {cfg.geometric.three_view_min_supporters}, and "
+               f"{cfg.geometric.three_view_min_share_of_best:.2g} of those at its best offset)")
+        sink.stage_event("cues", msg)
+        log.warning(msg)
+    weak = sorted(n for n, ok in sure.items() if not ok and n not in failed and n not in dissent)
+    if weak:
+        msg = (f"geometric track pairs not used for {', '.join(weak)}: the joint vote prefers their "
+               f"offsets by less than {cfg.geometric.joint_min_margin:g} (margins "
+               f"{', '.join(f'{n} {joint.margin[n]:.1f}' for n in weak)})"
+               + ("; point transfer did not confirm them" if transfer else ""))
+        sink.stage_event("cues", msg)
+        log.warning(msg)
+    # a Δ only when a third camera is sure too (a closed triangle confirms it): with a single
+    # sure pair nothing checks it, and Stage 1 accepts the minimum its own supporters make
+    # (fencing1 with looser moving regions: aria01-aria03 at +2.4 s, truth +1.5 s; rendered
+    # seed 1 with estimated cameras: cam3 3.7 s off; the all-around scene: cam1 141 ms off)
+    unconfirmed = {(a, b) for (a, b) in found if sure.get(a) and sure.get(b) and (a, b) not in used}
+    if unconfirmed:
+        names = ", ".join(sorted(f"{a}__{b}" for a, b in unconfirmed))
+        msg = (f"geometric track pairs not used for {names}: the joint vote is sure of "
+               f"{sum(sure.values())} camera(s) only, so no triangle of sure cameras confirms their Δ")
+        sink.stage_event("cues", msg)
+        log.warning(msg)
+    out = dict(pairs)
+    for (a, b), (_, gs) in found.items():
+        delta = joint.offsets_s[b] - joint.offsets_s[a]
+        both = (a, b) in used
+        index = supporters(gs, delta) if both else np.zeros((0, 2), np.int64)
+        _log_votes(sink, a, b, gs, delta if both else None)
+        desc = pairs[(a, b)]
+        n_desc = len(desc.index)
+        # an unsure camera's descriptor pairs are filtered too: at a wrong joint Δ few survive
+        # (the pair is then refused for too few pairs) instead of a wrong minimum being accepted
+        if cfg.geometric.joint_filter_descriptor:
+            desc = _consistent_descriptor_pairs(desc, delta, cameras, tracks, vids, cfg)
+        every = cfg.geometric.joint_filter_descriptor or not n_desc  # every row kept at delta
+        out[(a, b)], n_new = _merge_pairs(desc, index, chosen_at_offset_s=delta if every else None)
+        stats["pairs"].setdefault(f"{a}__{b}", {}).update({
+            "geometric_candidates": gs.candidates, "geometric_informative": gs.informative,
+            "geometric_pairs": int(len(index)), "geometric_new": int(n_new),
+            "geometric_peaks_s": [round(p, 4) for p in gs.peaks_s],
+            "geometric_peak_votes": list(gs.peak_votes), "geometric_joint_delta_s": round(delta, 4),
+            "descriptor_pairs_kept": int(len(desc.index)), "descriptor_pairs_before": int(n_desc)})
+        votes = votes_at(gs, delta)
+        stats["pairs"][f"{a}__{b}"].update({"geometric_joint_votes": votes,
+                                            "geometric_joint_margin": [round(joint.margin[a], 2),
+                                                                       round(joint.margin[b], 2)]})
+        sink.stage_event("cues", f"{a}__{b}: {len(index)} track pairs from epipolar consistency "
+                                 f"(joint vote over all camera pairs: Δ {delta:+.3f} s)",
+                         pair=f"{a}__{b}", votes=votes, informative=gs.informative,
+                         geometric_pairs=int(len(index)), descriptor_pairs_kept=int(len(desc.index)),
+                         descriptor_pairs_before=int(n_desc), margin_a=round(joint.margin[a], 2),
+                         margin_b=round(joint.margin[b], 2))
+        log.info("%s__%s: %d geometric track pairs (%d new) at the joint Δ %+.3f s", a, b,
+                 len(index), n_new, delta)
+    return out, used
