@@ -12,6 +12,7 @@ from vs_inspect.types import CameraTrack, TrackPairs
 from .stage0_fakes import K
 from .stage0_fakes import Events as _Events
 
+
 def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), memo: dict | None = None,
                           calls: list | None = None):
     """_estimate when the background reconstruction registers nothing and the moving points give
