@@ -9,8 +9,7 @@ from vs_inspect.cues.config import CueConfig
 from vs_inspect.geometry.epipolar import look_at
 from vs_inspect.types import CameraTrack, TrackPairs
 
-from .stage0_fakes import K
-from .stage0_fakes import Events as _Events
+from .stage0_fakes import Events, K
 
 
 def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), memo: dict | None = None,
@@ -150,7 +149,7 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
                                register_masks=None) for n in "abc"}
     timings = {}
     stats = {"dropped": {}, "camera_source": "estimated", "timings_s": timings}
-    sink = _Events()
+    sink = Events()
     kept = ex.estimated_cameras(vids, CueConfig(), stats, {}, {}, sink, progress=False)
     assert stats["timings_s"] is timings  # the caller's timings stay the ones written to
     return kept, stats, sink, seen

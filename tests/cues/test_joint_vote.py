@@ -13,8 +13,7 @@ from vs_inspect.geometry.epipolar import look_at
 from vs_inspect.record.sink import NullSink
 from vs_inspect.types import CameraTrack, CueStats, TrackPairs
 
-from .stage0_fakes import K
-from .stage0_fakes import Events as _Events
+from .stage0_fakes import Events, K
 
 
 def _stats(delta_s: float, n: int = 12) -> GeometricPairStats:
@@ -33,7 +32,7 @@ def _run(moving_b: bool, sure_c: bool, min_sure: int = 3):
     pairs = {k: TrackPairs(*k, np.zeros((0, 2), np.int64)) for k in found}
     joint = JointChoice(offs, 10.0, {"a": 5.0, "b": 5.0, "c": 5.0 if sure_c else 1.0})
     sure = {"a": True, "b": True, "c": sure_c}
-    sink, stats = _Events(), {"pairs": {}}
+    sink, stats = Events(), {"pairs": {}}
     cfg = CueConfig(geometric=GeometricPairConfig(joint_min_sure=min_sure))
     out, _ = _add_joint_pairs(pairs, found, joint, sure, cams, {}, {}, cfg, stats, sink)
     return {k: len(v.index) for k, v in out.items()}, sink.messages, stats
@@ -115,7 +114,7 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
     tracks = {n: Tracks(xy[n], None) for n in "abc"}
     cfg = CueConfig(geometric=GeometricPairConfig(joint_min_margin=1e9))  # no camera sure
     monkeypatch.setattr(gp, "consistent_peaks", lambda *a, **k: (None, "inconsistent"))
-    sink, stats = _Events(), {"pairs": {}}
+    sink, stats = Events(), {"pairs": {}}
     got = add_geometric_pairs(pairs, cams, tracks, vids, cfg, stats, sink, progress=False, estimated=True)
     out, voted = got.pairs, got.voted
     assert stats["geometric_peaks"] == "inconsistent"
@@ -152,7 +151,7 @@ def _sure_of_all(monkeypatch, offsets: dict[str, float], estimated: bool = True,
     infos, cams, xy, _, row_of = _scene({"a": 0.0, "b": 0.42, "c": -0.3})
     pairs = {k: TrackPairs(*k, np.zeros((0, 2), np.int64)) for k in (("a", "b"), ("a", "c"), ("b", "c"))}
     monkeypatch.setattr(gp, "joint_offsets", lambda *a, **k: JointChoice(dict(offsets), 30.0, dict.fromkeys(offsets, 10.0)))
-    sink, stats = _Events(), {"pairs": {}}
+    sink, stats = Events(), {"pairs": {}}
     out = add_geometric_pairs(pairs, cams, {n: Tracks(xy[n], None) for n in "abc"},
                               {n: SimpleNamespace(info=infos[n]) for n in "abc"}, cfg,
                               stats, sink, progress=False, estimated=estimated, other_peaks=other_peaks,
@@ -283,7 +282,7 @@ def _lone_pair(monkeypatch, moving_b: bool, **geometric):
                                                                          {"a": 1.0, "b": 1.0}))
     desc = np.array([[100, 100], [101, 101], [102, 102]])
     vids = {n: SimpleNamespace(info=SimpleNamespace(frame_interval_s=1 / 30)) for n in "ab"}
-    sink, stats = _Events(), {"pairs": {}}
+    sink, stats = Events(), {"pairs": {}}
     tracks = {n: SimpleNamespace(xy=None) for n in "ab"}  # read by the vote only, replaced here
     out = add_geometric_pairs({("a", "b"): TrackPairs("a", "b", desc, np.ones(3))}, cams, tracks, vids,
                               CueConfig(geometric=GeometricPairConfig(**geometric)), stats, sink,

@@ -4,9 +4,9 @@ For every pair of cameras, geometric_pairs votes for the offsets at which track 
 their epipolar lines. Here those votes become decisions: the offsets of all cameras chosen
 together (or the peaks that close every triangle), which cameras are sure of theirs (their own
 pairs, the three-view checks of cues/transfer.py and another camera model's peaks agree), the
-supporters of the trusted offsets added to the descriptor pairs, and a camera fitted to the
-moving points at an offset its votes refuse taken out. Every decision is reported to the sink.
-No I/O.
+supporters of the trusted offsets added to the descriptor pairs; and which cameras fitted to
+the moving points their own votes refuse (check_fitted_offsets; camera_choice takes them out).
+The pairing's decisions are reported to the sink. No I/O.
 """
 
 from __future__ import annotations

@@ -7,11 +7,12 @@ share, as in unsynchronized two-view geometry; with three or more static cameras
 all of them together, every pair's share summed with its triangles closed), self-calibrate one
 focal length per pair (the f that makes K_vᵀ F K_r closest to an essential matrix, principal
 points at the image centres), decompose into a relative pose, and fix the scale of every pair
-from points triangulated on the reference's tracks. With three or more cameras, one focal per camera and every pose are then
-fitted to the track pairs of all camera pairs at once (scipy least squares, Cauchy loss),
-started from the per-pair focals and from a few shared guesses: one pair's focal is ill-posed
-when the optical axes nearly meet, as they do around a scene. Pure functions of arrays; the
-coarse offsets found here are only used to build the cameras, Stage 1 searches the offsets again.
+from points triangulated on the reference's tracks. With three or more cameras, one focal per
+camera and every pose are then fitted to the track pairs of all camera pairs at once (scipy
+least squares, Cauchy loss), started from the per-pair focals and from a few shared guesses: one
+pair's focal is ill-posed when the optical axes nearly meet, as they do around a scene. Pure
+functions of arrays; the coarse offsets found here are only used to build the cameras, Stage 1
+searches the offsets again.
 """
 
 from __future__ import annotations
