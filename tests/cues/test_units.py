@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from vs_inspect.cues.config import MatchConfig, MotionConfig, TrackConfig
-from vs_inspect.cues.extract import to_full_px
+from vs_inspect.cues.video_cues import to_full_px
 from vs_inspect.cues.learned import xfeat_available
 from vs_inspect.cues.matching import (extract_keyframe_features, keyframe_indices,
                                       match_by_sorting, match_descriptors, match_tracks)

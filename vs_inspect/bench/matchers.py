@@ -326,7 +326,7 @@ class SfmRow:
 
 
 def sfm_inputs(paths: list[Path], static_frames: int = 9, moving_frames: int = 30, max_side: int = 1280):
-    """The pipeline's SfM input per video (extract._video_cues): frames with the moving regions
+    """The pipeline's SfM input per video (video_cues._video_cues): frames with the moving regions
     masked, one temporal-median image for a static camera. -> (frames_by_video, sizes, num_frames, moving)."""
     from ..cues.config import CueConfig
     from ..cues.motion import moving_regions

@@ -14,7 +14,6 @@ import functools
 import logging
 import time
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -22,9 +21,7 @@ from ..record.sink import DeferredSink, Sink
 from ..types import CameraTrack, Tracks
 from .config import CueConfig
 from .joint_vote import add_geometric_pairs, check_fitted_offsets
-
-if TYPE_CHECKING:
-    from .extract import _VideoCues
+from .video_cues import VideoCues
 
 log = logging.getLogger(__name__)
 
@@ -97,7 +94,7 @@ def vote_on_cameras(cams: CameraSet, vids: dict, all_pairs: dict, cfg: CueConfig
     return dataclasses.replace(cams, cameras=cameras, pairs=pairs, used=used, peaks=peaks, voting_s=voting_s)
 
 
-def estimated_cameras(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, all_pairs: dict,
+def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, all_pairs: dict,
                       frame_images: dict, sink: Sink, progress: bool) -> CameraSet:
     """The cameras pycolmap estimates and their pairs (frame_images: name -> (a function giving a
     moving camera's frames to register, how many), as cameras.CameraModels takes them). With
@@ -201,7 +198,7 @@ def _note_other_models(dropped: dict[str, str], kept: CameraSet, others: list[tu
             dropped[n] += f" (also tried: {'; '.join(notes)})"
 
 
-def _estimate(vids: dict[str, _VideoCues], cfg: CueConfig, stats: dict, pairs: dict, est,
+def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, pairs: dict, est,
               from_tracks: bool = False, memo: dict | None = None) -> CameraSet:
     """The cameras of est (cameras.CameraEstimate) and the tracks undistorted with them, or the
     cameras the moving points give when their cameras explain the points better and est is weak,
