@@ -29,7 +29,12 @@ HELD_OUT_SCENES = ("a30_c4m1_s10", "a45_c4m1_s11", "a60_c4m1_s12", "a60_c4m1_s13
 HELD_OUT_2_SCENES = ("a30_c4m1_s22", "a45_c4m1_s23", "a60_c4m1_s24", "a60_c4m1_s25", "a90_c4m1_s26",
                      "a60_c3m0_s27", "a45_c5m2_s28", "a30_c3m1_s29", "a60_c4m1_s30", "a90_c4m0_s31",
                      "a45_c4m1_s32", "a60_c5m2_s33")
-SCENE_SETS = {"held-out": HELD_OUT_SCENES, "tuning": TUNING_SCENES, "held-out-2": HELD_OUT_2_SCENES}
+# seeds rendered after every rule up to stop 53 (stop 54): the same mix again
+HELD_OUT_3_SCENES = ("a30_c4m1_s34", "a45_c4m1_s35", "a60_c4m1_s36", "a60_c4m1_s37", "a90_c4m1_s38",
+                     "a60_c3m0_s39", "a45_c5m2_s40", "a30_c3m1_s41", "a60_c4m1_s42", "a90_c4m0_s43",
+                     "a45_c4m1_s44", "a60_c5m2_s45")
+SCENE_SETS = {"held-out": HELD_OUT_SCENES, "tuning": TUNING_SCENES, "held-out-2": HELD_OUT_2_SCENES,
+              "held-out-3": HELD_OUT_3_SCENES}
 
 
 @dataclass(frozen=True)
