@@ -150,25 +150,25 @@ def _curve(peaks: dict[float, float], lo: float = -3.0, hi: float = 3.0, step: f
 
 
 def _offsets(curves, chosen: dict[str, int]) -> dict[str, float]:
-    """joint_offsets' grid indices on the reference "r"'s curves, as offsets in seconds."""
+    """joint_coarse_offsets' grid indices on the reference "r"'s curves, as offsets in seconds."""
     return {v: float(curves[("r", v)].offsets_s[k]) for v, k in chosen.items()}
 
 
-def test_joint_offsets_close_the_triangle_where_one_pair_alone_peaks_wrong():
+def test_joint_coarse_offsets_close_the_triangle_where_one_pair_alone_peaks_wrong():
     """r-a alone peaks 1.5 s from the truth; r-b and a-b agree on the truth only with a's second
     peak: summed over the triangle, the truth wins (held-out-2's s26 and s31, README stop 52)."""
     curves = {("r", "a"): _curve({2.0: 0.62, 0.5: 0.55}),  # truth Δ_ra 0.5
               ("r", "b"): _curve({1.0: 0.60}),  # truth Δ_rb 1.0
               ("a", "b"): _curve({0.5: 0.58})}  # Δ_ab = Δ_rb − Δ_ra
-    got, score = pairwise.joint_offsets("r", curves)
+    got, score = pairwise.joint_coarse_offsets("r", curves)
     assert _offsets(curves, got) == pytest.approx({"a": 0.5, "b": 1.0}) and score == pytest.approx(0.55 + 0.60 + 0.58)
     # without the pair between a and b there is nothing to close: no joint choice
-    assert pairwise.joint_offsets("r", {k: v for k, v in curves.items() if k != ("a", "b")}) is None
+    assert pairwise.joint_coarse_offsets("r", {k: v for k, v in curves.items() if k != ("a", "b")}) is None
     # a pair keyed the other way round is read as Δ_ba = Δ_ra − Δ_rb
     flipped = curves | {("a", "b"): _curve({-0.5: 0.58})}
     del flipped[("a", "b")]
     flipped[("b", "a")] = _curve({-0.5: 0.58})
-    assert _offsets(flipped, pairwise.joint_offsets("r", flipped)[0]) == pytest.approx({"a": 0.5, "b": 1.0})
+    assert _offsets(flipped, pairwise.joint_coarse_offsets("r", flipped)[0]) == pytest.approx({"a": 0.5, "b": 1.0})
 
 
 def test_offset_curve_reads_the_nearest_grid_offset_and_nan_off_the_grid():
@@ -208,13 +208,13 @@ def test_cameras_from_tracks_moves_a_camera_whose_pair_with_the_reference_peaks_
     assert details["joint_fit"]["median_px_after"] < 0.1
 
 
-def test_joint_offsets_on_a_grid_too_large_to_score_whole_refines_a_coarser_one():
+def test_joint_coarse_offsets_on_a_grid_too_large_to_score_whole_refines_a_coarser_one():
     """Over max_grid combinations, every k-th offset is scored, then each camera refined on its
     full grid: the same answer as the full search here."""
     curves = {("r", "a"): _curve({2.0: 0.62, 0.5: 0.55, 0.6: 0.5, 0.4: 0.5}),
               ("r", "b"): _curve({1.0: 0.60, 0.9: 0.5, 1.1: 0.5}),
               ("a", "b"): _curve({0.5: 0.58, 0.4: 0.5, 0.6: 0.5})}
-    full = pairwise.joint_offsets("r", curves)
-    coarse = pairwise.joint_offsets("r", curves, max_grid=400)  # 61 x 61 offsets: every 4th
+    full = pairwise.joint_coarse_offsets("r", curves)
+    coarse = pairwise.joint_coarse_offsets("r", curves, max_grid=400)  # 61 x 61 offsets: every 4th
     assert _offsets(curves, full[0]) == pytest.approx({"a": 0.5, "b": 1.0})
     assert coarse[0] == full[0] and coarse[1] == pytest.approx(full[1])

@@ -146,7 +146,7 @@ def search_pair(xy_r, info_r, xy_v, info_v, index, **kwargs) -> PairGeometry | N
     return None if curve is None else _geometry_at(curve, int(np.argmax(curve.share)), info_r, info_v)
 
 
-def joint_offsets(ref: str, curves: dict[tuple[str, str], OffsetCurve], max_grid: int = 2_000_000
+def joint_coarse_offsets(ref: str, curves: dict[tuple[str, str], OffsetCurve], max_grid: int = 2_000_000
                   ) -> tuple[dict[str, int], float] | None:
     """Coarse offsets Δ_rv of every camera v with a curve against ref that together explain the
     most: the sum of every pair's inlier share at Δ_uv = Δ_rv − Δ_ru (a triangle must close, so a
@@ -195,7 +195,7 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
     A camera needs min_inlier_share of its correspondences with the reference within 2 px of the
     best F (right offsets score higher than wrong ones; the measured shares are in BENCHMARKS.md).
     joint: with two or more other static cameras that share track pairs, the coarse offsets are
-    chosen together (joint_offsets: every pair's curve, triangles closed) instead of each
+    chosen together (joint_coarse_offsets: every pair's curve, triangles closed) instead of each
     camera's best with the reference alone; details["joint_offsets"] names the cameras it moved.
     refine: with three or more cameras, fit every focal and pose to all pairs at once
     (refine_cameras; details["joint_fit"] says how well); when the fit leaves the median track
@@ -234,7 +234,7 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
                 curve = offset_curve(xy[a], infos[a], xy[b], infos[b], tp.index)
                 if curve is not None:
                     curves[(a, b)] = curve
-        together = joint_offsets(ref, curves)
+        together = joint_coarse_offsets(ref, curves)
         if together is not None:
             alone, (chosen, score) = chosen, together
             details["joint_offsets"] = {
