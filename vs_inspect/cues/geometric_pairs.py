@@ -113,6 +113,18 @@ def _line_a(xb, j, q, G, g):
             G[g, q, 2, 0] * y0 + G[g, q, 2, 1] * y1 + G[g, q, 2, 2])
 
 
+@nb.njit(inline="always")
+def _first_at_least(k, d, lo, hi, value):
+    """The first q in [lo, hi] with k[d, q] >= value (hi + 1 when none); k[d] increases there."""
+    while lo <= hi:
+        mid = (lo + hi) // 2
+        if k[d, mid] >= value:
+            hi = mid - 1
+        else:
+            lo = mid + 1
+    return lo
+
+
 @nb.njit(parallel=True, cache=True)
 def _consistency(xa, xb, cand_a, cand_b, G, e_a, e_b, k, w, tau2, min_frames, min_share, max_band,
                  min_sweep, qstep, epi_r2):
@@ -136,6 +148,15 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_a, e_b, k, w, tau2, min_frames, mi
     best = np.full(C, -1, np.int64)
     best_res = np.full(C, np.inf)
     Ta = xa.shape[1]
+    # per offset, b's frames whose moment falls within a's frames: [qv0[d], qv1[d]] (k is -1
+    # before and after; increasing between)
+    qv0 = np.full(D, Tb, np.int64)
+    qv1 = np.full(D, -1, np.int64)
+    for d in range(D):
+        for q in range(Tb):
+            if k[d, q] >= 0:
+                qv0[d] = min(qv0[d], q)
+                qv1[d] = q
     for c in nb.prange(C):
         i = cand_a[c]
         j = cand_b[c]
@@ -143,6 +164,7 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_a, e_b, k, w, tau2, min_frames, mi
         lb1 = np.empty(Tb)
         lb2 = np.empty(Tb)
         okb = np.empty(Tb, np.bool_)
+        n_okb = np.zeros(Tb + 1, np.int64)  # n_okb[q]: frames of b read before q
         q0, q1, nvb = Tb, -1, 0
         for q in range(Tb):
             y0 = xb[j, q, 0]
@@ -154,6 +176,7 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_a, e_b, k, w, tau2, min_frames, mi
                 q1 = q
                 nvb += 1
             lb0[q], lb1[q], lb2[q] = _line_a(xb, j, q, G, 0)
+            n_okb[q + 1] = n_okb[q] + okb[q]
         ka0, ka1 = Ta, -1  # a's seen span (interpolation needs frames k and k+1)
         for kk in range(Ta):
             if not np.isnan(xa[i, kk, 0]):
@@ -165,6 +188,13 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_a, e_b, k, w, tau2, min_frames, mi
         for d in range(D):
             # k[d] increases with q: skip offsets whose mapped span misses a's span
             if (k[d, q1] >= 0 and k[d, q1] < ka0) or k[d, q0] >= ka1:
+                continue
+            # the frames of b read whose moment falls within a's seen span, [qa, qb]: at most
+            # n_max moments can count, so too few can never be consistent
+            qa = max(q0, _first_at_least(k, d, qv0[d], qv1[d], ka0))
+            qb = min(q1, _first_at_least(k, d, qv0[d], qv1[d], ka1) - 1)
+            n_max = n_okb[qb + 1] - n_okb[qa] if qb >= qa else 0
+            if n_max < min_frames:
                 continue
             g = d if per_d else 0
             # a few probe moments first: a wrong pair rarely fits more than one of them
@@ -181,6 +211,8 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_a, e_b, k, w, tau2, min_frames, mi
                 r = _sampson(xa, i, kk, w[d, q], G, g, q, l0, l1, l2)
                 if r >= 2.25 * tau2:  # False for NaN (a not seen there)
                     missed += 1
+                    if missed > 1:  # refused already: the other probes cannot change that
+                        break
             if missed > 1:
                 continue
             n = 0
@@ -191,7 +223,7 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_a, e_b, k, w, tau2, min_frames, mi
             r2 = 0.0
             lo = np.inf
             hi = -np.inf
-            for q in range(q0, q1 + 1, qstep):
+            for q in range(q0 + (qa - q0 + qstep - 1) // qstep * qstep, qb + 1, qstep):
                 kk = k[d, q]
                 if kk < ka0 or kk >= ka1 or not okb[q]:
                     continue
@@ -204,7 +236,8 @@ def _consistency(xa, xb, cand_a, cand_b, G, e_a, e_b, k, w, tau2, min_frames, mi
                     continue
                 n += 1
                 if r >= tau2:
-                    if n - fit > max_miss:
+                    # even if every moment left fitted, the share would fall short
+                    if n - fit > max_miss or fit + (n_max - n) < min_share * n_max:
                         break
                     continue
                 if _degenerate(xa, i, kk, w[d, q], xb, j, q, e_a, e_b, g, epi_r2):
