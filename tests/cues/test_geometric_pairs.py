@@ -419,3 +419,43 @@ def test_a_disputed_camera_its_own_three_view_check_backs_is_kept():
     assert sorted(disputed_by_other_model(joint, sure, sift, 0.067, "", {"a": 0.8}, 0.8)[1]) == ["a"]
     assert sorted(disputed_by_other_model(joint, sure, sift, 0.067, "", {"d": 0.9}, 0.8)[0]) == ["a"]
     assert sorted(disputed_by_other_model(joint, sure, sift, 0.067, "", shares)[0]) == ["a", "d"]
+
+
+def _one_candidate(y_a: np.ndarray, y_b: np.ndarray, min_share: float):
+    """_consistency on one track pair under epipolar lines y_a = y_b (two cameras side by side),
+    at three offsets: a's frame q - 1, q, q + 1 for b's frame q (-1 where a has no frame).
+    Returns (number of consistent offsets, best offset index)."""
+    from vs_inspect.cues.geometric_pairs import _consistency
+
+    Ta, Tb = len(y_a), len(y_b)
+    xa = np.stack([np.full(Ta, 100.0), y_a], 1)[None]  # (1,Ta,2)
+    xb = np.stack([np.full(Tb, 300.0), y_b], 1)[None]
+    G = np.array([[0.0, 0, 0], [0, 0, -1], [0, 1, 0]])  # x_aᵀ G x_b = y_b - y_a
+    G = np.broadcast_to(G, (1, Tb, 3, 3)).copy()
+    e = np.broadcast_to([1.0, 0.0, 0.0], (1, Tb, 3)).copy()  # epipoles at infinity
+    k = np.arange(Tb)[None, :] + np.arange(-1, 2)[:, None]
+    k = np.where((k >= 0) & (k <= Ta - 2), k, -1).astype(np.int64)
+    w = np.zeros(k.shape)
+    n, best, _ = _consistency(xa, xb, np.zeros(1, np.int64), np.zeros(1, np.int64), G, e, e, k, w,
+                              4.0, 8, min_share, 2, 8.0, 1, 0.0)
+    return int(n[0]), int(best[0])
+
+
+def test_consistency_counts_a_pair_at_the_share_and_the_frame_count_it_needs_exactly():
+    """The vote's pruning (stop 54: only the moments both tracks are seen, left once the share
+    cannot be reached) must not refuse a pair that meets the bars exactly."""
+    y = 10.0 * np.arange(13)  # b's point sweeps 120 px across the horizontal epipolar lines
+    y_b = y[:12]
+    assert _one_candidate(y, y_b, 0.75) == (1, 1)  # a's frame q at b's frame q: every moment fits
+    # 9 of 12 moments fit, the 3 misses first: the share is 0.75 exactly, consistent
+    y_a = y.copy()
+    y_a[[0, 1, 2]] += 50.0
+    assert _one_candidate(y_a, y_b, 0.75) == (1, 1)
+    y_a[5] += 50.0  # 8 of 12: refused
+    assert _one_candidate(y_a, y_b, 0.75) == (0, -1)
+    # a seen on frames 0-8 only: 8 moments of b meet it (frames 0-7 interpolate to 8), min_frames
+    short = y.copy()
+    short[9:] = np.nan
+    assert _one_candidate(short, y_b, 0.75) == (1, 1)
+    short[8] = np.nan  # 7 moments: too few
+    assert _one_candidate(short, y_b, 0.75) == (0, -1)
