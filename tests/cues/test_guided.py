@@ -85,6 +85,25 @@ def test_guided_matching_by_homography_refuses_matches_off_the_transfer():
     assert np.array_equal(m[:, 0], m[:, 1])
 
 
+def test_a_keypoint_whose_line_or_transfer_is_at_infinity_fits_nothing_and_stops_nothing():
+    """A keypoint of a with (F x_a)_3 = 0 (or a homography sending it to infinity): held-out-3's
+    45° s40 crashed there with a division by zero (stop 54). Its line is still a line; the
+    homography's transfer is at infinity and fits no keypoint."""
+    rng = np.random.default_rng(3)
+    n = 40
+    xy_a = np.c_[rng.uniform(0, 640, n), rng.uniform(0, 480, n)]
+    xy_a[:5, 1] = 0.0  # on the top row: F's third row (0, 1, 0) gives them (F x_a)_3 = 0
+    xy_b = xy_a + [30.0, 0.0]  # a sideways move: the epipolar lines are the rows
+    F = np.array([[0.0, 0, 0], [0, 0, -1], [0, 1, 0]])  # x_bᵀ F x_a = y_a - y_b
+    desc_a = _sift_like(rng, n)
+    desc_b = _perturb(rng, desc_a, 3.0)
+    m = guided_matches(xy_a, desc_a, xy_b, desc_b, F, False)
+    assert set(range(5)) <= set(m[:, 0]) and np.array_equal(m[:, 0], m[:, 1])
+    H = np.array([[1.0, 0, 30.0], [0, 1, 0], [0, 1.0, 0]])  # sends the top row to infinity
+    m = guided_matches(xy_a, desc_a, xy_b, desc_b, H, True)
+    assert not set(range(5)) & set(m[:, 0])
+
+
 def test_guided_matching_refuses_wrong_shapes():
     rng = np.random.default_rng(2)
     d = _sift_like(rng, 5)
