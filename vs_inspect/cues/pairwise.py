@@ -147,7 +147,7 @@ def search_pair(xy_r, info_r, xy_v, info_v, index, **kwargs) -> PairGeometry | N
 
 
 def joint_coarse_offsets(ref: str, curves: dict[tuple[str, str], OffsetCurve], max_grid: int = 2_000_000
-                  ) -> tuple[dict[str, int], float] | None:
+                         ) -> tuple[dict[str, int], float] | None:
     """Coarse offsets Δ_rv of every camera v with a curve against ref that together explain the
     most: the sum of every pair's inlier share at Δ_uv = Δ_rv − Δ_ru (a triangle must close, so a
     wrong peak of one pair is outvoted by the two pairs that go round it). ({v: index of Δ_rv in
