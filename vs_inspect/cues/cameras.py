@@ -211,9 +211,17 @@ class CameraModels:
         unneeded XFeat build stops before SIFT's frames are registered."""
         cfg = self._cfg
         kind = cfg.features if cfg.features in LEARNED_FEATURES else "sift"
-        model = self._first_model = _build_model(
-            kind, self._frames, self._sizes, self._moving, cfg, self._tmp, self._seed,
-            before_mapping=self._xfeat.start if self._xfeat_possible else None)
+        try:
+            model = _build_model(kind, self._frames, self._sizes, self._moving, cfg, self._tmp, self._seed,
+                                 before_mapping=self._xfeat.start if self._xfeat_possible else None)
+        except InterruptedError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - a model that fails is every video's reason, not the end of the run
+            why = f"{kind.upper()}'s model failed ({type(exc).__name__}: {exc})"
+            log.warning("%s", why, exc_info=True)
+            model = _Model(kind, {}, None, self._tmp / "database.db", None, {},
+                           sum(len(v[0]) for v in self._frames.values()), (), failed=why)
+        self._first_model = model
         est = _estimate_from(model, *self._inputs, register=False)
         if est.unregistered and self._xfeat_possible:
             other, registered = self._xfeat_result()
@@ -590,6 +598,7 @@ class _Model:
     scales: dict[str, float]  # video -> SfM pixels per full-resolution pixel
     num_images: int
     image_pairs: tuple  # _image_pair_matches
+    failed: str | None = None  # why building it failed (then no reconstruction)
 
 
 def _videos_in(rec) -> set[str]:
@@ -664,9 +673,9 @@ def _estimate_from(model: _Model, frames_by_video, num_frames, moving, cfg: Came
     poses are slerped between its SfM frames. cancel: checked per registered frame."""
     rec = model.rec
     if rec is None:
-        return CameraEstimate({}, {n: "no reconstruction: too few matches between the frames "
-                                      "of the videos (static background)" for n in frames_by_video},
-                              None, None, model.num_images, 0, model.features, model.image_pairs)
+        why = model.failed or "no reconstruction: too few matches between the frames of the videos (static background)"
+        return CameraEstimate({}, dict.fromkeys(frames_by_video, why), None, None, model.num_images, 0,
+                              model.features, model.image_pairs)
     cams: dict[str, EstimatedCamera] = {}
     unreg: dict[str, str] = {}
     # video -> [(frame, cam_from_world (4,4), pycolmap camera, 3D points seen)]
