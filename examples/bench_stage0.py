@@ -310,14 +310,16 @@ def bench_arcs(args) -> None:
 
 
 def camera_models(stats) -> str:
-    """Where a run's cameras came from: "calibration", the features of the model kept, and with
-    two models tried how many videos the joint vote trusted on each ("xfeat (sift 0, xfeat 4)")."""
+    """Where a run's cameras came from: "calibration", the features of the model kept (or "moving
+    points" when their cameras were used), and with two models tried how many videos the joint
+    vote trusted on each ("xfeat (sift 0, xfeat 4)")."""
     sfm = stats.sfm or {}
     if not sfm:
         return stats.camera_source
     tried = sfm.get("models") or []
     counts = ", ".join(f"{m['features']} {len(m['trusted'])}" for m in tried)
-    return sfm["features"] + (f" ({counts})" if counts else "")
+    kept = "moving points" if (sfm.get("fallback") or {}).get("used") else sfm["features"]
+    return kept + (f" ({counts})" if counts else "")
 
 
 def main() -> None:
