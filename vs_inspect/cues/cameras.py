@@ -164,7 +164,7 @@ class CameraModels:
         self._workdir, self._seed = workdir, seed
         self._inputs = (frames_by_video, num_frames, moving, cfg, seed)
         self._registration = dict(frame_features=frame_features, frame_images=frame_images, progress=progress)
-        n_images = sum(len(v[0]) for v in frames_by_video.values())
+        self._n_images = n_images = sum(len(v[0]) for v in frames_by_video.values())
         self._xfeat_wanted = cfg.features == "auto" and xfeat_available()
         self._xfeat_possible = self._xfeat_wanted and n_images <= cfg.auto_xfeat_max_images
         if self._xfeat_wanted and not self._xfeat_possible:
@@ -219,8 +219,7 @@ class CameraModels:
         except Exception as exc:  # noqa: BLE001 - a model that fails is every video's reason, not the end of the run
             why = f"{kind.upper()}'s model failed ({type(exc).__name__}: {exc})"
             log.warning("%s", why, exc_info=True)
-            model = _Model(kind, {}, None, self._tmp / "database.db", None, {},
-                           sum(len(v[0]) for v in self._frames.values()), (), failed=why)
+            model = _Model(kind, {}, None, self._tmp / "database.db", None, {}, self._n_images, (), failed=why)
         self._first_model = model
         est = _estimate_from(model, *self._inputs, register=False)
         if est.unregistered and self._xfeat_possible:
