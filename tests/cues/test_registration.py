@@ -42,6 +42,43 @@ def test_opencv_sift_converted_matches_colmaps_own_descriptors():
     assert np.abs(colmap_sift(raw).astype(float) - raw).mean() > 5.0
 
 
+def _opencv_ratio_matches(q, kf, ratio=0.8):
+    """The brute-force matcher's ratio matches, as ratio_matches returned them before its BLAS path."""
+    good = [p[0] for p in cv2.BFMatcher(cv2.NORM_L2).knnMatch(q, kf, k=2)
+            if len(p) == 2 and p[0].distance < ratio * p[1].distance]
+    return (np.array([[m.queryIdx, m.trainIdx] for m in good], int).reshape(-1, 2),
+            np.array([m.distance for m in good], float))
+
+
+def test_ratio_matches_are_opencvs_brute_force_matches_bit_for_bit():
+    """SIFT's uint8 descriptors take one BLAS product instead of OpenCV's brute-force matcher; the
+    matches and their distances must be the matcher's exactly (exact ties, which the ratio test
+    drops; ratios at the bar), and descriptors where the product would not be exact keep the
+    matcher."""
+    from vs_inspect.cues.registration import _exact_two_nearest, ratio_matches
+
+    rng = np.random.default_rng(5)
+
+    def sift_like(n):
+        return colmap_sift(rng.gamma(0.5, 1.0, (n, 128)) ** 2).astype(np.float32)
+
+    q = sift_like(900)
+    near = np.clip(q[:300] + rng.integers(-3, 4, (300, 128)), 0, 255)  # true matches, a little off
+    kf = np.concatenate([sift_like(500), near, near[:40], q[300:340]]).astype(np.float32)  # ties, exact
+    kf[7] = kf[8]
+    big = rng.integers(0, 256, (300, 128)).astype(np.float32)  # squared norms ~ 2.8e6: not exact
+    cases = {"sift": (q, kf), "big": (big, big[::-1].copy() + 1), "float": (q + 0.25, kf)}
+    for name, (a, b) in cases.items():
+        want_pairs, want_cost = _opencv_ratio_matches(a, b)
+        pairs, cost = ratio_matches()(a, b)
+        assert np.array_equal(pairs, want_pairs) and np.array_equal(cost, want_cost), name
+        assert (_exact_two_nearest(a, b) is not None) == (name == "sift"), name
+    assert len(ratio_matches()(q, kf)[0]) > 250
+    # a ratio of 1 keeps every query whose two nearest differ, and drops exact ties
+    tie = np.concatenate([q[:5], q[:5]])
+    assert ratio_matches(1.0)(q[:5], tie)[0].shape == (0, 2) == _opencv_ratio_matches(q[:5], tie, 1.0)[0].shape
+
+
 def _scene(seed: int = 0, n: int = 400):
     """3D points with descriptors, a keyframe that sees them all, and the camera."""
     pycolmap = import_pycolmap()

@@ -128,13 +128,49 @@ def keyframes_of(rec, video: str, descriptors_of: Callable[[int], np.ndarray]) -
 Match = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
+# below this squared norm, integer descriptors give exact float32 dot products and distances
+# (every partial sum < 2^24), and distinct squared distances (< 2^22) distinct float32 roots
+_EXACT_NORM_SQ = 2.0 ** 20
+
+
+def _exact_two_nearest(q: np.ndarray, kf: np.ndarray) -> tuple[np.ndarray, ...] | None:
+    """The two nearest keyframe rows of each query row by L2 distance, ties to the lower index:
+    ((M,) first, (M,) its float32 distance, (M,) second, (M,) its distance), or None when the
+    descriptors are not integer-valued with squared norms under _EXACT_NORM_SQ. Then the result is
+    OpenCV's brute-force matcher's, bit for bit (|a|^2 + |b|^2 - 2ab is exact), from one BLAS
+    product: 2-3x faster on SIFT's uint8 descriptors."""
+    nq = np.einsum("ij,ij->i", q, q)
+    nk = np.einsum("ij,ij->i", kf, kf)
+    if (nq.max(initial=0.0) >= _EXACT_NORM_SQ or nk.max(initial=0.0) >= _EXACT_NORM_SQ
+            or not (np.array_equal(q, np.rint(q)) and np.array_equal(kf, np.rint(kf)))):
+        return None
+    d_sq = q @ kf.T
+    d_sq *= -2.0
+    d_sq += nq[:, None]
+    d_sq += nk[None, :]
+    rows = np.arange(len(q))
+    first = np.argmin(d_sq, axis=1)  # the lowest index among equals, as OpenCV's
+    first_d = np.sqrt(d_sq[rows, first])
+    d_sq[rows, first] = np.inf
+    second = np.argmin(d_sq, axis=1)
+    return first, first_d, second, np.sqrt(d_sq[rows, second])
+
+
 def ratio_matches(ratio: float = 0.8) -> Match:
-    """SIFT's matching: nearest neighbour by L2 distance, Lowe's ratio test; cost = distance."""
+    """SIFT's matching: nearest neighbour by L2 distance, Lowe's ratio test; cost = distance.
+    OpenCV's brute-force matcher, or the same answer from _exact_two_nearest where it is exact."""
     matcher = cv2.BFMatcher(cv2.NORM_L2)
 
     def match(q: np.ndarray, kf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        if len(kf) < 2:
+        if len(kf) < 2 or not len(q):
             return np.zeros((0, 2), int), np.zeros(0)
+        q, kf = np.asarray(q, np.float32), np.asarray(kf, np.float32)
+        nearest = _exact_two_nearest(q, kf)
+        if nearest is not None:
+            first, first_d, _, second_d = nearest
+            # compared in float64, as DMatch's float distances are in Python
+            good = np.nonzero(first_d.astype(np.float64) < ratio * second_d.astype(np.float64))[0]
+            return np.stack([good, first[good]], 1).astype(int), first_d[good].astype(float)
         good = [p[0] for p in matcher.knnMatch(q, kf, k=2) if len(p) == 2 and p[0].distance < ratio * p[1].distance]
         return (np.array([[m.queryIdx, m.trainIdx] for m in good], int).reshape(-1, 2),
                 np.array([m.distance for m in good], float))
