@@ -104,6 +104,53 @@ def test_a_keypoint_whose_line_or_transfer_is_at_infinity_fits_nothing_and_stops
     assert not set(range(5)) & set(m[:, 0])
 
 
+def _best_two_by_numpy(desc_a, desc_b, xy_a, xy_b, M, homography, max_sq_px):
+    """_best_two's answer from the full matrices: which pairs fit (the same float32 operations in
+    the same order), their integer distances, each row's and column's two smallest."""
+    f32 = np.float32
+    u, v = xy_a[:, :1].astype(f32), xy_a[:, 1:2].astype(f32)
+    p, q = xy_b[None, :, 0].astype(f32), xy_b[None, :, 1].astype(f32)
+    M = M.astype(f32)
+    l0, l1, l2 = (M[r, 0] * u + M[r, 1] * v + M[r, 2] for r in range(3))
+    if homography:
+        fits = (l0 / l2 - p) ** 2 + (l1 / l2 - q) ** 2 <= max_sq_px
+    else:
+        r0, r1 = M[0, 0] * p + M[1, 0] * q + M[2, 0], M[0, 1] * p + M[1, 1] * q + M[2, 1]
+        fits = (p * l0 + q * l1 + l2) ** 2 <= max_sq_px * (l0 * l0 + l1 * l1 + r0 * r0 + r1 * r1)
+    a, b = desc_a.astype(np.int64), desc_b.astype(np.int64)
+    d = np.where(fits, (a * a).sum(1)[:, None] + (b * b).sum(1)[None] - 2 * a @ b.T, np.iinfo(np.int64).max)
+
+    def rows(d, fits):
+        top = np.sort(d, axis=1)[:, :2]
+        return np.where(fits.any(1), np.argmin(d, axis=1), -1), top, fits.sum(1)
+    return (*rows(d, fits), *rows(d.T, fits.T))
+
+
+@pytest.mark.parametrize("homography", [False, True])
+def test_best_two_is_the_full_matrix_answer(homography):
+    """The fit test runs over all of b's keypoints, then only the fits are visited, eight flags
+    at a time: every fit is found, in order (the first of equal distances is the nearest), up to
+    the last keypoint of a count that is not a multiple of eight, and no padding is read."""
+    from vs_inspect.cues.guided import _best_two
+
+    rng = np.random.default_rng(4)
+    xy_a, xy_b, F = _two_views(rng, 203)
+    xy_b = xy_b[:-2]  # 201 keypoints: the last word half full
+    desc_a, desc_b = _sift_like(rng, 203), _sift_like(rng, 201)
+    desc_b[150] = desc_b[40]  # equal distances from every keypoint of a
+    H = np.array([[1.02, 0.01, 25.0], [-0.01, 0.98, 3.0], [1e-5, 0.0, 1.0]])
+    if homography:  # b's keypoints where H takes a's, a few px off
+        x = np.c_[xy_a[:201], np.ones(201)] @ H.T
+        xy_b = x[:, :2] / x[:, 2:] + rng.normal(0, 3.0, (201, 2))
+    M, band = (H, 400.0) if homography else (F, 64.0)
+    got = _best_two(desc_a, desc_b, xy_a.astype(np.float32), xy_b.astype(np.float32), M.astype(np.float32),
+                    homography, np.float32(band))
+    want = _best_two_by_numpy(desc_a, desc_b, xy_a, xy_b, M, homography, np.float32(band))
+    for name, g, w in zip(["best_a", "top_a", "fit_a", "best_b", "top_b", "fit_b"], got, want):
+        assert np.array_equal(g, w), name
+    assert got[2].sum() > 300 and got[5][-1] > 0  # many fits, the last keypoint among them
+
+
 def test_guided_matching_refuses_wrong_shapes():
     rng = np.random.default_rng(2)
     d = _sift_like(rng, 5)

@@ -11,7 +11,9 @@ pycolmap 4.2's: squared L2 distances of the uint8 descriptors, a keypoint off th
 distance 512, the test in float32. Measured against COLMAP's own guided matching on three scenes'
 databases: 760 of 761 pairs gave identical matches (the other one match apart), for 23-27 CPU-s
 instead of about 260 on the 720p one; 18.5 CPU-s since b's Sampson terms are computed once per
-keypoint (the same matches on all 264 pairs).
+keypoint (the same matches on all 264 pairs); since then the test runs over all of b's keypoints
+in one vectorised pass and only the fits are visited (2.3x faster with F, 7x with H, on 6000
+keypoints a side; the same answer bit for bit).
 
 Distances are exact integers, so the result does not depend on compilation or thread count.
 """
@@ -73,28 +75,38 @@ def _best_two(desc_a, desc_b, xy_a, xy_b, model, homography, max_sq_px):
         p, q = xy_b[j, 0], xy_b[j, 1]
         rb[j, 0] = M[0, 0] * p + M[1, 0] * q + M[2, 0]
         rb[j, 1] = M[0, 1] * p + M[1, 1] * q + M[2, 1]
+    px, py = xy_b[:, 0].copy(), xy_b[:, 1].copy()
+    r0, r1 = rb[:, 0].copy(), rb[:, 1].copy()
+    # which of b's keypoints fit a's keypoint i: one vectorised pass over b, then only the fits
+    # are visited, eight flags to a word (about 1 in 70 fits; this halves the time)
+    words = (m + 7) // 8
+    fits = np.zeros(8 * words, np.uint8)
+    fit_words = fits.view(np.uint64)
     for i in range(n):
         u, v = xy_a[i, 0], xy_a[i, 1]
         # F x_a (epipolar line in b) or H x_a (transferred point)
         l0 = M[0, 0] * u + M[0, 1] * v + M[0, 2]
         l1 = M[1, 0] * u + M[1, 1] * v + M[1, 2]
         l2 = M[2, 0] * u + M[2, 1] * v + M[2, 2]
-        tx, ty = l0 / l2, l1 / l2  # the transferred point (homography)
-        for j in range(m):
-            p, q = xy_b[j, 0], xy_b[j, 1]
-            if homography:
-                du = tx - p
-                dv = ty - q
-                fits = du * du + dv * dv <= max_sq_px
-            else:
-                # squared Sampson distance
-                e = p * l0 + q * l1 + l2
-                fits = e * e <= max_sq_px * (l0 * l0 + l1 * l1 + rb[j, 0] * rb[j, 0] + rb[j, 1] * rb[j, 1])
-            if not fits:  # NaN (point at infinity) fails too
+        if homography:
+            tx, ty = l0 / l2, l1 / l2  # the transferred point
+            for j in range(m):
+                du = tx - px[j]
+                dv = ty - py[j]
+                fits[j] = du * du + dv * dv <= max_sq_px  # NaN (point at infinity) fails too
+        else:
+            ll = l0 * l0 + l1 * l1
+            for j in range(m):
+                e = px[j] * l0 + py[j] * l1 + l2  # squared Sampson distance
+                fits[j] = e * e <= max_sq_px * (ll + r0[j] * r0[j] + r1[j] * r1[j])
+        for w in range(words):
+            if fit_words[w] == 0:
                 continue
-            d = sq_a[i] + sq_b[j] - 2 * _int_dot(desc_a[i], desc_b[j])
-            _keep_two(top_a, best_a, fit_a, i, j, d)
-            _keep_two(top_b, best_b, fit_b, j, i, d)
+            for j in range(8 * w, min(8 * w + 8, m)):
+                if fits[j]:
+                    d = sq_a[i] + sq_b[j] - 2 * _int_dot(desc_a[i], desc_b[j])
+                    _keep_two(top_a, best_a, fit_a, i, j, d)
+                    _keep_two(top_b, best_b, fit_b, j, i, d)
     return best_a, top_a, fit_a, best_b, top_b, fit_b
 
 
