@@ -69,14 +69,10 @@ def _best_two(desc_a, desc_b, xy_a, xy_b, model, homography, max_sq_px):
     top_b = np.full((m, 2), big, np.int64)
     fit_b = np.zeros(m, np.int64)
     M = model
+    px, py = xy_b[:, 0].copy(), xy_b[:, 1].copy()  # contiguous, for the vectorised passes
     # Fᵀ x_b, the Sampson denominator's b terms: once per keypoint, not per candidate
-    rb = np.empty((m, 2), np.float32)
-    for j in range(m):
-        p, q = xy_b[j, 0], xy_b[j, 1]
-        rb[j, 0] = M[0, 0] * p + M[1, 0] * q + M[2, 0]
-        rb[j, 1] = M[0, 1] * p + M[1, 1] * q + M[2, 1]
-    px, py = xy_b[:, 0].copy(), xy_b[:, 1].copy()
-    r0, r1 = rb[:, 0].copy(), rb[:, 1].copy()
+    r0 = M[0, 0] * px + M[1, 0] * py + M[2, 0]
+    r1 = M[0, 1] * px + M[1, 1] * py + M[2, 1]
     # which of b's keypoints fit a's keypoint i: one vectorised pass over b, then only the fits
     # are visited, eight flags to a word (2.3x faster where 1 in 70 fits, on random keypoints)
     words = (m + 7) // 8
@@ -97,7 +93,7 @@ def _best_two(desc_a, desc_b, xy_a, xy_b, model, homography, max_sq_px):
         else:
             ll = l0 * l0 + l1 * l1
             for j in range(m):
-                e = px[j] * l0 + py[j] * l1 + l2  # squared Sampson distance
+                e = px[j] * l0 + py[j] * l1 + l2  # x_bᵀ F x_a: the squared Sampson distance's numerator
                 fits[j] = e * e <= max_sq_px * (ll + r0[j] * r0[j] + r1[j] * r1[j])
         for w in range(words):
             if fit_words[w] == 0:

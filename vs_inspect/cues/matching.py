@@ -162,21 +162,24 @@ def match_by_sorting(sim: np.ndarray, ratio: float, mutual: bool) -> np.ndarray:
     best = np.take_along_axis(top2, order[:, :1], axis=1)[:, 0]
     s_best = np.take_along_axis(s2, order[:, :1], axis=1)[:, 0]
     s_second = np.take_along_axis(s2, order[:, 1:], axis=1)[:, 0]
-    d1 = np.sqrt(np.maximum(2 - 2 * s_best, 0))
-    d2 = np.sqrt(np.maximum(2 - 2 * s_second, 0))
-    ok = d1 < ratio * d2
-    if mutual:
-        back = np.argmax(sim, axis=0)
-        ok &= back[best] == np.arange(len(sim))
-    ia = np.nonzero(ok)[0]
-    return np.stack([ia, best[ia]], axis=1).astype(np.int64)
+    return _ratio_and_mutual(best, s_best, s_second, np.argmax(sim, axis=0) if mutual else None, ratio, mutual)
+
+
+@nb.njit(nogil=True, cache=True, fastmath={"reassoc"})
+def _sum_any_order(x):
+    """x's sum in any order (vectorised): NaN exactly when x holds a NaN or both infinities."""
+    s = x.dtype.type(0)
+    for k in range(x.shape[0]):
+        s += x[k]
+    return s
 
 
 @nb.njit(nogil=True, cache=True)
 def _rows_and_columns_best(sim):
     """One pass over (Na,Nb) similarities (Nb >= 2): each row's first argmax, its value and the
-    largest of the row's other values, and each column's first argmax; ok False when sim holds
-    a NaN (numpy's argmax has its own rule for NaN)."""
+    largest of the row's other values, and each column's first argmax; ok False when a row's sum
+    is NaN (a NaN, whose rule numpy's argmax has, or both infinities), checked per row by a
+    vectorised sum: a NaN test in the scan itself made it half again slower."""
     n, m = sim.shape
     best = np.zeros(n, np.int64)
     s_best = np.empty(n, sim.dtype)
@@ -184,17 +187,17 @@ def _rows_and_columns_best(sim):
     col_best = np.zeros(m, np.int64)
     col_max = sim[0].copy()
     for i in range(n):
-        b, v1, v2 = 0, sim[i, 0], -np.inf
-        if v1 != v1:
+        if np.isnan(_sum_any_order(sim[i])):
             return best, s_best, s_second, col_best, False
+        b, v1, v2 = 0, sim[i, 0], -np.inf
         for j in range(1, m):
             v = sim[i, j]
             if v > v1:
-                b, v1, v2 = j, v, v1
+                v2 = v1
+                v1 = v
+                b = j
             elif v > v2:
                 v2 = v
-            elif v != v:
-                return best, s_best, s_second, col_best, False
         best[i], s_best[i], s_second[i] = b, v1, v2
         for j in range(m):
             if sim[i, j] > col_max[j]:
@@ -206,7 +209,7 @@ def _rows_and_columns_best(sim):
 def _match_fast(sim: np.ndarray, ratio: float, mutual: bool) -> np.ndarray:
     """match_descriptors for ratio <= 1 from (Na,Nb) similarities, without sorting: the best is
     the row's argmax and the second best the row's largest other value (the same values as the
-    two largest of a partition), found with each column's argmax in one compiled pass (3x
+    two largest of a partition), found with each column's argmax in one compiled pass (2-2.4x
     faster than numpy's passes, the same pairs). A row whose two best are tied fails the test
     d1 < ratio d2 whichever of them is called best, so the pairs are the same."""
     best, s_best, s_second, back, ok = _rows_and_columns_best(sim)
@@ -230,7 +233,8 @@ def _ratio_and_mutual(best: np.ndarray, s_best: np.ndarray, s_second: np.ndarray
 
 
 def _match_fast_numpy(sim: np.ndarray, ratio: float, mutual: bool) -> np.ndarray:
-    """_match_fast by numpy's passes, for similarities that hold a NaN (numpy's argmax rules)."""
+    """_match_fast by numpy's passes, for similarities that hold a NaN (numpy's argmax rules)
+    or a row with both infinities."""
     rows = np.arange(len(sim))
     back = np.argmax(sim, axis=0) if mutual else None  # before sim is changed below
     best = np.argmax(sim, axis=1)

@@ -134,11 +134,12 @@ _EXACT_NORM_SQ = 2.0 ** 20
 
 
 def _exact_two_nearest(q: np.ndarray, kf: np.ndarray) -> tuple[np.ndarray, ...] | None:
-    """The two nearest keyframe rows of each query row by L2 distance, ties to the lower index:
-    ((M,) first, (M,) its float32 distance, (M,) second, (M,) its distance), or None when the
-    descriptors are not integer-valued with squared norms under _EXACT_NORM_SQ. Then the result is
-    OpenCV's brute-force matcher's, bit for bit (|a|^2 + |b|^2 - 2ab is exact), from one BLAS
-    product: 2-3x faster on SIFT's uint8 descriptors."""
+    """The nearest keyframe row of each query row by L2 distance, ties to the lower index, with
+    the float32 distances to it and to the second nearest: ((M,) first, (M,) its distance, (M,)
+    the second's distance), or None when the descriptors are not integer-valued with squared
+    norms under _EXACT_NORM_SQ. Then the result is OpenCV's brute-force matcher's, bit for bit
+    (|a|^2 + |b|^2 - 2ab is exact), from one BLAS product: 2-3x faster on SIFT's uint8
+    descriptors."""
     nq = np.einsum("ij,ij->i", q, q)
     nk = np.einsum("ij,ij->i", kf, kf)
     if (nq.max(initial=0.0) >= _EXACT_NORM_SQ or nk.max(initial=0.0) >= _EXACT_NORM_SQ
@@ -152,8 +153,7 @@ def _exact_two_nearest(q: np.ndarray, kf: np.ndarray) -> tuple[np.ndarray, ...] 
     first = np.argmin(d_sq, axis=1)  # the lowest index among equals, as OpenCV's
     first_d = np.sqrt(d_sq[rows, first])
     d_sq[rows, first] = np.inf
-    second = np.argmin(d_sq, axis=1)
-    return first, first_d, second, np.sqrt(d_sq[rows, second])
+    return first, first_d, np.sqrt(d_sq.min(axis=1))
 
 
 def ratio_matches(ratio: float = 0.8) -> Match:
@@ -167,7 +167,7 @@ def ratio_matches(ratio: float = 0.8) -> Match:
         q, kf = np.asarray(q, np.float32), np.asarray(kf, np.float32)
         nearest = _exact_two_nearest(q, kf)
         if nearest is not None:
-            first, first_d, _, second_d = nearest
+            first, first_d, second_d = nearest
             # compared in float64, as DMatch's float distances are in Python
             good = np.nonzero(first_d.astype(np.float64) < ratio * second_d.astype(np.float64))[0]
             return np.stack([good, first[good]], 1).astype(int), first_d[good].astype(float)
