@@ -13,6 +13,7 @@ from __future__ import annotations
 import os
 import threading
 import time
+from dataclasses import replace
 
 import cv2
 import numpy as np
@@ -51,7 +52,9 @@ def _database(tmp, threads: int, monkeypatch) -> dict:
     reader = pycolmap.ImageReaderOptions()
     reader.camera_model = "SIMPLE_RADIAL"
     reader.mask_path = str(tmp / "masks")
-    cameras._sift_database(db, tmp / "images", reader, CameraConfig(max_features=1024), few=False, seed=0)
+    # COLMAP's own extraction on every image (ASIFT's threads: test_static_images_get_asift_...)
+    cameras._sift_database(db, tmp / "images", reader, CameraConfig(max_features=1024, asift_per_view=0),
+                           few=False, seed=0)
     d = pycolmap.Database.open(db)
     try:
         images = {im.image_id: im.name for im in d.read_all_images()}
@@ -150,6 +153,53 @@ def test_sift_database_matches_only_the_chosen_pairs(tmp_path):
     assert {("v0/000000.jpg", "v0/000001.jpg"), ("v0/000000.jpg", "v0/000002.jpg"),
             ("v1/000000.jpg", "v1/000003.jpg"), ("v0/000000.jpg", "v1/000003.jpg")} <= matched
     assert len(matched) == 8 * 7 // 2 - 1
+
+
+def _features_in_database(tmp, name: str, cfg: CameraConfig, moving: dict[str, bool]) -> dict:
+    pycolmap = import_pycolmap()
+    reader = pycolmap.ImageReaderOptions()
+    reader.camera_model = "SIMPLE_RADIAL"
+    reader.mask_path = str(tmp / "masks")
+    db = tmp / f"{name}.db"
+    cameras._sift_database(db, tmp / "images", reader, cfg, few=False, seed=0, moving=moving)
+    d = pycolmap.Database.open(db)
+    try:
+        return {im.name: (np.asarray(d.read_keypoints(im.image_id))[:, :2],
+                          np.asarray(d.read_descriptors(im.image_id).data)) for im in d.read_all_images()}
+    finally:
+        d.close()
+
+
+def test_static_images_get_asift_features_and_moving_ones_colmaps(tmp_path):
+    """CameraConfig.asift_per_view: a static video's images hold ASIFT's features (within their
+    masks, COLMAP's pixel centres), the same with one OpenCV thread or two; a moving video's
+    COLMAP's own SIFT, as without ASIFT."""
+    from vs_inspect.cues.registration import affine_sift
+
+    _write_images(tmp_path / "images", tmp_path / "masks")
+    moving = {"v0": True, "v1": False}
+    cfg = CameraConfig(max_features=1024, sequence_overlap=1)
+    with_asift = _features_in_database(tmp_path, "asift", replace(cfg, asift_per_view=40), moving)
+    without = _features_in_database(tmp_path, "sift", replace(cfg, asift_per_view=0), moving)
+    assert with_asift.keys() == without.keys() and len(with_asift) == 8
+    for name, (xy, desc) in with_asift.items():
+        if name.startswith("v0/"):
+            np.testing.assert_array_equal(xy, without[name][0])
+            np.testing.assert_array_equal(desc, without[name][1])
+            continue
+        grey = cv2.imread(str(tmp_path / "images" / name), cv2.IMREAD_GRAYSCALE)
+        mask = cv2.imread(str(tmp_path / "masks" / (name + ".png")), cv2.IMREAD_GRAYSCALE)
+        threads = cv2.getNumThreads()
+        try:
+            cv2.setNumThreads(1)
+            want_xy, want_desc = affine_sift(grey, mask, 40)
+        finally:
+            cv2.setNumThreads(threads)
+        assert len(want_xy) > len(without[name][0]) > 100
+        np.testing.assert_array_equal(xy, want_xy + 0.5)
+        np.testing.assert_array_equal(desc, want_desc)
+        # the mask keeps features off the right half (its warped views blur its edge by a pixel or two)
+        assert xy[:, 0].max() < 163
 
 
 def test_lens_record_undistorts_as_the_tracks_were():

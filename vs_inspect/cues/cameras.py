@@ -403,6 +403,9 @@ def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool
     ext.sift.domain_size_pooling = few
     pycolmap.Database.open(db).close()  # import_images needs the file to exist
     pycolmap.import_images(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER, options=reader)
+    if cfg.asift_per_view:
+        _asift_static_images(db, img_dir, Path(reader.mask_path), cfg.asift_per_view, moving or {})
+    # COLMAP's extractor skips the images that have features already (the static ones with ASIFT)
     pycolmap.extract_features(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER,
                               reader_options=reader, extraction_options=ext,
                               device=pycolmap.Device.cpu)
@@ -424,6 +427,31 @@ def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool
         pycolmap.match_image_pairs(db, matching_options=mopt, pairing_options=pairing,
                                    verification_options=verification, device=pycolmap.Device.cpu)
     _guided_rematch(db, mopt.sift, verification)
+
+
+def _asift_static_images(db: Path, img_dir: Path, mask_dir: Path, per_view: int,
+                         moving: dict[str, bool]) -> None:
+    """ASIFT features (registration.affine_sift, per_view per simulated view) of every static
+    video's images written into the database, in COLMAP's form: cameras far apart around one floor
+    see it foreshortened along different headings, and SIFT matched almost none of it (README)."""
+    pycolmap = import_pycolmap()
+
+    from .registration import affine_sift
+
+    database = pycolmap.Database.open(db)
+    try:
+        for im in sorted(database.read_all_images(), key=lambda im: im.image_id):
+            if moving.get(im.name.split("/")[0], False):
+                continue
+            grey = cv2.imread(str(img_dir / im.name), cv2.IMREAD_GRAYSCALE)
+            mask = cv2.imread(str(mask_dir / (im.name + ".png")), cv2.IMREAD_GRAYSCALE)
+            xy, desc = affine_sift(grey, mask, per_view)
+            database.write_keypoints(im.image_id, xy + 0.5)  # COLMAP: pixel centres at +0.5
+            database.write_descriptors(im.image_id,
+                                       pycolmap.FeatureDescriptors(pycolmap.FeatureExtractorType.SIFT, desc))
+            log.info("%s: %d ASIFT features", im.name, len(xy))
+    finally:
+        database.close()
 
 
 def _guided_rematch(db: Path, sift_options, verification) -> None:

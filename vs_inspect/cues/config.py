@@ -213,6 +213,12 @@ class CameraConfig:
     """Estimated cameras, features auto: ALIKED's model is tried only when its SfM images make at most this many image pairs to match (sfm_image_pairs: 70 for 3 static cameras and a hand-held one, 237 with two hand-held, 411 for fencing1's three worn cameras). On fencing1 it made the camera step 615 s and trusted no video (the run took 655 s, 72 s without it); on held-out s21 (two hand-held) Stage 0 took 1941 s beside other runs (README, stop 50)."""
     auto_aliked_max_pixels: int = 500_000
     """Estimated cameras, features auto: ALIKED's model is tried only when every SfM image has at most this many pixels (640x480 and the clips' 910x512 do, 1280x720 does not). Its cost grows with the pixels: on the 4 x 10 s 720p timing scene its camera step took 1064 s (beside two other runs on 2 cores) and trusted no video, where the run without it took 155-159 s on an AMD EPYC (stop 47) and 372 s on an Intel Xeon (stop 51; README)."""
+    asift_per_view: int = field(default=300, metadata={
+        "flag": "--sfm-asift", "metavar": "N",
+        "help": "estimated cameras: a static camera's SfM image gets ASIFT features (SIFT on simulated tilts "
+                "and turns of it, OpenCV's AffineFeature), N per view, so that cameras facing one floor from "
+                "far apart headings match; 0: COLMAP's SIFT only"})
+    """Estimated cameras, SIFT's model: a static camera's one SfM image gets ASIFT features (Morel & Yu 2009: SIFT on about 40 simulated views of the image, tilted and turned, OpenCV's AffineFeature), this many per view, instead of COLMAP's SIFT; a moving camera's frames keep COLMAP's. Cameras around a scene see its floor foreshortened along different headings, where SIFT finds almost no common features. 0: off."""
     min_inliers: int = 30
     """Estimated cameras: inlier matches needed to start the reconstruction (half that to add an image); a camera whose images each see fewer 3D points is left out as not trusted."""
     fallback_from_tracks: bool = True

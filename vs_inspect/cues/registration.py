@@ -62,14 +62,30 @@ def colmap_sift(descriptors: np.ndarray) -> np.ndarray:
     return np.clip(np.round(512.0 * d), 0, 255).astype(np.uint8)
 
 
+def _colmap_like_sift(max_features: int):
+    # COLMAP's peak threshold (0.02 / 3 octave layers): the reconstruction's own detections
+    return cv2.SIFT_create(nfeatures=max_features, contrastThreshold=0.02)
+
+
+def affine_sift(grey: np.ndarray, mask: np.ndarray | None, per_view: int) -> tuple[np.ndarray, np.ndarray]:
+    """ASIFT (Morel & Yu 2009, OpenCV's AffineFeature): SIFT on the image seen with simulated
+    tilts and turns, each view's keypoints mapped back. grey (H,W) uint8; mask (H,W) uint8, > 0
+    where features may be; per_view: SIFT features kept per view. Returns ((N,2) float32 px,
+    pixel centres at integers; (N,128) COLMAP's uint8 L1-root descriptors). Same image, same
+    features (OpenCV concatenates the views in order)."""
+    kp, d = cv2.AffineFeature_create(_colmap_like_sift(per_view)).detectAndCompute(grey, mask)
+    if d is None or not len(kp):
+        return np.zeros((0, 2), np.float32), np.zeros((0, 128), np.uint8)
+    return np.array([p.pt for p in kp], np.float32), colmap_sift(d)
+
+
 def frame_features(grey: np.ndarray, moving: np.ndarray | None, frames: np.ndarray,
                    scale_xy: tuple[float, float], max_features: int,
                    dilate_px: int = 15) -> FrameFeatures:
     """SIFT on the given frames of a video, on the background. grey (T,H,W) uint8 working frames;
     moving (T,H,W) instance ids (> 0: a moving region, masked out after dilating by dilate_px,
     as for the reconstruction's own frames) or None; scale_xy: full px per working px."""
-    # COLMAP's peak threshold (0.02 / 3 octave layers): the reconstruction's own detections
-    sift = cv2.SIFT_create(nfeatures=max_features, contrastThreshold=0.02)
+    sift = _colmap_like_sift(max_features)
     kernel = np.ones((dilate_px, dilate_px), np.uint8)
     s = np.asarray(scale_xy, np.float64)
     xys, descs = [], []
