@@ -72,11 +72,11 @@ def track_config(args) -> TrackConfig:
 
 def camera_config(args) -> CameraConfig:
     """The camera estimation asked for on the command line (--features, --sfm-matcher,
-    --sfm-frames, --sfm-max-features, --sfm-aliked-frames)."""
+    --sfm-frames, --sfm-max-features, --sfm-aliked-frames, --sfm-asift)."""
     static_frames, moving_frames = args.sfm_frames
     return CameraConfig(features=args.features, xfeat_matcher=args.sfm_matcher, static_frames=static_frames,
                         moving_frames=moving_frames, max_features=args.sfm_max_features,
-                        auto_aliked_frames=args.sfm_aliked_frames)
+                        auto_aliked_frames=args.sfm_aliked_frames, asift_per_view=args.sfm_asift)
 
 
 def run(paths, calib, cfg=CueConfig()):
@@ -369,6 +369,8 @@ def main() -> None:
                        help="features per SfM frame")
         p.add_argument("--sfm-aliked-frames", type=int, metavar="N", default=CameraConfig.auto_aliked_frames,
                        help="--features auto: SfM frames per moving camera of ALIKED's model, tried last; 0: never")
+        p.add_argument("--sfm-asift", type=int, metavar="N", default=CameraConfig.asift_per_view,
+                       help="ASIFT features per simulated view on a static camera's SfM image; 0: COLMAP's SIFT")
     for p in (c, v):
         p.add_argument("--geometric", choices=["joint", "triangles"], default="joint",
                        help="geometric track pairs: every camera's offset chosen at once from all pairs' "

@@ -251,3 +251,15 @@ def test_the_moving_points_cameras_are_tried_when_no_model_is_trusted_for_any_vi
     # a model trusted for some video: not tried
     _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": {"a"}, "xfeat": set(), "moving points": {"a", "b"}})
     assert "moving points" not in [s[0] for s in seen] and stats["sfm"]["features"] == "sift"
+
+
+def test_the_record_says_when_sifts_static_images_had_asift_features(monkeypatch):
+    """result.json's cues.sfm names the static cameras' features of SIFT's model (ASIFT by default,
+    CameraConfig.asift_per_view), and says nothing of them with COLMAP's SIFT alone."""
+    from vs_inspect.cues.config import CameraConfig
+
+    _, stats = _moving_point_cameras(monkeypatch, ["a", "b", "c"])
+    assert stats["sfm"]["features"] == "sift"
+    assert stats["sfm"]["static_images"] == "ASIFT, 300 features per simulated view"
+    _, stats = _moving_point_cameras(monkeypatch, ["a", "b", "c"], CueConfig(camera=CameraConfig(asift_per_view=0)))
+    assert "static_images" not in stats["sfm"]

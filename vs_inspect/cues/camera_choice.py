@@ -219,6 +219,8 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, pairs: di
         stats["sfm"]["frame_registration"] = regs
     if est.features == "xfeat":
         stats["sfm"]["xfeat_matcher"] = cfg.camera.xfeat_matcher
+    if est.features == "sift" and cfg.camera.asift_per_view:  # the static cameras' images
+        stats["sfm"]["static_images"] = f"ASIFT, {cfg.camera.asift_per_view} features per simulated view"
     static = [n for n, v in vids.items() if v.camera_motion != "moving"]
     # a model resting on few points per image, or missing a static camera, is checked against the
     # moving points: such models can pass the point threshold with wrong focals and rotations
