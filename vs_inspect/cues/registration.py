@@ -11,6 +11,9 @@ gives the pose from those 2D-3D matches. The features are the reconstruction's k
 or a learned model's (XFeat, ALIKED, DISK on the frame at SfM resolution; mutual nearest
 neighbours by cosine, the rule of the XFeat model's own matching). A frame with too few inliers
 keeps the slerped pose of its neighbours (reported).
+
+Also here, as the other OpenCV SIFT in COLMAP's form: ASIFT (affine_sift), which SIFT's
+reconstruction uses for a static camera's image.
 """
 
 from __future__ import annotations
