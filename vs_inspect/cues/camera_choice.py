@@ -29,9 +29,16 @@ log = logging.getLogger(__name__)
 MOVING_POINTS = "moving points"  # the kind of the camera set _estimate builds from the moving points alone
 
 
+OWN = " own"  # a weak model's kind with this suffix: its own cameras, voted on after the moving points' failed
+
+
 def _owner(kind: str) -> str:
-    """Whose cameras a set of `kind` are, for messages: "SIFT's", "the moving points'"."""
-    return "the moving points'" if kind == MOVING_POINTS else f"{kind.upper()}'s"
+    """Whose cameras a set of `kind` are, for messages: "SIFT's", "the moving points'", "SIFT's own"."""
+    if kind == MOVING_POINTS:
+        return "the moving points'"
+    if kind.endswith(OWN):
+        return f"{kind.removesuffix(OWN).upper()}'s own"
+    return f"{kind.upper()}'s"
 
 
 @dataclass
@@ -116,18 +123,20 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, a
 
         memo: dict = {}
 
-        def attempt(est, other_peaks=None, other="", from_tracks=False) -> tuple[str, CameraSet] | None:
+        def attempt(est, other_peaks=None, other="", from_tracks=False,
+                    as_built=False) -> tuple[str, CameraSet] | None:
             own = _copy_stats(stats)
             events = DeferredSink(sink.options)
-            cams = _estimate(vids, cfg, own, all_pairs, est, from_tracks, memo)
+            cams = _estimate(vids, cfg, own, all_pairs, est, from_tracks, memo, as_built)
             if from_tracks and not (own["sfm"].get("fallback") or {}).get("used"):
                 return None  # est's own cameras again, already voted on
             out = vote_on_cameras(cams, vids, all_pairs, cfg, own, events, progress, estimated=True,
                                   other_peaks=other_peaks, other=other)
-            kind = MOVING_POINTS if from_tracks else est.features
+            kind = MOVING_POINTS if from_tracks else est.features + (OWN if as_built else "")
             return kind, dataclasses.replace(out, stats=own, events=events)
 
         kept_est = models.first()
+        first_est = kept_est
         kind, kept = attempt(kept_est)
         first_kind, first_peaks = kind, kept.peaks
         tried, failed = [(kind, kept)], []
@@ -159,6 +168,16 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, a
                 tried.append(points)
                 if points[1].used:
                     kind, kept = points
+        if (cfg.geometric.enabled and cfg.camera.weak_model_when_replaced and not kept.used
+                and (tried[0][1].stats["sfm"].get("fallback") or {}).get("used") and len(first_est.cameras) >= 2):
+            # the first model was weak and the moving points' cameras replaced its own, and no video
+            # was trusted on any set: its own cameras get their vote too (a weak model may be right:
+            # the moving points' cameras are judged on track pairs at their own coarse offsets)
+            log.info("the joint vote trusted no video on any camera set: trying %s own cameras", _owner(first_kind))
+            own = attempt(first_est, as_built=True)
+            tried.append(own)
+            if own[1].used:
+                kind, kept = own
         skipped = models.third_skipped
     kept.events.replay(sink)
     stats.clear()
@@ -199,12 +218,13 @@ def _note_other_models(dropped: dict[str, str], kept: CameraSet, others: list[tu
 
 
 def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, pairs: dict, est,
-              from_tracks: bool = False, memo: dict | None = None) -> CameraSet:
+              from_tracks: bool = False, memo: dict | None = None, as_built: bool = False) -> CameraSet:
     """The cameras of est (cameras.CameraEstimate) and the tracks undistorted with them, or the
     cameras the moving points give when their cameras explain the points better and est is weak,
     or from_tracks (the joint vote trusted no video on est's cameras; the moving points' cameras
     may then be fewer). memo: kept between calls on the same videos and pairs, so that the moving
-    points' cameras, which do not depend on est, are fitted once."""
+    points' cameras, which do not depend on est, are fitted once. as_built: est's cameras even
+    when weak (the moving points' are not fitted nor compared)."""
     from .cameras import lens_record, undistort_with_colmap
     from .pairwise import cameras_from_tracks, epipolar_fit_px
 
@@ -227,7 +247,7 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, pairs: di
     fewest = min((c.points_seen for c in est.cameras.values()), default=0)
     weak = len(est.cameras) < 2 or any(n not in est.cameras for n in static) or \
         fewest < 2 * cfg.camera.min_inliers
-    if (weak or from_tracks) and cfg.camera.fallback_from_tracks and len(static) >= 2:
+    if (weak or from_tracks) and cfg.camera.fallback_from_tracks and len(static) >= 2 and not as_built:
         ref = max(vids, key=lambda n: sum(len(p.index) for k, p in pairs.items() if n in k))
         infos = {n: v.info for n, v in vids.items()}
         xy = {n: v.xy_full for n, v in vids.items()}
