@@ -267,6 +267,17 @@ def test_the_record_says_when_sifts_static_images_had_asift_features(monkeypatch
     assert stats["sfm"]["static_images"] == "ASIFT, 300 features per simulated view"
     _, stats = _moving_point_cameras(monkeypatch, ["a", "b", "c"], CueConfig(camera=CameraConfig(asift_per_view=0)))
     assert "static_images" not in stats["sfm"]
+    # every camera moving: no static image had any
+    from types import SimpleNamespace
+
+    from vs_inspect.cues.camera_choice import _estimate
+    from vs_inspect.cues.cameras import CameraEstimate
+
+    est = CameraEstimate({}, dict.fromkeys("ab", "no reconstruction"), None, None, 2, 0, "sift")
+    vids = {n: SimpleNamespace(camera_motion="moving") for n in "ab"}
+    stats = {"dropped": {}, "camera_source": "estimated"}
+    _estimate(vids, CueConfig(), stats, {}, est)
+    assert stats["sfm"]["features"] == "sift" and "static_images" not in stats["sfm"]
 
 
 def test_a_weak_models_own_cameras_are_voted_on_when_the_moving_points_replaced_them_for_nothing(monkeypatch):

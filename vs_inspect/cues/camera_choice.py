@@ -239,9 +239,9 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, pairs: di
         stats["sfm"]["frame_registration"] = regs
     if est.features == "xfeat":
         stats["sfm"]["xfeat_matcher"] = cfg.camera.xfeat_matcher
-    if est.features == "sift" and cfg.camera.asift_per_view:  # the static cameras' images
-        stats["sfm"]["static_images"] = f"ASIFT, {cfg.camera.asift_per_view} features per simulated view"
     static = [n for n, v in vids.items() if v.camera_motion != "moving"]
+    if est.features == "sift" and cfg.camera.asift_per_view and static:  # the static cameras' images
+        stats["sfm"]["static_images"] = f"ASIFT, {cfg.camera.asift_per_view} features per simulated view"
     # a model resting on few points per image, or missing a static camera, is checked against the
     # moving points: such models can pass the point threshold with wrong focals and rotations
     fewest = min((c.points_seen for c in est.cameras.values()), default=0)
