@@ -45,13 +45,19 @@ def _write_images(folder, masks):
             cv2.imwrite(str(masks / f"v{v}" / f"{k:06d}.jpg.png"), mask)
 
 
+def _reader(masks):
+    """COLMAP's image reader options as _build_model sets them, with the masks of _write_images."""
+    reader = import_pycolmap().ImageReaderOptions()
+    reader.camera_model = "SIMPLE_RADIAL"
+    reader.mask_path = str(masks)
+    return reader
+
+
 def _database(tmp, threads: int, monkeypatch) -> dict:
     pycolmap = import_pycolmap()
     monkeypatch.setattr(cameras, "SFM_THREADS", threads)
     db = tmp / f"db{threads}.db"
-    reader = pycolmap.ImageReaderOptions()
-    reader.camera_model = "SIMPLE_RADIAL"
-    reader.mask_path = str(tmp / "masks")
+    reader = _reader(tmp / "masks")
     # COLMAP's own extraction on every image (ASIFT's threads: test_static_images_get_asift_...)
     cameras._sift_database(db, tmp / "images", reader, CameraConfig(max_features=1024, asift_per_view=0),
                            few=False, seed=0)
@@ -134,9 +140,7 @@ def test_sfm_image_pairs_match_a_moving_video_sequentially():
 def test_sift_database_matches_only_the_chosen_pairs(tmp_path):
     _write_images(tmp_path / "images", tmp_path / "masks")
     pycolmap = import_pycolmap()
-    reader = pycolmap.ImageReaderOptions()
-    reader.camera_model = "SIMPLE_RADIAL"
-    reader.mask_path = str(tmp_path / "masks")
+    reader = _reader(tmp_path / "masks")
     db = tmp_path / "db.db"
     cameras._sift_database(db, tmp_path / "images", reader, CameraConfig(max_features=1024, sequence_overlap=1),
                            few=False, seed=0, moving={"v0": True, "v1": False})
@@ -157,9 +161,7 @@ def test_sift_database_matches_only_the_chosen_pairs(tmp_path):
 
 def _features_in_database(tmp, name: str, cfg: CameraConfig, moving: dict[str, bool]) -> dict:
     pycolmap = import_pycolmap()
-    reader = pycolmap.ImageReaderOptions()
-    reader.camera_model = "SIMPLE_RADIAL"
-    reader.mask_path = str(tmp / "masks")
+    reader = _reader(tmp / "masks")
     db = tmp / f"{name}.db"
     cameras._sift_database(db, tmp / "images", reader, cfg, few=False, seed=0, moving=moving)
     d = pycolmap.Database.open(db)
