@@ -3,7 +3,9 @@ $VS_INSPECT_DATA); tests that need it skip with a reason when it is absent."""
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -19,8 +21,12 @@ os.environ.setdefault("XDG_DATA_HOME", str(REPO / ".cache" / "xdg-data"))
 # import, and tests/test_engine.py's two-node cluster needs the second one)
 os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
 os.environ.setdefault("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")
-# sync/demo write recordings/<run>.rrd by default; keep the tests' ones out of the checkout
-os.environ.setdefault("VS_INSPECT_RECORDINGS", tempfile.mkdtemp(prefix="vs-inspect-test-recordings-"))
+# sync/demo write recordings/<run>.rrd by default; keep the tests' ones out of the checkout, in a
+# folder removed when the session ends (each run left one behind in /tmp before)
+if "VS_INSPECT_RECORDINGS" not in os.environ:
+    _recordings = tempfile.mkdtemp(prefix="vs-inspect-test-recordings-")
+    os.environ["VS_INSPECT_RECORDINGS"] = _recordings
+    atexit.register(shutil.rmtree, _recordings, ignore_errors=True)
 
 
 def shared_data_dir() -> Path:
