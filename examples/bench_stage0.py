@@ -8,7 +8,9 @@
     PYTHONPATH=. python examples/bench_stage0.py speed
     # rendered scenes with their exact calibration, with and without the geometric track pairs
     PYTHONPATH=. python examples/bench_stage0.py rendered --seeds 0 1 2
-    # scenes whose cameras share a view (arcs of 30-90°), estimated cameras: offsets over 2 frames
+    # scenes whose cameras share a view (arcs of 30-90°), estimated cameras: offsets over 2 frames,
+    # and the cameras against the truth (camera px: the true moving points' distance from their
+    # epipolar lines, median / worst camera pair)
     PYTHONPATH=. python examples/bench_stage0.py arcs [--scenes a60_c4m1_s12 ...] [--set held-out|tuning|held-out-2|held-out-3] [--calibrated] [--features F] --workdir W
     # caliscope, visualsync and rendered take the track settings too, e.g. the tracks of before:
     PYTHONPATH=. python examples/bench_stage0.py rendered --seeds 0 1 2 --klt-window 21 --no-anchor
@@ -34,12 +36,12 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np  # noqa: F401  (before pycolmap)
+import numpy as np  # before pycolmap
 
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from vs_inspect.bench.arcs import SCENE_SETS, frame_errors, parse_scene, summarize  # noqa: E402
+from vs_inspect.bench.arcs import SCENE_SETS, camera_errors_px, frame_errors, parse_scene, summarize  # noqa: E402
 from vs_inspect.bench.datasets import corner_sync_bias_s, load_caliscope, read_caliscope_frame_times  # noqa: E402
 from vs_inspect.cues import CueConfig, MatchConfig, extract_cues  # noqa: E402
 from vs_inspect.cues.config import CAMERA_FEATURES, CameraConfig, GeometricPairConfig, TrackConfig  # noqa: E402
@@ -275,8 +277,8 @@ def bench_arcs(args) -> None:
     except ValueError as exc:
         raise SystemExit(f"bench_stage0.py arcs: {exc}") from None
     all_errors: list[float | None] = []
-    print("| scene | reference | offsets (frames; null = unresolved) | cameras | stage 0 s | sync s |")
-    print("| --- | --- | --- | --- | --- | --- |")
+    print("| scene | reference | offsets (frames; null = unresolved) | cameras | camera px | stage 0 s | sync s |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
     with (contextlib.nullcontext(args.workdir) if args.workdir else tempfile.TemporaryDirectory()) as tmp:
         for sc in scenes:
             folder, scene_cfg = Path(tmp) / sc.name, sc.scene_config()
@@ -290,7 +292,7 @@ def bench_arcs(args) -> None:
                                               progress=False)
             except InputError as exc:
                 all_errors.extend([None] * (len(truth) - 1))  # every offset but the reference's null
-                print(f"| {sc.name} | - | Stage 0 failed: {exc} | - | {time.perf_counter() - t0:.1f} | - |", flush=True)
+                print(f"| {sc.name} | - | Stage 0 failed: {exc} | - | - | {time.perf_counter() - t0:.1f} | - |", flush=True)
                 continue
             t1 = time.perf_counter()
             res = sync_bundle(bundle, progress=False)
@@ -299,14 +301,44 @@ def bench_arcs(args) -> None:
             all_errors.extend(errors.values())
             shown = ", ".join(f"{v} " + ("null" if e is None else f"{e:+.2f}" + (" **over 2**" if abs(e) > 2 else ""))
                               for v, e in errors.items())
-            print(f"| {sc.name} | {res.reference} | {shown} | {camera_models(stats)} | {t1 - t0:.1f} | {t2 - t1:.1f} |",
-                  flush=True)
+            print(f"| {sc.name} | {res.reference} | {shown} | {camera_models(stats)} | {camera_px(folder, bundle, stats)} "
+                  f"| {t1 - t0:.1f} | {t2 - t1:.1f} |", flush=True)
     s = summarize(all_errors)
     med = "-" if s.median_abs_frames is None else f"{s.median_abs_frames:.2f}"
     mx = "-" if s.max_abs_frames is None else f"{s.max_abs_frames:.2f}"
     print(f"\n{len(scenes)} scenes, {s.offsets} offsets: {s.resolved} resolved ({s.within_1} within 1 frame, "
           f"{s.from_1_to_2} at 1-2 frames, **{s.over_2} over 2 frames**), {s.offsets - s.resolved} null; "
           f"|error| median {med}, max {mx} frames")
+
+
+def camera_px(folder: Path, bundle, stats) -> str:
+    """The cameras against the scene's truth (vs_inspect.bench.arcs.camera_errors_px): the median
+    and the largest over the camera pairs of their true points' median distance from the
+    epipolar lines, in px ("-": fewer than two cameras)."""
+    import cv2
+
+    from vs_inspect.cues.cameras import undistort_with_lens
+    from vs_inspect.io.calibration import load_calibration
+
+    names = [v.name for v in bundle.videos]
+    truth = load_calibration(folder / "calibration.json", names)
+    lens = (stats.sfm or {}).get("lens") or {}
+    # the tracks were undistorted with the estimated lens, or with the calibration's
+    undistort = {n: (lambda xy, n=n: undistort_with_lens(lens[n], bundle.cameras[n].K.reshape(-1, 3, 3)[0], xy))
+                 for n in lens if n in bundle.cameras}
+    for n, cal in truth.items():
+        if n not in undistort and np.any(cal.dist):
+            undistort[n] = lambda xy, cal=cal: cv2.undistortPoints(
+                xy.reshape(-1, 1, 2).astype(np.float64), cal.K, cal.dist, P=cal.K).reshape(-1, 2)
+    trajectories = np.load(folder / "trajectories.npz")
+    errors = camera_errors_px(bundle.cameras, truth,
+                              {v.name: v.timestamps_s for v in bundle.videos},
+                              json.loads((folder / "gt.json").read_text())["offsets_s"],
+                              trajectories["times_global_s"], trajectories["points_world"], undistort)
+    if not errors:
+        return "-"
+    px = list(errors.values())
+    return f"{float(np.median(px)):.2f} / {max(px):.2f}"
 
 
 def camera_models(stats) -> str:

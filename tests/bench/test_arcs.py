@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
-from vs_inspect.bench.arcs import SCENE_SETS, frame_errors, parse_scene, summarize
+from vs_inspect.bench.arcs import SCENE_SETS, camera_errors_px, frame_errors, parse_scene, summarize
+from vs_inspect.geometry.epipolar import look_at
+from vs_inspect.io.calibration import CameraCalibration
+from vs_inspect.types import CameraTrack
 
 
 def test_parse_scene_and_its_rendering_settings():
@@ -53,3 +57,47 @@ def test_summarize_counts_the_offsets_over_two_frames():
     assert s.max_abs_frames == pytest.approx(36.6)
     empty = summarize([None, None])
     assert (empty.resolved, empty.over_2, empty.median_abs_frames) == (0, 0, None)
+
+
+def _turned(T: np.ndarray, deg: float) -> np.ndarray:
+    """cam_from_world turned by deg about the camera's own y axis."""
+    c, s = np.cos(np.radians(deg)), np.sin(np.radians(deg))
+    out = T.copy()
+    out[:3] = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]]) @ T[:3]
+    return out
+
+
+def test_camera_errors_are_zero_for_the_true_cameras_and_grow_with_a_turn():
+    """Points moving through the view of two static cameras and a hand-held one (per-frame
+    poses, 60 of its 90 frames not valid); a camera turned by two degrees leaves its pairs'
+    true points off their epipolar lines, the others not."""
+    rng = np.random.default_rng(1)
+    K = np.array([[500.0, 0, 320], [0, 500, 240], [0, 0, 1]])
+    g = np.linspace(-1.0, 4.0, 601)
+    start = rng.uniform(-1, 1, (40, 3)) * [1.5, 1.5, 0.5]
+    velocity = rng.uniform(-1, 1, (40, 3)) * 0.4
+    points = start[:, None] + velocity[:, None] * g[None, :, None]  # (M,G,3)
+    static = {n: look_at(np.array(c), np.zeros(3)) for n, c in (("a", (0, -6, 1.5)), ("b", (5, -3, 1.5)))}
+    fps, frames = 30.0, 90
+    hand = np.stack([look_at(np.array([-4 + 0.01 * k, -4.0, 1.5]), np.zeros(3)) for k in range(frames)])
+    truth = {n: CameraCalibration(K, np.zeros(5), T, (640, 480)) for n, T in static.items()}
+    truth["c"] = CameraCalibration(K, np.zeros(5), hand, (640, 480))
+    stamps = {n: np.arange(frames) / fps for n in truth}
+    offsets = {"a": 0.0, "b": 0.4, "c": 0.1}
+    valid = np.ones(frames, bool)
+    valid[:60] = False
+    exact = {n: CameraTrack(K, cal.cam_from_world) for n, cal in truth.items()}
+    unsure = hand.copy()
+    unsure[:60] = [_turned(T, 5.0) for T in hand[:60]]  # wrong poses where not valid: never used
+    exact["c"] = CameraTrack(K, unsure, valid)
+    got = camera_errors_px(exact, truth, stamps, offsets, g, points)
+    assert set(got) == {("a", "b"), ("a", "c"), ("b", "c")}
+    assert max(got.values()) < 1e-6
+    turned = dict(exact, b=CameraTrack(K, _turned(static["b"], 2.0)))
+    off = camera_errors_px(turned, truth, stamps, offsets, g, points)
+    assert off[("a", "b")] > 1.0 and off[("b", "c")] > 1.0 and off[("a", "c")] < 1e-6
+    # the points are undistorted as the tracks were: a shift there is an error too
+    shifted = camera_errors_px(exact, truth, stamps, offsets, g, points, undistort={"a": lambda xy: xy + [0.0, 3.0]})
+    assert shifted[("a", "b")] > 0.5 and shifted[("b", "c")] < 1e-6
+    # a camera with no estimate is left out
+    assert set(camera_errors_px({"a": exact["a"], "b": exact["b"]}, truth, stamps, offsets, g, points)) == {("a", "b")}

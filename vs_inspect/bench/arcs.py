@@ -9,9 +9,13 @@ which 1 hand-held, seed 12, rendered as `vs-inspect synth-video --arc-deg 60 --c
 
 from __future__ import annotations
 
+import itertools
 import re
 import statistics
+from collections.abc import Callable
 from dataclasses import dataclass
+
+import numpy as np
 
 SCENE_SECONDS = 6.0
 _NAME = re.compile(r"a(\d+)_c(\d+)m(\d+)_s(\d+)")
@@ -96,3 +100,78 @@ def summarize(errors: list[float | None]) -> ArcSummary:
                       over_2=sum(e > 2 for e in got),
                       median_abs_frames=statistics.median(got) if got else None,
                       max_abs_frames=max(got) if got else None)
+
+
+def _pose_at(T: np.ndarray, k: int) -> np.ndarray:
+    return T if T.ndim == 2 else T[k]
+
+
+def camera_errors_px(estimated: dict, truth: dict, timestamps_s: dict[str, np.ndarray],
+                     offsets_s: dict[str, float], times_global_s: np.ndarray, points_world: np.ndarray,
+                     undistort: dict[str, Callable[[np.ndarray], np.ndarray]] | None = None,
+                     every: int = 3) -> dict[tuple[str, str], float]:
+    """How well estimated cameras explain a scene's true moving points: {(a, b): median over the
+    points of their mean distance (px) from each other's epipolar line}, for every pair of videos
+    that both have an estimated camera. Stage 1's cue is exactly these distances, so they say
+    how much of an offset's error the cameras can account for.
+
+    estimated: name -> types.CameraTrack (pinhole; per frame for a moving camera, whose frames
+    outside its valid ones are skipped); truth: name -> io.calibration.CameraCalibration;
+    timestamps_s: name -> (T,) local frame times; offsets_s: the true offsets (DESIGN.md);
+    times_global_s (G,), points_world (M,G,3): the scene's points over time (trajectories.npz).
+    At every `every`-th frame of b, the points at that moment are projected with the true
+    cameras (at a's frame nearest to it, and with the true lens), kept where both images see
+    them, and undistorted like the tracks (undistort: name -> function of (N,2) px; none: as
+    they are)."""
+    import cv2
+
+    from ..geometry.epipolar import epipolar_lines, fundamental_from_cameras, line_distance
+
+    def seen(name: str, k: int, X: np.ndarray) -> np.ndarray:
+        cal = truth[name]
+        T = _pose_at(np.asarray(cal.cam_from_world, np.float64), k)
+        rvec, _ = cv2.Rodrigues(T[:3, :3])
+        xy, _ = cv2.projectPoints(X.reshape(-1, 1, 3), rvec, T[:3, 3], np.asarray(cal.K, np.float64),
+                                  np.asarray(cal.dist, np.float64))
+        xy = xy.reshape(-1, 2)
+        depth = X @ T[2, :3] + T[2, 3]
+        w, h = cal.size if cal.size is not None else (np.inf, np.inf)
+        inside = (depth > 0) & (xy[:, 0] >= 0) & (xy[:, 1] >= 0) & (xy[:, 0] < w) & (xy[:, 1] < h)
+        return np.where(inside[:, None], xy, np.nan)
+
+    out = {}
+    names = [n for n in estimated if n in truth and n in timestamps_s and n in offsets_s]
+    for a, b in itertools.combinations(sorted(names), 2):
+        ea, eb = estimated[a], estimated[b]
+        ta, tb = np.asarray(timestamps_s[a], np.float64), np.asarray(timestamps_s[b], np.float64)
+        dist = []
+        for kb in range(0, len(tb), max(1, every)):
+            g = tb[kb] + offsets_s[b]
+            if not times_global_s[0] <= g <= times_global_s[-1]:
+                continue
+            ka = int(np.argmin(np.abs(ta + offsets_s[a] - g)))
+            half = 0.5 * (ta[1] - ta[0]) if len(ta) > 1 else 0.0
+            if abs(ta[ka] + offsets_s[a] - g) > half + 1e-9:
+                continue  # a was not recording then
+            if any(e.valid is not None and not e.valid[k] for e, k in ((ea, ka), (eb, kb))):
+                continue
+            i = int(np.clip(np.searchsorted(times_global_s, g), 1, len(times_global_s) - 1))
+            w = (g - times_global_s[i - 1]) / (times_global_s[i] - times_global_s[i - 1])
+            X = (1.0 - w) * points_world[:, i - 1] + w * points_world[:, i]  # (M,3) at g
+            xa, xb = seen(a, ka, X), seen(b, kb, X)
+            ok = np.isfinite(xa).all(1) & np.isfinite(xb).all(1)
+            if not ok.any():
+                continue
+            xa, xb = xa[ok], xb[ok]
+            if undistort:
+                xa = undistort[a](xa) if a in undistort else xa
+                xb = undistort[b](xb) if b in undistort else xb
+            Ka = ea.K if ea.K.ndim == 2 else ea.K[ka]
+            Kb = eb.K if eb.K.ndim == 2 else eb.K[kb]
+            F = fundamental_from_cameras(Ka, _pose_at(ea.cam_from_world, ka), Kb, _pose_at(eb.cam_from_world, kb))
+            d_a = line_distance(epipolar_lines(F, xb), xa)
+            d_b = line_distance(epipolar_lines(np.swapaxes(F, -1, -2), xa), xb)
+            dist.append(0.5 * (d_a + d_b))
+        if dist:
+            out[(a, b)] = float(np.median(np.concatenate(dist)))
+    return out
