@@ -315,10 +315,8 @@ def camera_px(folder: Path, bundle, stats) -> str:
     """The cameras against the scene's truth (vs_inspect.bench.arcs.camera_errors_px): the median
     and the largest over the camera pairs of their true points' median distance from the
     epipolar lines, in px ("-": fewer than two cameras)."""
-    import cv2
-
     from vs_inspect.cues.cameras import undistort_with_lens
-    from vs_inspect.io.calibration import load_calibration
+    from vs_inspect.io.calibration import load_calibration, undistort_points
 
     names = [v.name for v in bundle.videos]
     truth = load_calibration(folder / "calibration.json", names)
@@ -327,9 +325,7 @@ def camera_px(folder: Path, bundle, stats) -> str:
     undistort = {n: (lambda xy, n=n: undistort_with_lens(lens[n], bundle.cameras[n].K.reshape(-1, 3, 3)[0], xy))
                  for n in lens if n in bundle.cameras}
     for n, cal in truth.items():
-        if n not in undistort and np.any(cal.dist):
-            undistort[n] = lambda xy, cal=cal: cv2.undistortPoints(
-                xy.reshape(-1, 1, 2).astype(np.float64), cal.K, cal.dist, P=cal.K).reshape(-1, 2)
+        undistort.setdefault(n, lambda xy, cal=cal: undistort_points(cal, xy))
     trajectories = np.load(folder / "trajectories.npz")
     errors = camera_errors_px(bundle.cameras, truth,
                               {v.name: v.timestamps_s for v in bundle.videos},

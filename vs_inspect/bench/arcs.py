@@ -143,15 +143,16 @@ def camera_errors_px(estimated: dict, truth: dict, timestamps_s: dict[str, np.nd
     names = [n for n in estimated if n in truth and n in timestamps_s and n in offsets_s]
     for a, b in itertools.combinations(sorted(names), 2):
         ea, eb = estimated[a], estimated[b]
-        ta, tb = np.asarray(timestamps_s[a], np.float64), np.asarray(timestamps_s[b], np.float64)
+        ga = np.asarray(timestamps_s[a], np.float64) + offsets_s[a]  # a's frames on the global clock
+        gb = np.asarray(timestamps_s[b], np.float64) + offsets_s[b]
+        half = 0.5 * (ga[1] - ga[0]) if len(ga) > 1 else 0.0
         dist = []
-        for kb in range(0, len(tb), max(1, every)):
-            g = tb[kb] + offsets_s[b]
+        for kb in range(0, len(gb), max(1, every)):
+            g = gb[kb]
             if not times_global_s[0] <= g <= times_global_s[-1]:
                 continue
-            ka = int(np.argmin(np.abs(ta + offsets_s[a] - g)))
-            half = 0.5 * (ta[1] - ta[0]) if len(ta) > 1 else 0.0
-            if abs(ta[ka] + offsets_s[a] - g) > half + 1e-9:
+            ka = int(np.argmin(np.abs(ga - g)))
+            if abs(ga[ka] - g) > half + 1e-9:
                 continue  # a was not recording then
             if any(e.valid is not None and not e.valid[k] for e, k in ((ea, ka), (eb, kb))):
                 continue
