@@ -10,7 +10,8 @@
     PYTHONPATH=. python examples/bench_stage0.py rendered --seeds 0 1 2
     # scenes whose cameras share a view (arcs of 30-90°), estimated cameras: offsets over 2 frames,
     # and the cameras against the truth (camera px: the true moving points' distance from their
-    # epipolar lines, median / worst camera pair)
+    # epipolar lines, median / worst camera pair) and the track pairs against the truth (the share
+    # whose two tracks follow one body point, two points, or a track no rigid point)
     PYTHONPATH=. python examples/bench_stage0.py arcs [--scenes a60_c4m1_s12 ...] [--set held-out|tuning|held-out-2|held-out-3] [--calibrated] [--features F] --workdir W
     # caliscope, visualsync and rendered take the track settings too, e.g. the tracks of before:
     PYTHONPATH=. python examples/bench_stage0.py rendered --seeds 0 1 2 --klt-window 21 --no-anchor
@@ -27,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import json
 import logging
 import re
@@ -41,7 +43,8 @@ import numpy as np  # before pycolmap
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from vs_inspect.bench.arcs import SCENE_SETS, camera_errors_px, frame_errors, parse_scene, summarize  # noqa: E402
+from vs_inspect.bench.arcs import (SCENE_SETS, PairTruth, camera_errors_px, fit_body_points, frame_errors,  # noqa: E402
+                                   judge_pairs, parse_scene, summarize)
 from vs_inspect.bench.datasets import corner_sync_bias_s, load_caliscope, read_caliscope_frame_times  # noqa: E402
 from vs_inspect.cues import CueConfig, MatchConfig, extract_cues  # noqa: E402
 from vs_inspect.cues.config import CAMERA_FEATURES, CameraConfig, GeometricPairConfig, TrackConfig  # noqa: E402
@@ -277,8 +280,9 @@ def bench_arcs(args) -> None:
     except ValueError as exc:
         raise SystemExit(f"bench_stage0.py arcs: {exc}") from None
     all_errors: list[float | None] = []
-    print("| scene | reference | offsets (frames; null = unresolved) | cameras | camera px | stage 0 s | sync s |")
-    print("| --- | --- | --- | --- | --- | --- | --- |")
+    print("| scene | reference | offsets (frames; null = unresolved) | cameras | camera px "
+          "| track pairs: same / other point / not rigid | stage 0 s | sync s |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
     with (contextlib.nullcontext(args.workdir) if args.workdir else tempfile.TemporaryDirectory()) as tmp:
         for sc in scenes:
             folder, scene_cfg = Path(tmp) / sc.name, sc.scene_config()
@@ -292,7 +296,7 @@ def bench_arcs(args) -> None:
                                               progress=False)
             except InputError as exc:
                 all_errors.extend([None] * (len(truth) - 1))  # every offset but the reference's null
-                print(f"| {sc.name} | - | Stage 0 failed: {exc} | - | - | {time.perf_counter() - t0:.1f} | - |", flush=True)
+                print(f"| {sc.name} | - | Stage 0 failed: {exc} | - | - | - | {time.perf_counter() - t0:.1f} | - |", flush=True)
                 continue
             t1 = time.perf_counter()
             res = sync_bundle(bundle, progress=False)
@@ -302,7 +306,7 @@ def bench_arcs(args) -> None:
             shown = ", ".join(f"{v} " + ("null" if e is None else f"{e:+.2f}" + (" **over 2**" if abs(e) > 2 else ""))
                               for v, e in errors.items())
             print(f"| {sc.name} | {res.reference} | {shown} | {camera_models(stats)} | {camera_px(folder, bundle, stats)} "
-                  f"| {t1 - t0:.1f} | {t2 - t1:.1f} |", flush=True)
+                  f"| {true_pairs(sc, bundle, stats)} | {t1 - t0:.1f} | {t2 - t1:.1f} |", flush=True)
     s = summarize(all_errors)
     med = "-" if s.median_abs_frames is None else f"{s.median_abs_frames:.2f}"
     mx = "-" if s.max_abs_frames is None else f"{s.max_abs_frames:.2f}"
@@ -335,6 +339,34 @@ def camera_px(folder: Path, bundle, stats) -> str:
         return "-"
     px = list(errors.values())
     return f"{float(np.median(px)):.2f} / {max(px):.2f}"
+
+
+def true_pairs(sc, bundle, stats) -> str:
+    """The bundle's cross-view track pairs against the scene's true motion
+    (vs_inspect.bench.arcs.judge_pairs): the share of pairs whose two tracks follow one body
+    point (within 5 cm), two different points, or a track no rigid point, of all pairs."""
+    from vs_inspect.cues.cameras import distort_with_lens
+    from vs_inspect.synth.world import make_scene
+
+    scene = make_scene(sc.scene_config())
+    bodies = [b.world_from_body for b in scene.world.bodies if b.moving]
+    lens = (stats.sfm or {}).get("lens") or {}
+    fits = {}
+    for cam in scene.cameras:
+        if cam.name not in bundle.tracks:
+            continue
+        xy = bundle.tracks[cam.name].xy
+        if cam.name in lens:  # back to the video's pixels (the rendered cameras have no distortion)
+            xy = distort_with_lens(lens[cam.name], bundle.cameras[cam.name].K.reshape(-1, 3, 3)[0], xy)
+        fits[cam.name] = fit_body_points(xy, cam.global_times_s, cam.K, cam.pose_fn(cam.global_times_s), bodies)
+    total = PairTruth(0, 0, 0)
+    for (a, b), tp in bundle.pairs.items():
+        got = judge_pairs(tp.index, fits[a], fits[b])
+        total = PairTruth(*(x + y for x, y in zip(dataclasses.astuple(total), dataclasses.astuple(got))))
+    if not total.total:
+        return "-"
+    return (f"{100 * total.same_point / total.total:.0f} / {100 * total.other_point / total.total:.0f} / "
+            f"{100 * total.not_rigid / total.total:.0f} % of {total.total}")
 
 
 def camera_models(stats) -> str:

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vs_inspect.bench.arcs import SCENE_SETS, camera_errors_px, frame_errors, parse_scene, summarize
-from vs_inspect.geometry.epipolar import look_at
+from vs_inspect.bench.arcs import (SCENE_SETS, PairTruth, camera_errors_px, fit_body_points, frame_errors,
+                                   judge_pairs, parse_scene, summarize)
+from vs_inspect.geometry.epipolar import look_at, project
 from vs_inspect.io.calibration import CameraCalibration
 from vs_inspect.types import CameraTrack
 
@@ -101,3 +102,59 @@ def test_camera_errors_are_zero_for_the_true_cameras_and_grow_with_a_turn():
     assert shifted[("a", "b")] > 0.5 and shifted[("b", "c")] < 1e-6
     # a camera with no estimate is left out
     assert set(camera_errors_px({"a": exact["a"], "b": exact["b"]}, truth, stamps, offsets, g, points)) == {("a", "b")}
+
+
+def _moving_body(spin: float, speed: float, height: float):
+    """world_from_body(g) (G,4,4): a body turning about its vertical axis while it walks."""
+    def pose(g):
+        g = np.asarray(g, np.float64)
+        c, s = np.cos(spin * g), np.sin(spin * g)
+        W = np.zeros((len(g), 4, 4))
+        W[:, 0, 0], W[:, 0, 1], W[:, 1, 0], W[:, 1, 1] = c, -s, s, c
+        W[:, 2, 2] = W[:, 3, 3] = 1.0
+        W[:, :3, 3] = np.stack([speed * g - 1.0, 0.3 * np.sin(g), np.full_like(g, height)], 1)
+        return W
+    return pose
+
+
+def test_track_pairs_are_judged_against_the_true_body_points():
+    """Tracks that are exact projections of points on two moving bodies, seen by a static and a
+    hand-held camera: each track is traced to its body point; a pair of one point is the same
+    point, a pair of two points (on one body or two) is not, and a track that jumps from one
+    point to another halfway follows no body point."""
+    rng = np.random.default_rng(3)
+    K = np.array([[500.0, 0, 320], [0, 500, 240], [0, 0, 1]])
+    frames, fps = 60, 30.0
+    g = 0.5 + np.arange(frames) / fps
+    bodies = [_moving_body(0.8, 0.6, 1.0), _moving_body(-0.5, 0.4, 0.4)]
+    on_body = [rng.uniform(-0.25, 0.25, (6, 3)) for _ in bodies]
+    static = look_at(np.array([0.0, -6.0, 1.5]), np.array([0.0, 0.0, 0.8]))
+    hand = np.stack([look_at(np.array([5.0 - 0.02 * k, -3.0, 1.6]), np.array([0.0, 0.0, 0.8])) for k in range(frames)])
+
+    def tracks(cams):
+        cams = np.broadcast_to(cams, (frames, 4, 4))
+        out = []
+        for W, pts in zip((f(g) for f in bodies), on_body):
+            X = np.einsum("tij,mj->mti", W[:, :3, :3], pts) + W[None, :, :3, 3]  # (M,T,3)
+            out.append(np.stack([project(K, cams[t], X[:, t]) for t in range(frames)], 1))
+        return np.concatenate(out)  # (12,T,2): body 0's points, then body 1's
+
+    xa, xb = tracks(static), tracks(hand)
+    xa[2, :20] = np.nan  # unseen for a while: still its point
+    jumped = np.concatenate([xa[0, :30], xa[1, 30:]])  # slides from point 0 to point 1
+    short = np.full((frames, 2), np.nan)
+    short[:5] = xa[3, :5]  # too short to say
+    xa = np.concatenate([xa, jumped[None], short[None]])
+    fit_a = fit_body_points(xa, g, K, static, bodies)
+    fit_b = fit_body_points(xb, g, K, hand, bodies)
+    assert list(fit_a.body[:12]) == [0] * 6 + [1] * 6 and list(fit_b.body) == [0] * 6 + [1] * 6
+    assert np.allclose(fit_a.point_body[:6], on_body[0], atol=1e-3)
+    assert np.allclose(fit_b.point_body[6:], on_body[1], atol=1e-3)
+    assert fit_a.residual_px[:12].max() < 1e-3
+    assert fit_a.body[12] == -1 and fit_a.residual_px[12] > 1.5  # the slid track
+    assert fit_a.body[13] == -1 and np.isinf(fit_a.residual_px[13])  # the short one
+    same = np.stack([np.arange(12), np.arange(12)], 1)
+    assert judge_pairs(same, fit_a, fit_b) == PairTruth(12, 0, 0)
+    # another point of body 0, a point of body 1, and two pairs with a track that follows no point
+    got = judge_pairs(np.array([[0, 1], [0, 7], [12, 0], [13, 3]]), fit_a, fit_b)
+    assert (got.same_point, got.other_point, got.not_rigid, got.total) == (0, 2, 2, 4)

@@ -208,7 +208,8 @@ def test_lens_record_undistorts_as_the_tracks_were():
     """result.json's cues.sfm.lens (plain data) with the camera's K undistorts image points exactly
     as the estimated camera undistorted the tracks, and the lens is not a no-op."""
     pycolmap = import_pycolmap()
-    from vs_inspect.cues.cameras import EstimatedCamera, lens_record, undistort_with_colmap, undistort_with_lens
+    from vs_inspect.cues.cameras import (EstimatedCamera, distort_with_lens, lens_record, undistort_with_colmap,
+                                        undistort_with_lens)
     from vs_inspect.types import CameraTrack
     colmap_camera = pycolmap.Camera(model="SIMPLE_RADIAL", width=640, height=360, params=[300.0, 320.0, 180.0, 0.08])
     K = np.array([[600.0, 0, 639.5], [0, 600.0, 359.5], [0, 0, 1]])
@@ -223,6 +224,11 @@ def test_lens_record_undistorts_as_the_tracks_were():
     # k > 0 pushed a corner outwards: undone, it moves inwards by tens of px; the centre stays
     assert np.linalg.norm(got[0, 0] - [639.5, 359.5]) < np.linalg.norm(xy[0, 0] - [639.5, 359.5]) - 10
     np.testing.assert_allclose(got[0, 1], [640.0, 360.0], atol=1e-6)
+    # and distort_with_lens takes the points back to where the video had them
+    back = distort_with_lens(lens, K, got)
+    seen = np.isfinite(xy).all(-1)
+    np.testing.assert_allclose(back[seen], xy[seen], atol=1e-6)
+    assert np.isnan(back[1, 1]).all()
 
 
 def _two_views():

@@ -176,3 +176,72 @@ def camera_errors_px(estimated: dict, truth: dict, timestamps_s: dict[str, np.nd
         if dist:
             out[(a, b)] = float(np.median(np.concatenate(dist)))
     return out
+
+
+@dataclass(frozen=True)
+class BodyPointFit:
+    """Which rigid moving body point each track of one video follows (the scene's truth)."""
+
+    body: np.ndarray  # (N,) int index into the bodies given, -1: no body point within fit_px
+    point_body: np.ndarray  # (N,3) m, the point in its body's frame (NaN where body is -1)
+    residual_px: np.ndarray  # (N,) median distance of the track from that point's projection (inf: too short)
+
+
+def fit_body_points(xy: np.ndarray, global_times_s: np.ndarray, K: np.ndarray, cam_from_world: np.ndarray,
+                    bodies: list[Callable[[np.ndarray], np.ndarray]], fit_px: float = 1.5,
+                    min_frames: int = 8) -> BodyPointFit:
+    """For every track of xy (N,T,2 px, undistorted, NaN where unseen): the body point whose
+    projection it follows best. bodies: world_from_body(global times (G,)) -> (G,4,4) of each
+    moving body; global_times_s (T,): the true global time of each frame; cam_from_world (4,4)
+    or (T,4,4): the true camera. As the body moves against the camera, the track's frames see
+    one body point from many places, so the point is triangulated in the body's frame (linear,
+    least squares) and judged by its reprojection. A track on an occluding edge, or one that
+    slid from one point to another, follows none."""
+    N, T = xy.shape[:2]
+    cams = np.broadcast_to(np.asarray(cam_from_world, np.float64), (T, 4, 4))
+    P = np.einsum("ij,tjk->tik", np.asarray(K, np.float64), cams[:, :3])  # (T,3,4)
+    poses = [np.asarray(f(np.asarray(global_times_s, np.float64))) for f in bodies]  # each (T,4,4)
+    body = np.full(N, -1)
+    point = np.full((N, 3), np.nan)
+    residual = np.full(N, np.inf)
+    for n in range(N):
+        seen = np.isfinite(xy[n]).all(1)
+        if seen.sum() < min_frames:
+            continue
+        x = xy[n, seen].astype(np.float64)
+        for bi, W in enumerate(poses):
+            M = np.einsum("tij,tjk->tik", P[seen], W[seen])  # (F,3,4) image from body
+            A = np.concatenate([x[:, :1] * M[:, 2] - M[:, 0], x[:, 1:] * M[:, 2] - M[:, 1]])
+            X, *_ = np.linalg.lstsq(A[:, :3], -A[:, 3], rcond=None)
+            p = M @ np.append(X, 1.0)
+            if (p[:, 2] <= 0).any():
+                continue
+            r = float(np.median(np.linalg.norm(p[:, :2] / p[:, 2:] - x, axis=1)))
+            if r < residual[n]:
+                residual[n], body[n], point[n] = r, bi, X
+    body[residual > fit_px] = -1
+    point[body < 0] = np.nan
+    return BodyPointFit(body, point, residual)
+
+
+@dataclass(frozen=True)
+class PairTruth:
+    """Cross-view track pairs judged against the scene's true motion."""
+
+    same_point: int  # both tracks follow one body point (within same_point_m)
+    other_point: int  # both follow a body point, but not the same one
+    not_rigid: int  # a track of the pair follows no body point (BodyPointFit.body -1)
+
+    @property
+    def total(self) -> int:
+        return self.same_point + self.other_point + self.not_rigid
+
+
+def judge_pairs(index: np.ndarray, fit_a: BodyPointFit, fit_b: BodyPointFit,
+                same_point_m: float = 0.05) -> PairTruth:
+    """index (P,2): track pairs (track of a, track of b)."""
+    ia, ib = np.asarray(index, np.int64).reshape(-1, 2).T
+    rigid = (fit_a.body[ia] >= 0) & (fit_b.body[ib] >= 0)
+    near = np.linalg.norm(fit_a.point_body[ia] - fit_b.point_body[ib], axis=1) <= same_point_m
+    same = rigid & (fit_a.body[ia] == fit_b.body[ib]) & near
+    return PairTruth(int(same.sum()), int((rigid & ~same).sum()), int((~rigid).sum()))

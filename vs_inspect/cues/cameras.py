@@ -870,6 +870,22 @@ def undistort_with_lens(lens: dict, K: np.ndarray, xy: np.ndarray) -> np.ndarray
     return _undistort(cc, lens["sfm_scale"], np.asarray(K, np.float64), xy)
 
 
+def distort_with_lens(lens: dict, K: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """The inverse of undistort_with_lens: (...,2) pinhole px of K (3,3) -> full-resolution
+    OpenCV px through the lens_record (where the video's own pixels were)."""
+    pycolmap = import_pycolmap()
+    cc = pycolmap.Camera(model=lens["model"], width=lens["width"], height=lens["height"], params=lens["params"])
+    K = np.asarray(K, np.float64)
+    shp = xy.shape
+    flat = xy.reshape(-1, 2).astype(np.float64)
+    ok = np.isfinite(flat).all(1)
+    out = np.full_like(flat, np.nan)
+    if ok.any():
+        rays = np.column_stack([(flat[ok] - [K[0, 2], K[1, 2]]) / [K[0, 0], K[1, 1]], np.ones(ok.sum())])
+        out[ok] = np.asarray(cc.img_from_cam(rays, check_cheirality=False)) / lens["sfm_scale"] - 0.5
+    return out.reshape(shp)
+
+
 def _undistort(colmap_camera, sfm_scale: float, K: np.ndarray, xy: np.ndarray) -> np.ndarray:
     shp = xy.shape
     flat = xy.reshape(-1, 2).astype(np.float64)
