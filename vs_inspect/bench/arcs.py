@@ -239,7 +239,9 @@ class PairTruth:
 
 def judge_pairs(index: np.ndarray, fit_a: BodyPointFit, fit_b: BodyPointFit,
                 same_point_m: float = 0.05) -> PairTruth:
-    """index (P,2): track pairs (track of a, track of b)."""
+    """Track pairs index (P,2) (track of a, track of b) counted by what their tracks follow
+    (fit_body_points of each video): one point of one body (the two points within same_point_m
+    metres in the body's frame), two different points, or, for at least one track, none."""
     ia, ib = np.asarray(index, np.int64).reshape(-1, 2).T
     rigid = (fit_a.body[ia] >= 0) & (fit_b.body[ib] >= 0)
     near = np.linalg.norm(fit_a.point_body[ia] - fit_b.point_body[ib], axis=1) <= same_point_m

@@ -863,18 +863,20 @@ def lens_record(cam: EstimatedCamera) -> dict:
             "height": int(cc.height), "sfm_scale": float(cam.sfm_scale)}
 
 
+def _lens_camera(lens: dict):
+    """The pycolmap.Camera of a lens_record."""
+    pycolmap = import_pycolmap()
+    return pycolmap.Camera(model=lens["model"], width=lens["width"], height=lens["height"], params=lens["params"])
+
+
 def undistort_with_lens(lens: dict, K: np.ndarray, xy: np.ndarray) -> np.ndarray:
     """(...,2) full-resolution OpenCV px through a lens_record -> pinhole px of K (3,3)."""
-    pycolmap = import_pycolmap()
-    cc = pycolmap.Camera(model=lens["model"], width=lens["width"], height=lens["height"], params=lens["params"])
-    return _undistort(cc, lens["sfm_scale"], np.asarray(K, np.float64), xy)
+    return _undistort(_lens_camera(lens), lens["sfm_scale"], np.asarray(K, np.float64), xy)
 
 
 def distort_with_lens(lens: dict, K: np.ndarray, xy: np.ndarray) -> np.ndarray:
     """The inverse of undistort_with_lens: (...,2) pinhole px of K (3,3) -> full-resolution
     OpenCV px through the lens_record (where the video's own pixels were)."""
-    pycolmap = import_pycolmap()
-    cc = pycolmap.Camera(model=lens["model"], width=lens["width"], height=lens["height"], params=lens["params"])
     K = np.asarray(K, np.float64)
     shp = xy.shape
     flat = xy.reshape(-1, 2).astype(np.float64)
@@ -882,7 +884,8 @@ def distort_with_lens(lens: dict, K: np.ndarray, xy: np.ndarray) -> np.ndarray:
     out = np.full_like(flat, np.nan)
     if ok.any():
         rays = np.column_stack([(flat[ok] - [K[0, 2], K[1, 2]]) / [K[0, 0], K[1, 1]], np.ones(ok.sum())])
-        out[ok] = np.asarray(cc.img_from_cam(rays, check_cheirality=False)) / lens["sfm_scale"] - 0.5
+        sfm = np.asarray(_lens_camera(lens).img_from_cam(rays, check_cheirality=False))
+        out[ok] = sfm / lens["sfm_scale"] - 0.5  # COLMAP puts pixel centres at +0.5
     return out.reshape(shp)
 
 
