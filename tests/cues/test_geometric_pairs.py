@@ -17,6 +17,7 @@ from vs_inspect.cues.geometric_pairs import (
     geometric_pairs,
     joint_offsets,
     joint_vote_share,
+    rival_offsets,
     supporters,
 )
 from vs_inspect.geometry.epipolar import fundamental_from_cameras, look_at, project
@@ -459,3 +460,28 @@ def test_consistency_counts_a_pair_at_the_share_and_the_frame_count_it_needs_exa
     assert _one_candidate(short, y_b, 0.75) == (1, 1)
     short[8] = np.nan  # 7 moments: too few
     assert _one_candidate(short, y_b, 0.75) == (0, -1)
+
+
+def test_a_camera_with_a_rival_offset_in_three_views_and_in_its_votes_is_not_sure():
+    """Held-out-2 s22 in small: the joint vote puts the hand-held d one period of a repeated
+    motion off (+2.317 s; truth +1.100 s); its pairs also vote for the truth, and its three-view
+    check follows more trajectories there (21 against 16)."""
+    joint = JointChoice({"a": 0.0, "b": 1.1, "c": -1.1, "d": 2.317}, 128.0, {"a": 39.0, "b": 36.0, "c": 5.4, "d": 8.7})
+    found = {("a", "b"): _voted({1.1: 500}), ("a", "c"): _voted({-1.1: 300}), ("b", "c"): _voted({-2.2: 220}),
+             ("a", "d"): _voted({2.283: 37, 1.1: 23}), ("b", "d"): _voted({1.217: 67, 0.0: 47}),
+             ("c", "d"): _voted({3.417: 27, 2.2: 24})}
+    sure = dict.fromkeys("abcd", True)
+    best = {"d": (1.1, 21, 16)}
+    out = rival_offsets(found, joint, sure, best, 0.2, 0.3)
+    assert list(out) == ["d"]
+    assert "follows 21 trajectories at +1.100 s against 16 at its joint offset +2.317 s" in out["d"]
+    assert "a__d 0.62" in out["d"] and "b__d 0.70" in out["d"] and "c__d 0.89" in out["d"]
+    # one pair that all but rules the rival out keeps it sure (held-out-3 s45's cam0: 0.15)
+    ruled_out = {**found, ("c", "d"): _voted({3.417: 27, 2.2: 3})}
+    assert rival_offsets(ruled_out, joint, sure, best, 0.2, 0.3) == {}
+    # a rival as near as a peak's own width, or with fewer trajectories than the joint offset, is none
+    assert rival_offsets(found, joint, sure, {"d": (2.15, 21, 16)}, 0.2, 0.3) == {}
+    assert rival_offsets(found, joint, sure, {"d": (1.1, 16, 16)}, 0.2, 0.3) == {}
+    # only sure cameras are judged, against the other sure cameras' pairs
+    assert rival_offsets(found, joint, {**sure, "d": False}, best, 0.2, 0.3) == {}
+    assert list(rival_offsets(ruled_out, joint, {**sure, "c": False}, best, 0.2, 0.3)) == ["d"]

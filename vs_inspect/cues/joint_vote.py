@@ -76,15 +76,29 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
         three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, sink)
         sure = {n: ok and (n not in three_view or three_view[n].passed) for n, ok in sure.items()}
     dissent = {}
+    if three_view and cfg.geometric.three_view_rival_frames > 0:
+        from .geometric_pairs import rival_offsets
+
+        best = {n: (chk.best_offset_s, chk.best_supporters, chk.supporters) for n, chk in three_view.items()
+                if chk.best_offset_s is not None}
+        dissent = rival_offsets({k: gs for k, (_, gs) in found.items()}, joint, sure, best,
+                                cfg.geometric.three_view_rival_frames * coarsest,
+                                cfg.geometric.three_view_rival_vote_share)
+        for n, why in dissent.items():
+            sure[n] = False
+            msg = f"joint vote not sure of {n}: {why}"
+            sink.stage_event("cues", msg)
+            log.warning(msg)
     # after the three-view check, which triangulates the pairs of the cameras sure then (without
     # the hand-held camera this refuses, stop 43's sweep seed 1 left its static cam2 too few
     # trajectories); estimated cameras only: with a calibration a right pair had 0.35
     if cfg.geometric.joint_min_pair_share > 0 and estimated and joint is not None:
         from .geometric_pairs import dissenting_cameras
 
-        dissent = dissenting_cameras({k: gs for k, (_, gs) in found.items()}, joint, sure,
-                                     cfg.geometric.joint_min_pair_share)
-        for n, why in dissent.items():
+        disputed = dissenting_cameras({k: gs for k, (_, gs) in found.items()}, joint, sure,
+                                      cfg.geometric.joint_min_pair_share)
+        dissent.update(disputed)
+        for n, why in disputed.items():
             sure[n] = False
             msg = f"joint vote not sure of {n}: {why}"
             sink.stage_event("cues", msg)
