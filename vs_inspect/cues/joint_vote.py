@@ -76,6 +76,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
         three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, sink)
         sure = {n: ok and (n not in three_view or three_view[n].passed) for n, ok in sure.items()}
     dissent = {}
+    # three_view is only filled for estimated cameras (a calibration's are given)
     if three_view and cfg.geometric.three_view_rival_frames > 0:
         from .geometric_pairs import rival_offsets
 
