@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import dataclasses
 import json
 import logging
 import re
@@ -43,7 +42,7 @@ import numpy as np  # before pycolmap
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from vs_inspect.bench.arcs import (SCENE_SETS, PairTruth, camera_errors_px, fit_body_points, frame_errors,  # noqa: E402
+from vs_inspect.bench.arcs import (SCENE_SETS, camera_errors_px, fit_body_points, frame_errors,  # noqa: E402
                                    judge_pairs, parse_scene, summarize)
 from vs_inspect.bench.datasets import corner_sync_bias_s, load_caliscope, read_caliscope_frame_times  # noqa: E402
 from vs_inspect.cues import CueConfig, MatchConfig, extract_cues  # noqa: E402
@@ -326,7 +325,7 @@ def camera_px(folder: Path, bundle, stats) -> str:
     truth = load_calibration(folder / "calibration.json", names)
     lens = (stats.sfm or {}).get("lens") or {}
     # the tracks were undistorted with the estimated lens, or with the calibration's
-    undistort = {n: (lambda xy, n=n: undistort_with_lens(lens[n], bundle.cameras[n].K.reshape(-1, 3, 3)[0], xy))
+    undistort = {n: (lambda xy, n=n: undistort_with_lens(lens[n], first_K(bundle, n), xy))
                  for n in lens if n in bundle.cameras}
     for n, cal in truth.items():
         undistort.setdefault(n, lambda xy, cal=cal: undistort_points(cal, xy))
@@ -357,16 +356,19 @@ def true_pairs(sc, bundle, stats) -> str:
             continue
         xy = bundle.tracks[cam.name].xy
         if cam.name in lens:  # back to the video's pixels (the rendered cameras have no distortion)
-            xy = distort_with_lens(lens[cam.name], bundle.cameras[cam.name].K.reshape(-1, 3, 3)[0], xy)
+            xy = distort_with_lens(lens[cam.name], first_K(bundle, cam.name), xy)
         fits[cam.name] = fit_body_points(xy, cam.global_times_s, cam.K, cam.pose_fn(cam.global_times_s), bodies)
-    total = PairTruth(0, 0, 0)
-    for (a, b), tp in bundle.pairs.items():
-        got = judge_pairs(tp.index, fits[a], fits[b])
-        total = PairTruth(*(x + y for x, y in zip(dataclasses.astuple(total), dataclasses.astuple(got))))
-    if not total.total:
+    judged = [judge_pairs(tp.index, fits[a], fits[b]) for (a, b), tp in bundle.pairs.items()]
+    total = sum(j.total for j in judged)
+    if not total:
         return "-"
-    return (f"{100 * total.same_point / total.total:.0f} / {100 * total.other_point / total.total:.0f} / "
-            f"{100 * total.not_rigid / total.total:.0f} % of {total.total}")
+    return " / ".join(f"{100 * sum(getattr(j, k) for j in judged) / total:.0f}"
+                      for k in ("same_point", "other_point", "not_rigid")) + f" % of {total}"
+
+
+def first_K(bundle, name: str) -> np.ndarray:
+    """(3,3) the camera's K (a moving camera's first frame's: an estimated lens is shared by its frames)."""
+    return bundle.cameras[name].K.reshape(-1, 3, 3)[0]
 
 
 def camera_models(stats) -> str:

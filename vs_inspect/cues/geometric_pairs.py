@@ -672,11 +672,9 @@ def rival_offsets(found: dict[tuple[str, str], GeometricPairStats], joint: Joint
     for cam, (best_s, n_best, n_joint) in sorted(three_view_best_s.items()):
         if not sure.get(cam) or n_best <= n_joint or abs(best_s - joint.offsets_s[cam]) <= min_apart_s:
             continue
-        shares = {}
-        for (a, b), st in found.items():
-            if cam in (a, b) and sure.get(a) and sure.get(b):
-                at = {**joint.offsets_s, cam: best_s}
-                shares[f"{a}__{b}"] = joint_vote_share(st, at[b] - at[a])
+        at = {**joint.offsets_s, cam: best_s}
+        shares = {f"{a}__{b}": joint_vote_share(st, at[b] - at[a]) for (a, b), st in found.items()
+                  if cam in (a, b) and sure.get(a) and sure.get(b)}
         if shares and min(shares.values()) >= min_share:
             out[cam] = (f"its three-view check follows {n_best} trajectories at {best_s:+.3f} s against "
                         f"{n_joint} at its joint offset {joint.offsets_s[cam]:+.3f} s, and its pairs keep "

@@ -63,11 +63,11 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
         found[(a, b)] = geometric_pairs(a, b, vids[a].info, vids[b].info, cameras[a], cameras[b],
                                         tracks[a].xy, tracks[b].xy, cfg.geometric)
     peaks_s = {k: tuple(gs.peaks_s) for k, (_, gs) in found.items()}
+    votes = {k: gs for k, (_, gs) in found.items()}  # each pair's vote evidence
     coarsest = max((vids[n].info.frame_interval_s for k in found for n in k), default=0.0)
     # each of a triangle's three peaks is located to about ±1 frame (its support window), so
     # right peaks close within about 3 frames, while wrong ones miss by far more
-    joint = joint_offsets({k: gs for k, (_, gs) in found.items()}, 3.0 * coarsest) \
-        if cfg.geometric.joint else None
+    joint = joint_offsets(votes, 3.0 * coarsest) if cfg.geometric.joint else None
     sure = {} if joint is None else {n: m >= cfg.geometric.joint_min_margin for n, m in joint.margin.items()}
     three_view = {}
     # the check is of cameras Stage 0 estimated: a calibration's are given (with one, the tiny
@@ -82,28 +82,15 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
 
         best = {n: (chk.best_offset_s, chk.best_supporters, chk.supporters) for n, chk in three_view.items()
                 if chk.best_offset_s is not None}
-        dissent = rival_offsets({k: gs for k, (_, gs) in found.items()}, joint, sure, best,
-                                cfg.geometric.three_view_rival_frames * coarsest,
-                                cfg.geometric.three_view_rival_vote_share)
-        for n, why in dissent.items():
-            sure[n] = False
-            msg = f"joint vote not sure of {n}: {why}"
-            sink.stage_event("cues", msg)
-            log.warning(msg)
+        _not_sure(rival_offsets(votes, joint, sure, best, cfg.geometric.three_view_rival_frames * coarsest,
+                                cfg.geometric.three_view_rival_vote_share), sure, dissent, sink)
     # after the three-view check, which triangulates the pairs of the cameras sure then (without
     # the hand-held camera this refuses, stop 43's sweep seed 1 left its static cam2 too few
     # trajectories); estimated cameras only: with a calibration a right pair had 0.35
     if cfg.geometric.joint_min_pair_share > 0 and estimated and joint is not None:
         from .geometric_pairs import dissenting_cameras
 
-        disputed = dissenting_cameras({k: gs for k, (_, gs) in found.items()}, joint, sure,
-                                      cfg.geometric.joint_min_pair_share)
-        dissent.update(disputed)
-        for n, why in disputed.items():
-            sure[n] = False
-            msg = f"joint vote not sure of {n}: {why}"
-            sink.stage_event("cues", msg)
-            log.warning(msg)
+        _not_sure(dissenting_cameras(votes, joint, sure, cfg.geometric.joint_min_pair_share), sure, dissent, sink)
     overruled = {}  # camera -> why the other model's dispute of it was overruled
     if other_peaks is not None and estimated and joint is not None:
         from .geometric_pairs import disputed_by_other_model
@@ -116,12 +103,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
             msg = f"joint vote still sure of {n}: {why}"
             sink.stage_event("cues", msg)
             log.info(msg)
-        for n, why in disputed.items():
-            sure[n] = False
-            dissent[n] = why
-            msg = f"joint vote not sure of {n}: {why}"
-            sink.stage_event("cues", msg)
-            log.warning(msg)
+        _not_sure(disputed, sure, dissent, sink)
     refused = bool(dissent) or any(not chk.passed for chk in three_view.values())
     # a camera refused (by its pairs or in three views) keeps the joint path (no geometric pair
     # for it), instead of the triangle fallback below choosing among the same cameras' vote peaks
@@ -205,6 +187,16 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
         log.info("%s__%s: %d geometric track pairs (%d new), %s", a, b, len(index), n_new, which)
     used = {k: found[k][1].peaks_s[i] for k, i in (chosen or {}).items() if i is not None}
     return GeometricPairing(out, used, peaks_s)
+
+
+def _not_sure(refused: dict[str, str], sure: dict[str, bool], dissent: dict[str, str], sink: Sink) -> None:
+    """Marks each camera of refused ({camera: why}) not sure, keeps why in dissent, and says so."""
+    for n, why in refused.items():
+        sure[n] = False
+        dissent[n] = why
+        msg = f"joint vote not sure of {n}: {why}"
+        sink.stage_event("cues", msg)
+        log.warning(msg)
 
 
 def check_fitted_offsets(fallback: dict, voted: dict, vids: dict) -> dict[str, str]:
