@@ -45,15 +45,16 @@ sys.path.insert(0, str(REPO))
 from vs_inspect.bench.arcs import (SCENE_SETS, camera_errors_px, fit_body_points, frame_errors,  # noqa: E402
                                    judge_pairs, parse_scene, summarize)
 from vs_inspect.bench.datasets import corner_sync_bias_s, load_caliscope, read_caliscope_frame_times  # noqa: E402
-from vs_inspect.cues import CueConfig, MatchConfig, extract_cues  # noqa: E402
+from vs_inspect.cues import CueConfig, MatchConfig  # noqa: E402
 from vs_inspect.cues.config import CAMERA_FEATURES, CameraConfig, GeometricPairConfig, TrackConfig  # noqa: E402
 from vs_inspect.cues.learned import MATCHERS  # noqa: E402
 from vs_inspect.errors import InputError  # noqa: E402
 from vs_inspect.io.calibration import rig_to_json  # noqa: E402
 from vs_inspect.pipeline.board import estimate_from_board  # noqa: E402
-from vs_inspect.io.calibration import load_calibration  # noqa: E402
 from vs_inspect.io.atomic import write_json_atomic  # noqa: E402
 from vs_inspect.io.video import VideoWriter, iter_frames, open_video  # noqa: E402
+from vs_inspect.pipeline.config import RunConfig  # noqa: E402
+from vs_inspect.pipeline.run import run as run_pipeline  # noqa: E402
 from vs_inspect.pipeline.stage12 import sync_bundle  # noqa: E402
 
 DATA = REPO.parent / "shared" / "data"
@@ -84,16 +85,17 @@ def camera_config(args) -> CameraConfig:
 
 
 def run(paths, calib, cfg=CueConfig()):
-    srcs = [open_video(p) for p in paths]
-    names = [s.info.name for s in srcs]
-    cal = load_calibration(calib, names, {s.info.name: (s.info.width, s.info.height) for s in srcs}) \
-        if calib else None
-    t0 = time.perf_counter()
-    bundle, stats = extract_cues(srcs, cal, cfg, progress=False)
-    t1 = time.perf_counter()
-    res = sync_bundle(bundle, progress=False)
-    t2 = time.perf_counter()
-    return res, stats, t1 - t0, t2 - t1
+    """The whole pipeline as `vs-inspect sync` runs it (RunResult: every video's offset, or None
+    with the reason), Stage 0's stats, and the seconds of Stage 0 and of Stage 1 + 2."""
+    res = run_pipeline(list(paths), RunConfig(cues=cfg), calibration=calib, progress=False)
+    stage0_s = res.timings_s["stage0_with_io_s"]
+    return res, res.cues, stage0_s, res.timings_s["total_s"] - stage0_s
+
+
+def unresolved_lines(res) -> str:
+    """One indented line per video without an offset: its name and why (as result.json says)."""
+    return "".join(f"\n    {v}: null: {res.unresolved.get(v, '?')}" for v, off in res.offsets_s.items()
+                   if off is None)
 
 
 def errors_ms(res, truth: dict[str, float]) -> dict[str, float | None]:
@@ -148,7 +150,7 @@ def bench_caliscope(args) -> None:
             all_err_corner += [e if e is not None else float("inf") for e in err_corner.values()]
             rows.append((trial, cuts, err, tc, ts, stats.registered_cameras, stats.dropped))
             print(f"trial {trial}: cuts {cuts}  err_ms {format_ms(err)}"
-                  f"  cues {tc:.1f}s sync {ts:.1f}s  cameras {stats.registered_cameras} dropped {stats.dropped}",
+                  f"  cues {tc:.1f}s sync {ts:.1f}s  cameras {stats.registered_cameras}" + unresolved_lines(res),
                   flush=True)
     med = statistics.median(all_err)
     within = sum(e <= 1000 / 6 for e in all_err) / len(all_err)
@@ -171,21 +173,17 @@ def bench_visualsync(args) -> None:
         for p in paths:
             m = pat.search(p.stem)
             truth[p.stem] = int(m.group(1)) / 10.0
-        try:
-            res, stats, tc, ts = run(paths, None, CueConfig(camera=camera_config(args),
-                                                            match=MatchConfig(descriptor=args.descriptor),
-                                                            track=track_config(args),
-                                                            geometric=GeometricPairConfig(
-                                                                joint=args.geometric == "joint")))
-        except InputError as exc:
-            print(f"{scene}: no result: {exc}", flush=True)
-            continue
+        res, stats, tc, ts = run(paths, None, CueConfig(camera=camera_config(args),
+                                                        match=MatchConfig(descriptor=args.descriptor),
+                                                        track=track_config(args),
+                                                        geometric=GeometricPairConfig(
+                                                            joint=args.geometric == "joint")))
         err = errors_ms(res, truth)
         fr = {k: (None if v is None else round(v / 100.0, 2)) for k, v in err.items()}
         print(f"{scene}: error in frames {fr}  cues {tc:.1f}s sync {ts:.1f}s  "
-              f"cameras {stats.registered_cameras}/{len(paths)} dropped {stats.dropped} "
-              f"pairs {[(p.a[-12:], p.b[-12:], p.decision.accepted, p.num_track_pairs) for p in res.pairs]}",
-              flush=True)
+              f"cameras {stats.registered_cameras}/{len(paths)} "
+              f"pairs {[(p.a[-12:], p.b[-12:], p.decision.accepted, p.num_track_pairs) for p in res.pairs]}"
+              + unresolved_lines(res), flush=True)
 
 
 def bench_speed(args) -> None:
@@ -210,26 +208,20 @@ def bench_speed(args) -> None:
         for calib, label in ((root / "camera_array.toml", "calibration"), (None, "estimated")):
             if label == "estimated" and not args.estimate:
                 continue
-            c0, t0 = time.process_time(), time.perf_counter()
-            try:
-                res, stats, tc, ts = run(paths, calib)
-            except InputError as exc:  # no video got a camera: a result too, like sync's exit 2
-                print(f"\nspeed ({label}): no result after {time.perf_counter() - t0:.1f} s "
-                      f"(CPU {time.process_time() - c0:.1f} s): {exc}")
-                continue
+            c0 = time.process_time()
+            res, stats, tc, ts = run(paths, calib)  # no video with a camera: every offset None, with why
             cpu = time.process_time() - c0
             print(f"\nspeed ({label}): 4 videos x {args.seconds} s x 1280x720 @ 30 fps")
-            print(f"{'stage':<16}{'seconds':>10}")
-            for k, v in stats.timings_s.items():
-                print(f"{k:<16}{v:>10.2f}")
-            for k, v in res.timings_s.items():
-                print(f"{k:<16}{v:>10.2f}")
-            print(f"{'cues+sync':<16}{tc + ts:>10.2f}   (CPU time of this process: {cpu:.1f} s; "
+            print(f"{'stage':<24}{'seconds':>10}")
+            for k, v in res.timings_s.items():  # Stage 0's steps (stage0_*), then Stage 1 and 2's
+                print(f"{k:<24}{v:>10.2f}")
+            print(f"{'cues+sync':<24}{tc + ts:>10.2f}   (CPU time of this process: {cpu:.1f} s; "
                   f"the machine has 2 cores shared with other jobs)")
             print(json.dumps({"tracks": stats.tracks, "track_pairs": stats.track_pairs,
                               "registered_cameras": stats.registered_cameras}))
             # no cuts: the true offsets are the host timestamps of the first frames
-            print(f"error against the first frames' timestamps: {format_ms(errors_ms(res, truth))} ms")
+            print(f"error against the first frames' timestamps: {format_ms(errors_ms(res, truth))} ms"
+                  + unresolved_lines(res))
 
 
 def bench_rendered(args) -> None:
