@@ -8,8 +8,7 @@ import cv2
 import numpy as np  # noqa: I001  (numpy before pycolmap)
 import pytest
 
-from vs_inspect.cues.registration import (Keyframe, affine_sift, affine_sift_images, asift_views, colmap_sift,
-                                          frame_features, register_frames, _colmap_like_sift)
+from vs_inspect.cues.registration import Keyframe, affine_sift, colmap_sift, frame_features, register_frames
 from vs_inspect.geometry.epipolar import look_at
 from vs_inspect.signals import import_pycolmap
 
@@ -91,33 +90,6 @@ def test_affine_sift_matches_a_floor_seen_from_another_heading_where_sift_does_n
     mask[:, 160:] = 0
     masked, _ = affine_sift(a, mask, 100)
     assert len(masked) > 100 and masked[:, 0].max() < 161
-
-
-def test_affine_sift_on_threads_one_view_a_task_gives_opencvs_own_features():
-    """asift_views are OpenCV's default views (its AffineFeature on its own finds exactly
-    affine_sift's features), and affine_sift_images, one view per task on two threads, gives each
-    image the features of affine_sift on the whole image, mask included."""
-    floor = texture(480, 480, seed=5)
-    images = [(cv2.warpPerspective(floor, _floor_view(floor, heading, 3.0), (320, 240)), None)
-              for heading in (0, 60)]
-    mask = np.full(images[1][0].shape, 255, np.uint8)
-    mask[100:180, 40:200] = 0
-    images[1] = (images[1][0], mask)
-    views = asift_views()
-    assert len(views) == 43 and views[0] == (1.0, 0.0)
-    kp, d = cv2.AffineFeature_create(_colmap_like_sift(60)).detectAndCompute(*images[1])
-    whole = [affine_sift(grey, m, 60) for grey, m in images]
-    np.testing.assert_array_equal(whole[1][0], np.array([k.pt for k in kp], np.float32))
-    np.testing.assert_array_equal(whole[1][1], colmap_sift(d))
-    on_threads = affine_sift_images(images, 60, threads=2)
-    assert len(on_threads) == 2
-    for (xy, desc), (want_xy, want_desc) in zip(on_threads, whole):
-        assert len(want_xy) > 200
-        np.testing.assert_array_equal(xy, want_xy)
-        np.testing.assert_array_equal(desc, want_desc)
-    # a view's features are its own: two views' are not one view's twice
-    first, second = (affine_sift(*images[0], 60, [v]) for v in views[:2])
-    assert not np.array_equal(first[0], second[0])
 
 
 def _opencv_ratio_matches(q, kf, ratio=0.8):

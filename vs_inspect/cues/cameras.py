@@ -436,16 +436,16 @@ def _asift_static_images(db: Path, img_dir: Path, mask_dir: Path, per_view: int,
     see it foreshortened along different headings, and SIFT matched almost none of it (README)."""
     pycolmap = import_pycolmap()
 
-    from .registration import affine_sift_images
+    from .registration import affine_sift
 
     database = pycolmap.Database.open(db)
     try:
-        static = [im for im in sorted(database.read_all_images(), key=lambda im: im.image_id)
-                  if not moving.get(im.name.split("/")[0], False)]
-        found = affine_sift_images([(cv2.imread(str(img_dir / im.name), cv2.IMREAD_GRAYSCALE),
-                                     cv2.imread(str(mask_dir / (im.name + ".png")), cv2.IMREAD_GRAYSCALE))
-                                    for im in static], per_view, os.cpu_count() or 1)
-        for im, (xy, desc) in zip(static, found):
+        for im in sorted(database.read_all_images(), key=lambda im: im.image_id):
+            if moving.get(im.name.split("/")[0], False):
+                continue
+            grey = cv2.imread(str(img_dir / im.name), cv2.IMREAD_GRAYSCALE)
+            mask = cv2.imread(str(mask_dir / (im.name + ".png")), cv2.IMREAD_GRAYSCALE)
+            xy, desc = affine_sift(grey, mask, per_view)
             database.write_keypoints(im.image_id, xy + 0.5)  # COLMAP: pixel centres at +0.5
             database.write_descriptors(im.image_id,
                                        pycolmap.FeatureDescriptors(pycolmap.FeatureExtractorType.SIFT, desc))

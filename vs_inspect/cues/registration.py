@@ -70,54 +70,16 @@ def _colmap_like_sift(max_features: int):
     return cv2.SIFT_create(nfeatures=max_features, contrastThreshold=0.02)
 
 
-def asift_views(max_tilt: int = 5) -> list[tuple[float, float]]:
-    """ASIFT's simulated views, (tilt, roll in degrees) each: tilt 1, then √2^k for k = 1..max_tilt,
-    each with rolls 0, 72°/tilt, 2·72°/tilt, ... below 180°. Built as OpenCV's AffineFeature
-    builds its default views, in float32, so that the values, and so the features, are its own."""
-    f = np.float32
-    views, tilt = [(1.0, 0.0)], f(1.0)
-    for _ in range(max_tilt):
-        tilt = f(tilt * f(np.sqrt(2.0)))
-        step = f(f(72.0) / tilt)
-        rolls = int(np.floor(f(180.0) / step))
-        if f(rolls * step) == f(180.0):
-            rolls -= 1
-        views += [(float(tilt), float(f(step * f(j)))) for j in range(rolls + 1)]
-    return views
-
-
-def affine_sift(grey: np.ndarray, mask: np.ndarray | None, per_view: int,
-                views: list[tuple[float, float]] | None = None) -> tuple[np.ndarray, np.ndarray]:
+def affine_sift(grey: np.ndarray, mask: np.ndarray | None, per_view: int) -> tuple[np.ndarray, np.ndarray]:
     """ASIFT (Morel & Yu 2009, OpenCV's AffineFeature): SIFT on the image seen with simulated
     tilts and turns, each view's keypoints mapped back. grey (H,W) uint8; mask (H,W) uint8, > 0
-    where features may be; per_view: SIFT features kept per view; views: (tilt, roll) of each
-    (default: asift_views()). Returns ((N,2) float32 px, pixel centres at integers; (N,128)
-    COLMAP's uint8 L1-root descriptors), the views' features in the order of the views: those of
-    consecutive parts of the views, concatenated, are those of the whole."""
-    views = asift_views() if views is None else views
-    detector = cv2.AffineFeature_create(_colmap_like_sift(per_view))
-    detector.setViewParams([t for t, _ in views], [r for _, r in views])
-    kp, d = detector.detectAndCompute(grey, mask)
+    where features may be; per_view: SIFT features kept per view. Returns ((N,2) float32 px,
+    pixel centres at integers; (N,128) COLMAP's uint8 L1-root descriptors). Same image, same
+    features (OpenCV concatenates the views in order)."""
+    kp, d = cv2.AffineFeature_create(_colmap_like_sift(per_view)).detectAndCompute(grey, mask)
     if d is None or not len(kp):
         return np.zeros((0, 2), np.float32), np.zeros((0, 128), np.uint8)
     return np.array([p.pt for p in kp], np.float32), colmap_sift(d)
-
-
-def affine_sift_images(images: list[tuple[np.ndarray, np.ndarray | None]], per_view: int,
-                       threads: int) -> list[tuple[np.ndarray, np.ndarray]]:
-    """affine_sift of each (grey, mask) of images, one simulated view per task on `threads`
-    threads (OpenCV's AffineFeature runs its views one after another on one core, and releases
-    the GIL): the same features as image by image."""
-    from concurrent.futures import ThreadPoolExecutor
-
-    tasks = [(i, view) for i in range(len(images)) for view in asift_views()]
-    with ThreadPoolExecutor(max(1, threads), thread_name_prefix="asift") as pool:
-        found = list(pool.map(lambda task: affine_sift(*images[task[0]], per_view, [task[1]]), tasks))
-    out = []
-    for i in range(len(images)):
-        mine = [f for (j, _), f in zip(tasks, found) if j == i]
-        out.append((np.concatenate([xy for xy, _ in mine]), np.concatenate([d for _, d in mine])))
-    return out
 
 
 def frame_features(grey: np.ndarray, moving: np.ndarray | None, frames: np.ndarray,
