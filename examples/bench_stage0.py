@@ -112,7 +112,7 @@ def bench_caliscope(args) -> None:
     root = DATA / "caliscope_post_optimization"
     ft = read_caliscope_frame_times(root)
     rng = np.random.default_rng(args.seed)
-    all_err, all_err_corner, rows = [], [], []
+    all_err, all_err_corner = [], []
     bias = corner_sync_bias_s(load_caliscope(root))
     print("corner synchronization vs host timestamps (uncut): "
           + ", ".join(f"{n} {1000 * b:+.1f} ms" for n, b in bias.items()), flush=True)
@@ -148,7 +148,6 @@ def bench_caliscope(args) -> None:
             all_err += vals
             err_corner = errors_ms(res, {n: t + bias.get(n, 0.0) for n, t in truth.items()})
             all_err_corner += [e if e is not None else float("inf") for e in err_corner.values()]
-            rows.append((trial, cuts, err, tc, ts, stats.registered_cameras, stats.dropped))
             print(f"trial {trial}: cuts {cuts}  err_ms {format_ms(err)}"
                   f"  cues {tc:.1f}s sync {ts:.1f}s  cameras {stats.registered_cameras}" + unresolved_lines(res),
                   flush=True)
