@@ -305,3 +305,45 @@ def test_a_weak_models_own_cameras_are_voted_on_when_the_moving_points_replaced_
                                 CueConfig(camera=CameraConfig(weak_model_when_replaced=False)))):
         _, _, _, seen = _two_camera_models(monkeypatch, trusted, weak_first=weak, config=cfg)
         assert "sift own" not in [s[0] for s in seen], (trusted, weak)
+
+
+def test_the_moving_points_cameras_are_not_fitted_when_they_could_not_replace_a_weak_model(monkeypatch):
+    """A weak model (few points per image) that placed a hand-held camera besides the two static
+    ones: the moving points give static cameras only, 2 < 3, so they could not replace it and are
+    not fitted; the model's cameras are used and the record says why. With only the two static
+    cameras placed, they are fitted and compared as before."""
+    from types import SimpleNamespace
+
+    import vs_inspect.cues.pairwise as pairwise_mod
+    from vs_inspect.cues.camera_choice import _estimate
+    from vs_inspect.cues.cameras import CameraEstimate, EstimatedCamera
+    from vs_inspect.signals import import_pycolmap
+
+    lens = import_pycolmap().Camera(model="SIMPLE_RADIAL", width=640, height=480, params=[500.0, 320.0, 240.0, 0.0])
+    motion = {"a": "static", "b": "static", "h": "moving"}
+    info = SimpleNamespace(width=640, height=480, num_frames=50)
+    vids = {n: SimpleNamespace(info=info, camera_motion=m, xy_full=np.zeros((0, 50, 2)),
+                               instance=np.zeros(0, np.int64)) for n, m in motion.items()}
+    pairs = {("a", "b"): TrackPairs("a", "b", np.zeros((0, 2), np.int64))}
+    calls = []
+
+    def fit(*a, **k):
+        calls.append(k)
+        return {}, {}, {}
+
+    monkeypatch.setattr(pairwise_mod, "cameras_from_tracks", fit)
+
+    def estimate(names):
+        cams = {n: EstimatedCamera(CameraTrack(K, look_at([6.0 * np.cos(i), 6.0 * np.sin(i), 2.0], [0, 0, 1])),
+                                   lens, 1.0, np.arange(1), points_seen=40) for i, n in enumerate(names)}
+        est = CameraEstimate(cams, {}, None, None, 3, 3, "sift")
+        stats = {"dropped": {}, "camera_source": "estimated"}
+        return _estimate(vids, CueConfig(), stats, pairs, est), stats
+
+    kept, stats = estimate("abh")
+    assert calls == [] and set(kept.cameras) == {"a", "b", "h"}
+    fb = stats["sfm"]["fallback"]
+    assert fb["used"] is False and "fewest 40 per image" in fb["why"]
+    assert "2 static camera(s) at most, fewer than its 3" in fb["why"]
+    kept, stats = estimate("ab")
+    assert len(calls) == 1 and set(kept.cameras) == {"a", "b"} and stats["sfm"]["fallback"]["used"] is False
