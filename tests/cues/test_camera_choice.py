@@ -311,7 +311,7 @@ def test_the_moving_points_cameras_are_not_fitted_when_they_could_not_replace_a_
     """A weak model (few points per image) that placed a hand-held camera besides the two static
     ones: the moving points give static cameras only, 2 < 3, so they could not replace it and are
     not fitted; the model's cameras are used and the record says why. With only the two static
-    cameras placed, they are fitted and compared as before."""
+    cameras placed, they are fitted as before (here none come out, so the model is kept)."""
     from types import SimpleNamespace
 
     import vs_inspect.cues.pairwise as pairwise_mod

@@ -247,13 +247,14 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, pairs: di
     fewest = min((c.points_seen for c in est.cameras.values()), default=0)
     weak = len(est.cameras) < 2 or any(n not in est.cameras for n in static) or \
         fewest < 2 * cfg.camera.min_inliers
+    weak_why = (f"the background reconstruction rests on few points (fewest {fewest} per image) or left a "
+                f"static camera out")
     # the moving points give static cameras only, so when the model placed more videos than there
     # are static ones their cameras cannot replace it (`use` below): not fitted (11 s on the 720p scene)
     outnumbered = not from_tracks and len(est.cameras) > len(static)
     compared = (weak or from_tracks) and cfg.camera.fallback_from_tracks and len(static) >= 2 and not as_built
     if compared and outnumbered:
-        why = (f"the background reconstruction rests on few points (fewest {fewest} per image) or left a static "
-               f"camera out; the moving points' cameras were not fitted: they would be {len(static)} static "
+        why = (f"{weak_why}; the moving points' cameras were not fitted: they would be {len(static)} static "
                f"camera(s) at most, fewer than its {len(est.cameras)}, so they could not replace it")
         stats["sfm"]["fallback"] = {"why": why, "used": False}
         log.warning("%s", why)
@@ -276,8 +277,7 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, pairs: di
         if len(est.cameras) < 2:
             why = f"the background reconstruction registered {len(est.cameras)} camera(s)"
         elif weak:
-            why = (f"the background reconstruction rests on few points (fewest {fewest} per image) or left a "
-                   f"static camera out")
+            why = weak_why
         else:
             why = "the joint vote trusted no video on any camera model's cameras"
         if len(cams) == 2 and not cfg.camera.fallback_unchecked_pair:
