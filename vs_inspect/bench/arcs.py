@@ -37,8 +37,12 @@ HELD_OUT_2_SCENES = ("a30_c4m1_s22", "a45_c4m1_s23", "a60_c4m1_s24", "a60_c4m1_s
 HELD_OUT_3_SCENES = ("a30_c4m1_s34", "a45_c4m1_s35", "a60_c4m1_s36", "a60_c4m1_s37", "a90_c4m1_s38",
                      "a60_c3m0_s39", "a45_c5m2_s40", "a30_c3m1_s41", "a60_c4m1_s42", "a90_c4m0_s43",
                      "a45_c4m1_s44", "a60_c5m2_s45")
+# seeds rendered after every rule up to stop 61 (stop 62): the same mix again
+HELD_OUT_4_SCENES = ("a30_c4m1_s46", "a45_c4m1_s47", "a60_c4m1_s48", "a60_c4m1_s49", "a90_c4m1_s50",
+                     "a60_c3m0_s51", "a45_c5m2_s52", "a30_c3m1_s53", "a60_c4m1_s54", "a90_c4m0_s55",
+                     "a45_c4m1_s56", "a60_c5m2_s57")
 SCENE_SETS = {"held-out": HELD_OUT_SCENES, "tuning": TUNING_SCENES, "held-out-2": HELD_OUT_2_SCENES,
-              "held-out-3": HELD_OUT_3_SCENES}
+              "held-out-3": HELD_OUT_3_SCENES, "held-out-4": HELD_OUT_4_SCENES}
 
 
 @dataclass(frozen=True)
