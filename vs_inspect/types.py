@@ -467,37 +467,54 @@ class CueStats:
 
     def refused_in_three_views(self) -> list[str]:
         """The cameras Stage 0's three-view check refused (geometric_joint's "three_view"), by name."""
-        checks = (self.geometric_joint or {}).get("three_view") or {}
-        return sorted(v for v, chk in checks.items() if not chk["passed"])
+        return refused_in_three_views(self.geometric_joint)
 
     def geometric_refusal(self, video: str) -> str | None:
-        """Why Stage 0 gave `video` no geometric track pairs: its pairs with a moving camera had
-        no triangle to check their vote peaks, or its joint vote was unsure of it (with point
-        transfer's verdict), sure of it but refuted in three views or by a pair of its own
-        (dissent), or sure of too few cameras to close a triangle; else None (used, dropped, or no
-        joint vote)."""
-        withheld = [(k, p["geometric_withheld"]) for k, p in self.pairs.items()
-                    if video in k.split("__") and p.get("geometric_withheld")]
-        if withheld and video not in self.dropped:
-            return "Stage 0 gave " + "; ".join(pairs_by_reason(withheld, " no geometric track pairs"))
-        joint = self.geometric_joint or {}
-        if video not in joint.get("margin", {}) or video in joint.get("used", ()) or video in self.dropped:
-            return None
-        if video in self.refused_in_three_views():
-            three_view = joint["three_view"][video]
-            return (f"Stage 0's joint vote was sure of its offset (margin {joint['margin'][video]:.1f}), but "
-                    f"not in three views ({three_view['reason']}), so it got no geometric track pairs")
-        dissent = (joint.get("dissent") or {}).get(video)
-        if dissent:  # point transfer does not check such a camera (cues/joint_vote.add_geometric_pairs)
-            return (f"Stage 0's joint vote chose its offset (margin {joint['margin'][video]:.1f}), but {dissent}, "
-                    f"so it got no geometric track pairs")
-        if video in joint.get("sure", ()):
-            return (f"Stage 0's joint vote was sure of its offset (margin {joint['margin'][video]:.1f}) but of "
-                    f"{len(joint['sure'])} camera(s) only, so no triangle of sure cameras confirmed it and it "
-                    f"got no geometric track pairs")
-        check = (joint.get("transfer") or {}).get(video)
-        return (f"Stage 0's joint vote was not sure of its offset (margin {joint['margin'][video]:.1f}), "
-                f"so it got no geometric track pairs" + (f" ({check['reason']})" if check else ""))
+        """Why Stage 0 gave `video` no geometric track pairs (geometric_refusal below), or None."""
+        return geometric_refusal(self.pairs, self.dropped, self.geometric_joint, video)
+
+    def other_models_note(self, video: str) -> str | None:
+        """What the camera models Stage 0 tried and did not keep made of `video`, when the kept
+        one placed its camera but did not trust its offset (sfm's "other_models"), or None."""
+        return ((self.sfm or {}).get("other_models") or {}).get(video)
+
+
+def refused_in_three_views(joint: dict[str, Any] | None) -> list[str]:
+    """The cameras a joint vote's three-view check refused (its "three_view"), by name."""
+    checks = (joint or {}).get("three_view") or {}
+    return sorted(v for v, chk in checks.items() if not chk["passed"])
+
+
+def geometric_refusal(pairs: dict[str, dict[str, Any]], dropped: dict[str, str], joint: dict[str, Any] | None,
+                      video: str) -> str | None:
+    """Why Stage 0 gave `video` no geometric track pairs, from CueStats' pairs, dropped and
+    geometric_joint (of the kept camera model, or of another one tried): its pairs with a moving
+    camera had no triangle to check their vote peaks, or its joint vote was unsure of it (with
+    point transfer's verdict), sure of it but refuted in three views or by a pair of its own
+    (dissent), or sure of too few cameras to close a triangle; else None (used, dropped, or no
+    joint vote)."""
+    withheld = [(k, p["geometric_withheld"]) for k, p in pairs.items()
+                if video in k.split("__") and p.get("geometric_withheld")]
+    if withheld and video not in dropped:
+        return "Stage 0 gave " + "; ".join(pairs_by_reason(withheld, " no geometric track pairs"))
+    joint = joint or {}
+    if video not in joint.get("margin", {}) or video in joint.get("used", ()) or video in dropped:
+        return None
+    if video in refused_in_three_views(joint):
+        three_view = joint["three_view"][video]
+        return (f"Stage 0's joint vote was sure of its offset (margin {joint['margin'][video]:.1f}), but "
+                f"not in three views ({three_view['reason']}), so it got no geometric track pairs")
+    dissent = (joint.get("dissent") or {}).get(video)
+    if dissent:  # point transfer does not check such a camera (cues/joint_vote.add_geometric_pairs)
+        return (f"Stage 0's joint vote chose its offset (margin {joint['margin'][video]:.1f}), but {dissent}, "
+                f"so it got no geometric track pairs")
+    if video in joint.get("sure", ()):
+        return (f"Stage 0's joint vote was sure of its offset (margin {joint['margin'][video]:.1f}) but of "
+                f"{len(joint['sure'])} camera(s) only, so no triangle of sure cameras confirmed it and it "
+                f"got no geometric track pairs")
+    check = (joint.get("transfer") or {}).get(video)
+    return (f"Stage 0's joint vote was not sure of its offset (margin {joint['margin'][video]:.1f}), "
+            f"so it got no geometric track pairs" + (f" ({check['reason']})" if check else ""))
 
 
 @dataclass(frozen=True)

@@ -81,12 +81,13 @@ def test_two_cameras_from_the_moving_points_alone_are_refused(monkeypatch):
 
 def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: bool = True,
                        second_fails: bool = False, registered: dict[str, str] | None = None,
-                       weak_first: bool = False, config: CueConfig = CueConfig()):
+                       weak_first: bool = False, config: CueConfig = CueConfig(), joints: dict | None = None):
     """camera_choice.estimated_cameras on three videos with camera models ("sift" first, "xfeat"
     second, "aliked" third when `trusted` names it, else none; the moving points' cameras, when
     `trusted` names "moving points", are used) whose pairing trusts the videos of `trusted`; each
     model has a camera for the videos `registered` names for it (default: all). weak_first: the
-    moving points' cameras replace the first model's (its own are "sift own").
+    moving points' cameras replace the first model's (its own are "sift own"). joints: a model's
+    joint vote record (CueStats' geometric_joint) as its vote leaves it.
     Returns (kept set, stats, sink, votes seen as (kind, other_peaks, other))."""
     import dataclasses
     from types import SimpleNamespace
@@ -141,6 +142,8 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
     def vote(cams, vids, all_pairs, cfg, stats, sink, progress, estimated, other_peaks=None, other=""):
         kind = stats["sfm"]["features"]
         seen.append((kind, other_peaks, other))
+        if kind in (joints or {}):
+            stats["geometric_joint"] = joints[kind]
         sink.stage_event("cues", f"voted on {kind}")
         return dataclasses.replace(cams, pairs={}, used=frozenset(trusted[kind]),
                                    peaks={("a", "b"): (0.1,) if kind == "sift" else (0.2,)})
@@ -217,6 +220,33 @@ def test_a_video_without_a_camera_says_what_every_model_made_of_it(monkeypatch):
                                            second_fails=True)
     assert [s[0] for s in seen] == ["sift"]
     assert stats["dropped"] == {"c": "sift matched too little; the moving points' cameras refused"}
+
+
+def test_a_video_placed_but_not_timed_says_what_the_other_models_made_of_it(monkeypatch):
+    """Every model places c, none is trusted for it: the kept set's record says, for c, why each
+    other model's joint vote left it out, e.g. a rival offset (held-out-4's s48, README log stop
+    62, where the reasons named the first model's vote alone); a trusted video gets no such note."""
+    rival = ("its three-view check follows 55 trajectories at -1.217 s against 45 at its joint offset "
+             "+0.000 s: two offsets, as a repeated motion gives")
+    joints = {"xfeat": {"margin": {"a": 9.0, "b": 8.0, "c": 7.5}, "sure": ["a", "b"], "used": ["a", "b"],
+                        "dissent": {"c": rival}}}
+    kept, stats, _, _ = _two_camera_models(monkeypatch, {"sift": {"a", "b"}, "xfeat": {"a", "b"}, "aliked": {"a"}},
+                                           joints=joints)
+    assert stats["sfm"]["features"] == "sift" and set(kept.cameras) == {"a", "b", "c"} and "c" not in kept.used
+    note = stats["sfm"]["other_models"]["c"]
+    assert note == ("XFEAT's model registered it, but its set was not kept (its joint vote trusted 2 video(s); "
+                    "for this one: Stage 0's joint vote chose its offset (margin 7.5), but " + rival + ", so it got "
+                    "no geometric track pairs); ALIKED's model registered it, but its set was not kept (its joint "
+                    "vote trusted 1 video(s))")
+    assert set(stats["sfm"]["other_models"]) == {"c"} and stats["dropped"] == {}
+    # the run's reason for c carries it (result.json reads it back the same)
+    from vs_inspect.cues.extract import _cue_stats
+
+    stats.update(registered_cameras=3, tracks=0, track_pairs=0, videos={}, pairs={})
+    assert _cue_stats(stats).other_models_note("c") == note and _cue_stats(stats).other_models_note("a") is None
+    # one model tried: nothing to say
+    _, stats, _, _ = _two_camera_models(monkeypatch, {"sift": {"a", "b"}}, second_fails=True)
+    assert "other_models" not in stats["sfm"]
 
 
 def test_a_second_camera_model_that_fails_leaves_the_first_standing(monkeypatch):

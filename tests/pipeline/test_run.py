@@ -278,3 +278,21 @@ def test_an_unresolved_video_whose_own_pair_contradicted_the_joint_vote_says_so(
     assert r.unresolved["a"].startswith(f"Stage 0's joint vote chose its offset (margin 6.1), but {why}, so it "
                                         "got no geometric track pairs; the reference, but no accepted pair")
     assert r.offsets_s == {"a": None, "b": 0.0, "c": 0.4, "d": -0.2} and set(r.unresolved) == {"a"}
+
+
+def test_a_null_reason_names_what_the_other_camera_models_made_of_the_video():
+    """A video Stage 0's kept camera model placed but did not time: its reason in the run ends with
+    what the other models tried made of it (CueStats.other_models_note); a video Stage 0 dropped
+    already carries that in its own reason."""
+    from vs_inspect.pipeline.run import _run_result
+    from vs_inspect.types import CueStats, SyncResult
+
+    note = "XFEAT's model registered it, but its set was not kept (its joint vote trusted 2 video(s))"
+    stats = CueStats("estimated", 3, 0, 0, {}, {}, {"d": "no camera (also tried: ...)"}, {},
+                     sfm={"features": "sift", "other_models": {"c": note, "d": "not this"}})
+    sync = SyncResult("a", {"a": 0.0, "b": 0.5, "c": None}, {"a": 0.0, "b": 0.01, "c": None},
+                      {"c": "no cross-view track pairs"}, (), (("a", "b"),), ())
+    res = _run_result(sync, stats, RunInputs(videos={n: n for n in "abcd"}), RunConfig(), None, {})
+    assert res.unresolved["c"] == f"no cross-view track pairs (other camera models tried: {note})"
+    assert res.unresolved["d"] == "no camera (also tried: ...)" and res.offsets_s["d"] is None
+    assert "b" not in res.unresolved

@@ -182,7 +182,7 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, a
     kept.events.replay(sink)
     stats.clear()
     stats.update(kept.stats)
-    _note_other_models(stats["dropped"], kept, [(k, c) for k, c in tried if c is not kept], vids)
+    _note_other_models(stats, kept, [(k, c) for k, c in tried if c is not kept], vids)
     if len(tried) > 1:
         stats["sfm"]["models"] = [{"features": k, "cameras": len(c.cameras), "trusted": sorted(c.used),
                                    "kept": c is kept} for k, c in tried]
@@ -199,22 +199,38 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, a
     return kept
 
 
-def _note_other_models(dropped: dict[str, str], kept: CameraSet, others: list[tuple[str, CameraSet]],
-                       vids: dict) -> None:
-    """Adds to the reason of each video the kept set has no camera for what the other models tried
-    made of it, so a null says whether any model could place its camera."""
-    for n in [n for n in dropped if n in vids and n not in kept.cameras]:
-        notes = []
-        for kind, c in others:
-            whose = f"{_owner(kind)} {'cameras' if kind == MOVING_POINTS else 'model'}"
-            if n in c.cameras:
-                notes.append(f"{whose} registered it, but its set was not kept "
-                             f"(its joint vote trusted {len(c.used)} video(s))")
-            else:  # the reason's first clause: the rest repeats for every model (the moving points' cameras)
-                why = c.stats["dropped"].get(n, "no camera").split("; ")[0]
-                notes.append(f"{whose}: {why}")
-        if notes:
-            dropped[n] += f" (also tried: {'; '.join(notes)})"
+def _note_other_models(stats: dict, kept: CameraSet, others: list[tuple[str, CameraSet]], vids: dict) -> None:
+    """What the other models tried made of each video the kept set gives no offset: added to the
+    reason of a video it has no camera for (stats' "dropped"), and kept in sfm's "other_models"
+    for a video it placed but did not trust, so a null says whether any model could time it."""
+    untrusted = {}
+    for n in vids:
+        notes = [_verdict(kind, c, n) for kind, c in others]
+        if not notes:
+            continue
+        if n in stats["dropped"] and n not in kept.cameras:
+            stats["dropped"][n] += f" (also tried: {'; '.join(notes)})"
+        elif n in kept.cameras and n not in kept.used:
+            untrusted[n] = "; ".join(notes)
+    if untrusted and stats.get("sfm") is not None:
+        stats["sfm"]["other_models"] = untrusted
+
+
+def _verdict(kind: str, c: CameraSet, n: str) -> str:
+    """What camera set c (of kind) made of video n, one clause: trusted, placed but not trusted
+    (and why its joint vote gave no geometric pairs), or why it has no camera."""
+    from ..types import geometric_refusal
+
+    whose = f"{_owner(kind)} {'cameras' if kind == MOVING_POINTS else 'model'}"
+    joint = c.stats.get("geometric_joint")
+    if n in c.cameras:
+        why = "" if n in c.used else geometric_refusal(c.stats.get("pairs", {}), c.stats["dropped"], joint, n)
+        return (f"{whose} registered it, but its set was not kept (its joint vote trusted {len(c.used)} video(s)"
+                + (f"; for this one: {why}" if why else "") + ")")
+    # the reason's first clause: the rest repeats for every model (the moving points' cameras)
+    why = c.stats["dropped"].get(n, "no camera").split("; ")[0]
+    dissent = ((joint or {}).get("dissent") or {}).get(n)  # e.g. a refused camera's rival offset
+    return f"{whose}: {why}" + (f" (its joint vote: {dissent})" if dissent else "")
 
 
 def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, pairs: dict, est,

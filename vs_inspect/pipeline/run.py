@@ -169,6 +169,9 @@ def _run_result(sync: SyncResult, stats: CueStats | None, inputs: RunInputs, con
         why = stats.geometric_refusal(name) if stats is not None else None
         if why:
             unresolved[name] = f"{why}; {unresolved[name]}"
+        others = stats.other_models_note(name) if stats is not None and name not in stats.dropped else None
+        if others:
+            unresolved[name] += f" (other camera models tried: {others})"
     if moved_reference is not None:
         unresolved[moved_reference] += (f"; it cannot be the reference, so {sync.reference} is the "
                                          "reference instead")
