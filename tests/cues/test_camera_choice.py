@@ -155,7 +155,7 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
     vids = {n: SimpleNamespace(sfm_frames=None, info=info, camera_motion="static", frame_features=None,
                                register_masks=None) for n in "abc"}
     timings = {}
-    stats = {"dropped": {}, "camera_source": "estimated", "timings_s": timings}
+    stats = {"dropped": {}, "pairs": {}, "camera_source": "estimated", "timings_s": timings}
     sink = Events()
     kept = ex.estimated_cameras(vids, config, stats, {}, {}, sink, progress=False)
     assert stats["timings_s"] is timings  # the caller's timings stay the ones written to
@@ -239,7 +239,7 @@ def test_a_video_placed_but_not_timed_says_what_the_other_models_made_of_it(monk
                     "no geometric track pairs); ALIKED's model registered it, but its set was not kept (its joint "
                     "vote trusted 1 video(s))")
     assert set(stats["sfm"]["other_models"]) == {"c"} and stats["dropped"] == {}
-    # the run's reason for c carries it (result.json reads it back the same)
+    # the typed record the run reads it from
     from vs_inspect.cues.extract import _cue_stats
 
     stats.update(registered_cameras=3, tracks=0, track_pairs=0, videos={}, pairs={})

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..record.sink import DeferredSink, Sink
-from ..types import CameraTrack, Tracks
+from ..types import CameraTrack, Tracks, geometric_refusal
 from .config import CueConfig
 from .joint_vote import add_geometric_pairs, check_fitted_offsets
 from .video_cues import VideoCues
@@ -203,15 +203,14 @@ def _note_other_models(stats: dict, kept: CameraSet, others: list[tuple[str, Cam
     """What the other models tried made of each video the kept set gives no offset: added to the
     reason of a video it has no camera for (stats' "dropped"), and kept in sfm's "other_models"
     for a video it placed but did not trust, so a null says whether any model could time it."""
+    if not others:
+        return
     untrusted = {}
     for n in vids:
-        notes = [_verdict(kind, c, n) for kind, c in others]
-        if not notes:
-            continue
         if n in stats["dropped"] and n not in kept.cameras:
-            stats["dropped"][n] += f" (also tried: {'; '.join(notes)})"
+            stats["dropped"][n] += f" (also tried: {'; '.join(_verdict(k, c, n) for k, c in others)})"
         elif n in kept.cameras and n not in kept.used:
-            untrusted[n] = "; ".join(notes)
+            untrusted[n] = "; ".join(_verdict(k, c, n) for k, c in others)
     if untrusted and stats.get("sfm") is not None:
         stats["sfm"]["other_models"] = untrusted
 
@@ -219,12 +218,10 @@ def _note_other_models(stats: dict, kept: CameraSet, others: list[tuple[str, Cam
 def _verdict(kind: str, c: CameraSet, n: str) -> str:
     """What camera set c (of kind) made of video n, one clause: trusted, placed but not trusted
     (and why its joint vote gave no geometric pairs), or why it has no camera."""
-    from ..types import geometric_refusal
-
     whose = f"{_owner(kind)} {'cameras' if kind == MOVING_POINTS else 'model'}"
     joint = c.stats.get("geometric_joint")
     if n in c.cameras:
-        why = "" if n in c.used else geometric_refusal(c.stats.get("pairs", {}), c.stats["dropped"], joint, n)
+        why = "" if n in c.used else geometric_refusal(c.stats["pairs"], c.stats["dropped"], joint, n)
         return (f"{whose} registered it, but its set was not kept (its joint vote trusted {len(c.used)} video(s)"
                 + (f"; for this one: {why}" if why else "") + ")")
     # the reason's first clause: the rest repeats for every model (the moving points' cameras)
