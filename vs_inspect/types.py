@@ -40,6 +40,14 @@ def pairs_by_reason(items: list[tuple[str, str]], verb: str = "", max_names: int
     return out
 
 
+def first_clause(reason: str, max_chars: int = 160) -> str:
+    """A reason's first clause, before its first "; " or " (" (what follows details it), cut to
+    max_chars: the few words a null's headline gives."""
+    cut = min((i for i in (reason.find("; "), reason.find(" (")) if i > 0), default=len(reason))
+    clause = reason[:cut]
+    return clause if len(clause) <= max_chars else clause[:max_chars - 1].rstrip() + "…"
+
+
 def _require_shape(name: str, array: np.ndarray, shape: tuple) -> None:
     """Raise ValueError unless array matches shape (None = any length)."""
     ok = array.ndim == len(shape) and all(s is None or s == d for s, d in zip(shape, array.shape))
@@ -473,6 +481,24 @@ class CueStats:
         """Why Stage 0 gave `video` no geometric track pairs (geometric_refusal below), or None."""
         return geometric_refusal(self.pairs, self.dropped, self.geometric_joint, video)
 
+    def headline(self, video: str, later: str | None = None) -> str:
+        """Why `video` has no offset, in a few words: why Stage 0 left it out, or the kept camera
+        model's refusal (refusal_headline, the model named when others were tried) and later's
+        first clause (Stage 1 and 2's reason, e.g. "not connected to the reference ..."), then
+        what the other camera models made of it."""
+        sfm = self.sfm or {}
+        if video in self.dropped:
+            why, later = first_clause(self.dropped[video]), None
+        else:
+            why = refusal_headline(self.pairs, self.dropped, self.geometric_joint, video)
+        others = (sfm.get("other_models_headline") or {}).get(video) or {}
+        parts = [f"{sfm['kept_model']}: {why}" if why and others and sfm.get("kept_model") else why,
+                 first_clause(later) if later else None]
+        if others:  # models that say what the kept one says are named, not repeated
+            said = [(m, "the same" if c == why else c) for m, c in others.items()]
+            parts.append("other camera models: " + "; ".join(pairs_by_reason(said)))
+        return "; ".join(p for p in parts if p) or "no offset"
+
     def other_models_note(self, video: str) -> str | None:
         """What the camera models Stage 0 tried and did not keep made of `video`, when the kept
         one placed its camera but did not trust its offset (sfm's "other_models"), or None."""
@@ -493,27 +519,49 @@ def geometric_refusal(pairs: dict[str, dict[str, Any]], dropped: dict[str, str],
     point transfer's verdict), sure of it but refuted in three views or by a pair of its own
     (dissent), or sure of too few cameras to close a triangle; else None (used, dropped, or no
     joint vote)."""
+    refusal = _refusal(pairs, dropped, joint, video)
+    return None if refusal is None else refusal[1]
+
+
+def refusal_headline(pairs: dict[str, dict[str, Any]], dropped: dict[str, str], joint: dict[str, Any] | None,
+                     video: str) -> str | None:
+    """geometric_refusal's cause in a few words ("refuted in three views", "two offsets 1.22 s
+    apart, as a repeated motion gives"), or None when it gives none."""
+    refusal = _refusal(pairs, dropped, joint, video)
+    return None if refusal is None else refusal[0]
+
+
+def _refusal(pairs: dict[str, dict[str, Any]], dropped: dict[str, str], joint: dict[str, Any] | None,
+             video: str) -> tuple[str, str] | None:
+    """(headline, the whole account) of geometric_refusal, or None."""
     withheld = [(k, p["geometric_withheld"]) for k, p in pairs.items()
                 if video in k.split("__") and p.get("geometric_withheld")]
     if withheld and video not in dropped:
-        return "Stage 0 gave " + "; ".join(pairs_by_reason(withheld, " no geometric track pairs"))
+        short = next((p["geometric_withheld_short"] for k, p in pairs.items()
+                      if video in k.split("__") and p.get("geometric_withheld_short")), "vote peaks unchecked")
+        return short, "Stage 0 gave " + "; ".join(pairs_by_reason(withheld, " no geometric track pairs"))
     joint = joint or {}
     if video not in joint.get("margin", {}) or video in joint.get("used", ()) or video in dropped:
         return None
+    margin = joint["margin"][video]
     if video in refused_in_three_views(joint):
         three_view = joint["three_view"][video]
-        return (f"Stage 0's joint vote was sure of its offset (margin {joint['margin'][video]:.1f}), but "
+        return ("refuted in three views",
+                f"Stage 0's joint vote was sure of its offset (margin {margin:.1f}), but "
                 f"not in three views ({three_view['reason']}), so it got no geometric track pairs")
     dissent = (joint.get("dissent") or {}).get(video)
     if dissent:  # point transfer does not check such a camera (cues/joint_vote.add_geometric_pairs)
-        return (f"Stage 0's joint vote chose its offset (margin {joint['margin'][video]:.1f}), but {dissent}, "
+        return ((joint.get("dissent_short") or {}).get(video, "its offset disputed"),
+                f"Stage 0's joint vote chose its offset (margin {margin:.1f}), but {dissent}, "
                 f"so it got no geometric track pairs")
     if video in joint.get("sure", ()):
-        return (f"Stage 0's joint vote was sure of its offset (margin {joint['margin'][video]:.1f}) but of "
+        return (f"sure of {len(joint['sure'])} camera(s) only, no triangle to confirm it",
+                f"Stage 0's joint vote was sure of its offset (margin {margin:.1f}) but of "
                 f"{len(joint['sure'])} camera(s) only, so no triangle of sure cameras confirmed it and it "
                 f"got no geometric track pairs")
     check = (joint.get("transfer") or {}).get(video)
-    return (f"Stage 0's joint vote was not sure of its offset (margin {joint['margin'][video]:.1f}), "
+    return (f"joint vote unsure of it (margin {margin:.1f})",
+            f"Stage 0's joint vote was not sure of its offset (margin {margin:.1f}), "
             f"so it got no geometric track pairs" + (f" ({check['reason']})" if check else ""))
 
 
@@ -541,6 +589,8 @@ class RunResult:
     drift_ppm: dict[str, float | None] | None = None  # with the drift model (--drift), per video, ppm
     drift_std_ppm: dict[str, float | None] | None = None  # its 1-sigma, ppm
     gt_drift_ppm: dict[str, float] | None = None  # true drift when known (gt.json drift_ppm)
+    unresolved_headline: dict[str, str] | None = None  # video -> why it has no offset in a few words
+    # (unresolved holds the whole account); None in a result read from a file without it
 
     @property
     def resolved(self) -> list[str]:

@@ -215,6 +215,10 @@ def test_a_video_without_a_camera_says_what_every_model_made_of_it(monkeypatch):
     assert stats["dropped"] == {"c": (
         "sift matched too little; the moving points' cameras refused (also tried: XFEAT's model registered it, "
         "but its set was not kept (its joint vote trusted 1 video(s)); ALIKED's model: aliked matched too little)")}
+    # the same in a few words (a trusted video gets none)
+    assert stats["sfm"]["other_models_headline"] == {"c": {"XFEAT's model": "not trusted",
+                                                           "ALIKED's model": "aliked matched too little"}}
+    assert stats["sfm"]["kept_model"] == "SIFT's model"
     # with one model tried (XFeat's failed, ALIKED's skipped), the reason is the model's own
     _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b"}}, registered={"sift": "ab"},
                                            second_fails=True)
@@ -229,7 +233,7 @@ def test_a_video_placed_but_not_timed_says_what_the_other_models_made_of_it(monk
     rival = ("its three-view check follows 55 trajectories at -1.217 s against 45 at its joint offset "
              "+0.000 s: two offsets, as a repeated motion gives")
     joints = {"xfeat": {"margin": {"a": 9.0, "b": 8.0, "c": 7.5}, "sure": ["a", "b"], "used": ["a", "b"],
-                        "dissent": {"c": rival}}}
+                        "dissent": {"c": rival}, "dissent_short": {"c": "two offsets 1.22 s apart"}}}
     kept, stats, _, _ = _two_camera_models(monkeypatch, {"sift": {"a", "b"}, "xfeat": {"a", "b"}, "aliked": {"a"}},
                                            joints=joints)
     assert stats["sfm"]["features"] == "sift" and set(kept.cameras) == {"a", "b", "c"} and "c" not in kept.used
@@ -239,6 +243,8 @@ def test_a_video_placed_but_not_timed_says_what_the_other_models_made_of_it(monk
                     "no geometric track pairs); ALIKED's model registered it, but its set was not kept (its joint "
                     "vote trusted 1 video(s))")
     assert set(stats["sfm"]["other_models"]) == {"c"} and stats["dropped"] == {}
+    assert stats["sfm"]["other_models_headline"] == {"c": {"XFEAT's model": "two offsets 1.22 s apart",
+                                                           "ALIKED's model": "not trusted"}}
     # the typed record the run reads it from
     from vs_inspect.cues.extract import _cue_stats
 
@@ -246,7 +252,7 @@ def test_a_video_placed_but_not_timed_says_what_the_other_models_made_of_it(monk
     assert _cue_stats(stats).other_models_note("c") == note and _cue_stats(stats).other_models_note("a") is None
     # one model tried: nothing to say
     _, stats, _, _ = _two_camera_models(monkeypatch, {"sift": {"a", "b"}}, second_fails=True)
-    assert "other_models" not in stats["sfm"]
+    assert "other_models" not in stats["sfm"] and "other_models_headline" not in stats["sfm"]
 
 
 def test_a_second_camera_model_that_fails_leaves_the_first_standing(monkeypatch):

@@ -126,6 +126,9 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
     # c's two pairs share the reason, which is given once
     assert why.startswith("Stage 0 gave a__c and b__c no geometric track pairs: the vote peaks"), why
     assert why.count("the vote peaks") == 1, why
+    # and in a few words, for the offsets table (result.json's "unresolved_headline")
+    assert CueStats("estimated", 3, 90, 0, {}, stats["pairs"], {}, {}, "inconsistent").headline("c") == (
+        "vote peaks do not close the triangles")
     assert any("descriptor pairs kept only where consistent" in m for m in sink.messages)
     for (u, v), tp in out.items():
         right = {(row_of[u][p], row_of[v][p]) for p in range(30)}
@@ -183,6 +186,30 @@ def test_sure_cameras_refuted_in_three_views_get_no_pairs(monkeypatch):
     cue_stats = CueStats("estimated", 3, 90, 0, {}, stats["pairs"], {}, {}, "joint", None, joint)
     why = cue_stats.geometric_refusal("c")
     assert "sure of its offset (margin 10.0), but not in three views" in why and "+0.200 s" in why
+    assert cue_stats.headline("c", "not connected; its pairs: ...") == "refuted in three views; not connected"
+
+
+def test_a_sure_camera_with_a_rival_offset_says_how_far_apart_the_two_offsets_lie(monkeypatch):
+    """The rival-offset rule's refusal (geometric_pairs.rival_offsets, replaced here) reaches the
+    record with its few words: how far the three-view check's best offset lies from the joint one."""
+    import vs_inspect.cues.geometric_pairs as gp
+
+    seen = {}
+
+    def rivals(votes, joint, sure, best, bound_s, share):
+        seen.update(best=best, joint=dict(joint.offsets_s))
+        return {"c": "its three-view check follows more trajectories elsewhere: two offsets"}
+
+    monkeypatch.setattr(gp, "rival_offsets", rivals)
+    out, stats, msgs, _ = _sure_of_all(monkeypatch, {"a": 0.0, "b": 0.42, "c": -0.3})
+    joint = stats["geometric_joint"]
+    apart = abs(seen["best"]["c"][0] - seen["joint"]["c"])
+    assert joint["dissent_short"] == {"c": f"two offsets {apart:.2f} s apart, as a repeated motion gives"}
+    assert "c" not in joint["sure"] and "c" not in joint["used"]
+    cue_stats = CueStats("estimated", 3, 90, 0, {}, stats["pairs"], {}, {}, "joint", None, joint)
+    assert cue_stats.headline("c") == joint["dissent_short"]["c"]
+    assert cue_stats.geometric_refusal("c").startswith("Stage 0's joint vote chose its offset (margin 10.0), but "
+                                                      "its three-view check follows more")
 
 
 def test_cameras_another_model_disputes_are_kept_when_their_three_view_checks_back_them(monkeypatch):
@@ -202,6 +229,7 @@ def test_cameras_another_model_disputes_are_kept_when_their_three_view_checks_ba
     out, stats, msgs, _ = _sure_of_all(monkeypatch, offsets, other_peaks=far, cfg=cfg)
     joint = stats["geometric_joint"]
     assert joint["used"] == [] and sorted(joint["dissent"]) == ["a", "b", "c"] and "overruled" not in joint
+    assert joint["dissent_short"] == dict.fromkeys("abc", "SIFT's model's vote peaks disagree")
     assert all(len(tp.index) == 0 for tp in out.values())
 
 
@@ -304,6 +332,7 @@ def test_a_lone_pair_with_a_moving_camera_keeps_only_its_descriptor_pairs(monkey
     cue_stats = CueStats("estimated", 2, 90, 3, {}, stats["pairs"], {}, {}, "no triangle")
     assert cue_stats.geometric_refusal("b").startswith("Stage 0 gave a__b no geometric track pairs: no triangle")
     assert cue_stats.geometric_refusal("a") == cue_stats.geometric_refusal("b")
+    assert cue_stats.headline("b") == "a moving camera's vote peaks, no triangle to check them"
 
     out, stats, msgs = _lone_pair(monkeypatch, moving_b=True, unchecked_moving=True)  # the rule before
     assert len(out[("a", "b")].index) == 39 and "geometric_withheld" not in stats["pairs"]["a__b"]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from types import SimpleNamespace
 
@@ -15,7 +16,7 @@ from vs_inspect.pipeline import RunConfig, run, sync_bundle
 from vs_inspect.record.sink import NullSink
 from vs_inspect.sync.config import LandscapeConfig, SyncConfig
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
-from vs_inspect.types import RunInputs, RunResult
+from vs_inspect.types import RunInputs, RunResult, first_clause
 
 SMALL = CueSceneConfig(cameras=3, moving=1, variable_rate=1, seconds=4.0, pairs_per_view_pair=100,
                        max_offset_s=1.0, seed=4)
@@ -52,7 +53,8 @@ def test_bundle_in_run_result_out(scene, tmp_path):
     assert path == tmp_path / "result.json"
     data = json.loads(path.read_text())
     assert {"format", "version", "reference", "offsets_s", "uncertainty_s", "unresolved", "pairs",
-            "solve", "timings_s", "config", "input", "gt_offsets_s", "time_model"} == set(data)
+            "unresolved_headline", "solve", "timings_s", "config", "input", "gt_offsets_s",
+            "time_model"} == set(data)
     assert data["time_model"] == "constant"
     assert run_result_to_dict(read_run_result(tmp_path)) == data
 
@@ -158,9 +160,17 @@ def test_no_video_gets_a_camera_and_result_json_still_says_why_for_each(tmp_path
         assert res["unresolved"][n].startswith("no reconstruction"), res["unresolved"][n]
         assert res["unresolved"][n].startswith(res["cues"]["dropped"][n])
     assert res["unresolved"]["v0"].endswith("no video could be used, so even the reference has no offset")
+    # in a few words (what the offsets table prints): the reason's first clause, once, and that
+    # every other camera model tried (XFeat's and ALIKED's with the learned extras) said the same
+    for n, why in res["unresolved"].items():
+        head = res["unresolved_headline"][n]
+        assert head.count(first_clause(why)) == 1 and len(head) < len(why), head
+        assert "other camera models" not in head or head.endswith("model: the same"), head
     assert res["pairs"] == [] and set(res["input"]["videos"]) == {"v0", "v1", "v2"}
     assert "bundle" not in res["input"]  # no cue bundle was extracted
-    assert "null" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "null" in printed and res["unresolved_headline"]["v1"] in printed
+    assert res["unresolved"]["v1"] not in printed  # the whole reason is in result.json
 
 
 def test_sync_with_one_readable_video_writes_result_json(tmp_path):
@@ -233,6 +243,7 @@ def test_an_unresolved_videos_pairs_that_share_a_reason_say_it_once():
     sync = SyncResult("a", {"a": 0.0, "b": 0.5, "c": None, "d": 0.2}, {}, {"c": "not connected"}, (), (), ())
     r = _run_result(sync, stats, RunInputs(), RunConfig(), None, {})
     assert r.unresolved["c"] == f"Stage 0 gave a__c, b__c and c__d no geometric track pairs: {why}; not connected"
+    assert r.unresolved_headline == {"c": "vote peaks unchecked; not connected"}  # pairs without the few words
 
     def land(a, b, reason):  # the fields _with_its_pairs reads of a PairLandscape
         return SimpleNamespace(a=a, b=b, decision=SimpleNamespace(reason=reason))
@@ -260,6 +271,10 @@ def test_an_unresolved_video_the_joint_vote_was_sure_of_alone_with_one_other_say
     assert r.unresolved["b"].startswith("Stage 0's joint vote was sure of its offset (margin 5.3) but of 2 "
                                         "camera(s) only, so no triangle of sure cameras confirmed it")
     assert r.unresolved["c"].startswith("Stage 0's joint vote was not sure of its offset (margin 0.2)")
+    alone = "sure of 2 camera(s) only, no triangle to confirm it"
+    assert r.unresolved_headline == {"a": f"{alone}; the reference, but no accepted pair links it",
+                                     "b": f"{alone}; not connected",
+                                     "c": "joint vote unsure of it (margin 0.2); not connected"}
 
 
 def test_an_unresolved_video_whose_own_pair_contradicted_the_joint_vote_says_so():
@@ -296,3 +311,14 @@ def test_a_null_reason_names_what_the_other_camera_models_made_of_the_video():
     assert res.unresolved["c"] == f"no cross-view track pairs (other camera models tried: {note})"
     assert res.unresolved["d"] == "no camera (also tried: ...)" and res.offsets_s["d"] is None
     assert "b" not in res.unresolved
+    # in a few words: the kept model's cause, Stage 1 and 2's, the other models'
+    # (models that say what the kept one says are named together)
+    stats = dataclasses.replace(stats, sfm={**stats.sfm, "kept_model": "SIFT's model", "other_models_headline": {
+        "c": {"XFEAT's model": "two offsets 1.22 s apart", "ALIKED's model": "refuted in three views"},
+        "d": {"XFEAT's model": "no camera", "ALIKED's model": "no camera", "the moving points' cameras": "x"}}})
+    res = _run_result(sync, stats, RunInputs(videos={n: n for n in "abcd"}), RunConfig(), None, {})
+    assert res.unresolved_headline == {
+        "c": ("no cross-view track pairs; other camera models: XFEAT's model: two offsets 1.22 s apart; "
+              "ALIKED's model: refuted in three views"),
+        "d": ("SIFT's model: no camera; other camera models: XFEAT's model and ALIKED's model: the same; "
+              "the moving points' cameras: x")}

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..record.sink import DeferredSink, Sink
-from ..types import CameraTrack, Tracks, geometric_refusal
+from ..types import CameraTrack, Tracks, first_clause, geometric_refusal, refusal_headline
 from .config import CueConfig
 from .joint_vote import add_geometric_pairs, check_fitted_offsets
 from .video_cues import VideoCues
@@ -182,7 +182,7 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, a
     kept.events.replay(sink)
     stats.clear()
     stats.update(kept.stats)
-    _note_other_models(stats, kept, [(k, c) for k, c in tried if c is not kept], vids)
+    _note_other_models(stats, kind, kept, [(k, c) for k, c in tried if c is not kept], vids)
     if len(tried) > 1:
         stats["sfm"]["models"] = [{"features": k, "cameras": len(c.cameras), "trusted": sorted(c.used),
                                    "kept": c is kept} for k, c in tried]
@@ -199,26 +199,39 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, a
     return kept
 
 
-def _note_other_models(stats: dict, kept: CameraSet, others: list[tuple[str, CameraSet]], vids: dict) -> None:
-    """What the other models tried made of each video the kept set gives no offset: added to the
-    reason of a video it has no camera for (stats' "dropped"), and kept in sfm's "other_models"
-    for a video it placed but did not trust, so a null says whether any model could time it."""
+def _note_other_models(stats: dict, kind: str, kept: CameraSet, others: list[tuple[str, CameraSet]],
+                       vids: dict) -> None:
+    """What the other models tried made of each video the kept set (of kind) gives no offset:
+    added to the reason of a video it has no camera for (stats' "dropped"), and kept in sfm's
+    "other_models" for a video it placed but did not trust, so a null says whether any model
+    could time it; sfm's "other_models_headline" says it in a few words for both ({video: {whose
+    cameras: why}}), and "kept_model" whose set was kept."""
     if not others:
         return
-    untrusted = {}
+    untrusted, headlines = {}, {}
     for n in vids:
         if n in stats["dropped"] and n not in kept.cameras:
             stats["dropped"][n] += f" (also tried: {'; '.join(_verdict(k, c, n) for k, c in others)})"
         elif n in kept.cameras and n not in kept.used:
             untrusted[n] = "; ".join(_verdict(k, c, n) for k, c in others)
-    if untrusted and stats.get("sfm") is not None:
-        stats["sfm"]["other_models"] = untrusted
+        else:
+            continue
+        headlines[n] = {_whose(k): _verdict_headline(c, n) for k, c in others}
+    if headlines and stats.get("sfm") is not None:
+        stats["sfm"].update({"kept_model": _whose(kind), "other_models_headline": headlines})
+        if untrusted:
+            stats["sfm"]["other_models"] = untrusted
+
+
+def _whose(kind: str) -> str:
+    """Whose cameras a set of kind are, for messages: "SIFT's model", "the moving points' cameras"."""
+    return f"{_owner(kind)} {'cameras' if kind == MOVING_POINTS else 'model'}"
 
 
 def _verdict(kind: str, c: CameraSet, n: str) -> str:
     """What camera set c (of kind) made of video n, one clause: trusted, placed but not trusted
     (and why its joint vote gave no geometric pairs), or why it has no camera."""
-    whose = f"{_owner(kind)} {'cameras' if kind == MOVING_POINTS else 'model'}"
+    whose = _whose(kind)
     joint = c.stats.get("geometric_joint")
     if n in c.cameras:
         why = "" if n in c.used else geometric_refusal(c.stats["pairs"], c.stats["dropped"], joint, n)
@@ -228,6 +241,18 @@ def _verdict(kind: str, c: CameraSet, n: str) -> str:
     why = c.stats["dropped"].get(n, "no camera").split("; ")[0]
     dissent = ((joint or {}).get("dissent") or {}).get(n)  # e.g. a refused camera's rival offset
     return f"{whose}: {why}" + (f" (its joint vote: {dissent})" if dissent else "")
+
+
+def _verdict_headline(c: CameraSet, n: str) -> str:
+    """_verdict in a few words: what kept camera set c from timing video n."""
+    joint = c.stats.get("geometric_joint")
+    if n in c.used:
+        return f"timed it, but its set ({len(c.used)} video(s)) was not kept"
+    if n in c.cameras:
+        return refusal_headline(c.stats["pairs"], c.stats["dropped"], joint, n) or "not trusted"
+    # a refused camera's rival offset says more than "refused"
+    return (((joint or {}).get("dissent_short") or {}).get(n)
+            or first_clause(c.stats["dropped"].get(n, "no camera")))
 
 
 def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, pairs: dict, est,

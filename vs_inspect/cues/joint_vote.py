@@ -75,22 +75,27 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     if cfg.geometric.three_view_min_supporters > 0 and estimated and sum(sure.values()) >= 3:
         three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, sink)
         sure = {n: ok and (n not in three_view or three_view[n].passed) for n, ok in sure.items()}
-    dissent = {}
+    dissent, dissent_short = {}, {}  # camera -> why it was made unsure; the same in a few words
     # three_view is only filled for estimated cameras (a calibration's are given)
     if three_view and cfg.geometric.three_view_rival_frames > 0:
         from .geometric_pairs import rival_offsets
 
         best = {n: (chk.best_offset_s, chk.best_supporters, chk.supporters) for n, chk in three_view.items()
                 if chk.best_offset_s is not None}
-        _not_sure(rival_offsets(votes, joint, sure, best, cfg.geometric.three_view_rival_frames * coarsest,
-                                cfg.geometric.three_view_rival_vote_share), sure, dissent, sink)
+        rivals = rival_offsets(votes, joint, sure, best, cfg.geometric.three_view_rival_frames * coarsest,
+                               cfg.geometric.three_view_rival_vote_share)
+        _not_sure(rivals, sure, dissent, sink, dissent_short,
+                  {n: f"two offsets {abs(best[n][0] - joint.offsets_s[n]):.2f} s apart, as a repeated motion gives"
+                   for n in rivals})
     # after the three-view check, which triangulates the pairs of the cameras sure then (without
     # the hand-held camera this refuses, stop 43's sweep seed 1 left its static cam2 too few
     # trajectories); estimated cameras only: with a calibration a right pair had 0.35
     if cfg.geometric.joint_min_pair_share > 0 and estimated and joint is not None:
         from .geometric_pairs import dissenting_cameras
 
-        _not_sure(dissenting_cameras(votes, joint, sure, cfg.geometric.joint_min_pair_share), sure, dissent, sink)
+        dissenting = dissenting_cameras(votes, joint, sure, cfg.geometric.joint_min_pair_share)
+        _not_sure(dissenting, sure, dissent, sink, dissent_short,
+                  {n: "a pair of its own has few votes at its joint offset" for n in dissenting})
     overruled = {}  # camera -> why the other model's dispute of it was overruled
     if other_peaks is not None and estimated and joint is not None:
         from .geometric_pairs import disputed_by_other_model
@@ -103,7 +108,8 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
             msg = f"joint vote still sure of {n}: {why}"
             sink.stage_event("cues", msg)
             log.info(msg)
-        _not_sure(disputed, sure, dissent, sink)
+        _not_sure(disputed, sure, dissent, sink, dissent_short,
+                  {n: f"{other}'s vote peaks disagree" for n in disputed})
     refused = bool(dissent) or any(not chk.passed for chk in three_view.values())
     # a camera refused (by its pairs or in three views) keeps the joint path (no geometric pair
     # for it), instead of the triangle fallback below choosing among the same cameras' vote peaks
@@ -116,7 +122,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
                                                 frozenset(dissent))
         sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
         said = _JointChecks({c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
-                            {c: chk.summary() for c, chk in three_view.items()}, dissent, overruled)
+                            {c: chk.summary() for c, chk in three_view.items()}, dissent, dissent_short, overruled)
         out, used = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg, stats, sink, said)
         return GeometricPairing(_add_transfer_pairs(out, checks, traj, list(vids), stats, sink), used, peaks_s)
     if joint is not None:
@@ -133,8 +139,10 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     # joint vote's offsets, unsure as they are, so that a wrong offset leaves too few of them
     unchecked = status in ("inconsistent", "one triangle")
     filter_desc = unchecked and joint is not None and cfg.geometric.joint_filter_descriptor
-    unchecked_why = None
+    unchecked_why = unchecked_short = None
     if unchecked:
+        unchecked_short = ("vote peaks do not close the triangles" if status == "inconsistent" else
+                           "three cameras, one triangle: too weak a check of the vote peaks")
         unchecked_why = ("the vote peaks of the camera pairs do not close the triangles (Δ_ab + Δ_bc ≠ Δ_ac), "
                          "so some peaks are wrong" if status == "inconsistent" else
                          "three cameras give one triangle, and its closure (Δ_ab + Δ_bc ≈ Δ_ac) is a single "
@@ -146,14 +154,15 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     out = dict(pairs)
     for (a, b), (gp, gs) in found.items():
         pick = chosen.get((a, b)) if chosen is not None else None  # index of the chosen peak
-        index, withheld = gp.index, None
+        index, withheld, withheld_short = gp.index, None, None
         if pick is not None:
             index = index[gs.pair_peak == pick]
         elif unchecked:
-            index, withheld = index[:0], unchecked_why
+            index, withheld, withheld_short = index[:0], unchecked_why, unchecked_short
         elif len(index) and (cameras[a].is_moving or cameras[b].is_moving) and not cfg.geometric.unchecked_moving:
             withheld = (f"no triangle checks its vote peaks ({', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s), "
                         f"and a moving camera's per-frame geometry lets wrong tracks fit a wrong offset")
+            withheld_short = "a moving camera's vote peaks, no triangle to check them"
             msg = f"geometric track pairs not used for {a}__{b}: {withheld}"
             sink.stage_event("cues", msg, pair=f"{a}__{b}")
             log.warning(msg)
@@ -174,7 +183,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
                 "geometric_peak_votes": list(gs.peak_votes),
                 "geometric_chosen_peak_s": round(gs.peaks_s[pick], 4) if pick is not None else None}
         if withheld:
-            info["geometric_withheld"] = withheld
+            info.update({"geometric_withheld": withheld, "geometric_withheld_short": withheld_short})
         if pick is None and n_new:
             info["geometric_unchecked"] = int(n_new)
         if filter_desc:
@@ -189,11 +198,14 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     return GeometricPairing(out, used, peaks_s)
 
 
-def _not_sure(refused: dict[str, str], sure: dict[str, bool], dissent: dict[str, str], sink: Sink) -> None:
-    """Marks each camera of refused ({camera: why}) not sure, keeps why in dissent, and says so."""
+def _not_sure(refused: dict[str, str], sure: dict[str, bool], dissent: dict[str, str], sink: Sink,
+              dissent_short: dict[str, str], short: dict[str, str]) -> None:
+    """Marks each camera of refused ({camera: why}) not sure, keeps why in dissent (and short's
+    few words in dissent_short), and says so."""
     for n, why in refused.items():
         sure[n] = False
         dissent[n] = why
+        dissent_short[n] = short[n]
         msg = f"joint vote not sure of {n}: {why}"
         sink.stage_event("cues", msg)
         log.warning(msg)
@@ -410,6 +422,7 @@ class _JointChecks:
     transfer: dict = dataclasses.field(default_factory=dict)  # camera -> point transfer's summary
     three_view: dict = dataclasses.field(default_factory=dict)  # camera -> the three-view check's summary
     dissent: dict = dataclasses.field(default_factory=dict)  # camera -> why its pairs (or the other model) contradict it
+    dissent_short: dict = dataclasses.field(default_factory=dict)  # camera -> that in a few words (a null's headline)
     overruled: dict = dataclasses.field(default_factory=dict)  # camera -> why the other model's dispute was overruled
 
 

@@ -316,6 +316,6 @@ def check_in_three_views(camera: str, joint_offset_s: float, traj: Trajectories,
     bar = max(float(min_supporters), min_share_of_best * n_best)
     if n < bar:
         return ThreeViewCheck(camera, joint_offset_s, traj.num_trajectories, n, n_best, at_best, bar, False,
-                              f"{what}; fewer than {bar:g}: its camera or offset disagrees in three views", land)
+                              f"{what}; fewer than {bar:.3g}: its camera or offset disagrees in three views", land)
     return ThreeViewCheck(camera, joint_offset_s, traj.num_trajectories, n, n_best, at_best, bar, True,
                           f"{what}: agrees in three views", land)

@@ -149,6 +149,7 @@ def run_result_to_dict(r: RunResult) -> dict[str, Any]:
         "offsets_s": {k: _num(v) if v is not None else None for k, v in r.offsets_s.items()},
         "uncertainty_s": {k: _num(v) if v is not None else None for k, v in r.uncertainty_s.items()},
         "unresolved": dict(r.unresolved),
+        **({"unresolved_headline": dict(r.unresolved_headline)} if r.unresolved_headline is not None else {}),
         "pairs": [pair_to_dict(p) for p in r.pairs],
         "solve": {
             "solver": r.solver,
@@ -276,7 +277,9 @@ def run_result_from_dict(d: dict[str, Any], source: str = "result") -> RunResult
                          d.get("config"), cues,
                          {str(k): float(v) for k, v in gt.items()} if isinstance(gt, dict) else None,
                          drift, drift_std,
-                         {k: v for k, v in gt_drift.items() if v is not None} if gt_drift is not None else None)
+                         {k: v for k, v in gt_drift.items() if v is not None} if gt_drift is not None else None,
+                         {str(k): str(v) for k, v in d["unresolved_headline"].items()}
+                         if isinstance(d.get("unresolved_headline"), dict) else None)
     except InputError as exc:
         raise InputError(f"{source}: {exc}") from None
     except (KeyError, TypeError, ValueError, AttributeError) as exc:

@@ -19,7 +19,7 @@ from ..engine import Engine, open_engine
 from ..errors import InputError, NoUsableVideos
 from ..record.sink import NullSink, Sink
 from ..sync.config import SyncConfig
-from ..types import CueBundle, CueStats, RunInputs, RunResult, SyncResult
+from ..types import CueBundle, CueStats, RunInputs, RunResult, SyncResult, first_clause
 from .config import RunConfig
 from .stage0 import run_stage0
 from .stage12 import sync_bundle
@@ -137,12 +137,13 @@ def _nothing_usable(exc: NoUsableVideos, config: RunConfig, where: RunInputs,
         raise InputError(f"--reference {reference!r} is not one of the videos; known: {names}")
     unresolved = {n: exc.stats.dropped.get(n, "Stage 0 could not use this video") for n in names}
     unresolved[reference] += "; no video could be used, so even the reference has no offset"
+    headlines = {n: exc.stats.headline(n, why) for n, why in unresolved.items()}
     timings = {f"stage0_{k}": v for k, v in exc.stats.timings_s.items()}
     timings["stage0_with_io_s"] = elapsed_s
     timings["total_s"] = elapsed_s
     return RunResult(reference, {n: None for n in names}, {n: None for n in names}, unresolved, (),
                      config.sync.solve.solver, (), (), timings, recorded_inputs or where,
-                     config.to_dict(), exc.stats, None)
+                     config.to_dict(), exc.stats, None, unresolved_headline=headlines)
 
 
 def _drift_of(sync: SyncResult, stats: CueStats | None) -> dict:
@@ -165,6 +166,9 @@ def _run_result(sync: SyncResult, stats: CueStats | None, inputs: RunInputs, con
         offsets[name] = None
         unc[name] = None
         unresolved[name] = why
+    # in a few words: Stage 0's cause and Stage 1 and 2's first clause ("not connected to ...")
+    headlines = {n: stats.headline(n, why) if stats is not None else first_clause(why)
+                 for n, why in unresolved.items()}
     for name in unresolved:  # its pairs say "no/too few track pairs"; Stage 0 may know why
         why = stats.geometric_refusal(name) if stats is not None else None
         if why:
@@ -177,4 +181,4 @@ def _run_result(sync: SyncResult, stats: CueStats | None, inputs: RunInputs, con
                                          "reference instead")
     return RunResult(sync.reference, offsets, unc, unresolved, sync.pairs, sync.solver,
                      sync.solve_pairs, sync.iterations, timings_s, inputs, config.to_dict(), stats,
-                     dict(gt_offsets_s) if gt_offsets_s else None)
+                     dict(gt_offsets_s) if gt_offsets_s else None, unresolved_headline=headlines)
