@@ -587,3 +587,23 @@ def test_the_3d_view_is_left_out_when_no_camera_was_logged(tmp_path):
     with RerunSink(tmp_path / "cams.rrd", progress=False) as sink:
         sink.cameras({"a": CameraTrack(K, np.eye(4))}, None, None)
         assert "3D" in views(sink.blueprint(["a"]))
+
+
+def test_the_offsets_panel_gives_every_null_in_a_few_words_and_in_full(tmp_path):
+    """The run's summary rewrites the offsets panel: a video Stage 0 left out (not in Stage 2's
+    table) is listed too, each null with its headline in the table and its whole reason below."""
+    from vs_inspect.io.recording import SYNC_OFFSETS, _chunks, _first_text
+
+    full = "no reconstruction: too few matches; from the moving points: half the pairs 16.7 px off (also tried: ...)"
+    res = RunResult("a", {"a": 0.0, "b": 0.5, "c": None}, {"a": 0.0, "b": 0.01, "c": None},
+                    {"c": full}, (), "irls", (), (), {"total_s": 1.0},
+                    unresolved_headline={"c": "no reconstruction: too few matches"})
+    path = tmp_path / "run.rrd"
+    with RerunSink(path, progress=False) as sink:
+        sink.run_summary(res)
+    texts = [_first_text(ch.to_record_batch()) for ch in _chunks(path, [f"/{SYNC_OFFSETS}/**"])]
+    md = next(t for t in texts if t)
+    rows = {line.split("|")[1].strip(): line for line in md.splitlines() if line.startswith("| ")}
+    assert set(rows) >= {"a", "b", "c"}
+    assert rows["c"].rstrip(" |").endswith("no reconstruction: too few matches") and full not in rows["c"]
+    assert md.endswith(f"**c**: {full}")

@@ -440,7 +440,8 @@ class RerunSink(Sink):
             self._log_loops(view)
         self._log_solve(result)
         if view is not None:
-            self._log_offsets(result, view)
+            self._log_offsets(result.reference, result.solver, result.offsets_s, result.uncertainty_s,
+                              result.unresolved_reason, view)
         self._flush_videos(result.offsets_s)
         if view is not None:
             self._log_trajectories(view)
@@ -459,6 +460,11 @@ class RerunSink(Sink):
     @_timed
     def run_summary(self, result: RunResult) -> None:
         self._summary = result
+        # the run's table replaces Stage 2's: every input video (those Stage 0 left out too), each
+        # null with the run's few words, and its whole reason below the table
+        self._log_offsets(result.reference, result.solver, result.offsets_s, result.uncertainty_s,
+                          {v: (result.unresolved_headline or {}).get(v) or why for v, why in result.unresolved.items()},
+                          self._view, result.unresolved)
 
     # ---- finishing ----
 
@@ -968,18 +974,24 @@ class RerunSink(Sink):
             self.rec.send_columns(solve_residual_path(a, b), tcol, rr.Scalars.columns(scalars=R[:, e]))
             self.rec.send_columns(solve_weight_path(a, b), tcol, rr.Scalars.columns(scalars=Wt[:, e]))
 
-    def _log_offsets(self, result: SyncResult, view: RunRecordView) -> None:
+    def _log_offsets(self, reference: str, solver: str, offsets_s: dict, uncertainty_s: dict, notes: dict,
+                     view: RunRecordView | None, in_full: dict | None = None) -> None:
+        """The offsets table (notes: video -> why it is null; truth and errors from view, when
+        given), and each null's whole reason (in_full) below it."""
         rows = []
-        for v, off in result.offsets_s.items():
-            u = result.uncertainty_s.get(v)
-            t = view.true_offsets_s.get(v)
-            err = view.errors_ms.get(v)
+        for v, off in offsets_s.items():
+            u = uncertainty_s.get(v)
+            t = view.true_offsets_s.get(v) if view is not None else None
+            err = view.errors_ms.get(v) if view is not None else None
+            note = notes.get(v, '').replace("|", "/") if off is None else ''
             rows.append(f"| {v} | {_fmt(off)} | {_fmt(u, '', 4) if u is not None else '-'} | "
                         f"{_fmt(t) if t is not None else '-'} | "
-                        f"{f'{err:.1f}' if err is not None and t is not None else '-'} | "
-                        f"{result.unresolved_reason.get(v, '') if off is None else ''} |")
-        md = (f"## Offsets (reference {result.reference}, solver {result.solver})\n\n"
+                        f"{f'{err:.1f}' if err is not None and t is not None else '-'} | {note} |")
+        md = (f"## Offsets (reference {reference}, solver {solver})\n\n"
               "| video | offset_s | ± s | true_s | error_ms | note |\n|---|---|---|---|---|---|\n" + "\n".join(rows))
+        full = {v: why for v, why in (in_full or {}).items() if offsets_s.get(v) is None and why != notes.get(v)}
+        if full:
+            md += "\n\n### Each null's reason in full\n\n" + "\n\n".join(f"**{v}**: {why}" for v, why in full.items())
         self.rec.log(SYNC_OFFSETS, rr.TextDocument(md, media_type=rr.MediaType.MARKDOWN), static=True)
 
     def _log_loops(self, view: RunRecordView) -> None:
