@@ -12,7 +12,7 @@
     # and the cameras against the truth (camera px: the true moving points' distance from their
     # epipolar lines, median / worst camera pair) and the track pairs against the truth (the share
     # whose two tracks follow one body point, two points, or a track no rigid point)
-    PYTHONPATH=. python examples/bench_stage0.py arcs [--scenes a60_c4m1_s12 ...] [--set held-out|tuning|held-out-2|held-out-3|held-out-4] [--calibrated] [--features F] --workdir W
+    PYTHONPATH=. python examples/bench_stage0.py arcs [--scenes a60_c4m1_s12 ...] [--set held-out|tuning|held-out-2|held-out-3|held-out-4|held-out-5] [--calibrated] [--features F] --workdir W
     # caliscope, visualsync and rendered take the track settings too, e.g. the tracks of before:
     PYTHONPATH=. python examples/bench_stage0.py rendered --seeds 0 1 2 --klt-window 21 --no-anchor
 
@@ -405,7 +405,7 @@ def main() -> None:
                    help="held-out: seeds 10-21 (stop 46); tuning: stop 43's 14 scenes, on which the rules "
                         "of stops 43-45 were built; held-out-2: seeds 22-33, rendered after stop 47's rules; "
                         "held-out-3: seeds 34-45, rendered after stop 53's; held-out-4: seeds 46-57, rendered "
-                        "after stop 61's")
+                        "after stop 61's; held-out-5: seeds 58-69, rendered after stop 62's")
     which.add_argument("--tuning", action="store_true", help="the same as --set tuning")
     a.add_argument("--calibrated", action="store_true", help="with each scene's exact calibration")
     a.add_argument("--workdir", type=Path, help="render into (and reuse finished renderings from) this "

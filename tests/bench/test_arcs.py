@@ -35,8 +35,9 @@ def test_the_scene_sets_share_no_seed():
     assert seeds["held-out-2"] == set(range(22, 34))
     assert seeds["held-out-3"] == set(range(34, 46))
     assert seeds["held-out-4"] == set(range(46, 58))
+    assert seeds["held-out-5"] == set(range(58, 70))
     # the later held-out sets mix arcs and cameras as the first does
-    later = ("held-out-2", "held-out-3", "held-out-4")
+    later = ("held-out-2", "held-out-3", "held-out-4", "held-out-5")
     kinds = {k: sorted(n.rsplit("_s", 1)[0] for n in SCENE_SETS[k]) for k in ("held-out",) + later}
     assert all(kinds[k] == kinds["held-out"] for k in later)
 

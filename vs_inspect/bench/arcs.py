@@ -41,8 +41,12 @@ HELD_OUT_3_SCENES = ("a30_c4m1_s34", "a45_c4m1_s35", "a60_c4m1_s36", "a60_c4m1_s
 HELD_OUT_4_SCENES = ("a30_c4m1_s46", "a45_c4m1_s47", "a60_c4m1_s48", "a60_c4m1_s49", "a90_c4m1_s50",
                      "a60_c3m0_s51", "a45_c5m2_s52", "a30_c3m1_s53", "a60_c4m1_s54", "a90_c4m0_s55",
                      "a45_c4m1_s56", "a60_c5m2_s57")
+# seeds rendered after every rule up to stop 62 (stop 63): the same mix again
+HELD_OUT_5_SCENES = ("a30_c4m1_s58", "a45_c4m1_s59", "a60_c4m1_s60", "a60_c4m1_s61", "a90_c4m1_s62",
+                     "a60_c3m0_s63", "a45_c5m2_s64", "a30_c3m1_s65", "a60_c4m1_s66", "a90_c4m0_s67",
+                     "a45_c4m1_s68", "a60_c5m2_s69")
 SCENE_SETS = {"held-out": HELD_OUT_SCENES, "tuning": TUNING_SCENES, "held-out-2": HELD_OUT_2_SCENES,
-              "held-out-3": HELD_OUT_3_SCENES, "held-out-4": HELD_OUT_4_SCENES}
+              "held-out-3": HELD_OUT_3_SCENES, "held-out-4": HELD_OUT_4_SCENES, "held-out-5": HELD_OUT_5_SCENES}
 
 
 @dataclass(frozen=True)
