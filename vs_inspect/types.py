@@ -40,6 +40,11 @@ def pairs_by_reason(items: list[tuple[str, str]], verb: str = "", max_names: int
     return out
 
 
+# how a dropped video's reason adds why the moving points' own cameras did not place it either
+# (cues/camera_choice.py); a headline keeps that clause too
+FROM_MOVING_POINTS = "from the moving points: "
+
+
 def first_clause(reason: str, max_chars: int = 160) -> str:
     """A reason's first clause, before its first "; " or " (" (what follows details it), cut to
     max_chars: the few words a null's headline gives."""
@@ -488,14 +493,16 @@ class CueStats:
         what the other camera models made of it."""
         sfm = self.sfm or {}
         if video in self.dropped:
-            why, later = first_clause(self.dropped[video]), None
+            first, *rest = self.dropped[video].split("; ")
+            cause, later = first_clause(first), None
+            why = "; ".join([cause, *(first_clause(c) for c in rest if c.startswith(FROM_MOVING_POINTS))])
         else:
-            why = refusal_headline(self.pairs, self.dropped, self.geometric_joint, video)
+            cause = why = refusal_headline(self.pairs, self.dropped, self.geometric_joint, video)
         others = (sfm.get("other_models_headline") or {}).get(video) or {}
         parts = [f"{sfm['kept_model']}: {why}" if why and others and sfm.get("kept_model") else why,
                  first_clause(later) if later else None]
-        if others:  # models that say what the kept one says are named, not repeated
-            said = [(m, "the same" if c == why else c) for m, c in others.items()]
+        if others:  # models whose cause is the kept one's are named, not repeated
+            said = [(m, "the same" if c == cause else c) for m, c in others.items()]
             parts.append("other camera models: " + "; ".join(pairs_by_reason(said)))
         return "; ".join(p for p in parts if p) or "no offset"
 

@@ -69,6 +69,12 @@ def test_two_cameras_from_the_moving_points_alone_are_refused(monkeypatch):
     for n in "ab":
         assert stats["dropped"][n].startswith("no reconstruction: too few matches; from the moving points: "
                                               "only two cameras came out"), stats["dropped"][n]
+    # in a few words, both causes are kept (sequence69's "only 2 track pairs" is the second)
+    from vs_inspect.cues.extract import _cue_stats
+
+    stats.update(registered_cameras=0, tracks=0, track_pairs=0, videos={}, pairs={}, timings_s={})
+    head = _cue_stats(stats).headline("a")
+    assert head.startswith("no reconstruction: too few matches; from the moving points: only two cameras came out")
     # three are used (their fitted offsets are then checked against their votes), and so are two
     # when the config asks for them
     cams, stats = _moving_point_cameras(monkeypatch, ["a", "b", "c"])

@@ -69,3 +69,25 @@ def test_point_transfer_view_only_when_a_check_was_logged():
         assert len(got) == (origin is not None)
         if origin:
             assert str(got[0].origin).strip("/") == "cues/transfer"
+
+
+def test_a_run_that_searched_no_pair_opens_on_frames_and_its_offsets_table():
+    """Stage 0 could use no video (sequence69): no SyncResult and no pair, so no offset_ms
+    timeline; the layout still shows the run's offsets table (why each video is null), in front,
+    and opens on the frame timeline, on which the videos were logged."""
+    import rerun.blueprint as rrb
+
+    bp = blueprint(["a", "b"], [], None, {}, timeline="frame", offsets_logged=True, show_world=False)
+    assert bp.time_panel.timeline == "frame"
+    left = bp.root_container.contents[0]
+    tabs = left.contents[0]
+    assert isinstance(tabs, rrb.Tabs)
+    names = [v.name for v in tabs.contents]
+    assert names == ["how to read this recording", "offsets", "decision log"]
+    assert tabs.active_tab == names.index("offsets")
+    # a run with pairs keeps the guide in front, and no offsets table is shown without one logged
+    result = SyncResult("a", {"a": 0.0, "b": 0.1}, {}, {}, (), (), ())
+    tabs = blueprint(["a", "b"], ["a__b"], result, {}, offsets_logged=True).root_container.contents[0].contents[0]
+    assert tabs.active_tab == 0 and "offsets" in [v.name for v in tabs.contents]
+    tabs = blueprint(["a", "b"], [], None, {}).root_container.contents[0].contents[0]
+    assert "offsets" not in [v.name for v in tabs.contents]

@@ -601,6 +601,8 @@ def test_the_offsets_panel_gives_every_null_in_a_few_words_and_in_full(tmp_path)
     path = tmp_path / "run.rrd"
     with RerunSink(path, progress=False) as sink:
         sink.run_summary(res)
+        # no video was placed in time and no pair searched: the layout opens on frame
+        assert sink.blueprint(["a", "b", "c"]).time_panel.timeline == "frame"
     texts = [_first_text(ch.to_record_batch()) for ch in _chunks(path, [f"/{SYNC_OFFSETS}/**"])]
     md = next(t for t in texts if t)
     rows = {line.split("|")[1].strip(): line for line in md.splitlines() if line.startswith("| ")}

@@ -166,3 +166,41 @@ def test_a_container_with_one_child_given_as_a_string_is_read():
     assert on_screen_views(layout) == ["1" * 32, "2" * 32]
     assert activate_tab(layout, "events")
     assert layout["/container/tabs"]["ContainerBlueprint"]["active_tab"] == v2
+
+
+def test_a_run_that_synchronized_nothing_opens_with_frames_and_its_reasons(tmp_path):
+    """Stage 0 could use no video (as on sequence69): the recording has no offset_ms timeline, so
+    the viewer is shot as it opens, on the frame timeline, with the offsets table in front; no
+    panel on screen is empty (before stop 63 the screenshot tool stopped at the missing timeline
+    and the videos showed no frame)."""
+    if rerun_executable() is None:
+        pytest.skip("no rerun viewer executable beside this Python or on PATH")
+    from vs_inspect.record.rerun_sink import RerunSink
+    from vs_inspect.types import RunResult, VideoInfo
+
+    rrd = tmp_path / "nothing.rrd"
+    names = ("a", "b")
+    why = "no reconstruction: too few matches between the frames of the videos (static background)"
+    with RerunSink(rrd, progress=False) as sink:
+        for n in names:
+            info = VideoInfo(n, 320, 240, 10, np.arange(10) / 10.0, fps=10.0)
+            sink.video(info, None)
+            for k in range(10):
+                img = np.full((240, 320, 3), 70, np.uint8)
+                img[40:80, 30 * k:30 * k + 30] = 255
+                sink.video_frame(n, k, img)
+        sink.run_summary(RunResult("a", dict.fromkeys(names), dict.fromkeys(names), dict.fromkeys(names, why),
+                                   (), "irls", (), (), {"total_s": 1.0},
+                                   unresolved_headline=dict.fromkeys(names, why.split(" (")[0])))
+    try:
+        shots = take_screenshots(rrd, tmp_path / "shots", mode="headless", settle_s=0.6)
+    except RuntimeError as exc:
+        if "did not come up" in str(exc):
+            pytest.skip(f"the rerun viewer cannot render here: {str(exc).splitlines()[0]}")
+        raise
+    assert [(s.label, s.offset_ms, s.timeline_on_open) for s in shots] == [("opened", None, "frame")]
+    panels = {p.name: p for p in shots[0].panels}
+    assert {"offsets", "a", "b"} <= set(panels), set(panels)
+    assert shots[0].empty_panels == [], {p.name: p.ink for p in shots[0].panels}
+    with pytest.raises(ValueError, match="no offset_ms timeline"):
+        take_screenshots(rrd, tmp_path / "shots2", {"at_0ms": 0}, mode="headless")

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..record.sink import DeferredSink, Sink
-from ..types import CameraTrack, Tracks, first_clause, geometric_refusal, refusal_headline
+from ..types import FROM_MOVING_POINTS, CameraTrack, Tracks, first_clause, geometric_refusal, refusal_headline
 from .config import CueConfig
 from .joint_vote import add_geometric_pairs, check_fitted_offsets
 from .video_cues import VideoCues
@@ -357,7 +357,7 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, pairs: di
             return CameraSet(cams, {n: Tracks(vids[n].xy_full, vids[n].instance) for n in cams}, None, None, {})
         if len(est.cameras) < 2:  # neither worked: say why for both
             est = dataclasses.replace(est, unregistered={
-                n: (f"{sfm_why}; from the moving points: {reasons[n].removeprefix('camera could not be registered: ')}"
+                n: (f"{sfm_why}; {FROM_MOVING_POINTS}{reasons[n].removeprefix('camera could not be registered: ')}"
                     if n in reasons else sfm_why) for n, sfm_why in est.unregistered.items()})
     stats["dropped"].update(est.unregistered)
     for n, why in est.unregistered.items():

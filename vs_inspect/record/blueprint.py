@@ -92,7 +92,7 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
               sizes: dict[str, tuple[int, int]] | None = None, eye: tuple | None = None,
               transfer_origin: str | None = None, three_view_origin: str | None = None,
               votes_logged: list[str] | None = None,
-              show_world: bool = True):
+              show_world: bool = True, offsets_logged: bool = False):
     """The default blueprint.
 
     pairs_logged: "a__b" of every pair in the order they were logged (their order when the result
@@ -105,7 +105,8 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
     three_view_origin: where Stage 0's three-view checks of sure cameras were logged (None: none were).
     votes_logged: "a__b" of the pairs whose geometric pairing votes were logged (Stage 0).
     show_world: whether the 3D view is shown (False: no camera was logged, e.g. Stage 0 refused
-    every one, and the view would open empty).
+    every one, and the view would open empty). offsets_logged: the run's offsets table was logged
+    without a SyncResult (Stage 0 could use no video); with no pair logged it opens in front.
     """
     import rerun.blueprint as rrb
     pair_views, sizes = pair_views or {}, sizes or {}
@@ -114,8 +115,12 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
                                   range_ms, sizes.get(a)) for a, b, acc in shown]
     info = [rrb.TextDocumentView(origin=GUIDE, name="how to read this recording")]
     if result is not None:
-        info += [rrb.TextDocumentView(origin=SYNC_PAIRS, name="pairs (failed first)"),
-                 rrb.TextDocumentView(origin=SYNC_OFFSETS, name="offsets")]
+        info.append(rrb.TextDocumentView(origin=SYNC_PAIRS, name="pairs (failed first)"))
+    active = 0
+    if result is not None or offsets_logged:
+        # with no pair to look at, why each video has no offset is what to read first
+        active = len(info) if offsets_logged and not pairs_logged else 0
+        info.append(rrb.TextDocumentView(origin=SYNC_OFFSETS, name="offsets"))
     if has_loops:
         info.append(rrb.TextDocumentView(origin=SYNC_LOOPS, name="loop closure"))
     info.append(rrb.TextLogView(origin=LOG, name="decision log"))
@@ -142,7 +147,7 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
     if three_view_origin is not None:
         overview.append(rrb.TimeSeriesView(origin=three_view_origin, name="three-view check (Stage 0: sure cameras)",
                                            time_ranges=_full_range(), plot_legend=rrb.PlotLegend(visible=True)))
-    left = rrb.Vertical(rrb.Tabs(*info, active_tab=0), *( [rrb.Tabs(*overview, active_tab=0)] if overview else []),
+    left = rrb.Vertical(rrb.Tabs(*info, active_tab=active), *( [rrb.Tabs(*overview, active_tab=0)] if overview else []),
                         row_shares=[1, 1][: 1 + bool(overview)])
     video_views = [rrb.Spatial2DView(origin=video_path(v), name=v, visual_bounds=_bounds(sizes.get(v)))
                    for v in video_names[:MAX_VIDEO_VIEWS]]

@@ -244,6 +244,7 @@ class RerunSink(Sink):
         self._bundle: CueBundle | None = None
         self._result: SyncResult | None = None
         self._view: RunRecordView | None = None
+        self._timed_videos = False  # a video was logged on the time timeline (it had an offset)
         self._summary: RunResult | None = None
         self._flushed_videos = False
         self._pairs_logged: list[str] = []
@@ -524,7 +525,8 @@ class RerunSink(Sink):
 
     def blueprint(self, names: list[str]):
         """The default blueprint of what was logged so far (record/blueprint.py)."""
-        timeline = TIMELINE_OFFSET_MS if self._offset_ms_min is not None else TIMELINE_TIME
+        timeline = (TIMELINE_OFFSET_MS if self._offset_ms_min is not None else
+                    TIMELINE_TIME if self._timed_videos else TIMELINE_FRAME)
         rng = (self._offset_ms_min, self._offset_ms_max) if self._offset_ms_min is not None else None
         return blueprint(names, self._pairs_logged, self._result, self._pair_views, timeline,
                          has_loops=bool(self._view is not None and self._view.triangles), range_ms=rng,
@@ -532,7 +534,8 @@ class RerunSink(Sink):
                          eye=self._eye, transfer_origin=CUES_TRANSFER if self._transfer_logged else None,
                          three_view_origin=CUES_THREE_VIEW if self._three_view_logged else None,
                          votes_logged=self._votes_logged,
-                         show_world=bool(self._world_cameras) or self._bundle is not None)
+                         show_world=bool(self._world_cameras) or self._bundle is not None,
+                         offsets_logged=self._summary is not None)
 
     def abort(self) -> None:
         """Stop writing and delete the temporary file; nothing that looks complete is left."""
@@ -646,6 +649,8 @@ class RerunSink(Sink):
 
     def _flush_videos(self, offsets: dict[str, float | None]) -> None:
         self._flushed_videos = True
+        # whether any video is on the time timeline (else the viewer opens on frame: see blueprint)
+        self._timed_videos = any(o is not None and math.isfinite(o) for o in offsets.values())
         total = sum(len(b.jpeg) + len(b.masks) for b in self._videos.values())
         bar = tqdm(total=total, desc="recording frames", unit="frame", leave=False,
                    disable=not self.progress or total < 50)
@@ -1039,11 +1044,16 @@ class RerunSink(Sink):
                   "pairs with the most track pairs first, then accepted pairs from the least clear "
                   "minimum up); every pair is in the **pairs** table and in **all landscapes**; to see "
                   "another pair, add a view with origin `pairs/<a>__<b>`." if n_pairs > shown else "")
+        opening = ("""**No pair offset was searched in this run**, so there is no `offset_ms` timeline: the
+viewer opens on **`frame`** (each video by its own frame index), and **offsets** (left) says why
+each video has no offset; **decision log** and the notes at the end of this guide say what each
+stage decided. The rest of this guide describes a run with pairs.""" if lo is None else
+                   f"""The viewer opens on the **`offset_ms`** timeline: the candidate pair offset Δ_ab in milliseconds
+over the whole search range{rng}. Δ_ab = offset_s[b] − offset_s[a]: video b started Δ_ab later
+than a. Move the time cursor (drag it, or type a value in the time field) to sweep Δ.""")
         md = f"""# How to read this recording
 
-The viewer opens on the **`offset_ms`** timeline: the candidate pair offset Δ_ab in milliseconds
-over the whole search range{rng}. Δ_ab = offset_s[b] − offset_s[a]: video b started Δ_ab later
-than a. Move the time cursor (drag it, or type a value in the time field) to sweep Δ.
+{opening}
 
 **Middle column: one tab per pair a→b, failed pairs first.** ✗ marks a rejected pair, ✓ an accepted
 one.{capped}

@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError
 from ..io.recording import TIMELINE_OFFSET_MS
 
 INK_DIFF = 40  # a pixel is ink when a channel differs from the empty panel by more than this (0-255)
@@ -53,7 +54,7 @@ class PanelShot:
 @dataclass(frozen=True)
 class Screenshots:
     label: str  # "chosen" or "wrong"
-    offset_ms: int  # where the time cursor was, on the offset_ms timeline
+    offset_ms: int | None  # where the time cursor was, on the offset_ms timeline (None: as opened)
     full: Path  # PNG of the whole viewer
     panels: tuple[PanelShot, ...]  # every panel on screen
     timeline_on_open: str | None  # the timeline the viewer showed when the recording opened
@@ -202,6 +203,18 @@ def _empty_recording(path: Path) -> Path:
     return path
 
 
+def default_offsets_ms(rrd: Path, pair: tuple[str, str] | None = None) -> dict[str, int | None]:
+    """The offsets take_screenshots shows by default: {"chosen": ms, "wrong": ms}
+    (chosen_and_wrong_ms), or {"opened": None} when no pair was evaluated: then the recording
+    has no offset_ms timeline (a run that synchronized nothing, the one most worth a look) and
+    the viewer is shot as it opens."""
+    from ..io.recording import read_recording
+    if not read_recording(rrd).landscapes:
+        return {"opened": None}
+    chosen, wrong = chosen_and_wrong_ms(rrd, pair)
+    return {"chosen": chosen, "wrong": wrong}
+
+
 def chosen_and_wrong_ms(rrd: Path, pair: tuple[str, str] | None = None) -> tuple[int, int]:
     """(chosen, wrong): the chosen Δ in ms of the pair (default: the one in the first
     container, the layout's active tab) and an offset a third of the search range away from it."""
@@ -308,12 +321,12 @@ def _paint(client, settle_s: float, min_rounds: int = 2, max_rounds: int = 6) ->
         prev = img
 
 
-def take_screenshots(rrd: str | Path, out_dir: str | Path, offsets_ms: dict[str, int] | None = None,
+def take_screenshots(rrd: str | Path, out_dir: str | Path, offsets_ms: dict[str, int | None] | None = None,
                      mode: str = "auto", settle_s: float = 1.0,
                      pair: tuple[str, str] | None = None, tabs: tuple[str, ...] = ()) -> list[Screenshots]:
     """Open rrd in the native viewer, take a screenshot of the viewer with the time cursor at each
-    offset (label -> ms on the offset_ms timeline; default: the chosen Δ of the pair on screen
-    and a wrong one), cut out every panel on screen, and measure each panel's ink against the same
+    offset (label -> ms on the offset_ms timeline, None: where the viewer opened; default:
+    default_offsets_ms), cut out every panel on screen, and measure each panel's ink against the same
     layout over an empty recording. PNGs go to out_dir as <label>.png and <label>/<panel>.png.
     pair: (a, b) whose container is brought to the front (default: the layout's first, a failed
     pair when there is one). tabs: titles of views or containers brought to the front of their tabs
@@ -329,8 +342,9 @@ def take_screenshots(rrd: str | Path, out_dir: str | Path, offsets_ms: dict[str,
     rrd, out_dir = Path(rrd), Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     if offsets_ms is None:
-        chosen, wrong = chosen_and_wrong_ms(rrd, pair)
-        offsets_ms = {"chosen": chosen, "wrong": wrong}
+        offsets_ms = default_offsets_ms(rrd, pair)
+    elif any(ms is not None for ms in offsets_ms.values()) and default_offsets_ms(rrd) == {"opened": None}:
+        raise ValueError(f"{rrd} has no offset_ms timeline (no pair was evaluated): no offset to move to")
     fulls: dict[str, tuple[int, np.ndarray]] = {}
     with tempfile.TemporaryDirectory(prefix="vs-inspect-shots-") as tmp, \
             viewer(mode, log_path=out_dir / "viewer.log") as client:
@@ -352,12 +366,13 @@ def take_screenshots(rrd: str | Path, out_dir: str | Path, offsets_ms: dict[str,
         views = [v for v in client.get_state().views if v.visible and v.view_id.replace("-", "") in shown]
         rects: dict[str, tuple[int, int, int, int]] = {}
         for label, ms in offsets_ms.items():
-            client.set_time(TIMELINE_OFFSET_MS, sequence=int(ms), play_state="paused", recording=store)
+            if ms is not None:
+                client.set_time(TIMELINE_OFFSET_MS, sequence=int(ms), play_state="paused", recording=store)
             _paint(client, settle_s)
             full = _png(client.take_screenshot())
             if not rects:
                 rects = {v.view_id: _locate(full, _png(client.take_screenshot(v.view_id))) for v in views}
-            fulls[label] = (int(ms), full)
+            fulls[label] = (None if ms is None else int(ms), full)
         empty = _open(client, _empty_recording(Path(tmp) / "empty.rrd"))
         client.set_blueprint(layout, store_id=empty)
         _paint(client, settle_s)
@@ -401,11 +416,15 @@ def main(argv: list[str] | None = None) -> int:
         print("note: ffmpeg is not on PATH: the native viewer shows no frame of embedded H.264 videos",
               file=sys.stderr)
     offsets = {f"at_{ms}ms": ms for ms in args.at} if args.at else None
-    shots = take_screenshots(args.rrd, args.out, offsets, mode=args.mode,
-                             pair=tuple(args.pair) if args.pair else None, tabs=tuple(args.tab))
+    try:
+        shots = take_screenshots(args.rrd, args.out, offsets, mode=args.mode,
+                                 pair=tuple(args.pair) if args.pair else None, tabs=tuple(args.tab))
+    except (ValueError, InputError) as exc:  # an unknown pair or tab, no offsets, not a recording
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     bad = 0
     for s in shots:
-        print(f"{s.label} (offset_ms = {s.offset_ms}): {s.full}")
+        print(f"{s.label} (offset_ms = {'as opened' if s.offset_ms is None else s.offset_ms}): {s.full}")
         for ps in s.panels:
             flag = "EMPTY" if ps.empty else "ok"
             bad += ps.empty
