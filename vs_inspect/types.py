@@ -603,6 +603,10 @@ class RunResult:
     def resolved(self) -> list[str]:
         return [v for v, off in self.offsets_s.items() if off is not None]
 
+    def headlines(self) -> dict[str, str]:
+        """Each unresolved video's reason in a few words (unresolved_headline), else in full."""
+        return {v: (self.unresolved_headline or {}).get(v) or why for v, why in self.unresolved.items()}
+
     def pair(self, a: str, b: str) -> PairLandscape | None:
         for p in self.pairs:
             if (p.a, p.b) == (a, b):

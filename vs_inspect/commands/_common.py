@@ -165,12 +165,6 @@ def offsets_table(offsets: dict, uncertainty: dict, truth: dict | None, referenc
     return "\n".join(lines)
 
 
-def null_reasons(result) -> dict[str, str]:
-    """Each unresolved video's reason for the offsets table: its headline (a few words) when the
-    run has one, else the whole reason."""
-    return {v: (result.unresolved_headline or {}).get(v) or why for v, why in result.unresolved.items()}
-
-
 def print_run(result, path, truth: dict | None = None,
               frame_s: dict[str, float] | None = None) -> None:
     """The offsets table (input order, truth from the run or given; errors in frames when the
@@ -180,7 +174,7 @@ def print_run(result, path, truth: dict | None = None,
     shown_truth = {n: truth[n] for n in names if n in truth} if truth else None
     print(offsets_table({n: result.offsets_s.get(n) for n in names},
                         {n: result.uncertainty_s.get(n) for n in names}, shown_truth,
-                        result.reference, null_reasons(result), frame_s if shown_truth else None))
+                        result.reference, result.headlines(), frame_s if shown_truth else None))
     if any(result.offsets_s.get(n) is None for n in names) and result.unresolved_headline:
         print(f"each null's reason in full: \"unresolved\" in {path}")
     if result.drift_ppm is not None:  # --drift: t_global = offset_s + (1 + drift) * t_local

@@ -22,7 +22,7 @@ from ..record.sink import Sink
 from ..synth.videos import is_complete, render_scene, rendered_with
 from ..synth.world import SceneConfig, make_scene
 from ..types import RunInputs, RunResult
-from ._common import null_reasons, offsets_table, print_run
+from ._common import offsets_table, print_run
 from ._common import run_config as run_config_of
 from ._record import add_record_options, describe, open_sink, rrd_path
 from .sync import exit_code
@@ -84,7 +84,7 @@ def run_demo(out: Path, config: SceneConfig = DEMO_SCENE, run_config: RunConfig 
                           recorded_inputs=RunInputs(scene=str(scene_dir), cues="true cue bundle"))
     path = write_run_result(result, out / "result.json")
     print(offsets_table(result.offsets_s, result.uncertainty_s, result.gt_offsets_s,
-                        result.reference, null_reasons(result)))
+                        result.reference, result.headlines()))
     for p in result.pairs:
         if not p.decision.accepted:
             print(f"rejected {p.a}__{p.b}: {p.decision.reason}")

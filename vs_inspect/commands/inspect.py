@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..types import PairLandscape, RunResult
-from ._common import add_gt_option, load_gt, null_reasons, offsets_table
+from ._common import add_gt_option, load_gt, offsets_table
 
 
 def register(sub) -> None:
@@ -59,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
     for v in rec.videos:
         rate = f"{v.fps:g} fps" if v.fps else "variable rate"
         print(f"  {v.name}: {v.width}x{v.height}, {v.num_frames} frames, {v.duration_s:.2f} s, {rate}")
-    print(offsets_table(res.offsets_s, res.uncertainty_s, truth, res.reference, null_reasons(res),
+    print(offsets_table(res.offsets_s, res.uncertainty_s, truth, res.reference, res.headlines(),
                         frame_s if truth else None))
 
     diag = diagnose(res, rec.videos, truth)

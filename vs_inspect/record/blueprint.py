@@ -106,7 +106,7 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
     votes_logged: "a__b" of the pairs whose geometric pairing votes were logged (Stage 0).
     show_world: whether the 3D view is shown (False: no camera was logged, e.g. Stage 0 refused
     every one, and the view would open empty). offsets_logged: the run's offsets table was logged
-    without a SyncResult (Stage 0 could use no video); with no pair logged it opens in front.
+    (also without a SyncResult: Stage 0 could use no video); with no pair logged it opens in front.
     """
     import rerun.blueprint as rrb
     pair_views, sizes = pair_views or {}, sizes or {}

@@ -464,8 +464,7 @@ class RerunSink(Sink):
         # the run's table replaces Stage 2's: every input video (those Stage 0 left out too), each
         # null with the run's few words, and its whole reason below the table
         self._log_offsets(result.reference, result.solver, result.offsets_s, result.uncertainty_s,
-                          {v: (result.unresolved_headline or {}).get(v) or why for v, why in result.unresolved.items()},
-                          self._view, result.unresolved)
+                          result.headlines(), self._view, result.unresolved)
 
     # ---- finishing ----
 
