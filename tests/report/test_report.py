@@ -3,6 +3,7 @@ size, not blank, and the same images and numbers from both sources."""
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from html import escape as html_escape
 from pathlib import Path
@@ -246,6 +247,14 @@ def test_rejected_pair_panel_and_demo_folder_layout(tmp_path):
     assert r.epipolar is not None and r.epipolar.accepted is False
     html = write_index(r, {}, tmp_path / "i.html").read_text()
     assert "best of a rejected pair" in html and "(chosen)" not in html
+    # a null's status: its few words, and the whole reason folded beneath
+    why = "no reconstruction: too few matches (static background); from the moving points: 2 track pairs"
+    v = r.names[-1]
+    nulled = dataclasses.replace(r, offsets_s={**r.offsets_s, v: None}, unresolved={v: why},
+                                 unresolved_headline={v: "no reconstruction: too few matches"})
+    html = write_index(nulled, {}, tmp_path / "n.html").read_text()
+    assert ("unresolved: no reconstruction: too few matches<details><summary>in full</summary>"
+            + html_escape(why) + "</details>") in html
     ok = load_report_data(out)
     assert ok.epipolar.accepted is True
 

@@ -302,7 +302,8 @@ def build_report_data(result: RunResult, bundle: CueBundle | None, *, source: st
     return ReportData(source, result.reference, videos, offsets, unc, dict(result.unresolved), pairs,
                       gt, cameras, static_points, static_colors, trajs, panel, mosaic,
                       transfer_views(result, gt), tuple(notes),
-                      {k: float(v) for k, v in result.timings_s.items()}, three_view_views(result, gt))
+                      {k: float(v) for k, v in result.timings_s.items()}, three_view_views(result, gt),
+                      result.headlines())
 
 
 # ---- the report's data of a run folder or of a recording alone ------------------------------

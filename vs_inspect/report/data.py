@@ -207,6 +207,8 @@ class ReportData:
     notes: tuple[str, ...] = ()  # readable notes on what could not be shown and why
     timings_s: dict[str, float] = field(default_factory=dict)
     three_view: tuple[ThreeViewView, ...] = ()  # Stage 0's three-view checks (none: no estimated camera sure)
+    unresolved_headline: dict[str, str] = field(default_factory=dict)  # video -> why in a few words
+    # (RunResult.headlines: the whole reason where the run gave none)
 
     @property
     def names(self) -> list[str]:

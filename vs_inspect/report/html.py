@@ -16,6 +16,13 @@ def _s(x: float | None, digits: int = 4, sign: bool = True) -> str:
     return f"{x:+.{digits}f}" if sign else f"{x:.{digits}f}"
 
 
+def _null_status(headline: str, full: str) -> str:
+    """A null's status cell: its reason in a few words, the whole reason unfolded on a click."""
+    e = html.escape
+    more = f"<details><summary>in full</summary>{e(full)}</details>" if full and full != headline else ""
+    return f"unresolved: {e(headline)}{more}"
+
+
 CSS = """
 body { font-family: system-ui, sans-serif; margin: 24px; max-width: 1700px; color: #222; }
 table { border-collapse: collapse; margin: 8px 0 24px 0; font-size: 14px; }
@@ -52,9 +59,9 @@ def write_index(data: ReportData, images: dict[str, tuple[str, str]], path: Path
         if gt:
             row += (f"<td>{_s(gt[v] - ref_gt) if v in gt else '—'}</td><td>{_s(errs.get(v), 1, False)}</td>"
                     f"<td>{_s(frames.get(v), 2, False)}</td>")
-        status = "reference" if v == data.reference else (
-            "synchronized" if off is not None else "unresolved: " + data.unresolved.get(v, ""))
-        out.append(row + f"<td class='l'>{e(status)}</td></tr>")
+        status = e("reference" if v == data.reference else "synchronized") if off is not None else (
+            _null_status(data.unresolved_headline.get(v) or data.unresolved.get(v, ""), data.unresolved.get(v, "")))
+        out.append(row + f"<td class='l'>{status}</td></tr>")
     out.append("</table>")
     resolved = [x for x in errs.values() if x is not None]
     if resolved:
