@@ -142,7 +142,8 @@ def offsets_table(offsets: dict, uncertainty: dict, truth: dict | None, referenc
     """A short plain-text table of offsets, with the truth and error when known (and the error
     in frames of each video when its frame interval frame_s[v], seconds, is given)."""
     lines = []
-    head = f"{'video':<16}{'offset_s':>11}{'± s':>9}"
+    w = max([16] + [len(v) + 2 for v in offsets])  # long names (sequence69's are 32 characters) stay aligned
+    head = f"{'video':<{w}}{'offset_s':>11}{'± s':>9}"
     if truth:
         head += f"{'true_s':>11}{'error_ms':>10}" + (f"{'frames':>8}" if frame_s else "")
     lines.append(head)
@@ -150,7 +151,7 @@ def offsets_table(offsets: dict, uncertainty: dict, truth: dict | None, referenc
     frames = error_frames(errors_ms, frame_s) if frame_s else {}
     for v, off in offsets.items():
         u = uncertainty.get(v)
-        row = f"{v:<16}{fmt_s(off):>11}{('%.4f' % u) if u is not None else '-':>9}"
+        row = f"{v:<{w}}{fmt_s(off):>11}{('%.4f' % u) if u is not None else '-':>9}"
         if truth and v in truth:
             tv = truth[v] - truth.get(reference, 0.0)
             row += f"{tv:>+11.4f}"
