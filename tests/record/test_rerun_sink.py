@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import os
 import shutil
 import subprocess
@@ -608,4 +609,23 @@ def test_the_offsets_panel_gives_every_null_in_a_few_words_and_in_full(tmp_path)
     rows = {line.split("|")[1].strip(): line for line in md.splitlines() if line.startswith("| ")}
     assert set(rows) >= {"a", "b", "c"}
     assert rows["c"].rstrip(" |").endswith("no reconstruction: too few matches") and full not in rows["c"]
-    assert md.endswith(f"**c**: {full}")
+    assert md.endswith(f"**c**: no reconstruction: too few matches\n\n> in full: {full}")
+
+
+def test_a_pair_without_a_landscape_gets_its_decision_alone(tmp_path):
+    """A pair with no track pair (held-out-4's s48: Stage 0 refused every camera) has no finite
+    energy and no epipolar view: its container holds the decision only, not two empty panels."""
+    import rerun.blueprint as rrb
+
+    from vs_inspect.types import PairDecision, PairLandscape
+
+    land = PairLandscape("a", "b", np.linspace(-1, 1, 5), np.full(5, np.nan), np.zeros(5, int), np.array([], int),
+                         math.nan, math.nan, math.nan, 0,
+                         PairDecision(False, "no cross-view track pairs", 0.0, 0.0, 0, 0, False))
+    with RerunSink(tmp_path / "r.rrd", progress=False) as sink:
+        sink.pair_landscape(land)
+        middle = sink.blueprint(["a", "b"]).root_container.contents[1]
+        (container,) = middle.contents
+        kinds = [type(v).__name__ for v in container.contents]
+        assert kinds == ["TextDocumentView"], kinds
+        assert not isinstance(container.contents[0], rrb.Container)

@@ -527,7 +527,10 @@ class RerunSink(Sink):
         timeline = (TIMELINE_OFFSET_MS if self._offset_ms_min is not None else
                     TIMELINE_TIME if self._timed_videos else TIMELINE_FRAME)
         rng = (self._offset_ms_min, self._offset_ms_max) if self._offset_ms_min is not None else None
-        return blueprint(names, self._pairs_logged, self._result, self._pair_views, timeline,
+        # a pair logged without a finite energy or an epipolar view gets its decision alone (the
+        # blueprint assumes both for a pair it is not told about: held-out-4's s48 opened on empty ones)
+        views = {k: self._pair_views.get(k, set()) for k in self._pairs_logged}
+        return blueprint(names, self._pairs_logged, self._result, views, timeline,
                          has_loops=bool(self._view is not None and self._view.triangles), range_ms=rng,
                          sizes={n: (b.info.width, b.info.height) for n, b in self._videos.items()},
                          eye=self._eye, transfer_origin=CUES_TRANSFER if self._transfer_logged else None,
@@ -981,7 +984,8 @@ class RerunSink(Sink):
     def _log_offsets(self, reference: str, solver: str, offsets_s: dict, uncertainty_s: dict, notes: dict,
                      view: RunRecordView | None, in_full: dict | None = None) -> None:
         """The offsets table (notes: video -> why it is null; truth and errors from view, when
-        given), and each null's whole reason (in_full) below it."""
+        given), and below it each null's note again (the table's cell is cut to the panel's width)
+        with its whole reason (in_full), when given."""
         rows = []
         for v, off in offsets_s.items():
             u = uncertainty_s.get(v)
@@ -993,9 +997,11 @@ class RerunSink(Sink):
                         f"{f'{err:.1f}' if err is not None and t is not None else '-'} | {note} |")
         md = (f"## Offsets (reference {reference}, solver {solver})\n\n"
               "| video | offset_s | ± s | true_s | error_ms | note |\n|---|---|---|---|---|---|\n" + "\n".join(rows))
-        full = {v: why for v, why in (in_full or {}).items() if offsets_s.get(v) is None and why != notes.get(v)}
-        if full:
-            md += "\n\n### Each null's reason in full\n\n" + "\n\n".join(f"**{v}**: {why}" for v, why in full.items())
+        nulls = [v for v, off in offsets_s.items() if off is None and v in (in_full or {})]
+        if nulls:
+            md += "\n\n### Why each null has no offset\n\n" + "\n\n".join(
+                f"**{v}**: {notes.get(v) or in_full[v]}" + (f"\n\n> in full: {in_full[v]}" if in_full[v] != notes.get(v) else "")
+                for v in nulls)
         self.rec.log(SYNC_OFFSETS, rr.TextDocument(md, media_type=rr.MediaType.MARKDOWN), static=True)
 
     def _log_loops(self, view: RunRecordView) -> None:

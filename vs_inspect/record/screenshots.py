@@ -205,9 +205,9 @@ def _empty_recording(path: Path) -> Path:
 
 def default_offsets_ms(rrd: Path, pair: tuple[str, str] | None = None) -> dict[str, int | None]:
     """The offsets take_screenshots shows by default: {"chosen": ms, "wrong": ms}
-    (chosen_and_wrong_ms), or {"opened": None} when no pair was evaluated: then the recording
-    has no offset_ms timeline (a run that synchronized nothing, the one most worth a look) and
-    the viewer is shot as it opens."""
+    (chosen_and_wrong_ms), or {"opened": None} when no pair has a landscape (a run that
+    synchronized nothing, the one most worth a look): there is no chosen Δ, often no offset_ms
+    timeline at all, and the viewer is shot as it opens."""
     from ..io.recording import read_recording
     if not read_recording(rrd).landscapes:
         return {"opened": None}
@@ -343,15 +343,18 @@ def take_screenshots(rrd: str | Path, out_dir: str | Path, offsets_ms: dict[str,
     out_dir.mkdir(parents=True, exist_ok=True)
     if offsets_ms is None:
         offsets_ms = default_offsets_ms(rrd, pair)
-    elif any(ms is not None for ms in offsets_ms.values()) and default_offsets_ms(rrd) == {"opened": None}:
-        raise ValueError(f"{rrd} has no offset_ms timeline (no pair was evaluated): no offset to move to")
     fulls: dict[str, tuple[int, np.ndarray]] = {}
     with tempfile.TemporaryDirectory(prefix="vs-inspect-shots-") as tmp, \
             viewer(mode, log_path=out_dir / "viewer.log") as client:
         store = _open(client, rrd)
         # blueprint applied, panels laid out, the static images decoded (once: they are cached)
         _paint(client, 2 * settle_s, min_rounds=4)
-        opened_on = next((r.current_timeline for r in client.get_state().recordings if r.store_id == store), None)
+        state = next((r for r in client.get_state().recordings if r.store_id == store), None)
+        opened_on = state.current_timeline if state is not None else None
+        if (state is not None and any(ms is not None for ms in offsets_ms.values())
+                and not any(t.name == TIMELINE_OFFSET_MS and t.start is not None for t in state.timelines)):
+            raise ValueError(f"{rrd} has no {TIMELINE_OFFSET_MS} timeline (no pair offset was searched): "
+                             "no offset to move to")
         layout = client.get_blueprint(store_id=store).blueprint
         if pair is not None:
             if not activate_tab(layout, f"{pair[0]}→{pair[1]}", suffix=True):
