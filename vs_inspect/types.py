@@ -526,7 +526,7 @@ def geometric_refusal(pairs: dict[str, dict[str, Any]], dropped: dict[str, str],
     point transfer's verdict), sure of it but refuted in three views or by a pair of its own
     (dissent), or sure of too few cameras to close a triangle; else None (used, dropped, or no
     joint vote)."""
-    refusal = _refusal(pairs, dropped, joint, video)
+    refusal = refusal_texts(pairs, dropped, joint, video)
     return None if refusal is None else refusal[1]
 
 
@@ -534,19 +534,19 @@ def refusal_headline(pairs: dict[str, dict[str, Any]], dropped: dict[str, str], 
                      video: str) -> str | None:
     """geometric_refusal's cause in a few words ("refuted in three views", "two offsets 1.22 s
     apart, as a repeated motion gives"), or None when it gives none."""
-    refusal = _refusal(pairs, dropped, joint, video)
+    refusal = refusal_texts(pairs, dropped, joint, video)
     return None if refusal is None else refusal[0]
 
 
-def _refusal(pairs: dict[str, dict[str, Any]], dropped: dict[str, str], joint: dict[str, Any] | None,
-             video: str) -> tuple[str, str] | None:
-    """(headline, the whole account) of geometric_refusal, or None."""
-    withheld = [(k, p["geometric_withheld"]) for k, p in pairs.items()
-                if video in k.split("__") and p.get("geometric_withheld")]
+def refusal_texts(pairs: dict[str, dict[str, Any]], dropped: dict[str, str], joint: dict[str, Any] | None,
+                  video: str) -> tuple[str, str] | None:
+    """(refusal_headline, geometric_refusal) of `video`, worked out once, or None."""
+    withheld = [(k, p) for k, p in pairs.items() if video in k.split("__") and p.get("geometric_withheld")]
     if withheld and video not in dropped:
-        short = next((p["geometric_withheld_short"] for k, p in pairs.items()
-                      if video in k.split("__") and p.get("geometric_withheld_short")), "vote peaks unchecked")
-        return short, "Stage 0 gave " + "; ".join(pairs_by_reason(withheld, " no geometric track pairs"))
+        short = next((p["geometric_withheld_short"] for _, p in withheld if p.get("geometric_withheld_short")),
+                     "vote peaks unchecked")
+        return short, "Stage 0 gave " + "; ".join(pairs_by_reason([(k, p["geometric_withheld"]) for k, p in withheld],
+                                                                  " no geometric track pairs"))
     joint = joint or {}
     if video not in joint.get("margin", {}) or video in joint.get("used", ()) or video in dropped:
         return None

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..record.sink import DeferredSink, Sink
-from ..types import FROM_MOVING_POINTS, CameraTrack, Tracks, first_clause, geometric_refusal, refusal_headline
+from ..types import FROM_MOVING_POINTS, CameraTrack, Tracks, first_clause, refusal_texts
 from .config import CueConfig
 from .joint_vote import add_geometric_pairs, check_fitted_offsets
 from .video_cues import VideoCues
@@ -210,13 +210,16 @@ def _note_other_models(stats: dict, kind: str, kept: CameraSet, others: list[tup
         return
     untrusted, headlines = {}, {}
     for n in vids:
-        if n in stats["dropped"] and n not in kept.cameras:
-            stats["dropped"][n] += f" (also tried: {'; '.join(_verdict(k, c, n) for k, c in others)})"
-        elif n in kept.cameras and n not in kept.used:
-            untrusted[n] = "; ".join(_verdict(k, c, n) for k, c in others)
+        placed = n in kept.cameras
+        if (n in kept.used) if placed else (n not in stats["dropped"]):
+            continue  # timed, or kept out for a reason of its own (unreadable)
+        verdicts = {_whose(k): _verdict(k, c, n) for k, c in others}  # whose -> (whole clause, few words)
+        said = "; ".join(whole for whole, _ in verdicts.values())
+        if placed:
+            untrusted[n] = said
         else:
-            continue
-        headlines[n] = {_whose(k): _verdict_headline(c, n) for k, c in others}
+            stats["dropped"][n] += f" (also tried: {said})"
+        headlines[n] = {whose: short for whose, (_, short) in verdicts.items()}
     if headlines and stats.get("sfm") is not None:
         stats["sfm"].update({"kept_model": _whose(kind), "other_models_headline": headlines})
         if untrusted:
@@ -228,31 +231,25 @@ def _whose(kind: str) -> str:
     return f"{_owner(kind)} {'cameras' if kind == MOVING_POINTS else 'model'}"
 
 
-def _verdict(kind: str, c: CameraSet, n: str) -> str:
-    """What camera set c (of kind) made of video n, one clause: trusted, placed but not trusted
-    (and why its joint vote gave no geometric pairs), or why it has no camera."""
+def _verdict(kind: str, c: CameraSet, n: str) -> tuple[str, str]:
+    """What camera set c (of kind) made of video n: (one clause, the same in a few words). It
+    trusted n, placed it but did not trust it (and why its joint vote gave no geometric pairs),
+    or why it has no camera."""
     whose = _whose(kind)
-    joint = c.stats.get("geometric_joint")
+    joint = c.stats.get("geometric_joint") or {}
     if n in c.cameras:
-        why = "" if n in c.used else geometric_refusal(c.stats["pairs"], c.stats["dropped"], joint, n)
-        return (f"{whose} registered it, but its set was not kept (its joint vote trusted {len(c.used)} video(s)"
-                + (f"; for this one: {why}" if why else "") + ")")
+        refusal = None if n in c.used else refusal_texts(c.stats["pairs"], c.stats["dropped"], joint, n)
+        whole = (f"{whose} registered it, but its set was not kept (its joint vote trusted {len(c.used)} video(s)"
+                 + (f"; for this one: {refusal[1]}" if refusal else "") + ")")
+        short = (f"timed it, but its set ({len(c.used)} video(s)) was not kept" if n in c.used else
+                 refusal[0] if refusal else "not trusted")
+        return whole, short
+    dropped = c.stats["dropped"].get(n, "no camera")
+    dissent = (joint.get("dissent") or {}).get(n)  # e.g. a refused camera's rival offset
     # the reason's first clause: the rest repeats for every model (the moving points' cameras)
-    why = c.stats["dropped"].get(n, "no camera").split("; ")[0]
-    dissent = ((joint or {}).get("dissent") or {}).get(n)  # e.g. a refused camera's rival offset
-    return f"{whose}: {why}" + (f" (its joint vote: {dissent})" if dissent else "")
-
-
-def _verdict_headline(c: CameraSet, n: str) -> str:
-    """_verdict in a few words: what kept camera set c from timing video n."""
-    joint = c.stats.get("geometric_joint")
-    if n in c.used:
-        return f"timed it, but its set ({len(c.used)} video(s)) was not kept"
-    if n in c.cameras:
-        return refusal_headline(c.stats["pairs"], c.stats["dropped"], joint, n) or "not trusted"
+    whole = f"{whose}: {dropped.split('; ')[0]}" + (f" (its joint vote: {dissent})" if dissent else "")
     # a refused camera's rival offset says more than "refused"
-    return (((joint or {}).get("dissent_short") or {}).get(n)
-            or first_clause(c.stats["dropped"].get(n, "no camera")))
+    return whole, (joint.get("dissent_short") or {}).get(n) or first_clause(dropped)
 
 
 def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, pairs: dict, est,

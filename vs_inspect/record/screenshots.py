@@ -209,24 +209,24 @@ def default_offsets_ms(rrd: Path, pair: tuple[str, str] | None = None) -> dict[s
     synchronized nothing, the one most worth a look): there is no chosen Δ, often no offset_ms
     timeline at all, and the viewer is shot as it opens."""
     from ..io.recording import read_recording
-    if not read_recording(rrd).landscapes:
+    rec = read_recording(rrd)
+    if not rec.landscapes:
         return {"opened": None}
-    chosen, wrong = chosen_and_wrong_ms(rrd, pair)
+    chosen, wrong = chosen_and_wrong_ms(rec, pair)
     return {"chosen": chosen, "wrong": wrong}
 
 
-def chosen_and_wrong_ms(rrd: Path, pair: tuple[str, str] | None = None) -> tuple[int, int]:
-    """(chosen, wrong): the chosen Δ in ms of the pair (default: the one in the first
-    container, the layout's active tab) and an offset a third of the search range away from it."""
-    from ..io.recording import pair_key, read_recording
+def chosen_and_wrong_ms(rec, pair: tuple[str, str] | None = None) -> tuple[int, int]:
+    """(chosen, wrong) of a recording with landscapes (io.recording.Recording): the chosen Δ in ms
+    of the pair (default: the one in the first container, the layout's active tab) and an offset
+    a third of the search range away from it."""
+    from ..io.recording import pair_key
     from .blueprint import shown_pairs
-    rec = read_recording(rrd)
     shown = shown_pairs(rec.meta.get("pairs", []), rec.result)
     if pair is not None:
         shown = [(pair[0], pair[1], None)]
     series = rec.landscapes.get(pair_key(shown[0][0], shown[0][1]), {}) if shown else {}
-    all_ms = np.concatenate([s.offset_ms for p in rec.landscapes.values() for s in p.values()]) \
-        if rec.landscapes else np.zeros(1, np.int64)
+    all_ms = np.concatenate([s.offset_ms for p in rec.landscapes.values() for s in p.values()])
     lo, hi = int(all_ms.min()), int(all_ms.max())
     chosen = None
     if rec.result is not None and shown:
