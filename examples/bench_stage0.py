@@ -12,7 +12,7 @@
     # and the cameras against the truth (camera px: the true moving points' distance from their
     # epipolar lines, median / worst camera pair) and the track pairs against the truth (the share
     # whose two tracks follow one body point, two points, or a track no rigid point)
-    PYTHONPATH=. python examples/bench_stage0.py arcs [--scenes a60_c4m1_s12 ...] [--set held-out|tuning|held-out-2|held-out-3|held-out-4|held-out-5] [--calibrated] [--features F] --workdir W
+    PYTHONPATH=. python examples/bench_stage0.py arcs [--scenes a60_c4m1_s12 ...] [--set held-out|tuning|held-out-2|held-out-3|held-out-4|held-out-5|mixed-rates] [--calibrated] [--features F] --workdir W
     # caliscope, visualsync and rendered take the track settings too, e.g. the tracks of before:
     PYTHONPATH=. python examples/bench_stage0.py rendered --seeds 0 1 2 --klt-window 21 --no-anchor
 
@@ -291,7 +291,8 @@ def bench_arcs(args) -> None:
             t1 = time.perf_counter()
             res = sync_bundle(bundle, progress=False)
             t2 = time.perf_counter()
-            errors = frame_errors(res.reference, res.offsets_s, truth, scene_cfg.fps)
+            rates = {c["name"]: c["fps"] for c in json.loads((folder / "scene.json").read_text())["cameras"]}
+            errors = frame_errors(res.reference, res.offsets_s, truth, rates)
             all_errors.extend(errors.values())
             shown = ", ".join(f"{v} " + ("null" if e is None else f"{e:+.2f}" + (" **over 2**" if abs(e) > 2 else ""))
                               for v, e in errors.items())

@@ -20,8 +20,16 @@ def test_parse_scene_and_its_rendering_settings():
     assert (cfg.width, cfg.height, cfg.fps) == (640, 480, 30.0)
 
 
+def test_a_mixed_rate_scene_draws_each_cameras_rate():
+    sc = parse_scene("a45_c5m2_s76_mixed")
+    assert (sc.arc_deg, sc.cameras, sc.moving, sc.seed, sc.mixed_rates) == (45.0, 5, 2, 76, True)
+    assert sc.scene_config().fps is None  # drawn per camera by the renderer
+    assert not parse_scene("a45_c5m2_s76").mixed_rates
+
+
 @pytest.mark.parametrize("name, says", [("a60_c4m1", "not a scene name"), ("a0_c4m1_s1", "outside 1-360"),
-                                        ("a60_c2m2_s1", "one of them static"), ("a60_c1m0_s1", "at least 2")])
+                                        ("a60_c2m2_s1", "one of them static"), ("a60_c1m0_s1", "at least 2"),
+                                        ("a60_c4m1_s1_mix", "not a scene name")])
 def test_parse_scene_refuses_bad_names(name, says):
     with pytest.raises(ValueError, match=says):
         parse_scene(name)
@@ -36,10 +44,12 @@ def test_the_scene_sets_share_no_seed():
     assert seeds["held-out-3"] == set(range(34, 46))
     assert seeds["held-out-4"] == set(range(46, 58))
     assert seeds["held-out-5"] == set(range(58, 70))
+    assert seeds["mixed-rates"] == set(range(70, 82))
     # the later held-out sets mix arcs and cameras as the first does
-    later = ("held-out-2", "held-out-3", "held-out-4", "held-out-5")
+    later = ("held-out-2", "held-out-3", "held-out-4", "held-out-5", "mixed-rates")
     kinds = {k: sorted(n.rsplit("_s", 1)[0] for n in SCENE_SETS[k]) for k in ("held-out",) + later}
     assert all(kinds[k] == kinds["held-out"] for k in later)
+    assert all(parse_scene(n).mixed_rates == (k == "mixed-rates") for k, names in SCENE_SETS.items() for n in names)
 
 
 def test_frame_errors_against_the_results_reference():
@@ -52,6 +62,14 @@ def test_frame_errors_against_the_results_reference():
     assert "cam1" not in err
     # a reference without an offset leaves nothing resolved
     assert frame_errors("cam0", offsets, truth, fps=30.0) == {"cam1": None, "cam2": None}
+
+
+def test_frame_errors_with_each_videos_rate_count_the_slower_videos_frames():
+    truth = {"cam0": 0.0, "cam1": 0.5, "cam2": -1.0}
+    offsets = {"cam0": 0.0, "cam1": 0.5 + 0.1, "cam2": -1.0 - 0.1}  # each 0.1 s off
+    err = frame_errors("cam0", offsets, truth, {"cam0": 60.0, "cam1": 24.0, "cam2": 50.0})
+    assert err["cam1"] == pytest.approx(2.4)  # in 24 fps frames (cam1 is the slower)
+    assert err["cam2"] == pytest.approx(-5.0)  # in 50 fps frames (the reference is faster)
 
 
 def test_summarize_counts_the_offsets_over_two_frames():

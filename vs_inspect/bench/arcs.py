@@ -4,7 +4,9 @@ over 2 frames"), counted per offset.
 
 A scene is named a<arc>_c<cameras>m<hand-held>_s<seed>, e.g. a60_c4m1_s12: 60° arc, 4 cameras of
 which 1 hand-held, seed 12, rendered as `vs-inspect synth-video --arc-deg 60 --cameras 4
---moving 1 --seed 12 --seconds 6` would render it (640×480, 30 fps).
+--moving 1 --seed 12 --seconds 6` would render it (640×480, 30 fps). The suffix _mixed (e.g.
+a60_c4m1_s70_mixed) draws each camera's frame rate from 24, 25, 30, 50 and 60 fps instead
+(`--fps 0`), as phones and action cameras filming one event record.
 """
 
 from __future__ import annotations
@@ -18,7 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 
 SCENE_SECONDS = 6.0
-_NAME = re.compile(r"a(\d+)_c(\d+)m(\d+)_s(\d+)")
+SCENE_FPS = 30.0  # every camera's, unless the scene's rates are mixed
+_NAME = re.compile(r"a(\d+)_c(\d+)m(\d+)_s(\d+)(_mixed)?")
 
 # stop 43's sweep, which the rules of stops 43-45 were built on (its square-pixel scenes need a
 # scratch change of the renderer and are not here)
@@ -45,8 +48,14 @@ HELD_OUT_4_SCENES = ("a30_c4m1_s46", "a45_c4m1_s47", "a60_c4m1_s48", "a60_c4m1_s
 HELD_OUT_5_SCENES = ("a30_c4m1_s58", "a45_c4m1_s59", "a60_c4m1_s60", "a60_c4m1_s61", "a90_c4m1_s62",
                      "a60_c3m0_s63", "a45_c5m2_s64", "a30_c3m1_s65", "a60_c4m1_s66", "a90_c4m0_s67",
                      "a45_c4m1_s68", "a60_c5m2_s69")
+# the same mix with each camera's frame rate drawn from 24-60 fps (stop 64): every rule so far was
+# measured at 30 fps, and a tolerance in frames of the coarsest video meets rates it was not tuned on
+MIXED_RATE_SCENES = tuple(f"{n}_mixed" for n in (
+    "a30_c4m1_s70", "a45_c4m1_s71", "a60_c4m1_s72", "a60_c4m1_s73", "a90_c4m1_s74", "a60_c3m0_s75",
+    "a45_c5m2_s76", "a30_c3m1_s77", "a60_c4m1_s78", "a90_c4m0_s79", "a45_c4m1_s80", "a60_c5m2_s81"))
 SCENE_SETS = {"held-out": HELD_OUT_SCENES, "tuning": TUNING_SCENES, "held-out-2": HELD_OUT_2_SCENES,
-              "held-out-3": HELD_OUT_3_SCENES, "held-out-4": HELD_OUT_4_SCENES, "held-out-5": HELD_OUT_5_SCENES}
+              "held-out-3": HELD_OUT_3_SCENES, "held-out-4": HELD_OUT_4_SCENES, "held-out-5": HELD_OUT_5_SCENES,
+              "mixed-rates": MIXED_RATE_SCENES}
 
 
 @dataclass(frozen=True)
@@ -56,37 +65,43 @@ class ArcScene:
     cameras: int
     moving: int  # how many of the cameras are hand-held
     seed: int
+    mixed_rates: bool = False  # each camera's frame rate drawn from 24-60 fps (else SCENE_FPS)
 
     def scene_config(self):
         from ..synth.world import SceneConfig
 
         return SceneConfig(cameras=self.cameras, moving=self.moving, seconds=SCENE_SECONDS,
-                           arc_deg=self.arc_deg, seed=self.seed)
+                           fps=None if self.mixed_rates else SCENE_FPS, arc_deg=self.arc_deg, seed=self.seed)
 
 
 def parse_scene(name: str) -> ArcScene:
-    """ArcScene from a name a<arc>_c<cameras>m<hand-held>_s<seed>; ValueError names what is wrong."""
+    """ArcScene from a name a<arc>_c<cameras>m<hand-held>_s<seed>[_mixed]; ValueError names what is wrong."""
     m = _NAME.fullmatch(name)
     if not m:
-        raise ValueError(f"{name!r}: not a scene name a<arc>_c<cameras>m<hand-held>_s<seed> (e.g. a60_c4m1_s12)")
-    arc, cams, moving, seed = (int(g) for g in m.groups())
+        raise ValueError(f"{name!r}: not a scene name a<arc>_c<cameras>m<hand-held>_s<seed>[_mixed] "
+                         "(e.g. a60_c4m1_s12)")
+    arc, cams, moving, seed = (int(g) for g in m.groups()[:4])
     if not 0 < arc <= 360:
         raise ValueError(f"{name!r}: arc {arc}° is outside 1-360")
     if cams < 2 or moving > cams - 1:
         raise ValueError(f"{name!r}: needs at least 2 cameras and one of them static (got {cams}, {moving} hand-held)")
-    return ArcScene(name, float(arc), cams, moving, seed)
+    return ArcScene(name, float(arc), cams, moving, seed, m.group(5) is not None)
 
 
 def frame_errors(reference: str, offsets_s: dict[str, float | None], truth_s: dict[str, float],
-                 fps: float) -> dict[str, float | None]:
-    """Signed error of every non-reference video's offset in frames of 1/fps s (None: unresolved)."""
+                 fps: float | dict[str, float]) -> dict[str, float | None]:
+    """Signed error of every non-reference video's offset in frames (None: unresolved).
+
+    fps: every video's frame rate, or each video's ({video: fps}); then an error is in frames of
+    the slower of the video and the reference (a 24 fps video against a 60 fps reference: 1/24 s)."""
     out: dict[str, float | None] = {}
     ref_s = offsets_s.get(reference)
     for v, t in truth_s.items():
         if v == reference:
             continue
         est = offsets_s.get(v)
-        out[v] = None if est is None or ref_s is None else fps * ((est - ref_s) - (t - truth_s[reference]))
+        rate = min(fps[v], fps[reference]) if isinstance(fps, dict) else fps
+        out[v] = None if est is None or ref_s is None else rate * ((est - ref_s) - (t - truth_s[reference]))
     return out
 
 
