@@ -400,13 +400,15 @@ def main() -> None:
                    "folder instead of a temporary one")
     a = sub.add_parser("arcs", help="rendered scenes whose cameras share a view, estimated cameras")
     a.add_argument("--scenes", nargs="+", metavar="NAME",
-                   help="scenes a<arc>_c<cameras>m<hand-held>_s<seed> (default: the scenes of --set)")
+                   help="scenes a<arc>_c<cameras>m<hand-held>_s<seed>[_mixed] (default: the scenes of --set)")
     which = a.add_mutually_exclusive_group()
     which.add_argument("--set", choices=sorted(SCENE_SETS), default="held-out",
                    help="held-out: seeds 10-21 (stop 46); tuning: stop 43's 14 scenes, on which the rules "
                         "of stops 43-45 were built; held-out-2: seeds 22-33, rendered after stop 47's rules; "
                         "held-out-3: seeds 34-45, rendered after stop 53's; held-out-4: seeds 46-57, rendered "
-                        "after stop 61's; held-out-5: seeds 58-69, rendered after stop 62's")
+                        "after stop 61's; held-out-5: seeds 58-69, rendered after stop 62's; mixed-rates: "
+                        "seeds 70-81, each camera at 24-60 fps (errors in frames of the slower video of each "
+                        "pair), rendered after stop 63's")
     which.add_argument("--tuning", action="store_true", help="the same as --set tuning")
     a.add_argument("--calibrated", action="store_true", help="with each scene's exact calibration")
     a.add_argument("--workdir", type=Path, help="render into (and reuse finished renderings from) this "
