@@ -118,8 +118,8 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
         info.append(rrb.TextDocumentView(origin=SYNC_PAIRS, name="pairs (failed first)"))
     active = 0
     if result is not None or offsets_logged:
-        # with no pair to look at, why each video has no offset is what to read first
-        active = len(info) if offsets_logged and not pairs_logged else 0
+        if offsets_logged and not pairs_logged:  # no pair to look at: why each video has no offset comes first
+            active = len(info)
         info.append(rrb.TextDocumentView(origin=SYNC_OFFSETS, name="offsets"))
     if has_loops:
         info.append(rrb.TextDocumentView(origin=SYNC_LOOPS, name="loop closure"))

@@ -208,7 +208,7 @@ class ReportData:
     timings_s: dict[str, float] = field(default_factory=dict)
     three_view: tuple[ThreeViewView, ...] = ()  # Stage 0's three-view checks (none: no estimated camera sure)
     unresolved_headline: dict[str, str] = field(default_factory=dict)  # video -> why in a few words
-    # (RunResult.headlines: the whole reason where the run gave none)
+    # (RunResult.headlines, which falls back to the whole reason where the run gave no headline)
 
     @property
     def names(self) -> list[str]:

@@ -60,7 +60,7 @@ def write_index(data: ReportData, images: dict[str, tuple[str, str]], path: Path
             row += (f"<td>{_s(gt[v] - ref_gt) if v in gt else '—'}</td><td>{_s(errs.get(v), 1, False)}</td>"
                     f"<td>{_s(frames.get(v), 2, False)}</td>")
         status = e("reference" if v == data.reference else "synchronized") if off is not None else (
-            _null_status(data.unresolved_headline.get(v) or data.unresolved.get(v, ""), data.unresolved.get(v, "")))
+            _null_status(data.unresolved_headline.get(v, ""), data.unresolved.get(v, "")))
         out.append(row + f"<td class='l'>{status}</td></tr>")
     out.append("</table>")
     resolved = [x for x in errs.values() if x is not None]
