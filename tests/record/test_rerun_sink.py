@@ -629,3 +629,29 @@ def test_a_pair_without_a_landscape_gets_its_decision_alone(tmp_path):
         kinds = [type(v).__name__ for v in container.contents]
         assert kinds == ["TextDocumentView"], kinds
         assert not isinstance(container.contents[0], rrb.Container)
+
+
+def _offsets_texts(path: Path) -> list[str]:
+    """Every text the file holds for the offsets panel, in the order written (the raw chunks: a
+    store keeps only the last static value, which would hide a second write)."""
+    import rerun.chunk as rrc
+
+    from vs_inspect.io.recording import SYNC_OFFSETS, _first_text
+    chunks = [c for c in rrc.RrdReader(str(path)).stream().to_chunks() if c.entity_path.lstrip("/") == SYNC_OFFSETS]
+    return [t for c in chunks if (t := _first_text(c.to_record_batch()))]
+
+
+def test_the_offsets_table_is_logged_once_and_stage2s_when_no_summary_follows(planted_run, tmp_path):
+    """The offsets table is written once, when the recording closes: the run's summary where there
+    is one (the planted run), else Stage 2's table (a bundle synchronized with no summary after it)."""
+    (summary_md,) = _offsets_texts(planted_run["path"])
+    assert summary_md.startswith("## Offsets (reference ")
+    assert all(f"| {v} |" in summary_md for v in planted_run["result"].offsets_s)
+
+    scene = make_cue_scene(CueSceneConfig(cameras=3, moving=0, variable_rate=0, seconds=3.0, points_per_object=10,
+                                          pairs_per_view_pair=60, no_match_pairs=0, seed=5))
+    path = tmp_path / "stage2_only.rrd"
+    with RerunSink(path, progress=False) as sink:
+        result = sync_bundle(scene.bundle, SyncConfig(), sink=sink, progress=False)
+    (stage2_md,) = _offsets_texts(path)
+    assert all(f"| {v} |" in stage2_md for v in result.offsets_s)

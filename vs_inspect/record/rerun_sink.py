@@ -440,9 +440,6 @@ class RerunSink(Sink):
             self._log_graph(result, view)
             self._log_loops(view)
         self._log_solve(result)
-        if view is not None:
-            self._log_offsets(result.reference, result.solver, result.offsets_s, result.uncertainty_s,
-                              result.unresolved_reason, view)
         self._flush_videos(result.offsets_s)
         if view is not None:
             self._log_trajectories(view)
@@ -461,10 +458,6 @@ class RerunSink(Sink):
     @_timed
     def run_summary(self, result: RunResult) -> None:
         self._summary = result
-        # the run's table replaces Stage 2's: every input video (those Stage 0 left out too), each
-        # null with the run's few words, and its whole reason below the table
-        self._log_offsets(result.reference, result.solver, result.offsets_s, result.uncertainty_s,
-                          result.headlines(), self._view, result.unresolved)
 
     # ---- finishing ----
 
@@ -482,6 +475,7 @@ class RerunSink(Sink):
                 summary = RunResult(r.reference, r.offsets_s, r.uncertainty_s, r.unresolved_reason,
                                     r.pairs, r.solver, r.solve_pairs, r.iterations, r.timings_s,
                                     gt_offsets_s=gt or None)
+            self._log_final_offsets()
             if summary is not None:
                 self.rec.log(META_RESULT, rr.TextDocument(json.dumps(run_result_to_dict(summary),
                                                                      default=json_default),
@@ -980,6 +974,18 @@ class RerunSink(Sink):
             tcol = [rr.TimeColumn(TIMELINE_ITERATION, sequence=its)]
             self.rec.send_columns(solve_residual_path(a, b), tcol, rr.Scalars.columns(scalars=R[:, e]))
             self.rec.send_columns(solve_weight_path(a, b), tcol, rr.Scalars.columns(scalars=Wt[:, e]))
+
+    def _log_final_offsets(self) -> None:
+        """The offsets table, once, when the recording closes: the run's summary (every input
+        video, Stage 0's left out too, each null in a few words and below the table in full), else
+        Stage 2's result when its record view was given; nothing before Stage 2."""
+        if self._summary is not None:
+            s = self._summary
+            self._log_offsets(s.reference, s.solver, s.offsets_s, s.uncertainty_s, s.headlines(), self._view,
+                              s.unresolved)
+        elif self._result is not None and self._view is not None:
+            r = self._result
+            self._log_offsets(r.reference, r.solver, r.offsets_s, r.uncertainty_s, r.unresolved_reason, self._view)
 
     def _log_offsets(self, reference: str, solver: str, offsets_s: dict, uncertainty_s: dict, notes: dict,
                      view: RunRecordView | None, in_full: dict | None = None) -> None:
