@@ -385,8 +385,6 @@ def test_keyframe_matches_per_pair_are_recorded(tmp_path):
     """Stage 0's descriptor matches per keyframe pair (match_tracks on a real texture seen by two
     'videos', one shifted): the counts add up to the pair's matches, and the recording holds them
     as a series on the keyframe_pair timeline plus a (Ka,Kb) grid, readable back."""
-    import cv2
-
     from vs_inspect.cues.config import MatchConfig
     from vs_inspect.cues.matching import extract_keyframe_features, match_tracks
 
