@@ -7,7 +7,8 @@ import time
 from pathlib import Path
 
 from ..errors import InputError
-from ..io.bundle import write_bundle, write_cue_stats
+from ..io.bundle import write_bundle
+from ..io.result import write_cue_stats
 from ..pipeline.stage0 import check_cue_config, run_stage0
 from ._common import add_config_file_option, add_cue_options, add_force_option, run_config
 

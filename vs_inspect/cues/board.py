@@ -32,37 +32,11 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from ..geometry.sampling import sample_video
+from ..io.board import BoardSpec
 from ..io.calibration import CameraCalibration
 from ..types import CameraTrack, VideoInfo
 
 log = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class BoardSpec:
-    columns: int  # squares along x
-    rows: int  # squares along y
-    square_m: float  # side of a square, metres
-    marker_m: float  # side of an ArUco marker, metres
-    dictionary: str  # OpenCV name, e.g. "DICT_4X4_1000"
-    inverted: bool = False  # printed white-on-black: detect on the inverted image
-
-    def __post_init__(self) -> None:
-        if self.columns < 2 or self.rows < 2:
-            raise ValueError(f"a ChArUco board needs at least 2x2 squares, got {self.columns}x{self.rows}")
-        if not 0 < self.marker_m < self.square_m:
-            raise ValueError(f"marker side {self.marker_m} m must be positive and below the square "
-                             f"side {self.square_m} m")
-        if not hasattr(cv2.aruco, self.dictionary):
-            raise ValueError(f"unknown ArUco dictionary {self.dictionary!r} (e.g. DICT_4X4_1000)")
-
-    def board(self):
-        d = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, self.dictionary))
-        return cv2.aruco.CharucoBoard((self.columns, self.rows), self.square_m, self.marker_m, d)
-
-    def corners_m(self) -> np.ndarray:
-        """(C,3) inner corners in the board frame, metres, indexed by corner id."""
-        return np.asarray(self.board().getChessboardCorners(), dtype=np.float64)
 
 
 @dataclass(frozen=True)

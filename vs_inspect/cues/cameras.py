@@ -28,7 +28,8 @@ from ..signals import import_pycolmap
 from ..types import CameraTrack
 from .config import CameraConfig
 from .guided import guided_matches
-from .learned import LEARNED_FEATURES, learned_unavailable, lightglue_available, xfeat_available
+from .config import LEARNED_FEATURES
+from .learned import learned_unavailable, lightglue_available, xfeat_available
 
 log = logging.getLogger(__name__)
 

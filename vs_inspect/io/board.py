@@ -9,10 +9,41 @@ from __future__ import annotations
 
 import json
 import tomllib
+from dataclasses import dataclass
 from pathlib import Path
 
-from ..cues.board import BoardSpec
+import cv2
+import numpy as np
+
 from ..errors import InputError
+
+@dataclass(frozen=True)
+class BoardSpec:
+    columns: int  # squares along x
+    rows: int  # squares along y
+    square_m: float  # side of a square, metres
+    marker_m: float  # side of an ArUco marker, metres
+    dictionary: str  # OpenCV name, e.g. "DICT_4X4_1000"
+    inverted: bool = False  # printed white-on-black: detect on the inverted image
+
+    def __post_init__(self) -> None:
+        if self.columns < 2 or self.rows < 2:
+            raise ValueError(f"a ChArUco board needs at least 2x2 squares, got {self.columns}x{self.rows}")
+        if not 0 < self.marker_m < self.square_m:
+            raise ValueError(f"marker side {self.marker_m} m must be positive and below the square "
+                             f"side {self.square_m} m")
+        if not hasattr(cv2.aruco, self.dictionary):
+            raise ValueError(f"unknown ArUco dictionary {self.dictionary!r} (e.g. DICT_4X4_1000)")
+
+    def board(self):
+        d = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, self.dictionary))
+        return cv2.aruco.CharucoBoard((self.columns, self.rows), self.square_m, self.marker_m, d)
+
+    def corners_m(self) -> np.ndarray:
+        """(C,3) inner corners in the board frame, metres, indexed by corner id."""
+        return np.asarray(self.board().getChessboardCorners(), dtype=np.float64)
+
+
 
 _UNIT_M = {"inch": 0.0254, "in": 0.0254, "cm": 0.01, "mm": 0.001, "m": 1.0}
 

@@ -17,6 +17,7 @@ import numpy as np
 from ..errors import BundleError
 from ..types import CameraTrack, CueBundle, CueStats, TrackPairs, Tracks, VideoInfo
 from .atomic import atomic_dir, write_json_atomic
+from .names import check_video_name
 
 log = logging.getLogger(__name__)
 
@@ -25,7 +26,6 @@ VERSION = 1
 POSE_FREE_KEY = "pose_free"  # optional per-video key of bundle.json: the camera has K only
 
 
-MAX_NAME_CHARS = 200      # a video name is a file name and an entity path: keep it printable
 MAX_FRAMES = 10_000_000   # 46 h at 60 fps; more is a corrupt or hostile bundle.json
 MAX_IMAGE_SIDE_PX = 100_000
 MEMORY_BUDGET_ENV = "VS_INSPECT_MEMORY_BUDGET_MB"  # arrays a bundle may hold in memory (default 2048 MB)
@@ -110,20 +110,6 @@ def _load_npz(path: Path, expect: dict[str, tuple[tuple[int | None, ...], ...]] 
             return {k: z[k] for k in wanted}
     except (ValueError, OSError, zipfile.BadZipFile, EOFError) as exc:
         raise BundleError(path, f"not a readable .npz file ({exc})") from None
-
-
-def check_video_name(name: object) -> str | None:
-    """Why `name` cannot be a video name (None when it can): it names files and recording entities
-    and is printed in tables, so it is a short, printable, file-safe string."""
-    if not isinstance(name, str) or not name:
-        return "must be a non-empty string"
-    if len(name) > MAX_NAME_CHARS:
-        return f"is {len(name)} characters long (at most {MAX_NAME_CHARS})"
-    if any(not c.isprintable() for c in name):
-        return "has a newline or another control character"
-    if "/" in name or name.startswith("."):
-        return "must be file-safe (no '/', not starting with '.')"
-    return None
 
 
 def _load_json(path: Path):
@@ -420,16 +406,3 @@ def write_bundle(bundle: CueBundle, folder: str | os.PathLike, overwrite: bool =
                 gt["drift_ppm"] = bundle.gt_drift_ppm
             (tmp / "gt.json").write_text(json.dumps(gt, indent=1))
     return dest
-
-
-def write_cue_stats(stats: CueStats, folder: str | os.PathLike, inputs: dict[str, str],
-                    total_with_io_s: float | None = None) -> Path:
-    """FOLDER/cues_stats.json (atomic): Stage 0's counts, timings and the videos it was given."""
-    from .result import cue_stats_to_dict
-
-    data = cue_stats_to_dict(stats)
-    data["timings_s"] = dict(stats.timings_s)
-    if total_with_io_s is not None:
-        data["timings_s"]["total_with_io_s"] = total_with_io_s
-    data["input"] = {"videos": dict(inputs)}
-    return write_json_atomic(data, Path(folder) / "cues_stats.json")

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..errors import InputError
 from .atomic import write_json_atomic
+from .names import check_video_name
 from ..types import (CueStats, PairDecision, PairLandscape, RateLandscape, RunInputs, RunResult,
                      SolveIteration, VideoCueStats)
 
@@ -232,7 +233,6 @@ def run_result_from_dict(d: dict[str, Any], source: str = "result") -> RunResult
         if not isinstance(d, dict) or not isinstance(d.get("offsets_s"), dict) or "reference" not in d:
             raise InputError("not a vs-inspect result (needs 'reference' and 'offsets_s')")
         offsets = {str(k): _opt_float(v, f"offsets_s[{k!r}]") for k, v in d["offsets_s"].items()}
-        from .bundle import check_video_name
         for k in offsets:  # names are printed in tables: no forged lines
             problem = check_video_name(k)
             if problem:
@@ -298,3 +298,14 @@ def read_run_result(path: str | os.PathLike) -> RunResult:
     """A result.json (or a run folder holding one) as a RunResult."""
     data, path = read_json_file(path, "result.json")
     return run_result_from_dict(data, str(path))
+
+
+def write_cue_stats(stats: CueStats, folder: str | os.PathLike, inputs: dict[str, str],
+                    total_with_io_s: float | None = None) -> Path:
+    """FOLDER/cues_stats.json (atomic): Stage 0's counts, timings and the videos it was given."""
+    data = cue_stats_to_dict(stats)
+    data["timings_s"] = dict(stats.timings_s)
+    if total_with_io_s is not None:
+        data["timings_s"]["total_with_io_s"] = total_with_io_s
+    data["input"] = {"videos": dict(inputs)}
+    return write_json_atomic(data, Path(folder) / "cues_stats.json")

@@ -117,7 +117,7 @@ def open_video(path, fps: float | None = None, name: str | None = None) -> Video
     path = Path(path)
     if not path.exists():
         raise InputError(f"{path}: no such file or folder")
-    from .bundle import check_video_name
+    from .names import check_video_name
     problem = check_video_name(name or (path.name if path.is_dir() else path.stem))
     if problem:
         raise BadVideoName(f"{path}: the video's name (its file name) {problem}; rename it")
