@@ -12,7 +12,7 @@
     # and the cameras against the truth (camera px: the true moving points' distance from their
     # epipolar lines, median / worst camera pair) and the track pairs against the truth (the share
     # whose two tracks follow one body point, two points, or a track no rigid point)
-    PYTHONPATH=. python examples/bench_stage0.py arcs [--scenes a60_c4m1_s12 ...] [--set held-out|tuning|held-out-2|held-out-3|held-out-4|held-out-5|mixed-rates] [--calibrated] [--features F] --workdir W
+    PYTHONPATH=. python examples/bench_stage0.py arcs [--scenes a60_c4m1_s12 ...] [--set seeds-0-9|seeds-10-21|seeds-22-33|seeds-34-45|seeds-46-57|seeds-58-69|mixed-rates] [--calibrated] [--features F] --workdir W
     # caliscope, visualsync and rendered take the track settings too, e.g. the tracks of before:
     PYTHONPATH=. python examples/bench_stage0.py rendered --seeds 0 1 2 --klt-window 21 --no-anchor
 
@@ -42,7 +42,7 @@ import numpy as np  # before pycolmap
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from vs_inspect.bench.arcs import (SCENE_SETS, camera_errors_px, fit_body_points, frame_errors,  # noqa: E402
+from vs_inspect.bench.arcs import (DEFAULT_SET, SCENE_SETS, camera_errors_px, fit_body_points, frame_errors,  # noqa: E402
                                    judge_pairs, parse_scene, summarize)
 from vs_inspect.bench.datasets import corner_sync_bias_s, load_caliscope, read_caliscope_frame_times  # noqa: E402
 from vs_inspect.cues import CueConfig, MatchConfig  # noqa: E402
@@ -264,7 +264,7 @@ def bench_arcs(args) -> None:
     from vs_inspect.pipeline.stage0 import run_stage0
     from vs_inspect.synth.videos import render_unless_cached
 
-    names = args.scenes or SCENE_SETS["tuning" if args.tuning else args.set]
+    names = args.scenes or SCENE_SETS[args.set]
     try:
         scenes = [parse_scene(n) for n in names]
     except ValueError as exc:
@@ -402,14 +402,11 @@ def main() -> None:
     a.add_argument("--scenes", nargs="+", metavar="NAME",
                    help="scenes a<arc>_c<cameras>m<hand-held>_s<seed>[_mixed] (default: the scenes of --set)")
     which = a.add_mutually_exclusive_group()
-    which.add_argument("--set", choices=sorted(SCENE_SETS), default="held-out",
-                   help="held-out: seeds 10-21 (stop 46); tuning: stop 43's 14 scenes, on which the rules "
-                        "of stops 43-45 were built; held-out-2: seeds 22-33, rendered after stop 47's rules; "
-                        "held-out-3: seeds 34-45, rendered after stop 53's; held-out-4: seeds 46-57, rendered "
-                        "after stop 61's; held-out-5: seeds 58-69, rendered after stop 62's; mixed-rates: "
+    which.add_argument("--set", choices=sorted(SCENE_SETS), default=DEFAULT_SET,
+                   help="scenes by seed range: seeds-0-9 (14 scenes), seeds-10-21, seeds-22-33, seeds-34-45, "
+                        "seeds-46-57, seeds-58-69 (12 each, one mix of arcs and cameras), mixed-rates: "
                         "seeds 70-81, each camera at 24-60 fps (errors in frames of the slower video of each "
-                        "pair), rendered after stop 63's")
-    which.add_argument("--tuning", action="store_true", help="the same as --set tuning")
+                        f"pair; default: {DEFAULT_SET})")
     a.add_argument("--calibrated", action="store_true", help="with each scene's exact calibration")
     a.add_argument("--workdir", type=Path, help="render into (and reuse finished renderings from) this "
                    "folder instead of a temporary one")
