@@ -87,9 +87,9 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
         _not_sure(rivals, sure, dissent, sink, dissent_short,
                   {n: f"two offsets {abs(best[n][0] - joint.offsets_s[n]):.2f} s apart, as a repeated motion gives"
                    for n in rivals})
-    # after the three-view check, which triangulates the pairs of the cameras sure then (without
-    # the hand-held camera this refuses, stop 43's sweep seed 1 left its static cam2 too few
-    # trajectories); estimated cameras only: with a calibration a right pair had 0.35
+    # after the three-view check, which triangulates the pairs of the cameras sure then (a camera
+    # this refuses first could leave another too few trajectories); estimated cameras only: with a
+    # calibration a right pair can keep a small share of its top peak's votes
     if cfg.geometric.joint_min_pair_share > 0 and estimated and joint is not None:
         from .geometric_pairs import dissenting_cameras
 
@@ -117,7 +117,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
         checks, traj = {}, None
         if cfg.geometric.transfer and not all(sure.values()) and sum(sure.values()) >= 2:
             # not of a camera its own pairs contradict: point transfer projects into the same
-            # camera, and confirmed stop 43's hand-held one 4.4 frames off (its lens is biased)
+            # camera, whose biased geometry it can then confirm at a wrong offset
             checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, sink,
                                                 frozenset(dissent))
         sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
@@ -127,16 +127,16 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
         return GeometricPairing(_add_transfer_pairs(out, checks, traj, list(vids), stats, sink), used, peaks_s)
     if joint is not None:
         # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
-        # decides (and refuses when the triangles do not close), as before the joint choice
+        # decides (and refuses when the triangles do not close)
         sink.stage_event("cues", "joint vote sure of fewer than two cameras (margins "
                          + ", ".join(f"{n} {m:.1f}" for n, m in joint.margin.items())
                          + "): geometric peaks chosen by triangle closure")
     chosen, status = consistent_peaks({k: (gs.peaks_s, gs.peak_votes) for k, (_, gs) in found.items()},
                                       3.0 * coarsest)
     stats["geometric_peaks"] = status
-    # the descriptor pairs are unchecked too then: alone they put rendered and demo cameras
-    # 88-1456 ms off and were accepted (README, point transfer); kept only where consistent at the
-    # joint vote's offsets, unsure as they are, so that a wrong offset leaves too few of them
+    # the descriptor pairs are unchecked too then: alone they can put a camera a wrong offset that
+    # Stage 1 accepts; kept only where consistent at the joint vote's offsets, unsure as they are,
+    # so that a wrong offset leaves too few of them
     unchecked = status in ("inconsistent", "one triangle")
     filter_desc = unchecked and joint is not None and cfg.geometric.joint_filter_descriptor
     unchecked_why = unchecked_short = None
@@ -470,9 +470,8 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
         sink.stage_event("cues", msg)
         log.warning(msg)
     # a Δ only when a third camera is sure too (a closed triangle confirms it): with a single
-    # sure pair nothing checks it, and Stage 1 accepts the minimum its own supporters make
-    # (fencing1 with looser moving regions: aria01-aria03 at +2.4 s, truth +1.5 s; rendered
-    # seed 1 with estimated cameras: cam3 3.7 s off; the all-around scene: cam1 141 ms off)
+    # sure pair nothing checks it, and Stage 1 accepts the minimum its own supporters make, right
+    # or wrong
     unconfirmed = {(a, b) for (a, b) in found if sure.get(a) and sure.get(b) and (a, b) not in used}
     if unconfirmed:
         names = ", ".join(sorted(f"{a}__{b}" for a, b in unconfirmed))

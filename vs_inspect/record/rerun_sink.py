@@ -522,7 +522,7 @@ class RerunSink(Sink):
                     TIMELINE_TIME if self._timed_videos else TIMELINE_FRAME)
         rng = (self._offset_ms_min, self._offset_ms_max) if self._offset_ms_min is not None else None
         # a pair logged without a finite energy or an epipolar view gets its decision alone (the
-        # blueprint assumes both for a pair it is not told about: held-out-4's s48 opened on empty ones)
+        # blueprint assumes both for a pair it is not told about, and would open on empty views)
         views = {k: self._pair_views.get(k, set()) for k in self._pairs_logged}
         return blueprint(names, self._pairs_logged, self._result, views, timeline,
                          has_loops=bool(self._view is not None and self._view.triangles), range_ms=rng,

@@ -149,8 +149,8 @@ def _decided(a, b, offsets, near, moments, sc, coarse_s, directions, radius) -> 
     best_s, lo, hi, rival = sighting_peak(offsets, near, sc.rival_frames * coarse_s)
     best = int(np.argmin(np.abs(offsets - best_s)))
     # the half-height width over √(heads) (heads scatter about the peak like samples of it), at
-    # least a frame of the coarser video: on fencing1 both counted peaks were late, by 1.0 and 1.5
-    # frames, and 0.6 once refined (README)
+    # least a frame of the coarser video: a counted peak can be a frame or more late, as the head is
+    # not the camera (refine_frames fits that shift out, but not all of it)
     half = offsets[near >= 0.5 * top] if top else offsets[:0]
     uncertainty = coarse_s
     if top and len(half):
