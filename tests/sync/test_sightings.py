@@ -67,8 +67,8 @@ def test_too_few_sightings_are_refused():
 
 
 def test_an_offset_rests_on_one_sighting_at_most():
-    """a sees b's wearer, b sees c's: c's offset would chain two sightings (each 0.6 frames off
-    on fencing1, the same way), so c is null with the reason; with max_chain 2 it is resolved."""
+    """a sees b's wearer, b sees c's: c's offset would chain two sightings (whose errors can add
+    up), so c is null with the reason; with max_chain 2 it is resolved."""
     rng = np.random.default_rng(3)
     b2 = _bundle()
     TRUE_C_S = -0.5
