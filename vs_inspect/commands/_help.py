@@ -27,6 +27,13 @@ EXAMPLES: dict[str, list[tuple[str, str]]] = {
                      ("vs-inspect bench-timing --width 160 --height 120 --seconds 2",
                       "a tiny scene: the table in about a minute")],
     "bench-energy": [("vs-inspect bench-energy", "speed of the landscape against plain numpy")],
+    "bench-stage0": [("vs-inspect bench-stage0 caliscope --trials 5 --estimate",
+                      "caliscope with random cuts, estimated cameras: each trial's errors in ms"),
+                     ("vs-inspect bench-stage0 visualsync --scenes blenderbox",
+                      "the VisualSync clips of one scene: errors in frames"),
+                     ("vs-inspect bench-stage0 arcs --set seeds-10-21 --workdir /tmp/arcs",
+                      "rendered scenes sharing a view: offsets over 2 frames, cameras and track pairs "
+                      "against the truth (renderings kept for the next run)")],
     "calibrate-board": [(("vs-inspect calibrate-board cam0.mp4 cam1.mp4 --board charuco.toml "
                           "--out calib.json"), "the rig's cameras; then sync --calib calib.json")],
     "cues": [("vs-inspect cues cam0.mp4 cam1.mp4 cam2.mp4 --calib calib.json --out bundle",
