@@ -70,8 +70,8 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     joint = joint_offsets(votes, 3.0 * coarsest) if cfg.geometric.joint else None
     sure = {} if joint is None else {n: m >= cfg.geometric.joint_min_margin for n, m in joint.margin.items()}
     three_view = {}
-    # the check is of cameras Stage 0 estimated: a calibration's are given (with one, the tiny
-    # bench-timing scene's right hand-held camera had 3 trajectories followed, wrong ones 0-2)
+    # the check is of cameras Stage 0 estimated: a calibration's are given (and a right calibrated
+    # camera can follow as few trajectories as a wrong estimated one)
     if cfg.geometric.three_view_min_supporters > 0 and estimated and sum(sure.values()) >= 3:
         three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, sink)
         sure = {n: ok and (n not in three_view or three_view[n].passed) for n, ok in sure.items()}
@@ -216,9 +216,9 @@ def check_fitted_offsets(fallback: dict, voted: dict, vids: dict) -> dict[str, s
     unconfirmed: {camera: reason}; fallback["check"] records every pair's comparison.
 
     Those cameras were fitted to track pairs aligned at coarse offsets (fitted_offsets_s). Right
-    cameras at right offsets make the votes over all track pairs peak at the same Δ (caliscope:
-    within a frame); cameras fitted to wrong pairs at wrong offsets put the peaks elsewhere
-    (rendered seed 0 with SIFT: seconds away), and Stage 1 then accepts minima at offsets the
+    cameras at right offsets make the votes over all track pairs peak at the same Δ (within about
+    a frame); cameras fitted to wrong pairs at wrong offsets put the peaks elsewhere (up to
+    seconds away), and Stage 1 then accepts minima at offsets the
     cameras were never fitted for. Any contradiction refuses every such camera (they were fitted
     jointly); a camera in no agreeing pair is refused as unconfirmed. Two cameras give no check
     (their votes peak where their own F was fitted): they pass, marked unchecked (they are used
@@ -301,9 +301,8 @@ def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: di
                           vids: dict, cfg: CueConfig, sink: Sink) -> dict:
     """{camera: transfer.ThreeViewCheck} for every sure camera: the other sure cameras' track
     pairs triangulated at their joint offsets and projected into it at its own. Wrong cameras can
-    make the joint vote sure of wrong offsets, consistent in every triangle (rendered seed 2 with
-    XFeat's cameras: three cameras 0.5-2.8 s off, margins 8.5-23.6), since a line through a
-    wrong epipole still meets some track; a point in a third view rarely does."""
+    make the joint vote sure of wrong offsets, consistent in every triangle, since a line through
+    a wrong epipole still meets some track; a point in a third view rarely does."""
     from .transfer import check_in_three_views, triangulate_pairs
 
     g = cfg.geometric
