@@ -16,8 +16,8 @@ def test_accuracy_scene_smaller_size(tmp_path):
     """Like the judged scene (2 moving, 1 variable rate, 0.8 px, 25 % wrong, 0.5°, one all-wrong
     pair) with 6 cameras and 7 s instead of 7 and 8 s. With fewer redundant pairs the moving
     cameras' pose errors average out less, so the bounds are twice the judged ones (median
-    <= 10 ms, worst <= 2/3 of the slowest frame interval); the judged size is measured in the
-    README's sweep."""
+    <= 10 ms, worst <= 2/3 of the slowest frame interval); the judged size is measured by the
+    benchmarks (BENCHMARKS.md)."""
     bundle = tmp_path / "bundle"
     assert main(["synth-cues", "--out", str(bundle), "--cameras", "6", "--moving", "2",
                  "--variable-rate", "1", "--seconds", "7", "--seed", "4"]) == 0

@@ -236,7 +236,8 @@ def test_corrupt_video_task_is_null_with_its_reason_and_the_rest_finish(ray_clus
     assert ray_sink.calls == local_sink.calls
     for res in (local, distributed):
         assert res.offsets_s["bad"] is None
-        assert res.unresolved["bad"].startswith("could not be read:") and "corrupt" in res.unresolved["bad"]
+        assert res.unresolved["bad"].startswith("the video could not be read; ") and "corrupt" in res.unresolved["bad"]
+        assert "In detail: could not be read:" in res.unresolved["bad"]
         assert sorted(res.cues.videos) == ["v0", "v1", "v2", "v3"]  # the other tasks finished
         assert all(res.cues.videos[n].tracks > 0 for n in ("v0", "v1", "v2", "v3"))
         assert res.offsets_s["v0"] == 0.0  # the reference; v_i starts 2i frames later at 10 fps

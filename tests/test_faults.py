@@ -1,4 +1,4 @@
-"""Fault injection (issue 20): every bad input, bad option and failing file system gives ONE line
+"""Fault injection: every bad input, bad option and failing file system gives ONE line
 `vs-inspect CMD: error: ...` naming the file or the option, exit 2 (SIGTERM: 143), no traceback,
 and leaves exactly the files listed (no hidden .partial files, no stale outputs).
 

@@ -44,7 +44,7 @@ ENGINES = ("local", "ray")
 @dataclass(frozen=True)
 class EngineConfig:
     kind: str = field(default="local", metadata={"flag": "--engine", "choices": ENGINES})
-    """Where Stage 0 (per video) and Stage 1 (per pair) run: local (this process, one item after another) or ray (Ray tasks: an embedded Ray on this machine unless --ray-address names a cluster). The offsets are the same."""
+    """Where Stage 0 (per video) and Stage 1 (per pair) run: local (in this process) or ray (Ray tasks, on this machine unless --ray-address names a cluster); the offsets are the same."""
     ray_address: str | None = field(default=None, metadata={"flag": "--ray-address", "metavar": "ADDR"})
     """Address of a running Ray cluster to join (HOST:6379 of its head, or auto); None = start an embedded Ray on this machine."""
     ray_cpus: int | None = field(default=None, metadata={"flag": "--ray-cpus", "metavar": "N"})

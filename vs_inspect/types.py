@@ -583,7 +583,7 @@ class RunResult:
     reference: str
     offsets_s: dict[str, float | None]  # video -> offset_s (DESIGN.md convention), seconds
     uncertainty_s: dict[str, float | None]  # video -> 1-sigma of offset_s, seconds
-    unresolved: dict[str, str]  # video -> why it has no offset
+    unresolved: dict[str, str]  # video -> why it has no offset (the plain sentence, then the technical account)
     pairs: tuple[PairLandscape, ...]
     solver: str  # "irls" | "ls"
     solve_pairs: tuple[tuple[str, str], ...]  # the accepted pairs, in the order of residuals
@@ -596,15 +596,16 @@ class RunResult:
     drift_ppm: dict[str, float | None] | None = None  # with the drift model (--drift), per video, ppm
     drift_std_ppm: dict[str, float | None] | None = None  # its 1-sigma, ppm
     gt_drift_ppm: dict[str, float] | None = None  # true drift when known (gt.json drift_ppm)
-    unresolved_headline: dict[str, str] | None = None  # video -> why it has no offset in a few words
-    # (unresolved holds the whole account); None in a result read from a file without it
+    unresolved_headline: dict[str, str] | None = None  # video -> why it has no offset and what to try,
+    # one plain sentence (pipeline/reasons.py; unresolved holds it and then the whole technical
+    # account); None in a result read from a file without it
 
     @property
     def resolved(self) -> list[str]:
         return [v for v, off in self.offsets_s.items() if off is not None]
 
     def headlines(self) -> dict[str, str]:
-        """Each unresolved video's reason in a few words (unresolved_headline), else in full."""
+        """Each unresolved video's reason in one plain sentence (unresolved_headline), else in full."""
         return {v: (self.unresolved_headline or {}).get(v) or why for v, why in self.unresolved.items()}
 
     def pair(self, a: str, b: str) -> PairLandscape | None:

@@ -187,7 +187,7 @@ def test_most_pairs_failing_for_one_reason_is_a_global_cause():
 
 def test_no_cross_view_pairs_shows_what_stage0_had_to_pair():
     """The global "no cross-view pairs" cause gives each video's tracks and moving share, and
-    names the cameras that moved (as on fencing1: three head-worn cameras, 38-91 tracks)."""
+    names the cameras that moved (e.g. three head-worn cameras with few tracks each)."""
     import dataclasses
 
     from vs_inspect.analysis.diagnose import diagnose

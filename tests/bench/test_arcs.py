@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vs_inspect.bench.arcs import (SCENE_SETS, PairTruth, camera_errors_px, fit_body_points, frame_errors,
+from vs_inspect.bench.arcs import (DEFAULT_SET, SCENE_SETS, PairTruth, camera_errors_px, fit_body_points, frame_errors,
                                    judge_pairs, parse_scene, summarize)
 from vs_inspect.geometry.epipolar import look_at, project
 from vs_inspect.io.calibration import CameraCalibration
@@ -40,15 +40,16 @@ def test_the_scene_sets_share_no_seed():
     for a in seeds:
         for b in seeds:
             assert a == b or not seeds[a] & seeds[b], (a, b)
-    assert seeds["held-out-2"] == set(range(22, 34))
-    assert seeds["held-out-3"] == set(range(34, 46))
-    assert seeds["held-out-4"] == set(range(46, 58))
-    assert seeds["held-out-5"] == set(range(58, 70))
+    for k in SCENE_SETS:
+        if k.startswith("seeds-"):
+            lo, hi = map(int, k.removeprefix("seeds-").split("-"))
+            assert seeds[k] == set(range(lo, hi + 1)), k
     assert seeds["mixed-rates"] == set(range(70, 82))
-    # the later held-out sets mix arcs and cameras as the first does
-    later = ("held-out-2", "held-out-3", "held-out-4", "held-out-5", "mixed-rates")
-    kinds = {k: sorted(n.rsplit("_s", 1)[0] for n in SCENE_SETS[k]) for k in ("held-out",) + later}
-    assert all(kinds[k] == kinds["held-out"] for k in later)
+    assert DEFAULT_SET in SCENE_SETS
+    # every set after the first mixes arcs and cameras as seeds 10-21 do
+    later = ("seeds-22-33", "seeds-34-45", "seeds-46-57", "seeds-58-69", "mixed-rates")
+    kinds = {k: sorted(n.rsplit("_s", 1)[0] for n in SCENE_SETS[k]) for k in ("seeds-10-21",) + later}
+    assert all(kinds[k] == kinds["seeds-10-21"] for k in later)
     assert all(parse_scene(n).mixed_rates == (k == "mixed-rates") for k, names in SCENE_SETS.items() for n in names)
 
 

@@ -60,8 +60,8 @@ def test_the_moving_points_cameras_are_fitted_once_for_every_model(monkeypatch):
 
 
 def test_two_cameras_from_the_moving_points_alone_are_refused(monkeypatch):
-    """Their F and their offset come from the same track pairs and nothing checks them (a sweep of
-    two-camera runs: 8 of the 11 accepted were 0.07-5.4 s off): no camera, each video says why."""
+    """Their F and their offset come from the same track pairs and nothing checks them: no
+    camera, each video says why."""
     cams, stats = _moving_point_cameras(monkeypatch, ["a", "b"])
     assert cams == {}
     fb = stats["sfm"]["fallback"]
@@ -69,7 +69,7 @@ def test_two_cameras_from_the_moving_points_alone_are_refused(monkeypatch):
     for n in "ab":
         assert stats["dropped"][n].startswith("no reconstruction: too few matches; from the moving points: "
                                               "only two cameras came out"), stats["dropped"][n]
-    # in a few words, both causes are kept (sequence69's "only 2 track pairs" is the second)
+    # in a few words, both causes are kept (e.g. "only 2 track pairs" as the second)
     from vs_inspect.cues.extract import _cue_stats
 
     stats.update(registered_cameras=0, tracks=0, track_pairs=0, videos={}, pairs={}, timings_s={})
@@ -234,8 +234,8 @@ def test_a_video_without_a_camera_says_what_every_model_made_of_it(monkeypatch):
 
 def test_a_video_placed_but_not_timed_says_what_the_other_models_made_of_it(monkeypatch):
     """Every model places c, none is trusted for it: the kept set's record says, for c, why each
-    other model's joint vote left it out, e.g. a rival offset (held-out-4's s48, README log stop
-    62, where the reasons named the first model's vote alone); a trusted video gets no such note."""
+    other model's joint vote left it out, e.g. a rival offset (not the first model's vote alone);
+    a trusted video gets no such note."""
     rival = ("its three-view check follows 55 trajectories at -1.217 s against 45 at its joint offset "
              "+0.000 s: two offsets, as a repeated motion gives")
     joints = {"xfeat": {"margin": {"a": 9.0, "b": 8.0, "c": 7.5}, "sure": ["a", "b"], "used": ["a", "b"],
@@ -272,8 +272,7 @@ def test_a_second_camera_model_that_fails_leaves_the_first_standing(monkeypatch)
 
 def test_the_moving_points_cameras_are_tried_when_no_model_is_trusted_for_any_video(monkeypatch):
     """Every model placed the cameras and the joint vote trusted nothing on any: the moving points'
-    own cameras are tried last and kept when the vote trusts a video on them (held-out-2's s26,
-    README stop 52)."""
+    own cameras are tried last and kept when the vote trusts a video on them."""
     kept, stats, sink, seen = _two_camera_models(
         monkeypatch, {"sift": set(), "xfeat": set(), "aliked": set(), "moving points": {"a", "b"}},
         registered={"moving points": "ab"})
@@ -325,7 +324,7 @@ def test_the_record_says_when_sifts_static_images_had_asift_features(monkeypatch
 def test_a_weak_models_own_cameras_are_voted_on_when_the_moving_points_replaced_them_for_nothing(monkeypatch):
     """The first model was weak, the moving points' cameras replaced its own, and no set was
     trusted for any video: the first model's own cameras get their vote, and are kept when it
-    trusts a video (the 720p scene's three static cameras alone, README stop 57)."""
+    trusts a video."""
     from vs_inspect.cues.config import CameraConfig
 
     kept, stats, sink, seen = _two_camera_models(
@@ -353,7 +352,7 @@ def test_the_moving_points_cameras_are_not_fitted_when_they_could_not_replace_a_
     """A weak model (few points per image) that placed a hand-held camera besides the two static
     ones: the moving points give static cameras only, 2 < 3, so they could not replace it and are
     not fitted; the model's cameras are used and the record says why. With only the two static
-    cameras placed, they are fitted as before (here none come out, so the model is kept)."""
+    cameras placed, they are fitted (here none come out, so the model is kept)."""
     from types import SimpleNamespace
 
     import vs_inspect.cues.pairwise as pairwise_mod

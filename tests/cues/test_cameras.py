@@ -241,7 +241,7 @@ def _two_views():
 
 def test_mapper_runs_without_structure_less_registration_unless_asked(tmp_path, monkeypatch):
     """CameraConfig.structure_less_fallback reaches COLMAP's mapper (off by default: each failed
-    structure-less try cost a global bundle adjustment, README)."""
+    structure-less try costs a global bundle adjustment)."""
     pycolmap = import_pycolmap()
     seen = []
     real = pycolmap.incremental_mapping
@@ -379,8 +379,8 @@ def test_camera_models_second_is_xfeats_estimate_built_once(tmp_path, monkeypatc
 
 
 def test_a_first_model_that_fails_is_every_videos_reason_not_the_end_of_the_run(tmp_path, monkeypatch):
-    """A bug or a library error inside the first model's build (held-out-3's s40 met a division
-    by zero there, stop 54) leaves every video without a camera from it, with the error as the
+    """A bug or a library error inside the first model's build (e.g. a division by zero) leaves
+    every video without a camera from it, with the error as the
     reason, so that the other models and the moving points' cameras are still tried."""
     frames, sizes = _two_views()
 

@@ -301,7 +301,7 @@ def test_consistent_at_keeps_the_same_points_at_the_right_offset_only():
 
 def test_points_near_the_epipole_do_not_vote():
     """b also sees points next to a's camera (a head-worn camera's wearer, seen by the other
-    wearer: fencing1): they sit near the epipole, where every epipolar line passes, so any track
+    wearer): they sit near the epipole, where every epipolar line passes, so any track
     of a fits them at some offset. Such moments are not counted; the true pairs still vote."""
     from dataclasses import replace
 
@@ -377,10 +377,10 @@ def test_a_camera_whose_pair_votes_elsewhere_is_not_sure():
     assert dissenting_cameras(found, joint, {**sure, "b": False}, 0.5) == {}
 
 
-def _s4_in_small():
-    """Stop 47's tuning scene s4 in small: XFeat's joint vote puts d 0.53 s off; SIFT's peaks of
-    d's pairs lie far from XFeat's Δ, while one pair of each other camera has a SIFT peak at its
-    Δ. (joint, sure, SIFT's peaks)."""
+def _one_camera_the_other_model_disputes():
+    """Four cameras, XFeat's joint vote puts the hand-held d 0.53 s off; SIFT's peaks of d's pairs
+    lie far from XFeat's Δ, while one pair of each other camera has a SIFT peak at its Δ.
+    (joint, sure, SIFT's peaks)."""
     joint = JointChoice({"a": 0.0, "b": -1.383, "c": -1.4, "d": -0.867}, 87.0,
                         {"a": 6.4, "b": 8.8, "c": 24.4, "d": 15.6})
     sift = {("a", "b"): (0.717, 0.2), ("a", "c"): (-2.483,), ("a", "d"): (-4.283, -0.067),
@@ -389,7 +389,7 @@ def _s4_in_small():
 
 
 def test_a_camera_no_peak_of_the_other_model_meets_is_disputed():
-    joint, sure, sift = _s4_in_small()
+    joint, sure, sift = _one_camera_the_other_model_disputes()
     out, overruled = disputed_by_other_model(joint, sure, sift, 0.067, "SIFT's model")
     # a is disputed too: SIFT's camera a was wrong, so none of its pairs' peaks meets XFeat's Δ
     assert sorted(out) == ["a", "d"] and overruled == {}
@@ -409,9 +409,9 @@ def test_a_camera_no_peak_of_the_other_model_meets_is_disputed():
 
 
 def test_a_disputed_camera_its_own_three_view_check_backs_is_kept():
-    # s4's three-view shares: a (right, its SIFT camera wrong) follows 113 of its best offset's 120
+    # the three-view shares: a (right, its SIFT camera wrong) follows 113 of its best offset's 120
     # trajectories at the joint offset; d (16 frames off) 67 of 183
-    joint, sure, sift = _s4_in_small()
+    joint, sure, sift = _one_camera_the_other_model_disputes()
     shares = {"a": 113 / 120, "b": 1.0, "c": 1.0, "d": 67 / 183}
     out, overruled = disputed_by_other_model(joint, sure, sift, 0.067, "SIFT's model", shares, 0.8)
     assert sorted(out) == ["d"] and sorted(overruled) == ["a"]
@@ -443,8 +443,8 @@ def _one_candidate(y_a: np.ndarray, y_b: np.ndarray, min_share: float):
 
 
 def test_consistency_counts_a_pair_at_the_share_and_the_frame_count_it_needs_exactly():
-    """The vote's pruning (stop 54: only the moments both tracks are seen, left once the share
-    cannot be reached) must not refuse a pair that meets the bars exactly."""
+    """The vote's pruning (only the moments both tracks are seen, left once the share cannot be
+    reached) must not refuse a pair that meets the bars exactly."""
     y = 10.0 * np.arange(13)  # b's point sweeps 120 px across the horizontal epipolar lines
     y_b = y[:12]
     assert _one_candidate(y, y_b, 0.75) == (1, 1)  # a's frame q at b's frame q: every moment fits
@@ -463,7 +463,7 @@ def test_consistency_counts_a_pair_at_the_share_and_the_frame_count_it_needs_exa
 
 
 def test_a_camera_with_a_rival_offset_in_three_views_and_in_its_votes_is_not_sure():
-    """Held-out-2 s22 in small: the joint vote puts the hand-held d one period of a repeated
+    """The joint vote puts the hand-held d one period of a repeated
     motion off (+2.317 s; truth +1.100 s); its pairs also vote for the truth, and its three-view
     check follows more trajectories there (21 against 16)."""
     joint = JointChoice({"a": 0.0, "b": 1.1, "c": -1.1, "d": 2.317}, 128.0, {"a": 39.0, "b": 36.0, "c": 5.4, "d": 8.7})
@@ -476,7 +476,7 @@ def test_a_camera_with_a_rival_offset_in_three_views_and_in_its_votes_is_not_sur
     assert list(out) == ["d"]
     assert "follows 21 trajectories at +1.100 s against 16 at its joint offset +2.317 s" in out["d"]
     assert "a__d 0.62" in out["d"] and "b__d 0.70" in out["d"] and "c__d 0.89" in out["d"]
-    # one pair that all but rules the rival out keeps it sure (held-out-3 s45's cam0: 0.15)
+    # one pair that all but rules the rival out keeps it sure
     ruled_out = {**found, ("c", "d"): _voted({3.417: 27, 2.2: 3})}
     assert rival_offsets(ruled_out, joint, sure, best, 0.2, 0.3) == {}
     # a rival as near as a peak's own width, or with fewer trajectories than the joint offset, is none

@@ -86,9 +86,9 @@ def test_guided_matching_by_homography_refuses_matches_off_the_transfer():
 
 
 def test_a_keypoint_whose_line_or_transfer_is_at_infinity_fits_nothing_and_stops_nothing():
-    """A keypoint of a with (F x_a)_3 = 0 (or a homography sending it to infinity): held-out-3's
-    45° s40 crashed there with a division by zero (stop 54). Its line is still a line; the
-    homography's transfer is at infinity and fits no keypoint."""
+    """A keypoint of a with (F x_a)_3 = 0 (or a homography sending it to infinity) must not raise a
+    division by zero. Its line is still a line; the homography's transfer is at infinity and fits
+    no keypoint."""
     rng = np.random.default_rng(3)
     n = 40
     xy_a = np.c_[rng.uniform(0, 640, n), rng.uniform(0, 480, n)]

@@ -104,7 +104,7 @@ def test_heads_found_ahead_on_their_own_thread_are_the_heads_found_after(monkeyp
         assert len(poses) == 2  # the trackers start on the calling thread
         found = find_heads(sources, vids, dict.fromkeys("abc"), {}, cfg, stats, NullSink(), False, ahead)
     assert len(seen) == 18 and all(name.startswith("heads") for name in seen[:12]), set(seen)
-    assert set(seen[12:]) == {"MainThread"}  # c's heads: found by find_heads itself, as before
+    assert set(seen[12:]) == {"MainThread"}  # c's heads: found by find_heads itself
     assert all(p.closed for p in poses)
     assert found.keys() == after.keys() == set("abc")
     for n in "abc":

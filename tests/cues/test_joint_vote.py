@@ -213,10 +213,10 @@ def test_a_sure_camera_with_a_rival_offset_says_how_far_apart_the_two_offsets_li
 
 
 def test_cameras_another_model_disputes_are_kept_when_their_three_view_checks_back_them(monkeypatch):
-    """Right cameras whose first model's vote peaks all lie far off (its cameras were wrong, as
-    SIFT's on held-out-2 s22): each one's three-view check follows nearly all its best offset's
-    trajectories at its joint offset, so the dispute is overruled, with the reason in
-    result.json; with overruling off (stop 47), none stays sure and no pair is used."""
+    """Right cameras whose first model's vote peaks all lie far off (its cameras were wrong): each
+    one's three-view check follows nearly all its best offset's trajectories at its joint offset,
+    so the dispute is overruled, with the reason in result.json; with overruling off, none stays
+    sure and no pair is used."""
     offsets = {"a": 0.0, "b": 0.42, "c": -0.3}
     far = {("a", "b"): (2.0,), ("a", "c"): (-3.0,), ("b", "c"): (1.5,)}
     out, stats, msgs, _ = _sure_of_all(monkeypatch, offsets, other_peaks=far)
@@ -320,9 +320,8 @@ def _lone_pair(monkeypatch, moving_b: bool, **geometric):
 
 def test_a_lone_pair_with_a_moving_camera_keeps_only_its_descriptor_pairs(monkeypatch):
     """No triangle checks the vote peaks of a pair with a moving camera, whose per-frame geometry
-    lets wrong tracks fit a wrong offset (9 of 15 such pairs accepted from video were 0.8-2.4 s
-    off, README): its geometric pairs are withheld, with the reason, and the run's reason for the video
-    says so. Two static cameras keep every peak's supporters, as before."""
+    lets wrong tracks fit a wrong offset: its geometric pairs are withheld, with the reason, and
+    the run's reason for the video says so. Two static cameras keep every peak's supporters."""
     out, stats, msgs = _lone_pair(monkeypatch, moving_b=True)
     assert stats["geometric_peaks"] == "no triangle"
     assert out[("a", "b")].index.tolist() == [[100, 100], [101, 101], [102, 102]]

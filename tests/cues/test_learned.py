@@ -126,7 +126,7 @@ def test_moving_cameras_of_an_xfeat_model_are_registered_frame_by_frame(shared_d
     """fencing1's three head-worn cameras, 8 SfM frames each, XFeat's model: every other frame (at
     most 10 per second) is registered on its own with XFeat's features, and on the reconstructed
     frames themselves, registered from their neighbours, it lands nearer the model's pose than
-    the slerp between those neighbours (what an XFeat model gave before)."""
+    the slerp between those neighbours."""
     paths = sorted((shared_data / "visualsync_clips" / "fencing1").glob("*.mp4"))
     if len(paths) != 3:
         pytest.skip("fencing1 clips not in the shared data")

@@ -50,7 +50,7 @@ def test_search_pair_finds_the_offset_and_a_consistent_F():
 
 
 def test_search_pair_survives_opencv_raising(monkeypatch):
-    """OpenCV 5's USAC asserted (cv2.error) on degenerate samples of real pan160906 tracks; one
+    """OpenCV 5's USAC asserted (cv2.error) on degenerate samples of real tracks; one
     offset's failure must not end the search."""
     xy_r, info_r, xy_v, info_v, index = two_views()
     real = cv2.findFundamentalMat
@@ -156,7 +156,7 @@ def _offsets(curves, chosen: dict[str, int]) -> dict[str, float]:
 
 def test_joint_coarse_offsets_close_the_triangle_where_one_pair_alone_peaks_wrong():
     """r-a alone peaks 1.5 s from the truth; r-b and a-b agree on the truth only with a's second
-    peak: summed over the triangle, the truth wins (held-out-2's s26 and s31, README stop 52)."""
+    peak: summed over the triangle, the truth wins."""
     curves = {("r", "a"): _curve({2.0: 0.62, 0.5: 0.55}),  # truth Δ_ra 0.5
               ("r", "b"): _curve({1.0: 0.60}),  # truth Δ_rb 1.0
               ("a", "b"): _curve({0.5: 0.58})}  # Δ_ab = Δ_rb − Δ_ra

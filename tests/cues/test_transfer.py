@@ -129,9 +129,8 @@ def test_nothing_to_transfer_gives_an_empty_landscape():
 
 
 def test_tracks_near_the_projections_but_never_within_the_radius_give_an_empty_landscape():
-    # held-out-2 scene a90_c4m1_s26 (stop 48): tracks within reach of the projections (the radius
-    # plus the largest step of a track) but none within the radius made an empty set of hits,
-    # which raised IndexError
+    # tracks within reach of the projections (the radius plus the largest step of a track) but
+    # none within the radius make an empty set of hits, which must not raise IndexError
     infos, cams, xy, truth_ab, _ = _scene({"a": 0.0, "b": 0.42, "c": 0.2})
     traj = triangulate_pairs(infos, cams, xy, {("a", "b"): TrackPairs("a", "b", truth_ab)},
                              {"a": 0.0, "b": 0.42})

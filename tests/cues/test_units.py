@@ -48,7 +48,7 @@ def test_moving_camera_is_detected_and_compensated():
 
 def test_moving_camera_neighbours_are_chosen_in_time():
     # at 60 fps a slow object moves too little in two frames for the difference to cover it;
-    # the neighbours are taken neighbour_s apart (5 frames at 60 fps, 2 at 25 fps as before)
+    # the neighbours are taken neighbour_s apart (5 frames at 60 fps, 2 at 25 fps)
     frames, truth, _ = blob_sequence(T=30, pan_px=1.6, velocity=(0.3, 0.2), start=(90.0, 60.0))
     cfg = MotionConfig()
     assert neighbour_gap(cfg, 1 / 60) == 5 and neighbour_gap(cfg, 1 / 25) == 2 and neighbour_gap(cfg) == 2
@@ -73,8 +73,8 @@ def test_instances_link_two_blobs_over_time():
 
 
 def test_instances_beyond_int16_keep_distinct_ids():
-    # a long video with many short-lived regions: more than 32767 instances. The ids used to be
-    # held per pixel as int16 in volumes this large (2**26 pixels or more) and wrapped around
+    # a long video with many short-lived regions: more than 32767 instances. Ids held per pixel as
+    # int16 in volumes this large (2**26 pixels or more) would wrap around
     T, H, W = 1100, 240, 256
     assert T * H * W >= 2**26
     rng = np.random.default_rng(3)

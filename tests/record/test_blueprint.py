@@ -72,7 +72,7 @@ def test_point_transfer_view_only_when_a_check_was_logged():
 
 
 def test_a_run_that_searched_no_pair_opens_on_frames_and_its_offsets_table():
-    """Stage 0 could use no video (sequence69): no SyncResult and no pair, so no offset_ms
+    """Stage 0 could use no video: no SyncResult and no pair, so no offset_ms
     timeline; the layout still shows the run's offsets table (why each video is null), in front,
     and opens on the frame timeline, on which the videos were logged."""
     import rerun.blueprint as rrb

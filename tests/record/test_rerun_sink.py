@@ -611,7 +611,7 @@ def test_the_offsets_panel_gives_every_null_in_a_few_words_and_in_full(tmp_path)
 
 
 def test_a_pair_without_a_landscape_gets_its_decision_alone(tmp_path):
-    """A pair with no track pair (held-out-4's s48: Stage 0 refused every camera) has no finite
+    """A pair with no track pair (Stage 0 refused every camera) has no finite
     energy and no epipolar view: its container holds the decision only, not two empty panels."""
     import rerun.blueprint as rrb
 

@@ -169,10 +169,9 @@ def test_a_container_with_one_child_given_as_a_string_is_read():
 
 
 def test_a_run_that_synchronized_nothing_opens_with_frames_and_its_reasons(tmp_path):
-    """Stage 0 could use no video (as on sequence69): the recording has no offset_ms timeline, so
-    the viewer is shot as it opens, on the frame timeline, with the offsets table in front; no
-    panel on screen is empty (before stop 63 the screenshot tool stopped at the missing timeline
-    and the videos showed no frame)."""
+    """Stage 0 could use no video: the recording has no offset_ms timeline, so the viewer is shot
+    as it opens, on the frame timeline, with the offsets table in front; no panel on screen is
+    empty (the screenshot tool does not stop at the missing timeline, and the videos show frames)."""
     if rerun_executable() is None:
         pytest.skip("no rerun viewer executable beside this Python or on PATH")
     from vs_inspect.record.rerun_sink import RerunSink

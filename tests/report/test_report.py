@@ -376,7 +376,7 @@ def test_a_sighting_pair_says_what_its_curve_is(tmp_path, refitted):
     offsets = np.arange(-10, 11) * 0.1
     energy = 1.0 - np.exp(-((offsets - 0.3) / 0.15) ** 2)
     land = PairLandscape("a", "b", offsets, energy, np.full(21, 40), np.array([13]), 0.3, 0.0, 0.1, 0,
-                         PairDecision(True, "worn camera sightings: 20 heads ..." + (
+                         PairDecision(True, "sightings of a camera's carrier: 20 heads ..." + (
                              f"; {RefinedPeak(0.28, True, {'a': np.array([3.0, 2.0])}, 2.0, 2.0).note()}"
                              if refitted else ""), 0.9, 0.1, 2, 1, False),
                          residual="sighting")

@@ -46,7 +46,7 @@ def test_sightings_time_a_pair_without_track_pairs():
     assert res.offsets_s["b"] == pytest.approx(TRUE_B_S, abs=0.05), res.unresolved_reason
     (land,) = res.pairs
     assert land.residual == "sighting" and land.decision.accepted and land.num_track_pairs == 0
-    assert "a sees b's wearer" in land.decision.reason
+    assert "a sees the person carrying b" in land.decision.reason
     # off: no cue at all between them
     off = sync_bundle(_bundle(), SyncConfig(sightings=SightingConfig(enabled=False)), progress=False)
     assert off.offsets_s["b"] is None
@@ -55,7 +55,7 @@ def test_sightings_time_a_pair_without_track_pairs():
 def test_heads_of_someone_else_leave_the_pair_null_with_the_reason():
     res = sync_bundle(_bundle(heads_of_b=False), progress=False)
     assert res.offsets_s["b"] is None
-    assert "worn camera sightings" in res.unresolved_reason["b"], res.unresolved_reason
+    assert "sightings of a camera's carrier" in res.unresolved_reason["b"], res.unresolved_reason
 
 
 def test_too_few_sightings_are_refused():
@@ -67,8 +67,8 @@ def test_too_few_sightings_are_refused():
 
 
 def test_an_offset_rests_on_one_sighting_at_most():
-    """a sees b's wearer, b sees c's: c's offset would chain two sightings (each 0.6 frames off
-    on fencing1, the same way), so c is null with the reason; with max_chain 2 it is resolved."""
+    """a sees b's wearer, b sees c's: c's offset would chain two sightings (whose errors can add
+    up), so c is null with the reason; with max_chain 2 it is resolved."""
     rng = np.random.default_rng(3)
     b2 = _bundle()
     TRUE_C_S = -0.5
@@ -88,7 +88,7 @@ def test_an_offset_rests_on_one_sighting_at_most():
     accepted = {(p.a, p.b) for p in res.pairs if p.decision.accepted}
     assert accepted == {("a", "b"), ("b", "c")}, [(p.a, p.b, p.decision.reason) for p in res.pairs]
     assert res.offsets_s["b"] == pytest.approx(TRUE_B_S, abs=0.05)
-    assert res.offsets_s["c"] is None and "2 worn-camera sightings in a chain" in res.unresolved_reason["c"]
+    assert res.offsets_s["c"] is None and "2 sightings of camera carriers in a chain" in res.unresolved_reason["c"]
     two = sync_bundle(bundle, SyncConfig(sightings=SightingConfig(max_chain=2)), progress=False)
     assert two.offsets_s["c"] == pytest.approx(TRUE_C_S, abs=0.1)
 
@@ -146,6 +146,6 @@ def test_a_direction_without_heads_on_the_centre_gives_no_shift():
                             cameras={**b.cameras, "a": CameraTrack(K, pose_a)})
     res = sync_bundle(b, progress=False)
     (land,) = res.pairs
-    assert b.cameras["a"].is_moving and "b sees a's wearer" in land.decision.reason
+    assert b.cameras["a"].is_moving and "b sees the person carrying a" in land.decision.reason
     assert res.offsets_s["b"] == pytest.approx(TRUE_B_S, abs=0.02), land.decision.reason
     assert "(a: (" in land.decision.reason and "b: (" not in land.decision.reason and "nan" not in land.decision.reason

@@ -1,4 +1,4 @@
-"""Clock drift on the cue-level synthetic scenes (issue 22): every non-reference video's clock
+"""Clock drift on the cue-level synthetic scenes: every non-reference video's clock
 runs ± drift_ppm off, and `sync --drift` is compared with the constant-offset model (the ablation)
 on the same bundles. Errors are the project's one definition (eval.metrics.offset_errors_ms,
 offsets at each video's local time 0) and, with drift, the error at the end of each video.

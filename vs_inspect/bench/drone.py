@@ -1,4 +1,4 @@
-"""The drone benchmark (issue 22): pose-free pair sync with clock drift on the multi-view drone
+"""The drone benchmark: pose-free pair sync with clock drift on the multi-view drone
 tracking dataset, from detections alone, against the README's ground truth; the constant-offset
 model is the ablation (same pairs, rate fixed at 1, its error shown).
 

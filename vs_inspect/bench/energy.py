@@ -1,6 +1,6 @@
 """Speed of the Stage 1 landscape: compiled kernel vs the straightforward reference, same process.
 
-Workload (issue 2): 5,000 track pairs x 300 frames x 201 candidate offsets, for a static pair and
+Workload: 5,000 track pairs x 300 frames x 201 candidate offsets, for a static pair and
 for a pair with a moving camera. Tracks are full length (the worst case: no NaN to skip).
 """
 

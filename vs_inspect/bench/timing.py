@@ -1,5 +1,5 @@
-"""End-to-end time of `vs-inspect sync` on videos (vs-inspect bench-timing; issue 19's time target:
-4 × 10 s 720p videos in under 3 minutes on 2 cores, Stage 0 from video to offsets).
+"""End-to-end time of `vs-inspect sync` on videos (vs-inspect bench-timing), against the time
+target: 4 × 10 s 720p videos in under 3 minutes on 2 cores, Stage 0 from video to offsets.
 
 A rendered scene (vs_inspect.synth: 3 static + 1 hand-held camera, every video as long, exact
 truth) is synchronized by `vs-inspect sync` with default settings in a fresh process per run,
@@ -28,7 +28,7 @@ from pathlib import Path
 from ..errors import InputError
 from ..eval.metrics import evaluate_offsets
 
-TARGET_S = 180.0  # issue 19: 4 × 10 s 720p videos in under 3 minutes on 2 cores
+TARGET_S = 180.0  # the time target: 4 × 10 s 720p videos in under 3 minutes on 2 cores
 
 # (column, timings_s key of result.json): Stage 0 steps summed over the videos, then Stage 1 + 2
 STAGES = (("decode", "stage0_decode_s"), ("motion", "stage0_motion_s"),

@@ -142,7 +142,7 @@ def offsets_table(offsets: dict, uncertainty: dict, truth: dict | None, referenc
     """A short plain-text table of offsets, with the truth and error when known (and the error
     in frames of each video when its frame interval frame_s[v], seconds, is given)."""
     lines = []
-    w = max([16] + [len(v) + 2 for v in offsets])  # long names (sequence69's are 32 characters) stay aligned
+    w = max([16] + [len(v) + 2 for v in offsets])  # long names (32 characters and more) stay aligned
     head = f"{'video':<{w}}{'offset_s':>11}{'± s':>9}"
     if truth:
         head += f"{'true_s':>11}{'error_ms':>10}" + (f"{'frames':>8}" if frame_s else "")

@@ -1,4 +1,4 @@
-"""vs-inspect bench-timing: end-to-end time of `sync` on rendered 720p videos against issue 19's
+"""vs-inspect bench-timing: end-to-end time of `sync` on rendered 720p videos against the time
 target (4 × 10 s 720p videos in under 3 minutes on 2 cores)."""
 
 from __future__ import annotations

@@ -285,7 +285,7 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, pairs: di
     weak_why = (f"the background reconstruction rests on few points (fewest {fewest} per image) or left a "
                 f"static camera out")
     # the moving points give static cameras only, so when the model placed more videos than there
-    # are static ones their cameras cannot replace it (`use` below): not fitted (11 s on the 720p scene)
+    # are static ones their cameras cannot replace it (`use` below): not fitted (it would cost seconds)
     outnumbered = not from_tracks and len(est.cameras) > len(static)
     compared = (weak or from_tracks) and cfg.camera.fallback_from_tracks and len(static) >= 2 and not as_built
     if compared and outnumbered:

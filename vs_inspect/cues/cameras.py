@@ -190,13 +190,13 @@ class CameraModels:
         self._stack.close()
 
     def _xfeat_model(self, side_tmp: Path, cancel: _Cancel | None) -> tuple[_Model, CameraEstimate | None]:
-        # a moving camera's frames are registered against SIFT's model only once it is kept (on the
-        # 720p timing scene SIFT's lost to XFeat's after 10 s of registering frames against it);
-        # XFeat's registers them on the side thread (cancel given), started once SIFT's features are
-        # extracted (its matching and mapping run on one thread: the other core is idle) and going
-        # on while SIFT's cameras are paired, until second() or the end. Measured at stop 61
-        # (README): this costs 13-25 s where SIFT's cameras are kept and saves 36-48 s where
-        # XFeat's are, against building it only when asked for
+        # a moving camera's frames are registered against SIFT's model only once it is kept (time
+        # spent registering against a model that then loses is wasted); XFeat's registers them on
+        # the side thread (cancel given), started once SIFT's features are extracted (its matching
+        # and mapping run on one thread: the other core is idle) and going on while SIFT's cameras
+        # are paired, until second() or the end. Against building it only when asked for, this
+        # costs some seconds where SIFT's cameras are kept and saves more where XFeat's are
+        # (measured: see BENCHMARKS.md, "Measurements behind defaults")
         other = _build_model("xfeat", self._frames, self._sizes, self._moving, self._cfg, side_tmp, self._seed,
                              cancel=cancel)
         return other, None if cancel is None else _estimate_from(other, *self._inputs, cancel=cancel,
@@ -436,7 +436,7 @@ def _asift_static_images(db: Path, img_dir: Path, mask_dir: Path, per_view: int,
                          moving: dict[str, bool]) -> None:
     """ASIFT features (registration.affine_sift, per_view per simulated view) of every static
     video's images written into the database, in COLMAP's form: cameras far apart around one floor
-    see it foreshortened along different headings, and SIFT matched almost none of it (README)."""
+    see it foreshortened along different headings, and SIFT matches almost none of it."""
     pycolmap = import_pycolmap()
 
     from .registration import affine_sift

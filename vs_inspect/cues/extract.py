@@ -89,8 +89,8 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
     engine = engine or LocalEngine()
     task = (cfg, sink.options, calibration is None)
     t_videos = time.perf_counter()
-    # two videos at a time on threads locally: one video alone kept 2 cores 1.6x busy on average
-    # (the 720p scene's four: 23.5 -> 19.4 s, the same tracks). Not with learned keyframe
+    # two videos at a time on threads locally: one video alone keeps 2 cores only partly busy (the
+    # tracks are the same either way). Not with learned keyframe
     # descriptors: they set torch's process-wide thread count around each call
     for src, out in zip(sources, engine.map(video_cues_task, sources, shared=task, desc="cues per video",
                                             unit="video", progress=progress,

@@ -442,8 +442,7 @@ def consistent_peaks(peaks: dict[tuple[str, str], tuple[tuple[float, ...], tuple
     (None, why): "no triangle" (fewer than three cameras with peaks), "too many pairs" (the
     search tries every combination), "inconsistent" (no choice closes every triangle) or "one
     triangle" (three cameras: a single closure is one check on 27 choices of three peaks, and
-    some close within tol_s by chance; in a safety sweep of three-camera runs 5 of the 6 that
-    took this path reported an offset 0.19-1.18 s off, with 1 to 13 closing choices).
+    some close within tol_s by chance).
     """
     keys = [k for k in peaks if len(peaks[k][0])]
     if len(keys) > max_pairs:
@@ -627,15 +626,13 @@ def disputed_by_other_model(joint: JointChoice, sure: dict[str, bool],
     A sure camera is kept when one of its pairs with another sure camera has a peak of the other
     model within tol_s of the joint Δ_ab; a camera none of whose such pairs the other model voted
     on has no opinion against it and is kept. Two reconstructions from different features
-    rarely err alike: on stop 47's arcs scenes XFeat's joint vote was sure of a hand-held camera
-    16 frames off (three-view check passed) while SIFT's peaks of its pairs lay 15-24 frames from
-    that Δ; of the right cameras where XFeat's model won, all but two (whose SIFT cameras were
-    wrong) had such a peak within 2 frames.
+    rarely err alike, so a wrong camera of one model (even one that passes its three-view check)
+    tends to find no peak of the other model near its joint Δ, while right cameras do.
 
     three_view_share: camera -> trajectories its tracks follow at its joint offset over those
     followed at its best offset (transfer.ThreeViewCheck). A contradicted camera with at least
     overrule_share (None: none) is kept, its dispute overruled: the other model's cameras can be the wrong
-    ones (stop 48: the four right cameras so contradicted had 0.88-1.00, the wrong one 0.37)."""
+    ones (measured: see BENCHMARKS.md, "Measurements behind defaults")."""
     out: dict[str, str] = {}
     overruled: dict[str, str] = {}
     for cam in sorted(n for n, ok in sure.items() if ok):
@@ -667,7 +664,7 @@ def rival_offsets(found: dict[tuple[str, str], GeometricPairStats], joint: Joint
     pair of the camera with another sure camera keeps at least min_share of its own top peak's
     votes at the Δ it implies (joint_vote_share). Three views then prefer the rival and the
     epipolar vote does not rule it out: a repeated motion lets the joint vote choose a set of
-    peaks one period off that closes every triangle (held-out-2 s22's hand-held camera)."""
+    peaks one period off that closes every triangle."""
     out = {}
     for cam, (best_s, n_best, n_joint) in sorted(three_view_best_s.items()):
         if not sure.get(cam) or n_best <= n_joint or abs(best_s - joint.offsets_s[cam]) <= min_apart_s:

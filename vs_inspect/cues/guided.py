@@ -4,16 +4,13 @@ After geometric verification, COLMAP can match a pair's SIFT descriptors again w
 restricted to the other image's keypoints within `max_error` px of the epipolar line (squared
 Sampson distance to F) or of the homography's transfer (H for planar / panoramic pairs), with the
 same ratio test, distance bound and cross check as the first matching. Its CPU version (COLMAP's
-source) fills the full integer distance matrix of every pair first: on a 4 × 10 s 720p scene (264 pairs of up to
-6500 features) that was about 264 of the 290 CPU-s of matching. Here the geometric test comes
-first and a descriptor distance is computed only for the few keypoints that pass it. Same rule as
-pycolmap 4.2's: squared L2 distances of the uint8 descriptors, a keypoint off the model counted at
-distance 512, the test in float32. Measured against COLMAP's own guided matching on three scenes'
-databases: 760 of 761 pairs gave identical matches (the other one match apart), for 23-27 CPU-s
-instead of about 260 on the 720p one; 18.5 CPU-s since b's Sampson terms are computed once per
-keypoint (the same matches on all 264 pairs); since then the test runs over all of b's keypoints
-in one vectorised pass and only the fits are visited (2.3x faster with F, 7x with H, on 6000
-random keypoints a side; 30.7 -> 23.6 sampled s on the 720p scene; the same answer bit for bit).
+source) fills the full integer distance matrix of every pair first, which dominates matching on
+720p videos. Here the geometric test comes first and a descriptor distance is computed only for
+the few keypoints that pass it. Same rule as pycolmap 4.2's: squared L2 distances of the uint8
+descriptors, a keypoint off the model counted at distance 512, the test in float32. b's Sampson
+terms are computed once per keypoint, the test runs over all of b's keypoints in one vectorised
+pass and only the fits are visited. The matches are COLMAP's guided matches (measured: see
+BENCHMARKS.md, "Measurements behind defaults").
 
 Distances are exact integers, so the result does not depend on compilation or thread count.
 """
@@ -47,7 +44,7 @@ def _keep_two(top, best, fit, k, other, d):
 
 
 # numpy's error model: a division by zero gives inf or NaN, which fits nothing (numba's default
-# raised ZeroDivisionError where F x_a had a third coordinate of exactly 0; held-out-3 s40)
+# raises ZeroDivisionError where F x_a has a third coordinate of exactly 0)
 @nb.njit(nogil=True, cache=True, error_model="numpy")
 def _best_two(desc_a, desc_b, xy_a, xy_b, model, homography, max_sq_px):
     """For every keypoint of a (rows) and of b (columns): the nearest and second-nearest

@@ -70,8 +70,8 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     joint = joint_offsets(votes, 3.0 * coarsest) if cfg.geometric.joint else None
     sure = {} if joint is None else {n: m >= cfg.geometric.joint_min_margin for n, m in joint.margin.items()}
     three_view = {}
-    # the check is of cameras Stage 0 estimated: a calibration's are given (with one, the tiny
-    # bench-timing scene's right hand-held camera had 3 trajectories followed, wrong ones 0-2)
+    # the check is of cameras Stage 0 estimated: a calibration's are given (and a right calibrated
+    # camera can follow as few trajectories as a wrong estimated one)
     if cfg.geometric.three_view_min_supporters > 0 and estimated and sum(sure.values()) >= 3:
         three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, sink)
         sure = {n: ok and (n not in three_view or three_view[n].passed) for n, ok in sure.items()}
@@ -87,9 +87,9 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
         _not_sure(rivals, sure, dissent, sink, dissent_short,
                   {n: f"two offsets {abs(best[n][0] - joint.offsets_s[n]):.2f} s apart, as a repeated motion gives"
                    for n in rivals})
-    # after the three-view check, which triangulates the pairs of the cameras sure then (without
-    # the hand-held camera this refuses, stop 43's sweep seed 1 left its static cam2 too few
-    # trajectories); estimated cameras only: with a calibration a right pair had 0.35
+    # after the three-view check, which triangulates the pairs of the cameras sure then (a camera
+    # this refuses first could leave another too few trajectories); estimated cameras only: with a
+    # calibration a right pair can keep a small share of its top peak's votes
     if cfg.geometric.joint_min_pair_share > 0 and estimated and joint is not None:
         from .geometric_pairs import dissenting_cameras
 
@@ -117,7 +117,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
         checks, traj = {}, None
         if cfg.geometric.transfer and not all(sure.values()) and sum(sure.values()) >= 2:
             # not of a camera its own pairs contradict: point transfer projects into the same
-            # camera, and confirmed stop 43's hand-held one 4.4 frames off (its lens is biased)
+            # camera, whose biased geometry it can then confirm at a wrong offset
             checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, sink,
                                                 frozenset(dissent))
         sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
@@ -127,16 +127,16 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
         return GeometricPairing(_add_transfer_pairs(out, checks, traj, list(vids), stats, sink), used, peaks_s)
     if joint is not None:
         # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
-        # decides (and refuses when the triangles do not close), as before the joint choice
+        # decides (and refuses when the triangles do not close)
         sink.stage_event("cues", "joint vote sure of fewer than two cameras (margins "
                          + ", ".join(f"{n} {m:.1f}" for n, m in joint.margin.items())
                          + "): geometric peaks chosen by triangle closure")
     chosen, status = consistent_peaks({k: (gs.peaks_s, gs.peak_votes) for k, (_, gs) in found.items()},
                                       3.0 * coarsest)
     stats["geometric_peaks"] = status
-    # the descriptor pairs are unchecked too then: alone they put rendered and demo cameras
-    # 88-1456 ms off and were accepted (README, point transfer); kept only where consistent at the
-    # joint vote's offsets, unsure as they are, so that a wrong offset leaves too few of them
+    # the descriptor pairs are unchecked too then: alone they can put a camera a wrong offset that
+    # Stage 1 accepts; kept only where consistent at the joint vote's offsets, unsure as they are,
+    # so that a wrong offset leaves too few of them
     unchecked = status in ("inconsistent", "one triangle")
     filter_desc = unchecked and joint is not None and cfg.geometric.joint_filter_descriptor
     unchecked_why = unchecked_short = None
@@ -216,9 +216,9 @@ def check_fitted_offsets(fallback: dict, voted: dict, vids: dict) -> dict[str, s
     unconfirmed: {camera: reason}; fallback["check"] records every pair's comparison.
 
     Those cameras were fitted to track pairs aligned at coarse offsets (fitted_offsets_s). Right
-    cameras at right offsets make the votes over all track pairs peak at the same Δ (caliscope:
-    within a frame); cameras fitted to wrong pairs at wrong offsets put the peaks elsewhere
-    (rendered seed 0 with SIFT: seconds away), and Stage 1 then accepts minima at offsets the
+    cameras at right offsets make the votes over all track pairs peak at the same Δ (within about
+    a frame); cameras fitted to wrong pairs at wrong offsets put the peaks elsewhere (up to
+    seconds away), and Stage 1 then accepts minima at offsets the
     cameras were never fitted for. Any contradiction refuses every such camera (they were fitted
     jointly); a camera in no agreeing pair is refused as unconfirmed. Two cameras give no check
     (their votes peak where their own F was fitted): they pass, marked unchecked (they are used
@@ -301,9 +301,8 @@ def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: di
                           vids: dict, cfg: CueConfig, sink: Sink) -> dict:
     """{camera: transfer.ThreeViewCheck} for every sure camera: the other sure cameras' track
     pairs triangulated at their joint offsets and projected into it at its own. Wrong cameras can
-    make the joint vote sure of wrong offsets, consistent in every triangle (rendered seed 2 with
-    XFeat's cameras: three cameras 0.5-2.8 s off, margins 8.5-23.6), since a line through a
-    wrong epipole still meets some track; a point in a third view rarely does."""
+    make the joint vote sure of wrong offsets, consistent in every triangle, since a line through
+    a wrong epipole still meets some track; a point in a third view rarely does."""
     from .transfer import check_in_three_views, triangulate_pairs
 
     g = cfg.geometric
@@ -470,9 +469,8 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
         sink.stage_event("cues", msg)
         log.warning(msg)
     # a Δ only when a third camera is sure too (a closed triangle confirms it): with a single
-    # sure pair nothing checks it, and Stage 1 accepts the minimum its own supporters make
-    # (fencing1 with looser moving regions: aria01-aria03 at +2.4 s, truth +1.5 s; rendered
-    # seed 1 with estimated cameras: cam3 3.7 s off; the all-around scene: cam1 141 ms off)
+    # sure pair nothing checks it, and Stage 1 accepts the minimum its own supporters make, right
+    # or wrong
     unconfirmed = {(a, b) for (a, b) in found if sure.get(a) and sure.get(b) and (a, b) not in used}
     if unconfirmed:
         names = ", ".join(sorted(f"{a}__{b}" for a, b in unconfirmed))

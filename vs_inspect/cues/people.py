@@ -5,8 +5,8 @@ declared opencv-contrib-python would replace the headless OpenCV; it needs proto
 `make setup` does; without it Stage 0 says so and skips the sightings.
 
 BlazePose follows one person, the most prominent; in a frame with several it may take any of
-them. Its landmark smoothing is off: smoothed heads lagged their motion (on fencing1, in
-scratch runs, both usable sightings came out 1.5 frames late instead of 1.0; README).
+them. Its landmark smoothing is off: smoothed heads lag their motion, which makes the sightings
+late.
 """
 
 from __future__ import annotations

@@ -29,7 +29,7 @@ from ..types import CameraTrack, TrackPairs, VideoInfo
 
 _BLOCK_ELEMENTS = 4_000_000  # (offset, sample) brackets held at once
 MIN_OVERLAP_SHARE = 0.25  # offsets with less overlap than this share of the largest are not candidates
-MAX_BRACKETS = 30_000_000  # (offset, sample) brackets evaluated at most (about 12 s; the demo's 15 M: 6 s)
+MAX_BRACKETS = 30_000_000  # (offset, sample) brackets evaluated at most (about 12 s of compute)
 
 
 @dataclass(frozen=True)

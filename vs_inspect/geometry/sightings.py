@@ -6,7 +6,7 @@ that same moment. With both cameras' poses in one world (one reconstruction), th
 between a's head detection and the projection of b's centre at b's local time t − Δ is a
 landscape in Δ = offset_b − offset_a (DESIGN.md's convention) whose minimum is the true offset.
 It needs no cross-view matching: the head is found in a alone, and b contributes its own poses.
-Pure geometry, no I/O; examples/worn_camera_sightings.py measures it on fencing1.
+Pure geometry, no I/O.
 """
 
 from __future__ import annotations
@@ -111,7 +111,7 @@ def sighting_shift_fit(head_xy_a: np.ndarray, timestamps_a_s: np.ndarray, K_a: n
     A worn camera is not where the detector puts the head (Aria's camera sits at the frame's
     corner, the face a few cm away), so heads sit a few px to one side of the centre. While the
     wearer moves one way, the offset that brings the centre nearest the heads is then a frame or
-    so off (fencing1, README); leaving the shift free takes that side out of Δ.
+    so off; leaving the shift free takes that side out of Δ.
     """
     head, pose_a, valid_a, ts_b, pose_b, valid_b = _checked_inputs(
         head_xy_a, timestamps_a_s, cam_from_world_a, valid_a, timestamps_b_s, cam_from_world_b, valid_b, radius_px)

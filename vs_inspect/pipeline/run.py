@@ -19,8 +19,9 @@ from ..engine import Engine, open_engine
 from ..errors import InputError, NoUsableVideos
 from ..record.sink import NullSink, Sink
 from ..sync.config import SyncConfig
-from ..types import CueBundle, CueStats, RunInputs, RunResult, SyncResult, first_clause
+from ..types import CueBundle, CueStats, RunInputs, RunResult, SyncResult
 from .config import RunConfig
+from .reasons import plain_reason, with_plain_reason
 from .stage0 import run_stage0
 from .stage12 import sync_bundle
 
@@ -137,7 +138,8 @@ def _nothing_usable(exc: NoUsableVideos, config: RunConfig, where: RunInputs,
         raise InputError(f"--reference {reference!r} is not one of the videos; known: {names}")
     unresolved = {n: exc.stats.dropped.get(n, "Stage 0 could not use this video") for n in names}
     unresolved[reference] += "; no video could be used, so even the reference has no offset"
-    headlines = {n: exc.stats.headline(n, why) for n, why in unresolved.items()}
+    headlines = {n: plain_reason(n, why, exc.stats) for n, why in unresolved.items()}
+    unresolved = {n: with_plain_reason(headlines[n], why) for n, why in unresolved.items()}
     timings = {f"stage0_{k}": v for k, v in exc.stats.timings_s.items()}
     timings["stage0_with_io_s"] = elapsed_s
     timings["total_s"] = elapsed_s
@@ -166,9 +168,8 @@ def _run_result(sync: SyncResult, stats: CueStats | None, inputs: RunInputs, con
         offsets[name] = None
         unc[name] = None
         unresolved[name] = why
-    # in a few words: Stage 0's cause and Stage 1 and 2's first clause ("not connected to ...")
-    headlines = {n: stats.headline(n, why) if stats is not None else first_clause(why)
-                 for n, why in unresolved.items()}
+    # in the user's terms: what was missing and what to try (the technical account follows it)
+    headlines = {n: plain_reason(n, why, stats, sync.pairs) for n, why in unresolved.items()}
     for name in unresolved:  # its pairs say "no/too few track pairs"; Stage 0 may know why
         why = stats.geometric_refusal(name) if stats is not None else None
         if why:
@@ -179,6 +180,7 @@ def _run_result(sync: SyncResult, stats: CueStats | None, inputs: RunInputs, con
     if moved_reference is not None:
         unresolved[moved_reference] += (f"; it cannot be the reference, so {sync.reference} is the "
                                          "reference instead")
+    unresolved = {n: with_plain_reason(headlines[n], why) for n, why in unresolved.items()}
     return RunResult(sync.reference, offsets, unc, unresolved, sync.pairs, sync.solver,
                      sync.solve_pairs, sync.iterations, timings_s, inputs, config.to_dict(), stats,
                      dict(gt_offsets_s) if gt_offsets_s else None, unresolved_headline=headlines)

@@ -360,8 +360,8 @@ def _long_sighting_chains(lands, reference: str, max_chain: int) -> dict[str, st
     """{video: why} for the videos whose offset would rest on more than max_chain worn-camera
     sighting pairs in a chain from the reference."""
     return {v: _with_its_pairs(lands, v, (
-        f"its offset would rest on {hops} worn-camera sightings in a chain from the reference (at most "
-        f"{max_chain}): on fencing1 each was 0.6 frames late, the same way (README), so their errors add up"))
+        f"its offset would rest on {hops} sightings of camera carriers in a chain from the reference (at "
+        f"most {max_chain}), and their errors add up"))
         for v, hops in _sighting_hops(lands, reference).items() if hops > max_chain}
 
 

@@ -522,7 +522,7 @@ class RerunSink(Sink):
                     TIMELINE_TIME if self._timed_videos else TIMELINE_FRAME)
         rng = (self._offset_ms_min, self._offset_ms_max) if self._offset_ms_min is not None else None
         # a pair logged without a finite energy or an epipolar view gets its decision alone (the
-        # blueprint assumes both for a pair it is not told about: held-out-4's s48 opened on empty ones)
+        # blueprint assumes both for a pair it is not told about, and would open on empty views)
         views = {k: self._pair_views.get(k, set()) for k in self._pairs_logged}
         return blueprint(names, self._pairs_logged, self._result, views, timeline,
                          has_loops=bool(self._view is not None and self._view.triangles), range_ms=rng,
@@ -1071,9 +1071,9 @@ one.{capped}
 
 - *landscape*: the energy E(Δ) of the pair, low where the epipolar constraint holds. The diamond is
   the chosen Δ, circles the significant minima, a cross the true Δ when known. A rejected pair usually shows no clear single
-  minimum, or its minimum sits at the edge of the search range. A pair timed by a worn camera's
-  wearer seen in the other video (its decision says "worn camera sightings") shows 1 − the share
-  of heads on the worn camera's centre instead, 0 at the peak; it has no epipolar view. Its
+  minimum, or its minimum sits at the edge of the search range. A pair timed by the person carrying
+  a moving camera seen in the other video (its decision says "sightings of a camera's carrier")
+  shows 1 − the share of heads on that camera's centre instead, 0 at the peak; it has no epipolar view. Its
   diamond is the peak fitted again with one constant shift between the heads and the camera
   (the decision gives the shift), so it may sit a little beside the curve's lowest point.
 - *epipolar*: one frame of a with the epipolar lines of b's matched points at the cursor's Δ

@@ -207,7 +207,7 @@ class ReportData:
     notes: tuple[str, ...] = ()  # readable notes on what could not be shown and why
     timings_s: dict[str, float] = field(default_factory=dict)
     three_view: tuple[ThreeViewView, ...] = ()  # Stage 0's three-view checks (none: no estimated camera sure)
-    unresolved_headline: dict[str, str] = field(default_factory=dict)  # video -> why in a few words
+    unresolved_headline: dict[str, str] = field(default_factory=dict)  # video -> why, one plain sentence
     # (RunResult.headlines, which falls back to the whole reason where the run gave no headline)
 
     @property

@@ -1,5 +1,6 @@
 """Settings of Stage 1 and Stage 2, one docstring per field. A field whose metadata names a "flag"
-is a command-line option (pipeline.config generates it, with the docstring as help)."""
+is a command-line option (pipeline.config generates it, with the docstring as help). The
+measurements behind the defaults are in BENCHMARKS.md ("Measurements behind defaults")."""
 
 from __future__ import annotations
 
@@ -49,7 +50,7 @@ class DecisionConfig:
     min_track_pairs: int = 8
     """A pair with fewer cross-view track pairs, or whose best offset is seen by fewer of them, is rejected: a few wrong matches can line up by chance at some offset."""
     min_support_fraction: float = 0.4
-    """Reject when the best minimum rests on fewer (track pair, frame) terms than this fraction of the landscape's median count: a mean over few terms dips by chance, while right offsets of matched tracks have at least their usual overlap."""
+    """Reject when the best minimum rests on fewer (track pair, frame) terms than this fraction of the landscape's median count (a mean over few terms dips by chance)."""
     min_contrast: float = 0.3
     """Reject when the best energy is less than this fraction below the landscape's median (flat landscape)."""
     max_second_ratio: float = 0.7
@@ -67,12 +68,12 @@ class DecisionConfig:
     reject_range_edge: bool = True
     """Reject when the best minimum lies on the border of the search range."""
     unchecked_agree_frames: float = 2.0
-    """A pair with unchecked track pairs (TrackPairs.unchecked: two static cameras, whose epipolar vote no third camera checks) is accepted only if its other track pairs (found by appearance) alone give an accepted minimum within this many frames of the coarser video; 0 = no check. Measured (README, "Two calibrated cameras alone"): of 23 such runs accepted before, 8 were 2-23 frames off; with this check none of those 8 and 4 of the 15 right ones stay accepted; on caliscope's real webcams all 6 pairs alone stay accepted (within 0.88 frame at 6 fps; the two minima 1-31 ms apart)."""
+    """A pair with unchecked track pairs (two static cameras no third one checks) is accepted only if its descriptor pairs alone give an accepted minimum within this many frames; 0 = no check."""
 
     chosen_agree_frames: float = 2.0
-    """Reject when the best minimum lies more than this many frames of the coarser video from the Δ at which Stage 0 kept the pair's track pairs (TrackPairs.chosen_at_offset_s: the joint vote's Δ, each pair consistent with the cameras there); 0 = no check. Measured (README, "A camera its own pairs contradict"): in stop 44's runs of stop 43's sweep (18 scenes, estimated cameras) 46 of the 47 accepted pairs with such a Δ lay within 0.88 frame of it (right ones, and wrong ones at a wrong joint Δ, which this check cannot see), and the 720p timing scene's 6 with its calibration within 0.84; the 47th, on descriptor pairs alone between two cameras refused in three views, 3.5 frames from it and 3.5 frames off the truth (stop 43's other such pair, 34 frames off, is refused as too wide)."""
+    """Reject when the best minimum lies more than this many frames of the coarser video from the Δ at which Stage 0 kept the pair's track pairs (the joint vote's); 0 = no check."""
     max_uncertainty_frames: float = 1.0
-    """Reject when the best minimum's 1-sigma (from its curvature and the number of track pairs) is wider than this many frames of the coarser video; 0 = no check. Such a minimum cannot time the pair to a frame. Measured (README, "Narrow-arc rendered scenes"): the 148 accepted pairs of the cue scenes were at most 0.69 frame wide, caliscope's and blenderbox's narrower; of 52 accepted pairs in 18 rendered runs with estimated cameras the 44 within 2 frames of the truth were at most 0.72 frame wide, and the 3 wider than a frame were 4.4-36 frames off."""
+    """Reject when the best minimum's 1-sigma (from its curvature and the number of track pairs) is wider than this many frames of the coarser video; 0 = no check."""
 
     def __post_init__(self) -> None:
         check_fields(self, nonnegative=("min_track_pairs", "unchecked_agree_frames", "chosen_agree_frames",
@@ -104,7 +105,7 @@ class PairSelection:
     mode: str = field(default="all", metadata={
         "flag": "--pairs", "type": str, "metavar": "{all,FRACTION,rst,knn:K}",
         "apply": lambda text, sel: PairSelection.parse(text, sel.seed)})
-    """Pairs of videos to evaluate: all pairs, a random fraction (keeps a spanning tree so every video stays connected), rst (a random spanning tree), or knn:K (each camera with the K cameras whose viewing directions are closest, plus the fewest pairs that connect the rest: about N*K pairs for N videos)."""
+    """Pairs of videos to evaluate: all, a random FRACTION (keeping every video connected), rst (a random spanning tree) or knn:K (each camera with the K nearest in viewing direction)."""
     fraction: float = 1.0
     """Share of pairs for mode 'fraction'."""
     seed: int = field(default=0, metadata={"flag": "--seed"})
@@ -141,7 +142,7 @@ class PairSelection:
 @dataclass(frozen=True)
 class DriftConfig:
     enabled: bool = field(default=False, metadata={"flag": "--drift", "enable": True})
-    """Clock drift: each video's time is t_global = offset_s + (1 + drift) * t_local; each accepted pair's (Δ, rate) is refined on the energy around its 1-D minimum and Stage 2 solves offset and drift per video (the reference fixed). Off: one constant offset per video."""
+    """Clock drift: solve a rate per video besides its offset (t_global = offset_s + (1 + drift) * t_local), each accepted pair refined around its minimum. Off: one constant offset."""
     rate_half_width_ppm: float = 1000.0
     """The (Δ, rate) search spans the pair's rate ± this many ppm (pose-free pairs: around the rate their tracks gave)."""
     rate_step_ppm: float = 100.0
@@ -174,7 +175,7 @@ class SightingConfig:
     enabled: bool = field(default=True, metadata={
         "flag": "--no-sightings", "negate": True,
         "help": "do not time pairs with a worn camera by its wearer seen by the other camera "
-                "(the bundle's heads; README, \"A worn camera seen by another\")"})
+                "(the bundle's heads)"})
     """Time a pair whose track pairs gave no accepted offset by a moving camera's wearer seen in the other camera (the bundle's heads: sync/sightings.py)."""
     radius_fraction: float = 0.015
     """A head counts as on the worn camera's centre within this fraction of the viewer's image diagonal (10.9 px at 512x512)."""
@@ -185,9 +186,9 @@ class SightingConfig:
     rival_frames: float = 3.0
     """Frames of the coarser video beyond which another offset is a rival of the peak."""
     refine_frames: float = 2.0
-    """An accepted peak's Δ is fitted again within this many frames of the coarser video, with one constant image shift between the heads and the worn camera's centre (the head is not the camera: on fencing1 the peaks were 1.0 and 1.5 frames late without it, 0.6 with it; README); 0: the peak as counted."""
+    """An accepted peak's Δ is fitted again within this many frames of the coarser video, with one constant image shift between the wearer's head and the camera's centre; 0: the peak as counted."""
     max_chain: int = 1
-    """A video's offset may rest on at most this many sighting pairs in a chain from the reference (through accepted pairs; epipolar ones do not count): on fencing1 both were late, by 0.6 frames each once refined (1.0 and 1.5 before), so two in a chain put a camera 1.2 frames off (2.5 before; README)."""
+    """A video's offset may rest on at most this many sighting pairs in a chain from the reference (their errors add up; epipolar pairs do not count)."""
 
     def __post_init__(self) -> None:
         check_fields(self, nonnegative=("max_chain", "refine_frames"),

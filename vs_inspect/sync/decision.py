@@ -92,9 +92,8 @@ def check_uncertainty(decision: PairDecision, sigma_s: float, offset_s: float, f
                       cfg: DecisionConfig) -> PairDecision:
     """Reject a pair accepted so far whose best minimum's 1-sigma sigma_s is wider than
     cfg.max_uncertainty_frames frames of frame_s (the coarser video's): a shallow, wide minimum
-    over few track pairs does not time the pair to a frame, however alone it stands (a wrong
-    descriptor pair set with estimated cameras gave one 1.15 s off with 2.3 frames of 1-sigma).
-    NaN (no curvature at the minimum) is left to the other checks."""
+    over few track pairs does not time the pair to a frame, however alone it stands (wrong
+    descriptor pairs can make one far from the truth). NaN (no curvature at the minimum) is left to the other checks."""
     limit = cfg.max_uncertainty_frames * frame_s
     if decision.accepted and cfg.enabled and limit > 0 and np.isfinite(sigma_s) and sigma_s > limit:
         return replace(decision, accepted=False, reason=(
@@ -109,8 +108,7 @@ def check_chosen_offset(decision: PairDecision, offset_s: float, chosen_at_offse
     cfg.chosen_agree_frames frames of frame_s (the coarser video's) from the Δ at which Stage 0
     kept its track pairs (TrackPairs.chosen_at_offset_s; None: no such Δ, no check). Each of
     them was consistent with the cameras' epipolar geometry there, so a minimum elsewhere means
-    the track pairs and the cameras disagree (estimated cameras all refused in three views put
-    one 3.5 frames from it, 3.5 frames off the truth)."""
+    the track pairs and the cameras disagree."""
     limit = cfg.chosen_agree_frames * frame_s
     if not (decision.accepted and cfg.enabled and limit > 0 and chosen_at_offset_s is not None
             and np.isfinite(offset_s)):

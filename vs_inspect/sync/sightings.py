@@ -110,7 +110,7 @@ class RefinedPeak:
             return (f"not refined by a constant head-to-centre shift (the fit's best Δ lies on the border of "
                     f"±{self.window_frames:g} frames, or too few heads stay posed)")
         said = ", ".join(f"{v}: ({s[0]:+.1f}, {s[1]:+.1f}) px" for v, s in self.shift_px.items())
-        return (f"refined to Δ={self.offset_s:+.3f} s by a constant shift between the heads and the worn camera's "
+        return (f"refined to Δ={self.offset_s:+.3f} s by a constant shift between the heads and the camera's "
                 f"centre ({said}; rms {self.rms_px:.1f} px)")
 
 
@@ -149,24 +149,25 @@ def _decided(a, b, offsets, near, moments, sc, coarse_s, directions, radius) -> 
     best_s, lo, hi, rival = sighting_peak(offsets, near, sc.rival_frames * coarse_s)
     best = int(np.argmin(np.abs(offsets - best_s)))
     # the half-height width over √(heads) (heads scatter about the peak like samples of it), at
-    # least a frame of the coarser video: on fencing1 both counted peaks were late, by 1.0 and 1.5
-    # frames, and 0.6 once refined (README)
+    # least a frame of the coarser video: a counted peak can be a frame or more late, as the head is
+    # not the camera (refine_frames fits that shift out, but not all of it)
     half = offsets[near >= 0.5 * top] if top else offsets[:0]
     uncertainty = coarse_s
     if top and len(half):
         uncertainty = float(max(uncertainty, (half.max() - half.min()) / (2.0 * math.sqrt(top))))
     edge = lo == 0 or hi == len(near) - 1
-    who = "; ".join(f"{v} sees {w}'s wearer" for v, w in directions)
+    who = "; ".join(f"{v} sees the person carrying {w}" for v, w in directions)
     if top < sc.min_sightings:
-        ok, why = False, f"worn camera sightings: {top} heads at most on a worn camera's centre ({who}), need {sc.min_sightings}"
+        ok, why = False, (f"sightings of a camera's carrier: {top} heads at most on the camera's centre ({who}), "
+                          f"need {sc.min_sightings}")
     elif rival > sc.max_rival_ratio * top:
-        ok, why = False, (f"worn camera sightings ambiguous: {top} heads at Δ={best_s:+.3f} s, {rival} at an offset "
-                          f"more than {sc.rival_frames:g} frames away ({who})")
+        ok, why = False, (f"sightings of a camera's carrier ambiguous: {top} heads at Δ={best_s:+.3f} s, {rival} at "
+                          f"an offset more than {sc.rival_frames:g} frames away ({who})")
     elif edge:
-        ok, why = False, f"worn camera sightings peak on the border of the search range ({who})"
+        ok, why = False, f"sightings of a camera's carrier peak on the border of the search range ({who})"
     else:
-        ok, why = True, (f"worn camera sightings: {top} heads within "
-                         f"{', '.join(sorted({f'{r:.1f} px' for r in radius.values()}))} of the worn camera's centre at "
+        ok, why = True, (f"sightings of a camera's carrier: {top} heads within "
+                         f"{', '.join(sorted({f'{r:.1f} px' for r in radius.values()}))} of the camera's centre at "
                          f"Δ={best_s:+.3f} s, {rival} at any other offset ({who})")
     decision = PairDecision(accepted=ok, reason=why, contrast=1.0 - rival / max(top, 1),
                             second_depth_ratio=rival / max(top, 1), num_minima=1 + int(rival > 0),
