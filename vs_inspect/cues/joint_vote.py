@@ -22,6 +22,8 @@ from ..record.sink import Sink
 from ..types import TrackPairs, VideoInfo
 from .config import CueConfig
 
+# The vote's decisions are logged at INFO (`-v`): the recording and result.json hold them in full,
+# and the console ends with one plain reason per unresolved video.
 log = logging.getLogger(__name__)
 
 
@@ -150,7 +152,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
         msg = (f"geometric track pairs not used: {unchecked_why}"
                + ("; descriptor pairs kept only where consistent at the joint vote's offsets" if filter_desc else ""))
         sink.stage_event("cues", msg)
-        log.warning(msg)
+        log.info(msg)
     out = dict(pairs)
     for (a, b), (gp, gs) in found.items():
         pick = chosen.get((a, b)) if chosen is not None else None  # index of the chosen peak
@@ -165,7 +167,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
             withheld_short = "a moving camera's vote peaks, no triangle to check them"
             msg = f"geometric track pairs not used for {a}__{b}: {withheld}"
             sink.stage_event("cues", msg, pair=f"{a}__{b}")
-            log.warning(msg)
+            log.info(msg)
             index = index[:0]
         _log_votes(sink, a, b, gs, gs.peaks_s[pick] if pick is not None else None)
         desc = pairs[(a, b)]
@@ -208,7 +210,7 @@ def _not_sure(refused: dict[str, str], sure: dict[str, bool], dissent: dict[str,
         dissent_short[n] = short[n]
         msg = f"joint vote not sure of {n}: {why}"
         sink.stage_event("cues", msg)
-        log.warning(msg)
+        log.info(msg)
 
 
 def check_fitted_offsets(fallback: dict, voted: dict, vids: dict) -> dict[str, str]:
@@ -322,7 +324,7 @@ def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: di
         msg = f"{c}: {chk.reason}"
         sink.stage_event("cues", msg, camera=c, passed=int(chk.passed), supporters=chk.supporters,
                          best_supporters=chk.best_supporters, trajectories=chk.trajectories)
-        (log.info if chk.passed else log.warning)(msg)
+        log.info(msg)
     return checks
 
 
@@ -353,7 +355,7 @@ def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dic
         msg = f"{c}: {chk.reason}"
         sink.stage_event("cues", msg, camera=c, confirmed=int(chk.confirmed), z=round(land.z, 2),
                          trajectories=traj.num_trajectories)
-        (log.info if chk.confirmed else log.warning)(msg)
+        log.info(msg)
     return checks, traj
 
 
@@ -459,7 +461,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                f"(supporters {seen}; a camera needs {cfg.geometric.three_view_min_supporters}, and "
                f"{cfg.geometric.three_view_min_share_of_best:.2g} of those at its best offset)")
         sink.stage_event("cues", msg)
-        log.warning(msg)
+        log.info(msg)
     weak = sorted(n for n, ok in sure.items() if not ok and n not in failed and n not in dissent)
     if weak:
         msg = (f"geometric track pairs not used for {', '.join(weak)}: the joint vote prefers their "
@@ -467,7 +469,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                f"{', '.join(f'{n} {joint.margin[n]:.1f}' for n in weak)})"
                + ("; point transfer did not confirm them" if transfer else ""))
         sink.stage_event("cues", msg)
-        log.warning(msg)
+        log.info(msg)
     # a Δ only when a third camera is sure too (a closed triangle confirms it): with a single
     # sure pair nothing checks it, and Stage 1 accepts the minimum its own supporters make, right
     # or wrong
@@ -477,7 +479,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
         msg = (f"geometric track pairs not used for {names}: the joint vote is sure of "
                f"{sum(sure.values())} camera(s) only, so no triangle of sure cameras confirms their Δ")
         sink.stage_event("cues", msg)
-        log.warning(msg)
+        log.info(msg)
     out = dict(pairs)
     for (a, b), (_, gs) in found.items():
         delta = joint.offsets_s[b] - joint.offsets_s[a]
