@@ -41,6 +41,16 @@ EXAMPLES: dict[str, list[tuple[str, str]]] = {
                      ("vs-inspect bench-stage0 arcs --set seeds-10-21 --workdir /tmp/arcs",
                       "rendered scenes sharing a view: offsets over 2 frames, cameras and track pairs "
                       "against the truth (renderings kept for the next run)")],
+    "calib": [("vs-inspect calib convert Calib.qca.txt Calib.toml",
+               "a Qualisys calibration as Pose2Sim's TOML"),
+              ("vs-inspect calib convert out/run/cameras.json calibration.toml --to anipose",
+               "the cameras a run used, for anipose")],
+    "calib convert": [("vs-inspect calib convert Calib.qca.txt Calib.toml",
+                       "a Qualisys calibration as Pose2Sim's TOML"),
+                      ("vs-inspect calib convert sparse/0 easymocap_calib --to easymocap",
+                       "a COLMAP model as EasyMocap's intri.yml and extri.yml"),
+                      ("vs-inspect calib convert out/run/cameras.json calibration.toml --to anipose",
+                       "the cameras a run used, for anipose")],
     "calibrate-board": [(("vs-inspect calibrate-board cam0.mp4 cam1.mp4 --board charuco.toml "
                           "--out calib.json"), "the rig's cameras; then sync --calib calib.json")],
     "cues": [("vs-inspect cues cam0.mp4 cam1.mp4 cam2.mp4 --calib calib.json --out bundle",

@@ -203,10 +203,11 @@ def _load_toml(path: Path) -> dict[str, tuple[list[str], CameraCalibration]]:
     if isinstance(data.get("cameras"), dict):  # caliscope: [cameras.0], [cameras.1], ...
         for key, t in data["cameras"].items():
             if isinstance(t, dict) and "matrix" in t:
-                tables.append((f"cam_{key}", [f"cam_{key}", f"cam{key}"], t))
+                named = [str(t["name"])] if t.get("name") is not None else []
+                tables.append((f"cam_{key}", named + [f"cam_{key}", f"cam{key}"], t))
     for key, t in data.items():
         if key != "cameras" and isinstance(t, dict) and "matrix" in t:
-            names = [key] + ([str(t["name"])] if t.get("name") is not None else [])
+            names = ([str(t["name"])] if t.get("name") is not None else []) + [key]
             tables.append((key, names, t))
     out = {}
     for key, names, t in tables:

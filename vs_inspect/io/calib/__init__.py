@@ -106,8 +106,18 @@ def detect(path: Path) -> str:
 
 
 def read(path) -> dict:
+    """{key: (names, CameraCalibration)} of a calibration file or folder."""
     path = Path(path)
     return FORMATS[detect(path)].read(path)
+
+
+def read_named(path) -> dict:
+    """{camera name: CameraCalibration}: each camera under the first name its file gives it."""
+    cams = read(path)
+    firsts = [names[0] if names else k for k, (names, _) in cams.items()]
+    if len(set(firsts)) < len(firsts):
+        return {k: c for k, (_, c) in cams.items()}
+    return {n: c for n, (_, c) in zip(firsts, cams.values())}
 
 
 def format_for_output(path: Path, fmt: str | None) -> CalibrationFormat:

@@ -27,6 +27,10 @@ MM = 1000.0  # file millimetres per metre
 _FLIP = np.diag([1.0, -1.0, -1.0])  # QTM camera frame (y up, looks along -z) <-> OpenCV
 
 
+def _r(x) -> str:
+    return repr(float(x))
+
+
 def _f(el, key: str, where: str) -> float:
     v = el.get(key)
     try:
@@ -63,11 +67,11 @@ def read(path: Path):
             size = (int(round((_f(intr, "sensorMaxU", where) - _f(intr, "sensorMinU", where)) / SUBPIXELS)) + 1,
                     int(round((_f(intr, "sensorMaxV", where) - _f(intr, "sensorMinV", where)) / SUBPIXELS)) + 1)
         fx, fy = _f(intr, "focalLengthU", where) / SUBPIXELS, _f(intr, "focalLengthV", where) / SUBPIXELS
-        skew = float(intr.get("skew", 0) or 0) / SUBPIXELS
+        skew = _f(intr, "skew", where) / SUBPIXELS if intr.get("skew") else 0.0
         cx = _f(intr, "centerPointU", where) / SUBPIXELS - left
         cy = _f(intr, "centerPointV", where) / SUBPIXELS - top
         K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]
-        g = lambda k: float(intr.get(k, 0) or 0)  # noqa: E731
+        g = lambda k: _f(intr, k, where) if intr.get(k) else 0.0  # noqa: E731
         dist = [g("radialDistortion1"), g("radialDistortion2"), g("tangentalDistortion1"),
                 g("tangentalDistortion2"), g("radialDistortion3")]
         R_file = np.array([[_f(tr, f"r{r}{c}", where) for c in (1, 2, 3)] for r in (1, 2, 3)])
@@ -93,17 +97,17 @@ def write(cameras: dict, path: Path) -> list[Path]:
         R_cv, t = c.cam_from_world[:3, :3], c.cam_from_world[:3, 3]
         R_file = _FLIP @ R_cv
         centre = -R_cv.T @ t * MM
-        attrs = {f"r{r + 1}{k + 1}": repr(float(R_file[r, k])) for r in range(3) for k in range(3)}
-        attrs.update(x=repr(float(centre[0])), y=repr(float(centre[1])), z=repr(float(centre[2])))
+        attrs = {f"r{r + 1}{k + 1}": _r((R_file[r, k])) for r in range(3) for k in range(3)}
+        attrs.update(x=_r((centre[0])), y=_r((centre[1])), z=_r((centre[2])))
         ET.SubElement(cam, "transform", **attrs)
         K, d = c.K, np.r_[c.dist, np.zeros(5)][:5]
-        ET.SubElement(cam, "intrinsic", focalLengthU=repr(K[0, 0] * SUBPIXELS),
-                      focalLengthV=repr(K[1, 1] * SUBPIXELS), centerPointU=repr(K[0, 2] * SUBPIXELS),
-                      centerPointV=repr(K[1, 2] * SUBPIXELS), skew=repr(K[0, 1] * SUBPIXELS),
-                      radialDistortion1=repr(d[0]), radialDistortion2=repr(d[1]),
-                      radialDistortion3=repr(d[4]), tangentalDistortion1=repr(d[2]),
-                      tangentalDistortion2=repr(d[3]), sensorMinU="0", sensorMinV="0",
-                      sensorMaxU=repr((w - 1) * SUBPIXELS), sensorMaxV=repr((h - 1) * SUBPIXELS))
+        ET.SubElement(cam, "intrinsic", focalLengthU=_r(K[0, 0] * SUBPIXELS),
+                      focalLengthV=_r(K[1, 1] * SUBPIXELS), centerPointU=_r(K[0, 2] * SUBPIXELS),
+                      centerPointV=_r(K[1, 2] * SUBPIXELS), skew=_r(K[0, 1] * SUBPIXELS),
+                      radialDistortion1=_r(d[0]), radialDistortion2=_r(d[1]),
+                      radialDistortion3=_r(d[4]), tangentalDistortion1=_r(d[2]),
+                      tangentalDistortion2=_r(d[3]), sensorMinU="0", sensorMinV="0",
+                      sensorMaxU=_r((w - 1) * SUBPIXELS), sensorMaxV=_r((h - 1) * SUBPIXELS))
     ET.indent(root)
     text = "<?xml version='1.0' encoding='ASCII'?>\n" + ET.tostring(root, encoding="unicode") + "\n"
     return [atomic.write_text_atomic(text, path)]

@@ -26,7 +26,11 @@ from .xml_safe import parse_xml
 
 log = logging.getLogger(__name__)
 MM = 1000.0
-FIT_WARN_PX = 0.1  # warn when OpenCV's radial model reproduces Vicon's lens worse than this
+FIT_WARN_PX = 0.5  # warn when OpenCV's radial model reproduces Vicon's lens worse than this
+
+
+def _r(x) -> str:
+    return repr(float(x))
 
 
 def quat_xyzw_to_matrix(q) -> np.ndarray:
@@ -92,9 +96,12 @@ def read(path: Path):
             raise InputError(f"{where}: no <KeyFrames><KeyFrame> (an uncalibrated camera)")
         w, h = (int(round(v)) for v in _nums(cam, "SENSOR_SIZE", 2, where))
         fx = _nums(kf, "FOCAL_LENGTH", 1, where)[0]
-        ratio = float(cam.get("PIXEL_ASPECT_RATIO", 1) or 1)
+        ratio = _nums(cam, "PIXEL_ASPECT_RATIO", 1, where)[0] if cam.get("PIXEL_ASPECT_RATIO") else 1.0
+        skew = _nums(cam, "SKEW", 1, where)[0] if cam.get("SKEW") else 0.0
+        if ratio <= 0:
+            raise InputError(f"{where}: PIXEL_ASPECT_RATIO must be positive, got {ratio}")
         cx, cy = _nums(kf, "PRINCIPAL_POINT", 2, where)
-        K = np.array([[fx, float(cam.get("SKEW", 0) or 0), cx], [0, fx / ratio, cy], [0, 0, 1]])
+        K = np.array([[fx, skew, cx], [0, fx / ratio, cy], [0, 0, 1]])
         R = quat_xyzw_to_matrix(_nums(kf, "ORIENTATION", 4, where))
         centre = np.array(_nums(kf, "POSITION", 3, where)) / MM
         dist = np.zeros(5)
@@ -130,17 +137,17 @@ def write(cameras: dict, path: Path) -> list[Path]:
         w, h = c.size
         K = c.K
         cam = ET.SubElement(root, "Camera", DEVICEID=str(name), NAME=str(name), USERID=str(i + 1),
-                            PIXEL_ASPECT_RATIO=repr(K[0, 0] / K[1, 1]), SENSOR_SIZE=f"{w} {h}",
-                            SKEW=repr(float(K[0, 1])), TYPE="VIDEO")
+                            PIXEL_ASPECT_RATIO=_r(K[0, 0] / K[1, 1]), SENSOR_SIZE=f"{w} {h}",
+                            SKEW=_r((K[0, 1])), TYPE="VIDEO")
         kfs = ET.SubElement(cam, "KeyFrames")
         R, t = c.cam_from_world[:3, :3], c.cam_from_world[:3, 3]
         centre = -R.T @ t * MM
         q = matrix_to_quat_xyzw(R)
         radial = _opencv_to_vicon_radial2(c)
-        ET.SubElement(kfs, "KeyFrame", FOCAL_LENGTH=repr(float(K[0, 0])), FRAME="0",
-                      ORIENTATION=" ".join(repr(float(v)) for v in q),
-                      POSITION=" ".join(repr(float(v)) for v in centre),
-                      PRINCIPAL_POINT=f"{K[0, 2]!r} {K[1, 2]!r}", VICON_RADIAL2=radial)
+        ET.SubElement(kfs, "KeyFrame", FOCAL_LENGTH=_r((K[0, 0])), FRAME="0",
+                      ORIENTATION=" ".join(_r((v)) for v in q),
+                      POSITION=" ".join(_r((v)) for v in centre),
+                      PRINCIPAL_POINT=f"{_r(K[0, 2])} {_r(K[1, 2])}", VICON_RADIAL2=radial)
     ET.indent(root)
     text = '<?xml version="1.0" encoding="UTF-8" standalone="no" ?>\n' + ET.tostring(root, encoding="unicode") + "\n"
     return [atomic.write_text_atomic(text, path)]
@@ -153,7 +160,7 @@ def _opencv_to_vicon_radial2(c) -> str:
     K = c.K
     pp, f = K[:2, 2], K[0, 0]
     if not np.any(c.dist != 0):
-        return f"ThirdOrderRadial {pp[0]!r} {pp[1]!r} 0 0 0"
+        return f"ThirdOrderRadial {_r(pp[0])} {_r(pp[1])} 0 0 0"
     w, h = c.size
     gx, gy = np.meshgrid(np.linspace(0, w - 1, 41), np.linspace(0, h - 1, 41))
     xd = np.c_[gx.ravel(), gy.ravel()]
@@ -164,4 +171,4 @@ def _opencv_to_vicon_radial2(c) -> str:
     r2 = (d ** 2).sum(1) / f ** 2
     A = np.concatenate([(d * r2[:, None] ** p).reshape(-1, 1) for p in (1, 2, 3)], axis=1)
     k = np.linalg.lstsq(A, (xu - xd).reshape(-1), rcond=None)[0]
-    return f"ThirdOrderRadial {pp[0]!r} {pp[1]!r} {k[0]!r} {k[1]!r} {k[2]!r}"
+    return f"ThirdOrderRadial " + " ".join(_r(v) for v in (*pp, *k))
