@@ -10,7 +10,7 @@ Conventions of the file:
 - Lens: ``VICON_RADIAL="k1 k2"`` (on pixel offsets from the principal point) or
   ``VICON_RADIAL2="<model> dcx dcy k1 k2 k3"`` (on offsets from the distortion centre divided
   by the focal length). Both map a distorted image point to its undistorted place; OpenCV's
-  model goes the other way, so the OpenCV coefficients (k1 k2 k3) are fitted to the Vicon
+  model goes the other way, so OpenCV rational coefficients (k1 k2 k3 k4 k5 k6) are fitted to the Vicon
   mapping over the image, and the fit's worst residual is logged.
 """
 
@@ -57,9 +57,15 @@ def _nums(el, key: str, n: int | None, where: str) -> list[float]:
 
 
 def fit_opencv_radial(K: np.ndarray, size, centre_px, k_vicon, scale_px: float) -> tuple[np.ndarray, float]:
-    """OpenCV (k1, k2, p1=0, p2=0, k3) whose forward model best matches Vicon's undistortion
-    x_u = c + (x_d - c)(1 + k1 r² + k2 r⁴ + k3 r⁶), r = |x_d - c| / scale_px; and the worst
-    residual in pixels over a grid of the image."""
+    """OpenCV rational lens coefficients (k1 k2 p1=0 p2=0 k3 k4 k5 k6) whose forward model best
+    matches Vicon's undistortion x_u = c + (x_d - c)(1 + k1 r² + k2 r⁴ + k3 r⁶),
+    r = |x_d - c| / scale_px, over a grid of the image; and the worst residual in pixels.
+
+    OpenCV: n_d = n_u (1 + a1 ρ² + a2 ρ⁴ + a3 ρ⁶) / (1 + b1 ρ² + b2 ρ⁴ + b3 ρ⁶), ρ = |n_u|,
+    fitted linearly as n_d - n_u = n_u (a1 ρ² + ...) - n_d (b1 ρ² + ...): a ratio of
+    polynomials inverts Vicon's polynomial far better than a polynomial does.
+    """
+    import cv2
     w, h = size
     gx, gy = np.meshgrid(np.linspace(0, w - 1, 41), np.linspace(0, h - 1, 41))
     xd = np.c_[gx.ravel(), gy.ravel()]
@@ -67,16 +73,20 @@ def fit_opencv_radial(K: np.ndarray, size, centre_px, k_vicon, scale_px: float) 
     r2 = (((xd - c) / scale_px) ** 2).sum(1)
     k = np.r_[k_vicon, np.zeros(3)][:3]
     xu = c + (xd - c) * (1 + k[0] * r2 + k[1] * r2 ** 2 + k[2] * r2 ** 3)[:, None]
-    # OpenCV, radial only about the principal point: n_d = n_u (1 + a ru² + b ru⁴ + e ru⁶)
     pp = K[:2, 2]
     f = np.array([K[0, 0], K[1, 1]])
     nu, nd = (xu - pp) / f, (xd - pp) / f
-    ru2 = (nu ** 2).sum(1)
-    A = np.concatenate([(nu * ru2[:, None] ** p).reshape(-1, 1) for p in (1, 2, 3)], axis=1)
+    rho2 = (nu ** 2).sum(1)[:, None]
+    cols = [nu * rho2 ** p for p in (1, 2, 3)] + [-nd * rho2 ** p for p in (1, 2, 3)]
+    A = np.stack([col.reshape(-1) for col in cols], axis=1)
     b = (nd - nu).reshape(-1)
-    coef = np.linalg.lstsq(A, b, rcond=None)[0]
-    resid = np.abs((A @ coef - b).reshape(-1, 2) * f).max()
-    return np.array([coef[0], coef[1], 0.0, 0.0, coef[2]]), float(resid)
+    a1, a2, a3, b1, b2, b3 = np.linalg.lstsq(A, b, rcond=None)[0]
+    dist = np.array([a1, a2, 0.0, 0.0, a3, b1, b2, b3])
+    Kn = K.copy()
+    Kn[0, 1] = 0.0
+    back = cv2.projectPoints(np.c_[nu, np.ones(len(nu))], np.zeros(3), np.zeros(3), Kn, dist)[0]
+    resid = np.abs(back.reshape(-1, 2) - (nd * f + pp)).max()
+    return dist, float(resid)
 
 
 def read(path: Path):
