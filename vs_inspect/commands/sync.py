@@ -88,11 +88,23 @@ def _run(args: argparse.Namespace, cfg, out: Path, truth: dict[str, float] | Non
     if args.bundle and (out / "cues").is_dir():  # --force over a video run: its cues are not this run's
         import shutil
         shutil.rmtree(out / "cues")
+    _write_cameras(args, out)
     if describe(sink):
         print(describe(sink))
     print_run(result, path, truth=gt_with_reference(truth, args.gt, result.reference),
               frame_s=_frame_intervals(args.bundle or out / "cues"))
     return exit_code(result)
+
+
+def _write_cameras(args: argparse.Namespace, out: Path) -> None:
+    """OUT/cameras.json: the cameras the run used (given or estimated), for 'calib convert'."""
+    from ..io.bundle import read_bundle
+    from ..io.calib import RUN_CAMERAS, write_run_cameras
+    (out / RUN_CAMERAS).unlink(missing_ok=True)  # --force: an earlier run's cameras are not these
+    source = args.bundle or out / "cues"
+    if not (Path(source) / "bundle.json").is_file():
+        return
+    write_run_cameras(out, read_bundle(source), None if args.bundle else args.calib)
 
 
 def exit_code(result) -> int:

@@ -148,3 +148,46 @@ def write(cameras: dict, path, fmt: str | None = None) -> list[Path]:
             raise InputError(f"camera {n!r} has {c.dist.size} distortion coefficients; the "
                              f"{f.name} format stores {f.max_dist}")
     return f.write(cameras, path)
+
+
+RUN_CAMERAS = "cameras.json"  # the cameras a run used, in its folder
+
+
+def run_cameras(bundle, calibration=None) -> tuple[dict, str]:
+    """({video: CameraCalibration}, where they came from) of a run: the given calibration fitted to
+    each video's size (with its lens), else the bundle's cameras (estimated, or imported; tracks
+    already undistorted). Pose-free videos (no pose) are left out."""
+    from ..calibration import CameraCalibration, fit_to_video, load_calibration
+    sizes = {v.name: (v.width, v.height) for v in bundle.videos}
+    if calibration is not None:
+        cals = load_calibration(calibration, list(sizes))
+        out = {}
+        for n, c in cals.items():
+            if n in bundle.cameras:
+                out[n] = fit_to_video(c, *sizes[n], name=n)
+        return out, f"the calibration {calibration}, fitted to each video's image size"
+    out = {}
+    for n, cam in bundle.cameras.items():
+        if n in bundle.pose_free:
+            continue
+        K = cam.K if cam.K.ndim == 2 else cam.K[0]
+        if cam.K.ndim == 3 and np.abs(cam.K - K).max() > 1e-9:
+            continue  # a zooming camera: not one K for the file
+        out[n] = CameraCalibration(K=K.copy(), dist=np.zeros(5), cam_from_world=cam.cam_from_world.copy(),
+                                   size=sizes.get(n))
+    return out, "the cameras the run used (estimated from the videos, or from the cue bundle)"
+
+
+def write_run_cameras(folder, bundle, calibration=None) -> Path | None:
+    """FOLDER/cameras.json (vs-inspect's JSON, which 'calib convert' turns into other tools'
+    formats): the cameras a run used. None when no video has a posed camera."""
+    from ..atomic import write_json_atomic
+    cams, source = run_cameras(bundle, calibration)
+    if not cams:
+        return None
+    data = {"cameras": {n: {"K": c.K.tolist(), "dist": c.dist.tolist(),
+                            "cam_from_world": c.cam_from_world.tolist(),
+                            "size": list(c.size) if c.size else None} for n, c in cams.items()},
+            "source": source,
+            "convert": "vs-inspect calib convert cameras.json OUT (e.g. Calib.toml, calibration.toml --to anipose)"}
+    return write_json_atomic(data, Path(folder) / RUN_CAMERAS)
