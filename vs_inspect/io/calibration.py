@@ -342,18 +342,19 @@ CROP_MAX_FRACTION = 0.02  # a video this much smaller than its calibration (per 
 ENCODER_BLOCK_PX = 16  # codecs pad sides to multiples of this and crop the padding at right/bottom
 
 
-def fit_to_video(cal: CameraCalibration, width: int, height: int, name: str = "camera"
-                 ) -> CameraCalibration:
+def fit_to_video(cal: CameraCalibration, width: int, height: int, name: str = "camera",
+                 warn: bool = True) -> CameraCalibration:
     """The calibration at a video's resolution: unchanged; K scaled for a uniformly resized or
     integer-binned video (pixel centres kept: c' = (c + 0.5) s - 0.5); the principal point
     shifted for a crop of at most CROP_MAX_FRACTION of a side. Both with one warning saying
-    what was assumed. Other sizes are an InputError."""
+    what was assumed (warn=False: logged at debug level, for a second fit of the same video).
+    Other sizes are an InputError."""
     if cal.size is None or cal.size == (width, height):
         return cal if cal.size is not None else replace(cal, size=(int(width), int(height)))
     cw, ch = cal.size
     dw, dh = cw - width, ch - height
     if 0 <= dw <= CROP_MAX_FRACTION * cw and 0 <= dh <= CROP_MAX_FRACTION * ch:
-        return _cropped(cal, width, height, name)
+        return _cropped(cal, width, height, name, warn)
     sx, sy = width / cw, height / ch
     if abs(sx - sy) > 2.0 / min(cw, ch) * max(sx, sy):
         raise InputError(
@@ -370,12 +371,13 @@ def fit_to_video(cal: CameraCalibration, width: int, height: int, name: str = "c
     binned = round(1 / sx) if sx < 1 and abs(cw / width - round(cw / width)) < 1e-9 \
         and abs(ch / height - round(ch / height)) < 1e-9 else None
     how = f"binned by {binned}" if binned else f"resized by {sx:.4g}"
-    log.warning("%s: video %dx%d, calibration %dx%d: assumed the video is %s (focal lengths and "
+    (log.warning if warn else log.debug)("%s: video %dx%d, calibration %dx%d: assumed the video is %s (focal lengths and "
                 "principal point scaled)", name, width, height, cw, ch, how)
     return replace(cal, K=K, size=(int(width), int(height)))
 
 
-def _cropped(cal: CameraCalibration, width: int, height: int, name: str) -> CameraCalibration:
+def _cropped(cal: CameraCalibration, width: int, height: int, name: str, warn: bool = True
+             ) -> CameraCalibration:
     """K of a video cropped from the calibrated size: a few rows/columns removed. An encoder's
     padding (side a multiple of ENCODER_BLOCK_PX, less than a block removed) is cut at the right
     and bottom (principal point kept); any other crop is taken as centred (shifted by half)."""
@@ -395,8 +397,8 @@ def _cropped(cal: CameraCalibration, width: int, height: int, name: str) -> Came
     K = cal.K.copy()
     K[0, 2] -= shift[0]
     K[1, 2] -= shift[1]
-    log.warning("%s: video %dx%d, calibration %dx%d: assumed a crop, %s", name, width, height, cw,
-                ch, "; ".join(where))
+    (log.warning if warn else log.debug)("%s: video %dx%d, calibration %dx%d: assumed a crop, %s",
+                                         name, width, height, cw, ch, "; ".join(where))
     return replace(cal, K=K, size=(int(width), int(height)))
 
 

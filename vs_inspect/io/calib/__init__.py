@@ -164,7 +164,7 @@ def run_cameras(bundle, calibration=None) -> tuple[dict, str]:
         out = {}
         for n, c in cals.items():
             if n in bundle.cameras:
-                out[n] = fit_to_video(c, *sizes[n], name=n)
+                out[n] = fit_to_video(c, *sizes[n], name=n, warn=False)  # warned once by the run
         return out, f"the calibration {calibration}, fitted to each video's image size"
     out = {}
     for n, cam in bundle.cameras.items():
