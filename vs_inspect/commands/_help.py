@@ -59,7 +59,12 @@ EXAMPLES: dict[str, list[tuple[str, str]]] = {
              ("vs-inspect demo --true-cues-only --out out/demo", "skip the videos' Stage 0 run"),
              ("vs-inspect report out/demo --out out/demo-report", "then its figures")],
     "eval": [("vs-inspect eval out/run --gt scene/gt.json", "A@100, A@500 and per-video errors")],
-    "export": [("vs-inspect export out/run --mosaic out/run/mosaic.mp4",
+    "export": [("vs-inspect export out/run --offsets out/run/offsets.csv",
+                "each video's offset in seconds and in its own frames, and its frames in the "
+                "common span"),
+               ("vs-inspect export out/run --trimmed out/run/trimmed",
+                "every video cut to the common time span, for Pose2Sim, anipose or a NeRF trainer"),
+               ("vs-inspect export out/run --mosaic out/run/mosaic.mp4",
                 "all inputs side by side on the global timeline")],
     "import-drone": [("vs-inspect import-drone ../shared/data/drone_tracking_dataset3 --out drone",
                       "a pose-free cue bundle with gt.json")],

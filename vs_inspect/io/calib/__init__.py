@@ -140,7 +140,7 @@ def write(cameras: dict, path, fmt: str | None = None) -> list[Path]:
     for n, c in cameras.items():
         if c.size is None:
             raise InputError(f"camera {n!r}: its image size is unknown; {f.name} files store it "
-                             f"(convert with --videos, or to json)")
+                             f"(give it with --size WIDTH HEIGHT)")
         if c.cam_from_world.ndim == 3 and not f.moving:
             raise InputError(f"camera {n!r} has one pose per frame (a moving camera); only the "
                              f"json format holds those")
@@ -153,17 +153,18 @@ def write(cameras: dict, path, fmt: str | None = None) -> list[Path]:
 RUN_CAMERAS = "cameras.json"  # the cameras a run used, in its folder
 
 
-def run_cameras(bundle, calibration=None) -> tuple[dict, str]:
+def run_cameras(bundle, calibration=None, video_names: list[str] | None = None) -> tuple[dict, str]:
     """({video: CameraCalibration}, where they came from) of a run: the given calibration fitted to
     each video's size (with its lens), else the bundle's cameras (estimated, or imported; tracks
-    already undistorted). Pose-free videos (no pose) are left out."""
+    already undistorted). Pose-free videos (no pose) are left out. video_names: every input of
+    the run, so that the calibration maps to the videos as it did in the run."""
     from ..calibration import CameraCalibration, fit_to_video, load_calibration
     sizes = {v.name: (v.width, v.height) for v in bundle.videos}
     if calibration is not None:
-        cals = load_calibration(calibration, list(sizes))
+        cals = load_calibration(calibration, list(video_names or sizes))
         out = {}
         for n, c in cals.items():
-            if n in bundle.cameras:
+            if n in bundle.cameras and n in sizes:
                 out[n] = fit_to_video(c, *sizes[n], name=n, warn=False)  # warned once by the run
         return out, f"the calibration {calibration}, fitted to each video's image size"
     out = {}
@@ -178,11 +179,12 @@ def run_cameras(bundle, calibration=None) -> tuple[dict, str]:
     return out, "the cameras the run used (estimated from the videos, or from the cue bundle)"
 
 
-def write_run_cameras(folder, bundle, calibration=None) -> Path | None:
+def write_run_cameras(folder, bundle, calibration=None, video_names: list[str] | None = None
+                      ) -> Path | None:
     """FOLDER/cameras.json (vs-inspect's JSON, which 'calib convert' turns into other tools'
     formats): the cameras a run used. None when no video has a posed camera."""
     from ..atomic import write_json_atomic
-    cams, source = run_cameras(bundle, calibration)
+    cams, source = run_cameras(bundle, calibration, video_names)
     if not cams:
         return None
     data = {"cameras": {n: {"K": c.K.tolist(), "dist": c.dist.tolist(),
