@@ -132,7 +132,7 @@ def read(path: Path):
         if any(v != 0 for v in kv):
             dist, resid = fit_opencv_radial(K, (w, h), centre_px, kv, scale)
             (log.warning if resid > FIT_WARN_PX else log.info)(
-                "%s: Vicon lens model converted to OpenCV k1 k2 k3 (worst difference %.3g px)",
+                "%s: Vicon lens model converted to OpenCV's rational model (worst difference %.3g px)",
                 where, resid)
         out[name] = (names, _make(where, K, dist, _rt(R, -R @ centre), (w, h)))
     return out
@@ -153,7 +153,7 @@ def write(cameras: dict, path: Path) -> list[Path]:
         R, t = c.cam_from_world[:3, :3], c.cam_from_world[:3, 3]
         centre = -R.T @ t * MM
         q = matrix_to_quat_xyzw(R)
-        radial = _opencv_to_vicon_radial2(c)
+        radial = _opencv_to_vicon_radial2(c, name)
         ET.SubElement(kfs, "KeyFrame", FOCAL_LENGTH=_r((K[0, 0])), FRAME="0",
                       ORIENTATION=" ".join(_r((v)) for v in q),
                       POSITION=" ".join(_r((v)) for v in centre),
@@ -163,7 +163,7 @@ def write(cameras: dict, path: Path) -> list[Path]:
     return [atomic.write_text_atomic(text, path)]
 
 
-def _opencv_to_vicon_radial2(c) -> str:
+def _opencv_to_vicon_radial2(c, name: str = "camera") -> str:
     """Vicon's undistortion (k1 k2 k3 about the principal point, r in focal lengths) fitted to
     OpenCV's model of the camera."""
     import cv2
@@ -174,9 +174,14 @@ def _opencv_to_vicon_radial2(c) -> str:
     w, h = c.size
     gx, gy = np.meshgrid(np.linspace(0, w - 1, 41), np.linspace(0, h - 1, 41))
     xd = np.c_[gx.ravel(), gy.ravel()]
-    xu = cv2.undistortPoints(xd.reshape(-1, 1, 2), K, c.dist, P=K,
-                             criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-12)
-                             ).reshape(-1, 2)
+    crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-12)
+    radial = c.dist.copy()
+    radial[2:4] = 0.0  # Vicon's model has no tangential terms
+    xu = cv2.undistortPoints(xd.reshape(-1, 1, 2), K, radial, P=K, criteria=crit).reshape(-1, 2)
+    if np.any(c.dist[2:4] != 0):
+        full = cv2.undistortPoints(xd.reshape(-1, 1, 2), K, c.dist, P=K, criteria=crit).reshape(-1, 2)
+        log.warning("camera %r: Vicon's lens model has no tangential terms; p1 p2 dropped (points "
+                    "move by up to %.2g px)", name, float(np.abs(full - xu).max()))
     d = (xd - pp)
     r2 = (d ** 2).sum(1) / f ** 2
     A = np.concatenate([(d * r2[:, None] ** p).reshape(-1, 1) for p in (1, 2, 3)], axis=1)
