@@ -264,10 +264,10 @@ def test_sync_refuses_an_earlier_run_unless_force(bundle_dir, run_dir, tmp_path,
     (out / "cues" / "bundle.json").write_text("{}")
     before = (out / "result.json").read_bytes()
     fails(sync_argv(bundle_dir, out, "--no-rrd"), capsys, 2, str(out), "--force")
-    assert tree(out) == ["config.json", "cues/", "cues/bundle.json", "result.json"]
+    assert tree(out) == ["cameras.json", "config.json", "cues/", "cues/bundle.json", "result.json"]
     assert (out / "result.json").read_bytes() == before
     assert main([str(a) for a in sync_argv(bundle_dir, out, "--no-rrd", "--force")]) == 0
-    assert tree(out) == ["config.json", "result.json"]  # the earlier run's cues are not this run's
+    assert tree(out) == ["cameras.json", "config.json", "result.json"]  # the earlier run's cues are not this run's
     # --overwrite is the old name of --force (cues, synth-cues, import-visualsync)
     assert main([str(a) for a in sync_argv(bundle_dir, out, "--no-rrd", "--overwrite")]) == 0
 

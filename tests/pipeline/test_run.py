@@ -210,7 +210,7 @@ def test_reference_without_camera_gives_its_place_to_a_video_with_one(tmp_path, 
     config = RunConfig.from_dict({"sync": {"solve": {"reference": reference}}})
     result = run([a, b, c], config, calibration=cal, progress=False)
     assert result.reference == "b" and result.offsets_s["a"] is None
-    assert "not a uniform scale" in result.unresolved["a"]
+    assert "nor a uniform scale" in result.unresolved["a"]
     assert result.unresolved["a"].endswith("it cannot be the reference, so b is the reference instead")
     assert [(p.a, p.b) for p in result.pairs] == [("b", "c")]
     # these blank disks give no tracks, so b-c is not accepted: b's 0 was measured against nothing

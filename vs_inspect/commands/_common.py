@@ -78,8 +78,11 @@ def add_cue_options(p: argparse.ArgumentParser) -> None:
     """Stage 0's inputs (--calib, --fps) and options generated from cues.config's fields."""
     g = p.add_argument_group("cue extraction (Stage 0)")
     g.add_argument("--calib", type=Path, default=None,
-                   help="camera calibration (COLMAP model folder, JSON, or caliscope/anipose TOML); "
-                        "without it the cameras are estimated from the videos with pycolmap")
+                   help="camera calibration: COLMAP or EasyMocap folder, JSON, Pose2Sim/anipose/"
+                        "FreeMoCap/caliscope TOML, Qualisys .qca.txt, Vicon .xcp (see 'calib "
+                        "convert'); without it the cameras are estimated from the videos with "
+                        "pycolmap. A video a few rows/columns smaller than its calibration (a "
+                        "crop) or binned is accepted with a warning")
     g.add_argument("--fps", type=positive_float, default=None,
                    help="frame rate of image folders (and of files whose timestamps are unusable)")
     add_config_options(p, ("cues",), group=g)
@@ -166,6 +169,22 @@ def offsets_table(offsets: dict, uncertainty: dict, truth: dict | None, referenc
     return "\n".join(lines)
 
 
+def sign_in_words(offsets: dict, reference: str) -> str:
+    """The offsets' sign said once in words: 'cam2 starts 0.240 s after cam0; cam1 starts 0.100 s
+    before cam0' (offset_s > 0: the video's first frame came later than the reference's)."""
+    parts = []
+    for v, off in offsets.items():
+        if v == reference or off is None:
+            continue
+        if abs(off) < 5e-4:
+            parts.append(f"{v} starts with {reference}")
+        else:
+            parts.append(f"{v} starts {abs(off):.3f} s {'after' if off > 0 else 'before'} {reference}")
+    if not parts:
+        return ""
+    return "; ".join(parts) + f" (offset_s = the moment a video starts, on {reference}'s clock)"
+
+
 def print_run(result, path, truth: dict | None = None,
               frame_s: dict[str, float] | None = None) -> None:
     """The offsets table (input order, truth from the run or given; errors in frames when the
@@ -176,6 +195,9 @@ def print_run(result, path, truth: dict | None = None,
     print(offsets_table({n: result.offsets_s.get(n) for n in names},
                         {n: result.uncertainty_s.get(n) for n in names}, shown_truth,
                         result.reference, result.headlines(), frame_s if shown_truth else None))
+    words = sign_in_words({n: result.offsets_s.get(n) for n in names}, result.reference)
+    if words:
+        print(words)
     if any(result.offsets_s.get(n) is None for n in names) and result.unresolved_headline:
         print(f"each null's reason in full: \"unresolved\" in {path}")
     if result.drift_ppm is not None:  # --drift: t_global = offset_s + (1 + drift) * t_local

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..types import PairLandscape, RunResult
-from ._common import add_gt_option, load_gt, offsets_table
+from ._common import add_gt_option, load_gt, offsets_table, sign_in_words
 
 
 def register(sub) -> None:
@@ -61,6 +61,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {v.name}: {v.width}x{v.height}, {v.num_frames} frames, {v.duration_s:.2f} s, {rate}")
     print(offsets_table(res.offsets_s, res.uncertainty_s, truth, res.reference, res.headlines(),
                         frame_s if truth else None))
+    if sign_in_words(res.offsets_s, res.reference):
+        print(sign_in_words(res.offsets_s, res.reference))
 
     diag = diagnose(res, rec.videos, truth)
     by_key = {c.key: c for c in diag.checks}

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import logging
 from pathlib import Path
 
 from ..errors import InputError, VsInspectError
@@ -12,13 +13,18 @@ from ._common import (add_config_file_option, add_cue_options, add_force_option,
                       add_sync_options, check_output_folder, gt_with_reference, print_run, run_config)
 from ._record import add_record_options, check_rrd_path, describe, open_sink
 
+log = logging.getLogger(__name__)
+
 
 def register(sub) -> None:
     p = sub.add_parser("sync", help="synchronize videos or a cue bundle",
                        description="Estimate one time offset per video. Input is a cue bundle "
                                    "(--bundle DIR) or video files (then OUT/cues holds the "
-                                   "extracted cue bundle). Writes OUT/result.json and the run's "
-                                   "settings as OUT/config.json. Settings: the defaults, then "
+                                   "extracted cue bundle). Writes OUT/result.json, the run's "
+                                   "settings as OUT/config.json and the cameras it used as "
+                                   "OUT/cameras.json ('calib convert' turns them into other "
+                                   "tools' formats; 'export' writes offsets and trimmed videos "
+                                   "for them). Settings: the defaults, then "
                                    "--config FILE, then the options given on the command line "
                                    "(the command line wins).",
                        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
@@ -88,11 +94,27 @@ def _run(args: argparse.Namespace, cfg, out: Path, truth: dict[str, float] | Non
     if args.bundle and (out / "cues").is_dir():  # --force over a video run: its cues are not this run's
         import shutil
         shutil.rmtree(out / "cues")
+    _write_cameras(args, out, list(result.inputs.videos) or list(result.offsets_s))
     if describe(sink):
         print(describe(sink))
     print_run(result, path, truth=gt_with_reference(truth, args.gt, result.reference),
               frame_s=_frame_intervals(args.bundle or out / "cues"))
     return exit_code(result)
+
+
+def _write_cameras(args: argparse.Namespace, out: Path, names: list[str]) -> None:
+    """OUT/cameras.json: the cameras the run used (given or estimated), for 'calib convert'.
+    The result is already written: a problem here is a warning, not a failed run."""
+    from ..io.bundle import read_bundle
+    from ..io.calib import RUN_CAMERAS, write_run_cameras
+    (out / RUN_CAMERAS).unlink(missing_ok=True)  # --force: an earlier run's cameras are not these
+    source = args.bundle or out / "cues"
+    if not (Path(source) / "bundle.json").is_file():
+        return
+    try:
+        write_run_cameras(out, read_bundle(source), None if args.bundle else args.calib, names)
+    except (InputError, ValueError, OSError) as exc:
+        log.warning("%s not written: %s", out / RUN_CAMERAS, exc)
 
 
 def exit_code(result) -> int:

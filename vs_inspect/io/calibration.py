@@ -203,10 +203,11 @@ def _load_toml(path: Path) -> dict[str, tuple[list[str], CameraCalibration]]:
     if isinstance(data.get("cameras"), dict):  # caliscope: [cameras.0], [cameras.1], ...
         for key, t in data["cameras"].items():
             if isinstance(t, dict) and "matrix" in t:
-                tables.append((f"cam_{key}", [f"cam_{key}", f"cam{key}"], t))
+                named = [str(t["name"])] if t.get("name") is not None else []
+                tables.append((f"cam_{key}", named + [f"cam_{key}", f"cam{key}"], t))
     for key, t in data.items():
         if key != "cameras" and isinstance(t, dict) and "matrix" in t:
-            names = [key] + ([str(t["name"])] if t.get("name") is not None else [])
+            names = ([str(t["name"])] if t.get("name") is not None else []) + [key]
             tables.append((key, names, t))
     out = {}
     for key, names, t in tables:
@@ -240,7 +241,17 @@ def _load_toml(path: Path) -> dict[str, tuple[list[str], CameraCalibration]]:
         out[key] = (names, cal)
     if not out:
         raise InputError(f"{path}: no camera tables (with 'matrix') found")
+    meta = data.get("metadata")
+    if isinstance(meta, dict) and "charuco_square_size" in meta:  # FreeMoCap: millimetres
+        out = {k: (n, replace(c, cam_from_world=_scaled(c.cam_from_world, 1e-3)))
+               for k, (n, c) in out.items()}
     return out
+
+
+def _scaled(T: np.ndarray, s: float) -> np.ndarray:
+    T = T.copy()
+    T[..., :3, 3] *= s
+    return T
 
 
 # COLMAP camera model -> (fx, fy, cx, cy, OpenCV dist) from its params
@@ -302,23 +313,11 @@ def _load_colmap(path: Path, video_names: list[str]) -> dict[str, tuple[list[str
 
 
 def read_calibration_file(path) -> dict[str, tuple[list[str], CameraCalibration]]:
-    """All cameras of a calibration file/folder: key -> (names it is known by, calibration)."""
-    path = Path(path)
-    if not path.exists():
-        raise InputError(f"{path}: no such calibration file or folder")
-    if path.is_dir():
-        has = {p.name for p in path.iterdir()}
-        if not ({"cameras.txt", "images.txt"} <= has or {"cameras.bin", "images.bin"} <= has):
-            raise InputError(f"{path}: a folder must be a COLMAP model (cameras.txt/images.txt "
-                             f"or cameras.bin/images.bin)")
-        return _load_colmap(path, [])
-    suffix = path.suffix.lower()
-    if suffix == ".json":
-        return _load_json(path)
-    if suffix == ".toml":
-        return _load_toml(path)
-    raise InputError(f"{path}: unknown calibration format (expected a COLMAP model folder, "
-                     f".json or .toml)")
+    """All cameras of a calibration file/folder: key -> (names it is known by, calibration).
+    The format is told by the path (io/calib: COLMAP or EasyMocap folder, .json, .toml,
+    .qca.txt, .xcp, intri.yml/extri.yml); pickles are refused unread."""
+    from .calib import read
+    return read(path)
 
 
 def load_calibration(path, video_names: list[str],
@@ -339,18 +338,29 @@ def load_calibration(path, video_names: list[str],
     return out
 
 
-def fit_to_video(cal: CameraCalibration, width: int, height: int, name: str = "camera"
-                 ) -> CameraCalibration:
-    """The calibration at a video's resolution: unchanged, or K scaled for a uniformly resized
-    video (pixel centres kept: c' = (c + 0.5) s - 0.5). Other sizes are an InputError."""
+CROP_MAX_FRACTION = 0.02  # a video this much smaller than its calibration (per side) is a crop
+ENCODER_BLOCK_PX = 16  # codecs pad sides to multiples of this and crop the padding at right/bottom
+
+
+def fit_to_video(cal: CameraCalibration, width: int, height: int, name: str = "camera",
+                 warn: bool = True) -> CameraCalibration:
+    """The calibration at a video's resolution: unchanged; K scaled for a uniformly resized or
+    integer-binned video (pixel centres kept: c' = (c + 0.5) s - 0.5); the principal point
+    shifted for a crop of at most CROP_MAX_FRACTION of a side. Both with one warning saying
+    what was assumed (warn=False: logged at debug level, for a second fit of the same video).
+    Other sizes are an InputError."""
     if cal.size is None or cal.size == (width, height):
         return cal if cal.size is not None else replace(cal, size=(int(width), int(height)))
     cw, ch = cal.size
+    dw, dh = cw - width, ch - height
+    if 0 <= dw <= CROP_MAX_FRACTION * cw and 0 <= dh <= CROP_MAX_FRACTION * ch:
+        return _cropped(cal, width, height, name, warn)
     sx, sy = width / cw, height / ch
     if abs(sx - sy) > 2.0 / min(cw, ch) * max(sx, sy):
         raise InputError(
             f"{name}: video is {width}x{height} but the calibration was made at {cw}x{ch}, "
-            f"not a uniform scale: calibration for other cameras?"
+            f"neither a crop of at most {CROP_MAX_FRACTION:.0%} of a side nor a uniform scale: "
+            f"calibration for other cameras?"
         )
     K = cal.K.copy()
     K[0, 0] *= sx
@@ -358,8 +368,37 @@ def fit_to_video(cal: CameraCalibration, width: int, height: int, name: str = "c
     K[1, 1] *= sy
     K[0, 2] = (K[0, 2] + 0.5) * sx - 0.5
     K[1, 2] = (K[1, 2] + 0.5) * sy - 0.5
-    log.info("%s: calibration %dx%d scaled by %.4g to the video's %dx%d", name, cw, ch, sx,
-             width, height)
+    binned = round(1 / sx) if sx < 1 and abs(cw / width - round(cw / width)) < 1e-9 \
+        and abs(ch / height - round(ch / height)) < 1e-9 else None
+    how = f"binned by {binned}" if binned else f"resized by {sx:.4g}"
+    (log.warning if warn else log.debug)("%s: video %dx%d, calibration %dx%d: assumed the video is %s (focal lengths and "
+                "principal point scaled)", name, width, height, cw, ch, how)
+    return replace(cal, K=K, size=(int(width), int(height)))
+
+
+def _cropped(cal: CameraCalibration, width: int, height: int, name: str, warn: bool = True
+             ) -> CameraCalibration:
+    """K of a video cropped from the calibrated size: a few rows/columns removed. An encoder's
+    padding (side a multiple of ENCODER_BLOCK_PX, less than a block removed) is cut at the right
+    and bottom (principal point kept); any other crop is taken as centred (shifted by half)."""
+    cw, ch = cal.size
+    shift, where = [], []
+    for side, d, full in (("columns", cw - width, cw), ("rows", ch - height, ch)):
+        if d == 0:
+            shift.append(0.0)
+        elif full % ENCODER_BLOCK_PX == 0 and d < ENCODER_BLOCK_PX:
+            shift.append(0.0)
+            where.append(f"{d} {side} cut at the {'right' if side == 'columns' else 'bottom'} "
+                         f"(encoder padding; principal point kept)")
+        else:
+            shift.append(d / 2)
+            where.append(f"{d} {side} cut evenly from both sides (principal point moved by "
+                         f"{d / 2:g} px)")
+    K = cal.K.copy()
+    K[0, 2] -= shift[0]
+    K[1, 2] -= shift[1]
+    (log.warning if warn else log.debug)("%s: video %dx%d, calibration %dx%d: assumed a crop, %s",
+                                         name, width, height, cw, ch, "; ".join(where))
     return replace(cal, K=K, size=(int(width), int(height)))
 
 
