@@ -115,6 +115,16 @@ class VideoInfo:
 
 
 @dataclass(frozen=True)
+class CameraCalibration:
+    """One camera's intrinsics, lens distortion and pose (OpenCV conventions)."""
+
+    K: np.ndarray  # (3,3) px, at the image size `size`
+    dist: np.ndarray  # (k,) OpenCV order k1 k2 p1 p2 [k3 [k4 k5 k6 ...]], zeros if none
+    cam_from_world: np.ndarray  # (4,4) or (T,4,4) per frame (moving camera), x_cam = R X + t
+    size: tuple[int, int] | None  # (width, height) px the calibration was made at; None = unknown
+
+
+@dataclass(frozen=True)
 class CameraTrack:
     """Intrinsics and pose of one camera, static or per frame (OpenCV pinhole, undistorted)."""
 

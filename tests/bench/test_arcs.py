@@ -8,7 +8,7 @@ import pytest
 from vs_inspect.bench.arcs import (DEFAULT_SET, SCENE_SETS, PairTruth, camera_errors_px, fit_body_points, frame_errors,
                                    judge_pairs, parse_scene, summarize)
 from vs_inspect.geometry.epipolar import look_at, project
-from vs_inspect.io.calibration import CameraCalibration
+from vs_inspect.types import CameraCalibration
 from vs_inspect.types import CameraTrack
 
 

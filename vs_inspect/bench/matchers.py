@@ -31,7 +31,8 @@ from ..geometry.epipolar import (
     fundamental_from_cameras,
     relative_pose,
 )
-from ..io.calibration import CameraCalibration, undistort_points
+from ..io.calibration import undistort_points
+from ..types import CameraCalibration
 
 METHODS = ("sift", "xfeat-mnn", "xfeat-lighterglue", "aliked-lightglue", "disk-lightglue")
 MAX_SIDE = 1024  # images are downscaled to at most this side before features

@@ -106,7 +106,7 @@ def _write_cameras(args: argparse.Namespace, out: Path, names: list[str]) -> Non
     """OUT/cameras.json: the cameras the run used (given or estimated), for 'calib convert'.
     The result is already written: a problem here is a warning, not a failed run."""
     from ..io.bundle import read_bundle
-    from ..io.calib import RUN_CAMERAS, write_run_cameras
+    from ..io.calibration import RUN_CAMERAS, write_run_cameras
     (out / RUN_CAMERAS).unlink(missing_ok=True)  # --force: an earlier run's cameras are not these
     source = args.bundle or out / "cues"
     if not (Path(source) / "bundle.json").is_file():

@@ -33,7 +33,7 @@ from scipy.spatial.transform import Rotation
 
 from ..geometry.sampling import sample_video
 from ..io.board import BoardSpec
-from ..io.calibration import CameraCalibration
+from ..types import CameraCalibration
 from ..types import CameraTrack, VideoInfo
 
 log = logging.getLogger(__name__)

@@ -1,105 +1,28 @@
-"""Imported camera calibration: COLMAP models, a simple JSON, and the OpenCV-style TOML of
-multi-camera mocap tools (caliscope, anipose, Pose2Sim). Cameras are mapped to videos by name,
-else by order; every problem is an InputError that says what was found and what was expected.
-
-Supported files (``load_calibration(path, video_names)``):
-
-- COLMAP model folder (``cameras.txt/images.txt`` or ``cameras.bin/images.bin``, read with
-  pycolmap). Images map to videos by name: the image name's stem or its parent folder equals the
-  video name (``cam0.jpg``, ``cam0/000001.jpg``); several images of one video must share one pose
-  (a static camera). Camera models SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV and
-  FULL_OPENCV are converted to OpenCV distortion.
-- JSON: ``{"<video name>": {"K": 3x3, "dist": [k1, k2, p1, p2, ...], "cam_from_world": 4x4,
-  "size": [width, height]}}`` (``dist`` and ``size`` optional).
-- TOML: tables with ``matrix`` (3x3), ``distortions``, ``rotation`` (3x3 matrix as caliscope
-  writes, or a Rodrigues 3-vector as anipose and Pose2Sim write; world -> camera), ``translation``
-  (world -> camera) and ``size`` ([width, height]); either top level (``[cam_0]``) or under
-  ``[cameras.N]`` (caliscope). Tables without ``matrix`` (``[metadata]``) are ignored.
+"""A calibration applied to a run's videos: cameras mapped to videos (by name, else by order),
+each fitted to its video's image size (a uniform scale, a crop of a few rows or columns, an
+integer binning), tracks undistorted, and the cameras a run used written to its folder. The file
+formats themselves are read and written in io/calib. Every problem is an InputError that says
+what was found and what was expected.
 """
 
 from __future__ import annotations
 
-import json
 import logging
 import re
-import tomllib
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np  # noqa: I001  (numpy before pycolmap: see ENVIRONMENT.md)
 import cv2
 
 from ..errors import InputError
-from ..signals import import_pycolmap
-from ..types import CameraTrack
+from .atomic import write_json_atomic
+from ..types import CameraCalibration, CameraTrack
+from .calib import read
 
 log = logging.getLogger(__name__)
 
-_DIST_LENGTHS = (0, 4, 5, 8, 12, 14)  # OpenCV accepts these numbers of distortion coefficients
-
-
-@dataclass(frozen=True)
-class CameraCalibration:
-    """One camera's intrinsics, lens distortion and pose (OpenCV conventions)."""
-
-    K: np.ndarray  # (3,3) px, at the image size `size`
-    dist: np.ndarray  # (k,) OpenCV order k1 k2 p1 p2 [k3 [k4 k5 k6 ...]], zeros if none
-    cam_from_world: np.ndarray  # (4,4) or (T,4,4) per frame (moving camera), x_cam = R X + t
-    size: tuple[int, int] | None  # (width, height) px the calibration was made at; None = unknown
-
-
 # ---- validation -------------------------------------------------------------------------------
-
-
-def _make(where: str, K, dist, cam_from_world, size) -> CameraCalibration:
-    """Build a CameraCalibration, raising InputError naming `where` for every bad field."""
-    try:
-        K = np.asarray(K, dtype=np.float64)
-        dist = np.asarray([] if dist is None else dist, dtype=np.float64).reshape(-1)
-        T = np.asarray(cam_from_world, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{where}: calibration values are not numbers ({exc})") from None
-    if K.shape != (3, 3):
-        raise InputError(f"{where}: K must be 3x3, got shape {K.shape}")
-    if T.shape[-2:] == (3, 4):
-        bottom = np.broadcast_to([0.0, 0, 0, 1], T.shape[:-2] + (1, 4))
-        T = np.concatenate([T, bottom], axis=-2)
-    if T.shape[-2:] != (4, 4) or T.ndim not in (2, 3) or (T.ndim == 3 and len(T) == 0):
-        raise InputError(f"{where}: cam_from_world must be 4x4 or a list of 4x4 (one per frame), "
-                         f"got shape {T.shape}")
-    for name, a in (("K", K), ("distortion", dist), ("cam_from_world", T)):
-        if not np.all(np.isfinite(a)):
-            raise InputError(f"{where}: {name} has NaN or inf values")
-    if abs(np.linalg.det(K)) < 1e-9 or K[0, 0] <= 0 or K[1, 1] <= 0:
-        raise InputError(f"{where}: K is singular or has a non-positive focal length: {K.tolist()}")
-    if not np.allclose(K[2], [0, 0, 1], atol=1e-9):
-        raise InputError(f"{where}: the last row of K must be [0, 0, 1], got {K[2].tolist()}")
-    if dist.size not in _DIST_LENGTHS:
-        raise InputError(
-            f"{where}: {dist.size} distortion coefficients; OpenCV takes {_DIST_LENGTHS[1:]}"
-        )
-    if dist.size == 0:
-        dist = np.zeros(5)
-    R = T[..., :3, :3]
-    err = np.abs(R @ np.swapaxes(R, -1, -2) - np.eye(3)).max()
-    if err > 1e-4 or np.any(np.linalg.det(R) <= 0) or not np.allclose(T[..., 3, :], [0, 0, 0, 1]):
-        raise InputError(f"{where}: cam_from_world is not a rigid transform (|RRᵀ-I| = {err:.2g})")
-    if size is not None:
-        try:
-            w, h = (int(s) for s in size)
-        except (TypeError, ValueError):
-            raise InputError(f"{where}: size must be [width, height], got {size!r}") from None
-        if w < 1 or h < 1:
-            raise InputError(f"{where}: size must be positive, got {size!r}")
-        size = (w, h)
-    return CameraCalibration(K, dist, T, size)
-
-
-def _rt(R, t) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, :3] = R
-    T[:3, 3] = np.asarray(t, dtype=np.float64).reshape(3)
-    return T
 
 
 # ---- name matching ----------------------------------------------------------------------------
@@ -169,154 +92,10 @@ def match_names(camera_names: dict[str, list[str]], video_names: list[str], sour
     raise InputError(f"{source}: no camera named like videos {unmatched}; {listing}")
 
 
-# ---- formats ----------------------------------------------------------------------------------
-
-
-def _load_json(path: Path) -> dict[str, tuple[list[str], CameraCalibration]]:
-    try:
-        data = json.loads(path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
-        raise InputError(f"{path}: not valid JSON ({type(exc).__name__}: {exc})") from None
-    if isinstance(data, dict) and isinstance(data.get("cameras"), dict):
-        data = data["cameras"]
-    if not isinstance(data, dict) or not data:
-        raise InputError(f"{path}: expected {{\"<video name>\": {{\"K\": ..., \"cam_from_world\": ...}}}}")
-    out = {}
-    for name, entry in data.items():
-        where = f"{path}: camera {name!r}"
-        if not isinstance(entry, dict):
-            raise InputError(f"{where}: expected an object with K, dist, cam_from_world")
-        missing = [k for k in ("K", "cam_from_world") if k not in entry]
-        if missing:
-            raise InputError(f"{where}: missing {missing} (has {sorted(entry)})")
-        cal = _make(where, entry["K"], entry.get("dist"), entry["cam_from_world"], entry.get("size"))
-        out[name] = ([name], cal)
-    return out
-
-
-def _load_toml(path: Path) -> dict[str, tuple[list[str], CameraCalibration]]:
-    try:
-        data = tomllib.loads(path.read_text())
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: not valid TOML ({exc})") from None
-    tables: list[tuple[str, list[str], dict]] = []
-    if isinstance(data.get("cameras"), dict):  # caliscope: [cameras.0], [cameras.1], ...
-        for key, t in data["cameras"].items():
-            if isinstance(t, dict) and "matrix" in t:
-                named = [str(t["name"])] if t.get("name") is not None else []
-                tables.append((f"cam_{key}", named + [f"cam_{key}", f"cam{key}"], t))
-    for key, t in data.items():
-        if key != "cameras" and isinstance(t, dict) and "matrix" in t:
-            names = ([str(t["name"])] if t.get("name") is not None else []) + [key]
-            tables.append((key, names, t))
-    out = {}
-    for key, names, t in tables:
-        where = f"{path}: [{key}]"
-        if t.get("ignore") is True:
-            log.info("%s: marked ignore = true, skipped", where)
-            continue
-        if t.get("fisheye") is True:
-            raise InputError(f"{where}: fisheye cameras are not supported")
-        missing = [k for k in ("matrix", "rotation", "translation") if k not in t]
-        if missing:
-            raise InputError(f"{where}: missing {missing} (has {sorted(t)})")
-        try:
-            rot = np.asarray(t["rotation"], dtype=np.float64)
-        except (TypeError, ValueError):
-            raise InputError(f"{where}: rotation is not numeric") from None
-        if rot.shape == (3,) or rot.shape == (3, 1) or rot.shape == (1, 3):
-            if not np.all(np.isfinite(rot)):
-                raise InputError(f"{where}: rotation has NaN or inf values")
-            R = cv2.Rodrigues(rot.reshape(3, 1))[0]  # anipose / Pose2Sim: Rodrigues vector
-        elif rot.shape == (3, 3):
-            R = rot  # caliscope: matrix
-        else:
-            raise InputError(f"{where}: rotation must be a 3x3 matrix or a Rodrigues 3-vector, "
-                             f"got shape {rot.shape}")
-        try:
-            tvec = np.asarray(t["translation"], dtype=np.float64).reshape(3)
-        except (TypeError, ValueError):
-            raise InputError(f"{where}: translation must be 3 numbers, got {t['translation']!r}") from None
-        cal = _make(where, t["matrix"], t.get("distortions"), _rt(R, tvec), t.get("size"))
-        out[key] = (names, cal)
-    if not out:
-        raise InputError(f"{path}: no camera tables (with 'matrix') found")
-    meta = data.get("metadata")
-    if isinstance(meta, dict) and "charuco_square_size" in meta:  # FreeMoCap: millimetres
-        out = {k: (n, replace(c, cam_from_world=_scaled(c.cam_from_world, 1e-3)))
-               for k, (n, c) in out.items()}
-    return out
-
-
-def _scaled(T: np.ndarray, s: float) -> np.ndarray:
-    T = T.copy()
-    T[..., :3, 3] *= s
-    return T
-
-
-# COLMAP camera model -> (fx, fy, cx, cy, OpenCV dist) from its params
-def _colmap_intrinsics(model: str, p: np.ndarray):
-    if model == "SIMPLE_PINHOLE":
-        return p[0], p[0], p[1], p[2], np.zeros(5)
-    if model == "PINHOLE":
-        return p[0], p[1], p[2], p[3], np.zeros(5)
-    if model == "SIMPLE_RADIAL":
-        return p[0], p[0], p[1], p[2], np.array([p[3], 0, 0, 0, 0])
-    if model == "RADIAL":
-        return p[0], p[0], p[1], p[2], np.array([p[3], p[4], 0, 0, 0])
-    if model == "OPENCV":
-        return p[0], p[1], p[2], p[3], np.array([p[4], p[5], p[6], p[7], 0])
-    if model == "FULL_OPENCV":  # k1 k2 p1 p2 k3 k4 k5 k6: OpenCV's rational model order
-        return p[0], p[1], p[2], p[3], np.asarray(p[4:12])
-    return None
-
-
-def _load_colmap(path: Path, video_names: list[str]) -> dict[str, tuple[list[str], CameraCalibration]]:
-    pycolmap = import_pycolmap()  # keeps our SIGTERM handler (glog replaces it)
-
-    try:
-        rec = pycolmap.Reconstruction(str(path))
-    except Exception as exc:  # noqa: BLE001 - pycolmap raises plain RuntimeError/ValueError
-        raise InputError(f"{path}: not a readable COLMAP model ({exc})") from None
-    images = sorted(rec.images.values(), key=lambda im: im.name)
-    images = [im for im in images if im.has_pose]
-    if not images:
-        raise InputError(f"{path}: COLMAP model has no registered images")
-    # group images by the video they belong to: stem of the name, or its parent folder
-    groups: dict[str, list] = {}
-    for im in images:
-        p = Path(im.name)
-        key = p.stem if p.parent == Path(".") else p.parent.name
-        groups.setdefault(key, []).append(im)
-    out = {}
-    for key, ims in groups.items():
-        where = f"{path}: image {ims[0].name!r}"
-        poses = [np.vstack([im.cam_from_world().matrix(), [0, 0, 0, 1]]) for im in ims]
-        spread = max(np.abs(P - poses[0]).max() for P in poses)
-        if spread > 1e-6 * max(1.0, np.abs(poses[0]).max()) and len(ims) > 1:
-            raise InputError(
-                f"{path}: the {len(ims)} images of {key!r} have different poses (a moving camera); "
-                f"import one image per static camera"
-            )
-        cam = ims[0].camera if ims[0].has_camera_ptr() else rec.cameras[ims[0].camera_id]
-        model = cam.model_name if hasattr(cam, "model_name") else str(cam.model).split(".")[-1]
-        intr = _colmap_intrinsics(model, np.asarray(cam.params, dtype=np.float64))
-        if intr is None:
-            raise InputError(f"{where}: COLMAP camera model {model} is not supported "
-                             f"(use PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV or FULL_OPENCV)")
-        fx, fy, cx, cy, dist = intr
-        # COLMAP puts the centre of the top-left pixel at (0.5, 0.5); OpenCV at (0, 0)
-        K = np.array([[fx, 0, cx - 0.5], [0, fy, cy - 0.5], [0, 0, 1]])
-        cal = _make(where, K, dist, poses[0], (cam.width, cam.height))
-        out[key] = ([key, Path(ims[0].name).stem], cal)
-    return out
-
-
 def read_calibration_file(path) -> dict[str, tuple[list[str], CameraCalibration]]:
     """All cameras of a calibration file/folder: key -> (names it is known by, calibration).
     The format is told by the path (io/calib: COLMAP or EasyMocap folder, .json, .toml,
     .qca.txt, .xcp, intri.yml/extri.yml); pickles are refused unread."""
-    from .calib import read
     return read(path)
 
 
@@ -458,3 +237,46 @@ def rig_to_json(rig) -> dict:
                         inliers=rp.inliers)
     return {"cameras": cams, "board": board, "unregistered": dict(rig.unregistered),
             "world": "the frame of the first placed camera, metres"}
+
+
+RUN_CAMERAS = "cameras.json"  # the cameras a run used, in its folder
+
+
+def run_cameras(bundle, calibration=None, video_names: list[str] | None = None) -> tuple[dict, str]:
+    """({video: CameraCalibration}, where they came from) of a run: the given calibration fitted to
+    each video's size (with its lens), else the bundle's cameras (estimated, or imported; tracks
+    already undistorted). Pose-free videos (no pose) are left out. video_names: every input of
+    the run, so that the calibration maps to the videos as it did in the run."""
+    sizes = {v.name: (v.width, v.height) for v in bundle.videos}
+    if calibration is not None:
+        cals = load_calibration(calibration, list(video_names or sizes))
+        out = {}
+        for n, c in cals.items():
+            if n in bundle.cameras and n in sizes:
+                out[n] = fit_to_video(c, *sizes[n], name=n, warn=False)  # warned once by the run
+        return out, f"the calibration {calibration}, fitted to each video's image size"
+    out = {}
+    for n, cam in bundle.cameras.items():
+        if n in bundle.pose_free:
+            continue
+        K = cam.K if cam.K.ndim == 2 else cam.K[0]
+        if cam.K.ndim == 3 and np.abs(cam.K - K).max() > 1e-9:
+            continue  # a zooming camera: not one K for the file
+        out[n] = CameraCalibration(K=K.copy(), dist=np.zeros(5), cam_from_world=cam.cam_from_world.copy(),
+                                   size=sizes.get(n))
+    return out, "the cameras the run used (estimated from the videos, or from the cue bundle)"
+
+
+def write_run_cameras(folder, bundle, calibration=None, video_names: list[str] | None = None
+                      ) -> Path | None:
+    """FOLDER/cameras.json (vs-inspect's JSON, which 'calib convert' turns into other tools'
+    formats): the cameras a run used. None when no video has a posed camera."""
+    cams, source = run_cameras(bundle, calibration, video_names)
+    if not cams:
+        return None
+    data = {"cameras": {n: {"K": c.K.tolist(), "dist": c.dist.tolist(),
+                            "cam_from_world": c.cam_from_world.tolist(),
+                            "size": list(c.size) if c.size else None} for n, c in cams.items()},
+            "source": source,
+            "convert": "vs-inspect calib convert cameras.json OUT (e.g. Calib.toml, calibration.toml --to anipose)"}
+    return write_json_atomic(data, Path(folder) / RUN_CAMERAS)

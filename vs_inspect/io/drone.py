@@ -118,7 +118,8 @@ def read_drone_camera(folder: Path, name: str) -> DroneCamera:
 def undistort_px(cam: DroneCamera) -> np.ndarray:
     """(M,2) detections with the lens distortion removed, in the same K's pixels (NaN kept; points
     the lens model cannot invert become NaN)."""
-    from .calibration import CameraCalibration, undistort_points
+    from ..types import CameraCalibration
+    from .calibration import undistort_points
 
     return undistort_points(CameraCalibration(cam.K, cam.dist, np.eye(4), (cam.width, cam.height)),
                             cam.xy_px)

@@ -16,7 +16,7 @@ from typing import Callable
 import numpy as np
 
 from ...errors import InputError
-from . import easymocap, qualisys, text_formats, vicon
+from . import colmap, easymocap, qualisys, text_formats, vicon
 
 
 @dataclass(frozen=True)
@@ -31,31 +31,16 @@ class CalibrationFormat:
     summary: str = ""
 
 
-def _toml_reader(path):
-    from ..calibration import _load_toml
-    return _load_toml(path)
-
-
-def _json_reader(path):
-    from ..calibration import _load_json
-    return _load_json(path)
-
-
-def _colmap_reader(path):
-    from ..calibration import _load_colmap
-    return _load_colmap(path, [])
-
-
 FORMATS: dict[str, CalibrationFormat] = {f.name: f for f in (
-    CalibrationFormat("json", (".json",), _json_reader, text_formats.write_json, moving=True,
+    CalibrationFormat("json", (".json",), text_formats.read_json, text_formats.write_json, moving=True,
                       max_dist=14, summary="vs-inspect's JSON: K, dist, cam_from_world, size per camera"),
-    CalibrationFormat("pose2sim", (".toml",), _toml_reader, text_formats.write_pose2sim,
+    CalibrationFormat("pose2sim", (".toml",), text_formats.read_toml, text_formats.write_pose2sim,
                       summary="Pose2Sim Calib.toml (metres)"),
-    CalibrationFormat("anipose", (".toml",), _toml_reader, text_formats.write_anipose,
+    CalibrationFormat("anipose", (".toml",), text_formats.read_toml, text_formats.write_anipose,
                       summary="anipose calibration.toml"),
-    CalibrationFormat("freemocap", (".toml",), _toml_reader, text_formats.write_freemocap,
+    CalibrationFormat("freemocap", (".toml",), text_formats.read_toml, text_formats.write_freemocap,
                       summary="FreeMoCap camera_calibration.toml (millimetres)"),
-    CalibrationFormat("caliscope", (".toml",), _toml_reader, text_formats.write_caliscope,
+    CalibrationFormat("caliscope", (".toml",), text_formats.read_toml, text_formats.write_caliscope,
                       summary="caliscope camera_array.toml"),
     CalibrationFormat("qualisys", (".qca.txt", ".qca"), qualisys.read, qualisys.write,
                       summary="Qualisys QTM .qca.txt (millimetres)"),
@@ -63,7 +48,7 @@ FORMATS: dict[str, CalibrationFormat] = {f.name: f for f in (
                       summary="Vicon .xcp (millimetres)"),
     CalibrationFormat("easymocap", ("intri.yml", "extri.yml"), easymocap.read,
                       easymocap.write, folder=True, summary="EasyMocap intri.yml + extri.yml folder"),
-    CalibrationFormat("colmap", ("",), _colmap_reader, text_formats.write_colmap, folder=True,
+    CalibrationFormat("colmap", ("",), colmap.read_colmap, text_formats.write_colmap, folder=True,
                       max_dist=8, summary="COLMAP text model folder (cameras.txt, images.txt)"),
 )}
 
@@ -148,48 +133,3 @@ def write(cameras: dict, path, fmt: str | None = None) -> list[Path]:
             raise InputError(f"camera {n!r} has {c.dist.size} distortion coefficients; the "
                              f"{f.name} format stores {f.max_dist}")
     return f.write(cameras, path)
-
-
-RUN_CAMERAS = "cameras.json"  # the cameras a run used, in its folder
-
-
-def run_cameras(bundle, calibration=None, video_names: list[str] | None = None) -> tuple[dict, str]:
-    """({video: CameraCalibration}, where they came from) of a run: the given calibration fitted to
-    each video's size (with its lens), else the bundle's cameras (estimated, or imported; tracks
-    already undistorted). Pose-free videos (no pose) are left out. video_names: every input of
-    the run, so that the calibration maps to the videos as it did in the run."""
-    from ..calibration import CameraCalibration, fit_to_video, load_calibration
-    sizes = {v.name: (v.width, v.height) for v in bundle.videos}
-    if calibration is not None:
-        cals = load_calibration(calibration, list(video_names or sizes))
-        out = {}
-        for n, c in cals.items():
-            if n in bundle.cameras and n in sizes:
-                out[n] = fit_to_video(c, *sizes[n], name=n, warn=False)  # warned once by the run
-        return out, f"the calibration {calibration}, fitted to each video's image size"
-    out = {}
-    for n, cam in bundle.cameras.items():
-        if n in bundle.pose_free:
-            continue
-        K = cam.K if cam.K.ndim == 2 else cam.K[0]
-        if cam.K.ndim == 3 and np.abs(cam.K - K).max() > 1e-9:
-            continue  # a zooming camera: not one K for the file
-        out[n] = CameraCalibration(K=K.copy(), dist=np.zeros(5), cam_from_world=cam.cam_from_world.copy(),
-                                   size=sizes.get(n))
-    return out, "the cameras the run used (estimated from the videos, or from the cue bundle)"
-
-
-def write_run_cameras(folder, bundle, calibration=None, video_names: list[str] | None = None
-                      ) -> Path | None:
-    """FOLDER/cameras.json (vs-inspect's JSON, which 'calib convert' turns into other tools'
-    formats): the cameras a run used. None when no video has a posed camera."""
-    from ..atomic import write_json_atomic
-    cams, source = run_cameras(bundle, calibration, video_names)
-    if not cams:
-        return None
-    data = {"cameras": {n: {"K": c.K.tolist(), "dist": c.dist.tolist(),
-                            "cam_from_world": c.cam_from_world.tolist(),
-                            "size": list(c.size) if c.size else None} for n, c in cams.items()},
-            "source": source,
-            "convert": "vs-inspect calib convert cameras.json OUT (e.g. Calib.toml, calibration.toml --to anipose)"}
-    return write_json_atomic(data, Path(folder) / RUN_CAMERAS)

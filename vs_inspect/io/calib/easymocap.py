@@ -15,6 +15,8 @@ import numpy as np  # noqa: I001
 import cv2
 
 from ...errors import InputError
+from .. import atomic
+from .camera import make_camera, rt_matrix
 
 INTRI, EXTRI = "intri.yml", "extri.yml"
 
@@ -64,7 +66,6 @@ def _mat(fs, key: str, path: Path, required: bool = True):
 
 
 def read(path: Path):
-    from ..calibration import _make, _rt
     intri_p, extri_p = pair_paths(path)
     fi, fe = _open(intri_p), _open(extri_p)
     try:
@@ -84,7 +85,7 @@ def read(path: Path):
             H, W = fi.getNode(f"H_{n}"), fi.getNode(f"W_{n}")
             size = None if H.empty() or W.empty() else (int(W.real()), int(H.real()))
             dist = None if dist is None else dist.reshape(-1)
-            out[n] = ([n], _make(where, K, dist, _rt(rot, T), size))
+            out[n] = ([n], make_camera(where, K, dist, rt_matrix(rot, T), size))
         return out
     finally:
         fi.release()
@@ -93,7 +94,6 @@ def read(path: Path):
 
 def write(cameras: dict, path: Path) -> list[Path]:
     """intri.yml and extri.yml in the folder `path` (created)."""
-    from .. import atomic
     path.mkdir(parents=True, exist_ok=True)
     written = []
     for fname, kind in ((INTRI, "intri"), (EXTRI, "extri")):

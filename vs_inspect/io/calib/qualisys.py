@@ -20,6 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import InputError
+from .. import atomic
+from .camera import make_camera, rt_matrix
 from .xml_safe import parse_xml
 
 SUBPIXELS = 64.0  # QTM sensor coordinates per pixel
@@ -40,7 +42,6 @@ def _f(el, key: str, where: str) -> float:
 
 
 def read(path: Path):
-    from ..calibration import _make, _rt
     root = parse_xml(path, "Qualisys")
     cams = root.findall("cameras/camera")
     if root.tag != "calibration" or not cams:
@@ -77,7 +78,7 @@ def read(path: Path):
         R_file = np.array([[_f(tr, f"r{r}{c}", where) for c in (1, 2, 3)] for r in (1, 2, 3)])
         centre = np.array([_f(tr, k, where) for k in "xyz"]) / MM
         R = _FLIP @ R_file
-        cal = _make(where, K, dist, _rt(R, -R @ centre), size)
+        cal = make_camera(where, K, dist, rt_matrix(R, -R @ centre), size)
         out[name] = ([name], cal)
     return out
 
@@ -85,7 +86,6 @@ def read(path: Path):
 def write(cameras: dict, path: Path) -> list[Path]:
     """A .qca.txt holding the static cameras (world unit metres -> file millimetres)."""
     import xml.etree.ElementTree as ET
-    from .. import atomic
     root = ET.Element("calibration", source="vs-inspect", type="regular")
     cams = ET.SubElement(root, "cameras")
     for name, c in cameras.items():

@@ -1,5 +1,5 @@
-"""Writers of the text calibration formats: the simple JSON, the OpenCV-style TOML of Pose2Sim,
-anipose, FreeMoCap and caliscope, and a COLMAP text model. Their readers are in io/calibration.py.
+"""The text calibration formats: the simple JSON and the OpenCV-style TOML of Pose2Sim, anipose,
+FreeMoCap and caliscope (read and written), and a COLMAP text model (written; read in colmap.py).
 
 Numbers are written with Python's repr (shortest exact form), so a file read back gives the same
 floating-point values.
@@ -8,10 +8,20 @@ floating-point values.
 from __future__ import annotations
 
 import json
+import logging
+import tomllib
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np  # noqa: I001
 import cv2
+
+from ...errors import InputError
+from ..atomic import write_json_atomic, write_text_atomic
+from ...types import CameraCalibration
+from .camera import make_camera, rt_matrix, scaled_translation
+
+log = logging.getLogger(__name__)
 
 
 def _a(x) -> str:
@@ -25,7 +35,6 @@ def _dist(c, n: int = 5) -> list[float]:
 
 
 def write_json(cameras: dict, path: Path) -> list[Path]:
-    from ..atomic import write_json_atomic
     data = {"cameras": {n: {"K": c.K.tolist(), "dist": c.dist.tolist(),
                             "cam_from_world": c.cam_from_world.tolist(),
                             "size": list(c.size) if c.size else None}
@@ -46,7 +55,6 @@ def _toml_tables(cameras: dict, key, extra=(), rotation="rodrigues", unit=1.0, d
 
 def write_pose2sim(cameras: dict, path: Path) -> list[Path]:
     """Pose2Sim's Calib*.toml: [<name>] tables, Rodrigues rotation, metres."""
-    from ..atomic import write_text_atomic
     text = _toml_tables(cameras, lambda i, n: n if _bare(n) else json.dumps(n), ("fisheye = false",),
                         dist_n=4)
     return [write_text_atomic(text + "[metadata]\nadjusted = false\nerror = 0.0\n", path)]
@@ -54,14 +62,12 @@ def write_pose2sim(cameras: dict, path: Path) -> list[Path]:
 
 def write_anipose(cameras: dict, path: Path) -> list[Path]:
     """anipose's calibration.toml: [cam_<i>] tables with a name, Rodrigues rotation."""
-    from ..atomic import write_text_atomic
     text = _toml_tables(cameras, lambda i, n: f"cam_{i}")
     return [write_text_atomic(text + "[metadata]\nadjusted = false\nerror = 0.0\n", path)]
 
 
 def write_freemocap(cameras: dict, path: Path) -> list[Path]:
     """FreeMoCap's camera_calibration.toml: anipose's layout, translation in millimetres."""
-    from ..atomic import write_text_atomic
     text = _toml_tables(cameras, lambda i, n: f"cam_{i}", unit=1000.0)
     return [write_text_atomic(text + "[metadata]\ncharuco_square_size = 1.0\n"
                                      "world_unit = \"mm\"\n", path)]
@@ -69,7 +75,6 @@ def write_freemocap(cameras: dict, path: Path) -> list[Path]:
 
 def write_caliscope(cameras: dict, path: Path) -> list[Path]:
     """caliscope's camera_array.toml: [cameras.<i>] tables, rotation as a 3x3 matrix."""
-    from ..atomic import write_text_atomic
     lines = []
     for i, (n, c) in enumerate(cameras.items()):
         lines += [f"[cameras.{i}]", f"cam_id = {i}", f"name = {json.dumps(str(n))}",
@@ -88,7 +93,6 @@ def write_colmap(cameras: dict, path: Path) -> list[Path]:
     """A COLMAP text model in the folder `path`: one OPENCV (or FULL_OPENCV) camera and one image
     named <video>.jpg per camera (COLMAP puts pixel centres at +0.5)."""
     from scipy.spatial.transform import Rotation
-    from ..atomic import write_text_atomic
     path.mkdir(parents=True, exist_ok=True)
     cams, ims = ["# CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]"], ["# IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME"]
     for i, (n, c) in enumerate(cameras.items(), start=1):
@@ -106,3 +110,82 @@ def write_colmap(cameras: dict, path: Path) -> list[Path]:
     return [write_text_atomic("\n".join(cams) + "\n", path / "cameras.txt"),
             write_text_atomic("\n".join(ims) + "\n", path / "images.txt"),
             write_text_atomic("# 3D point list (empty)\n", path / "points3D.txt")]
+
+
+# ---- readers ----------------------------------------------------------------------------------
+
+
+def read_json(path: Path) -> dict[str, tuple[list[str], CameraCalibration]]:
+    try:
+        data = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
+        raise InputError(f"{path}: not valid JSON ({type(exc).__name__}: {exc})") from None
+    if isinstance(data, dict) and isinstance(data.get("cameras"), dict):
+        data = data["cameras"]
+    if not isinstance(data, dict) or not data:
+        raise InputError(f"{path}: expected {{\"<video name>\": {{\"K\": ..., \"cam_from_world\": ...}}}}")
+    out = {}
+    for name, entry in data.items():
+        where = f"{path}: camera {name!r}"
+        if not isinstance(entry, dict):
+            raise InputError(f"{where}: expected an object with K, dist, cam_from_world")
+        missing = [k for k in ("K", "cam_from_world") if k not in entry]
+        if missing:
+            raise InputError(f"{where}: missing {missing} (has {sorted(entry)})")
+        cal = make_camera(where, entry["K"], entry.get("dist"), entry["cam_from_world"], entry.get("size"))
+        out[name] = ([name], cal)
+    return out
+
+
+def read_toml(path: Path) -> dict[str, tuple[list[str], CameraCalibration]]:
+    try:
+        data = tomllib.loads(path.read_text())
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: not valid TOML ({exc})") from None
+    tables: list[tuple[str, list[str], dict]] = []
+    if isinstance(data.get("cameras"), dict):  # caliscope: [cameras.0], [cameras.1], ...
+        for key, t in data["cameras"].items():
+            if isinstance(t, dict) and "matrix" in t:
+                named = [str(t["name"])] if t.get("name") is not None else []
+                tables.append((f"cam_{key}", named + [f"cam_{key}", f"cam{key}"], t))
+    for key, t in data.items():
+        if key != "cameras" and isinstance(t, dict) and "matrix" in t:
+            names = ([str(t["name"])] if t.get("name") is not None else []) + [key]
+            tables.append((key, names, t))
+    out = {}
+    for key, names, t in tables:
+        where = f"{path}: [{key}]"
+        if t.get("ignore") is True:
+            log.info("%s: marked ignore = true, skipped", where)
+            continue
+        if t.get("fisheye") is True:
+            raise InputError(f"{where}: fisheye cameras are not supported")
+        missing = [k for k in ("matrix", "rotation", "translation") if k not in t]
+        if missing:
+            raise InputError(f"{where}: missing {missing} (has {sorted(t)})")
+        try:
+            rot = np.asarray(t["rotation"], dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InputError(f"{where}: rotation is not numeric") from None
+        if rot.shape == (3,) or rot.shape == (3, 1) or rot.shape == (1, 3):
+            if not np.all(np.isfinite(rot)):
+                raise InputError(f"{where}: rotation has NaN or inf values")
+            R = cv2.Rodrigues(rot.reshape(3, 1))[0]  # anipose / Pose2Sim: Rodrigues vector
+        elif rot.shape == (3, 3):
+            R = rot  # caliscope: matrix
+        else:
+            raise InputError(f"{where}: rotation must be a 3x3 matrix or a Rodrigues 3-vector, "
+                             f"got shape {rot.shape}")
+        try:
+            tvec = np.asarray(t["translation"], dtype=np.float64).reshape(3)
+        except (TypeError, ValueError):
+            raise InputError(f"{where}: translation must be 3 numbers, got {t['translation']!r}") from None
+        cal = make_camera(where, t["matrix"], t.get("distortions"), rt_matrix(R, tvec), t.get("size"))
+        out[key] = (names, cal)
+    if not out:
+        raise InputError(f"{path}: no camera tables (with 'matrix') found")
+    meta = data.get("metadata")
+    if isinstance(meta, dict) and "charuco_square_size" in meta:  # FreeMoCap: millimetres
+        out = {k: (n, replace(c, cam_from_world=scaled_translation(c.cam_from_world, 1e-3)))
+               for k, (n, c) in out.items()}
+    return out

@@ -22,6 +22,8 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import InputError
+from .. import atomic
+from .camera import make_camera, rt_matrix
 from .xml_safe import parse_xml
 
 log = logging.getLogger(__name__)
@@ -90,7 +92,6 @@ def fit_opencv_radial(K: np.ndarray, size, centre_px, k_vicon, scale_px: float) 
 
 
 def read(path: Path):
-    from ..calibration import _make, _rt
     root = parse_xml(path, "Vicon")
     cams = root.findall("Camera")
     if root.tag != "Cameras" or not cams:
@@ -134,14 +135,13 @@ def read(path: Path):
             (log.warning if resid > FIT_WARN_PX else log.info)(
                 "%s: Vicon lens model converted to OpenCV's rational model (worst difference %.3g px)",
                 where, resid)
-        out[name] = (names, _make(where, K, dist, _rt(R, -R @ centre), (w, h)))
+        out[name] = (names, make_camera(where, K, dist, rt_matrix(R, -R @ centre), (w, h)))
     return out
 
 
 def write(cameras: dict, path: Path) -> list[Path]:
     """An .xcp holding the static cameras; lens as VICON_RADIAL2 fitted to OpenCV's k1 k2 k3."""
     import xml.etree.ElementTree as ET
-    from .. import atomic
     root = ET.Element("Cameras", NAME="", VERSION="1.0")
     for i, (name, c) in enumerate(cameras.items()):
         w, h = c.size
