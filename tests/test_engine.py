@@ -14,7 +14,7 @@ from vs_inspect.bench.scale import RANGE_S, rig_config
 from vs_inspect.engine import EngineConfig, LocalEngine, TaskFailed, open_engine
 from vs_inspect.errors import InputError
 from vs_inspect.pipeline import RunConfig, run
-from vs_inspect.record.options import RecordOptions
+from vs_inspect.analysis.record_options import RecordOptions
 from vs_inspect.record.sink import Sink
 from vs_inspect.sync.config import LandscapeConfig, PairSelection, SyncConfig
 from vs_inspect.synth.cues import make_cue_scene

@@ -623,3 +623,37 @@ class RunResult:
             if (p.a, p.b) == (a, b):
                 return p
         return None
+
+
+@dataclass(frozen=True)
+class VideoSpan:
+    """One synchronized video's part of the common time span (analysis/common_span.py)."""
+
+    name: str
+    offset_s: float  # DESIGN.md convention: global time of the video's local time 0
+    frame_interval_s: float  # median spacing of the video's frames, s
+    first_frame: int  # first frame index inside the common span
+    last_frame: int  # last frame index inside it (inclusive)
+    first_time_s: float  # global time of first_frame, s
+    last_time_s: float  # global time of last_frame, s
+
+    @property
+    def num_frames(self) -> int:
+        return self.last_frame - self.first_frame + 1
+
+    @property
+    def offset_frames(self) -> float:
+        """offset_s in frames of this video."""
+        return self.offset_s / self.frame_interval_s
+
+
+@dataclass(frozen=True)
+class CommonSpan:
+    """The time span every synchronized video covers, as a frame range of each."""
+
+    reference: str
+    start_s: float  # global time of the slowest video's first frame in the span, s
+    end_s: float  # global time of its last frame in the span, s
+    anchor: str  # the slowest video, whose frames set start_s and end_s
+    videos: dict[str, VideoSpan]  # the synchronized videos (offset known), input order
+    skipped: dict[str, str]  # video -> why it has no span

@@ -13,7 +13,7 @@ from vs_inspect.analysis.record_views import (GRAPH_PAIR_AT, GRAPH_RADIUS_PX, gr
                                               pair_record_view, run_record_view, sweep_offsets,
                                               track_rows, triangle_residuals)
 from vs_inspect.eval.metrics import offset_errors_ms
-from vs_inspect.record.options import RecordOptions
+from vs_inspect.analysis.record_options import RecordOptions
 from vs_inspect.sync.config import SyncConfig
 from vs_inspect.pipeline.stage12 import sync_bundle
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene

@@ -15,7 +15,7 @@ from vs_inspect.io import recording as R
 from vs_inspect.io.recording import (RecordedVideo, read_recorded_bundle, read_recording,
                                      read_rrd_frames)
 from vs_inspect.io.result import run_result_to_dict
-from vs_inspect.record.options import RecordOptions
+from vs_inspect.analysis.record_options import RecordOptions
 from vs_inspect.record.rerun_sink import RerunSink
 from vs_inspect.sync.config import SyncConfig
 from vs_inspect.pipeline.stage12 import sync_bundle

@@ -15,7 +15,7 @@ from vs_inspect.cues.config import CameraConfig, CueConfig, TrackConfig
 from vs_inspect.errors import InputError
 from vs_inspect.pipeline import RunConfig
 from vs_inspect.pipeline.config import field_doc
-from vs_inspect.record.options import RecordOptions
+from vs_inspect.analysis.record_options import RecordOptions
 from vs_inspect.sync.config import (DecisionConfig, LandscapeConfig, PairSelection, SolveConfig,
                                     SyncConfig)
 
@@ -107,7 +107,7 @@ def test_every_number_is_validated_naming_the_option(data, needle):
 
 
 def test_defaults_and_presets_pass_validation():
-    from vs_inspect.record.options import RecordOptions
+    from vs_inspect.analysis.record_options import RecordOptions
     RunConfig()
     RecordOptions.minimal().with_flags(all_offsets=True, full_frames=True, all_tracks=True)
 

@@ -21,7 +21,7 @@ from vs_inspect.analysis.record_views import record_frame, record_mask
 from vs_inspect.cli import main
 from vs_inspect.io.recording import pair_key, read_recording, read_static_points, read_video_frames
 from vs_inspect.io.result import run_result_to_dict, write_run_result
-from vs_inspect.record.options import RecordOptions
+from vs_inspect.analysis.record_options import RecordOptions
 from vs_inspect.record.rerun_sink import RerunSink
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
 from vs_inspect.sync.config import SyncConfig

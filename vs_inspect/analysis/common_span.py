@@ -9,41 +9,9 @@ frame, which none of them can beat at their own rate.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from ..types import VideoInfo
-
-
-@dataclass(frozen=True)
-class VideoSpan:
-    name: str
-    offset_s: float  # DESIGN.md convention: global time of the video's local time 0
-    frame_interval_s: float  # median spacing of the video's frames, s
-    first_frame: int  # first frame index inside the common span
-    last_frame: int  # last frame index inside it (inclusive)
-    first_time_s: float  # global time of first_frame, s
-    last_time_s: float  # global time of last_frame, s
-
-    @property
-    def num_frames(self) -> int:
-        return self.last_frame - self.first_frame + 1
-
-    @property
-    def offset_frames(self) -> float:
-        """offset_s in frames of this video."""
-        return self.offset_s / self.frame_interval_s
-
-
-@dataclass(frozen=True)
-class CommonSpan:
-    reference: str
-    start_s: float  # global time of the slowest video's first frame in the span, s
-    end_s: float  # global time of its last frame in the span, s
-    anchor: str  # the slowest video, whose frames set start_s and end_s
-    videos: dict[str, VideoSpan]  # the synchronized videos (offset known), input order
-    skipped: dict[str, str]  # video -> why it has no span
+from ..types import CommonSpan, VideoInfo, VideoSpan
 
 
 def common_span(infos: list[VideoInfo], offsets_s: dict[str, float | None], reference: str

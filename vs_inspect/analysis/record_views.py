@@ -16,7 +16,7 @@ from ..eval.metrics import offset_errors_ms
 from .diagnose import loop_closures
 from .epipolar_sweep import EpipolarSweep, epipolar_sweep
 from .trajectories import PairTrajectories, run_trajectories
-from ..record.options import RecordOptions
+from .record_options import RecordOptions
 from ..types import CueBundle, PairLandscape, RateLandscape, SyncResult, VideoInfo
 
 GRAPH_RADIUS_PX = 300.0  # video nodes sit on a circle of this radius in the pair graph view

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np  # before pycolmap
 
 from ..pipeline import RunConfig, run
-from ..record.options import RecordOptions
+from ..analysis.record_options import RecordOptions
 from ..record.rerun_sink import RerunSink
 from ..record.screenshots import rerun_executable
 from ..synth.cues import CueSceneConfig, make_cue_scene

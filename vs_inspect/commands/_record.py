@@ -7,7 +7,7 @@ import hashlib
 import os
 from pathlib import Path
 
-from ..record.options import RecordOptions
+from ..analysis.record_options import RecordOptions
 from ..record.sink import NullSink, Sink
 
 RECORDINGS_ENV = "VS_INSPECT_RECORDINGS"  # folder of default recordings (default: ./recordings)

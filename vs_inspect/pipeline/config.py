@@ -35,7 +35,7 @@ from ..engine import EngineConfig
 from ..errors import InputError
 from ..io.atomic import write_json_atomic
 from ..io.result import read_json_file
-from ..record.options import RecordOptions
+from ..analysis.record_options import RecordOptions
 from ..sync.config import SyncConfig
 
 

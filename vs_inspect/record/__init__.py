@@ -4,7 +4,7 @@ RerunSink lives in record.rerun_sink (imported on demand: it pulls in rerun), it
 record.blueprint; io.recording names the recording's entities and reads a recording back.
 """
 
-from .options import RecordOptions
+from ..analysis.record_options import RecordOptions
 from .sink import NullSink, Sink
 
 __all__ = ["NullSink", "RecordOptions", "Sink"]

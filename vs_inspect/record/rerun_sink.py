@@ -46,7 +46,7 @@ from ..analysis.record_views import over_range
 from ..io.result import run_result_to_dict
 from ..types import CameraTrack, CueBundle, PairLandscape, RunResult, SyncResult, VideoInfo
 from .blueprint import MAX_PAIR_CONTAINERS, blueprint, pair_order
-from .options import RecordOptions
+from ..analysis.record_options import RecordOptions
 from .sink import Sink
 
 if TYPE_CHECKING:

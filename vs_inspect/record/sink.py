@@ -15,7 +15,7 @@ if TYPE_CHECKING:
 
     from ..analysis.record_views import PairRecordView, RunRecordView
     from ..types import CameraTrack, CueBundle, PairLandscape, RunResult, SyncResult, VideoInfo
-    from .options import RecordOptions
+    from ..analysis.record_options import RecordOptions
 
 
 class Sink:
