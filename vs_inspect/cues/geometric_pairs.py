@@ -32,6 +32,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
+from ..geometry.offsets import OffsetGrid, span_of
 from ..geometry.sampling import camera_at_frames, camera_between_frames, tracks_between_frames
 from ..geometry.timing import frame_brackets
 from ..types import CameraTrack, TrackPairs, VideoInfo
@@ -349,24 +350,26 @@ def _one_to_one(cand_a: np.ndarray, cand_b: np.ndarray, res: np.ndarray) -> np.n
 
 def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a: CameraTrack,
                     cam_b: CameraTrack, xy_a: np.ndarray, xy_b: np.ndarray,
-                    cfg: GeometricPairConfig = GeometricPairConfig()
+                    cfg: GeometricPairConfig = GeometricPairConfig(), grid: OffsetGrid = OffsetGrid()
                     ) -> tuple[TrackPairs, GeometricPairStats]:
     """Track pairs between cameras a and b from epipolar consistency over time.
 
     Either camera may move (per-frame poses): with one moving, its epipolar geometry is taken per
     frame; with both, per frame of b and per offset (a's pose at the moment b's frame meets,
     interpolated between its frames as its track points are). xy_a (Na,Ta,2), xy_b (Nb,Tb,2):
-    undistorted px in the cameras' pinhole models.
+    undistorted px in the cameras' pinhole models. grid: the limits of the offsets voted for
+    (overlap, range, windows), on a half-frame step of the finer video.
     """
     if cam_a.is_moving and not cam_b.is_moving:  # a moving camera is b inside: Δ_ba = -Δ_ab
-        tp, st = geometric_pairs(b, a, info_b, info_a, cam_b, cam_a, xy_b, xy_a, cfg)
+        tp, st = geometric_pairs(b, a, info_b, info_a, cam_b, cam_a, xy_b, xy_a, cfg, grid)
         return TrackPairs(a, b, tp.index[:, ::-1].copy(), tp.weight), st.swapped()
     empty = TrackPairs(a, b, np.zeros((0, 2), np.int64), np.zeros(0))
     Tb = xy_b.shape[1]
     step = 0.5 * min(info_a.frame_interval_s, info_b.frame_interval_s)
     ta, tb = info_a.timestamps_s, info_b.timestamps_s
-    lo, hi = ta[0] - tb[-1], ta[-1] - tb[0]
-    offsets = np.arange(np.ceil(lo / step), np.floor(hi / step) + 1) * step
+    offsets = grid.pair_offsets(a, span_of(ta), b, span_of(tb), step)
+    if not len(offsets):
+        return empty, GeometricPairStats(0, 0, 0, (), ())
     k, w = frame_brackets(ta, tb[None, :] + offsets[:, None])
     # (Dg,Tb,3,3): one row of G when a is static, one per offset when both move
     G = _moving_fundamentals(cam_a, cam_b, k, w) if cam_a.is_moving else \

@@ -26,6 +26,7 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
+from ..geometry.offsets import OffsetGrid, span_of
 from ..types import CameraTrack, TrackPairs, VideoInfo
 
 log = logging.getLogger(__name__)
@@ -98,17 +99,18 @@ class OffsetCurve:
 
 
 def offset_curve(xy_a, info_a, xy_b, info_b, index, min_corr: int = 40, thresh_px: float = 2.0,
-                 max_corr: int = 2000, seed: int = 0, min_share_of_max: float = 0.5) -> OffsetCurve | None:
-    """The pair's OffsetCurve from its track pairs (index (P,2): track of a, track of b), or None
-    when no offset aligns min_corr correspondences that one F can be fitted to."""
+                 max_corr: int = 2000, seed: int = 0, min_share_of_max: float = 0.5,
+                 grid: OffsetGrid = OffsetGrid()) -> OffsetCurve | None:
+    """The pair's OffsetCurve from its track pairs (index (P,2): track of a, track of b) over
+    grid's candidate offsets on the finer video's frame step, or None when no offset aligns
+    min_corr correspondences that one F can be fitted to."""
     if len(index) < 8:
         return None
     step = min(info_a.frame_interval_s, info_b.frame_interval_s)
-    lo = info_a.timestamps_s[0] - info_b.timestamps_s[-1]
-    hi = info_a.timestamps_s[-1] - info_b.timestamps_s[0]
     rng = np.random.default_rng(seed)
     cands = []
-    for d in np.arange(lo, hi + step / 2, step):
+    for d in grid.pair_offsets(info_a.name, span_of(info_a.timestamps_s), info_b.name,
+                               span_of(info_b.timestamps_s), step):
         A, B, _ = aligned_correspondences(xy_a, info_a, xy_b, info_b, index, d)
         if len(A) < min_corr:
             continue
@@ -189,7 +191,8 @@ def joint_coarse_offsets(ref: str, curves: dict[tuple[str, str], OffsetCurve], m
 def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.ndarray],
                         pairs: dict[tuple[str, str], TrackPairs], moving: dict[str, bool],
                         refine: bool = True, min_inlier_share: float = 0.2, max_median_fraction: float = 0.01,
-                        joint: bool = True) -> tuple[dict[str, CameraTrack], dict[str, str], dict[str, dict]]:
+                        joint: bool = True, grid: OffsetGrid = OffsetGrid()
+                        ) -> tuple[dict[str, CameraTrack], dict[str, str], dict[str, dict]]:
     """Static cameras in the reference's camera frame: (cameras, unregistered reasons, details).
 
     A camera needs min_inlier_share of its correspondences with the reference within 2 px of the
@@ -200,7 +203,7 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
     refine: with three or more cameras, fit every focal and pose to all pairs at once
     (refine_cameras; details["joint_fit"] says how well); when the fit leaves the median track
     pair farther than max_median_fraction of the image diagonal from its epipolar line (Stage 1's
-    inlier tolerance), no camera is returned."""
+    inlier tolerance), no camera is returned. grid: the limits of the coarse offsets searched."""
     reasons: dict[str, str] = {}
     details: dict[str, dict] = {}
     found: dict[str, tuple] = {}  # name -> (PairGeometry, aligned correspondences with ref)
@@ -221,7 +224,7 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
             reasons[v] = (f"camera could not be registered: background did not reconstruct and only "
                           f"{0 if idx is None else len(idx)} track pairs with {ref}")
             continue
-        curve = offset_curve(xy[ref], info_r, xy[v], infos[v], idx)
+        curve = offset_curve(xy[ref], info_r, xy[v], infos[v], idx, grid=grid)
         if curve is None:
             reasons[v] = ("camera could not be registered: no consistent two-view geometry from the "
                           f"moving points shared with {ref}")
@@ -231,7 +234,7 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
     if joint and len(index) >= 2:
         for (a, b), tp in sorted(pairs.items()):
             if a in index and b in index and len(tp.index) >= 8:
-                curve = offset_curve(xy[a], infos[a], xy[b], infos[b], tp.index)
+                curve = offset_curve(xy[a], infos[a], xy[b], infos[b], tp.index, grid=grid)
                 if curve is not None:
                     curves[(a, b)] = curve
         together = joint_coarse_offsets(ref, curves)

@@ -75,7 +75,7 @@ def _run(inputs, config: RunConfig, sink: Sink, engine: Engine, calibration, fps
     else:
         try:
             bundle, stats, videos = run_stage0(list(inputs), calibration, fps, config.cues, sink=sink,
-                                               progress=progress, engine=engine)
+                                               progress=progress, engine=engine, sync=config.sync)
         except NoUsableVideos as exc:  # nothing to synchronize, but every video gets its reason
             result = _nothing_usable(exc, config, RunInputs(videos=exc.inputs, fps=fps),
                                      recorded_inputs, time.perf_counter() - t0)

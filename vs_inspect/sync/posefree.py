@@ -34,6 +34,7 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from ..geometry.epipolar import epipolar_residual, skew
+from ..geometry.offsets import grid_around, grid_between, overlap_bounds, span_of
 
 
 @dataclass(frozen=True)
@@ -218,8 +219,8 @@ def estimate_pair(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
     enough overlap.
 
     t_a (Ta,), t_b (Tb,): local frame times (s); xy_a (Ta,2), xy_b (Tb,2): undistorted px, NaN
-    where unseen; K_a, K_b (3,3) px. offset_range_s: the offsets searched (default: every offset
-    with some overlap). coarse: (offsets, score, score_F) of an earlier run on the same tracks (e.g. the
+    where unseen; K_a, K_b (3,3) px. offset_range_s: (lo, hi) of the offsets searched (an
+    OffsetGrid's pair_bounds; default: every offset with some overlap). coarse: (offsets, score, score_F) of an earlier run on the same tracks (e.g. the
     drift model's, reused by the constant-offset ablation); peaks_s: refine only these offsets
     instead of the coarse peaks (e.g. the drift model's solution).
     """
@@ -230,11 +231,11 @@ def estimate_pair(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
     pair = _Pair(t_a, xy_a, t_b, xy_b, np.asarray(K_a, dtype=np.float64), np.asarray(K_b, dtype=np.float64))
     n_b = int(np.isfinite(np.asarray(xy_b)).all(axis=1).sum())
     pair.min_matches = int(cfg.min_overlap * min(len(pair.t_a), n_b))
-    lo, hi = offset_range_s if offset_range_s is not None else (t_a[0] - t_b[-1], t_a[-1] - t_b[0])
+    lo, hi = offset_range_s if offset_range_s is not None else overlap_bounds(span_of(t_a), span_of(t_b))
 
     # 1. coarse offsets, rate 1
     if coarse is None:
-        grid = np.arange(lo, hi + 1e-9, cfg.coarse_step_s)
+        grid = grid_between(lo, hi, cfg.coarse_step_s)
         both = np.array([pair.scores(d, 1.0, cfg.coarse_points, cfg.threshold_px)[:2] for d in grid]).reshape(-1, 2)
         coarse = (grid, both[:, 0], both[:, 1])
     coarse, coarse_score, coarse_score_F = coarse
@@ -250,7 +251,7 @@ def estimate_pair(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
     # not after the refinement, so the refined inlier count picks the peak.
     best: _Refined | None = None
     for p in peaks:
-        offs = p + np.arange(-cfg.fine_half_width_s, cfg.fine_half_width_s + 1e-9, cfg.fine_step_s)
+        offs = grid_around(p, cfg.fine_half_width_s, cfg.fine_step_s, (lo, hi))
         line = [pair.score(d, 1.0, cfg.fine_points, cfg.threshold_px)[0] for d in offs]
         if max(line) <= 0:
             continue
