@@ -44,7 +44,7 @@ def test_search_pair_finds_the_offset_and_a_consistent_F():
     assert abs(g.offset_s - TRUE_OFFSET_S) < 1e-6  # on the 0.1 s frame grid
     assert g.inlier_share > 0.95
     A, B, _ = pairwise.aligned_correspondences(xy_r, info_r, xy_v, info_v, index, g.offset_s)
-    lines = (g.F @ np.c_[A, np.ones(len(A))].T).T
+    lines = np.c_[A, np.ones(len(A))] @ g.F  # F_rv: x_rᵀ F x_v = 0, so v's epipolar line of x_r is x_rᵀ F
     dist = np.abs(np.sum(lines * np.c_[B, np.ones(len(B))], 1)) / np.hypot(lines[:, 0], lines[:, 1])
     assert np.median(dist) < 0.5
 

@@ -27,6 +27,8 @@ from scipy.spatial.transform import Rotation
 
 from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
 from ..geometry.offsets import OffsetGrid, span_of
+from ..geometry.two_view import (essential_from_fundamental, focal_from_fundamental, fundamental_ransac,
+                                 normalized_points, pose_from_essential, signed_sampson_px)
 from ..types import CameraTrack, TrackPairs, VideoInfo
 
 log = logging.getLogger(__name__)
@@ -35,7 +37,7 @@ log = logging.getLogger(__name__)
 @dataclass(frozen=True)
 class PairGeometry:
     offset_s: float  # coarse Δ_rv, seconds
-    F: np.ndarray  # (3,3), x_v^T F x_r = 0 (full-resolution px)
+    F: np.ndarray  # (3,3) F_rv: x_rᵀ F x_v = 0 (full-resolution px)
     inlier_share: float
     num_correspondences: int
     focal_px: float
@@ -63,19 +65,6 @@ def aligned_correspondences(xy_a: np.ndarray, info_a: VideoInfo, xy_b: np.ndarra
     return A[pi, fi], B[pi, fi], keys
 
 
-def _focal_from_F(F: np.ndarray, ca: np.ndarray, cb: np.ndarray, size: float) -> float:
-    """Focal (px) shared by both cameras that makes K_bᵀ F K_a most essential-like."""
-    best, best_f = np.inf, size
-    for f in np.geomspace(0.3 * size, 5.0 * size, 160):
-        Ka = np.array([[f, 0, ca[0]], [0, f, ca[1]], [0, 0, 1]])
-        Kb = np.array([[f, 0, cb[0]], [0, f, cb[1]], [0, 0, 1]])
-        s = np.linalg.svd(Kb.T @ F @ Ka, compute_uv=False)
-        cost = (s[0] - s[1]) / (s[0] + s[1])
-        if cost < best:
-            best, best_f = cost, f
-    return float(best_f)
-
-
 @dataclass(frozen=True)
 class OffsetCurve:
     """How well one F explains a pair's aligned track pairs at each coarse offset Δ_ab (offsets
@@ -85,7 +74,7 @@ class OffsetCurve:
     step_s: float  # the grid step, seconds
     share: np.ndarray  # (K,) MAGSAC inlier share of the best F at each offset
     count: np.ndarray  # (K,) aligned correspondences used at each offset
-    F: tuple  # K (3,3) arrays, x_b^T F x_a = 0 (full-resolution px)
+    F: tuple  # K (3,3) arrays F_ab: x_aᵀ F x_b = 0 (full-resolution px)
 
     def at(self, delta_s: np.ndarray) -> np.ndarray:
         """share at the grid offsets nearest delta_s (any shape); NaN off the curve."""
@@ -117,12 +106,8 @@ def offset_curve(xy_a, info_a, xy_b, info_b, index, min_corr: int = 40, thresh_p
         if len(A) > max_corr:
             sel = rng.choice(len(A), max_corr, replace=False)
             A, B = A[sel], B[sel]
-        try:
-            F, inl = cv2.findFundamentalMat(A.astype(np.float64), B.astype(np.float64), cv2.USAC_MAGSAC,
-                                            thresh_px, 0.999, 2000)
-        except cv2.error:  # OpenCV 5's USAC asserts on some degenerate samples instead of failing softly
-            continue
-        if F is None or F.shape != (3, 3):
+        F, inl = fundamental_ransac(A, B, thresh_px, 0.999, 2000)
+        if F is None:
             continue
         cands.append((float(d), float(inl.mean()), len(A), F))
     if not cands:
@@ -138,7 +123,7 @@ def _geometry_at(curve: OffsetCurve, k: int, info_r: VideoInfo, info_v: VideoInf
     ca = np.array([(info_r.width - 1) / 2, (info_r.height - 1) / 2])
     cb = np.array([(info_v.width - 1) / 2, (info_v.height - 1) / 2])
     F = curve.F[k]
-    f = _focal_from_F(F, ca, cb, float(max(info_r.width, info_r.height, info_v.width, info_v.height)))
+    f = focal_from_fundamental(F, ca, cb, float(max(info_r.width, info_r.height, info_v.width, info_v.height)))
     return PairGeometry(float(curve.offsets_s[k]), F, float(curve.share[k]), int(curve.count[k]), f)
 
 
@@ -300,10 +285,9 @@ def _cameras_at(ref: str, infos: dict[str, VideoInfo], found: dict[str, tuple], 
     geo = {}
     for v, (g, (A, B, keys)) in found.items():
         Ka, Kb = K(info_r, focal_px[v]), K(infos[v], focal_px[v])
-        E = Kb.T @ g.F @ Ka
-        na = cv2.undistortPoints(A.reshape(-1, 1, 2).astype(np.float64), Ka, None).reshape(-1, 2)
-        nb = cv2.undistortPoints(B.reshape(-1, 1, 2).astype(np.float64), Kb, None).reshape(-1, 2)
-        _, R, t, _ = cv2.recoverPose(E, na, nb, np.eye(3))
+        na, nb = normalized_points(A, Ka), normalized_points(B, Kb)
+        T = pose_from_essential(essential_from_fundamental(g.F, Ka, Kb), na, nb)
+        R, t = T[:3, :3], T[:3, 3]
         P0 = np.hstack([np.eye(3), np.zeros((3, 1))])
         P1 = np.hstack([R, t.reshape(3, 1)])
         X = cv2.triangulatePoints(P0, P1, na.T, nb.T)
@@ -330,14 +314,6 @@ def _cameras_at(ref: str, infos: dict[str, VideoInfo], found: dict[str, tuple], 
         cams[v] = CameraTrack(Kb, T)
     cams[ref] = CameraTrack(K(info_r, float(np.median(list(focal_px.values())))), np.eye(4))
     return cams, with_scale
-
-
-def _signed_sampson(F_ab: np.ndarray, h_a: np.ndarray, h_b: np.ndarray) -> np.ndarray:
-    """(P,) signed Sampson distance (px) of x_aᵀ F_ab x_b = 0, homogeneous h_a, h_b (P,3): the
-    signed root of geometry.epipolar's "sampson" residual, smooth at zero for least squares."""
-    Fb, Fta = h_b @ F_ab.T, h_a @ F_ab
-    num = np.sum(h_a * Fb, axis=1)
-    return num / np.sqrt(Fb[:, 0] ** 2 + Fb[:, 1] ** 2 + Fta[:, 0] ** 2 + Fta[:, 1] ** 2 + 1e-300)
 
 
 def _pair_data(cams, infos, xy, pairs, coarse_offset_s, max_per_pair, seed):
@@ -417,7 +393,7 @@ def refine_cameras(cams: dict[str, CameraTrack], ref: str, infos: dict[str, Vide
         Ks, Ts = unpack(x)
         Ks, Ts = np.stack(Ks), np.stack(Ts)
         F = fundamental_from_cameras(Ks[ia], Ts[ia], Ks[ib], Ts[ib])  # all pairs at once
-        out = [_signed_sampson(F[k], A, B) for k, (_, _, A, B) in enumerate(data)]
+        out = [signed_sampson_px(F[k], A, B) for k, (_, _, A, B) in enumerate(data)]
         out.append(np.array([10.0 * (np.linalg.norm(Ts[1][:3, 3]) - 1.0)]))  # scale gauge
         return np.concatenate(out)
 

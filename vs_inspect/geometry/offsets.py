@@ -2,7 +2,7 @@
 
 Δ_ab = offset_s[b] − offset_s[a] (DESIGN.md "Time and offsets"): x_a(t + Δ) and x_b(t) show the
 same moment. A video a spanning local times [a0, a1] and a video b spanning [b0, b1] share at
-least m seconds exactly when a0 − b1 + m <= Δ_ab <= a1 − b0 − m.
+least m seconds exactly when a0 − b1 + m <= Δ_ab <= a1 − b0 − m and both last at least m.
 
 OffsetGrid holds what limits the search of every pair: the least common time (--min-overlap-s),
 the largest |Δ| (--range-s) and per-video windows on offset_s (--around), which bound Δ_ab of a
@@ -52,7 +52,9 @@ def grid_around(center_s: float, half_width_s: float, step_s: float,
 
 def overlap_bounds(span_a: Span, span_b: Span, min_overlap_s: float = 0.0) -> Span:
     """(lo, hi) of the Δ_ab at which b's span, moved by Δ into a's time, shares at least
-    min_overlap_s with a's span."""
+    min_overlap_s with a's span; (inf, -inf), no offset, when either span is shorter than that."""
+    if min(span_a[1] - span_a[0], span_b[1] - span_b[0]) < min_overlap_s:
+        return math.inf, -math.inf
     return span_a[0] - span_b[1] + min_overlap_s, span_a[1] - span_b[0] - min_overlap_s
 
 

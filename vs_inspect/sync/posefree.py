@@ -28,13 +28,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from ..geometry.epipolar import epipolar_residual, skew
+from ..geometry.epipolar import skew
 from ..geometry.offsets import grid_around, grid_between, overlap_bounds, span_of
+from ..geometry.two_view import fundamental_ransac, nearest_calibrated_fundamental, pose_from_fundamental, sampson_px
 
 
 @dataclass(frozen=True)
@@ -109,11 +109,6 @@ def interpolate_track(t_query_s: np.ndarray, t_s: np.ndarray, xy: np.ndarray) ->
     return out
 
 
-def sampson_px(F_ab: np.ndarray, x_a: np.ndarray, x_b: np.ndarray) -> np.ndarray:
-    """(M,) Sampson distance (px, not squared) of x_aᵀ F_ab x_b = 0."""
-    return np.sqrt(epipolar_residual(F_ab, x_a, x_b, "sampson"))
-
-
 class _Pair:
     """The two tracks and the matching under a candidate time map."""
 
@@ -150,13 +145,8 @@ class _Pair:
         n_F = int(np.count_nonzero(sampson_px(F, xa, xb) < thr))
         if self.K_a is None:
             return n_F, n_F, F
-        n_E = int(np.count_nonzero(sampson_px(_nearest_calibrated_F(F, self.K_a, self.K_b), xa, xb) < thr))
+        n_E = int(np.count_nonzero(sampson_px(nearest_calibrated_fundamental(F, self.K_a, self.K_b), xa, xb) < thr))
         return n_E, n_F, F
-
-
-def _nearest_calibrated_F(F_ab: np.ndarray, K_a: np.ndarray, K_b: np.ndarray) -> np.ndarray:
-    U, _, Vt = np.linalg.svd(K_a.T @ F_ab @ K_b)
-    return np.linalg.inv(K_a).T @ (U @ np.diag([1.0, 1.0, 0.0]) @ Vt) @ np.linalg.inv(K_b)
 
 
 def _uniform(n_total: int, n: int) -> np.ndarray:
@@ -164,14 +154,9 @@ def _uniform(n_total: int, n: int) -> np.ndarray:
 
 
 def _ransac_F(xa, xb, n_sample, thr):
+    """F_ab (MAGSAC) of a time-uniform subsample of n_sample matches, or None."""
     idx = _uniform(len(xa), n_sample)
-    try:
-        F, _ = cv2.findFundamentalMat(xa[idx], xb[idx], cv2.USAC_MAGSAC, thr, 0.999, 500)
-    except cv2.error:
-        return None
-    if F is None or F.shape != (3, 3):
-        return None
-    return F.T  # OpenCV's F has x_bᵀ F x_a = 0; F_ab is its transpose
+    return fundamental_ransac(xa[idx], xb[idx], thr, 0.999, 500)[0]
 
 
 def _peaks(score: np.ndarray, grid: np.ndarray, k: int, min_sep: float) -> list[float]:
@@ -186,12 +171,10 @@ def _peaks(score: np.ndarray, grid: np.ndarray, k: int, min_sep: float) -> list[
 
 def _E_params(F_ab: np.ndarray, K_a: np.ndarray, K_b: np.ndarray, xa: np.ndarray, xb: np.ndarray):
     """(rotvec (3,), t angles (2,)) of b_from_a in F_ab, chosen by cheirality."""
-    E = K_b.T @ F_ab.T @ K_a  # OpenCV's order: x_bᵀ E x_a = 0 in normalized coordinates
-    na = cv2.undistortPoints(xa.reshape(-1, 1, 2), K_a, None).reshape(-1, 2)
-    nb = cv2.undistortPoints(xb.reshape(-1, 1, 2), K_b, None).reshape(-1, 2)
-    _, R, t, _ = cv2.recoverPose(E, na, nb, np.eye(3))
-    t = t.ravel() / np.linalg.norm(t)
-    return Rotation.from_matrix(R).as_rotvec(), np.array([np.arccos(np.clip(t[2], -1, 1)), np.arctan2(t[1], t[0])])
+    T = pose_from_fundamental(F_ab, K_a, K_b, xa, xb)
+    t = T[:3, 3] / np.linalg.norm(T[:3, 3])
+    return Rotation.from_matrix(T[:3, :3]).as_rotvec(), np.array([np.arccos(np.clip(t[2], -1, 1)),
+                                                                  np.arctan2(t[1], t[0])])
 
 
 def _pose_from_params(p: np.ndarray) -> np.ndarray:
