@@ -218,3 +218,15 @@ def test_joint_coarse_offsets_on_a_grid_too_large_to_score_whole_refines_a_coars
     coarse = pairwise.joint_coarse_offsets("r", curves, max_grid=400)  # 61 x 61 offsets: every 4th
     assert _offsets(curves, full[0]) == pytest.approx({"a": 0.5, "b": 1.0})
     assert coarse[0] == full[0] and coarse[1] == pytest.approx(full[1])
+
+
+def test_offset_curve_searches_only_the_offsets_the_run_allows():
+    from vs_inspect.geometry.offsets import OffsetGrid
+
+    xy_r, info_r, xy_v, info_v, index = two_views()
+    curve = pairwise.offset_curve(xy_r, info_r, xy_v, info_v, index, grid=OffsetGrid(range_s=0.5))
+    assert curve is None or np.abs(curve.offsets_s).max() <= 0.5 + 1e-9
+    window = OffsetGrid(windows_s=(("v", 0.5, 1.2),), reference="r")
+    curve = pairwise.offset_curve(xy_r, info_r, xy_v, info_v, index, grid=window)
+    assert curve.offsets_s.min() >= 0.5 - 1e-9 and curve.offsets_s.max() <= 1.2 + 1e-9
+    assert curve.offsets_s[int(np.argmax(curve.share))] == pytest.approx(TRUE_OFFSET_S, abs=1e-6)

@@ -6,9 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vs_inspect.cues.transfer import (check_in_three_views, confirm_offset, candidate_offsets,
+from vs_inspect.cues.transfer import (candidate_offsets, check_in_three_views, confirm_offset,
                                       transfer_landscape, triangulate_pairs)
 from vs_inspect.geometry.epipolar import look_at, project
+from vs_inspect.geometry.offsets import OffsetGrid
 from vs_inspect.types import CameraTrack, TrackPairs, VideoInfo
 
 K = np.array([[500.0, 0, 320], [0, 500.0, 240], [0, 0, 1]])
@@ -178,3 +179,24 @@ def test_a_right_camera_at_its_offset_passes_in_three_views_a_wrong_camera_or_of
     assert late.best_supporters >= right.supporters - 2 and late.best_offset_s == pytest.approx(0.35, abs=1 / 24)
     assert f"{late.best_supporters} at " in late.reason
     assert late.summary()["passed"] is False and late.summary()["joint_offset_s"] == 0.85
+
+
+def test_candidate_offsets_honour_the_range_and_the_window():
+    """Point transfer searches only the offsets the run allows (--range-s, --min-overlap-s,
+    --around): a window around the truth keeps it; one that leaves it out cannot find it."""
+    offsets = {"a": 0.0, "b": 0.42, "c": -0.9}
+    infos, cams, xy, truth_ab, _ = _scene(offsets)
+    traj = triangulate_pairs(infos, cams, xy, {("a", "b"): TrackPairs("a", "b", truth_ab)},
+                             {"a": 0.0, "b": 0.42})
+    step = 0.5 / FPS["c"]
+    free = candidate_offsets(traj, infos["c"], step)
+    ranged = candidate_offsets(traj, infos["c"], step, OffsetGrid(range_s=0.5), "a")
+    assert free.min() < -0.5 and free.max() > 0.5
+    assert ranged.min() >= -0.5 - 1e-9 and ranged.max() <= 0.5 + 1e-9
+    land = transfer_landscape(traj, infos["c"], cams["c"], xy["c"], ranged, radius_px=3.0)
+    assert land.offset_s is None or abs(land.offset_s - (-0.9)) > 0.3  # the truth is outside the range
+    window = OffsetGrid(windows_s=(("c", -1.2, -0.6),), reference="a")
+    inside = candidate_offsets(traj, infos["c"], step, window, "a")
+    assert inside.min() >= -1.2 - 1e-9 and inside.max() <= -0.6 + 1e-9
+    land = transfer_landscape(traj, infos["c"], cams["c"], xy["c"], inside, radius_px=3.0)
+    assert land.offset_s == pytest.approx(-0.9, abs=1.0 / FPS["c"])

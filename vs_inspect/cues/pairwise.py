@@ -5,7 +5,7 @@ For a reference video r and each other static video v: search the time offset wh
 track pairs (x_r(t + Δ), x_v(t)) give the most consistent fundamental matrix (RANSAC inlier
 share, as in unsynchronized two-view geometry; with three or more static cameras the offsets of
 all of them together, every pair's share summed with its triangles closed), self-calibrate one
-focal length per pair (the f that makes K_vᵀ F K_r closest to an essential matrix, principal
+focal length per pair (the f that makes K_rᵀ F_rv K_v closest to an essential matrix, principal
 points at the image centres), decompose into a relative pose, and fix the scale of every pair
 from points triangulated on the reference's tracks. With three or more cameras, one focal per
 camera and every pose are then fitted to the track pairs of all camera pairs at once (scipy
