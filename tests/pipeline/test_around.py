@@ -128,3 +128,12 @@ def test_the_three_spellings_are_one_window():
     assert grid.pair_window("c0", "c1") == (1.25, 1.75)
     assert grid.pair_window("c1", "c2") == (-3.25, -1.75)  # c2 − c1 within -1.5 − 1.75 .. -0.5 − 1.25
     assert grid.pair_window("c1", "c3") is None
+
+
+def test_windows_round_trip_through_config_json(tmp_path):
+    cfg = RunConfig(sync=SyncConfig(landscape=LandscapeConfig(around={"cam1": (1.5, 0.25)})))
+    back = RunConfig.load(cfg.save(tmp_path / "config.json"))
+    assert back.sync.landscape.around == {"cam1": (1.5, 0.25)}
+    (tmp_path / "bad.json").write_text(json.dumps({"sync": {"landscape": {"around": {"cam1": [1.5]}}}}))
+    with pytest.raises(Exception, match=r"around.cam1.*list of 2 values"):
+        RunConfig.load(tmp_path / "bad.json")

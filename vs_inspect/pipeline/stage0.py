@@ -15,7 +15,6 @@ from pathlib import Path
 from ..cues.config import CueConfig
 from ..engine import Engine
 from ..errors import BadVideoName, InputError, NoUsableVideos
-from ..geometry.offsets import OffsetGrid
 from ..record.sink import Sink
 from ..sync.config import SyncConfig
 from ..types import CueBundle, CueStats
@@ -58,7 +57,7 @@ def check_cue_config(cfg: CueConfig) -> None:
 
 def run_stage0(videos: Sequence[PathLike], calibration: PathLike | None = None,
                fps: float | None = None, cfg: CueConfig = CueConfig(), sink: Sink | None = None,
-               progress: bool = True, engine: Engine | None = None, sync: SyncConfig | None = None
+               progress: bool = True, engine: Engine | None = None, sync: SyncConfig = SyncConfig()
                ) -> tuple[CueBundle, CueStats, dict[str, str]]:
     """Stage 0 on video files or image folders: (bundle, stats, {name: path} of every input).
 
@@ -66,7 +65,7 @@ def run_stage0(videos: Sequence[PathLike], calibration: PathLike | None = None,
     the cameras. fps: frame rate of image folders (and of files whose timestamps are unusable).
     engine: where each video's cues are extracted (default: in this process). sync: the run's
     Stage 1 + 2 settings, whose limits of the candidate offsets (--min-overlap-s, --range-s,
-    --around) Stage 0's searches obey too (default: every offset with some common time).
+    --around) Stage 0's searches obey too.
     InputError when fewer than two videos are given; NoUsableVideos (an InputError that carries
     every video's reason) when fewer than two can be opened or none can be used.
     """
@@ -77,7 +76,7 @@ def run_stage0(videos: Sequence[PathLike], calibration: PathLike | None = None,
         raise InputError(f"need at least 2 videos to synchronize, got {len(videos)}")
     check_cue_config(cfg)
     sources, inputs, dropped = open_sources(videos, fps)
-    grid = OffsetGrid() if sync is None else sync.offset_grid(list(inputs))
+    grid = sync.offset_grid(list(inputs))
     if len(sources) < 2:
         why = "; ".join(f"{n}: {r}" for n, r in dropped.items())
         alone = {s.info.name: "the only readable video: there is no other video to synchronize it with"
