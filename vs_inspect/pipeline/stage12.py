@@ -17,13 +17,13 @@ import numpy as np
 from ..analysis.record_views import pair_record_view, run_record_view
 from ..engine import Engine, LocalEngine, TaskFailed
 from ..errors import InputError
+from ..geometry.offsets import OffsetGrid, grid_between, span_of
 from ..record.sink import NullSink, Sink
 from ..types import (CameraTrack, CueBundle, PairDecision, PairLandscape, SolveIteration, SyncResult,
                      TrackPairs, pairs_by_reason)
 from ..sync.config import DriftConfig, SolveConfig, SyncConfig
 from ..sync.decision import (check_chosen_offset, check_inliers, check_track_pairs_at_best, check_uncertainty,
                              decide)
-from ..geometry.offsets import OffsetGrid, grid_between, span_of
 from ..sync.landscape import (PairEnergy, PairInput, RawLandscape, compute_landscape, curvature_uncertainty,
                               landscape_step_s, refine_minimum)
 from ..sync.pairs import select_pairs
