@@ -182,8 +182,9 @@ def test_a_right_camera_at_its_offset_passes_in_three_views_a_wrong_camera_or_of
 
 
 def test_candidate_offsets_honour_the_range_and_the_window():
-    """Point transfer searches only the offsets the run allows (--range-s, --min-overlap-s,
-    --around): a window around the truth keeps it; one that leaves it out cannot find it."""
+    """Point transfer searches only the offsets the run allows: --range-s and --min-overlap-s
+    bound its candidates; an --around window holds its choice (the z-score's median stays the
+    whole range's): around the truth it is found, a window that leaves it out cannot find it."""
     offsets = {"a": 0.0, "b": 0.42, "c": -0.9}
     infos, cams, xy, truth_ab, _ = _scene(offsets)
     traj = triangulate_pairs(infos, cams, xy, {("a", "b"): TrackPairs("a", "b", truth_ab)},
@@ -196,7 +197,12 @@ def test_candidate_offsets_honour_the_range_and_the_window():
     land = transfer_landscape(traj, infos["c"], cams["c"], xy["c"], ranged, radius_px=3.0)
     assert land.offset_s is None or abs(land.offset_s - (-0.9)) > 0.3  # the truth is outside the range
     window = OffsetGrid(windows_s=(("c", -1.2, -0.6),), reference="a")
-    inside = candidate_offsets(traj, infos["c"], step, window, "a")
-    assert inside.min() >= -1.2 - 1e-9 and inside.max() <= -0.6 + 1e-9
-    land = transfer_landscape(traj, infos["c"], cams["c"], xy["c"], inside, radius_px=3.0)
+    grid = candidate_offsets(traj, infos["c"], step, window, "a")
+    assert np.array_equal(grid, free)  # the window does not crop the candidates
+    land = transfer_landscape(traj, infos["c"], cams["c"], xy["c"], grid, radius_px=3.0,
+                              allowed=window.within_window("a", "c", grid))
     assert land.offset_s == pytest.approx(-0.9, abs=1.0 / FPS["c"])
+    away = OffsetGrid(windows_s=(("c", 0.0, 0.6),), reference="a")
+    land = transfer_landscape(traj, infos["c"], cams["c"], xy["c"], grid, radius_px=3.0,
+                              allowed=away.within_window("a", "c", grid))
+    assert land.offset_s is None or 0.0 - 1e-9 <= land.offset_s <= 0.6 + 1e-9

@@ -347,9 +347,9 @@ def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dic
     checks = {}
     for c in sorted(n for n, ok in sure.items() if not ok and n not in skip):
         info = vids[c].info
-        land = transfer_landscape(traj, info, cameras[c], tracks[c].xy,
-                                  candidate_offsets(traj, info, 0.5 * info.frame_interval_s, grid, joint.origin),
-                                  _transfer_radius_px(info, g), g.transfer_min_hits)
+        offsets = candidate_offsets(traj, info, 0.5 * info.frame_interval_s, grid, joint.origin)
+        land = transfer_landscape(traj, info, cameras[c], tracks[c].xy, offsets, _transfer_radius_px(info, g),
+                                  g.transfer_min_hits, allowed=grid.within_window(joint.origin, c, offsets))
         chk = confirm_offset(c, joint.offsets_s[c], land, info.frame_interval_s,
                              g.transfer_agree_frames, g.transfer_min_z, g.transfer_min_supporters)
         checks[c] = chk

@@ -100,24 +100,33 @@ class OffsetGrid:
         return lo, hi
 
     def pair_bounds(self, a: str, span_a: Span, b: str, span_b: Span,
-                    min_overlap_s: float | None = None) -> Span:
+                    min_overlap_s: float | None = None, window: bool = True) -> Span:
         """(lo, hi) of the candidate Δ_ab of a (local times span_a) and b (span_b): enough common
-        time (min_overlap_s, default the grid's), within range_s and the windows."""
+        time (min_overlap_s, default the grid's), within range_s and (window) the windows."""
         m = self.min_overlap_s if min_overlap_s is None else min_overlap_s
         lo, hi = overlap_bounds(span_a, span_b, m)
         if self.range_s is not None:
             lo, hi = max(lo, -self.range_s), min(hi, self.range_s)
-        win = self.pair_window(a, b)
+        win = self.pair_window(a, b) if window else None
         if win is not None:
             lo, hi = max(lo, win[0]), min(hi, win[1])
         return lo, hi
 
     def pair_offsets(self, a: str, span_a: Span, b: str, span_b: Span, step_s: float,
-                     min_overlap_s: float | None = None) -> np.ndarray:
+                     min_overlap_s: float | None = None, window: bool = True) -> np.ndarray:
         """(D,) the candidate Δ_ab of the pair on the multiples of step_s (grid_between of
-        pair_bounds)."""
-        lo, hi = self.pair_bounds(a, span_a, b, span_b, min_overlap_s)
+        pair_bounds). window=False: the whole range, for a search whose statistics need it (the
+        energy's median, the votes' z-scores), whose choice is then held to within_window."""
+        lo, hi = self.pair_bounds(a, span_a, b, span_b, min_overlap_s, window)
         return grid_between(lo, hi, step_s, self.max_count, f"{a!r} and {b!r}")
+
+    def within_window(self, a: str, b: str, offsets_s: np.ndarray) -> np.ndarray:
+        """(D,) bool: which Δ_ab of offsets_s (D,) the pair's windows allow (all without one)."""
+        offsets_s = np.asarray(offsets_s, dtype=np.float64)
+        win = self.pair_window(a, b)
+        if win is None:
+            return np.ones(offsets_s.shape, bool)
+        return (offsets_s >= win[0] - 1e-9) & (offsets_s <= win[1] + 1e-9)
 
 def span_of(times_s: np.ndarray) -> Span:
     """(first, last) of strictly increasing local times (T,) s; ValueError when empty."""

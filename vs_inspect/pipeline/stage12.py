@@ -115,7 +115,9 @@ def _decided_landscape(a: PairInput, b: PairInput, tp: TrackPairs, cfg: SyncConf
     """The landscape of one set of track pairs, the decision on it and the checks at its refined
     minimum."""
     raw, pe = compute_landscape(a, b, tp, cfg.landscape, offsets, grid)
-    decision, minima = decide(raw.energy, raw.support, raw.offsets_s, len(tp.index), decision_cfg)
+    allowed = None if grid is None else grid.within_window(a.video.name, b.video.name, raw.offsets_s)
+    decision, minima = decide(raw.energy, raw.support, raw.offsets_s, len(tp.index), decision_cfg,
+                              None if allowed is None or allowed.all() else allowed)
     best, best_e, sigma = float("nan"), float("nan"), float("nan")
     if len(minima):
         best_idx = int(minima[0])
@@ -235,7 +237,8 @@ def _pose_free_inputs(bundle: CueBundle, a: str, b: str, side: dict[str, PairInp
             b: dataclasses.replace(side[b], camera=cam_b, video=vb)}
     step = landscape_step_s(side[a].video, vb, cfg.landscape)
     half = cfg.pose_free.window_s
-    lo, hi = grid.pair_bounds(a, span_of(side[a].video.timestamps_s), b, span_of(bundle.video(b).timestamps_s))
+    lo, hi = grid.pair_bounds(a, span_of(side[a].video.timestamps_s), b, span_of(bundle.video(b).timestamps_s),
+                              window=False)
     offsets = grid_between(max(pf.offset_s - half, lo), min(pf.offset_s + half, hi), step, grid.max_count,
                            f"{a!r} and {b!r}")
     return side, offsets, rate0

@@ -51,11 +51,12 @@ def landscape_step_s(va: VideoInfo, vb: VideoInfo, cfg: LandscapeConfig) -> floa
 def search_offsets(va: VideoInfo, vb: VideoInfo, cfg: LandscapeConfig,
                    grid: OffsetGrid | None = None) -> np.ndarray:
     """Candidate Δ_ab on a grid through 0, leaving >= min_overlap_s of common time, within
-    --range-s and the --around windows (grid: the run's, with its reference; default: cfg's
-    without a reference, so that only windows of both videos bound the pair)."""
+    --range-s. The --around windows do not crop it: the energy's statistics (its median, the
+    rivals' prominence) are read over the whole range, and the decision takes its minimum within
+    the window only (grid.within_window; grid: the run's, with its reference)."""
     grid = cfg.offset_grid() if grid is None else grid
     return grid.pair_offsets(va.name, span_of(va.timestamps_s), vb.name, span_of(vb.timestamps_s),
-                             landscape_step_s(va, vb, cfg))
+                             landscape_step_s(va, vb, cfg), window=False)
 
 
 class PairEnergy:

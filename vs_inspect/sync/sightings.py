@@ -70,7 +70,9 @@ def sighting_pair(bundle: CueBundle, a: str, b: str, cfg: SyncConfig) -> PairLan
     """The pair's sighting landscape and decision (None: no direction can be measured)."""
     directions = sighting_directions(bundle, a, b)
     va, vb = bundle.video(a), bundle.video(b)
-    offsets = search_offsets(va, vb, cfg.landscape, cfg.offset_grid(bundle.names))
+    grid = cfg.offset_grid(bundle.names)
+    offsets = search_offsets(va, vb, cfg.landscape, grid)
+    offsets = offsets[grid.within_window(a, b, offsets)]  # the peak and its rivals within --around's window
     if not directions or len(offsets) == 0:
         return None
     sc = cfg.sightings
