@@ -45,7 +45,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     checked in three views. other_peaks: (a, b) -> the vote peaks of another camera model (named
     other), which a sure camera's joint offset must meet in one of its pairs
     (geometric_pairs.disputed_by_other_model). grid: the limits of every vote's offsets (overlap,
-    range, windows), the point transfer's included.
+    range), the point transfer's included; its --around windows hold the peaks and offsets chosen.
 
     With three or more such cameras, the vote peaks whose offsets close every triangle
     (Δ_ab + Δ_bc ≈ Δ_ac) are chosen and only their supporters kept. When no choice closes the
