@@ -400,6 +400,7 @@ class PairLandscape:
     # of TrackPairs.unchecked); None: the check did not run
     confirm_energy: np.ndarray | None = None
     confirm_offset_s: float = float("nan")  # that landscape's refined best minimum, s (NaN: none accepted)
+    window_s: tuple[float, float] | None = None  # (lo, hi) of Δ_ab the --around windows allow, s; None: no window
 
 
 @dataclass(frozen=True)

@@ -131,7 +131,7 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
 
     seen = []
 
-    def estimate(vids, cfg, stats, pairs, est, from_tracks=False, memo=None, as_built=False):
+    def estimate(vids, cfg, stats, pairs, est, from_tracks=False, memo=None, as_built=False, grid=None):
         kind = ex.MOVING_POINTS if from_tracks else est.features + (ex.OWN if as_built else "")
         stats["sfm"] = {"features": kind}
         if weak_first and kind == "sift":  # replaced by the moving points' cameras
@@ -145,7 +145,7 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
                                  for n in vids if n not in names})
         return ex.CameraSet({n: CameraTrack(K, look_at([6.0, 0, 2.0], [0, 0, 1])) for n in names}, {}, None, None, {})
 
-    def vote(cams, vids, all_pairs, cfg, stats, sink, progress, estimated, other_peaks=None, other=""):
+    def vote(cams, vids, all_pairs, cfg, stats, sink, progress, estimated, other_peaks=None, other="", grid=None):
         kind = stats["sfm"]["features"]
         seen.append((kind, other_peaks, other))
         if kind in (joints or {}):

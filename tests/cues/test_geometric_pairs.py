@@ -21,6 +21,7 @@ from vs_inspect.cues.geometric_pairs import (
     supporters,
 )
 from vs_inspect.geometry.epipolar import fundamental_from_cameras, look_at, project
+from vs_inspect.geometry.offsets import OffsetGrid
 from vs_inspect.types import CameraTrack, VideoInfo
 
 K = np.array([[500.0, 0, 320], [0, 500.0, 240], [0, 0, 1]])
@@ -485,3 +486,29 @@ def test_a_camera_with_a_rival_offset_in_three_views_and_in_its_votes_is_not_sur
     # only sure cameras are judged, against the other sure cameras' pairs
     assert rival_offsets(found, joint, {**sure, "d": False}, best, 0.2, 0.3) == {}
     assert list(rival_offsets(ruled_out, joint, {**sure, "c": False}, best, 0.2, 0.3)) == ["d"]
+
+
+def test_the_vote_searches_only_the_offsets_the_run_allows():
+    """Stage 0's vote obeys --range-s, --min-overlap-s and --around as Stage 1 does: outside the
+    range the true offset gets no vote; a window holds the peaks (the votes span the range, for
+    their z-scores)."""
+    info_a, info_b, cam_a, cam_b, xy_a, xy_b, _ = _scene(0.84)
+    _, st = geometric_pairs("a", "b", info_a, info_b, cam_a, cam_b, xy_a, xy_b, grid=OffsetGrid(range_s=0.5))
+    assert st.vote_offsets_s is None or np.abs(st.vote_offsets_s).max() <= 0.5 + 1e-9
+    assert all(abs(p - 0.84) > 0.2 for p in st.peaks_s)
+    span = info_a.timestamps_s[-1] - info_a.timestamps_s[0]
+    _, st = geometric_pairs("a", "b", info_a, info_b, cam_a, cam_b, xy_a, xy_b, grid=OffsetGrid(min_overlap_s=2.0))
+    assert np.abs(st.vote_offsets_s).max() <= span - 2.0 + 1e-9
+    window = OffsetGrid(windows_s=(("b", 0.6, 1.1),), reference="a")
+    _, st = geometric_pairs("a", "b", info_a, info_b, cam_a, cam_b, xy_a, xy_b, grid=window)
+    assert st.vote_offsets_s.min() < 0.0 and st.window_s == (0.6, 1.1)
+    assert st.peaks_s[0] == pytest.approx(0.84, abs=1.5 / FPS)
+    assert all(0.6 - 1e-9 <= p <= 1.1 + 1e-9 for p in st.peaks_s)
+    # the pair the other way round (Δ_ba = −Δ_ab) is held to the same window
+    _, st = geometric_pairs("b", "a", info_b, info_a, cam_b, cam_a, xy_b, xy_a, grid=window)
+    assert st.window_s == (-1.1, -0.6)
+    assert all(-1.1 - 1e-9 <= p <= -0.6 + 1e-9 for p in st.peaks_s)
+    # away from the truth, no peak at it
+    _, st = geometric_pairs("a", "b", info_a, info_b, cam_a, cam_b, xy_a, xy_b,
+                            grid=OffsetGrid(windows_s=(("b", -0.6, 0.3),), reference="a"))
+    assert all(-0.6 - 1e-9 <= p <= 0.3 + 1e-9 for p in st.peaks_s)

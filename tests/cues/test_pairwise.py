@@ -44,7 +44,7 @@ def test_search_pair_finds_the_offset_and_a_consistent_F():
     assert abs(g.offset_s - TRUE_OFFSET_S) < 1e-6  # on the 0.1 s frame grid
     assert g.inlier_share > 0.95
     A, B, _ = pairwise.aligned_correspondences(xy_r, info_r, xy_v, info_v, index, g.offset_s)
-    lines = (g.F @ np.c_[A, np.ones(len(A))].T).T
+    lines = np.c_[A, np.ones(len(A))] @ g.F  # F_rv: x_rᵀ F x_v = 0, so v's epipolar line of x_r is x_rᵀ F
     dist = np.abs(np.sum(lines * np.c_[B, np.ones(len(B))], 1)) / np.hypot(lines[:, 0], lines[:, 1])
     assert np.median(dist) < 0.5
 
@@ -218,3 +218,15 @@ def test_joint_coarse_offsets_on_a_grid_too_large_to_score_whole_refines_a_coars
     coarse = pairwise.joint_coarse_offsets("r", curves, max_grid=400)  # 61 x 61 offsets: every 4th
     assert _offsets(curves, full[0]) == pytest.approx({"a": 0.5, "b": 1.0})
     assert coarse[0] == full[0] and coarse[1] == pytest.approx(full[1])
+
+
+def test_offset_curve_searches_only_the_offsets_the_run_allows():
+    from vs_inspect.geometry.offsets import OffsetGrid
+
+    xy_r, info_r, xy_v, info_v, index = two_views()
+    curve = pairwise.offset_curve(xy_r, info_r, xy_v, info_v, index, grid=OffsetGrid(range_s=0.5))
+    assert curve is None or np.abs(curve.offsets_s).max() <= 0.5 + 1e-9
+    window = OffsetGrid(windows_s=(("v", 0.5, 1.2),), reference="r")
+    curve = pairwise.offset_curve(xy_r, info_r, xy_v, info_v, index, grid=window)
+    assert curve.offsets_s.min() >= 0.5 - 1e-9 and curve.offsets_s.max() <= 1.2 + 1e-9
+    assert curve.offsets_s[int(np.argmax(curve.share))] == pytest.approx(TRUE_OFFSET_S, abs=1e-6)

@@ -6,9 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vs_inspect.cues.transfer import (check_in_three_views, confirm_offset, offset_grid,
+from vs_inspect.cues.transfer import (candidate_offsets, check_in_three_views, confirm_offset,
                                       transfer_landscape, triangulate_pairs)
 from vs_inspect.geometry.epipolar import look_at, project
+from vs_inspect.geometry.offsets import OffsetGrid
 from vs_inspect.types import CameraTrack, TrackPairs, VideoInfo
 
 K = np.array([[500.0, 0, 320], [0, 500.0, 240], [0, 0, 1]])
@@ -75,7 +76,7 @@ def test_the_third_cameras_offset_and_tracks_are_found(c_moving, offset_c):
     traj = triangulate_pairs(infos, cams, xy, {("a", "b"): TrackPairs("a", "b", truth_ab)},
                              {"a": 0.0, "b": 0.42})
     assert traj.num_trajectories >= 20
-    grid = offset_grid(traj, infos["c"], 0.5 / FPS["c"])
+    grid = candidate_offsets(traj, infos["c"], 0.5 / FPS["c"])
     land = transfer_landscape(traj, infos["c"], cams["c"], xy["c"], grid, radius_px=3.0)
     assert land.offset_s == pytest.approx(offset_c, abs=1.0 / FPS["c"])
     assert land.z > 5
@@ -98,7 +99,7 @@ def test_tracks_that_follow_nothing_give_no_clear_peak_and_are_refused():
     xy_c = xy["c"][:, rng.permutation(T)]
     traj = triangulate_pairs(infos, cams, xy, {("a", "b"): TrackPairs("a", "b", truth_ab)},
                              {"a": 0.0, "b": 0.42})
-    grid = offset_grid(traj, infos["c"], 0.5 / FPS["c"])
+    grid = candidate_offsets(traj, infos["c"], 0.5 / FPS["c"])
     land = transfer_landscape(traj, infos["c"], cams["c"], xy_c, grid, radius_px=3.0)
     chk = confirm_offset("c", 0.2, land, 1 / FPS["c"], 2.0, 5.0, 8)
     assert not chk.confirmed
@@ -111,7 +112,7 @@ def test_a_joint_offset_away_from_the_transfer_peak_is_refused_with_both_numbers
     traj = triangulate_pairs(infos, cams, xy, {("a", "b"): TrackPairs("a", "b", truth_ab)},
                              {"a": 0.0, "b": 0.42})
     land = transfer_landscape(traj, infos["c"], cams["c"], xy["c"],
-                              offset_grid(traj, infos["c"], 0.5 / FPS["c"]), radius_px=3.0)
+                              candidate_offsets(traj, infos["c"], 0.5 / FPS["c"]), radius_px=3.0)
     chk = confirm_offset("c", 0.35 + 5 / FPS["c"], land, 1 / FPS["c"], 2.0, 5.0, 8)
     assert not chk.confirmed
     assert "disagree" in chk.reason and "+0.35" in chk.reason
@@ -137,7 +138,7 @@ def test_tracks_near_the_projections_but_never_within_the_radius_give_an_empty_l
     jumper = np.full((1, T, 2), np.nan)
     jumper[0, :2] = [[-5000.0, 0.0], [-5000.0, 10000.0]]  # a 10000 px step: every track within reach
     xy_c = np.concatenate([xy["c"] + 2000.0, jumper])  # and none near a projection
-    land = transfer_landscape(traj, infos["c"], cams["c"], xy_c, offset_grid(traj, infos["c"], 0.5 / FPS["c"]),
+    land = transfer_landscape(traj, infos["c"], cams["c"], xy_c, candidate_offsets(traj, infos["c"], 0.5 / FPS["c"]),
                               radius_px=3.0)
     assert land.offset_s is None and len(land.matches) == 0 and not land.support.any()
     assert not confirm_offset("c", 0.2, land, 1 / FPS["c"], 2.0, 5.0, 8).confirmed
@@ -150,7 +151,7 @@ def test_many_offsets_thin_the_samples_and_still_find_the_offset(monkeypatch):
     infos, cams, xy, truth_ab, _ = _scene(offsets)
     traj = triangulate_pairs(infos, cams, xy, {("a", "b"): TrackPairs("a", "b", truth_ab)},
                              {"a": 0.0, "b": 0.42})
-    grid = offset_grid(traj, infos["c"], 0.5 / FPS["c"])
+    grid = candidate_offsets(traj, infos["c"], 0.5 / FPS["c"])
     full = transfer_landscape(traj, infos["c"], cams["c"], xy["c"], grid, radius_px=3.0)
     monkeypatch.setattr(transfer, "MAX_BRACKETS", len(grid) * len(traj.time_s) // 3)
     thin = transfer_landscape(traj, infos["c"], cams["c"], xy["c"], grid, radius_px=3.0, min_hits=3)
@@ -178,3 +179,30 @@ def test_a_right_camera_at_its_offset_passes_in_three_views_a_wrong_camera_or_of
     assert late.best_supporters >= right.supporters - 2 and late.best_offset_s == pytest.approx(0.35, abs=1 / 24)
     assert f"{late.best_supporters} at " in late.reason
     assert late.summary()["passed"] is False and late.summary()["joint_offset_s"] == 0.85
+
+
+def test_candidate_offsets_honour_the_range_and_the_window():
+    """Point transfer searches only the offsets the run allows: --range-s and --min-overlap-s
+    bound its candidates; an --around window holds its choice (the z-score's median stays the
+    whole range's): around the truth it is found, a window that leaves it out cannot find it."""
+    offsets = {"a": 0.0, "b": 0.42, "c": -0.9}
+    infos, cams, xy, truth_ab, _ = _scene(offsets)
+    traj = triangulate_pairs(infos, cams, xy, {("a", "b"): TrackPairs("a", "b", truth_ab)},
+                             {"a": 0.0, "b": 0.42})
+    step = 0.5 / FPS["c"]
+    free = candidate_offsets(traj, infos["c"], step)
+    ranged = candidate_offsets(traj, infos["c"], step, OffsetGrid(range_s=0.5), "a")
+    assert free.min() < -0.5 and free.max() > 0.5
+    assert ranged.min() >= -0.5 - 1e-9 and ranged.max() <= 0.5 + 1e-9
+    land = transfer_landscape(traj, infos["c"], cams["c"], xy["c"], ranged, radius_px=3.0)
+    assert land.offset_s is None or abs(land.offset_s - (-0.9)) > 0.3  # the truth is outside the range
+    window = OffsetGrid(windows_s=(("c", -1.2, -0.6),), reference="a")
+    grid = candidate_offsets(traj, infos["c"], step, window, "a")
+    assert np.array_equal(grid, free)  # the window does not crop the candidates
+    land = transfer_landscape(traj, infos["c"], cams["c"], xy["c"], grid, radius_px=3.0,
+                              allowed=window.within_window("a", "c", grid))
+    assert land.offset_s == pytest.approx(-0.9, abs=1.0 / FPS["c"])
+    away = OffsetGrid(windows_s=(("c", 0.0, 0.6),), reference="a")
+    land = transfer_landscape(traj, infos["c"], cams["c"], xy["c"], grid, radius_px=3.0,
+                              allowed=away.within_window("a", "c", grid))
+    assert land.offset_s is None or 0.0 - 1e-9 <= land.offset_s <= 0.6 + 1e-9

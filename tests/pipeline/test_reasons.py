@@ -31,7 +31,7 @@ def _pair(reason, a="r", b="v"):
      "calibration (--calib) or a video that shows more of that background"),
     (_stats(joint={"margin": {"v": 3.3}, "used": []}), "not connected", (),
      "its offset could not be confirmed by a third camera; try giving a calibration (--calib), a rough "
-     "offset window (--range-s) or another camera that sees the same motion"),
+     "offset window (--range-s or --around) or another camera that sees the same motion"),
     (_stats(joint={"margin": {"v": 9.0}, "used": [], "dissent": {"v": "x"},
                    "dissent_short": {"v": "two offsets 1.22 s apart, as a repeated motion gives"}}), "", (),
      "the motion it sees repeats, so more than one offset fits"),

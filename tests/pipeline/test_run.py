@@ -239,7 +239,7 @@ def test_an_unresolved_video_stage0_was_unsure_of_says_why_first():
     assert _detail(r.unresolved["d"]) == "not connected" and _detail(r.unresolved["e"]) == "could not be read"
     # in the user's terms: what was missing and what to try (the calibration is given already)
     assert r.unresolved_headline["c"] == ("its offset could not be confirmed by a third camera; try a rough "
-                                          "offset window (--range-s) or another camera that sees the same motion")
+                                          "offset window (--range-s or --around) or another camera that sees the same motion")
     assert r.unresolved_headline["e"].startswith("the video could not be read")
 
 
@@ -258,7 +258,7 @@ def test_an_unresolved_videos_pairs_that_share_a_reason_say_it_once():
     r = _run_result(sync, stats, RunInputs(), RunConfig(), None, {})
     assert _detail(r.unresolved["c"]) == f"Stage 0 gave a__c, b__c and c__d no geometric track pairs: {why}; not connected"
     assert r.unresolved_headline == {"c": "its offset could not be confirmed by a third camera; try giving a "
-                                          "calibration (--calib), a rough offset window (--range-s) or another "
+                                          "calibration (--calib), a rough offset window (--range-s or --around) or another "
                                           "camera that sees the same motion"}
     assert stats.headline("c", "not connected") == "vote peaks unchecked; not connected"  # the few words
 
@@ -290,7 +290,7 @@ def test_an_unresolved_video_the_joint_vote_was_sure_of_alone_with_one_other_say
     assert _detail(r.unresolved["c"]).startswith("Stage 0's joint vote was not sure of its offset (margin 0.2)")
     # in the user's terms, the same for the three: no third camera confirmed them
     unconfirmed = ("its offset could not be confirmed by a third camera; try giving a calibration (--calib), a "
-                   "rough offset window (--range-s) or another camera that sees the same motion")
+                   "rough offset window (--range-s or --around) or another camera that sees the same motion")
     assert r.unresolved_headline == dict.fromkeys("abc", unconfirmed)
     # the few words of each cause stay apart (CueStats.headline)
     alone = "sure of 2 camera(s) only, no triangle to confirm it"

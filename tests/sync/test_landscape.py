@@ -105,7 +105,7 @@ def test_the_energy_reads_videos_as_geometry_sampling_does(scene, a, b):
 
 
 def test_search_offsets_refuses_too_many_candidates_before_allocating():
-    from vs_inspect.sync.landscape import MAX_CANDIDATE_OFFSETS
+    from vs_inspect.geometry.offsets import MAX_CANDIDATE_OFFSETS
     a = VideoInfo.constant_rate("a", 64, 48, 300, 30.0)
     b = VideoInfo.constant_rate("b", 64, 48, 300, 30.0)
     with pytest.raises(ValueError, match="--step-s 1e-12 gives .* candidate offsets"):

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from vs_inspect.geometry.two_view import sampson_px
 from vs_inspect.sync.posefree import (PoseFreeConfig, estimate_pair, fit_at_time_map, fit_F_at_time_map,
-                                      interpolate_track, sampson_px)
+                                      interpolate_track)
 
 OFFSET_S = 3.217  # b started this long after a
 DRIFT_B = 200e-6  # b's clock runs 200 ppm fast; a is the reference

@@ -55,7 +55,7 @@ CAUSE_MEANING = {
                     "camera pose or calibration (or wrong matches)",
     CAUSE_LOOPS: "the pair offsets do not add up around loops of three videos: a wrong pose or "
                  "calibration, or wrong matches on one pair",
-    CAUSE_EDGE: "the true offset may lie outside the search range (--range-s), or the matches are "
+    CAUSE_EDGE: "the true offset may lie outside the search range (--range-s or --around), or the matches are "
                 "wrong",
     CAUSE_AMBIGUOUS: "two offsets fit alike: repetitive motion or wrong matches",
     CAUSE_SUPPORT: "the best offset rests on little overlap of the two videos' tracks: a chance dip",
@@ -396,7 +396,7 @@ def _video_blame(cause: str | None) -> str:
         return ("no offset fits any of its pairs: its camera pose or calibration is likely wrong "
                 "(or its tracks)")
     if cause == CAUSE_EDGE:
-        return "its true offset likely lies outside the search range (--range-s)"
+        return "its true offset likely lies outside the search range (--range-s or --around)"
     return f"{cause}: {CAUSE_MEANING.get(cause, '')}"
 
 

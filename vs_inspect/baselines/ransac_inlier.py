@@ -21,6 +21,7 @@ import numpy as np
 
 from ..geometry.epipolar import epipolar_lines
 from ..geometry.sampling import sample_video
+from ..geometry.two_view import fundamental_ransac
 from ..sync.config import LandscapeConfig
 from ..sync.pairs import select_pairs
 from ..sync.config import PairSelection
@@ -71,11 +72,10 @@ def ransac_inlier_count(x_a: np.ndarray, x_b: np.ndarray, threshold_px: float, m
     if n > max_fit:
         sel = np.sort(np.random.default_rng(seed).choice(n, max_fit, replace=False))
     cv2.setRNGSeed(seed)
-    F, _ = cv2.findFundamentalMat(x_a[sel].astype(np.float64), x_b[sel].astype(np.float64),
-                                  cv2.FM_RANSAC, threshold_px, 0.999, max_iters)
-    if F is None or F.shape != (3, 3):
+    F_ab, _ = fundamental_ransac(x_a[sel], x_b[sel], threshold_px, 0.999, max_iters, method="ransac")
+    if F_ab is None:
         return 0
-    return int(np.sum(epipolar_distance_sq(F, x_a, x_b) <= threshold_px ** 2))
+    return int(np.sum(epipolar_distance_sq(F_ab.T, x_a, x_b) <= threshold_px ** 2))
 
 
 def ransac_inlier_landscape(bundle: CueBundle, a: str, b: str, cfg: LandscapeConfig = LandscapeConfig(),

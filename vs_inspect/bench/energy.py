@@ -14,6 +14,7 @@ import numba
 import numpy as np
 
 from ..geometry.epipolar import look_at, project
+from ..geometry.offsets import grid_between
 from ..sync.config import LandscapeConfig
 from ..sync.landscape import PairEnergy, PairInput
 from ..sync.reference import reference_energy
@@ -64,7 +65,7 @@ def _peak_mb() -> float:
 
 def run_energy_bench(repeats: int = 3, reference_offsets: int = 201) -> list[EnergyBenchRow]:
     rows = []
-    offsets = np.arange(-100, 101) / 30.0  # 201 candidates at the frame step
+    offsets = grid_between(-100 / 30.0, 100 / 30.0, 1 / 30.0)  # 201 candidates at the frame step
     for case, moving in (("static pair", False), ("moving camera", True)):
         a, b, tp = _workload(moving)
         pe = PairEnergy(a, b, tp, LandscapeConfig())

@@ -26,11 +26,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from ..geometry.epipolar import (
-    epipolar_residual,
-    fundamental_from_cameras,
-    relative_pose,
-)
+from ..geometry.epipolar import fundamental_from_cameras, relative_pose
+from ..geometry.two_view import essential_ransac, fundamental_ransac, pose_from_essential, sampson_px
 from ..io.calibration import undistort_points
 from ..types import CameraCalibration
 
@@ -116,9 +113,10 @@ def _undistort(v: View, xy: np.ndarray) -> np.ndarray:
 
 
 def _sampson_px(F, xa, xb) -> np.ndarray:
+    """Sampson distance (px) of each match; inf without an F."""
     if F is None or not len(xa):
         return np.full(len(xa), np.inf)
-    return np.sqrt(epipolar_residual(F, xa, xb, "sampson"))
+    return sampson_px(F, xa, xb)
 
 
 def _rotation_error_deg(va: View, vb: View, xa: np.ndarray, xb: np.ndarray) -> float | None:
@@ -136,10 +134,10 @@ def _rotation_error_deg(va: View, vb: View, xa: np.ndarray, xb: np.ndarray) -> f
         return None
     na, nb = na[ok], nb[ok]
     thr = 1.0 / va.K[0, 0]
-    E, inl = cv2.findEssentialMat(nb, na, np.eye(3), cv2.RANSAC, 0.9999, thr)
-    if E is None or E.shape != (3, 3):
+    E_ba, inl = essential_ransac(nb, na, thr, 0.9999)
+    if E_ba is None:
         return None
-    _, R, _, _ = cv2.recoverPose(E, nb, na, np.eye(3), mask=inl)  # x_a = R x_b + t
+    R = pose_from_essential(E_ba, nb, na, inl)[:3, :3]  # a_from_b: x_a = R x_b + t
     R_true = relative_pose(va.cam_from_world, vb.cam_from_world)[:3, :3]
     c = (np.trace(R.T @ R_true) - 1) / 2
     return float(np.degrees(np.arccos(np.clip(c, -1, 1))))
@@ -166,8 +164,8 @@ def measure_pair(dataset: str, label: str, va: View, vb: View, matchers: dict) -
         pb = np.concatenate([g[1].keypoints[g[2][:, 1]] for g in got.values()])
         F = None
         if len(pa) >= 8:
-            Fba, _ = cv2.findFundamentalMat(pb, pa, cv2.USAC_MAGSAC, 1.0, 0.9999, 10000)
-            F = Fba[:3] if Fba is not None else None  # x_aᵀ F x_b = 0
+            F_ba, _ = fundamental_ransac(pb, pa, 1.0, 0.9999, 10000)
+            F = None if F_ba is None else F_ba.T  # x_aᵀ F x_b = 0
         reference = "estimated"
     rows = []
     for method, (fa, fb, idx, ia, ib, ma, mb, sec) in got.items():

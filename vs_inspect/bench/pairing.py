@@ -18,7 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
+from ..geometry.epipolar import fundamental_from_cameras
+from ..geometry.two_view import sampson_px
 from ..geometry.sampling import (
     camera_at_frames,
     camera_between_frames,
@@ -59,19 +60,13 @@ def _same_moment(bundle: CueBundle, cams: dict[str, CameraTrack], a: str, b: str
     return xa, bundle.tracks[b].xy, F
 
 
-def _sampson_px(xa: np.ndarray, xb: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """Sampson distance (px) of xa (...,2) and xb (...,2) with x_aᵀ F x_b = 0, F (...,3,3)."""
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.sqrt(epipolar_residual(F, xa, xb, "sampson"))
-
-
 def pair_truth(bundle: CueBundle, cams: dict[str, CameraTrack], offsets_s: dict[str, float],
                a: str, b: str, tol_px: float = 2.0, min_common: int = 5) -> PairTruth:
     """Precision and recall of bundle.pairs[(a, b)] under cams and the true offsets_s."""
     xa, xb, F = _same_moment(bundle, cams, a, b, offsets_s[b] - offsets_s[a])
     tp = bundle.pair(a, b)
     index = np.zeros((0, 2), np.int64) if tp is None else tp.index
-    d = _sampson_px(xa[index[:, 0]], xb[index[:, 1]], F[None])  # (P,Tb), NaN where not both seen
+    d = sampson_px(F[None], xa[index[:, 0]], xb[index[:, 1]])  # (P,Tb), NaN where not both seen
     common = np.isfinite(d).sum(1)
     hits = (d < tol_px).sum(1)
     judged = common >= min_common
@@ -85,7 +80,7 @@ def pair_truth(bundle: CueBundle, cams: dict[str, CameraTrack], offsets_s: dict[
         sb = np.nonzero(np.isfinite(xb[:, q, 0]))[0]
         if not len(sa) or not len(sb):
             continue
-        dq = _sampson_px(xa[sa, q][:, None], xb[sb, q][None, :], F[q])
+        dq = sampson_px(F[q], xa[sa, q][:, None], xb[sb, q][None, :])
         i, j = np.nonzero(dq < tol_px)
         keys.append(sa[i].astype(np.int64) * xb.shape[0] + sb[j])
     possible = 0

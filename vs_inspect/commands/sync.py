@@ -58,9 +58,10 @@ def run(args: argparse.Namespace) -> int:
     check_rrd_path(args, out)
     video_names = [p.name if p.is_dir() else p.stem for p in map(Path, args.videos)]
     truth = None
+    from ..io.bundle import read_gt, read_video_infos
+    names = [v.name for v in read_video_infos(args.bundle)] if args.bundle else video_names
+    cfg.sync.offset_grid(names)  # an --around window of no video (or the reference's without 0) fails now
     if args.gt is not None:  # a missing, malformed or mismatched truth fails now, not after the run
-        from ..io.bundle import read_gt, read_video_infos
-        names = [v.name for v in read_video_infos(args.bundle)] if args.bundle else video_names
         truth = read_gt(args.gt, names)
     if args.videos and not args.no_rrd:  # names are known now: refuse a recording collision early
         from ..io.recording import check_entity_names

@@ -31,6 +31,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
+from ..geometry.offsets import grid_around, grid_between, overlap_bounds, span_of
 from ..geometry.sampling import sample_video
 from ..io.board import BoardSpec
 from ..types import CameraCalibration
@@ -189,13 +190,13 @@ def pose_between_board_views(a: BoardView, b: BoardView, spec: BoardSpec, min_pa
     corners = spec.corners_m()
     ta, tb = a.info.timestamps_s, b.info.timestamps_s
     step = 0.5 * min(a.info.frame_interval_s, b.info.frame_interval_s)
-    coarse = np.arange(np.ceil((ta[0] - tb[-1]) / step), np.floor((ta[-1] - tb[0]) / step) + 1) * step
+    coarse = grid_between(*overlap_bounds(span_of(ta), span_of(tb)), step)
     best, best_d = None, 0.0
     for grid in (coarse, None):
         if grid is None:
             if best is None:
                 return None
-            grid = best_d + np.arange(-4, 5) * step / 4
+            grid = grid_around(best_d, step, step / 4)
         for d in grid:
             fit = _fit_at(float(d), a, b, corners, cap_px)
             if fit is not None and np.sum(fit[4] <= cap_px) >= min_pairings \

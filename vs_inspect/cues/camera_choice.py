@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..geometry.offsets import OffsetGrid
 from ..record.sink import DeferredSink, Sink
 from ..types import FROM_MOVING_POINTS, CameraTrack, Tracks, first_clause, refusal_texts
 from .config import CueConfig
@@ -65,10 +66,11 @@ def _copy_stats(stats: dict) -> dict:
 
 def vote_on_cameras(cams: CameraSet, vids: dict, all_pairs: dict, cfg: CueConfig, stats: dict, sink: Sink,
                     progress: bool, estimated: bool, other_peaks: dict | None = None,
-                    other: str = "") -> CameraSet:
+                    other: str = "", grid: OffsetGrid = OffsetGrid()) -> CameraSet:
     """cams with its pairs: the descriptor pairs of its cameras plus the geometric ones
-    (add_geometric_pairs; other_peaks, other: another camera model's vote peaks and its name),
-    a camera fitted to the moving points at an offset its votes refuse taken out."""
+    (add_geometric_pairs; other_peaks, other: another camera model's vote peaks and its name;
+    grid: the limits of the offsets voted for), a camera fitted to the moving points at an offset
+    its votes refuse taken out."""
     cameras = dict(cams.cameras)
     for name, why in stats["dropped"].items():
         if name in vids:
@@ -84,7 +86,7 @@ def vote_on_cameras(cams: CameraSet, vids: dict, all_pairs: dict, cfg: CueConfig
     if cfg.geometric.enabled:
         t0 = time.perf_counter()
         pairing = add_geometric_pairs(pairs, cameras, cams.tracks, vids, cfg, stats, sink, progress,
-                                      estimated=estimated, other_peaks=other_peaks, other=other)
+                                      estimated=estimated, other_peaks=other_peaks, other=other, grid=grid)
         pairs, voted = pairing.pairs, pairing.voted
         fallback = (stats.get("sfm") or {}).get("fallback") or {}
         if fallback.get("used"):
@@ -102,7 +104,7 @@ def vote_on_cameras(cams: CameraSet, vids: dict, all_pairs: dict, cfg: CueConfig
 
 
 def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, all_pairs: dict,
-                      frame_images: dict, sink: Sink, progress: bool) -> CameraSet:
+                      frame_images: dict, sink: Sink, progress: bool, grid: OffsetGrid = OffsetGrid()) -> CameraSet:
     """The cameras pycolmap estimates and their pairs (frame_images: name -> (a function giving a
     moving camera's frames to register, how many), as cameras.CameraModels takes them). With
     camera features "auto", when the joint vote on SIFT's cameras leaves a video without a
@@ -110,7 +112,8 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, a
     (geometric_pairs.disputed_by_other_model); the set with more such videos is kept, SIFT's on
     a tie. When the kept set still leaves one untrusted, ALIKED's model is tried last
     (CameraModels.third), held to the first set's peaks too, and kept only when it trusts more videos.
-    stats ends as the kept set left it, with every tried set's counts in stats["sfm"]["models"]."""
+    stats ends as the kept set left it, with every tried set's counts in stats["sfm"]["models"].
+    grid: the limits of every offset Stage 0 searches (the moving points' cameras' and the votes')."""
     from .cameras import CameraModels
 
     frames = {n: v.sfm_frames for n, v in vids.items() if v.sfm_frames is not None}
@@ -127,11 +130,11 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, a
                     as_built=False) -> tuple[str, CameraSet] | None:
             own = _copy_stats(stats)
             events = DeferredSink(sink.options)
-            cams = _estimate(vids, cfg, own, all_pairs, est, from_tracks, memo, as_built)
+            cams = _estimate(vids, cfg, own, all_pairs, est, from_tracks, memo, as_built, grid)
             if from_tracks and not (own["sfm"].get("fallback") or {}).get("used"):
                 return None  # est's own cameras again, already voted on
             out = vote_on_cameras(cams, vids, all_pairs, cfg, own, events, progress, estimated=True,
-                                  other_peaks=other_peaks, other=other)
+                                  other_peaks=other_peaks, other=other, grid=grid)
             kind = MOVING_POINTS if from_tracks else est.features + (OWN if as_built else "")
             return kind, dataclasses.replace(out, stats=own, events=events)
 
@@ -253,7 +256,8 @@ def _verdict(kind: str, c: CameraSet, n: str) -> tuple[str, str]:
 
 
 def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, pairs: dict, est,
-              from_tracks: bool = False, memo: dict | None = None, as_built: bool = False) -> CameraSet:
+              from_tracks: bool = False, memo: dict | None = None, as_built: bool = False,
+              grid: OffsetGrid = OffsetGrid()) -> CameraSet:
     """The cameras of est (cameras.CameraEstimate) and the tracks undistorted with them, or the
     cameras the moving points give when their cameras explain the points better and est is weak,
     or from_tracks (the joint vote trusted no video on est's cameras; the moving points' cameras
@@ -302,7 +306,7 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, pairs: di
         else:
             cams, reasons, details = cameras_from_tracks(
                 ref, infos, xy, pairs, {n: v.camera_motion == "moving" for n, v in vids.items()},
-                joint=cfg.camera.fallback_joint_offsets)
+                joint=cfg.camera.fallback_joint_offsets, grid=grid)
             if memo is not None:
                 memo["from_tracks"] = copy.deepcopy((cams, reasons, details))
         if from_tracks:  # the background did reconstruct; these cameras are the static ones only

@@ -22,6 +22,7 @@ from tqdm import tqdm
 
 from ..engine import Engine, LocalEngine, TaskFailed
 from ..errors import InputError, NoUsableVideos
+from ..geometry.offsets import OffsetGrid
 from ..record.sink import NullSink, Sink
 from ..types import CueBundle, CueStats, TrackPairs, Tracks, VideoCueStats
 from .camera_choice import CameraSet, estimated_cameras, vote_on_cameras
@@ -61,7 +62,7 @@ def _import_cameras(calibration: dict, vids: dict[str, VideoCues]) -> tuple[dict
 
 def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueConfig(),
                  sink: Sink | None = None, progress: bool = True,
-                 engine: Engine | None = None) -> tuple[CueBundle, CueStats]:
+                 engine: Engine | None = None, grid: OffsetGrid = OffsetGrid()) -> tuple[CueBundle, CueStats]:
     """Cues of every video: (CueBundle of the usable videos, CueStats).
 
     engine: where each video's own cues (decoding, moving regions, tracks, features) are
@@ -71,7 +72,8 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
     sources: VideoSource list (vs_inspect.io.video.open_video). calibration: name ->
     CameraCalibration (vs_inspect.io.calibration.load_calibration) or None to estimate the
     cameras with pycolmap. CueStats: timings per step, per-video and per-pair counts, the videos
-    left out of the bundle with their reason, the cameras' source.
+    left out of the bundle with their reason, the cameras' source. grid: the limits of every
+    offset Stage 0 searches (--min-overlap-s, --range-s, --around), as Stage 1's.
     """
     sink = sink or NullSink()
     if len(sources) < 2:
@@ -153,12 +155,12 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
             cameras, tracks, dropped, undistort = _import_cameras(calibration, vids)
             stats["dropped"].update(dropped)
             kept = vote_on_cameras(CameraSet(cameras, tracks, None, None, undistort), vids, all_pairs, cfg,
-                                   stats, sink, progress, estimated=False)
+                                   stats, sink, progress, estimated=False, grid=grid)
         else:
             by_name = {s.info.name: s for s in sources}
             frame_images = {n: (functools.partial(registration_images, by_name[n], v, cfg), len(v.register_masks[0]))
                             for n, v in vids.items() if v.register_masks is not None}
-            kept = estimated_cameras(vids, cfg, stats, all_pairs, frame_images, sink, progress)
+            kept = estimated_cameras(vids, cfg, stats, all_pairs, frame_images, sink, progress, grid)
         cameras, tracks, undistort, pairs = kept.cameras, kept.tracks, kept.undistort, kept.pairs
         points, colors = kept.points, kept.colors
         timings["cameras_s"] = time.perf_counter() - t0 - kept.voting_s

@@ -32,6 +32,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
+from ..geometry.offsets import OffsetGrid, span_of
 from ..geometry.sampling import camera_at_frames, camera_between_frames, tracks_between_frames
 from ..geometry.timing import frame_brackets
 from ..types import CameraTrack, TrackPairs, VideoInfo
@@ -53,6 +54,7 @@ class GeometricPairStats:
     cand_index: np.ndarray | None = None  # (M,2) informative candidates (track of a, track of b)
     cand_offset_s: np.ndarray | None = None  # (M,) their best Δ_ab, seconds
     cand_res: np.ndarray | None = None  # (M,) their mean Sampson distance² there, px²
+    window_s: tuple[float, float] | None = None  # (lo, hi) of Δ_ab a peak may be at (--around), s
 
     def swapped(self) -> GeometricPairStats:
         """The same evidence for the pair taken the other way round (Δ_ba = -Δ_ab)."""
@@ -62,7 +64,15 @@ class GeometricPairStats:
             self.peak_votes, self.pair_peak, flip,
             None if self.votes is None else self.votes[::-1].copy(), self.halfwidth_s,
             None if self.cand_index is None else self.cand_index[:, ::-1].copy(),
-            None if self.cand_offset_s is None else -self.cand_offset_s, self.cand_res)
+            None if self.cand_offset_s is None else -self.cand_offset_s, self.cand_res,
+            None if self.window_s is None else (-self.window_s[1], -self.window_s[0]))
+
+    def allows(self, delta_s: np.ndarray) -> np.ndarray:
+        """(...) bool: whether a peak may be at Δ_ab = delta_s (inside the --around window)."""
+        d = np.asarray(delta_s, np.float64)
+        if self.window_s is None:
+            return np.ones(d.shape, bool)
+        return (d >= self.window_s[0] - 1e-9) & (d <= self.window_s[1] + 1e-9)
 
 
 @nb.njit(inline="always")
@@ -294,13 +304,16 @@ def _candidates(xy: np.ndarray, max_tracks: int, min_frames: int, sweep: np.ndar
     return np.sort(idx)
 
 
-def _peaks(votes: np.ndarray, count: int, halfwidth: int) -> list[int]:
-    """Indices of the highest peaks of a vote histogram, at least 2*halfwidth+1 apart."""
+def _peaks(votes: np.ndarray, count: int, halfwidth: int, allowed: np.ndarray | None = None) -> list[int]:
+    """Indices of the highest peaks of a vote histogram, at least 2*halfwidth+1 apart (and where
+    allowed (D,) bool, when given)."""
     smooth = np.convolve(votes, np.ones(2 * halfwidth + 1), mode="same")
     out: list[int] = []
     for d in np.argsort(-smooth, kind="stable"):
         if smooth[d] <= 0 or len(out) >= count:
             break
+        if allowed is not None and not allowed[d]:
+            continue
         if all(abs(int(d) - p) > 2 * halfwidth for p in out):
             out.append(int(d))
     return out
@@ -349,24 +362,28 @@ def _one_to_one(cand_a: np.ndarray, cand_b: np.ndarray, res: np.ndarray) -> np.n
 
 def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a: CameraTrack,
                     cam_b: CameraTrack, xy_a: np.ndarray, xy_b: np.ndarray,
-                    cfg: GeometricPairConfig = GeometricPairConfig()
+                    cfg: GeometricPairConfig = GeometricPairConfig(), grid: OffsetGrid = OffsetGrid()
                     ) -> tuple[TrackPairs, GeometricPairStats]:
     """Track pairs between cameras a and b from epipolar consistency over time.
 
     Either camera may move (per-frame poses): with one moving, its epipolar geometry is taken per
     frame; with both, per frame of b and per offset (a's pose at the moment b's frame meets,
     interpolated between its frames as its track points are). xy_a (Na,Ta,2), xy_b (Nb,Tb,2):
-    undistorted px in the cameras' pinhole models.
+    undistorted px in the cameras' pinhole models. grid: the limits of the offsets voted for
+    (overlap, range), on a half-frame step of the finer video; its --around window holds the
+    peaks only, so that the votes' statistics (vote_z) stay the whole range's.
     """
     if cam_a.is_moving and not cam_b.is_moving:  # a moving camera is b inside: Δ_ba = -Δ_ab
-        tp, st = geometric_pairs(b, a, info_b, info_a, cam_b, cam_a, xy_b, xy_a, cfg)
+        tp, st = geometric_pairs(b, a, info_b, info_a, cam_b, cam_a, xy_b, xy_a, cfg, grid)
         return TrackPairs(a, b, tp.index[:, ::-1].copy(), tp.weight), st.swapped()
     empty = TrackPairs(a, b, np.zeros((0, 2), np.int64), np.zeros(0))
     Tb = xy_b.shape[1]
     step = 0.5 * min(info_a.frame_interval_s, info_b.frame_interval_s)
     ta, tb = info_a.timestamps_s, info_b.timestamps_s
-    lo, hi = ta[0] - tb[-1], ta[-1] - tb[0]
-    offsets = np.arange(np.ceil(lo / step), np.floor(hi / step) + 1) * step
+    offsets = grid.pair_offsets(a, span_of(ta), b, span_of(tb), step, window=False)
+    allowed = grid.within_window(a, b, offsets)
+    if not len(offsets):
+        return empty, GeometricPairStats(0, 0, 0, (), ())
     k, w = frame_brackets(ta, tb[None, :] + offsets[:, None])
     # (Dg,Tb,3,3): one row of G when a is static, one per offset when both move
     G = _moving_fundamentals(cam_a, cam_b, k, w) if cam_a.is_moving else \
@@ -402,7 +419,7 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
                                 cfg.min_sweep_tau * tau, qstep, (cfg.epipole_margin_tau * tau) ** 2)
     informative = best >= 0
     votes = np.bincount(best[informative], minlength=len(offsets)).astype(float)
-    peaks = _peaks(votes, cfg.peaks, cfg.peak_halfwidth)
+    peaks = _peaks(votes, cfg.peaks, cfg.peak_halfwidth, None if allowed.all() else allowed)
     keep_a, keep_b, keep_p, peak_votes = [], [], [], []
     for pi, p in enumerate(peaks):
         near = informative & (np.abs(best - p) <= cfg.peak_halfwidth)
@@ -425,7 +442,8 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
                                tuple(float(offsets[p]) for p in peaks), tuple(peak_votes),
                                np.array(keep_p, np.int64)[first], offsets, votes,
                                max(step * cfg.peak_halfwidth, 0.5 * coarser),
-                               np.stack([cand_a[inf], cand_b[inf]], 1), offsets[best[inf]], res[inf])
+                               np.stack([cand_a[inf], cand_b[inf]], 1), offsets[best[inf]], res[inf],
+                               grid.pair_window(a, b))
     return TrackPairs(a, b, index, np.ones(len(index))), stats
 
 
@@ -505,7 +523,7 @@ def joint_offsets(found: dict[tuple[str, str], GeometricPairStats], tol_s: float
     """Offsets of every camera that together collect the most votes over all pairs.
 
     Each pair's votes are z-scored (vote_z); a choice of offsets scores the sum over pairs of
-    the z-score at its Δ_ab = offset_b - offset_a (a Δ outside a pair's grid scores -5). The
+    the z-score at its Δ_ab = offset_b - offset_a (a Δ outside a pair's grid or its --around window scores -5). The
     choices tried: with each camera in turn as the reference, every combination of the
     `candidates` highest z-peaks of its pairs with the others. A single pair can have a false
     peak above its true one (a repeated motion, points moving along their epipolar lines), but
@@ -523,16 +541,19 @@ def joint_offsets(found: dict[tuple[str, str], GeometricPairStats], tol_s: float
         offs, z = zs[(a, b)]  # called for the pairs of zs only
         i = np.clip(np.searchsorted(offs, delta), 1, max(1, len(offs) - 1))
         i = np.where(np.abs(offs[i] - delta) < np.abs(offs[i - 1] - delta), i, i - 1)
-        inside = (delta >= offs[0] - 1e-9) & (delta <= offs[-1] + 1e-9)
+        inside = (delta >= offs[0] - 1e-9) & (delta <= offs[-1] + 1e-9) & found[(a, b)].allows(delta)
         return np.where(inside, z[i], -5.0)
 
     def peaks_of(a: str, b: str) -> list[float]:
         offs, z = zs[(a, b)] if (a, b) in zs else (-zs[(b, a)][0], zs[(b, a)][1])
-        sep = max(found[(a, b) if (a, b) in found else (b, a)].halfwidth_s, 1e-6) * 2
+        st = found[(a, b)] if (a, b) in found else found[(b, a)].swapped()
+        sep = max(st.halfwidth_s, 1e-6) * 2
         out: list[float] = []
         for i in np.argsort(-z, kind="stable"):
             if len(out) >= per:
                 break
+            if not st.allows(offs[i]):  # outside the pair's --around window
+                continue
             if all(abs(offs[i] - o) > sep for o in out):
                 out.append(float(offs[i]))
         return out

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from tqdm import tqdm
 
+from ..geometry.offsets import OffsetGrid
 from ..record.sink import Sink
 from ..types import TrackPairs, VideoInfo
 from .config import CueConfig
@@ -38,13 +39,15 @@ class GeometricPairing:
 
 def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
                         stats: dict, sink: Sink, progress: bool, estimated: bool,
-                        other_peaks: dict | None = None, other: str = "") -> GeometricPairing:
+                        other_peaks: dict | None = None, other: str = "",
+                        grid: OffsetGrid = OffsetGrid()) -> GeometricPairing:
     """Descriptor pairs plus epipolar-consistency pairs for every pair of known cameras (a moving
     one with its per-frame poses), the Δ_ab whose supporters were added and every pair's vote peaks.
     estimated: Stage 0 estimated the cameras (no calibration given); only then are sure cameras
     checked in three views. other_peaks: (a, b) -> the vote peaks of another camera model (named
     other), which a sure camera's joint offset must meet in one of its pairs
-    (geometric_pairs.disputed_by_other_model).
+    (geometric_pairs.disputed_by_other_model). grid: the limits of every vote's offsets (overlap,
+    range), the point transfer's included; its --around windows hold the peaks and offsets chosen.
 
     With three or more such cameras, the vote peaks whose offsets close every triangle
     (Δ_ab + Δ_bc ≈ Δ_ac) are chosen and only their supporters kept. When no choice closes the
@@ -63,7 +66,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     found = {}
     for a, b in tqdm(todo, desc="geometric pairs", unit="pair", disable=not progress, leave=False):
         found[(a, b)] = geometric_pairs(a, b, vids[a].info, vids[b].info, cameras[a], cameras[b],
-                                        tracks[a].xy, tracks[b].xy, cfg.geometric)
+                                        tracks[a].xy, tracks[b].xy, cfg.geometric, grid)
     peaks_s = {k: tuple(gs.peaks_s) for k, (_, gs) in found.items()}
     votes = {k: gs for k, (_, gs) in found.items()}  # each pair's vote evidence
     coarsest = max((vids[n].info.frame_interval_s for k in found for n in k), default=0.0)
@@ -75,7 +78,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     # the check is of cameras Stage 0 estimated: a calibration's are given (and a right calibrated
     # camera can follow as few trajectories as a wrong estimated one)
     if cfg.geometric.three_view_min_supporters > 0 and estimated and sum(sure.values()) >= 3:
-        three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, sink)
+        three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, sink, grid)
         sure = {n: ok and (n not in three_view or three_view[n].passed) for n, ok in sure.items()}
     dissent, dissent_short = {}, {}  # camera -> why it was made unsure; the same in a few words
     # three_view is only filled for estimated cameras (a calibration's are given)
@@ -121,7 +124,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
             # not of a camera its own pairs contradict: point transfer projects into the same
             # camera, whose biased geometry it can then confirm at a wrong offset
             checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, sink,
-                                                frozenset(dissent))
+                                                frozenset(dissent), grid)
         sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
         said = _JointChecks({c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
                             {c: chk.summary() for c, chk in three_view.items()}, dissent, dissent_short, overruled)
@@ -300,7 +303,7 @@ def _transfer_radius_px(info: VideoInfo, g) -> float:
 
 
 def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
-                          vids: dict, cfg: CueConfig, sink: Sink) -> dict:
+                          vids: dict, cfg: CueConfig, sink: Sink, grid: OffsetGrid = OffsetGrid()) -> dict:
     """{camera: transfer.ThreeViewCheck} for every sure camera: the other sure cameras' track
     pairs triangulated at their joint offsets and projected into it at its own. Wrong cameras can
     make the joint vote sure of wrong offsets, consistent in every triangle, since a line through
@@ -317,7 +320,8 @@ def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: di
                                  {n: joint.offsets_s[n] for n, ok in others.items() if ok})
         chk = check_in_three_views(c, joint.offsets_s[c], traj, infos[c], cameras[c], xy[c],
                                    _transfer_radius_px(infos[c], g), g.transfer_min_hits,
-                                   g.three_view_min_supporters, g.three_view_min_share_of_best)
+                                   g.three_view_min_supporters, g.three_view_min_share_of_best, grid,
+                                   joint.origin)
         checks[c] = chk
         sink.three_view_landscape(c, chk.landscape.offsets_s, chk.landscape.supporters, chk.joint_offset_s,
                                   chk.passed)
@@ -329,12 +333,13 @@ def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: di
 
 
 def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
-                         vids: dict, cfg: CueConfig, sink: Sink, skip: frozenset[str] = frozenset()):
+                         vids: dict, cfg: CueConfig, sink: Sink, skip: frozenset[str] = frozenset(),
+                         grid: OffsetGrid = OffsetGrid()):
     """({camera: transfer.TransferCheck}, the transfer.Trajectories projected): a check of every
     camera the joint vote is unsure of (but those of skip), the sure cameras' track pairs
     triangulated at their joint offsets and projected into it over its candidate offsets
     (cues/transfer.py)."""
-    from .transfer import confirm_offset, offset_grid, transfer_landscape, triangulate_pairs
+    from .transfer import candidate_offsets, confirm_offset, transfer_landscape, triangulate_pairs
 
     g = cfg.geometric
     sure_offsets = {n: joint.offsets_s[n] for n, ok in sure.items() if ok}
@@ -344,9 +349,9 @@ def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dic
     checks = {}
     for c in sorted(n for n, ok in sure.items() if not ok and n not in skip):
         info = vids[c].info
-        land = transfer_landscape(traj, info, cameras[c], tracks[c].xy,
-                                  offset_grid(traj, info, 0.5 * info.frame_interval_s),
-                                  _transfer_radius_px(info, g), g.transfer_min_hits)
+        offsets = candidate_offsets(traj, info, 0.5 * info.frame_interval_s, grid, joint.origin)
+        land = transfer_landscape(traj, info, cameras[c], tracks[c].xy, offsets, _transfer_radius_px(info, g),
+                                  g.transfer_min_hits, allowed=grid.within_window(joint.origin, c, offsets))
         chk = confirm_offset(c, joint.offsets_s[c], land, info.frame_interval_s,
                              g.transfer_agree_frames, g.transfer_min_z, g.transfer_min_supporters)
         checks[c] = chk

@@ -5,7 +5,7 @@ For a reference video r and each other static video v: search the time offset wh
 track pairs (x_r(t + Δ), x_v(t)) give the most consistent fundamental matrix (RANSAC inlier
 share, as in unsynchronized two-view geometry; with three or more static cameras the offsets of
 all of them together, every pair's share summed with its triangles closed), self-calibrate one
-focal length per pair (the f that makes K_vᵀ F K_r closest to an essential matrix, principal
+focal length per pair (the f that makes K_rᵀ F_rv K_v closest to an essential matrix, principal
 points at the image centres), decompose into a relative pose, and fix the scale of every pair
 from points triangulated on the reference's tracks. With three or more cameras, one focal per
 camera and every pose are then fitted to the track pairs of all camera pairs at once (scipy
@@ -26,6 +26,9 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
+from ..geometry.offsets import OffsetGrid, span_of
+from ..geometry.two_view import (essential_from_fundamental, focal_from_fundamental, fundamental_ransac,
+                                 normalized_points, pose_from_essential, signed_sampson_px)
 from ..types import CameraTrack, TrackPairs, VideoInfo
 
 log = logging.getLogger(__name__)
@@ -34,7 +37,7 @@ log = logging.getLogger(__name__)
 @dataclass(frozen=True)
 class PairGeometry:
     offset_s: float  # coarse Δ_rv, seconds
-    F: np.ndarray  # (3,3), x_v^T F x_r = 0 (full-resolution px)
+    F: np.ndarray  # (3,3) F_rv: x_rᵀ F x_v = 0 (full-resolution px)
     inlier_share: float
     num_correspondences: int
     focal_px: float
@@ -62,19 +65,6 @@ def aligned_correspondences(xy_a: np.ndarray, info_a: VideoInfo, xy_b: np.ndarra
     return A[pi, fi], B[pi, fi], keys
 
 
-def _focal_from_F(F: np.ndarray, ca: np.ndarray, cb: np.ndarray, size: float) -> float:
-    """Focal (px) shared by both cameras that makes K_bᵀ F K_a most essential-like."""
-    best, best_f = np.inf, size
-    for f in np.geomspace(0.3 * size, 5.0 * size, 160):
-        Ka = np.array([[f, 0, ca[0]], [0, f, ca[1]], [0, 0, 1]])
-        Kb = np.array([[f, 0, cb[0]], [0, f, cb[1]], [0, 0, 1]])
-        s = np.linalg.svd(Kb.T @ F @ Ka, compute_uv=False)
-        cost = (s[0] - s[1]) / (s[0] + s[1])
-        if cost < best:
-            best, best_f = cost, f
-    return float(best_f)
-
-
 @dataclass(frozen=True)
 class OffsetCurve:
     """How well one F explains a pair's aligned track pairs at each coarse offset Δ_ab (offsets
@@ -84,7 +74,7 @@ class OffsetCurve:
     step_s: float  # the grid step, seconds
     share: np.ndarray  # (K,) MAGSAC inlier share of the best F at each offset
     count: np.ndarray  # (K,) aligned correspondences used at each offset
-    F: tuple  # K (3,3) arrays, x_b^T F x_a = 0 (full-resolution px)
+    F: tuple  # K (3,3) arrays F_ab: x_aᵀ F x_b = 0 (full-resolution px)
 
     def at(self, delta_s: np.ndarray) -> np.ndarray:
         """share at the grid offsets nearest delta_s (any shape); NaN off the curve."""
@@ -98,29 +88,26 @@ class OffsetCurve:
 
 
 def offset_curve(xy_a, info_a, xy_b, info_b, index, min_corr: int = 40, thresh_px: float = 2.0,
-                 max_corr: int = 2000, seed: int = 0, min_share_of_max: float = 0.5) -> OffsetCurve | None:
-    """The pair's OffsetCurve from its track pairs (index (P,2): track of a, track of b), or None
-    when no offset aligns min_corr correspondences that one F can be fitted to."""
+                 max_corr: int = 2000, seed: int = 0, min_share_of_max: float = 0.5,
+                 grid: OffsetGrid = OffsetGrid()) -> OffsetCurve | None:
+    """The pair's OffsetCurve from its track pairs (index (P,2): track of a, track of b) over
+    grid's candidate offsets on the finer video's frame step, or None when no offset aligns
+    min_corr correspondences that one F can be fitted to."""
     if len(index) < 8:
         return None
     step = min(info_a.frame_interval_s, info_b.frame_interval_s)
-    lo = info_a.timestamps_s[0] - info_b.timestamps_s[-1]
-    hi = info_a.timestamps_s[-1] - info_b.timestamps_s[0]
     rng = np.random.default_rng(seed)
     cands = []
-    for d in np.arange(lo, hi + step / 2, step):
+    for d in grid.pair_offsets(info_a.name, span_of(info_a.timestamps_s), info_b.name,
+                               span_of(info_b.timestamps_s), step):
         A, B, _ = aligned_correspondences(xy_a, info_a, xy_b, info_b, index, d)
         if len(A) < min_corr:
             continue
         if len(A) > max_corr:
             sel = rng.choice(len(A), max_corr, replace=False)
             A, B = A[sel], B[sel]
-        try:
-            F, inl = cv2.findFundamentalMat(A.astype(np.float64), B.astype(np.float64), cv2.USAC_MAGSAC,
-                                            thresh_px, 0.999, 2000)
-        except cv2.error:  # OpenCV 5's USAC asserts on some degenerate samples instead of failing softly
-            continue
-        if F is None or F.shape != (3, 3):
+        F, inl = fundamental_ransac(A, B, thresh_px, 0.999, 2000)
+        if F is None:
             continue
         cands.append((float(d), float(inl.mean()), len(A), F))
     if not cands:
@@ -136,7 +123,7 @@ def _geometry_at(curve: OffsetCurve, k: int, info_r: VideoInfo, info_v: VideoInf
     ca = np.array([(info_r.width - 1) / 2, (info_r.height - 1) / 2])
     cb = np.array([(info_v.width - 1) / 2, (info_v.height - 1) / 2])
     F = curve.F[k]
-    f = _focal_from_F(F, ca, cb, float(max(info_r.width, info_r.height, info_v.width, info_v.height)))
+    f = focal_from_fundamental(F, ca, cb, float(max(info_r.width, info_r.height, info_v.width, info_v.height)))
     return PairGeometry(float(curve.offsets_s[k]), F, float(curve.share[k]), int(curve.count[k]), f)
 
 
@@ -189,7 +176,8 @@ def joint_coarse_offsets(ref: str, curves: dict[tuple[str, str], OffsetCurve], m
 def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.ndarray],
                         pairs: dict[tuple[str, str], TrackPairs], moving: dict[str, bool],
                         refine: bool = True, min_inlier_share: float = 0.2, max_median_fraction: float = 0.01,
-                        joint: bool = True) -> tuple[dict[str, CameraTrack], dict[str, str], dict[str, dict]]:
+                        joint: bool = True, grid: OffsetGrid = OffsetGrid()
+                        ) -> tuple[dict[str, CameraTrack], dict[str, str], dict[str, dict]]:
     """Static cameras in the reference's camera frame: (cameras, unregistered reasons, details).
 
     A camera needs min_inlier_share of its correspondences with the reference within 2 px of the
@@ -200,7 +188,7 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
     refine: with three or more cameras, fit every focal and pose to all pairs at once
     (refine_cameras; details["joint_fit"] says how well); when the fit leaves the median track
     pair farther than max_median_fraction of the image diagonal from its epipolar line (Stage 1's
-    inlier tolerance), no camera is returned."""
+    inlier tolerance), no camera is returned. grid: the limits of the coarse offsets searched."""
     reasons: dict[str, str] = {}
     details: dict[str, dict] = {}
     found: dict[str, tuple] = {}  # name -> (PairGeometry, aligned correspondences with ref)
@@ -221,7 +209,7 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
             reasons[v] = (f"camera could not be registered: background did not reconstruct and only "
                           f"{0 if idx is None else len(idx)} track pairs with {ref}")
             continue
-        curve = offset_curve(xy[ref], info_r, xy[v], infos[v], idx)
+        curve = offset_curve(xy[ref], info_r, xy[v], infos[v], idx, grid=grid)
         if curve is None:
             reasons[v] = ("camera could not be registered: no consistent two-view geometry from the "
                           f"moving points shared with {ref}")
@@ -231,7 +219,7 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
     if joint and len(index) >= 2:
         for (a, b), tp in sorted(pairs.items()):
             if a in index and b in index and len(tp.index) >= 8:
-                curve = offset_curve(xy[a], infos[a], xy[b], infos[b], tp.index)
+                curve = offset_curve(xy[a], infos[a], xy[b], infos[b], tp.index, grid=grid)
                 if curve is not None:
                     curves[(a, b)] = curve
         together = joint_coarse_offsets(ref, curves)
@@ -297,10 +285,9 @@ def _cameras_at(ref: str, infos: dict[str, VideoInfo], found: dict[str, tuple], 
     geo = {}
     for v, (g, (A, B, keys)) in found.items():
         Ka, Kb = K(info_r, focal_px[v]), K(infos[v], focal_px[v])
-        E = Kb.T @ g.F @ Ka
-        na = cv2.undistortPoints(A.reshape(-1, 1, 2).astype(np.float64), Ka, None).reshape(-1, 2)
-        nb = cv2.undistortPoints(B.reshape(-1, 1, 2).astype(np.float64), Kb, None).reshape(-1, 2)
-        _, R, t, _ = cv2.recoverPose(E, na, nb, np.eye(3))
+        na, nb = normalized_points(A, Ka), normalized_points(B, Kb)
+        T = pose_from_essential(essential_from_fundamental(g.F, Ka, Kb), na, nb)
+        R, t = T[:3, :3], T[:3, 3]
         P0 = np.hstack([np.eye(3), np.zeros((3, 1))])
         P1 = np.hstack([R, t.reshape(3, 1)])
         X = cv2.triangulatePoints(P0, P1, na.T, nb.T)
@@ -327,14 +314,6 @@ def _cameras_at(ref: str, infos: dict[str, VideoInfo], found: dict[str, tuple], 
         cams[v] = CameraTrack(Kb, T)
     cams[ref] = CameraTrack(K(info_r, float(np.median(list(focal_px.values())))), np.eye(4))
     return cams, with_scale
-
-
-def _signed_sampson(F_ab: np.ndarray, h_a: np.ndarray, h_b: np.ndarray) -> np.ndarray:
-    """(P,) signed Sampson distance (px) of x_aᵀ F_ab x_b = 0, homogeneous h_a, h_b (P,3): the
-    signed root of geometry.epipolar's "sampson" residual, smooth at zero for least squares."""
-    Fb, Fta = h_b @ F_ab.T, h_a @ F_ab
-    num = np.sum(h_a * Fb, axis=1)
-    return num / np.sqrt(Fb[:, 0] ** 2 + Fb[:, 1] ** 2 + Fta[:, 0] ** 2 + Fta[:, 1] ** 2 + 1e-300)
 
 
 def _pair_data(cams, infos, xy, pairs, coarse_offset_s, max_per_pair, seed):
@@ -414,7 +393,7 @@ def refine_cameras(cams: dict[str, CameraTrack], ref: str, infos: dict[str, Vide
         Ks, Ts = unpack(x)
         Ks, Ts = np.stack(Ks), np.stack(Ts)
         F = fundamental_from_cameras(Ks[ia], Ts[ia], Ks[ib], Ts[ib])  # all pairs at once
-        out = [_signed_sampson(F[k], A, B) for k, (_, _, A, B) in enumerate(data)]
+        out = [signed_sampson_px(F[k], A, B) for k, (_, _, A, B) in enumerate(data)]
         out.append(np.array([10.0 * (np.linalg.norm(Ts[1][:3, 3]) - 1.0)]))  # scale gauge
         return np.concatenate(out)
 

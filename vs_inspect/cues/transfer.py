@@ -22,6 +22,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..geometry.epipolar import project
+from ..geometry.offsets import OffsetGrid, span_of
 from ..geometry.sampling import camera_at_frames
 from ..geometry.timing import frame_brackets
 from ..geometry.triangulate import triangulate_over_time
@@ -110,7 +111,7 @@ class TransferLandscape:
 def transfer_landscape(traj: Trajectories, info_c: VideoInfo, camera_c: CameraTrack,
                        xy_c: np.ndarray, offsets_s: np.ndarray, radius_px: float,
                        min_hits: int = 5, min_overlap_share: float = MIN_OVERLAP_SHARE,
-                       neighbours: int = 4) -> TransferLandscape:
+                       neighbours: int = 4, allowed: np.ndarray | None = None) -> TransferLandscape:
     """The support of each candidate offset of camera c (offsets_s (D,), increasing), and the
     offset whose share (support per sample inside c's video) is highest.
 
@@ -120,7 +121,9 @@ def transfer_landscape(traj: Trajectories, info_c: VideoInfo, camera_c: CameraTr
     when at least min_hits. Offsets whose overlap (samples inside c's video) is below
     min_overlap_share of the largest overlap are not candidates: a peak resting on a few samples
     at the edge of the range says little. xy_c (N,T,2): c's tracks, undistorted px. Beyond
-    MAX_BRACKETS (offsets × samples), the samples are thinned evenly.
+    MAX_BRACKETS (offsets × samples), the samples are thinned evenly. allowed (D,) bool: the
+    offsets the best may be at (an --around window); the z-score's median and spread stay those
+    of every candidate.
     """
     offsets_s = np.asarray(offsets_s, np.float64)
     stride = -(-len(offsets_s) * len(traj.time_s) // MAX_BRACKETS)
@@ -197,7 +200,11 @@ def transfer_landscape(traj: Trajectories, info_c: VideoInfo, camera_c: CameraTr
         return TransferLandscape(offsets_s, support, overlap, supporters, -1, 0.0,
                                  np.zeros((0, 2), np.int64))
     vals = share[candidates]
-    best = int(np.flatnonzero(candidates)[np.argmax(vals)])
+    pick = candidates if allowed is None else candidates & np.asarray(allowed, bool)
+    if not pick.any() or support[pick].max() <= 0:
+        return TransferLandscape(offsets_s, support, overlap, supporters, -1, 0.0,
+                                 np.zeros((0, 2), np.int64))
+    best = int(np.flatnonzero(pick)[np.argmax(share[pick])])
     med = float(np.median(vals))
     mad = 1.4826 * float(np.median(np.abs(vals - med)))
     z = (share[best] - med) / max(mad, 1e-3)
@@ -212,13 +219,16 @@ def transfer_landscape(traj: Trajectories, info_c: VideoInfo, camera_c: CameraTr
                              matches[np.argsort(matches[:, 0])])
 
 
-def offset_grid(traj: Trajectories, info_c: VideoInfo, step_s: float) -> np.ndarray:
-    """Candidate offsets of c (step_s apart) at which some sample falls inside c's video."""
+def candidate_offsets(traj: Trajectories, info_c: VideoInfo, step_s: float, grid: OffsetGrid = OffsetGrid(),
+                      origin: str | None = None) -> np.ndarray:
+    """Candidate offsets of c (multiples of step_s) at which c's video shares enough time with
+    the samples (grid's min_overlap_s), within grid's range: the samples' times are global times
+    whose 0 is origin's local time 0 (the joint vote's first camera). The --around window is not
+    cropped here (it holds the choice: grid.within_window(origin, c, offsets))."""
     if not len(traj.time_s):
         return np.zeros(0)
-    lo = traj.time_s.min() - info_c.timestamps_s[-1]
-    hi = traj.time_s.max() - info_c.timestamps_s[0]
-    return np.arange(np.ceil(lo / step_s), np.floor(hi / step_s) + 1) * step_s
+    span = (float(traj.time_s.min()), float(traj.time_s.max()))
+    return grid.pair_offsets(origin or "", span, info_c.name, span_of(info_c.timestamps_s), step_s, window=False)
 
 
 @dataclass(frozen=True)
@@ -297,19 +307,24 @@ class ThreeViewCheck:
 
 def check_in_three_views(camera: str, joint_offset_s: float, traj: Trajectories, info_c: VideoInfo,
                          camera_c: CameraTrack, xy_c: np.ndarray, radius_px: float, min_hits: int,
-                         min_supporters: int, min_share_of_best: float) -> ThreeViewCheck:
+                         min_supporters: int, min_share_of_best: float, grid: OffsetGrid = OffsetGrid(),
+                         origin: str | None = None) -> ThreeViewCheck:
     """The camera passes when at least min_supporters of traj (the other sure cameras'
     trajectories) are followed by one of its tracks (xy_c (N,T,2), undistorted px) at its joint
     offset, each at min_hits moments within radius_px of the projection, and at least
     min_share_of_best as many as at the offset (half-frame grid) where most are: a wrong camera
-    leaves few followed anywhere, a wrong offset far fewer than the right one."""
-    grid = np.union1d(offset_grid(traj, info_c, 0.5 * info_c.frame_interval_s), [joint_offset_s])
-    land = transfer_landscape(traj, info_c, camera_c, xy_c, grid, radius_px, min_hits)
-    n = int(land.supporters[np.searchsorted(grid, joint_offset_s)])
-    enough = land.overlap >= MIN_OVERLAP_SHARE * land.overlap.max()  # the grid holds the joint offset at least
+    leaves few followed anywhere, a wrong offset far fewer than the right one. grid, origin: as
+    candidate_offsets takes them."""
+    offsets = np.union1d(candidate_offsets(traj, info_c, 0.5 * info_c.frame_interval_s, grid, origin),
+                         [joint_offset_s])
+    allowed = grid.within_window(origin or "", camera, offsets)
+    land = transfer_landscape(traj, info_c, camera_c, xy_c, offsets, radius_px, min_hits, allowed=allowed)
+    n = int(land.supporters[np.searchsorted(offsets, joint_offset_s)])
+    # the grid holds the joint offset at least
+    enough = (land.overlap >= MIN_OVERLAP_SHARE * land.overlap.max()) & allowed
     best = int(np.argmax(np.where(enough, land.supporters, -1)))
     n_best = int(land.supporters[best])
-    at_best = float(grid[best]) if n_best > 0 else None
+    at_best = float(offsets[best]) if n_best > 0 else None
     what = (f"{n} of the {traj.num_trajectories} trajectories the other sure cameras triangulate are "
             f"followed by a track of it at its joint offset {joint_offset_s:+.3f} s"
             + (f", {n_best} at {at_best:+.3f} s" if at_best is not None and n_best > n else ""))

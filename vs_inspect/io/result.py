@@ -48,6 +48,8 @@ def pair_to_dict(p: PairLandscape, with_landscape: bool = True) -> dict[str, Any
     }
     if p.pose_free:
         out["pose_free"] = True
+    if p.window_s is not None:  # --around: the Δ_ab its videos' windows allow, s
+        out["window_s"] = [float(p.window_s[0]), float(p.window_s[1])]
     if p.confirm_energy is not None:  # the pair had unchecked track pairs: the others' own minimum
         out["confirm_offset_s"] = _num(p.confirm_offset_s)
         if with_landscape:
@@ -178,6 +180,15 @@ def run_result_to_dict(r: RunResult) -> dict[str, Any]:
     return out
 
 
+def _window(w: Any) -> tuple[float, float] | None:
+    """A pair's window_s as written (two numbers, or absent)."""
+    if w is None:
+        return None
+    if not (isinstance(w, list) and len(w) == 2):
+        raise ValueError(f"pairs[].window_s must be a list of two numbers, got {w!r}")
+    return float(w[0]), float(w[1])
+
+
 def _pair_from_dict(p: dict[str, Any]) -> PairLandscape:
     land = p.get("landscape") or {}
     offsets = np.asarray(land.get("offsets_s", []), dtype=np.float64)
@@ -211,7 +222,7 @@ def _pair_from_dict(p: dict[str, Any]) -> PairLandscape:
                          1.0 if math.isnan(rate) else rate, f("drift_std_ppm") * 1e-6,
                          float(p.get("pivot_s", 0.0)), f("pivot_offset_s"), f("pivot_offset_std_s"),
                          rate_land, bool(p.get("pose_free", False)), _confirm_energy(p, len(offsets)),
-                         f("confirm_offset_s"))
+                         f("confirm_offset_s"), _window(p.get("window_s")))
 
 
 def _confirm_energy(p: dict[str, Any], num_offsets: int) -> np.ndarray | None:

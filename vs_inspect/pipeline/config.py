@@ -123,6 +123,11 @@ def _check_value(tp: Any, v: Any, key: str) -> Any:
         if not isinstance(v, dict):
             raise InputError(f"config key {key!r} must be an object, got {type(v).__name__}")
         return {_check_value(kt, k, f"{key}.{k}"): _check_value(vt, x, f"{key}.{k}") for k, x in v.items()}
+    if origin is tuple:
+        args = typing.get_args(tp)
+        if not isinstance(v, (list, tuple)) or len(v) != len(args):
+            raise InputError(f"config key {key!r} must be a list of {len(args)} values, got {v!r}")
+        return tuple(_check_value(t, x, f"{key}[{i}]") for i, (t, x) in enumerate(zip(args, v)))
     if dataclasses.is_dataclass(tp):
         return _from_dict(tp, v, key)
     if tp is float:

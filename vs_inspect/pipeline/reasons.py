@@ -11,7 +11,7 @@ from typing import Any
 from ..types import CueStats, refusal_headline
 
 CALIB = "giving a calibration (--calib)"
-WINDOW = "a rough offset window (--range-s)"
+WINDOW = "a rough offset window (--range-s or --around)"
 CAMERA = "another camera that sees the same motion"
 
 

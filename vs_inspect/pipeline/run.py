@@ -75,7 +75,7 @@ def _run(inputs, config: RunConfig, sink: Sink, engine: Engine, calibration, fps
     else:
         try:
             bundle, stats, videos = run_stage0(list(inputs), calibration, fps, config.cues, sink=sink,
-                                               progress=progress, engine=engine)
+                                               progress=progress, engine=engine, sync=config.sync)
         except NoUsableVideos as exc:  # nothing to synchronize, but every video gets its reason
             result = _nothing_usable(exc, config, RunInputs(videos=exc.inputs, fps=fps),
                                      recorded_inputs, time.perf_counter() - t0)
@@ -90,6 +90,7 @@ def _run(inputs, config: RunConfig, sink: Sink, engine: Engine, calibration, fps
         stage0_timings = {f"stage0_{k}": v for k, v in stats.timings_s.items()}
         stage0_timings["stage0_with_io_s"] = time.perf_counter() - t0
     sync_cfg, moved = _usable_reference(config.sync, bundle, stats, list(videos))
+    sync_cfg = _windows_of(sync_cfg, bundle)
     sync = sync_bundle(bundle, sync_cfg, sink=sink, progress=progress, engine=engine)
     timings = {**stage0_timings, **sync.timings_s, "total_s": time.perf_counter() - t0}
     result = _run_result(sync, stats, recorded_inputs or where, config, bundle.gt_offsets_s or None,
@@ -127,6 +128,15 @@ def _usable_reference(cfg: SyncConfig, bundle: CueBundle, stats: CueStats | None
     if stats is None or wanted in bundle.names or wanted not in stats.dropped:
         return cfg, None
     return dataclasses.replace(cfg, solve=dataclasses.replace(cfg.solve, reference=bundle.names[0])), wanted
+
+
+def _windows_of(cfg: SyncConfig, bundle: CueBundle) -> SyncConfig:
+    """cfg without the --around windows of videos Stage 0 left out (they have no pairs to limit;
+    a window of a name no input had was refused before Stage 0)."""
+    around = {n: w for n, w in cfg.landscape.around.items() if n in bundle.names}
+    if around == cfg.landscape.around:
+        return cfg
+    return dataclasses.replace(cfg, landscape=dataclasses.replace(cfg.landscape, around=around))
 
 
 def _nothing_usable(exc: NoUsableVideos, config: RunConfig, where: RunInputs,

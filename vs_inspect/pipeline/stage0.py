@@ -16,6 +16,7 @@ from ..cues.config import CueConfig
 from ..engine import Engine
 from ..errors import BadVideoName, InputError, NoUsableVideos
 from ..record.sink import Sink
+from ..sync.config import SyncConfig
 from ..types import CueBundle, CueStats
 
 log = logging.getLogger(__name__)
@@ -56,13 +57,15 @@ def check_cue_config(cfg: CueConfig) -> None:
 
 def run_stage0(videos: Sequence[PathLike], calibration: PathLike | None = None,
                fps: float | None = None, cfg: CueConfig = CueConfig(), sink: Sink | None = None,
-               progress: bool = True, engine: Engine | None = None
+               progress: bool = True, engine: Engine | None = None, sync: SyncConfig = SyncConfig()
                ) -> tuple[CueBundle, CueStats, dict[str, str]]:
     """Stage 0 on video files or image folders: (bundle, stats, {name: path} of every input).
 
     calibration: a file or folder that io.calibration.load_calibration reads, or None to estimate
     the cameras. fps: frame rate of image folders (and of files whose timestamps are unusable).
-    engine: where each video's cues are extracted (default: in this process).
+    engine: where each video's cues are extracted (default: in this process). sync: the run's
+    Stage 1 + 2 settings, whose limits of the candidate offsets (--min-overlap-s, --range-s,
+    --around) Stage 0's searches obey too.
     InputError when fewer than two videos are given; NoUsableVideos (an InputError that carries
     every video's reason) when fewer than two can be opened or none can be used.
     """
@@ -73,6 +76,7 @@ def run_stage0(videos: Sequence[PathLike], calibration: PathLike | None = None,
         raise InputError(f"need at least 2 videos to synchronize, got {len(videos)}")
     check_cue_config(cfg)
     sources, inputs, dropped = open_sources(videos, fps)
+    grid = sync.offset_grid(list(inputs))
     if len(sources) < 2:
         why = "; ".join(f"{n}: {r}" for n, r in dropped.items())
         alone = {s.info.name: "the only readable video: there is no other video to synchronize it with"
@@ -83,7 +87,7 @@ def run_stage0(videos: Sequence[PathLike], calibration: PathLike | None = None,
     if calibration is not None:
         calib = load_calibration(calibration, [s.info.name for s in sources])
     try:
-        bundle, stats = extract_cues(sources, calib, cfg, sink=sink, progress=progress, engine=engine)
+        bundle, stats = extract_cues(sources, calib, cfg, sink=sink, progress=progress, engine=engine, grid=grid)
     except NoUsableVideos as exc:
         stats = dataclasses.replace(exc.stats, dropped={**dropped, **exc.stats.dropped})
         raise NoUsableVideos(str(exc), stats, inputs) from None

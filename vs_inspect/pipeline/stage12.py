@@ -17,6 +17,7 @@ import numpy as np
 from ..analysis.record_views import pair_record_view, run_record_view
 from ..engine import Engine, LocalEngine, TaskFailed
 from ..errors import InputError
+from ..geometry.offsets import OffsetGrid, grid_between, span_of
 from ..record.sink import NullSink, Sink
 from ..types import (CameraTrack, CueBundle, PairDecision, PairLandscape, SolveIteration, SyncResult,
                      TrackPairs, pairs_by_reason)
@@ -24,7 +25,7 @@ from ..sync.config import DriftConfig, SolveConfig, SyncConfig
 from ..sync.decision import (check_chosen_offset, check_inliers, check_track_pairs_at_best, check_uncertainty,
                              decide)
 from ..sync.landscape import (PairEnergy, PairInput, RawLandscape, compute_landscape, curvature_uncertainty,
-                              refine_minimum)
+                              landscape_step_s, refine_minimum)
 from ..sync.pairs import select_pairs
 from ..sync.drift import PairTiming, solve_offsets_drift
 from ..sync.posefree import PoseFreeConfig, PoseFreePair, estimate_pair
@@ -46,20 +47,22 @@ def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig,
     (cfg.drift.enabled) the 1-D minimum is refined over (Δ, rate) (sync.rate)."""
     tp = bundle.pair(a, b) or TrackPairs(a, b, np.zeros((0, 2), dtype=np.int64))
     side = {n: PairInput(bundle.video(n), bundle.cameras[n], bundle.tracks[n]) for n in (a, b)}
+    grid = cfg.offset_grid(bundle.names)
+    window = grid.pair_window(a, b)
     offsets, rate0, decision_cfg = None, 1.0, cfg.decision
     if pose_free_pair:
         if pose_free is None or pose_free.b_from_a is None or pose_free.inlier_share < MIN_POSE_FREE_INLIERS:
-            return _pose_free_rejected(bundle, a, b, tp, cfg, pose_free), None
-        side, offsets, rate0 = _pose_free_inputs(bundle, a, b, side, cfg, pose_free)
+            return dataclasses.replace(_pose_free_rejected(bundle, a, b, tp, cfg, pose_free), window_s=window), None
+        side, offsets, rate0 = _pose_free_inputs(bundle, a, b, side, cfg, pose_free, grid)
         # one track followed by both cameras is the evidence here (its F explains most matches)
         decision_cfg = dataclasses.replace(cfg.decision, min_track_pairs=min(cfg.decision.min_track_pairs, 1))
     raw, pe, minima, decision, best, best_e, sigma = _decided_landscape(side[a], side[b], tp, cfg, decision_cfg,
-                                                                        offsets)
+                                                                        offsets, grid)
     confirm = None
     if decision.accepted and tp.unchecked is not None and tp.unchecked.any() and decision_cfg.enabled \
             and decision_cfg.unchecked_agree_frames > 0:
         decision, confirm = _confirm_without_unchecked(side[a], side[b], tp, cfg, decision_cfg, offsets, decision,
-                                                       best)
+                                                       best, grid)
     if len(tp.index) == 0 and not decision.accepted:
         decision = PairDecision(False, "no cross-view track pairs (no matched motion, or Stage 0 kept none)",
                                 0.0, 0.0, 0, 0, False)
@@ -67,7 +70,7 @@ def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig,
                          len(tp.index), decision, cfg.landscape.residual, raw.robust_scale,
                          confirm_energy=None if confirm is None else confirm.raw.energy,
                          confirm_offset_s=confirm.best_s if confirm is not None and confirm.decision.accepted
-                         else float("nan"))
+                         else float("nan"), window_s=window)
     if pose_free_pair:
         land = dataclasses.replace(land, rate=rate0, pose_free=True)
     if cfg.drift.enabled and math.isfinite(best):
@@ -108,11 +111,13 @@ class _Decided(NamedTuple):
 
 
 def _decided_landscape(a: PairInput, b: PairInput, tp: TrackPairs, cfg: SyncConfig, decision_cfg,
-                       offsets: np.ndarray | None) -> _Decided:
+                       offsets: np.ndarray | None, grid: OffsetGrid | None = None) -> _Decided:
     """The landscape of one set of track pairs, the decision on it and the checks at its refined
     minimum."""
-    raw, pe = compute_landscape(a, b, tp, cfg.landscape, offsets)
-    decision, minima = decide(raw.energy, raw.support, raw.offsets_s, len(tp.index), decision_cfg)
+    raw, pe = compute_landscape(a, b, tp, cfg.landscape, offsets, grid)
+    allowed = None if grid is None else grid.within_window(a.video.name, b.video.name, raw.offsets_s)
+    decision, minima = decide(raw.energy, raw.support, raw.offsets_s, len(tp.index), decision_cfg,
+                              None if allowed is None or allowed.all() else allowed)
     best, best_e, sigma = float("nan"), float("nan"), float("nan")
     if len(minima):
         best_idx = int(minima[0])
@@ -134,8 +139,8 @@ def _decided_landscape(a: PairInput, b: PairInput, tp: TrackPairs, cfg: SyncConf
 
 
 def _confirm_without_unchecked(a: PairInput, b: PairInput, tp: TrackPairs, cfg: SyncConfig, decision_cfg,
-                               offsets: np.ndarray | None, decision: PairDecision, best: float
-                               ) -> tuple[PairDecision, _Decided]:
+                               offsets: np.ndarray | None, decision: PairDecision, best: float,
+                               grid: OffsetGrid | None = None) -> tuple[PairDecision, _Decided]:
     """(decision, the other track pairs' own landscape and decision): the accepted decision, or
     a rejection when the pair's other track pairs alone (found by
     appearance, without assuming an offset) give no accepted minimum within
@@ -144,7 +149,7 @@ def _confirm_without_unchecked(a: PairInput, b: PairInput, tp: TrackPairs, cfg: 
     vote peak from a right one (a moving body's two sides fit a shifted offset)."""
     keep = ~tp.unchecked
     alone = TrackPairs(tp.a, tp.b, tp.index[keep], None if tp.weight is None else tp.weight[keep])
-    confirm = _decided_landscape(a, b, alone, cfg, decision_cfg, offsets)
+    confirm = _decided_landscape(a, b, alone, cfg, decision_cfg, offsets, grid)
     own, own_best = confirm.decision, confirm.best_s
     tol_s = decision_cfg.unchecked_agree_frames * max(a.video.frame_interval_s, b.video.frame_interval_s)
     head = (f"no third camera to check: {int(tp.unchecked.sum())} of the {len(tp.index)} track pairs "
@@ -196,7 +201,7 @@ def pose_free_job(bundle: CueBundle, a: str, b: str, cfg: SyncConfig) -> tuple:
     ia, ib = _pair_track_rows(bundle, a, b)
     va, vb = bundle.video(a), bundle.video(b)
     pcfg = PoseFreeConfig(estimate_rate=cfg.drift.enabled)
-    rng = None if cfg.landscape.range_s is None else (-cfg.landscape.range_s, cfg.landscape.range_s)
+    rng = cfg.offset_grid(bundle.names).pair_bounds(a, span_of(va.timestamps_s), b, span_of(vb.timestamps_s))
     return (va.timestamps_s, bundle.tracks[a].xy[ia], _static_K(bundle.cameras[a]),
             vb.timestamps_s, bundle.tracks[b].xy[ib], _static_K(bundle.cameras[b]), pcfg, rng)
 
@@ -222,7 +227,7 @@ def estimate_pose_free_pairs(bundle: CueBundle, chosen: list[tuple[str, str]], c
 
 
 def _pose_free_inputs(bundle: CueBundle, a: str, b: str, side: dict[str, PairInput], cfg: SyncConfig,
-                      pf: PoseFreePair):
+                      pf: PoseFreePair, grid: OffsetGrid):
     """(the pair's inputs with the cameras of pf's F, the window of offsets, the rate read at)."""
     cam_a = CameraTrack(_static_K(bundle.cameras[a]), np.eye(4))
     cam_b = CameraTrack(_static_K(bundle.cameras[b]), pf.b_from_a)
@@ -230,10 +235,13 @@ def _pose_free_inputs(bundle: CueBundle, a: str, b: str, side: dict[str, PairInp
     vb = scaled_video(bundle.video(b), rate0)
     side = {a: dataclasses.replace(side[a], camera=cam_a),
             b: dataclasses.replace(side[b], camera=cam_b, video=vb)}
-    step = cfg.landscape.step_s or min(side[a].video.frame_interval_s, vb.frame_interval_s)
+    step = landscape_step_s(side[a].video, vb, cfg.landscape)
     half = cfg.pose_free.window_s
-    k0, k1 = math.ceil((pf.offset_s - half) / step), math.floor((pf.offset_s + half) / step)
-    return side, np.arange(k0, k1 + 1) * step, rate0
+    lo, hi = grid.pair_bounds(a, span_of(side[a].video.timestamps_s), b, span_of(bundle.video(b).timestamps_s),
+                              window=False)
+    offsets = grid_between(max(pf.offset_s - half, lo), min(pf.offset_s + half, hi), step, grid.max_count,
+                           f"{a!r} and {b!r}")
+    return side, offsets, rate0
 
 
 def _pose_free_rejected(bundle: CueBundle, a: str, b: str, tp: TrackPairs, cfg: SyncConfig,
@@ -282,6 +290,7 @@ def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | 
     reference = cfg.solve.reference or names[0]
     if reference not in names:
         raise InputError(f"--reference {reference!r} is not a video of the bundle; known: {names}")
+    cfg.offset_grid(names)  # a window of no video: refused before any work
     timings: dict[str, float] = {}
     sink.bundle(bundle)
     t0 = time.perf_counter()

@@ -60,6 +60,7 @@ GREY = (150, 150, 150)  # unknown, no data
 MINIMA = (86, 180, 233)  # sky blue
 TRUTH = (240, 228, 66)  # yellow
 APPEARANCE_ONLY = GREY  # a pair's landscape without its unchecked track pairs
+WINDOW = (204, 121, 167)  # reddish purple: the --around window of a pair's Δ
 PALETTE = np.array(palette.CATEGORY, dtype=np.uint8)
 # point-to-line distance in the epipolar views: blue (far) through grey to yellow (on the line)
 RAMP = np.array([(70, 90, 210), (150, 150, 160), (253, 234, 69)], dtype=float)  # visible on black
@@ -796,12 +797,25 @@ class RerunSink(Sink):
                                   rr.Scalars.columns(scalars=[land.best_energy]))
         if land.confirm_energy is not None:
             self._log_confirm_landscape(base, land, ms)
+        if land.window_s is not None:
+            self._log_window(base, land, e[ok])
         if view is not None and view.true_offset_s is not None and view.true_energy is not None:
             self.rec.log(f"{base}/truth", rr.SeriesPoints(colors=[TRUTH], names=["true Δ"],
                                                           markers=["cross"], marker_sizes=[7.0]), static=True)
             self.rec.send_columns(f"{base}/truth",
                                   [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=[round(view.true_offset_s * 1000)])],
                                   rr.Scalars.columns(scalars=[view.true_energy]))
+
+    def _log_window(self, base: str, land: PairLandscape, energy: np.ndarray) -> None:
+        """The Δ_ab the --around windows allow: a bar from its lower to its upper bound, at the
+        height of the landscape's highest energy (the energy is searched within it only)."""
+        lo_ms, hi_ms = (round(x * 1000) for x in land.window_s)
+        top = float(np.max(energy)) if len(energy) else 1.0
+        self.rec.log(f"{base}/window", rr.SeriesLines(colors=[WINDOW], widths=[3.0],
+                                                      names=[f"--around window {land.window_s[0]:+.3f}..."
+                                                             f"{land.window_s[1]:+.3f} s"]), static=True)
+        self.rec.send_columns(f"{base}/window", [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=[lo_ms, hi_ms])],
+                              rr.Scalars.columns(scalars=[top, top]))
 
     def _log_confirm_landscape(self, base: str, land: PairLandscape, ms: np.ndarray) -> None:
         """The energy of the pair's track pairs found by appearance alone (its unchecked ones left

@@ -4,10 +4,13 @@ measurements behind the defaults are in BENCHMARKS.md ("Measurements behind defa
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
+import re
+from dataclasses import dataclass, field, replace
 
-from ..errors import check_fields
+from ..errors import InputError, check_fields
 from ..geometry.epipolar import RESIDUALS
+from ..geometry.offsets import OffsetGrid
 
 
 @dataclass(frozen=True)
@@ -24,6 +27,12 @@ class LandscapeConfig:
     """Search only |Δ| <= range_s (seconds); None = every offset with enough overlap."""
     step_s: float | None = field(default=None, metadata={"flag": "--step-s"})
     """Grid step of the discrete search; None = the finer of the two frame intervals."""
+    around: dict[str, tuple[float, float]] = field(default_factory=dict, metadata={
+        "flag": "--around", "append": True, "metavar": "NAME=OFFSET±WINDOW",
+        "help": "search that video's offset only within OFFSET±WINDOW seconds of the reference's time "
+                "(also NAME=OFFSET+-WINDOW or NAME=OFFSET:WINDOW; repeatable)",
+        "apply": lambda items, land: replace(land, around={**land.around, **parse_around(items)})})
+    """Per-video search window: name -> (offset_s, half width s); its pairs search only the Δ these windows allow."""
     min_terms: int = 30
     """An offset with fewer (track pair, frame) terms gets no energy (NaN)."""
     refine: bool = True
@@ -38,6 +47,38 @@ class LandscapeConfig:
             raise ValueError(f"unknown loss {self.loss!r}; choose truncated or mean")
         check_fields(self, positive=("robust_scale", "range_s", "step_s", "min_terms"),
                      nonnegative=("min_overlap_s", "threads"))
+        for name, (offset_s, half_s) in self.around.items():
+            if not (math.isfinite(offset_s) and math.isfinite(half_s) and half_s >= 0):
+                raise ValueError(f"--around {name}: the offset must be a number and the window a number "
+                                 f">= 0, got {offset_s}±{half_s}")
+            if self.range_s is not None and abs(offset_s) - half_s > self.range_s:
+                raise ValueError(f"--around {name}={offset_s:g}±{half_s:g} lies outside --range-s "
+                                 f"{self.range_s:g} (|offset| - window > range)")
+
+    def offset_grid(self, reference: str | None = None) -> OffsetGrid:
+        """The limits of every pair's candidate offsets: --min-overlap-s, --range-s and the
+        --around windows, whose origin is the reference video (offset 0)."""
+        return OffsetGrid(self.min_overlap_s, self.range_s,
+                          tuple((n, o - w, o + w) for n, (o, w) in sorted(self.around.items())), reference)
+
+
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+_AROUND = re.compile(rf"^(?P<name>[^=]+)=\s*(?P<offset>{_NUMBER})\s*(?:±|\+-|:)\s*(?P<window>{_NUMBER})$")
+
+
+def parse_around(items: list[str]) -> dict[str, tuple[float, float]]:
+    """NAME=OFFSET±WINDOW items (--around; ± may be written +- or :) as {name: (offset_s, window_s)}."""
+    out: dict[str, tuple[float, float]] = {}
+    for item in items:
+        m = _AROUND.match(item.strip())
+        if m is None:
+            raise ValueError(f"--around must be NAME=OFFSET±WINDOW in seconds (or NAME=OFFSET+-WINDOW, "
+                             f"NAME=OFFSET:WINDOW), for example cam1=1.5±0.5; got {item!r}")
+        window = float(m["window"])
+        if window < 0:
+            raise ValueError(f"--around {item!r}: the window must be >= 0")
+        out[m["name"].strip()] = (float(m["offset"]), window)
+    return out
 
 
 @dataclass(frozen=True)
@@ -205,3 +246,20 @@ class SyncConfig:
     pose_free: PoseFreeSyncConfig = PoseFreeSyncConfig()
     sightings: SightingConfig = SightingConfig()
 
+    def offset_grid(self, names: list[str]) -> OffsetGrid:
+        """The limits of every pair's candidate offsets among the videos names (--min-overlap-s,
+        --range-s, --around about the reference: --reference or the first name). InputError for a
+        window of no video of names, or a window of the reference that leaves out 0."""
+        reference = self.solve.reference or names[0]
+        check_windows(self.landscape, list(names), reference)
+        return self.landscape.offset_grid(reference)
+
+
+def check_windows(cfg: LandscapeConfig, names: list[str], reference: str) -> None:
+    """InputError for an --around window of no video of names, or of the reference outside 0."""
+    for name, (offset_s, half_s) in cfg.around.items():
+        if name not in names:
+            raise InputError(f"--around {name}: no video is named {name!r}; known: {', '.join(names)}")
+        if name == reference and abs(offset_s) > half_s:
+            raise InputError(f"--around {name}={offset_s:g}±{half_s:g}: {name} is the reference, whose "
+                             f"offset is 0 by definition, outside the window")

@@ -131,8 +131,10 @@ def support_fraction(support: np.ndarray, energy: np.ndarray, best: int) -> tupl
 
 
 def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_track_pairs: int,
-           cfg: DecisionConfig) -> tuple[PairDecision, np.ndarray]:
-    """(decision, minima indices best first)."""
+           cfg: DecisionConfig, allowed: np.ndarray | None = None) -> tuple[PairDecision, np.ndarray]:
+    """(decision, minima indices best first). allowed (D,) bool: the offsets a minimum may be
+    chosen at (an --around window); the landscape's median, range and edges stay the whole
+    landscape's, and minima outside are no rivals."""
     finite = np.isfinite(energy)
     if num_track_pairs < cfg.min_track_pairs:
         return PairDecision(False, f"too few track pairs: only {num_track_pairs} (fewer than "
@@ -145,6 +147,12 @@ def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_t
     e_base = float(np.nanmedian(energy))
     e_range = float(np.nanmax(energy)) - e_best
     minima, prom = local_minima(energy, cfg.min_prominence * e_range)
+    if allowed is not None:
+        inside = np.asarray(allowed, bool)[minima]
+        if not inside.any():
+            return PairDecision(False, "no minimum of the landscape within the --around window", 0.0, 0.0, 0, 0,
+                                False), np.zeros(0, dtype=np.int64)
+        minima, prom = minima[inside], prom[inside]
     # The lowest minimum may itself rest on much less overlap than another nearly as prominent
     # (e.g. a periodic motion matched again near the end of the range): by the rule below it is
     # then the weaker of the two, so the better supported minimum becomes the best.

@@ -16,6 +16,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
+from ..geometry.offsets import OffsetGrid, span_of
 from ..geometry.sampling import camera_at_frames, camera_between_frames, tracks_between_frames
 from ..geometry.timing import frame_brackets
 from ..types import CameraTrack, TrackPairs, Tracks, VideoInfo
@@ -34,9 +35,6 @@ class PairInput:
     tracks: Tracks
 
 
-MAX_CANDIDATE_OFFSETS = 1_000_000  # per pair; each is one energy evaluation over every term
-
-
 @dataclass(frozen=True)
 class RawLandscape:
     offsets_s: np.ndarray  # (D,) Δ_ab candidates, seconds
@@ -45,25 +43,20 @@ class RawLandscape:
     robust_scale: float  # truncation level used (residual units), NaN for the plain mean
 
 
-def search_offsets(va: VideoInfo, vb: VideoInfo, cfg: LandscapeConfig) -> np.ndarray:
-    """Candidate Δ_ab on a grid through 0, leaving >= min_overlap_s of common time."""
-    step = cfg.step_s or min(va.frame_interval_s, vb.frame_interval_s)
-    if not math.isfinite(step):
-        return np.zeros(0)
-    a0, a1 = va.timestamps_s[0], va.timestamps_s[-1]
-    b0, b1 = vb.timestamps_s[0], vb.timestamps_s[-1]
-    # a's time τ_a = τ_b + Δ: b's span maps to [b0 + Δ, b1 + Δ]; overlap with [a0, a1].
-    lo, hi = a0 - b1 + cfg.min_overlap_s, a1 - b0 - cfg.min_overlap_s
-    if cfg.range_s is not None:
-        lo, hi = max(lo, -cfg.range_s), min(hi, cfg.range_s)
-    if hi < lo:
-        return np.zeros(0)
-    k0, k1 = math.ceil(lo / step - 1e-9), math.floor(hi / step + 1e-9)
-    if k1 - k0 + 1 > MAX_CANDIDATE_OFFSETS:  # refuse before allocating (--step-s 1e-12 asks for TiB)
-        raise ValueError(f"--step-s {step:g} gives {k1 - k0 + 1:.3g} candidate offsets for "
-                         f"{va.name!r} and {vb.name!r} (at most {MAX_CANDIDATE_OFFSETS}): use a larger "
-                         f"--step-s or a smaller --range-s")
-    return np.arange(k0, k1 + 1) * step
+def landscape_step_s(va: VideoInfo, vb: VideoInfo, cfg: LandscapeConfig) -> float:
+    """The grid step of a pair's landscape: --step-s, else the finer of the two frame intervals."""
+    return cfg.step_s or min(va.frame_interval_s, vb.frame_interval_s)
+
+
+def search_offsets(va: VideoInfo, vb: VideoInfo, cfg: LandscapeConfig,
+                   grid: OffsetGrid | None = None) -> np.ndarray:
+    """Candidate Δ_ab on a grid through 0, leaving >= min_overlap_s of common time, within
+    --range-s. The --around windows do not crop it: the energy's statistics (its median, the
+    rivals' prominence) are read over the whole range, and the decision takes its minimum within
+    the window only (grid.within_window; grid: the run's, with its reference)."""
+    grid = cfg.offset_grid() if grid is None else grid
+    return grid.pair_offsets(va.name, span_of(va.timestamps_s), vb.name, span_of(vb.timestamps_s),
+                             landscape_step_s(va, vb, cfg), window=False)
 
 
 class PairEnergy:
@@ -175,10 +168,11 @@ class PairEnergy:
 
 
 def compute_landscape(a: PairInput, b: PairInput, pairs: TrackPairs, cfg: LandscapeConfig,
-                      offsets_s: np.ndarray | None = None) -> tuple[RawLandscape, PairEnergy]:
-    """The discrete landscape over the default (or configured) search grid, or over offsets_s
-    (D,) seconds when given (a pose-free pair's window around the offset its tracks gave)."""
-    offsets = search_offsets(a.video, b.video, cfg) if offsets_s is None else np.asarray(offsets_s, float)
+                      offsets_s: np.ndarray | None = None,
+                      grid: OffsetGrid | None = None) -> tuple[RawLandscape, PairEnergy]:
+    """The discrete landscape over the pair's search grid (search_offsets with grid), or over
+    offsets_s (D,) seconds when given (a pose-free pair's window around the offset its tracks gave)."""
+    offsets = search_offsets(a.video, b.video, cfg, grid) if offsets_s is None else np.asarray(offsets_s, float)
     pe = PairEnergy(a, b, pairs, cfg)
     if len(offsets) == 0 or len(pairs.index) == 0:
         nan = np.full(len(offsets), np.nan)

@@ -28,12 +28,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from ..geometry.epipolar import epipolar_residual, skew
+from ..geometry.epipolar import skew
+from ..geometry.offsets import grid_around, grid_between, overlap_bounds, span_of
+from ..geometry.two_view import fundamental_ransac, nearest_calibrated_fundamental, pose_from_fundamental, sampson_px
 
 
 @dataclass(frozen=True)
@@ -108,11 +109,6 @@ def interpolate_track(t_query_s: np.ndarray, t_s: np.ndarray, xy: np.ndarray) ->
     return out
 
 
-def sampson_px(F_ab: np.ndarray, x_a: np.ndarray, x_b: np.ndarray) -> np.ndarray:
-    """(M,) Sampson distance (px, not squared) of x_aᵀ F_ab x_b = 0."""
-    return np.sqrt(epipolar_residual(F_ab, x_a, x_b, "sampson"))
-
-
 class _Pair:
     """The two tracks and the matching under a candidate time map."""
 
@@ -149,13 +145,8 @@ class _Pair:
         n_F = int(np.count_nonzero(sampson_px(F, xa, xb) < thr))
         if self.K_a is None:
             return n_F, n_F, F
-        n_E = int(np.count_nonzero(sampson_px(_nearest_calibrated_F(F, self.K_a, self.K_b), xa, xb) < thr))
+        n_E = int(np.count_nonzero(sampson_px(nearest_calibrated_fundamental(F, self.K_a, self.K_b), xa, xb) < thr))
         return n_E, n_F, F
-
-
-def _nearest_calibrated_F(F_ab: np.ndarray, K_a: np.ndarray, K_b: np.ndarray) -> np.ndarray:
-    U, _, Vt = np.linalg.svd(K_a.T @ F_ab @ K_b)
-    return np.linalg.inv(K_a).T @ (U @ np.diag([1.0, 1.0, 0.0]) @ Vt) @ np.linalg.inv(K_b)
 
 
 def _uniform(n_total: int, n: int) -> np.ndarray:
@@ -163,14 +154,9 @@ def _uniform(n_total: int, n: int) -> np.ndarray:
 
 
 def _ransac_F(xa, xb, n_sample, thr):
+    """F_ab (MAGSAC) of a time-uniform subsample of n_sample matches, or None."""
     idx = _uniform(len(xa), n_sample)
-    try:
-        F, _ = cv2.findFundamentalMat(xa[idx], xb[idx], cv2.USAC_MAGSAC, thr, 0.999, 500)
-    except cv2.error:
-        return None
-    if F is None or F.shape != (3, 3):
-        return None
-    return F.T  # OpenCV's F has x_bᵀ F x_a = 0; F_ab is its transpose
+    return fundamental_ransac(xa[idx], xb[idx], thr, 0.999, 500)[0]
 
 
 def _peaks(score: np.ndarray, grid: np.ndarray, k: int, min_sep: float) -> list[float]:
@@ -185,12 +171,10 @@ def _peaks(score: np.ndarray, grid: np.ndarray, k: int, min_sep: float) -> list[
 
 def _E_params(F_ab: np.ndarray, K_a: np.ndarray, K_b: np.ndarray, xa: np.ndarray, xb: np.ndarray):
     """(rotvec (3,), t angles (2,)) of b_from_a in F_ab, chosen by cheirality."""
-    E = K_b.T @ F_ab.T @ K_a  # OpenCV's order: x_bᵀ E x_a = 0 in normalized coordinates
-    na = cv2.undistortPoints(xa.reshape(-1, 1, 2), K_a, None).reshape(-1, 2)
-    nb = cv2.undistortPoints(xb.reshape(-1, 1, 2), K_b, None).reshape(-1, 2)
-    _, R, t, _ = cv2.recoverPose(E, na, nb, np.eye(3))
-    t = t.ravel() / np.linalg.norm(t)
-    return Rotation.from_matrix(R).as_rotvec(), np.array([np.arccos(np.clip(t[2], -1, 1)), np.arctan2(t[1], t[0])])
+    T = pose_from_fundamental(F_ab, K_a, K_b, xa, xb)
+    t = T[:3, 3] / np.linalg.norm(T[:3, 3])
+    return Rotation.from_matrix(T[:3, :3]).as_rotvec(), np.array([np.arccos(np.clip(t[2], -1, 1)),
+                                                                  np.arctan2(t[1], t[0])])
 
 
 def _pose_from_params(p: np.ndarray) -> np.ndarray:
@@ -218,8 +202,8 @@ def estimate_pair(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
     enough overlap.
 
     t_a (Ta,), t_b (Tb,): local frame times (s); xy_a (Ta,2), xy_b (Tb,2): undistorted px, NaN
-    where unseen; K_a, K_b (3,3) px. offset_range_s: the offsets searched (default: every offset
-    with some overlap). coarse: (offsets, score, score_F) of an earlier run on the same tracks (e.g. the
+    where unseen; K_a, K_b (3,3) px. offset_range_s: (lo, hi) of the offsets searched (an
+    OffsetGrid's pair_bounds; default: every offset with some overlap). coarse: (offsets, score, score_F) of an earlier run on the same tracks (e.g. the
     drift model's, reused by the constant-offset ablation); peaks_s: refine only these offsets
     instead of the coarse peaks (e.g. the drift model's solution).
     """
@@ -230,11 +214,11 @@ def estimate_pair(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
     pair = _Pair(t_a, xy_a, t_b, xy_b, np.asarray(K_a, dtype=np.float64), np.asarray(K_b, dtype=np.float64))
     n_b = int(np.isfinite(np.asarray(xy_b)).all(axis=1).sum())
     pair.min_matches = int(cfg.min_overlap * min(len(pair.t_a), n_b))
-    lo, hi = offset_range_s if offset_range_s is not None else (t_a[0] - t_b[-1], t_a[-1] - t_b[0])
+    lo, hi = offset_range_s if offset_range_s is not None else overlap_bounds(span_of(t_a), span_of(t_b))
 
     # 1. coarse offsets, rate 1
     if coarse is None:
-        grid = np.arange(lo, hi + 1e-9, cfg.coarse_step_s)
+        grid = grid_between(lo, hi, cfg.coarse_step_s)
         both = np.array([pair.scores(d, 1.0, cfg.coarse_points, cfg.threshold_px)[:2] for d in grid]).reshape(-1, 2)
         coarse = (grid, both[:, 0], both[:, 1])
     coarse, coarse_score, coarse_score_F = coarse
@@ -250,7 +234,7 @@ def estimate_pair(t_a: np.ndarray, xy_a: np.ndarray, K_a: np.ndarray,
     # not after the refinement, so the refined inlier count picks the peak.
     best: _Refined | None = None
     for p in peaks:
-        offs = p + np.arange(-cfg.fine_half_width_s, cfg.fine_half_width_s + 1e-9, cfg.fine_step_s)
+        offs = grid_around(p, cfg.fine_half_width_s, cfg.fine_step_s, (lo, hi))
         line = [pair.score(d, 1.0, cfg.fine_points, cfg.threshold_px)[0] for d in offs]
         if max(line) <= 0:
             continue

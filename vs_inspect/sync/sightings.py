@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..geometry.offsets import grid_around
 from ..geometry.sightings import (SightingLandscape, SightingShiftFit, sighting_landscape, sighting_peak,
                                   sighting_shift_fit)
 from ..types import CueBundle, PairDecision, PairLandscape
@@ -69,7 +70,9 @@ def sighting_pair(bundle: CueBundle, a: str, b: str, cfg: SyncConfig) -> PairLan
     """The pair's sighting landscape and decision (None: no direction can be measured)."""
     directions = sighting_directions(bundle, a, b)
     va, vb = bundle.video(a), bundle.video(b)
-    offsets = search_offsets(va, vb, cfg.landscape)
+    grid = cfg.offset_grid(bundle.names)
+    offsets = search_offsets(va, vb, cfg.landscape, grid)
+    offsets = offsets[grid.within_window(a, b, offsets)]  # the peak and its rivals within --around's window
     if not directions or len(offsets) == 0:
         return None
     sc = cfg.sightings
@@ -88,7 +91,8 @@ def sighting_pair(bundle: CueBundle, a: str, b: str, cfg: SyncConfig) -> PairLan
     land = _decided(a, b, offsets, near, moments, sc, coarse_s, directions, radius)
     if not land.decision.accepted or sc.refine_frames <= 0:
         return land
-    peak = refine_peak(bundle, a, directions, land.best_offset_s, coarse_s, radius, sc.refine_frames)
+    peak = refine_peak(bundle, a, directions, land.best_offset_s, coarse_s, radius, sc.refine_frames,
+                       (float(offsets[0]), float(offsets[-1])))
     best = int(np.argmin(np.abs(offsets - peak.offset_s)))
     decision = replace(land.decision, reason=f"{land.decision.reason}; {peak.note()}")
     return replace(land, best_offset_s=peak.offset_s, minima_idx=np.array([best]), decision=decision)
@@ -115,13 +119,13 @@ class RefinedPeak:
 
 
 def refine_peak(bundle: CueBundle, a: str, directions, peak_s: float, coarse_s: float, radius: dict[str, float],
-                window_frames: float) -> RefinedPeak:
+                window_frames: float, bounds_s: tuple[float, float] = (-math.inf, math.inf)) -> RefinedPeak:
     """The peak's Δ_ab fitted again with one constant image shift per direction between its heads
     and the worn camera's centre (geometry.sighting_shift_fit, the heads within twice the radius at
     the peak), on a tenth-of-a-frame grid within window_frames of the peak. The peak as it was
     when the fit's minimum lies on the window's border or no Δ keeps 80 % of a direction's heads
-    posed."""
-    fine = peak_s + coarse_s * np.arange(-window_frames, window_frames + 1e-9, 0.1)
+    posed. bounds_s: the pair's search range, which the grid stays in."""
+    fine = grid_around(peak_s, window_frames * coarse_s, 0.1 * coarse_s, bounds_s)
     sum_sq = np.zeros(len(fine))
     moments = np.zeros(len(fine), int)
     enough = np.ones(len(fine), bool)
