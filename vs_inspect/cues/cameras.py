@@ -24,6 +24,7 @@ import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
 
 from ..geometry.epipolar import camera_centers
 from ..geometry.timing import frame_brackets, interpolate_poses
+from .. import signals
 from ..signals import import_pycolmap
 from ..types import CameraTrack
 from .config import CameraConfig
@@ -298,6 +299,7 @@ class _Cancel:
         self.token.cancel()
 
     def check(self) -> None:
+        signals.checkpoint()
         if self._event.is_set():
             raise InterruptedError("model building cancelled")
 
