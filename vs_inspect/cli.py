@@ -20,6 +20,7 @@ import os
 import pkgutil
 import signal
 import sys
+from contextlib import ExitStack
 
 import numpy  # noqa: F401  (before anything that may import pycolmap; see ENVIRONMENT.md)
 
@@ -132,8 +133,11 @@ def _main(argv: list[str] | None) -> int:
             parser.print_help()
             return EXIT_FAILED
         signals.checkpoint()
-        code = int(args.func(args) or 0)
-        signals.checkpoint()
+        from .io.lock import command_outputs, lock_outputs
+        with ExitStack() as stack:  # one run at a time into each output the command names
+            lock_outputs(stack, *command_outputs(args))
+            code = int(args.func(args) or 0)
+            signals.checkpoint()
         return code
     except KeyboardInterrupt as exc:  # a recorded signal (signals.Interrupted), or Ctrl-C itself
         return _stopped(getattr(exc, "signum", None) or signals.requested() or signal.SIGINT)

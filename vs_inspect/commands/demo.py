@@ -116,7 +116,26 @@ def run_video_pipeline(out: Path, scene_dir: Path, run_config: RunConfig = RunCo
 
 
 def run(args: argparse.Namespace) -> int:
+    from contextlib import ExitStack
+
+    from ..io.lock import lock_outputs
+
     out = Path(args.out)
+    first = rrd_path(args, out)
+    with ExitStack() as stack:  # one run at a time into OUT and the recordings
+        lock_outputs(stack, (out, "--out"), (first, "--rrd"),
+                     (None if args.true_cues_only or first is None else video_rrd_path(first), "--rrd"))
+        fresh = not out.exists()
+        try:
+            return _run(args, out)
+        except KeyboardInterrupt:  # interrupted: a fresh OUT is removed whole (a cached scene stays)
+            if fresh and out.is_dir():
+                import shutil
+                shutil.rmtree(out, ignore_errors=True)
+            raise
+
+
+def _run(args: argparse.Namespace, out: Path) -> int:
     cfg = run_config_of(args)
     with open_sink(args, out, cfg.record, progress=not args.no_progress) as sink:
         run_demo(out, DEMO_SCENE, run_config=cfg, sink=sink, rerender=args.rerender,

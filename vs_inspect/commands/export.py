@@ -69,6 +69,13 @@ def _video_paths(args, result: RunResult, result_dir: Path) -> dict[str, Path]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..io.lock import output_lock
+
+    with output_lock(args.mosaic, "--mosaic"):  # one run at a time into the mosaic's file
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     from ..report.mosaic import write_mosaic
 
     check_output_file(args.mosaic, args.force, "--mosaic")

@@ -23,6 +23,9 @@ from .. import signals
 from ..errors import OutputBusy
 
 
+_HELD: set[str] = set()  # lock files this process holds
+
+
 def lock_path(path: str | os.PathLike) -> Path:
     """`.NAME.lock` beside path."""
     path = Path(os.path.abspath(path))
@@ -54,6 +57,10 @@ def output_lock(path: str | os.PathLike, option: str = "--out") -> Iterator[Path
     empty). path is also named in the line printed if the command is interrupted."""
     target = Path(path)
     lp = lock_path(target)
+    key = os.fspath(lp)
+    if key in _HELD:  # this process holds it already (an outer block): nothing more to do
+        yield lp
+        return
     made = []
     for parent in reversed(lp.parents):
         if not parent.exists():
@@ -88,8 +95,10 @@ def output_lock(path: str | os.PathLike, option: str = "--out") -> Iterator[Path
             os.ftruncate(fd, 0)
             os.write(fd, json.dumps(info).encode())
             signals.register_output(target)
+            _HELD.add(key)
             yield lp
         finally:
+            _HELD.discard(key)
             try:
                 os.unlink(lp)  # while still holding the lock: see the inode check above
             except OSError:
@@ -114,3 +123,22 @@ def lock_outputs(stack: ExitStack, *outputs: tuple[str | os.PathLike | None, str
             continue
         seen.add(key)
         stack.enter_context(output_lock(path, option))
+
+
+# the options that name what a command writes, locked for every command (export's positional
+# `out` is its input run folder, not an output)
+OUTPUT_OPTIONS = {"out": "--out", "mosaic": "--mosaic", "json": "--json", "jsonl": "--jsonl",
+                  "workdir": "--workdir", "estimates": "--estimates"}
+INPUT_OUT = frozenset({"export"})
+
+
+def command_outputs(args) -> list[tuple[Path, str]]:
+    """(path, option) of every output a parsed command line names."""
+    out = []
+    for attr, option in OUTPUT_OPTIONS.items():
+        if attr == "out" and getattr(args, "command", None) in INPUT_OUT:
+            continue
+        value = getattr(args, attr, None)
+        if isinstance(value, (str, os.PathLike)):
+            out.append((Path(value), option))
+    return out
