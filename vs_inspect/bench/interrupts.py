@@ -73,9 +73,10 @@ def _cli(args: list[str], cwd: Path, env: dict[str, str], check: bool = True) ->
     return r
 
 
-def prepare_inputs(workdir: Path) -> dict[str, Path]:
+def prepare_inputs(workdir: Path, demo: bool = True) -> dict[str, Path]:
     """Small synthetic inputs, made once: a cue bundle, a rendered scene, a run folder with its
-    recording (for report) and a run of the scene's videos (for export)."""
+    recording (for report), a run of the scene's true cues (for export) and, with demo, the demo's
+    own rendered scene (minutes)."""
     workdir.mkdir(parents=True, exist_ok=True)
     env = _env(workdir)
     inputs = workdir / "inputs"
@@ -95,7 +96,7 @@ def prepare_inputs(workdir: Path) -> dict[str, Path]:
         _cli(["sync", "--bundle", str(p["scene"] / "bundle"), "--out", str(p["videos_run"]), "--no-rrd",
               "--no-progress", "--force"], inputs, env)
     p["demo_scene"] = inputs / "demo" / "scene"
-    if not (p["demo_scene"] / "COMPLETE").is_file():  # the demo's own scene, rendered once (minutes)
+    if demo and not (p["demo_scene"] / "COMPLETE").is_file():  # the demo's own scene, rendered once (minutes)
         _cli(["demo", "--out", str(inputs / "demo"), "--true-cues-only", "--no-rrd", "--no-progress"], inputs, env)
     return p
 

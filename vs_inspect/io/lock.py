@@ -95,10 +95,12 @@ def output_lock(path: str | os.PathLike, option: str = "--out") -> Iterator[Path
             os.ftruncate(fd, 0)
             os.write(fd, json.dumps(info).encode())
             signals.register_output(target)
+            signals.register_temporary(lp)  # removed too if the process is ended from the watchdog
             _HELD.add(key)
             yield lp
         finally:
             _HELD.discard(key)
+            signals.unregister_temporary(lp)
             try:
                 os.unlink(lp)  # while still holding the lock: see the inode check above
             except OSError:
