@@ -618,10 +618,12 @@ def _scratch(workdir: str | None):
     """A scratch folder for one reconstruction (images, masks, database, COLMAP's logs), removed
     afterwards."""
     tmp = Path(tempfile.mkdtemp(prefix="vs_inspect_sfm_", dir=workdir))
+    signals.register_temporary(tmp)  # removed also when the process is ended from the watchdog
     try:
         yield tmp
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+        signals.unregister_temporary(tmp)
 
 
 @dataclass(frozen=True)

@@ -20,7 +20,7 @@ from contextlib import ExitStack, contextmanager
 from pathlib import Path
 
 from .. import signals
-from ..errors import OutputBusy
+from ..errors import InputError, OutputBusy
 
 
 _HELD: set[str] = set()  # lock files this process holds
@@ -65,14 +65,18 @@ def output_lock(path: str | os.PathLike, option: str = "--out") -> Iterator[Path
     for parent in reversed(lp.parents):
         if not parent.exists():
             made.append(parent)
+        elif not parent.is_dir():
+            raise InputError(f"{option} {target}: {parent} is a file, not a folder")
     try:
         lp.parent.mkdir(parents=True, exist_ok=True)
-    except OSError:
-        made = []
-        raise
+    except OSError as exc:  # named by the output, as the write would have been
+        raise OSError(exc.errno, exc.strerror, os.fspath(target)) from None
     try:
         while True:
-            fd = os.open(lp, os.O_RDWR | os.O_CREAT, 0o644)
+            try:
+                fd = os.open(lp, os.O_RDWR | os.O_CREAT, 0o644)
+            except OSError as exc:  # a read-only or unwritable folder: named by the output
+                raise OSError(exc.errno, exc.strerror, os.fspath(target)) from None
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
