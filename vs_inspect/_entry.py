@@ -16,7 +16,9 @@ import sys
 def main(argv: list[str] | None = None) -> None:
     from . import signals  # the standard library only
 
-    signals.install()
+    args = sys.argv[1:] if argv is None else argv
+    command = next((a for a in args if not a.startswith("-")), None)
+    signals.install(f"vs-inspect {command}" if command else None)  # named in the line from the start
     code = 1
     try:
         from .cli import main as run_command

@@ -136,9 +136,7 @@ def _main(argv: list[str] | None) -> int:
         from .io.lock import command_outputs, lock_outputs
         with ExitStack() as stack:  # one run at a time into each output the command names
             lock_outputs(stack, *command_outputs(args))
-            code = int(args.func(args) or 0)
-            signals.checkpoint()
-        return code
+            return int(args.func(args) or 0)
     except KeyboardInterrupt as exc:  # a recorded signal (signals.Interrupted), or Ctrl-C itself
         return _stopped(getattr(exc, "signum", None) or signals.requested() or signal.SIGINT)
     except Exception as exc:  # the promise: one line, never a traceback

@@ -28,7 +28,6 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable
 
 GRACE_ENV = "VS_INSPECT_STOP_GRACE_S"
 DEFAULT_GRACE_S = 10.0
@@ -72,6 +71,7 @@ class _State:
         self.command = "vs-inspect"
         self.outputs: list[tuple[str, bool]] = []  # (path, existed before the command)
         self.temporaries: dict[str, None] = {}  # paths to remove if the watchdog ends the process
+        self.made_dirs: dict[str, None] = {}  # folders made for outputs: removed then if empty
         self.lock = threading.Lock()  # guards temporaries, outputs, announced
         self.commit = threading.RLock()  # held while a finished output is renamed into place
         self.announced = False
@@ -79,6 +79,7 @@ class _State:
         self.wake_r = -1
         self.wake_w = -1
         self.generation = 0  # counts install(): a deadline of an earlier command is void
+        self.committing = False  # the command is writing its finished outputs: checkpoints pass
 
 
 _S = _State()
@@ -100,12 +101,13 @@ def install(command: str | None = None) -> tuple | None:
         _S.command = command
     if _S.installed or threading.current_thread() is not threading.main_thread():
         return None
-    _S.signum, _S.count, _S.announced = None, 0, False
+    _S.signum, _S.count, _S.announced, _S.committing = None, 0, False, False
     _S.generation += 1
     _S.finished.clear()
     with _S.lock:
         _S.outputs.clear()
         _S.temporaries.clear()
+        _S.made_dirs.clear()
     if _S.wake_r < 0:
         r, w = os.pipe()
         os.set_blocking(w, False)
@@ -155,10 +157,18 @@ def requested() -> int | None:
 
 def checkpoint() -> None:
     """Raise Interrupted (Terminated for SIGTERM) if a signal was received: call it where stopping
-    is safe. Costs one attribute read otherwise."""
+    is safe. Costs one attribute read otherwise. Passes once begin_commit() was called."""
     s = _S.signum
-    if s is not None:
+    if s is not None and not _S.committing:
         raise Terminated(s) if s == signal.SIGTERM else Interrupted(s)
+
+
+def begin_commit() -> None:
+    """The command's work is done and it now writes its finished outputs one after another (a
+    recording, then result.json): a signal from here on no longer stops it halfway, which would
+    leave some outputs new and others missing; it finishes (within the grace period) and the one
+    line says the outputs are complete."""
+    _S.committing = True
 
 
 def set_command(command: str) -> None:
@@ -182,6 +192,16 @@ def register_temporary(path: str | os.PathLike) -> None:
 def unregister_temporary(path: str | os.PathLike) -> None:
     with _S.lock:
         _S.temporaries.pop(os.fspath(path), None)
+
+
+def register_made_dir(path: str | os.PathLike, made: bool = True) -> None:
+    """A folder made for an output (made=False: no longer to be removed): if the watchdog ends
+    the process, it is removed when empty, as the output's context manager would."""
+    with _S.lock:
+        if made:
+            _S.made_dirs[os.fspath(path)] = None
+        else:
+            _S.made_dirs.pop(os.fspath(path), None)
 
 
 def commit_lock() -> threading.RLock:
@@ -246,9 +266,17 @@ def remove_temporaries() -> None:
                 os.unlink(p)
         except OSError:
             pass
+    with _S.lock:
+        dirs = sorted(_S.made_dirs, key=len, reverse=True)  # the deepest first
+        _S.made_dirs.clear()
+    for d in dirs:
+        try:
+            os.rmdir(d)
+        except OSError:
+            pass
 
 
-def hard_exit(code: int, flush: Callable[[], None] | None = None) -> None:
+def hard_exit(code: int) -> None:
     """Flush stdout and stderr and end the process now (os._exit): interpreter shutdown with
     VTK/EGL, numba or rerun threads alive is where the crashes come from."""
     for f in (sys.stdout, sys.stderr):
@@ -302,14 +330,12 @@ def _stop_now() -> None:
     """The command did not stop in time (or a second signal came): clean up and end here."""
     signum = _S.signum or signal.SIGINT
     # never between the two renames of a replacement; give up waiting after a few seconds
-    got = _S.commit.acquire(timeout=5.0)
+    _S.commit.acquire(timeout=5.0)  # held until the process ends
     try:
         remove_temporaries()
         announce(signum)
     finally:
         hard_exit(128 + signum)
-        if got:  # not reached
-            _S.commit.release()
 
 
 def import_pycolmap():

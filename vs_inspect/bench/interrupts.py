@@ -53,6 +53,7 @@ class Outcome:
     moment_s: float
     ok: bool
     missed: bool = False  # the command had finished before the signal was sent
+    stop_s: float | None = None  # from the signal to the end of the process
     problems: list[str] = field(default_factory=list)
 
 
@@ -297,6 +298,7 @@ def interrupt_once(case: Case, root: Path, env: dict[str, str], sig: int, moment
         os.killpg(proc.pid, signal.SIGKILL)
         rc = proc.wait()
         out.problems.append(f"still running {grace_s + 60:.0f} s after the signal (killed)")
+    out.stop_s = time.monotonic() - t_sig
     reader.join(5)
     after = [l for t, l in reader.lines if t >= t_sig]
     text = "\n".join(l for _, l in reader.lines)
@@ -361,8 +363,12 @@ def table(outcomes: list[Outcome]) -> str:
     for o in outcomes:
         rows.setdefault((o.case, o.signal), []).append(o)
     w = max([len("command")] + [len(c) for c, _ in rows])
-    lines = [f"{'command':<{w}}  {'signal':<7} {'runs':>4} {'ok':>4} {'missed':>6} {'failures':>8}"]
+    lines = [f"{'command':<{w}}  {'signal':<7} {'runs':>4} {'ok':>4} {'missed':>6} {'failures':>8} "
+             f"{'stop_s median':>13} {'max':>6}"]
     for (c, s), os_ in rows.items():
+        stops = sorted(o.stop_s for o in os_ if o.stop_s is not None)
+        med = f"{stops[len(stops) // 2]:.2f}" if stops else "-"
+        top = f"{stops[-1]:.2f}" if stops else "-"
         lines.append(f"{c:<{w}}  {s:<7} {len(os_):>4} {sum(o.ok for o in os_):>4} "
-                     f"{sum(o.missed for o in os_):>6} {sum(not o.ok for o in os_):>8}")
+                     f"{sum(o.missed for o in os_):>6} {sum(not o.ok for o in os_):>8} {med:>13} {top:>6}")
     return "\n".join(lines)

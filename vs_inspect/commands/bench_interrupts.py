@@ -22,7 +22,7 @@ def register(sub) -> None:
                                    "no crash, and leave its outputs exactly as they were before (or "
                                    "complete, when the signal came after its work was done). Prints a "
                                    "table: command, signal, runs, ok, missed (finished before the "
-                                   "signal), failures.")
+                                   "signal), failures, and the seconds from the signal to the end of the process (median, max).")
     p.add_argument("--workdir", type=Path, required=True, help="folder for the inputs and the runs (inputs are reused)")
     p.add_argument("--moments", type=positive_int, default=10, help="moments per command and signal")
     p.add_argument("--repeats", type=positive_int, default=3, help="times the whole sweep is run")

@@ -7,6 +7,7 @@ import shutil
 from contextlib import ExitStack
 from pathlib import Path
 
+from .. import signals
 from ..errors import InputError, VsInspectError
 from ..io.lock import lock_outputs
 from ..io.result import write_run_result
@@ -70,9 +71,14 @@ def _checked_run(args: argparse.Namespace, cfg, out: Path) -> int:
         from ..io.recording import check_entity_names
         check_entity_names(video_names)
     fresh = not out.exists()
+    if fresh:  # removed whole also if the process is ended from the watchdog
+        signals.register_temporary(out)
     try:
-        return _run(args, cfg, out, truth)
+        code = _run(args, cfg, out, truth)
+        signals.unregister_temporary(out)
+        return code
     except BaseException as exc:
+        signals.unregister_temporary(out)
         if fresh and out.is_dir():
             if isinstance(exc, KeyboardInterrupt):  # interrupted: nothing of this run is left
                 shutil.rmtree(out, ignore_errors=True)
@@ -91,6 +97,9 @@ def _run(args: argparse.Namespace, cfg, out: Path, truth: dict[str, float] | Non
         else:
             result = run_pipeline(args.videos, cfg, sink, calibration=args.calib, fps=args.fps,
                                   bundle_out=out / "cues", progress=progress, truth_offsets_s=truth)
+        # the offsets are known: the recording, config.json and result.json are written whole,
+        # whatever signal comes now (else the recording could be new and result.json missing)
+        signals.begin_commit()
     # after the recording is complete: result.json last, so its presence means a finished run
     cfg.save(out / "config.json")
     try:

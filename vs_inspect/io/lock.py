@@ -67,6 +67,8 @@ def output_lock(path: str | os.PathLike, option: str = "--out") -> Iterator[Path
             made.append(parent)
         elif not parent.is_dir():
             raise InputError(f"{option} {target}: {parent} is a file, not a folder")
+    for d in made:
+        signals.register_made_dir(d)
     try:
         lp.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:  # named by the output, as the write would have been
@@ -112,10 +114,11 @@ def output_lock(path: str | os.PathLike, option: str = "--out") -> Iterator[Path
             os.close(fd)
     finally:
         for d in reversed(made):  # the deepest first
+            signals.register_made_dir(d, made=False)
             try:
                 d.rmdir()
             except OSError:
-                break
+                pass
 
 
 def lock_outputs(stack: ExitStack, *outputs: tuple[str | os.PathLike | None, str]) -> None:
