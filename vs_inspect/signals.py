@@ -131,13 +131,6 @@ def restore(previous: tuple | None) -> None:
     _S.installed = False
 
 
-def reinstall() -> None:
-    """Put our handlers back after a library replaced them (glog does when pycolmap loads)."""
-    if _S.installed and threading.current_thread() is threading.main_thread():
-        for s in SIGNALS:
-            signal.signal(s, _record)
-
-
 def in_forked_worker() -> None:
     """In a forked worker process: SIGINT ignored (Ctrl-C reaches the whole process group; the
     parent stops the pool), SIGTERM's default action (the pool ends its workers with it), and no
