@@ -1,9 +1,8 @@
 """The `vs-inspect` console script: signal handling first, then the command line.
 
-Nothing heavy is imported before vs_inspect.signals has installed its handlers (this module's
-package __init__ imports numpy, which takes a moment but cannot be stopped halfway by a recorded
-signal), so Ctrl-C or SIGTERM at any moment, even during `import torch`, ends the command with
-one line. The process ends with os._exit after flushing its output: interpreter shutdown with
+Nothing but the standard library is imported before vs_inspect.signals has installed its handlers
+(the package's __init__ imports nothing), so Ctrl-C or SIGTERM at any moment, even during
+`import torch`, ends the command with one line. The process ends with os._exit after flushing its output: interpreter shutdown with
 VTK/EGL, numba or rerun threads alive is where crashes at exit come from.
 """
 

@@ -129,6 +129,7 @@ def restore(previous: tuple | None) -> None:
         signal.signal(s, h if h is not None else signal.SIG_DFL)
     signal.set_wakeup_fd(old_fd)
     _S.installed = False
+    _S.signum = None  # the command that received it has returned: later calls are not stopped
 
 
 def in_forked_worker() -> None:
