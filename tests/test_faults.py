@@ -414,7 +414,7 @@ BUNDLE_CASES = {
     "complex xy": ({"arrays": {"tracks/cam0.npz": {"xy": np.zeros((3, 5, 2), complex)}}}, "tracks/cam0.npz",
                    "complex"),
     "string array": ({"arrays": {"tracks/cam0.npz": {"instance": np.array(["a"])}}}, "tracks/cam0.npz",
-                     "only real numbers"),
+                     "instance has dtype string; need integer ids"),
 }
 
 
@@ -523,7 +523,7 @@ def test_unexpected_errors_are_one_line(exc, needle, bundle_dir, tmp_path, monke
         raise exc
     monkeypatch.setattr(sync_cmd, "run_pipeline", boom)
     fails(sync_argv(bundle_dir, tmp_path / "out", "--rrd", tmp_path / "recs" / "r.rrd"), capsys, 2, needle)
-    assert tree(tmp_path) == ["recs/"]  # the recording's folder, but no .partial in it
+    assert tree(tmp_path) == []  # no .partial, no lock, and no folder made for the recording
 
 
 # ---- SIGTERM takes Ctrl-C's cleanup path ------------------------------------------------------
@@ -550,18 +550,21 @@ def _run_and_terminate(script: str, tmp_path: Path, ready: str = "READY",
     return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
 
 
-@pytest.mark.parametrize("sig,code,word", [(signal.SIGTERM, 143, "terminated"),
-                                           (signal.SIGINT, 130, "interrupted")])
+@pytest.mark.parametrize("sig,code,word", [(signal.SIGTERM, 143, "SIGTERM"),
+                                           (signal.SIGINT, 130, "SIGINT")])
 def test_sigterm_during_sync_removes_the_partial_recording(bundle_dir, tmp_path, sig, code, word):
     """SIGTERM takes Ctrl-C's path: the same cleanup, exit 143 (Ctrl-C: 130)."""
     script = f"""
         import numpy, sys, time
         import vs_inspect.commands.sync as s
         real = s.run_pipeline
+        from vs_inspect import signals
         def slow(*a, **k):
             r = real(*a, **k)
             print("READY", flush=True)
-            time.sleep(60)
+            for _ in range(600):  # work between safe points
+                time.sleep(0.1)
+                signals.checkpoint()
             return r
         s.run_pipeline = slow
         from vs_inspect.cli import main
@@ -570,7 +573,8 @@ def test_sigterm_during_sync_removes_the_partial_recording(bundle_dir, tmp_path,
     """
     r = _run_and_terminate(script, tmp_path, sig=sig)
     assert r.returncode == code, r.stderr
-    assert r.stderr.strip().splitlines() == [f"vs-inspect sync: {word}"]
+    assert r.stderr.strip().splitlines() == [f"vs-inspect sync: interrupted by {word}; nothing written "
+                                             "to out, recs/r.rrd"]
     assert tree(tmp_path / "recs") == [] and not (tmp_path / "out").exists()
     assert tree(tmp_path / "tmp") == []
 
@@ -580,10 +584,13 @@ def test_sigterm_during_report_leaves_no_folder(run_dir, tmp_path):
         import numpy, sys, time
         import vs_inspect.report.figures as f
         real = f.landscapes
+        from vs_inspect import signals
         def slow(*a, **k):
             real(*a, **k)
             print("READY", flush=True)
-            time.sleep(60)
+            for _ in range(600):
+                time.sleep(0.1)
+                signals.checkpoint()
         f.landscapes = slow
         from vs_inspect.cli import main
         sys.exit(main(["report", {str(run_dir)!r}, "--out", "rep"]))
@@ -591,7 +598,7 @@ def test_sigterm_during_report_leaves_no_folder(run_dir, tmp_path):
     r = _run_and_terminate(script, tmp_path)
     assert r.returncode == 143, r.stderr
     assert "Traceback" not in r.stderr
-    assert r.stderr.strip().splitlines()[-1] == "vs-inspect report: terminated"
+    assert r.stderr.strip().splitlines() == ["vs-inspect report: interrupted by SIGTERM; nothing written to rep"]
     assert tree(tmp_path) == ["tmp/"]  # no rep/, no .rep.partial-*
 
 
@@ -604,9 +611,12 @@ def test_sigterm_during_sfm_removes_the_scratch_folder(tmp_path):
         from vs_inspect.signals import Terminated, install
         install()  # as vs_inspect.cli.main does
         import vs_inspect.cues.cameras as c
+        from vs_inspect import signals
         def slow(*a, **k):
             print("READY", flush=True)
-            time.sleep(60)
+            for _ in range(600):
+                time.sleep(0.1)
+                signals.checkpoint()
         c._sift_database = slow
         from vs_inspect.cues.config import CameraConfig
         img = numpy.zeros((64, 64, 3), numpy.uint8)

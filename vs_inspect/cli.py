@@ -4,9 +4,10 @@ every failure into one clear line `vs-inspect COMMAND: error: ...` and an exit c
 traceback (-vv logs the traceback for debugging).
 
 Exit codes: 0 done; 2 no result could be produced (bad input or option, an unreadable or
-unwritable file, out of memory); 130 interrupted by Ctrl-C (SIGINT); 143 terminated by SIGTERM.
-SIGTERM takes the same cleanup path as Ctrl-C (a KeyboardInterrupt), so every temporary output
-(io.atomic, the recording's .partial, the SfM scratch folder) is removed before exiting.
+unwritable file, out of memory, another run writing the same output); 130 interrupted by Ctrl-C
+(SIGINT); 143 terminated by SIGTERM. Both signals are only recorded when they arrive; the command
+stops at its next safe point (vs_inspect.signals), every temporary output (io.atomic, the
+recording's .partial, the SfM scratch folder) is removed, and one line says what was left.
 """
 
 from __future__ import annotations
@@ -17,15 +18,14 @@ import importlib
 import logging
 import os
 import pkgutil
+import signal
 import sys
+from contextlib import ExitStack
 
 import numpy  # noqa: F401  (before anything that may import pycolmap; see ENVIRONMENT.md)
 
-from . import __version__, commands
+from . import __version__, commands, signals
 from .errors import VsInspectError
-from .signals import Terminated
-from .signals import install as install_sigterm
-from .signals import restore as restore_sigterm
 
 log = logging.getLogger(__name__)
 
@@ -47,8 +47,9 @@ def build_parser() -> argparse.ArgumentParser:
         description="Synchronize videos of one dynamic scene from cameras that were never "
                     "synchronized, by the epipolar cue (VisualSync), and show why.",
         epilog="Run 'vs-inspect COMMAND --help' for the options of a command. Exit codes: 0 done, "
-               "2 no result (bad input, an unreadable or unwritable file), 130 Ctrl-C, 143 SIGTERM "
-               "(temporary outputs are removed in both cases).")
+               "2 no result (bad input, an unreadable or unwritable file, another run writing the "
+               "same output), 130 Ctrl-C, 143 SIGTERM (temporary outputs are removed in both "
+               "cases; the command stops within VS_INSPECT_STOP_GRACE_S seconds, default 10).")
     parser.add_argument("--version", action="version", version=f"vs-inspect {__version__}")
     parser.add_argument("-v", "--verbose", action="count", default=0,
                         help="more log output (-v info, -vv debug, with tracebacks of errors)")
@@ -106,35 +107,56 @@ def _message(exc: BaseException, args: argparse.Namespace) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    """Run one command; returns its exit code. Installs the signal handlers for the command's
+    duration when vs_inspect._entry has not (a call from Python)."""
+    previous = signals.install()
     try:
-        args = parser.parse_args(argv)
-    except SystemExit as exc:  # --help, --version, or a usage error (one line, see _Parser)
-        return exc.code if isinstance(exc.code, int) else EXIT_FAILED
-    if args.verbose < 2:  # rerun's writer reports I/O errors on stderr too; ours is the one line
-        os.environ.setdefault("RUST_LOG", "off")
-    logging.basicConfig(level=[logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)],
-                        format="%(levelname)s %(name)s: %(message)s")
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return EXIT_FAILED
-    previous = install_sigterm()
+        return _main(argv)
+    finally:
+        signals.restore(previous)
+
+
+def _main(argv: list[str] | None) -> int:
+    args = None
     try:
-        return int(args.func(args) or 0)
-    except Terminated:
-        print(f"vs-inspect {args.command}: terminated", file=sys.stderr)
-        return EXIT_TERMINATED
-    except KeyboardInterrupt:
-        print(f"vs-inspect {args.command}: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        parser = build_parser()
+        try:
+            args = parser.parse_args(argv)
+        except SystemExit as exc:  # --help, --version, or a usage error (one line, see _Parser)
+            return exc.code if isinstance(exc.code, int) else EXIT_FAILED
+        signals.set_command(f"vs-inspect {args.command}" if args.command else "vs-inspect")
+        if args.verbose < 2:  # rerun's writer reports I/O errors on stderr too; ours is the one line
+            os.environ.setdefault("RUST_LOG", "off")
+        logging.basicConfig(level=[logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)],
+                            format="%(levelname)s %(name)s: %(message)s")
+        if not getattr(args, "func", None):
+            parser.print_help()
+            return EXIT_FAILED
+        signals.checkpoint()
+        from .io.lock import command_outputs, lock_outputs
+        with ExitStack() as stack:  # one run at a time into each output the command names
+            lock_outputs(stack, *command_outputs(args))
+            return int(args.func(args) or 0)
+    except KeyboardInterrupt as exc:  # a recorded signal (signals.Interrupted), or Ctrl-C itself
+        return _stopped(getattr(exc, "signum", None) or signals.requested() or signal.SIGINT)
     except Exception as exc:  # the promise: one line, never a traceback
+        if signals.requested() is not None:  # an error caused by stopping: the stop is the news
+            log.debug("error while stopping", exc_info=True)
+            return _stopped(signals.requested())
         log.debug("traceback of the error below", exc_info=True)
         code = exc.exit_code if isinstance(exc, VsInspectError) else EXIT_FAILED
-        print(f"vs-inspect {args.command}: error: {one_line(_message(exc, args))}", file=sys.stderr)
+        name = getattr(args, "command", None)
+        print(f"vs-inspect{' ' + name if name else ''}: error: {one_line(_message(exc, args))}",
+              file=sys.stderr)
         return code
-    finally:
-        restore_sigterm(previous)
+
+
+def _stopped(signum: int) -> int:
+    signals.remove_temporaries()  # what no context manager removed (normally nothing)
+    signals.announce(signum)
+    return EXIT_TERMINATED if signum == signal.SIGTERM else 128 + signum
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from ._entry import main as _entry_main
+    _entry_main(sys.argv[1:])

@@ -24,7 +24,6 @@ import functools
 import logging
 import multiprocessing
 import os
-import signal
 import threading
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
@@ -34,6 +33,7 @@ from typing import Any
 
 from tqdm import tqdm
 
+from . import signals
 from .errors import InputError, check_fields
 
 log = logging.getLogger(__name__)
@@ -102,14 +102,19 @@ class LocalEngine(Engine):
         if threads and not processes and workers > 1:
             pool = ThreadPoolExecutor(min(workers, 2), thread_name_prefix="engine")
             try:
-                yield from tqdm(pool.map(functools.partial(fn, shared), items), total=len(items), desc=desc,
-                                unit=unit, disable=not progress, leave=False)
+                for out in tqdm(pool.map(functools.partial(_checked, fn, shared), items), total=len(items),
+                                desc=desc, unit=unit, disable=not progress, leave=False):
+                    signals.checkpoint()
+                    yield out
             finally:  # left early (an error, Ctrl-C): the items not started are not run
                 pool.shutdown(wait=True, cancel_futures=True)
             return
         if workers <= 1:
             for item in tqdm(items, desc=desc, unit=unit, disable=not progress, leave=False):
-                yield fn(shared, item)
+                signals.checkpoint()
+                out = fn(shared, item)
+                signals.checkpoint()
+                yield out
             return
         global _FORKED
         _FORKED = (fn, shared)  # inherited by the forked workers: the bundle is never pickled
@@ -118,8 +123,10 @@ class LocalEngine(Engine):
             pool = multiprocessing.get_context("fork").Pool(workers, initializer=_forked_init)
             mine = [p for p in multiprocessing.active_children() if p not in before]
             try:
-                yield from tqdm(pool.imap(_forked_call, items), total=len(items), desc=desc, unit=unit,
-                                disable=not progress, leave=False)
+                for out in tqdm(pool.imap(_forked_call, items), total=len(items), desc=desc, unit=unit,
+                                disable=not progress, leave=False):
+                    signals.checkpoint()
+                    yield out
             finally:
                 stop_pool(pool, mine)
         finally:
@@ -146,9 +153,14 @@ def stop_pool(pool, workers: list, grace_s: float = 10.0) -> None:
 
 
 def _forked_init() -> None:
-    # the pool ends its workers with SIGTERM: the default action, not the CLI's Terminated
-    # handler inherited by the fork (which printed a traceback per worker)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    # the pool ends its workers with SIGTERM (its default action); Ctrl-C reaches the whole
+    # process group, and the parent stops the pool at its next safe point
+    signals.in_forked_worker()
+
+
+def _checked(fn, shared, item):
+    signals.checkpoint()  # a stopped run starts no more items
+    return fn(shared, item)
 
 
 def _forked_call(item):
@@ -233,6 +245,7 @@ class RayEngine(Engine):
                     log.warning("a Ray task was lost: %s: %s", type(exc).__name__, first)
                     out = TaskFailed(f"its Ray task was lost ({type(exc).__name__}: {first})")
                 got += 1
+                signals.checkpoint()
                 yield out
         finally:
             rest = refs[got:]

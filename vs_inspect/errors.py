@@ -67,3 +67,7 @@ def check_fields(obj, *, positive=(), nonnegative=(), fraction=(), at_least=None
             raise ValueError(f"{name(f)} must be >= {at_least[f.name]}, got {v!r}")
         if at_most and f.name in at_most and not v <= at_most[f.name]:
             raise ValueError(f"{name(f)} must be <= {at_most[f.name]}, got {v!r}")
+
+
+class OutputBusy(VsInspectError):
+    """Another run is writing the same output (its lock is held); the message names that run."""

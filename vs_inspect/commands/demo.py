@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from .. import signals
 from ..io.bundle import read_gt
 from ..io.result import write_run_result
 from ..pipeline import RunConfig
@@ -69,11 +70,13 @@ def ensure_scene(folder: Path, config: SceneConfig = DEMO_SCENE, rerender: bool 
 
 
 def run_demo(out: Path, config: SceneConfig = DEMO_SCENE, run_config: RunConfig = RunConfig(),
-             sink: Sink | None = None, rerender: bool = False, progress: bool = True) -> RunResult:
+             sink: Sink | None = None, rerender: bool = False, progress: bool = True,
+             final: bool = False) -> RunResult:
     """Render (or reuse) the scene in out/scene, synchronize its true cues, write out/result.json.
 
     This is the scene's true cue bundle through Stage 1 + 2; run_video_pipeline sends the
-    rendered videos through the whole pipeline.
+    rendered videos through the whole pipeline. final: nothing follows in this command, so once
+    the offsets are known the outputs are written whole whatever signal comes (signals.begin_commit).
     """
     out = Path(out)
     scene_dir = out / "scene"
@@ -82,6 +85,8 @@ def run_demo(out: Path, config: SceneConfig = DEMO_SCENE, run_config: RunConfig 
           "solver's errors from Stage 0's")
     result = run_pipeline(scene_dir / "bundle", run_config, sink, progress=progress,
                           recorded_inputs=RunInputs(scene=str(scene_dir), cues="true cue bundle"))
+    if final:
+        signals.begin_commit()
     path = write_run_result(result, out / "result.json")
     print(offsets_table(result.offsets_s, result.uncertainty_s, result.gt_offsets_s,
                         result.reference, result.headlines()))
@@ -98,7 +103,7 @@ def video_rrd_path(true_cues_rrd: Path) -> Path:
 
 
 def run_video_pipeline(out: Path, scene_dir: Path, run_config: RunConfig = RunConfig(),
-                       progress: bool = True, sink: Sink | None = None) -> int:
+                       progress: bool = True, sink: Sink | None = None, final: bool = False) -> int:
     """The rendered videos through the whole pipeline, exactly as a user's videos would go
     (`vs-inspect sync cam*.mp4 --calib calibration.json`), printed against the truth; recorded
     to sink when given."""
@@ -109,6 +114,8 @@ def run_video_pipeline(out: Path, scene_dir: Path, run_config: RunConfig = RunCo
     out = Path(out)
     result = run_pipeline(videos, run_config, sink, calibration=scene_dir / "calibration.json",
                           bundle_out=out / "cues", progress=progress)
+    if final:  # as run_demo's final
+        signals.begin_commit()
     path = write_run_result(result, out / "result.json")
     run_config.save(out / "config.json")
     print_run(result, path, truth=truth)
@@ -116,11 +123,35 @@ def run_video_pipeline(out: Path, scene_dir: Path, run_config: RunConfig = RunCo
 
 
 def run(args: argparse.Namespace) -> int:
+    from contextlib import ExitStack
+
+    from ..io.lock import lock_outputs
+
     out = Path(args.out)
+    first = rrd_path(args, out)
+    with ExitStack() as stack:  # one run at a time into OUT and the recordings
+        lock_outputs(stack, (out, "--out"), (first, "--rrd"),
+                     (None if args.true_cues_only or first is None else video_rrd_path(first), "--rrd"))
+        fresh = not out.exists()
+        if fresh:  # removed whole also if the process is ended from the watchdog
+            signals.register_temporary(out)
+        try:
+            code = _run(args, out)
+            signals.unregister_temporary(out)
+            return code
+        except KeyboardInterrupt:  # interrupted: a fresh OUT is removed whole (a cached scene stays)
+            signals.unregister_temporary(out)
+            if fresh and out.is_dir():
+                import shutil
+                shutil.rmtree(out, ignore_errors=True)
+            raise
+
+
+def _run(args: argparse.Namespace, out: Path) -> int:
     cfg = run_config_of(args)
     with open_sink(args, out, cfg.record, progress=not args.no_progress) as sink:
         run_demo(out, DEMO_SCENE, run_config=cfg, sink=sink, rerender=args.rerender,
-                 progress=not args.no_progress)
+                 progress=not args.no_progress, final=args.true_cues_only)
     if describe(sink):
         print(describe(sink))
     if not args.true_cues_only:
@@ -128,7 +159,7 @@ def run(args: argparse.Namespace) -> int:
         video_args = argparse.Namespace(**{**vars(args), "rrd": video_rrd_path(first) if first else None})
         with open_sink(video_args, out / "videos", cfg.record, progress=not args.no_progress) as vsink:
             run_video_pipeline(out / "videos", out / "scene", cfg, progress=not args.no_progress,
-                               sink=vsink)
+                               sink=vsink, final=True)
         if describe(vsink):
             print(describe(vsink))
     return 0

@@ -82,6 +82,16 @@ def _video_paths(args, result: RunResult, result_dir: Path) -> dict[str, Path]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from contextlib import ExitStack
+
+    from ..io.lock import lock_outputs
+
+    with ExitStack() as stack:  # one run at a time into each output
+        lock_outputs(stack, (args.offsets, "--offsets"), (args.trimmed, "--trimmed"), (args.mosaic, "--mosaic"))
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     if not (args.offsets or args.trimmed or args.mosaic):
         raise InputError("nothing to export: give --offsets, --trimmed and/or --mosaic")
     if args.offsets is not None:

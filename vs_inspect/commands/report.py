@@ -32,6 +32,13 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..io.lock import output_lock
+
+    with output_lock(args.out, "--out"):  # one run at a time into --out
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     from ..analysis.report_data import load_report_data
     from ..report.build import render_report
     from ..report.figures import checked_render_options

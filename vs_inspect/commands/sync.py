@@ -4,14 +4,18 @@ from __future__ import annotations
 
 import argparse
 import logging
+import shutil
+from contextlib import ExitStack
 from pathlib import Path
 
+from .. import signals
 from ..errors import InputError, VsInspectError
+from ..io.lock import lock_outputs
 from ..io.result import write_run_result
 from ..pipeline import run as run_pipeline
 from ._common import (add_config_file_option, add_cue_options, add_force_option, add_gt_option,
                       add_sync_options, check_output_folder, gt_with_reference, print_run, run_config)
-from ._record import add_record_options, check_rrd_path, describe, open_sink
+from ._record import add_record_options, check_rrd_path, describe, open_sink, rrd_path
 
 log = logging.getLogger(__name__)
 
@@ -52,6 +56,13 @@ def run(args: argparse.Namespace) -> int:
         from ..pipeline.stage0 import check_cue_config
         check_cue_config(cfg.cues)
     out = Path(args.out)
+    with ExitStack() as stack:
+        # one run at a time into --out and the recording: taken before anything is checked
+        lock_outputs(stack, (out, "--out"), (rrd_path(args, out), "--rrd"))
+        return _checked_run(args, cfg, out)
+
+
+def _checked_run(args: argparse.Namespace, cfg, out: Path) -> int:
     # every output is checked before any work, so a bad --out or --rrd fails in a second, not
     # after the whole run; an earlier run's result is replaced only with --force
     check_output_folder(out, args.force)
@@ -67,11 +78,19 @@ def run(args: argparse.Namespace) -> int:
         from ..io.recording import check_entity_names
         check_entity_names(video_names)
     fresh = not out.exists()
+    if fresh:  # removed whole also if the process is ended from the watchdog
+        signals.register_temporary(out)
     try:
-        return _run(args, cfg, out, truth)
-    except BaseException:
-        if fresh and out.is_dir() and not any(out.iterdir()):
-            out.rmdir()  # a failed run leaves no empty --out behind
+        code = _run(args, cfg, out, truth)
+        signals.unregister_temporary(out)
+        return code
+    except BaseException as exc:
+        signals.unregister_temporary(out)
+        if fresh and out.is_dir():
+            if isinstance(exc, KeyboardInterrupt):  # interrupted: nothing of this run is left
+                shutil.rmtree(out, ignore_errors=True)
+            elif not any(out.iterdir()):
+                out.rmdir()  # a failed run leaves no empty --out behind
         raise
 
 
@@ -85,6 +104,9 @@ def _run(args: argparse.Namespace, cfg, out: Path, truth: dict[str, float] | Non
         else:
             result = run_pipeline(args.videos, cfg, sink, calibration=args.calib, fps=args.fps,
                                   bundle_out=out / "cues", progress=progress, truth_offsets_s=truth)
+        # the offsets are known: the recording, config.json and result.json are written whole,
+        # whatever signal comes now (else the recording could be new and result.json missing)
+        signals.begin_commit()
     # after the recording is complete: result.json last, so its presence means a finished run
     cfg.save(out / "config.json")
     try:
@@ -93,7 +115,6 @@ def _run(args: argparse.Namespace, cfg, out: Path, truth: dict[str, float] | Non
         (out / "config.json").unlink(missing_ok=True)
         raise
     if args.bundle and (out / "cues").is_dir():  # --force over a video run: its cues are not this run's
-        import shutil
         shutil.rmtree(out / "cues")
     _write_cameras(args, out, list(result.inputs.videos) or list(result.offsets_s))
     if describe(sink):

@@ -24,6 +24,7 @@ import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
 
 from ..geometry.epipolar import camera_centers
 from ..geometry.timing import frame_brackets, interpolate_poses
+from .. import signals
 from ..signals import import_pycolmap
 from ..types import CameraTrack
 from .config import CameraConfig
@@ -298,6 +299,7 @@ class _Cancel:
         self.token.cancel()
 
     def check(self) -> None:
+        signals.checkpoint()
         if self._event.is_set():
             raise InterruptedError("model building cancelled")
 
@@ -616,10 +618,12 @@ def _scratch(workdir: str | None):
     """A scratch folder for one reconstruction (images, masks, database, COLMAP's logs), removed
     afterwards."""
     tmp = Path(tempfile.mkdtemp(prefix="vs_inspect_sfm_", dir=workdir))
+    signals.register_temporary(tmp)  # removed also when the process is ended from the watchdog
     try:
         yield tmp
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+        signals.unregister_temporary(tmp)
 
 
 @dataclass(frozen=True)

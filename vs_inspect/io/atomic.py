@@ -1,17 +1,21 @@
 """One way to write a file or a folder so that a reader never sees it half-written.
 
-Everything is written under a hidden temporary name in the destination's folder and renamed into
-place only when complete (a rename within one file system is atomic); on any error, including
-KeyboardInterrupt, the temporary is removed. Finished files get the usual mode (0666 minus the
-umask), not mkstemp's 0600.
+Everything is written under a hidden temporary name beside the destination,
+`.NAME.partial-PID-RANDOM`, and renamed into place only when complete (a rename within one file
+system is atomic); a replaced destination is first renamed to `.NAME.old-PID`. On any error,
+including an interrupt, the temporary is removed; if the process is killed (SIGKILL, power loss)
+these names say what they are, no reader takes them for a result (readers list only the names
+they expect, never dot-names), and the next writer into the same place removes the ones whose
+process is no longer alive. Finished files get the usual mode (0666 minus the umask).
 """
 
 from __future__ import annotations
 
 import json
 import os
+import re
+import secrets
 import shutil
-import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -19,11 +23,75 @@ from typing import Any
 
 import numpy as np
 
+from .. import signals
+
 
 def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+def temporary_name(path: Path, suffix: str = "") -> Path:
+    """`.NAME.partial-PID-RANDOM<suffix>` beside path."""
+    return path.with_name(f".{path.name}.partial-{os.getpid()}-{secrets.token_hex(4)}{suffix}")
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # someone else's process
+        return True
+    return True
+
+
+def _remove(p: Path) -> None:
+    try:
+        if p.is_dir() and not p.is_symlink():
+            shutil.rmtree(p, ignore_errors=True)
+        else:
+            p.unlink(missing_ok=True)
+    except OSError:
+        pass
+
+
+def remove_leftovers(path: str | os.PathLike) -> list[Path]:
+    """Remove what killed writers left beside path (`.NAME.partial-PID-*`, `.NAME.old-PID`)
+    whose process is not alive. Returns what was removed."""
+    path = Path(path)
+    pattern = re.compile(re.escape(f".{path.name}.") + r"(?:partial-(\d+)-[0-9a-f]+.*|old-(\d+))")
+    removed = []
+    try:
+        entries = list(os.scandir(path.parent))
+    except OSError:
+        return removed
+    for e in entries:
+        m = pattern.fullmatch(e.name)
+        if m is None:
+            continue
+        pid = int(m.group(1) or m.group(2))
+        if not _alive(pid):
+            _remove(Path(e.path))
+            removed.append(Path(e.path))
+    return removed
+
+
+def _replace(tmp: Path, path: Path) -> None:
+    """tmp becomes path; an existing path goes to .NAME.old-PID first and is then removed."""
+    with signals.commit_lock():
+        if tmp.is_dir() and os.path.lexists(path):  # a folder cannot replace in one rename
+            old = path.with_name(f".{path.name}.old-{os.getpid()}")
+            os.replace(path, old)
+            os.replace(tmp, path)
+            signals.unregister_temporary(tmp)
+            _remove(old)
+        else:
+            os.replace(tmp, path)
+            signals.unregister_temporary(tmp)
 
 
 @contextmanager
@@ -34,15 +102,18 @@ def atomic_path(path: str | os.PathLike, suffix: str = "") -> Iterator[Path]:
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=f".partial{suffix}", dir=path.parent)
-    os.close(fd)
-    tmp = Path(name)
+    remove_leftovers(path)
+    tmp = temporary_name(path, suffix)
+    signals.register_temporary(tmp)
     try:
+        os.close(os.open(tmp, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))
         yield tmp
+        signals.checkpoint()  # an interrupted run replaces nothing
         os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
+        _replace(tmp, path)
     except BaseException:
-        tmp.unlink(missing_ok=True)
+        _remove(tmp)
+        signals.unregister_temporary(tmp)
         raise
 
 
@@ -58,22 +129,18 @@ def atomic_dir(path: str | os.PathLike, overwrite: bool = False) -> Iterator[Pat
     if occupied and not overwrite:
         raise FileExistsError(f"{path} exists and is not empty")
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.partial-", dir=path.parent))
+    remove_leftovers(path)
+    tmp = temporary_name(path)
+    signals.register_temporary(tmp)
     try:
+        tmp.mkdir(mode=0o700)
         yield tmp
+        signals.checkpoint()  # an interrupted run replaces nothing
         os.chmod(tmp, 0o777 & ~_umask())
-        if path.exists():
-            old = path.with_name(f".{path.name}.old-{os.getpid()}")
-            os.replace(path, old)
-            os.replace(tmp, path)
-            if old.is_dir():
-                shutil.rmtree(old, ignore_errors=True)
-            else:
-                old.unlink(missing_ok=True)
-        else:
-            os.replace(tmp, path)
+        _replace(tmp, path)
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
+        _remove(tmp)
+        signals.unregister_temporary(tmp)
         raise
 
 

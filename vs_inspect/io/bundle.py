@@ -79,6 +79,25 @@ def _shape_text(shape: tuple) -> str:
     return "(" + ",".join("N" if s is None else str(s) for s in shape) + ")"
 
 
+# arrays that hold flags (bool allowed); every other array holds numbers, and a bool array there
+# is a mistake (a mask saved in place of coordinates), not 0 and 1
+FLAG_ARRAYS = frozenset({"valid", "unchecked"})
+_NEEDS = {"xy": "float pixel coordinates", "index": "integer track indices", "instance": "integer ids",
+          "K": "numbers (a 3x3 camera matrix)", "cam_from_world": "numbers (a 4x4 rigid transform)",
+          "weight": "numbers", "chosen_at_offset_s": "a number of seconds"}
+
+
+def check_numeric_dtype(path, key: str, dtype: np.dtype) -> None:
+    """BundleError naming the file and the array unless dtype is a real number type (bool only for
+    the flag arrays; never strings, objects, complex numbers or structured records)."""
+    dtype = np.dtype(dtype)
+    allowed = "biuf" if key in FLAG_ARRAYS else "iuf"
+    if dtype.hasobject or dtype.fields is not None or dtype.kind not in allowed:
+        kind = {"c": "complex", "b": "bool", "U": "string", "S": "bytes", "O": "object"}.get(dtype.kind, str(dtype))
+        need = "bool flags or numbers" if key in FLAG_ARRAYS else _NEEDS.get(key, "numbers")
+        raise BundleError(path, f"{key} has dtype {kind}; need {need}")
+
+
 def _load_npz(path: Path, expect: dict[str, tuple[tuple[int | None, ...], ...]] | None = None,
               budget: _Budget | None = None, note: str = "") -> dict[str, np.ndarray]:
     """The arrays of `expect` (name -> allowed shapes, None = any length) from an .npz, after checking
@@ -91,9 +110,7 @@ def _load_npz(path: Path, expect: dict[str, tuple[tuple[int | None, ...], ...]] 
         raise BundleError(path, f"not a readable .npz file ({exc})") from None
     wanted = headers if expect is None else {k: v for k, v in headers.items() if k in expect}
     for key, (shape, dtype) in wanted.items():
-        if dtype.hasobject or dtype.kind not in "biuf":
-            kind = "complex" if dtype.kind == "c" else str(dtype)
-            raise BundleError(path, f"array {key!r} has dtype {kind}; only real numbers are allowed")
+        check_numeric_dtype(path, key, dtype)
         if expect is not None:
             allowed = expect[key]
             if not any(len(a) == len(shape) and all(w is None or w == s for w, s in zip(a, shape))

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..errors import BadVideoName, InputError
 from ..types import VideoInfo
+from .. import signals
 from .atomic import atomic_path
 
 log = logging.getLogger(__name__)
@@ -290,6 +291,7 @@ def _decoded_frames(src: VideoSource, container, stream) -> Iterator[tuple[int, 
     index_of = {p: k for k, p in enumerate(src._pts)} if src._pts is not None else None
     k_next = 0
     for frame in container.decode(stream):
+        signals.checkpoint()  # between frames (PyAV's decoder cannot be stopped halfway)
         if index_of is not None:
             k = index_of.get(frame.pts)
             if k is None:
@@ -313,6 +315,7 @@ def iter_frames(src: VideoSource, step: int = 1, max_side: int | None = None
     n = src.info.num_frames
     if src.is_image_folder:
         for k in range(0, n, step):
+            signals.checkpoint()
             yield k, _read_image(src, k, max_side)
         return
     expected = list(range(0, n, step))
@@ -395,6 +398,7 @@ def _read_by_seeking(src: VideoSource, wanted: list[int], max_side: int | None
                 container.seek(src._pts[wanted[i]], stream=stream, backward=True, any_frame=False)
                 first = True
                 for frame in container.decode(stream):
+                    signals.checkpoint()
                     k = index_of.get(frame.pts)
                     if k is None:
                         continue
@@ -510,6 +514,7 @@ class VideoWriter:
         if pts <= self._last_pts:
             raise ValueError(f"{self.path}: frame times must increase (got {t:.6f} s after "
                              f"{float(self._last_pts * self.TIME_BASE):.6f} s)")
+        signals.checkpoint()  # between frames
         frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(img), format="bgr24")
         frame.pts = pts
         frame.time_base = self.TIME_BASE

@@ -173,14 +173,23 @@ def read_cotracker(path, visibility_threshold: float = 0.5) -> Tracks:
     return Tracks(np.ascontiguousarray(xy.transpose(1, 0, 2)))
 
 
+_NUMBER_ARRAYS = frozenset({"pred_tracks", "c2w", "K", "filtered_corr_indices"})
+
+
 def _load_npz(path: Path) -> dict[str, np.ndarray]:
     try:
         with np.load(path, allow_pickle=False) as z:
-            return {k: z[k] for k in z.files}
+            arrays = {k: z[k] for k in z.files}
     except FileNotFoundError:
         raise InputError(f"{path}: missing file") from None
     except (ValueError, OSError, zipfile.BadZipFile, EOFError) as exc:
         raise InputError(f"{path}: not a readable .npz file ({exc})") from None
+    for k, a in arrays.items():  # numbers (bool only for visibility and validity flags)
+        allowed = "iuf" if k in _NUMBER_ARRAYS else "biuf"
+        if a.dtype.hasobject or a.dtype.fields is not None or a.dtype.kind not in allowed:
+            kind = {"c": "complex", "b": "bool", "U": "string", "S": "bytes"}.get(a.dtype.kind, str(a.dtype))
+            raise InputError(f"{path}: {k} has dtype {kind}; need numbers")
+    return arrays
 
 
 def _orthonormalize(R: np.ndarray) -> np.ndarray:

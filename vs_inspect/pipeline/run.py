@@ -15,6 +15,7 @@ import os
 import time
 from collections.abc import Sequence
 
+from .. import signals
 from ..engine import Engine, open_engine
 from ..errors import InputError, NoUsableVideos
 from ..record.sink import NullSink, Sink
@@ -82,6 +83,7 @@ def _run(inputs, config: RunConfig, sink: Sink, engine: Engine, calibration, fps
             sink.run_summary(result)
             return result
         bundle = _with_truth(bundle, truth_offsets_s)
+        signals.checkpoint()  # between stages
         if bundle_out is not None:
             from ..io.bundle import write_bundle
             write_bundle(bundle, bundle_out, overwrite=True)
@@ -89,6 +91,7 @@ def _run(inputs, config: RunConfig, sink: Sink, engine: Engine, calibration, fps
                           videos=videos, fps=fps)
         stage0_timings = {f"stage0_{k}": v for k, v in stats.timings_s.items()}
         stage0_timings["stage0_with_io_s"] = time.perf_counter() - t0
+    signals.checkpoint()  # between stages
     sync_cfg, moved = _usable_reference(config.sync, bundle, stats, list(videos))
     sync_cfg = _windows_of(sync_cfg, bundle)
     sync = sync_bundle(bundle, sync_cfg, sink=sink, progress=progress, engine=engine)
@@ -97,6 +100,7 @@ def _run(inputs, config: RunConfig, sink: Sink, engine: Engine, calibration, fps
                          timings, moved)
     if sync.drift_ppm is not None or bundle.gt_drift_ppm is not None:
         result = dataclasses.replace(result, gt_drift_ppm=bundle.gt_drift_ppm, **_drift_of(sync, stats))
+    signals.checkpoint()
     sink.run_summary(result)
     return result
 

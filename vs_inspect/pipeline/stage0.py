@@ -69,7 +69,12 @@ def run_stage0(videos: Sequence[PathLike], calibration: PathLike | None = None,
     InputError when fewer than two videos are given; NoUsableVideos (an InputError that carries
     every video's reason) when fewer than two can be opened or none can be used.
     """
+    from ..signals import import_pycolmap
     from ..cues.extract import extract_cues
+
+    # loaded here, on the calling thread: glog installs its own SIGTERM handler when pycolmap
+    # loads, and only the main thread can put ours back (a first import on a worker thread could not)
+    import_pycolmap()
     from ..io.calibration import load_calibration
 
     if len(videos) < 2:

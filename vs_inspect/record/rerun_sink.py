@@ -29,7 +29,7 @@ import numpy as np
 import rerun as rr
 from tqdm import tqdm
 
-from .. import __version__, palette
+from .. import __version__, palette, signals
 from ..io.atomic import json_default, atomic_path
 from ..io.recording import (APPLICATION_ID, CUES_THREE_VIEW, CUES_TRANSFER, GUIDE, LOG_DECISIONS, META_BUNDLE, META_CONFIG,
                             META_RECORDING, META_RESULT, META_VIDEOS, RECORDING_FORMAT,
@@ -197,6 +197,7 @@ def _timed(fn):
 
     @functools.wraps(fn)
     def wrapper(self, *args, **kwargs):
+        signals.checkpoint()  # every hook is a safe point to stop at
         t = time.perf_counter()
         try:
             return fn(self, *args, **kwargs)

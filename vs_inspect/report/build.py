@@ -7,6 +7,7 @@ import logging
 import time
 from pathlib import Path
 
+from .. import signals
 from ..io.atomic import atomic_dir
 from . import figures
 from .data import ReportData
@@ -80,6 +81,7 @@ def _render_into(data: ReportData, out: Path, formats: tuple[str, ...] = ("png",
     paths: dict[str, Path] = {}
     times: dict[str, float] = {}
     for key in available(data):
+        signals.checkpoint()  # between figures
         t0 = time.perf_counter()
         p = out / f"{key}.{formats[0]}"
         if key == "scene3d":

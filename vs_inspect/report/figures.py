@@ -20,7 +20,7 @@ from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
 
-from .. import palette  # noqa: E402
+from .. import palette, signals  # noqa: E402
 from ..errors import InputError  # noqa: E402
 from .data import EpipolarPanel, PairView, ReportData  # noqa: E402
 
@@ -129,6 +129,7 @@ def _save(fig, path: Path, dpi: float = DPI, formats: tuple[str, ...] = ("png",)
     what figure_size_px says, and constrained layout keeps every label inside it."""
     out = []
     for fmt in formats:
+        signals.checkpoint()  # between files
         p = Path(path).with_suffix("." + fmt)
         fig.savefig(p, dpi=dpi, format=fmt, metadata=_METADATA.get(fmt))
         out.append(p)

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import signals
 from .data import CameraView, ReportData
 
 os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")  # before vtk is imported
@@ -79,6 +80,7 @@ def render_scene(data: ReportData, path: Path, size: tuple[int, int], dpi: float
     for fmt in formats:
         if fmt == "png":
             continue
+        signals.checkpoint()  # between files
         import matplotlib.pyplot as plt
         img = plt.imread(png)
         fig = plt.figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
@@ -101,7 +103,19 @@ def _render_png(data: ReportData, path: Path, size: tuple[int, int], scale: floa
     colors = video_colors(data.names or [c.name for c in data.cameras])
     zoom = scale  # font scale with the dpi
     scale = _scene_scale(data)
+    signals.checkpoint()  # VTK's rendering below cannot be stopped halfway
     pl = pv.Plotter(off_screen=True, window_size=list(size))
+    try:
+        _draw(pl, pv, data, colors, zoom, scale, size)
+        signals.checkpoint()
+        pl.screenshot(str(path))
+    finally:
+        pl.close()
+    signals.checkpoint()
+    return path
+
+
+def _draw(pl, pv, data: ReportData, colors, zoom: float, scale: float, size: tuple[int, int]) -> None:
     pl.set_background("white")
     centers_all = []
     for cam in data.cameras:
@@ -153,6 +167,3 @@ def _render_png(data: ReportData, path: Path, size: tuple[int, int], scale: floa
     # wrapped to the window's width, placed with a margin: nothing runs off an edge
     pl.add_text(_title_lines(title, int(size[0] / (15.0 * zoom))), position=(int(12 * zoom), size[1] - int(70 * zoom)),
                 font_size=int(13 * zoom), color="black")
-    pl.screenshot(str(path))
-    pl.close()
-    return path
