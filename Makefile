@@ -41,7 +41,7 @@ $(STAMP): pyproject.toml Makefile
 	@echo "set up: $(VENV) (run the tool as $(VENV)/bin/vs-inspect, or source $(VENV)/bin/activate first)"
 
 demo: $(STAMP)
-	$(PY) -m vs_inspect.cli demo
+	$(PY) -m vs_inspect demo
 
 # test files run on TEST_JOBS processes (pytest-xdist; a file's tests stay on one, so its fixtures
 # are built once): most tests use one core, so 2 take the suite from 12.0 to 7.5 min on 2 cores.
@@ -53,7 +53,7 @@ test: $(STAMP)
 	  if [ $$rc -eq 5 ]; then echo "no tests collected" >&2; exit 1; fi; exit $$rc
 
 bench: $(STAMP)
-	$(PY) -m vs_inspect.cli bench-energy
+	$(PY) -m vs_inspect bench-energy
 
 clean:
 	rm -rf $(VENV) .cache

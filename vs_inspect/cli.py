@@ -156,7 +156,3 @@ def _stopped(signum: int) -> int:
     signals.announce(signum)
     return EXIT_TERMINATED if signum == signal.SIGTERM else 128 + signum
 
-
-if __name__ == "__main__":
-    from ._entry import main as _entry_main
-    _entry_main(sys.argv[1:])

@@ -145,7 +145,7 @@ def time_sync(folder: Path, out: Path, calibrated: bool, scene_label: str,
     """Run `vs-inspect sync` on the scene's videos in a fresh process and measure it."""
     folder, out = Path(folder), Path(out)
     videos = sorted(str(p) for p in folder.glob("cam*.mp4"))
-    cmd = [sys.executable, "-m", "vs_inspect.cli", "sync", *videos, "--out", str(out),
+    cmd = [sys.executable, "-m", "vs_inspect", "sync", *videos, "--out", str(out),
            "--no-progress", "--force", *extra_args]
     if calibrated:
         cmd += ["--calib", str(folder / "calibration.json")]
