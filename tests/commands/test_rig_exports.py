@@ -1,8 +1,8 @@
 """On a rendered rig with known offsets (real H.264 videos, one at a variable frame rate):
 synchronizing with videos 8 columns narrower than their calibration gives the same offsets as
 with the exact sizes; the run folder holds the cameras it used; export --offsets and --trimmed
-write what other tools read, and the trimmed videos (decoded back) begin at the same true moment
-within half a frame of the slower video."""
+write what other tools read, and the trimmed videos (decoded back) begin at the same moment
+within half a frame of the slower video by the run's offsets (in true time, plus those offsets' errors)."""
 
 from __future__ import annotations
 
@@ -128,7 +128,7 @@ def test_export_offsets_and_trimmed_videos(rig, capsys):
     # the trimmed videos: which original frame each starts with (decoded and matched), and the
     # true moment of that frame
     trim = json.loads((root / "trimmed" / "trim.json").read_text())
-    starts_true, dt = {}, {}
+    starts_est, starts_true, dt = {}, {}, {}
     for v in rows:
         t = open_video(root / "trimmed" / f"{v}.mp4")
         k0, k1 = int(rows[v]["first_frame"]), int(rows[v]["last_frame"])
@@ -143,13 +143,19 @@ def test_export_offsets_and_trimmed_videos(rig, capsys):
         diffs = {k: np.abs(img.astype(np.float32) - first).mean()
                  for k, img in iter_frames(orig) if abs(k - k0) <= 2}
         assert min(diffs, key=diffs.get) == k0, (v, diffs)  # frame-accurate cut
+        starts_est[v] = ts[k0] + res["offsets_s"][v]
         starts_true[v] = ts[k0] + truth[v]
         dt[v] = infos[v].frame_interval_s
     anchor = max(dt, key=dt.get)  # the slowest video sets the span's frames
-    print("true start of each trimmed video (s):", starts_true, "anchor", anchor)
+    print("start of each trimmed video (s), by the run's offsets:", starts_est, "true:", starts_true,
+          "anchor", anchor)
     for v in rows:
         slower = max(dt[v], dt[anchor])
-        assert abs(starts_true[v] - starts_true[anchor]) <= 0.5 * slower, (v, starts_true)
+        # the cut's promise, in the offsets it was given: the same moment within half a frame
+        assert abs(starts_est[v] - starts_est[anchor]) <= 0.5 * slower + 1e-6, (v, starts_est)
+        # in true time, the two offsets' own errors add to that
+        est_error = abs(res["offsets_s"][v] - truth[v]) + abs(res["offsets_s"][anchor] - truth[anchor])
+        assert abs(starts_true[v] - starts_true[anchor]) <= 0.5 * slower + est_error + 1e-6, (v, starts_true)
 
 
 def test_export_refusals(rig, tmp_path, capsys):
