@@ -358,9 +358,9 @@ def test_the_moving_points_cameras_are_not_fitted_when_they_could_not_replace_a_
     import vs_inspect.cues.pairwise as pairwise_mod
     from vs_inspect.cues.camera_choice import _estimate
     from vs_inspect.cues.cameras import CameraEstimate, EstimatedCamera
-    from vs_inspect.signals import import_pycolmap
+    from vs_inspect.geometry.camera_model import Lens
 
-    lens = import_pycolmap().Camera(model="SIMPLE_RADIAL", width=640, height=480, params=[500.0, 320.0, 240.0, 0.0])
+    lens = Lens("SIMPLE_RADIAL", (500.0, 320.0, 240.0, 0.0), 640, 480, 1.0)
     motion = {"a": "static", "b": "static", "h": "moving"}
     info = SimpleNamespace(width=640, height=480, num_frames=50)
     vids = {n: SimpleNamespace(info=info, camera_motion=m, xy_full=np.zeros((0, 50, 2)),
@@ -376,7 +376,7 @@ def test_the_moving_points_cameras_are_not_fitted_when_they_could_not_replace_a_
 
     def estimate(names):
         cams = {n: EstimatedCamera(CameraTrack(K, look_at([6.0 * np.cos(i), 6.0 * np.sin(i), 2.0], [0, 0, 1])),
-                                   lens, 1.0, np.arange(1), points_seen=40) for i, n in enumerate(names)}
+                                   lens, np.arange(1), points_seen=40) for i, n in enumerate(names)}
         est = CameraEstimate(cams, {}, None, None, 3, 3, "sift")
         stats = {"dropped": {}, "camera_source": "estimated"}
         return _estimate(vids, CueConfig(), stats, pairs, est), stats

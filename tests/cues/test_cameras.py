@@ -204,28 +204,27 @@ def test_static_images_get_asift_features_and_moving_ones_colmaps(tmp_path):
         assert xy[:, 0].max() < 163
 
 
-def test_lens_record_undistorts_as_the_tracks_were():
+def test_lens_undistorts_as_the_tracks_were():
     """result.json's cues.sfm.lens (plain data) with the camera's K undistorts image points exactly
     as the estimated camera undistorted the tracks, and the lens is not a no-op."""
-    pycolmap = import_pycolmap()
-    from vs_inspect.cues.cameras import (EstimatedCamera, distort_with_lens, lens_record, undistort_with_colmap,
-                                        undistort_with_lens)
+    from vs_inspect.cues.cameras import EstimatedCamera, undistort_with_colmap
+    from vs_inspect.geometry.camera_model import Lens
     from vs_inspect.types import CameraTrack
-    colmap_camera = pycolmap.Camera(model="SIMPLE_RADIAL", width=640, height=360, params=[300.0, 320.0, 180.0, 0.08])
     K = np.array([[600.0, 0, 639.5], [0, 600.0, 359.5], [0, 0, 1]])
-    cam = EstimatedCamera(CameraTrack(K, np.eye(4)), colmap_camera, 0.5, np.arange(1))
+    cam = EstimatedCamera(CameraTrack(K, np.eye(4)), Lens("SIMPLE_RADIAL", (300.0, 320.0, 180.0, 0.08), 640, 360, 0.5),
+                          np.arange(1))
     xy = np.array([[[10.0, 20.0], [640.0, 360.0]], [[1200.0, 700.0], [np.nan, 5.0]]])
-    lens = lens_record(cam)
+    lens = cam.lens.to_json()
     assert lens == {"model": "SIMPLE_RADIAL", "params": [300.0, 320.0, 180.0, 0.08], "width": 640,
                     "height": 360, "sfm_scale": 0.5}
-    got = undistort_with_lens(lens, K, xy)
+    got = Lens.from_json(lens).undistort(K, xy)
     np.testing.assert_allclose(got, undistort_with_colmap(cam, xy), atol=1e-9)
     assert np.isnan(got[1, 1]).all()
     # k > 0 pushed a corner outwards: undone, it moves inwards by tens of px; the centre stays
     assert np.linalg.norm(got[0, 0] - [639.5, 359.5]) < np.linalg.norm(xy[0, 0] - [639.5, 359.5]) - 10
     np.testing.assert_allclose(got[0, 1], [640.0, 360.0], atol=1e-6)
-    # and distort_with_lens takes the points back to where the video had them
-    back = distort_with_lens(lens, K, got)
+    # and distort takes the points back to where the video had them
+    back = cam.lens.distort(K, got)
     seen = np.isfinite(xy).all(-1)
     np.testing.assert_allclose(back[seen], xy[seen], atol=1e-6)
     assert np.isnan(back[1, 1]).all()

@@ -71,14 +71,14 @@ def camera_px(folder: Path, bundle, stats) -> str:
     """The cameras against the scene's truth (vs_inspect.bench.arcs.camera_errors_px): the median
     and the largest over the camera pairs of their true points' median distance from the
     epipolar lines, in px ("-": fewer than two cameras)."""
-    from ..cues.cameras import undistort_with_lens
+    from ..geometry.camera_model import Lens
     from ..io.calibration import load_calibration, undistort_points
 
     names = [v.name for v in bundle.videos]
     truth = load_calibration(folder / "calibration.json", names)
     lens = (stats.sfm or {}).get("lens") or {}
     # the tracks were undistorted with the estimated lens, or with the calibration's
-    undistort = {n: (lambda xy, n=n: undistort_with_lens(lens[n], first_K(bundle, n), xy))
+    undistort = {n: (lambda xy, n=n: Lens.from_json(lens[n]).undistort(first_K(bundle, n), xy))
                  for n in lens if n in bundle.cameras}
     for n, cal in truth.items():
         undistort.setdefault(n, lambda xy, cal=cal: undistort_points(cal, xy))
@@ -97,7 +97,7 @@ def true_pairs(sc, bundle, stats) -> str:
     """The bundle's cross-view track pairs against the scene's true motion
     (vs_inspect.bench.arcs.judge_pairs): the share of pairs whose two tracks follow one body
     point (within 5 cm), two different points, or a track no rigid point, of all pairs."""
-    from ..cues.cameras import distort_with_lens
+    from ..geometry.camera_model import Lens
     from ..synth.world import make_scene
 
     scene = make_scene(sc.scene_config())
@@ -109,7 +109,7 @@ def true_pairs(sc, bundle, stats) -> str:
             continue
         xy = bundle.tracks[cam.name].xy
         if cam.name in lens:  # back to the video's pixels (the rendered cameras have no distortion)
-            xy = distort_with_lens(lens[cam.name], first_K(bundle, cam.name), xy)
+            xy = Lens.from_json(lens[cam.name]).distort(first_K(bundle, cam.name), xy)
         fits[cam.name] = fit_body_points(xy, cam.global_times_s, cam.K, cam.pose_fn(cam.global_times_s), bodies)
     judged = [judge_pairs(tp.index, fits[a], fits[b]) for (a, b), tp in bundle.pairs.items()]
     total = sum(j.total for j in judged)

@@ -264,7 +264,7 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, pairs: di
     may then be fewer). memo: kept between calls on the same videos and pairs, so that the moving
     points' cameras, which do not depend on est, are fitted once. as_built: est's cameras even
     when weak (the moving points' are not fitted nor compared)."""
-    from .cameras import lens_record, undistort_with_colmap
+    from .cameras import undistort_with_colmap
     from .pairwise import cameras_from_tracks, epipolar_fit_px
 
     stats["sfm"] = {"features": est.features, "images": est.num_images, "registered_images": est.num_registered,
@@ -272,7 +272,7 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, pairs: di
                     "image_pairs": list(est.image_pairs),
                     # the tracks are undistorted with it; other image points (e.g. an evidence
                     # script's detections) need it too
-                    "lens": {n: lens_record(c) for n, c in est.cameras.items()}}
+                    "lens": {n: c.lens.to_json() for n, c in est.cameras.items()}}
     regs = {n: c.frame_registration for n, c in est.cameras.items() if c.frame_registration is not None}
     if regs:
         stats["sfm"]["frame_registration"] = regs

@@ -22,6 +22,7 @@ from pathlib import Path
 import cv2
 import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
 
+from ..geometry.camera_model import Lens, scale_intrinsics
 from ..geometry.epipolar import camera_centers
 from ..geometry.timing import frame_brackets, interpolate_poses
 from .. import signals
@@ -47,8 +48,7 @@ class EstimatedCamera:
     """A camera from the reconstruction plus the lens model to undistort tracks with."""
 
     track: CameraTrack  # full-resolution pinhole K, cam_from_world (4,4) or (T,4,4)
-    colmap_camera: object  # pycolmap.Camera at SfM resolution (for undistortion)
-    sfm_scale: float  # SfM pixels per full-resolution pixel
+    lens: Lens  # the estimated lens at SfM resolution, to undistort full-resolution points with
     registered_frames: np.ndarray  # (R,) int, video frames with a pose (SfM or registered on their own)
     points_seen: int = 0  # 3D points seen by its best-registered image
     frame_registration: dict | None = None  # a moving camera's frames registered on their own
@@ -748,7 +748,8 @@ def _estimate_from(model: _Model, frames_by_video, num_frames, moving, cfg: Came
         cam = regs[0][2]
         s = model.scales[name]
         f, cx, cy = cam.focal_length, cam.principal_point_x, cam.principal_point_y
-        K = np.array([[f / s, 0, (cx / s) - 0.5], [0, f / s, (cy / s) - 0.5], [0, 0, 1.0]])
+        # COLMAP's pixel centres are at +0.5: its K at SfM resolution, in OpenCV's convention, scaled
+        K = scale_intrinsics(np.array([[f, 0, cx - 0.5], [0, f, cy - 0.5], [0, 0, 1.0]]), 1 / s, 1 / s)
         reg_info = None
         if register and moving[name] and cfg.register_every > 0:
             # the other frames registered on their own, with features of the database's kind:
@@ -765,7 +766,8 @@ def _estimate_from(model: _Model, frames_by_video, num_frames, moving, cfg: Came
             track = CameraTrack(K, T_all, valid)
         else:
             track = CameraTrack(K, _mean_pose(poses))
-        cams[name] = EstimatedCamera(track, cam, s, np.sort(fk), int(seen), reg_info)
+        lens = Lens(cam.model.name, tuple(float(p) for p in cam.params), int(cam.width), int(cam.height), float(s))
+        cams[name] = EstimatedCamera(track, lens, np.sort(fk), int(seen), reg_info)
     pts = np.array([p.xyz for p in rec.points3D.values()]) if rec.num_points3D() else None
     cols = np.array([p.color for p in rec.points3D.values()], np.uint8) if rec.num_points3D() else None
     return CameraEstimate(cams, unreg, pts, cols, model.num_images, rec.num_reg_images(), model.features,
@@ -857,52 +859,4 @@ def _register_others(rec, name: str, keyframes, features, match, camera, sfm_sca
 
 def undistort_with_colmap(cam: EstimatedCamera, xy: np.ndarray) -> np.ndarray:
     """(...,2) full-resolution OpenCV px through the estimated lens -> pinhole px of cam.track.K."""
-    K = cam.track.K if cam.track.K.ndim == 2 else cam.track.K[0]
-    return _undistort(cam.colmap_camera, cam.sfm_scale, K, xy)
-
-
-def lens_record(cam: EstimatedCamera) -> dict:
-    """The estimated lens as plain data (result.json `cues.sfm.lens`): COLMAP's camera model and
-    parameters at SfM resolution and the SfM scale. With the camera's K (cameras/<video>.npz) it
-    undistorts any image point as the tracks were (undistort_with_lens)."""
-    cc = cam.colmap_camera
-    return {"model": cc.model.name, "params": [float(p) for p in cc.params], "width": int(cc.width),
-            "height": int(cc.height), "sfm_scale": float(cam.sfm_scale)}
-
-
-def _lens_camera(lens: dict):
-    """The pycolmap.Camera of a lens_record."""
-    pycolmap = import_pycolmap()
-    return pycolmap.Camera(model=lens["model"], width=lens["width"], height=lens["height"], params=lens["params"])
-
-
-def undistort_with_lens(lens: dict, K: np.ndarray, xy: np.ndarray) -> np.ndarray:
-    """(...,2) full-resolution OpenCV px through a lens_record -> pinhole px of K (3,3)."""
-    return _undistort(_lens_camera(lens), lens["sfm_scale"], np.asarray(K, np.float64), xy)
-
-
-def distort_with_lens(lens: dict, K: np.ndarray, xy: np.ndarray) -> np.ndarray:
-    """The inverse of undistort_with_lens: (...,2) pinhole px of K (3,3) -> full-resolution
-    OpenCV px through the lens_record (where the video's own pixels were)."""
-    K = np.asarray(K, np.float64)
-    shp = xy.shape
-    flat = xy.reshape(-1, 2).astype(np.float64)
-    ok = np.isfinite(flat).all(1)
-    out = np.full_like(flat, np.nan)
-    if ok.any():
-        rays = np.column_stack([(flat[ok] - [K[0, 2], K[1, 2]]) / [K[0, 0], K[1, 1]], np.ones(ok.sum())])
-        sfm = np.asarray(_lens_camera(lens).img_from_cam(rays, check_cheirality=False))
-        out[ok] = sfm / lens["sfm_scale"] - 0.5  # COLMAP puts pixel centres at +0.5
-    return out.reshape(shp)
-
-
-def _undistort(colmap_camera, sfm_scale: float, K: np.ndarray, xy: np.ndarray) -> np.ndarray:
-    shp = xy.shape
-    flat = xy.reshape(-1, 2).astype(np.float64)
-    ok = np.isfinite(flat).all(1)
-    out = np.full_like(flat, np.nan)
-    if ok.any():
-        sfm = (flat[ok] + 0.5) * sfm_scale  # COLMAP puts pixel centres at +0.5
-        norm = np.asarray(colmap_camera.cam_from_img(sfm))
-        out[ok] = norm[:, :2] * [K[0, 0], K[1, 1]] + [K[0, 2], K[1, 2]]
-    return out.reshape(shp)
+    return cam.lens.undistort(cam.track.K if cam.track.K.ndim == 2 else cam.track.K[0], xy)

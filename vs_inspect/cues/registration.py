@@ -26,6 +26,7 @@ import cv2
 import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
 from tqdm import tqdm
 
+from ..geometry.camera_model import scale_points
 from ..signals import import_pycolmap
 
 
@@ -90,7 +91,6 @@ def frame_features(grey: np.ndarray, moving: np.ndarray | None, frames: np.ndarr
     as for the reconstruction's own frames) or None; scale_xy: full px per working px."""
     sift = _colmap_like_sift(max_features)
     kernel = np.ones((dilate_px, dilate_px), np.uint8)
-    s = np.asarray(scale_xy, np.float64)
     xys, descs = [], []
     for k in frames:
         m = None if moving is None else \
@@ -101,7 +101,7 @@ def frame_features(grey: np.ndarray, moving: np.ndarray | None, frames: np.ndarr
             descs.append(np.zeros((0, 128), np.uint8))
             continue
         xy = np.array([p.pt for p in kp], np.float64)
-        xys.append((xy + 0.5) * s - 0.5)
+        xys.append(scale_points(xy, *scale_xy))
         descs.append(colmap_sift(d))
     return FrameFeatures(np.asarray(frames, int), xys, descs)
 
@@ -219,7 +219,7 @@ def learned_frame_features(images: Iterable[tuple[int, np.ndarray, np.ndarray | 
                              leave=False):
         f = matcher.features(img, mask)
         frames.append(int(k))
-        xys.append((f.keypoints.astype(np.float64) + 0.5) / sfm_scale - 0.5)
+        xys.append(scale_points(f.keypoints, 1 / sfm_scale, 1 / sfm_scale))
         descs.append(f.descriptors.astype(np.float32))
     return FrameFeatures(np.array(frames, int), xys, descs)
 

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..analysis.record_views import record_frame, record_mask
 from ..errors import InputError
+from ..geometry.camera_model import scale_points
 from ..record.sink import NullSink, Sink
 from ..types import VideoInfo
 from .config import CueConfig
@@ -46,8 +47,7 @@ class VideoCues:
 
 def to_full_px(xy: np.ndarray, scale_xy: tuple[float, float]) -> np.ndarray:
     """Working-resolution px -> full-resolution px (pixel centres at integers on both)."""
-    s = np.asarray(scale_xy, dtype=np.float64)
-    return (xy.astype(np.float64) + 0.5) * s - 0.5
+    return scale_points(xy, *scale_xy)
 
 
 def _sfm_indices(T: int, moving: bool, cfg) -> np.ndarray:
