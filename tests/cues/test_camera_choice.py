@@ -9,7 +9,16 @@ from vs_inspect.cues.config import CueConfig
 from vs_inspect.geometry.epipolar import look_at
 from vs_inspect.types import CameraTrack, TrackPairs
 
+from tests.cue_records import joint
+from vs_inspect.cue_stats import CueStats, MovingPointsCameras, SfmRecord
+from vs_inspect.cues.joint_vote import GeometricPairing
+
 from .stage0_fakes import Events, K
+
+
+def _as_json(cams) -> dict:
+    """A camera set's records as result.json's "cues" holds them (a stats-like dict)."""
+    return {"camera_source": cams.source, "dropped": dict(cams.dropped), "sfm": cams.sfm.to_json()}
 
 
 def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), memo: dict | None = None,
@@ -38,8 +47,8 @@ def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), m
                                register_masks=None, xy_full=np.zeros((0, 50, 2)),
                                instance=np.zeros(0, np.int64)) for n in names}
     pairs = {(a, b): TrackPairs(a, b, np.zeros((0, 2), np.int64)) for a, b in zip(names, names[1:])}
-    stats = {"dropped": {}, "camera_source": "estimated"}
-    return _estimate(vids, config, stats, pairs, est, memo=memo).cameras, stats
+    got = _estimate(vids, config, pairs, est, memo=memo)
+    return got.cameras, _as_json(got)
 
 
 def test_the_moving_points_cameras_are_fitted_once_for_every_model(monkeypatch):
@@ -70,10 +79,7 @@ def test_two_cameras_from_the_moving_points_alone_are_refused(monkeypatch):
         assert stats["dropped"][n].startswith("no reconstruction: too few matches; from the moving points: "
                                               "only two cameras came out"), stats["dropped"][n]
     # in a few words, both causes are kept (e.g. "only 2 track pairs" as the second)
-    from vs_inspect.cues.extract import _cue_stats
-
-    stats.update(registered_cameras=0, tracks=0, track_pairs=0, videos={}, pairs={}, timings_s={})
-    head = _cue_stats(stats).headline("a")
+    head = CueStats.from_json(stats).headline("a")
     assert head.startswith("no reconstruction: too few matches; from the moving points: only two cameras came out")
     # three are used (their fitted offsets are then checked against their votes), and so are two
     # when the config asks for them
@@ -131,27 +137,26 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
 
     seen = []
 
-    def estimate(vids, cfg, stats, pairs, est, from_tracks=False, memo=None, as_built=False, grid=None):
+    def estimate(vids, cfg, pairs, est, from_tracks=False, memo=None, as_built=False, grid=None):
         kind = ex.MOVING_POINTS if from_tracks else est.features + (ex.OWN if as_built else "")
-        stats["sfm"] = {"features": kind}
+        sfm = SfmRecord(kind, 3, 3, {}, (), {})
         if weak_first and kind == "sift":  # replaced by the moving points' cameras
-            stats["sfm"]["fallback"] = {"used": True}
+            sfm = dataclasses.replace(sfm, fallback=MovingPointsCameras("weak", True))
         if from_tracks:  # the moving points' cameras, used when the test's trusted names them
-            stats["sfm"]["fallback"] = {"used": kind in trusted}
+            sfm = dataclasses.replace(sfm, fallback=MovingPointsCameras("none trusted", kind in trusted))
             if kind not in trusted:
-                return ex.CameraSet({}, {}, None, None, {})
+                return ex.CameraSet({}, {}, None, None, {}, sfm=sfm)
         names = (registered or {}).get(kind, "".join(vids))
-        stats["dropped"].update({n: f"{kind} matched too little; the moving points' cameras refused"
-                                 for n in vids if n not in names})
-        return ex.CameraSet({n: CameraTrack(K, look_at([6.0, 0, 2.0], [0, 0, 1])) for n in names}, {}, None, None, {})
+        dropped = {n: f"{kind} matched too little; the moving points' cameras refused" for n in vids if n not in names}
+        return ex.CameraSet({n: CameraTrack(K, look_at([6.0, 0, 2.0], [0, 0, 1])) for n in names}, {}, None, None, {},
+                            dropped, sfm=sfm)
 
-    def vote(cams, vids, all_pairs, cfg, stats, sink, progress, estimated, other_peaks=None, other="", grid=None):
-        kind = stats["sfm"]["features"]
+    def vote(cams, vids, all_pairs, cfg, sink, progress, estimated, other_peaks=None, other="", grid=None):
+        kind = cams.sfm.features
         seen.append((kind, other_peaks, other))
-        if kind in (joints or {}):
-            stats["geometric_joint"] = joints[kind]
+        pairing = GeometricPairing({}, {}, {}, "joint", {}, {}, joints.get(kind) if joints else None)
         sink.stage_event("cues", f"voted on {kind}")
-        return dataclasses.replace(cams, pairs={}, used=frozenset(trusted[kind]),
+        return dataclasses.replace(cams, pairs={}, used=frozenset(trusted[kind]), pairing=pairing,
                                    peaks={("a", "b"): (0.1,) if kind == "sift" else (0.2,)})
 
     monkeypatch.setattr(cameras_mod, "CameraModels", Models)
@@ -160,12 +165,9 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
     info = SimpleNamespace(width=640, height=480, num_frames=50)
     vids = {n: SimpleNamespace(sfm_frames=None, info=info, camera_motion="static", frame_features=None,
                                register_masks=None) for n in "abc"}
-    timings = {}
-    stats = {"dropped": {}, "pairs": {}, "camera_source": "estimated", "timings_s": timings}
     sink = Events()
-    kept = ex.estimated_cameras(vids, config, stats, {}, {}, sink, progress=False)
-    assert stats["timings_s"] is timings  # the caller's timings stay the ones written to
-    return kept, stats, sink, seen
+    kept = ex.estimated_cameras(vids, config, {}, {}, sink, progress=False)
+    return kept, _as_json(kept), sink, seen
 
 
 def test_second_camera_model_is_kept_when_its_joint_vote_trusts_more_videos(monkeypatch):
@@ -238,8 +240,8 @@ def test_a_video_placed_but_not_timed_says_what_the_other_models_made_of_it(monk
     a trusted video gets no such note."""
     rival = ("its three-view check follows 55 trajectories at -1.217 s against 45 at its joint offset "
              "+0.000 s: two offsets, as a repeated motion gives")
-    joints = {"xfeat": {"margin": {"a": 9.0, "b": 8.0, "c": 7.5}, "sure": ["a", "b"], "used": ["a", "b"],
-                        "dissent": {"c": rival}, "dissent_short": {"c": "two offsets 1.22 s apart"}}}
+    joints = {"xfeat": joint({"a": 9.0, "b": 8.0, "c": 7.5}, sure=("a", "b"), used=("a", "b"),
+                             dissent={"c": rival}, dissent_short={"c": "two offsets 1.22 s apart"})}
     kept, stats, _, _ = _two_camera_models(monkeypatch, {"sift": {"a", "b"}, "xfeat": {"a", "b"}, "aliked": {"a"}},
                                            joints=joints)
     assert stats["sfm"]["features"] == "sift" and set(kept.cameras) == {"a", "b", "c"} and "c" not in kept.used
@@ -252,10 +254,8 @@ def test_a_video_placed_but_not_timed_says_what_the_other_models_made_of_it(monk
     assert stats["sfm"]["other_models_headline"] == {"c": {"XFEAT's model": "two offsets 1.22 s apart",
                                                            "ALIKED's model": "not trusted"}}
     # the typed record the run reads it from
-    from vs_inspect.cues.extract import _cue_stats
-
-    stats.update(registered_cameras=3, tracks=0, track_pairs=0, videos={}, pairs={})
-    assert _cue_stats(stats).other_models_note("c") == note and _cue_stats(stats).other_models_note("a") is None
+    assert CueStats.from_json(stats).other_models_note("c") == note
+    assert CueStats.from_json(stats).other_models_note("a") is None
     # one model tried: nothing to say
     _, stats, _, _ = _two_camera_models(monkeypatch, {"sift": {"a", "b"}}, second_fails=True)
     assert "other_models" not in stats["sfm"] and "other_models_headline" not in stats["sfm"]
@@ -316,8 +316,7 @@ def test_the_record_says_when_sifts_static_images_had_asift_features(monkeypatch
 
     est = CameraEstimate({}, dict.fromkeys("ab", "no reconstruction"), None, None, 2, 0, "sift")
     vids = {n: SimpleNamespace(camera_motion="moving") for n in "ab"}
-    stats = {"dropped": {}, "camera_source": "estimated"}
-    _estimate(vids, CueConfig(), stats, {}, est)
+    stats = _as_json(_estimate(vids, CueConfig(), {}, est))
     assert stats["sfm"]["features"] == "sift" and "static_images" not in stats["sfm"]
 
 
@@ -378,8 +377,8 @@ def test_the_moving_points_cameras_are_not_fitted_when_they_could_not_replace_a_
         cams = {n: EstimatedCamera(CameraTrack(K, look_at([6.0 * np.cos(i), 6.0 * np.sin(i), 2.0], [0, 0, 1])),
                                    lens, np.arange(1), points_seen=40) for i, n in enumerate(names)}
         est = CameraEstimate(cams, {}, None, None, 3, 3, "sift")
-        stats = {"dropped": {}, "camera_source": "estimated"}
-        return _estimate(vids, CueConfig(), stats, pairs, est), stats
+        got = _estimate(vids, CueConfig(), pairs, est)
+        return got, _as_json(got)
 
     kept, stats = estimate("abh")
     assert calls == [] and set(kept.cameras) == {"a", "b", "h"}

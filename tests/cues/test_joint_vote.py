@@ -11,9 +11,24 @@ from vs_inspect.cues.geometric_pairs import GeometricPairStats, JointChoice
 from vs_inspect.cues.joint_vote import _add_joint_pairs
 from vs_inspect.geometry.epipolar import look_at
 from vs_inspect.record.sink import NullSink
-from vs_inspect.types import CameraTrack, CueStats, TrackPairs
+from vs_inspect.cue_stats import CueStats, PairCueStats, to_json
+from vs_inspect.types import CameraTrack, TrackPairs
 
 from .stage0_fakes import Events, K
+
+
+def _as_json(pairing) -> dict:
+    """A pairing's records as result.json's "cues" holds them (a stats-like dict)."""
+    pairs = {f"{a}__{b}": to_json(PairCueStats(0, 0, 0, 0, v, pairing.transfer_new.get((a, b))))
+             for (a, b), v in pairing.votes.items()}
+    out = {"pairs": pairs, "geometric_peaks": pairing.status}
+    if pairing.joint is not None:
+        out["geometric_joint"] = to_json(pairing.joint)
+    return out
+
+
+def _cue_stats(stats: dict) -> CueStats:
+    return CueStats.from_json({"camera_source": "estimated", **stats})
 
 
 def _stats(delta_s: float, n: int = 12) -> GeometricPairStats:
@@ -32,10 +47,10 @@ def _run(moving_b: bool, sure_c: bool, min_sure: int = 3):
     pairs = {k: TrackPairs(*k, np.zeros((0, 2), np.int64)) for k in found}
     joint = JointChoice(offs, 10.0, {"a": 5.0, "b": 5.0, "c": 5.0 if sure_c else 1.0})
     sure = {"a": True, "b": True, "c": sure_c}
-    sink, stats = Events(), {"pairs": {}}
+    sink = Events()
     cfg = CueConfig(geometric=GeometricPairConfig(joint_min_sure=min_sure))
-    out, _ = _add_joint_pairs(pairs, found, joint, sure, cams, {}, {}, cfg, stats, sink)
-    return {k: len(v.index) for k, v in out.items()}, sink.messages, stats
+    out, _, _, record = _add_joint_pairs(pairs, found, joint, sure, cams, {}, {}, cfg, sink)
+    return {k: len(v.index) for k, v in out.items()}, sink.messages, {"geometric_joint": to_json(record)}
 
 
 def test_two_sure_cameras_alone_get_no_pairs():
@@ -74,17 +89,15 @@ def test_transfer_matches_join_both_source_pairs_in_video_order():
     land = TransferLandscape(np.zeros(1), np.ones(1), np.ones(1, np.int64), np.ones(1, np.int64), 0, 9.0,
                              np.array([[0, 7], [1, 8]]))
     pairs = {k: TrackPairs(*k, np.array([[1, 1]])) for k in (("a", "b"), ("a", "c"), ("b", "c"))}
-    stats = {"pairs": {}}
     checks = {"b": TransferCheck("b", 0.0, land, True, "confirmed")}
-    out = _add_transfer_pairs(pairs, checks, traj, ["a", "b", "c"], stats, NullSink())
+    out, added = _add_transfer_pairs(pairs, checks, traj, ["a", "b", "c"], NullSink())
     assert out[("a", "b")].index.tolist() == [[1, 1], [3, 7], [4, 8]]  # a's track, then b's
     assert out[("b", "c")].index.tolist() == [[1, 1], [7, 5], [8, 6]]  # b's track, then c's
     assert out[("a", "c")].index.tolist() == [[1, 1]]
-    assert stats["pairs"]["a__b"]["transfer_new"] == 2
+    assert added[("a", "b")] == 2
     # an unconfirmed camera gets nothing
-    stats = {"pairs": {}}
     checks = {"b": TransferCheck("b", 0.0, land, False, "they disagree")}
-    out = _add_transfer_pairs(pairs, checks, traj, ["a", "b", "c"], stats, NullSink())
+    out, added = _add_transfer_pairs(pairs, checks, traj, ["a", "b", "c"], NullSink())
     assert all(len(v.index) == 1 for v in out.values())
 
 
@@ -114,20 +127,20 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
     tracks = {n: Tracks(xy[n], None) for n in "abc"}
     cfg = CueConfig(geometric=GeometricPairConfig(joint_min_margin=1e9))  # no camera sure
     monkeypatch.setattr(gp, "consistent_peaks", lambda *a, **k: (None, "inconsistent"))
-    sink, stats = Events(), {"pairs": {}}
-    got = add_geometric_pairs(pairs, cams, tracks, vids, cfg, stats, sink, progress=False, estimated=True)
-    out, voted = got.pairs, got.voted
+    sink = Events()
+    got = add_geometric_pairs(pairs, cams, tracks, vids, cfg, sink, progress=False, estimated=True)
+    out, voted, stats = got.pairs, got.voted, _as_json(got)
     assert stats["geometric_peaks"] == "inconsistent"
     assert voted == {}  # no Δ chosen, so none is reported as voted
     # each pair and each video's null reason say why it got no geometric pair
     assert all(p["geometric_withheld"].startswith("the vote peaks of the camera pairs do not close")
                for p in stats["pairs"].values())
-    why = CueStats("estimated", 3, 90, 0, {}, stats["pairs"], {}, {}, "inconsistent").geometric_refusal("c")
+    why = _cue_stats(stats).geometric_refusal("c")
     # c's two pairs share the reason, which is given once
     assert why.startswith("Stage 0 gave a__c and b__c no geometric track pairs: the vote peaks"), why
     assert why.count("the vote peaks") == 1, why
     # and in a few words, for the offsets table (result.json's "unresolved_headline")
-    assert CueStats("estimated", 3, 90, 0, {}, stats["pairs"], {}, {}, "inconsistent").headline("c") == (
+    assert _cue_stats(stats).headline("c") == (
         "vote peaks do not close the triangles")
     assert any("descriptor pairs kept only where consistent" in m for m in sink.messages)
     for (u, v), tp in out.items():
@@ -154,12 +167,12 @@ def _sure_of_all(monkeypatch, offsets: dict[str, float], estimated: bool = True,
     infos, cams, xy, _, row_of = _scene({"a": 0.0, "b": 0.42, "c": -0.3})
     pairs = {k: TrackPairs(*k, np.zeros((0, 2), np.int64)) for k in (("a", "b"), ("a", "c"), ("b", "c"))}
     monkeypatch.setattr(gp, "joint_offsets", lambda *a, **k: JointChoice(dict(offsets), 30.0, dict.fromkeys(offsets, 10.0)))
-    sink, stats = Events(), {"pairs": {}}
-    out = add_geometric_pairs(pairs, cams, {n: Tracks(xy[n], None) for n in "abc"},
+    sink = Events()
+    got = add_geometric_pairs(pairs, cams, {n: Tracks(xy[n], None) for n in "abc"},
                               {n: SimpleNamespace(info=infos[n]) for n in "abc"}, cfg,
-                              stats, sink, progress=False, estimated=estimated, other_peaks=other_peaks,
-                               other="SIFT's model").pairs
-    return out, stats, sink.messages, row_of
+                              sink, progress=False, estimated=estimated, other_peaks=other_peaks,
+                              other="SIFT's model")
+    return got.pairs, _as_json(got), sink.messages, row_of
 
 
 def test_sure_cameras_that_see_each_others_points_keep_their_pairs(monkeypatch):
@@ -183,7 +196,7 @@ def test_sure_cameras_refuted_in_three_views_get_no_pairs(monkeypatch):
     assert joint["sure"] == [] and joint["used"] == [] and stats["geometric_peaks"] == "joint"
     assert all(len(tp.index) == 0 for tp in out.values())
     assert any("geometric track pairs not used for a, b, c: the joint vote was sure" in m for m in msgs), msgs
-    cue_stats = CueStats("estimated", 3, 90, 0, {}, stats["pairs"], {}, {}, "joint", None, joint)
+    cue_stats = _cue_stats(stats)
     why = cue_stats.geometric_refusal("c")
     assert "sure of its offset (margin 10.0), but not in three views" in why and "+0.200 s" in why
     assert cue_stats.headline("c", "not connected; its pairs: ...") == "refuted in three views; not connected"
@@ -206,7 +219,7 @@ def test_a_sure_camera_with_a_rival_offset_says_how_far_apart_the_two_offsets_li
     apart = abs(seen["best"]["c"][0] - seen["joint"]["c"])
     assert joint["dissent_short"] == {"c": f"two offsets {apart:.2f} s apart, as a repeated motion gives"}
     assert "c" not in joint["sure"] and "c" not in joint["used"]
-    cue_stats = CueStats("estimated", 3, 90, 0, {}, stats["pairs"], {}, {}, "joint", None, joint)
+    cue_stats = _cue_stats(stats)
     assert cue_stats.headline("c") == joint["dissent_short"]["c"]
     assert cue_stats.geometric_refusal("c").startswith("Stage 0's joint vote chose its offset (margin 10.0), but "
                                                       "its three-view check follows more")
@@ -242,8 +255,6 @@ def test_cameras_from_a_calibration_are_not_checked_in_three_views(monkeypatch):
     assert not any("three views" in m for m in msgs)
 
 
-def _fallback(fitted: dict[str, float]) -> dict:
-    return {"used": True, "fitted_offsets_s": dict(fitted)}
 
 
 def _videos(names, fps: float = 30.0) -> dict:
@@ -254,41 +265,36 @@ def _videos(names, fps: float = 30.0) -> dict:
 def test_cameras_from_moving_points_whose_votes_agree_are_kept():
     from vs_inspect.cues.joint_vote import check_fitted_offsets
 
-    fb = _fallback({"r": 0.0, "u": 0.5, "v": -1.0})
     # voted Δ within a frame of the fitted ones (caliscope's case)
     voted = {("r", "u"): 0.52, ("r", "v"): -1.03, ("u", "v"): -1.5}
-    assert check_fitted_offsets(fb, voted, _videos("ruv")) == {}
-    assert fb["check"]["verdict"] == "confirmed"
-    assert all(row["agrees"] for row in fb["check"]["pairs"].values())
+    refused, check = check_fitted_offsets({"r": 0.0, "u": 0.5, "v": -1.0}, voted, _videos("ruv"))
+    assert refused == {} and check.verdict == "confirmed"
+    assert all(row.agrees for row in check.pairs.values())
 
 
 def test_cameras_from_moving_points_contradicted_by_their_votes_are_all_refused():
     from vs_inspect.cues.joint_vote import check_fitted_offsets
 
     # rendered seed 0 with SIFT: fitted at seconds away from where their own votes peak
-    fb = _fallback({"r": 0.0, "u": -2.717, "v": 1.79})
     voted = {("u", "r"): 0.458, ("u", "v"): -0.133, ("r", "v"): 0.345}
-    refused = check_fitted_offsets(fb, voted, _videos("ruv"))
+    refused, check = check_fitted_offsets({"r": 0.0, "u": -2.717, "v": 1.79}, voted, _videos("ruv"))
     assert set(refused) == {"r", "u", "v"}
     assert "contradict" in refused["u"] and "u__r" in refused["u"]
-    assert fb["check"]["verdict"] == "contradicted"
+    assert check.verdict == "contradicted"
     # one pair off by 4 frames (tolerance 3) is enough
-    fb = _fallback({"r": 0.0, "u": 0.5, "v": -1.0})
     voted = {("r", "u"): 0.5, ("r", "v"): -1.0, ("u", "v"): -1.5 + 4 / 30}
-    assert set(check_fitted_offsets(fb, voted, _videos("ruv"))) == {"r", "u", "v"}
+    assert set(check_fitted_offsets({"r": 0.0, "u": 0.5, "v": -1.0}, voted, _videos("ruv"))[0]) == {"r", "u", "v"}
 
 
 def test_camera_from_moving_points_without_an_agreeing_vote_is_refused_alone():
     from vs_inspect.cues.joint_vote import check_fitted_offsets
 
-    fb = _fallback({"r": 0.0, "u": 0.5, "v": -1.0})
-    refused = check_fitted_offsets(fb, {("r", "u"): 0.5}, _videos("ruv"))
+    refused, check = check_fitted_offsets({"r": 0.0, "u": 0.5, "v": -1.0}, {("r", "u"): 0.5}, _videos("ruv"))
     assert list(refused) == ["v"] and "confirmed" in refused["v"]
-    assert fb["check"]["verdict"] == "partly unconfirmed"
+    assert check.verdict == "partly unconfirmed"
     # two cameras: nothing to check against, marked so
-    fb = _fallback({"r": 0.0, "u": 0.5})
-    assert check_fitted_offsets(fb, {("r", "u"): 3.0}, _videos("ru")) == {}
-    assert fb["check"]["verdict"].startswith("unchecked")
+    refused, check = check_fitted_offsets({"r": 0.0, "u": 0.5}, {("r", "u"): 3.0}, _videos("ru"))
+    assert refused == {} and check.verdict.startswith("unchecked")
 
 
 def _lone_pair(monkeypatch, moving_b: bool, **geometric):
@@ -310,12 +316,12 @@ def _lone_pair(monkeypatch, moving_b: bool, **geometric):
                                                                          {"a": 1.0, "b": 1.0}))
     desc = np.array([[100, 100], [101, 101], [102, 102]])
     vids = {n: SimpleNamespace(info=SimpleNamespace(frame_interval_s=1 / 30)) for n in "ab"}
-    sink, stats = Events(), {"pairs": {}}
+    sink = Events()
     tracks = {n: SimpleNamespace(xy=None) for n in "ab"}  # read by the vote only, replaced here
-    out = add_geometric_pairs({("a", "b"): TrackPairs("a", "b", desc, np.ones(3))}, cams, tracks, vids,
-                              CueConfig(geometric=GeometricPairConfig(**geometric)), stats, sink,
-                              progress=False, estimated=True).pairs
-    return out, stats, sink.messages
+    got = add_geometric_pairs({("a", "b"): TrackPairs("a", "b", desc, np.ones(3))}, cams, tracks, vids,
+                              CueConfig(geometric=GeometricPairConfig(**geometric)), sink,
+                              progress=False, estimated=True)
+    return got.pairs, _as_json(got), sink.messages
 
 
 def test_a_lone_pair_with_a_moving_camera_keeps_only_its_descriptor_pairs(monkeypatch):
@@ -328,7 +334,7 @@ def test_a_lone_pair_with_a_moving_camera_keeps_only_its_descriptor_pairs(monkey
     info = stats["pairs"]["a__b"]
     assert info["geometric_pairs"] == 0 and "+0.500, +1.300, -0.700 s" in info["geometric_withheld"]
     assert any(m.startswith("geometric track pairs not used for a__b: no triangle") for m in msgs), msgs
-    cue_stats = CueStats("estimated", 2, 90, 3, {}, stats["pairs"], {}, {}, "no triangle")
+    cue_stats = _cue_stats(stats)
     assert cue_stats.geometric_refusal("b").startswith("Stage 0 gave a__b no geometric track pairs: no triangle")
     assert cue_stats.geometric_refusal("a") == cue_stats.geometric_refusal("b")
     assert cue_stats.headline("b") == "a moving camera's vote peaks, no triangle to check them"
@@ -340,4 +346,4 @@ def test_a_lone_pair_with_a_moving_camera_keeps_only_its_descriptor_pairs(monkey
     # ...marked unchecked (Stage 1 confirms their minimum with the 3 descriptor pairs alone)
     assert out[("a", "b")].unchecked.tolist() == [False] * 3 + [True] * 36
     assert stats["pairs"]["a__b"]["geometric_unchecked"] == 36
-    assert CueStats("estimated", 2, 90, 39, {}, stats["pairs"], {}, {}, "no triangle").geometric_refusal("b") is None
+    assert _cue_stats(stats).geometric_refusal("b") is None

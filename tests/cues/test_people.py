@@ -34,9 +34,8 @@ def test_without_mediapipe_stage0_says_why_and_finds_no_heads(monkeypatch):
 
     monkeypatch.setattr(people.importlib.util, "find_spec", lambda name, *a: None)
     assert people.heads_unavailable().startswith("head detection needs mediapipe 0.10.14")
-    stats: dict = {}
-    assert find_heads([], {}, {}, {}, None, stats, NullSink(), False) == {}
-    assert stats["heads"] == {"skipped": people.heads_unavailable()}
+    heads, record = find_heads([], {}, {}, {}, None, NullSink(), False)
+    assert heads == {} and record.skipped == people.heads_unavailable()
     with pytest.raises(RuntimeError, match="needs mediapipe"):
         people.detect_landmarks([np.zeros((8, 8, 3), np.uint8)])
 

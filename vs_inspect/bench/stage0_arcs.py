@@ -71,14 +71,13 @@ def camera_px(folder: Path, bundle, stats) -> str:
     """The cameras against the scene's truth (vs_inspect.bench.arcs.camera_errors_px): the median
     and the largest over the camera pairs of their true points' median distance from the
     epipolar lines, in px ("-": fewer than two cameras)."""
-    from ..geometry.camera_model import Lens
     from ..io.calibration import load_calibration, undistort_points
 
     names = [v.name for v in bundle.videos]
     truth = load_calibration(folder / "calibration.json", names)
-    lens = (stats.sfm or {}).get("lens") or {}
+    lens = stats.sfm.lens if stats.sfm is not None else {}
     # the tracks were undistorted with the estimated lens, or with the calibration's
-    undistort = {n: (lambda xy, n=n: Lens.from_json(lens[n]).undistort(first_K(bundle, n), xy))
+    undistort = {n: (lambda xy, n=n: lens[n].undistort(first_K(bundle, n), xy))
                  for n in lens if n in bundle.cameras}
     for n, cal in truth.items():
         undistort.setdefault(n, lambda xy, cal=cal: undistort_points(cal, xy))
@@ -97,19 +96,18 @@ def true_pairs(sc, bundle, stats) -> str:
     """The bundle's cross-view track pairs against the scene's true motion
     (vs_inspect.bench.arcs.judge_pairs): the share of pairs whose two tracks follow one body
     point (within 5 cm), two different points, or a track no rigid point, of all pairs."""
-    from ..geometry.camera_model import Lens
     from ..synth.world import make_scene
 
     scene = make_scene(sc.scene_config())
     bodies = [b.world_from_body for b in scene.world.bodies if b.moving]
-    lens = (stats.sfm or {}).get("lens") or {}
+    lens = stats.sfm.lens if stats.sfm is not None else {}
     fits = {}
     for cam in scene.cameras:
         if cam.name not in bundle.tracks:
             continue
         xy = bundle.tracks[cam.name].xy
         if cam.name in lens:  # back to the video's pixels (the rendered cameras have no distortion)
-            xy = Lens.from_json(lens[cam.name]).distort(first_K(bundle, cam.name), xy)
+            xy = lens[cam.name].distort(first_K(bundle, cam.name), xy)
         fits[cam.name] = fit_body_points(xy, cam.global_times_s, cam.K, cam.pose_fn(cam.global_times_s), bodies)
     judged = [judge_pairs(tp.index, fits[a], fits[b]) for (a, b), tp in bundle.pairs.items()]
     total = sum(j.total for j in judged)
@@ -128,10 +126,9 @@ def camera_models(stats) -> str:
     """Where a run's cameras came from: "calibration", the features of the model kept (or "moving
     points" when their cameras were used), and with two models tried how many videos the joint
     vote trusted on each ("xfeat (sift 0, xfeat 4)")."""
-    sfm = stats.sfm or {}
-    if not sfm:
+    sfm = stats.sfm
+    if sfm is None:
         return stats.camera_source
-    tried = sfm.get("models") or []
-    counts = ", ".join(f"{m['features']} {len(m['trusted'])}" for m in tried)
-    kept = "moving points" if (sfm.get("fallback") or {}).get("used") else sfm["features"]
+    counts = ", ".join(f"{m.features} {len(m.trusted)}" for m in sfm.models or ())
+    kept = "moving points" if sfm.fallback is not None and sfm.fallback.used else sfm.features
     return kept + (f" ({counts})" if counts else "")

@@ -22,6 +22,7 @@ from pathlib import Path
 import cv2
 import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
 
+from ..cue_stats import FrameRegistration
 from ..geometry.camera_model import Lens, scale_intrinsics
 from ..geometry.epipolar import camera_centers
 from ..geometry.timing import frame_brackets, interpolate_poses
@@ -51,9 +52,7 @@ class EstimatedCamera:
     lens: Lens  # the estimated lens at SfM resolution, to undistort full-resolution points with
     registered_frames: np.ndarray  # (R,) int, video frames with a pose (SfM or registered on their own)
     points_seen: int = 0  # 3D points seen by its best-registered image
-    frame_registration: dict | None = None  # a moving camera's frames registered on their own
-    # (registration.py): {"tried", "registered", "refused", "median_inliers", "frames",
-    # "check_frames", "check_rotation_deg_median", "check_slerp_rotation_deg_median"}
+    frame_registration: FrameRegistration | None = None  # a moving camera's frames registered on their own
 
 
 @dataclass(frozen=True)
@@ -840,18 +839,16 @@ def _register_others(rec, name: str, keyframes, features, match, camera, sfm_sca
         T = _slerp_poses(fk[others], poses[others], k + 1)[k]
         err_slerp.append(angle_deg(T[:3, :3], poses[i, :3, :3]))
     new_frames = reg.frames[keep]
-    info = {"tried": int((~np.isin(features.frames, fk)).sum()), "registered": int(keep.sum()),
-            "refused": int((~own).sum() - keep.sum()),
-            "median_inliers": float(np.median(reg.inliers[keep])) if keep.any() else 0.0,
-            "frames": new_frames.tolist(),
-            "check_frames": len(err_reg),
-            "check_rotation_deg_median": round(float(np.median(err_reg)), 3) if err_reg else None,
-            "check_slerp_rotation_deg_median": round(float(np.median(err_slerp)), 3) if err_slerp else None}
+    info = FrameRegistration(int((~np.isin(features.frames, fk)).sum()), int(keep.sum()), int((~own).sum() - keep.sum()),
+                             float(np.median(reg.inliers[keep])) if keep.any() else 0.0,
+                             tuple(new_frames.tolist()), len(err_reg),
+                             round(float(np.median(err_reg)), 3) if err_reg else None,
+                             round(float(np.median(err_slerp)), 3) if err_slerp else None)
     log.info("%s: %d of %d other frames registered against the reconstruction (median %.0f inliers, "
              "%d refused for a jump); on %d reconstructed frames, registered from their neighbours: "
-             "median rotation error %s° (slerp between neighbours: %s°)", name, info["registered"],
-             info["tried"], info["median_inliers"], info["refused"], len(err_reg),
-             info["check_rotation_deg_median"], info["check_slerp_rotation_deg_median"])
+             "median rotation error %s° (slerp between neighbours: %s°)", name, info.registered,
+             info.tried, info.median_inliers, info.refused, len(err_reg),
+             info.check_rotation_deg_median, info.check_slerp_rotation_deg_median)
     fk = np.concatenate([fk, new_frames])
     poses = np.concatenate([poses, reg.cam_from_world[keep]])
     return fk, poses, info

@@ -24,11 +24,12 @@ from ..engine import Engine, LocalEngine, TaskFailed
 from ..errors import InputError, NoUsableVideos
 from ..geometry.offsets import OffsetGrid
 from ..record.sink import NullSink, Sink
-from ..types import CueBundle, CueStats, TrackPairs, Tracks, VideoCueStats
+from ..cue_stats import CueStats, PairCueStats, VideoCueStats
+from ..types import CueBundle, TrackPairs, Tracks
 from .camera_choice import CameraSet, estimated_cameras, vote_on_cameras
 from .config import CueConfig
 from .heads import HeadsAhead, find_heads
-from .matching import match_tracks
+from .matching import PairStats, match_tracks
 from .video_cues import VideoCues, VideoCuesOutcome, registration_images, video_cues_task
 
 log = logging.getLogger(__name__)
@@ -84,8 +85,9 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
         raise InputError(f"video names must be unique, got {dup} more than once "
                          "(rename the files or put them in differently named folders)")
     timings: dict[str, float] = {}
-    stats: dict = {"videos": {}, "pairs": {}, "dropped": {}, "timings_s": timings,
-                   "camera_source": "calibration" if calibration is not None else "estimated"}
+    videos: dict[str, VideoCueStats] = {}
+    dropped: dict[str, str] = {}
+    matched: dict[tuple[str, str], PairStats] = {}
     t_all = time.perf_counter()
     vids: dict[str, VideoCues] = {}
     engine = engine or LocalEngine()
@@ -107,25 +109,22 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
         for step, sec in out.timings_s.items():
             timings[step] = timings.get(step, 0.0) + sec
         if out.cues is None:
-            stats["dropped"][src.info.name] = f"could not be read: {out.error}"
+            dropped[src.info.name] = f"could not be read: {out.error}"
             sink.stage_event("cues", f"{src.info.name}: could not be read: {out.error}")
             log.warning("%s: could not be read: %s", src.info.name, out.error)
             continue
         v = out.cues
         vids[src.info.name] = v
         n_tracks = v.xy_full.shape[0]
-        stats["videos"][src.info.name] = {
-            "path": v.path, "camera_motion": v.camera_motion,
-            "background_motion_px": round(v.background_motion_px, 3),
-            "moving_fraction": round(v.moving_fraction, 4), "tracks": int(n_tracks),
-            "instances": int(len(np.unique(v.instance[v.instance > 0]))),
-            "keyframe_features": int(len(v.features.frame)),
-            "snapped_features": int((v.features.track >= 0).sum()),
-        }
+        msg = None
         if v.moving_fraction == 0 or n_tracks == 0:
             msg = "no moving regions found (nothing moves in this video)" if v.moving_fraction == 0 \
                 else "no point tracks inside the moving regions"
-            stats["videos"][src.info.name]["note"] = msg
+        videos[src.info.name] = VideoCueStats(
+            v.path, v.camera_motion, round(v.background_motion_px, 3), round(v.moving_fraction, 4), int(n_tracks),
+            int(len(np.unique(v.instance[v.instance > 0]))), int(len(v.features.frame)),
+            int((v.features.track >= 0).sum()), msg)
+        if msg is not None:
             sink.stage_event("cues", f"{src.info.name}: {msg}")
             log.warning("%s: %s", src.info.name, msg)
 
@@ -145,57 +144,53 @@ def extract_cues(sources, calibration: dict | None = None, cfg: CueConfig = CueC
                                   vids[b].instance, cfg.match)
             all_pairs[(a, b)] = tp
             sink.pair_matches(a, b, vids[a].features.keyframes, vids[b].features.keyframes, ps.keyframe_matches)
-            stats["pairs"][f"{a}__{b}"] = {"matches": ps.matches, "snapped": ps.snapped,
-                                           "instance_pairs": ps.instance_pairs, "track_pairs": ps.track_pairs}
+            matched[(a, b)] = ps
             log.info("%s__%s: %d matches, %d snapped, %d instance pairs, %d track pairs",
                      a, b, ps.matches, ps.snapped, ps.instance_pairs, ps.track_pairs)
         timings["matching_s"] = time.perf_counter() - t0
         t0 = time.perf_counter()
         if calibration is not None:
-            cameras, tracks, dropped, undistort = _import_cameras(calibration, vids)
-            stats["dropped"].update(dropped)
-            kept = vote_on_cameras(CameraSet(cameras, tracks, None, None, undistort), vids, all_pairs, cfg,
-                                   stats, sink, progress, estimated=False, grid=grid)
+            cameras, tracks, refused, undistort = _import_cameras(calibration, vids)
+            kept = vote_on_cameras(CameraSet(cameras, tracks, None, None, undistort, refused, "calibration"), vids,
+                                   all_pairs, cfg, sink, progress, estimated=False, grid=grid)
         else:
             by_name = {s.info.name: s for s in sources}
             frame_images = {n: (functools.partial(registration_images, by_name[n], v, cfg), len(v.register_masks[0]))
                             for n, v in vids.items() if v.register_masks is not None}
-            kept = estimated_cameras(vids, cfg, stats, all_pairs, frame_images, sink, progress, grid)
+            kept = estimated_cameras(vids, cfg, all_pairs, frame_images, sink, progress, grid)
+        dropped.update(kept.dropped)
         cameras, tracks, undistort, pairs = kept.cameras, kept.tracks, kept.undistort, kept.pairs
         points, colors = kept.points, kept.colors
         timings["cameras_s"] = time.perf_counter() - t0 - kept.voting_s
         if cfg.geometric.enabled:
             timings["geometric_pairs_s"] = kept.voting_s
-        heads = {}
+        heads, heads_record = {}, None
         if cfg.heads and any(c.is_moving for c in cameras.values()):
             t0 = time.perf_counter()
-            heads = find_heads(sources, vids, cameras, undistort, cfg, stats, sink, progress, ahead)
+            heads, heads_record = find_heads(sources, vids, cameras, undistort, cfg, sink, progress, ahead)
             timings["heads_s"] = time.perf_counter() - t0
-    stats["registered_cameras"] = len(cameras)
     if cameras:  # after the moving points' cameras were checked: a refused one is not drawn
         sink.cameras(cameras, points, colors)
     usable = [n for n in names if n in cameras]
     timings["total_s"] = time.perf_counter() - t_all
-    stats["track_pairs"] = int(sum(len(p.index) for p in pairs.values()))
-    stats["tracks"] = int(sum(t.num_tracks for t in tracks.values()))
     for n in names:  # every video left out says why, whatever step lost it
-        if n not in cameras and n not in stats["dropped"]:
-            stats["dropped"][n] = "no camera for this video"
+        if n not in cameras and n not in dropped:
+            dropped[n] = "no camera for this video"
+    pairing = kept.pairing
+    votes = pairing.votes if pairing is not None else {}
+    transfer_new = pairing.transfer_new if pairing is not None else {}
+    stats = CueStats(kept.source, len(cameras), int(sum(t.num_tracks for t in tracks.values())),
+                     int(sum(len(p.index) for p in pairs.values())), videos,
+                     {f"{a}__{b}": PairCueStats(ps.matches, ps.snapped, ps.instance_pairs, ps.track_pairs,
+                                                votes.get((a, b)), transfer_new.get((a, b)))
+                      for (a, b), ps in matched.items()},
+                     dropped, timings, pairing.status if pairing is not None else None, kept.sfm,
+                     pairing.joint if pairing is not None else None, heads_record)
     if not usable:
-        reasons = "; ".join(f"{n}: {r}" for n, r in stats["dropped"].items())
-        raise NoUsableVideos(f"no video could be used: {reasons}", _cue_stats(stats),
-                             {s.info.name: str(s.path) for s in sources})
+        reasons = "; ".join(f"{n}: {r}" for n, r in dropped.items())
+        raise NoUsableVideos(f"no video could be used: {reasons}", stats, {s.info.name: str(s.path) for s in sources})
     bundle = CueBundle(tuple(vids[n].info for n in usable), {n: cameras[n] for n in usable},
                        {n: tracks[n] for n in usable}, pairs, heads={n: h for n, h in heads.items() if n in usable})
-    sink.stage_event("cues", "cue extraction finished", tracks=stats["tracks"],
-                     track_pairs=stats["track_pairs"], cameras=len(cameras))
-    return bundle, _cue_stats(stats)
-
-
-
-def _cue_stats(stats: dict) -> CueStats:
-    """The typed record of the counts gathered while extracting (a private dict until here)."""
-    return CueStats(stats["camera_source"], stats["registered_cameras"], stats["tracks"],
-                    stats["track_pairs"], {n: VideoCueStats(**v) for n, v in stats["videos"].items()},
-                    stats["pairs"], stats["dropped"], stats["timings_s"], stats.get("geometric_peaks"),
-                    stats.get("sfm"), stats.get("geometric_joint"), stats.get("heads"))
+    sink.stage_event("cues", "cue extraction finished", tracks=stats.tracks,
+                     track_pairs=stats.track_pairs, cameras=len(cameras))
+    return bundle, stats

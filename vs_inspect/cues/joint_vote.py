@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from tqdm import tqdm
 
+from ..cue_stats import FittedOffsetCheck, FittedOffsetPair, JointVoteRecord, PairVoteSummary
 from ..geometry.offsets import OffsetGrid
 from ..record.sink import Sink
 from ..types import TrackPairs, VideoInfo
@@ -35,10 +36,14 @@ class GeometricPairing:
     pairs: dict  # (a, b) -> TrackPairs: the descriptor pairs kept plus the geometric ones
     voted: dict  # (a, b) -> the Δ_ab (s) whose supporters were added
     peaks_s: dict  # (a, b) -> tuple of the pair's vote peaks Δ_ab (s), as the vote found them
+    status: str  # how the peaks were chosen: "joint", or consistent_peaks' status
+    votes: dict  # (a, b) -> PairVoteSummary of what its vote found and kept
+    transfer_new: dict  # (a, b) -> track pairs point transfer added
+    joint: JointVoteRecord | None  # the joint vote, None when the triangles decided
 
 
 def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
-                        stats: dict, sink: Sink, progress: bool, estimated: bool,
+                        sink: Sink, progress: bool, estimated: bool,
                         other_peaks: dict | None = None, other: str = "",
                         grid: OffsetGrid = OffsetGrid()) -> GeometricPairing:
     """Descriptor pairs plus epipolar-consistency pairs for every pair of known cameras (a moving
@@ -128,8 +133,10 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
         sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
         said = _JointChecks({c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
                             {c: chk.summary() for c, chk in three_view.items()}, dissent, dissent_short, overruled)
-        out, used = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg, stats, sink, said)
-        return GeometricPairing(_add_transfer_pairs(out, checks, traj, list(vids), stats, sink), used, peaks_s)
+        out, used, summaries, record = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg,
+                                                        sink, said)
+        out, transfer_new = _add_transfer_pairs(out, checks, traj, list(vids), sink)
+        return GeometricPairing(out, used, peaks_s, "joint", summaries, transfer_new, record)
     if joint is not None:
         # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
         # decides (and refuses when the triangles do not close)
@@ -138,7 +145,6 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
                          + "): geometric peaks chosen by triangle closure")
     chosen, status = consistent_peaks({k: (gs.peaks_s, gs.peak_votes) for k, (_, gs) in found.items()},
                                       3.0 * coarsest)
-    stats["geometric_peaks"] = status
     # the descriptor pairs are unchecked too then: alone they can put a camera a wrong offset that
     # Stage 1 accepts; kept only where consistent at the joint vote's offsets, unsure as they are,
     # so that a wrong offset leaves too few of them
@@ -156,7 +162,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
                + ("; descriptor pairs kept only where consistent at the joint vote's offsets" if filter_desc else ""))
         sink.stage_event("cues", msg)
         log.info(msg)
-    out = dict(pairs)
+    out, summaries = dict(pairs), {}
     for (a, b), (gp, gs) in found.items():
         pick = chosen.get((a, b)) if chosen is not None else None  # index of the chosen peak
         index, withheld, withheld_short = gp.index, None, None
@@ -182,25 +188,20 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
         # with no geometric pair, every row was kept at the joint vote's Δ
         kept_at = joint.offsets_s[b] - joint.offsets_s[a] if filter_desc and not len(index) else None
         out[(a, b)], n_new = _merge_pairs(desc, index, unchecked=pick is None, chosen_at_offset_s=kept_at)
-        info = {"geometric_candidates": gs.candidates, "geometric_informative": gs.informative,
-                "geometric_pairs": int(len(index)), "geometric_new": n_new,
-                "geometric_peaks_s": [round(p, 4) for p in gs.peaks_s],
-                "geometric_peak_votes": list(gs.peak_votes),
-                "geometric_chosen_peak_s": round(gs.peaks_s[pick], 4) if pick is not None else None}
-        if withheld:
-            info.update({"geometric_withheld": withheld, "geometric_withheld_short": withheld_short})
-        if pick is None and n_new:
-            info["geometric_unchecked"] = int(n_new)
-        if filter_desc:
-            info.update({"descriptor_pairs_kept": int(len(desc.index)), "descriptor_pairs_before": int(n_desc)})
-        stats["pairs"].setdefault(f"{a}__{b}", {}).update(info)
+        summaries[(a, b)] = PairVoteSummary(
+            gs.candidates, gs.informative, int(len(index)), n_new, tuple(round(p, 4) for p in gs.peaks_s),
+            tuple(gs.peak_votes), geometric_chosen_peak_s=round(gs.peaks_s[pick], 4) if pick is not None else None,
+            geometric_withheld=withheld, geometric_withheld_short=withheld_short,
+            geometric_unchecked=int(n_new) if pick is None and n_new else None,
+            descriptor_pairs_kept=int(len(desc.index)) if filter_desc else None,
+            descriptor_pairs_before=int(n_desc) if filter_desc else None)
         which = (f"peak {gs.peaks_s[pick]:+.3f} s chosen: the peaks of all static pairs close every triangle"
                  if pick is not None else
                  f"vote peaks at {', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s")
         sink.stage_event("cues", f"{a}__{b}: {len(index)} track pairs from epipolar consistency ({which})")
         log.info("%s__%s: %d geometric track pairs (%d new), %s", a, b, len(index), n_new, which)
     used = {k: found[k][1].peaks_s[i] for k, i in (chosen or {}).items() if i is not None}
-    return GeometricPairing(out, used, peaks_s)
+    return GeometricPairing(out, used, peaks_s, status, summaries, {}, None)
 
 
 def _not_sure(refused: dict[str, str], sure: dict[str, bool], dissent: dict[str, str], sink: Sink,
@@ -216,22 +217,21 @@ def _not_sure(refused: dict[str, str], sure: dict[str, bool], dissent: dict[str,
         log.info(msg)
 
 
-def check_fitted_offsets(fallback: dict, voted: dict, vids: dict) -> dict[str, str]:
+def check_fitted_offsets(fitted: dict[str, float], voted: dict, vids: dict
+                         ) -> tuple[dict[str, str], FittedOffsetCheck]:
     """Cameras from the moving points that their own epipolar votes contradict or leave
-    unconfirmed: {camera: reason}; fallback["check"] records every pair's comparison.
+    unconfirmed: ({camera: reason}, the record of every pair's comparison).
 
-    Those cameras were fitted to track pairs aligned at coarse offsets (fitted_offsets_s). Right
-    cameras at right offsets make the votes over all track pairs peak at the same Δ (within about
-    a frame); cameras fitted to wrong pairs at wrong offsets put the peaks elsewhere (up to
-    seconds away), and Stage 1 then accepts minima at offsets the
-    cameras were never fitted for. Any contradiction refuses every such camera (they were fitted
-    jointly); a camera in no agreeing pair is refused as unconfirmed. Two cameras give no check
-    (their votes peak where their own F was fitted): they pass, marked unchecked (they are used
-    only with camera.fallback_unchecked_pair; by default _estimate refuses them)."""
-    fitted = fallback["fitted_offsets_s"]
+    Those cameras were fitted to track pairs aligned at coarse offsets (fitted: camera ->
+    offset_s relative to the reference). Right cameras at right offsets make the votes over all
+    track pairs peak at the same Δ (within about a frame); cameras fitted to wrong pairs at wrong
+    offsets put the peaks elsewhere (up to seconds away), and Stage 1 then accepts minima at
+    offsets the cameras were never fitted for. Any contradiction refuses every such camera (they
+    were fitted jointly); a camera in no agreeing pair is refused as unconfirmed. Two cameras give
+    no check (their votes peak where their own F was fitted): they pass, marked unchecked (they
+    are used only with camera.fallback_unchecked_pair; by default _estimate refuses them)."""
     if len(fitted) < 3:
-        fallback["check"] = {"verdict": "unchecked (two cameras: no third to confirm their offset)"}
-        return {}
+        return {}, FittedOffsetCheck("unchecked (two cameras: no third to confirm their offset)")
     tol_s = 3.0 * max(vids[n].info.frame_interval_s for n in fitted)
     rows, agreeing, contradicted = {}, set(), []
     for (a, b), delta in sorted(voted.items()):
@@ -239,7 +239,7 @@ def check_fitted_offsets(fallback: dict, voted: dict, vids: dict) -> dict[str, s
             continue
         expect = fitted[b] - fitted[a]
         ok = abs(delta - expect) <= tol_s
-        rows[f"{a}__{b}"] = {"fitted_s": round(expect, 4), "voted_s": round(delta, 4), "agrees": ok}
+        rows[f"{a}__{b}"] = FittedOffsetPair(round(expect, 4), round(delta, 4), ok)
         if ok:
             agreeing |= {a, b}
         else:
@@ -252,11 +252,8 @@ def check_fitted_offsets(fallback: dict, voted: dict, vids: dict) -> dict[str, s
     else:
         refused = {n: ("camera from the moving points refused: no pair of it with a sure epipolar vote "
                        "confirmed the offset it was fitted at") for n in fitted if n not in agreeing}
-    fallback["check"] = {"tolerance_s": round(tol_s, 4), "pairs": rows,
-                         "verdict": "contradicted" if contradicted else
-                         "confirmed" if not refused else "partly unconfirmed",
-                         "refused": sorted(refused)}
-    return refused
+    verdict = "contradicted" if contradicted else "confirmed" if not refused else "partly unconfirmed"
+    return refused, FittedOffsetCheck(verdict, round(tol_s, 4), rows, tuple(sorted(refused)))
 
 
 def _log_votes(sink: Sink, a: str, b: str, gs, chosen_s: float | None) -> None:
@@ -364,12 +361,12 @@ def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dic
     return checks, traj
 
 
-def _add_transfer_pairs(pairs: dict, checks: dict, traj, order: list[str], stats: dict,
-                        sink: Sink) -> dict:
-    """pairs plus, for every camera that point transfer confirmed, its tracks that follow a
+def _add_transfer_pairs(pairs: dict, checks: dict, traj, order: list[str], sink: Sink) -> tuple[dict, dict]:
+    """(pairs plus, for every camera that point transfer confirmed, its tracks that follow a
     trajectory (of traj, transfer.Trajectories) paired with both tracks the trajectory was
-    triangulated from; order: the videos' order (a pair's key names the earlier one first)."""
-    out = dict(pairs)
+    triangulated from, {(a, b): track pairs added}); order: the videos' order (a pair's key
+    names the earlier one first)."""
+    out, added = dict(pairs), {}
     for c, chk in checks.items():
         if not chk.confirmed:
             continue
@@ -385,10 +382,10 @@ def _add_transfer_pairs(pairs: dict, checks: dict, traj, order: list[str], stats
                 continue
             # no chosen_at_offset_s: the new rows follow trajectories at the transfer's offset
             out[key], n_new = _merge_pairs(out[key], np.unique(np.array(rows, np.int64), axis=0))
-            stats["pairs"].setdefault(f"{key[0]}__{key[1]}", {})["transfer_new"] = int(n_new)
+            added[key] = int(n_new)
             sink.stage_event("cues", f"{key[0]}__{key[1]}: {n_new} track pairs from point transfer",
                              pair=f"{key[0]}__{key[1]}", transfer_new=int(n_new))
-    return out
+    return out, added
 
 
 def _consistent_descriptor_pairs(desc: TrackPairs, delta_s: float, cameras: dict, tracks: dict,
@@ -425,42 +422,39 @@ def _merge_pairs(tp: TrackPairs, index: np.ndarray, unchecked: bool = False,
 class _JointChecks:
     """What the checks after the joint vote said of its cameras, kept in result.json."""
 
-    transfer: dict = dataclasses.field(default_factory=dict)  # camera -> point transfer's summary
-    three_view: dict = dataclasses.field(default_factory=dict)  # camera -> the three-view check's summary
+    transfer: dict = dataclasses.field(default_factory=dict)  # camera -> TransferSummary
+    three_view: dict = dataclasses.field(default_factory=dict)  # camera -> ThreeViewSummary
     dissent: dict = dataclasses.field(default_factory=dict)  # camera -> why its pairs (or the other model) contradict it
     dissent_short: dict = dataclasses.field(default_factory=dict)  # camera -> that in a few words (a null's headline)
     overruled: dict = dataclasses.field(default_factory=dict)  # camera -> why the other model's dispute was overruled
 
 
 def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cameras: dict,
-                     tracks: dict, vids: dict, cfg: CueConfig, stats: dict, sink: Sink,
-                     said: _JointChecks = _JointChecks()) -> tuple[dict, dict]:
-    """(pairs, {(a, b): the joint Δ_ab whose supporters were added}): the supporters of the
-    jointly chosen offsets (geometric_pairs.joint_offsets) for every pair whose Δ is trusted
-    (_joint_pair_used: both cameras' offsets won by at least joint_min_margin, or point transfer
-    confirmed them, and joint_min_sure cameras are sure; sure: camera -> whether it is, said:
-    what the checks after the vote said, for result.json); nothing for the others. A
-    descriptor pair is kept only if it is epipolar-consistent at the joint Δ (with
-    joint_filter_descriptor): the descriptor pairs are mostly wrong on small moving objects
-    (BENCHMARKS.md), and the joint Δ is the best evidence there is of the moment they share."""
+                     tracks: dict, vids: dict, cfg: CueConfig, sink: Sink,
+                     said: _JointChecks = _JointChecks()) -> tuple[dict, dict, dict, JointVoteRecord]:
+    """(pairs, {(a, b): the joint Δ_ab whose supporters were added}, {(a, b): PairVoteSummary},
+    the JointVoteRecord): the supporters of the jointly chosen offsets
+    (geometric_pairs.joint_offsets) for every pair whose Δ is trusted (_joint_pair_used: both
+    cameras' offsets won by at least joint_min_margin, or point transfer confirmed them, and
+    joint_min_sure cameras are sure; sure: camera -> whether it is, said: what the checks after
+    the vote said, for result.json); nothing for the others. A descriptor pair is kept only if it
+    is epipolar-consistent at the joint Δ (with joint_filter_descriptor): the descriptor pairs are
+    mostly wrong on small moving objects (BENCHMARKS.md), and the joint Δ is the best evidence
+    there is of the moment they share."""
     from .geometric_pairs import supporters, votes_at
 
     # the pairs whose joint Δ is trusted, and that Δ: the one decision everything below reads
     used = {(a, b): joint.offsets_s[b] - joint.offsets_s[a] for a, b in found
             if _joint_pair_used(a, b, sure, cameras, cfg.geometric.joint_min_sure)}
-    stats["geometric_peaks"] = "joint"
-    stats["geometric_joint"] = {"origin": joint.origin,
-                                "offsets_s": {n: round(o, 4) for n, o in joint.offsets_s.items()},
-                                "score": round(joint.score, 2),
-                                "margin": {n: round(m, 2) for n, m in joint.margin.items()},
-                                "sure": sorted(n for n, ok in sure.items() if ok),
-                                "used": sorted({n for k in used for n in k})}
-    # copies (asdict), in field order; an empty check is left out
-    stats["geometric_joint"].update({key: value for key, value in dataclasses.asdict(said).items() if value})
+    record = JointVoteRecord(joint.origin, {n: round(o, 4) for n, o in joint.offsets_s.items()},
+                             round(joint.score, 2), {n: round(m, 2) for n, m in joint.margin.items()},
+                             tuple(sorted(n for n, ok in sure.items() if ok)), tuple(sorted({n for k in used for n in k})),
+                             # an empty check is left out
+                             **{k: dict(v) for k, v in dataclasses.asdict(said).items() if v})
     three_view, dissent, transfer = said.three_view, said.dissent, said.transfer
-    failed = sorted(n for n, chk in three_view.items() if not chk["passed"] and not sure[n])
+    failed = sorted(n for n, chk in three_view.items() if not chk.passed and not sure[n])
     if failed:
-        seen = ", ".join(f"{n} {three_view[n]['supporters']}" for n in failed)
+        seen = ", ".join(f"{n} {three_view[n].supporters}" for n in failed)
         msg = (f"geometric track pairs not used for {', '.join(failed)}: the joint vote was sure of "
                f"their offsets, but the points the other sure cameras triangulate are not seen there "
                f"(supporters {seen}; a camera needs {cfg.geometric.three_view_min_supporters}, and "
@@ -485,7 +479,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                f"{sum(sure.values())} camera(s) only, so no triangle of sure cameras confirms their Δ")
         sink.stage_event("cues", msg)
         log.info(msg)
-    out = dict(pairs)
+    out, summaries = dict(pairs), {}
     for (a, b), (_, gs) in found.items():
         delta = joint.offsets_s[b] - joint.offsets_s[a]
         both = (a, b) in used
@@ -499,16 +493,12 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
             desc = _consistent_descriptor_pairs(desc, delta, cameras, tracks, vids, cfg)
         every = cfg.geometric.joint_filter_descriptor or not n_desc  # every row kept at delta
         out[(a, b)], n_new = _merge_pairs(desc, index, chosen_at_offset_s=delta if every else None)
-        stats["pairs"].setdefault(f"{a}__{b}", {}).update({
-            "geometric_candidates": gs.candidates, "geometric_informative": gs.informative,
-            "geometric_pairs": int(len(index)), "geometric_new": int(n_new),
-            "geometric_peaks_s": [round(p, 4) for p in gs.peaks_s],
-            "geometric_peak_votes": list(gs.peak_votes), "geometric_joint_delta_s": round(delta, 4),
-            "descriptor_pairs_kept": int(len(desc.index)), "descriptor_pairs_before": int(n_desc)})
         votes = votes_at(gs, delta)
-        stats["pairs"][f"{a}__{b}"].update({"geometric_joint_votes": votes,
-                                            "geometric_joint_margin": [round(joint.margin[a], 2),
-                                                                       round(joint.margin[b], 2)]})
+        summaries[(a, b)] = PairVoteSummary(
+            gs.candidates, gs.informative, int(len(index)), int(n_new), tuple(round(p, 4) for p in gs.peaks_s),
+            tuple(gs.peak_votes), geometric_joint_delta_s=round(delta, 4), geometric_joint_votes=votes,
+            geometric_joint_margin=(round(joint.margin[a], 2), round(joint.margin[b], 2)),
+            descriptor_pairs_kept=int(len(desc.index)), descriptor_pairs_before=int(n_desc))
         sink.stage_event("cues", f"{a}__{b}: {len(index)} track pairs from epipolar consistency "
                                  f"(joint vote over all camera pairs: Δ {delta:+.3f} s)",
                          pair=f"{a}__{b}", votes=votes, informative=gs.informative,
@@ -517,4 +507,4 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                          margin_b=round(joint.margin[b], 2))
         log.info("%s__%s: %d geometric track pairs (%d new) at the joint Δ %+.3f s", a, b,
                  len(index), n_new, delta)
-    return out, used
+    return out, used, summaries, record

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..cue_stats import ThreeViewSummary, TransferSummary
 from ..geometry.epipolar import project
 from ..geometry.offsets import OffsetGrid, span_of
 from ..geometry.sampling import camera_at_frames
@@ -241,17 +242,16 @@ class TransferCheck:
     confirmed: bool
     reason: str  # why (or why not), one line
 
-    def summary(self, trajectories: int) -> dict:
-        """JSON values for result.json's cues.geometric_joint.transfer, the landscape included
+    def summary(self, trajectories: int) -> TransferSummary:
+        """The record result.json's cues.geometric_joint.transfer keeps, the landscape included
         (trajectories: how many were projected)."""
         land = self.landscape
-        return {"joint_offset_s": round(self.joint_offset_s, 4),
-                "transfer_offset_s": None if land.offset_s is None else round(land.offset_s, 4),
-                "z": round(land.z, 2), "trajectories": int(trajectories),
-                "supporters": int(land.supporters[land.best]) if land.best >= 0 else 0,
-                "matches": int(len(land.matches)), "confirmed": self.confirmed, "reason": self.reason,
-                "offsets_s": [round(float(o), 4) for o in land.offsets_s],
-                "share": [round(float(v), 4) for v in land.share]}
+        return TransferSummary(round(self.joint_offset_s, 4), None if land.offset_s is None else round(land.offset_s, 4),
+                               round(land.z, 2), int(trajectories),
+                               int(land.supporters[land.best]) if land.best >= 0 else 0,
+                               int(len(land.matches)), self.confirmed, self.reason,
+                               tuple(round(float(o), 4) for o in land.offsets_s),
+                               tuple(round(float(v), 4) for v in land.share))
 
 
 def confirm_offset(camera: str, joint_offset_s: float, landscape: TransferLandscape,
@@ -295,14 +295,14 @@ class ThreeViewCheck:
     reason: str  # why (or why not), one line
     landscape: TransferLandscape  # over the camera's candidate offsets, the joint offset among them
 
-    def summary(self) -> dict:
-        """JSON values for result.json's cues.geometric_joint.three_view."""
-        return {"joint_offset_s": round(self.joint_offset_s, 4), "trajectories": self.trajectories,
-                "supporters": self.supporters, "best_supporters": self.best_supporters,
-                "best_offset_s": None if self.best_offset_s is None else round(self.best_offset_s, 4),
-                "needed": round(self.needed, 2), "passed": self.passed, "reason": self.reason,
-                "offsets_s": [round(float(o), 4) for o in self.landscape.offsets_s],
-                "supporters_by_offset": [int(n) for n in self.landscape.supporters]}
+    def summary(self) -> ThreeViewSummary:
+        """The record result.json's cues.geometric_joint.three_view keeps."""
+        return ThreeViewSummary(round(self.joint_offset_s, 4), self.trajectories, self.supporters,
+                                self.best_supporters,
+                                None if self.best_offset_s is None else round(self.best_offset_s, 4),
+                                round(self.needed, 2), self.passed, self.reason,
+                                tuple(round(float(o), 4) for o in self.landscape.offsets_s),
+                                tuple(int(n) for n in self.landscape.supporters))
 
 
 def check_in_three_views(camera: str, joint_offset_s: float, traj: Trajectories, info_c: VideoInfo,

@@ -17,7 +17,8 @@ from ..engine import Engine
 from ..errors import BadVideoName, InputError, NoUsableVideos
 from ..record.sink import Sink
 from ..sync.config import SyncConfig
-from ..types import CueBundle, CueStats
+from ..cue_stats import CueStats
+from ..types import CueBundle
 
 log = logging.getLogger(__name__)
 
