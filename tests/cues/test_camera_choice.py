@@ -12,8 +12,9 @@ from vs_inspect.types import CameraTrack, TrackPairs
 from tests.cue_records import joint
 from vs_inspect.cue_stats import CueStats, MovingPointsCameras, SfmRecord
 from vs_inspect.cues.joint_vote import GeometricPairing
+from vs_inspect.cues.records import Note
 
-from .stage0_fakes import Events, K
+from .stage0_fakes import K
 
 
 def _as_json(cams) -> dict:
@@ -151,13 +152,13 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
         return ex.CameraSet({n: CameraTrack(K, look_at([6.0, 0, 2.0], [0, 0, 1])) for n in names}, {}, None, None, {},
                             dropped, sfm=sfm)
 
-    def vote(cams, vids, all_pairs, cfg, sink, progress, estimated, other_peaks=None, other="", grid=None):
+    def vote(cams, vids, all_pairs, cfg, progress, estimated, other_peaks=None, other="", grid=None):
         kind = cams.sfm.features
         seen.append((kind, other_peaks, other))
         pairing = GeometricPairing({}, {}, {}, "joint", {}, {}, joints.get(kind) if joints else None)
-        sink.stage_event("cues", f"voted on {kind}")
         return dataclasses.replace(cams, pairs={}, used=frozenset(trusted[kind]), pairing=pairing,
-                                   peaks={("a", "b"): (0.1,) if kind == "sift" else (0.2,)})
+                                   peaks={("a", "b"): (0.1,) if kind == "sift" else (0.2,)},
+                                   notes=(Note("cues", f"voted on {kind}"),))
 
     monkeypatch.setattr(cameras_mod, "CameraModels", Models)
     monkeypatch.setattr(ex, "_estimate", estimate)
@@ -165,9 +166,8 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
     info = SimpleNamespace(width=640, height=480, num_frames=50)
     vids = {n: SimpleNamespace(sfm_frames=None, info=info, camera_motion="static", frame_features=None,
                                register_masks=None) for n in "abc"}
-    sink = Events()
-    kept = ex.estimated_cameras(vids, config, {}, {}, sink, progress=False)
-    return kept, _as_json(kept), sink, seen
+    kept = ex.estimated_cameras(vids, config, {}, {}, progress=False)
+    return kept, _as_json(kept), SimpleNamespace(messages=[n.message for n in kept.notes]), seen
 
 
 def test_second_camera_model_is_kept_when_its_joint_vote_trusts_more_videos(monkeypatch):

@@ -22,7 +22,6 @@ def test_a_video_whose_heads_cannot_be_found_is_named_and_the_others_kept(monkey
 
     import vs_inspect.io.video as video_mod
     from vs_inspect.cues.heads import find_heads
-    from vs_inspect.record.sink import NullSink
 
     T = 4
 
@@ -44,7 +43,7 @@ def test_a_video_whose_heads_cannot_be_found_is_named_and_the_others_kept(monkey
     sources = [SimpleNamespace(info=infos[n], frame=None if n == "b" else frame) for n in "abc"]
     vids = {n: SimpleNamespace(info=infos[n], scale_xy=(2.0, 2.0)) for n in "abc"}
     heads, record = find_heads(sources, vids, dict.fromkeys("abc"), {}, SimpleNamespace(max_side=640, heads_max_hz=10.0),
-                               NullSink(), False)
+                               False)
     assert list(heads) == ["a", "c"]
     np.testing.assert_allclose(heads["a"], np.tile([20.5, 40.5], (T, 1)))  # working px x2, centres kept
     # at 30 fps every third frame is looked at (at most about 10 a second), NaN between
@@ -86,7 +85,6 @@ def _fake_videos(monkeypatch, frames_of, poses: list, seen: list):
 
 def test_heads_found_ahead_on_their_own_thread_are_the_heads_found_after(monkeypatch):
     from vs_inspect.cues.heads import HeadsAhead, find_heads
-    from vs_inspect.record.sink import NullSink
 
     def frame(name, k):
         if name == "b":
@@ -94,13 +92,13 @@ def test_heads_found_ahead_on_their_own_thread_are_the_heads_found_after(monkeyp
         return np.full((8, 10, 3), 1 + k + 10 * "abc".index(name), np.uint8)
     poses, seen = [], []
     sources, vids, cfg = _fake_videos(monkeypatch, frame, poses, seen)
-    after, _ = find_heads(sources, vids, dict.fromkeys("abc"), {}, cfg, NullSink(), False)
+    after, _ = find_heads(sources, vids, dict.fromkeys("abc"), {}, cfg, False)
     assert set(seen) == {"MainThread"} and len(seen) == 18 and all(p.closed for p in poses)
     poses.clear(), seen.clear()
     monkeypatch.setattr(HeadsAhead, "max_videos", 2)  # each tracker holds memory till its video is done
     with HeadsAhead(sources, vids, cfg) as ahead:
         assert len(poses) == 2  # the trackers start on the calling thread
-        found, record = find_heads(sources, vids, dict.fromkeys("abc"), {}, cfg, NullSink(), False, ahead)
+        found, record = find_heads(sources, vids, dict.fromkeys("abc"), {}, cfg, False, ahead)
     assert len(seen) == 18 and all(name.startswith("heads") for name in seen[:12]), set(seen)
     assert set(seen[12:]) == {"MainThread"}  # c's heads: found by find_heads itself
     assert all(p.closed for p in poses)

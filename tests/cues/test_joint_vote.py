@@ -10,11 +10,10 @@ from vs_inspect.cues.config import CueConfig, GeometricPairConfig
 from vs_inspect.cues.geometric_pairs import GeometricPairStats, JointChoice
 from vs_inspect.cues.joint_vote import _add_joint_pairs
 from vs_inspect.geometry.epipolar import look_at
-from vs_inspect.record.sink import NullSink
 from vs_inspect.cue_stats import CueStats, PairCueStats, to_json
 from vs_inspect.types import CameraTrack, TrackPairs
 
-from .stage0_fakes import Events, K
+from .stage0_fakes import K
 
 
 def _as_json(pairing) -> dict:
@@ -47,10 +46,10 @@ def _run(moving_b: bool, sure_c: bool, min_sure: int = 3):
     pairs = {k: TrackPairs(*k, np.zeros((0, 2), np.int64)) for k in found}
     joint = JointChoice(offs, 10.0, {"a": 5.0, "b": 5.0, "c": 5.0 if sure_c else 1.0})
     sure = {"a": True, "b": True, "c": sure_c}
-    sink = Events()
+    notes = []
     cfg = CueConfig(geometric=GeometricPairConfig(joint_min_sure=min_sure))
-    out, _, _, record = _add_joint_pairs(pairs, found, joint, sure, cams, {}, {}, cfg, sink)
-    return {k: len(v.index) for k, v in out.items()}, sink.messages, {"geometric_joint": to_json(record)}
+    out, _, _, record, _ = _add_joint_pairs(pairs, found, joint, sure, cams, {}, {}, cfg, notes)
+    return {k: len(v.index) for k, v in out.items()}, [n.message for n in notes], {"geometric_joint": to_json(record)}
 
 
 def test_two_sure_cameras_alone_get_no_pairs():
@@ -90,14 +89,14 @@ def test_transfer_matches_join_both_source_pairs_in_video_order():
                              np.array([[0, 7], [1, 8]]))
     pairs = {k: TrackPairs(*k, np.array([[1, 1]])) for k in (("a", "b"), ("a", "c"), ("b", "c"))}
     checks = {"b": TransferCheck("b", 0.0, land, True, "confirmed")}
-    out, added = _add_transfer_pairs(pairs, checks, traj, ["a", "b", "c"], NullSink())
+    out, added = _add_transfer_pairs(pairs, checks, traj, ["a", "b", "c"], [])
     assert out[("a", "b")].index.tolist() == [[1, 1], [3, 7], [4, 8]]  # a's track, then b's
     assert out[("b", "c")].index.tolist() == [[1, 1], [7, 5], [8, 6]]  # b's track, then c's
     assert out[("a", "c")].index.tolist() == [[1, 1]]
     assert added[("a", "b")] == 2
     # an unconfirmed camera gets nothing
     checks = {"b": TransferCheck("b", 0.0, land, False, "they disagree")}
-    out, added = _add_transfer_pairs(pairs, checks, traj, ["a", "b", "c"], NullSink())
+    out, added = _add_transfer_pairs(pairs, checks, traj, ["a", "b", "c"], [])
     assert all(len(v.index) == 1 for v in out.values())
 
 
@@ -127,9 +126,9 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
     tracks = {n: Tracks(xy[n], None) for n in "abc"}
     cfg = CueConfig(geometric=GeometricPairConfig(joint_min_margin=1e9))  # no camera sure
     monkeypatch.setattr(gp, "consistent_peaks", lambda *a, **k: (None, "inconsistent"))
-    sink = Events()
-    got = add_geometric_pairs(pairs, cams, tracks, vids, cfg, sink, progress=False, estimated=True)
+    got = add_geometric_pairs(pairs, cams, tracks, vids, cfg, progress=False, estimated=True)
     out, voted, stats = got.pairs, got.voted, _as_json(got)
+    messages = [n.message for n in got.notes]
     assert stats["geometric_peaks"] == "inconsistent"
     assert voted == {}  # no Δ chosen, so none is reported as voted
     # each pair and each video's null reason say why it got no geometric pair
@@ -142,7 +141,7 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
     # and in a few words, for the offsets table (result.json's "unresolved_headline")
     assert _cue_stats(stats).headline("c") == (
         "vote peaks do not close the triangles")
-    assert any("descriptor pairs kept only where consistent" in m for m in sink.messages)
+    assert any("descriptor pairs kept only where consistent" in m for m in messages)
     for (u, v), tp in out.items():
         right = {(row_of[u][p], row_of[v][p]) for p in range(30)}
         kept = {tuple(x) for x in tp.index.tolist()}
@@ -167,12 +166,11 @@ def _sure_of_all(monkeypatch, offsets: dict[str, float], estimated: bool = True,
     infos, cams, xy, _, row_of = _scene({"a": 0.0, "b": 0.42, "c": -0.3})
     pairs = {k: TrackPairs(*k, np.zeros((0, 2), np.int64)) for k in (("a", "b"), ("a", "c"), ("b", "c"))}
     monkeypatch.setattr(gp, "joint_offsets", lambda *a, **k: JointChoice(dict(offsets), 30.0, dict.fromkeys(offsets, 10.0)))
-    sink = Events()
     got = add_geometric_pairs(pairs, cams, {n: Tracks(xy[n], None) for n in "abc"},
                               {n: SimpleNamespace(info=infos[n]) for n in "abc"}, cfg,
-                              sink, progress=False, estimated=estimated, other_peaks=other_peaks,
+                              progress=False, estimated=estimated, other_peaks=other_peaks,
                               other="SIFT's model")
-    return got.pairs, _as_json(got), sink.messages, row_of
+    return got.pairs, _as_json(got), [n.message for n in got.notes], row_of
 
 
 def test_sure_cameras_that_see_each_others_points_keep_their_pairs(monkeypatch):
@@ -316,12 +314,11 @@ def _lone_pair(monkeypatch, moving_b: bool, **geometric):
                                                                          {"a": 1.0, "b": 1.0}))
     desc = np.array([[100, 100], [101, 101], [102, 102]])
     vids = {n: SimpleNamespace(info=SimpleNamespace(frame_interval_s=1 / 30)) for n in "ab"}
-    sink = Events()
     tracks = {n: SimpleNamespace(xy=None) for n in "ab"}  # read by the vote only, replaced here
     got = add_geometric_pairs({("a", "b"): TrackPairs("a", "b", desc, np.ones(3))}, cams, tracks, vids,
-                              CueConfig(geometric=GeometricPairConfig(**geometric)), sink,
+                              CueConfig(geometric=GeometricPairConfig(**geometric)),
                               progress=False, estimated=True)
-    return got.pairs, _as_json(got), sink.messages
+    return got.pairs, _as_json(got), [n.message for n in got.notes]
 
 
 def test_a_lone_pair_with_a_moving_camera_keeps_only_its_descriptor_pairs(monkeypatch):

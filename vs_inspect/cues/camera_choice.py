@@ -19,10 +19,11 @@ import numpy as np
 
 from ..cue_stats import (ImagePairMatches, JointCoarseOffsets, JointFit, ModelTried,
                          MovingPointsCameras, MovingPointsPair, SfmRecord, from_json, refusal_texts)
+from ..errors import InputError
 from ..geometry.offsets import OffsetGrid
-from ..record.sink import DeferredSink, Sink
 from ..types import FROM_MOVING_POINTS, CameraTrack, Tracks, first_clause
 from .config import CueConfig
+from .records import Note, say_cameras
 from .joint_vote import GeometricPairing, add_geometric_pairs, check_fitted_offsets
 from .video_cues import VideoCues
 
@@ -61,14 +62,41 @@ class CameraSet:
     peaks: dict | None = None  # (a, b) -> the pair's vote peaks Δ_ab (s)
     voting_s: float = 0.0  # seconds spent voting
     pairing: GeometricPairing | None = None  # what the pairing made of the set (None: not run)
-    events: DeferredSink | None = None  # its reports, held until the set is kept
+    notes: tuple[Note, ...] = ()  # what was decided on the set, in words, in order (its pairing's included)
 
     def votes(self) -> dict:
         """"a__b" -> the pair's PairVoteSummary on these cameras."""
         return {f"{a}__{b}": v for (a, b), v in (self.pairing.votes if self.pairing else {}).items()}
 
 
-def vote_on_cameras(cams: CameraSet, vids: dict, all_pairs: dict, cfg: CueConfig, sink: Sink,
+def calibrated_cameras(calibration: dict, vids: dict[str, VideoCues]) -> CameraSet:
+    """The cameras of an imported calibration (name -> CameraCalibration) fitted to each video,
+    the tracks undistorted with their lenses; a video the calibration cannot serve is dropped
+    with the reason."""
+    from ..io.calibration import fit_to_video, to_camera_track, undistort_points
+
+    cams, tracks, dropped, undistort = {}, {}, {}, {}
+    for name, v in vids.items():
+        cal = calibration.get(name)
+        if cal is None:
+            dropped[name] = "the calibration has no camera for this video"
+            continue
+        try:
+            cal = fit_to_video(cal, v.info.width, v.info.height, name=name)
+        except InputError as exc:
+            dropped[name] = str(exc)
+            continue
+        if cal.cam_from_world.ndim == 3 and len(cal.cam_from_world) != v.info.num_frames:
+            dropped[name] = (f"the calibration has {len(cal.cam_from_world)} per-frame poses but the "
+                             f"video has {v.info.num_frames} frames")
+            continue
+        cams[name] = to_camera_track(cal)
+        undistort[name] = functools.partial(undistort_points, cal)  # (...,2), NaN kept
+        tracks[name] = Tracks(undistort[name](v.xy_full), v.instance)
+    return CameraSet(cams, tracks, None, None, undistort, dropped, "calibration")
+
+
+def vote_on_cameras(cams: CameraSet, vids: dict, all_pairs: dict, cfg: CueConfig,
                     progress: bool, estimated: bool, other_peaks: dict | None = None,
                     other: str = "", grid: OffsetGrid = OffsetGrid()) -> CameraSet:
     """cams with its pairs: the descriptor pairs of its cameras plus the geometric ones
@@ -76,22 +104,23 @@ def vote_on_cameras(cams: CameraSet, vids: dict, all_pairs: dict, cfg: CueConfig
     grid: the limits of the offsets voted for), a camera fitted to the moving points at an offset
     its votes refuse taken out."""
     cameras, dropped, sfm = dict(cams.cameras), dict(cams.dropped), cams.sfm
+    notes: list[Note] = []
     for name, why in dropped.items():
         if name in vids:
-            sink.stage_event("cameras", f"{name}: {why}")
+            say_cameras(notes, f"{name}: {why}")
     for name, r in ((sfm.frame_registration if sfm else None) or {}).items():
         if name in cameras:  # the moving camera's own poses, each frame registered on its own
-            sink.stage_event("cameras", f"{name}: {r.registered} of {r.tried} frames outside the "
-                                        f"reconstruction registered against it (median {r.median_inliers:.0f} "
-                                        f"inliers, {r.refused} refused); the rest slerped",
-                             registered=r.registered, tried=r.tried, refused=r.refused)
+            say_cameras(notes, f"{name}: {r.registered} of {r.tried} frames outside the reconstruction registered "
+                               f"against it (median {r.median_inliers:.0f} inliers, {r.refused} refused); the rest "
+                               "slerped", registered=r.registered, tried=r.tried, refused=r.refused)
     pairs = {k: v for k, v in all_pairs.items() if k[0] in cameras and k[1] in cameras}
     used, peaks, voting_s, pairing = frozenset(), {}, 0.0, None
     if cfg.geometric.enabled:
         t0 = time.perf_counter()
-        pairing = add_geometric_pairs(pairs, cameras, cams.tracks, vids, cfg, sink, progress,
+        pairing = add_geometric_pairs(pairs, cameras, cams.tracks, vids, cfg, progress,
                                       estimated=estimated, other_peaks=other_peaks, other=other, grid=grid)
         pairs, voted = pairing.pairs, pairing.voted
+        notes += pairing.notes
         fallback = sfm.fallback if sfm is not None else None
         if fallback is not None and fallback.used:
             refused, check = check_fitted_offsets(fallback.fitted_offsets_s, voted, vids)
@@ -99,18 +128,18 @@ def vote_on_cameras(cams: CameraSet, vids: dict, all_pairs: dict, cfg: CueConfig
             for n, why in refused.items():
                 cameras.pop(n, None)
                 dropped[n] = why
-                sink.stage_event("cameras", f"{n}: {why}")
+                say_cameras(notes, f"{n}: {why}")
                 log.warning("%s: %s", n, why)
             pairs = {k: v for k, v in pairs.items() if k[0] in cameras and k[1] in cameras}
         used = frozenset(n for k in voted for n in k if n in cameras)
         peaks = {k: pairing.peaks_s.get(k, ()) for k in pairs}
         voting_s = time.perf_counter() - t0
     return dataclasses.replace(cams, cameras=cameras, dropped=dropped, sfm=sfm, pairs=pairs, used=used, peaks=peaks,
-                               voting_s=voting_s, pairing=pairing)
+                               voting_s=voting_s, pairing=pairing, notes=tuple(notes))
 
 
 def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dict,
-                      frame_images: dict, sink: Sink, progress: bool, grid: OffsetGrid = OffsetGrid()) -> CameraSet:
+                      frame_images: dict, progress: bool, grid: OffsetGrid = OffsetGrid()) -> CameraSet:
     """The cameras pycolmap estimates and their pairs (frame_images: name -> (a function giving a
     moving camera's frames to register, how many), as cameras.CameraModels takes them). With
     camera features "auto", when the joint vote on SIFT's cameras leaves a video without a
@@ -134,14 +163,13 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
 
         def attempt(est, other_peaks=None, other="", from_tracks=False,
                     as_built=False) -> tuple[str, CameraSet] | None:
-            events = DeferredSink(sink.options)
             cams = _estimate(vids, cfg, all_pairs, est, from_tracks, memo, as_built, grid)
             if from_tracks and not (cams.sfm.fallback is not None and cams.sfm.fallback.used):
                 return None  # est's own cameras again, already voted on
-            out = vote_on_cameras(cams, vids, all_pairs, cfg, events, progress, estimated=True,
+            out = vote_on_cameras(cams, vids, all_pairs, cfg, progress, estimated=True,
                                   other_peaks=other_peaks, other=other, grid=grid)
             kind = MOVING_POINTS if from_tracks else est.features + (OWN if as_built else "")
-            return kind, dataclasses.replace(out, events=events)
+            return kind, out
 
         kept_est = models.first()
         first_est = kept_est
@@ -188,7 +216,7 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
             if own[1].used:
                 kind, kept = own
         skipped = models.third_skipped
-    kept.events.replay(sink)
+    notes = list(kept.notes)  # only the kept set's notes are reported, then the choice
     models_tried = tuple(ModelTried(k, len(c.cameras), tuple(sorted(c.used)), c is kept) for k, c in tried)
     kept = _note_other_models(kind, kept, [(k, c) for k, c in tried if c is not kept], vids)
     sfm = kept.sfm
@@ -196,15 +224,15 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
         sfm = dataclasses.replace(sfm, models=models_tried)
         msg = (f"camera models: {_owner(kind)} kept; the joint vote trusted "
                + ", ".join(f"{len(c.used)} video(s) on {_owner(k)}" for k, c in tried))
-        sink.stage_event("cameras", msg)
+        say_cameras(notes, msg)
         log.info(msg)
     if failed:
         sfm = dataclasses.replace(sfm, models_failed="; ".join(failed))
-        sink.stage_event("cameras", sfm.models_failed)
+        say_cameras(notes, sfm.models_failed)
     if skipped:
         sfm = dataclasses.replace(sfm, models_skipped=skipped)
-        sink.stage_event("cameras", skipped)
-    return dataclasses.replace(kept, sfm=sfm)
+        say_cameras(notes, skipped)
+    return dataclasses.replace(kept, sfm=sfm, notes=tuple(notes))
 
 
 def _note_other_models(kind: str, kept: CameraSet, others: list[tuple[str, CameraSet]], vids: dict) -> CameraSet:

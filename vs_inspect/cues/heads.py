@@ -15,7 +15,6 @@ from tqdm import tqdm
 
 from ..cue_stats import HeadsRecord
 from ..errors import InputError
-from ..record.sink import Sink
 from ..types import VideoInfo
 from .config import CueConfig
 from .video_cues import VideoCues, frame_step, to_full_px
@@ -109,7 +108,7 @@ class HeadsAhead:
 
 
 def find_heads(sources, vids: dict[str, VideoCues], cameras: dict, undistort: dict, cfg: CueConfig,
-               sink: Sink, progress: bool, ahead: HeadsAhead | None = None
+               progress: bool, ahead: HeadsAhead | None = None
                ) -> tuple[dict[str, np.ndarray], HeadsRecord]:
     """({video: (T,2) undistorted full-resolution px of the head the person detector found in a
     frame (NaN: none, or a frame beyond cfg.heads_max_hz not looked at)}, the record of the run)
@@ -120,7 +119,6 @@ def find_heads(sources, vids: dict[str, VideoCues], cameras: dict, undistort: di
     why = heads_unavailable()
     if why:
         log.info("worn-camera sightings skipped: %s", why)
-        sink.stage_event("cues", f"worn-camera sightings skipped: {why}")
         return {}, HeadsRecord(skipped=why)
     out, found, failed = {}, {}, {}
     for src in tqdm([s for s in sources if s.info.name in cameras], desc="heads", unit="video",
@@ -141,10 +139,8 @@ def find_heads(sources, vids: dict[str, VideoCues], cameras: dict, undistort: di
         raw = to_full_px(heads, vids[n].scale_xy)
         out[n] = undistort[n](raw) if n in undistort else raw
         found[n] = int(np.isfinite(out[n][:, 0]).sum())
-        sink.stage_event("cues", f"{n}: a person's head in {found[n]} of {len(raw)} frames", heads=found[n])
     for n, why in failed.items():
         log.warning("%s: no heads: %s", n, why)
-        sink.stage_event("cues", f"{n}: no heads: {why}")
     spent = ahead.seconds() if ahead is not None else {}
     log.info("heads found: %s", ", ".join(f"{n} {k}" for n, k in found.items()))
     return out, HeadsRecord(detector="mediapipe BlazePose (pose_landmark_full)", frames_with_a_head=found,

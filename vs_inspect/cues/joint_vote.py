@@ -6,23 +6,23 @@ together (or the peaks that close every triangle), which cameras are sure of the
 pairs, the three-view checks of cues/transfer.py and another camera model's peaks agree), the
 supporters of the trusted offsets added to the descriptor pairs; and which cameras fitted to
 the moving points their own votes refuse (check_fitted_offsets; camera_choice takes them out).
-The pairing's decisions are reported to the sink. No I/O.
+The pairing's decisions come back as notes in words (the Stage 0 controller reports them). No I/O.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import logging
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from tqdm import tqdm
 
 from ..cue_stats import FittedOffsetCheck, FittedOffsetPair, JointVoteRecord, PairVoteSummary
 from ..geometry.offsets import OffsetGrid
-from ..record.sink import Sink
 from ..types import TrackPairs, VideoInfo
 from .config import CueConfig
+from .records import Note, say
 
 # The vote's decisions are logged at INFO (`-v`): the recording and result.json hold them in full,
 # and the console ends with one plain reason per unresolved video.
@@ -40,10 +40,15 @@ class GeometricPairing:
     votes: dict  # (a, b) -> PairVoteSummary of what its vote found and kept
     transfer_new: dict  # (a, b) -> track pairs point transfer added
     joint: JointVoteRecord | None  # the joint vote, None when the triangles decided
+    found: dict = field(default_factory=dict)  # (a, b) -> GeometricPairStats: the pair's vote
+    chosen_s: dict = field(default_factory=dict)  # (a, b) -> the Δ_ab whose supporters were kept, or None
+    transfer: dict = field(default_factory=dict)  # camera -> transfer.TransferCheck of an unsure camera
+    three_view: dict = field(default_factory=dict)  # camera -> transfer.ThreeViewCheck of a sure camera
+    notes: tuple[Note, ...] = ()  # the decisions in words, in order
 
 
 def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
-                        sink: Sink, progress: bool, estimated: bool,
+                        progress: bool, estimated: bool,
                         other_peaks: dict | None = None, other: str = "",
                         grid: OffsetGrid = OffsetGrid()) -> GeometricPairing:
     """Descriptor pairs plus epipolar-consistency pairs for every pair of known cameras (a moving
@@ -74,6 +79,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
                                         tracks[a].xy, tracks[b].xy, cfg.geometric, grid)
     peaks_s = {k: tuple(gs.peaks_s) for k, (_, gs) in found.items()}
     votes = {k: gs for k, (_, gs) in found.items()}  # each pair's vote evidence
+    notes: list[Note] = []
     coarsest = max((vids[n].info.frame_interval_s for k in found for n in k), default=0.0)
     # each of a triangle's three peaks is located to about ±1 frame (its support window), so
     # right peaks close within about 3 frames, while wrong ones miss by far more
@@ -83,7 +89,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     # the check is of cameras Stage 0 estimated: a calibration's are given (and a right calibrated
     # camera can follow as few trajectories as a wrong estimated one)
     if cfg.geometric.three_view_min_supporters > 0 and estimated and sum(sure.values()) >= 3:
-        three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, sink, grid)
+        three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, notes, grid)
         sure = {n: ok and (n not in three_view or three_view[n].passed) for n, ok in sure.items()}
     dissent, dissent_short = {}, {}  # camera -> why it was made unsure; the same in a few words
     # three_view is only filled for estimated cameras (a calibration's are given)
@@ -94,7 +100,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
                 if chk.best_offset_s is not None}
         rivals = rival_offsets(votes, joint, sure, best, cfg.geometric.three_view_rival_frames * coarsest,
                                cfg.geometric.three_view_rival_vote_share)
-        _not_sure(rivals, sure, dissent, sink, dissent_short,
+        _not_sure(rivals, sure, dissent, notes, dissent_short,
                   {n: f"two offsets {abs(best[n][0] - joint.offsets_s[n]):.2f} s apart, as a repeated motion gives"
                    for n in rivals})
     # after the three-view check, which triangulates the pairs of the cameras sure then (a camera
@@ -104,7 +110,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
         from .geometric_pairs import dissenting_cameras
 
         dissenting = dissenting_cameras(votes, joint, sure, cfg.geometric.joint_min_pair_share)
-        _not_sure(dissenting, sure, dissent, sink, dissent_short,
+        _not_sure(dissenting, sure, dissent, notes, dissent_short,
                   {n: "a pair of its own has few votes at its joint offset" for n in dissenting})
     overruled = {}  # camera -> why the other model's dispute of it was overruled
     if other_peaks is not None and estimated and joint is not None:
@@ -116,9 +122,9 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
                                                       shares, cfg.geometric.other_model_overrule_share)
         for n, why in overruled.items():
             msg = f"joint vote still sure of {n}: {why}"
-            sink.stage_event("cues", msg)
+            say(notes, msg)
             log.info(msg)
-        _not_sure(disputed, sure, dissent, sink, dissent_short,
+        _not_sure(disputed, sure, dissent, notes, dissent_short,
                   {n: f"{other}'s vote peaks disagree" for n in disputed})
     refused = bool(dissent) or any(not chk.passed for chk in three_view.values())
     # a camera refused (by its pairs or in three views) keeps the joint path (no geometric pair
@@ -128,21 +134,22 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
         if cfg.geometric.transfer and not all(sure.values()) and sum(sure.values()) >= 2:
             # not of a camera its own pairs contradict: point transfer projects into the same
             # camera, whose biased geometry it can then confirm at a wrong offset
-            checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, sink,
+            checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, notes,
                                                 frozenset(dissent), grid)
         sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
         said = _JointChecks({c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
                             {c: chk.summary() for c, chk in three_view.items()}, dissent, dissent_short, overruled)
-        out, used, summaries, record = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg,
-                                                        sink, said)
-        out, transfer_new = _add_transfer_pairs(out, checks, traj, list(vids), sink)
-        return GeometricPairing(out, used, peaks_s, "joint", summaries, transfer_new, record)
+        out, used, summaries, record, chosen = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids,
+                                                                cfg, notes, said)
+        out, transfer_new = _add_transfer_pairs(out, checks, traj, list(vids), notes)
+        return GeometricPairing(out, used, peaks_s, "joint", summaries, transfer_new, record, votes, chosen,
+                                checks, three_view, tuple(notes))
     if joint is not None:
         # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
         # decides (and refuses when the triangles do not close)
-        sink.stage_event("cues", "joint vote sure of fewer than two cameras (margins "
-                         + ", ".join(f"{n} {m:.1f}" for n, m in joint.margin.items())
-                         + "): geometric peaks chosen by triangle closure")
+        say(notes, "joint vote sure of fewer than two cameras (margins "
+            + ", ".join(f"{n} {m:.1f}" for n, m in joint.margin.items())
+            + "): geometric peaks chosen by triangle closure")
     chosen, status = consistent_peaks({k: (gs.peaks_s, gs.peak_votes) for k, (_, gs) in found.items()},
                                       3.0 * coarsest)
     # the descriptor pairs are unchecked too then: alone they can put a camera a wrong offset that
@@ -160,9 +167,9 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
                          "check on 27 choices of vote peaks, some of which close by chance")
         msg = (f"geometric track pairs not used: {unchecked_why}"
                + ("; descriptor pairs kept only where consistent at the joint vote's offsets" if filter_desc else ""))
-        sink.stage_event("cues", msg)
+        say(notes, msg)
         log.info(msg)
-    out, summaries = dict(pairs), {}
+    out, summaries, chosen_s = dict(pairs), {}, {}
     for (a, b), (gp, gs) in found.items():
         pick = chosen.get((a, b)) if chosen is not None else None  # index of the chosen peak
         index, withheld, withheld_short = gp.index, None, None
@@ -175,10 +182,10 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
                         f"and a moving camera's per-frame geometry lets wrong tracks fit a wrong offset")
             withheld_short = "a moving camera's vote peaks, no triangle to check them"
             msg = f"geometric track pairs not used for {a}__{b}: {withheld}"
-            sink.stage_event("cues", msg, pair=f"{a}__{b}")
+            say(notes, msg, pair=f"{a}__{b}")
             log.info(msg)
             index = index[:0]
-        _log_votes(sink, a, b, gs, gs.peaks_s[pick] if pick is not None else None)
+        chosen_s[(a, b)] = gs.peaks_s[pick] if pick is not None else None
         desc = pairs[(a, b)]
         n_desc = len(desc.index)
         if filter_desc:
@@ -198,13 +205,13 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
         which = (f"peak {gs.peaks_s[pick]:+.3f} s chosen: the peaks of all static pairs close every triangle"
                  if pick is not None else
                  f"vote peaks at {', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s")
-        sink.stage_event("cues", f"{a}__{b}: {len(index)} track pairs from epipolar consistency ({which})")
+        say(notes, f"{a}__{b}: {len(index)} track pairs from epipolar consistency ({which})")
         log.info("%s__%s: %d geometric track pairs (%d new), %s", a, b, len(index), n_new, which)
     used = {k: found[k][1].peaks_s[i] for k, i in (chosen or {}).items() if i is not None}
-    return GeometricPairing(out, used, peaks_s, status, summaries, {}, None)
+    return GeometricPairing(out, used, peaks_s, status, summaries, {}, None, votes, chosen_s, {}, {}, tuple(notes))
 
 
-def _not_sure(refused: dict[str, str], sure: dict[str, bool], dissent: dict[str, str], sink: Sink,
+def _not_sure(refused: dict[str, str], sure: dict[str, bool], dissent: dict[str, str], notes: list[Note],
               dissent_short: dict[str, str], short: dict[str, str]) -> None:
     """Marks each camera of refused ({camera: why}) not sure, keeps why in dissent (and short's
     few words in dissent_short), and says so."""
@@ -213,7 +220,7 @@ def _not_sure(refused: dict[str, str], sure: dict[str, bool], dissent: dict[str,
         dissent[n] = why
         dissent_short[n] = short[n]
         msg = f"joint vote not sure of {n}: {why}"
-        sink.stage_event("cues", msg)
+        say(notes, msg)
         log.info(msg)
 
 
@@ -256,14 +263,6 @@ def check_fitted_offsets(fitted: dict[str, float], voted: dict, vids: dict
     return refused, FittedOffsetCheck(verdict, round(tol_s, 4), rows, tuple(sorted(refused)))
 
 
-def _log_votes(sink: Sink, a: str, b: str, gs, chosen_s: float | None) -> None:
-    """The pair's geometric votes over Δ_ab and the Δ whose supporters were kept, to the sink."""
-    from .geometric_pairs import vote_z
-
-    if gs.votes is not None and len(gs.votes):
-        sink.pair_votes(a, b, gs.vote_offsets_s, gs.votes, vote_z(gs)[1], chosen_s)
-
-
 def _transfer_source(a: str, b: str, sure: dict[str, bool], cameras: dict) -> bool:
     """Whether pair (a, b)'s joint Δ may be triangulated for point transfer: both cameras sure,
     and when both move, a third camera sure too (their per-frame geometry lets wrong tracks fit
@@ -300,7 +299,7 @@ def _transfer_radius_px(info: VideoInfo, g) -> float:
 
 
 def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
-                          vids: dict, cfg: CueConfig, sink: Sink, grid: OffsetGrid = OffsetGrid()) -> dict:
+                          vids: dict, cfg: CueConfig, notes: list[Note], grid: OffsetGrid = OffsetGrid()) -> dict:
     """{camera: transfer.ThreeViewCheck} for every sure camera: the other sure cameras' track
     pairs triangulated at their joint offsets and projected into it at its own. Wrong cameras can
     make the joint vote sure of wrong offsets, consistent in every triangle, since a line through
@@ -320,17 +319,15 @@ def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: di
                                    g.three_view_min_supporters, g.three_view_min_share_of_best, grid,
                                    joint.origin)
         checks[c] = chk
-        sink.three_view_landscape(c, chk.landscape.offsets_s, chk.landscape.supporters, chk.joint_offset_s,
-                                  chk.passed)
         msg = f"{c}: {chk.reason}"
-        sink.stage_event("cues", msg, camera=c, passed=int(chk.passed), supporters=chk.supporters,
-                         best_supporters=chk.best_supporters, trajectories=chk.trajectories)
+        say(notes, msg, camera=c, passed=int(chk.passed), supporters=chk.supporters,
+            best_supporters=chk.best_supporters, trajectories=chk.trajectories)
         log.info(msg)
     return checks
 
 
 def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
-                         vids: dict, cfg: CueConfig, sink: Sink, skip: frozenset[str] = frozenset(),
+                         vids: dict, cfg: CueConfig, notes: list[Note], skip: frozenset[str] = frozenset(),
                          grid: OffsetGrid = OffsetGrid()):
     """({camera: transfer.TransferCheck}, the transfer.Trajectories projected): a check of every
     camera the joint vote is unsure of (but those of skip), the sure cameras' track pairs
@@ -352,16 +349,14 @@ def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dic
         chk = confirm_offset(c, joint.offsets_s[c], land, info.frame_interval_s,
                              g.transfer_agree_frames, g.transfer_min_z, g.transfer_min_supporters)
         checks[c] = chk
-        sink.transfer_landscape(c, land.offsets_s, land.share, chk.joint_offset_s, land.offset_s,
-                                chk.confirmed)
         msg = f"{c}: {chk.reason}"
-        sink.stage_event("cues", msg, camera=c, confirmed=int(chk.confirmed), z=round(land.z, 2),
-                         trajectories=traj.num_trajectories)
+        say(notes, msg, camera=c, confirmed=int(chk.confirmed), z=round(land.z, 2),
+            trajectories=traj.num_trajectories)
         log.info(msg)
     return checks, traj
 
 
-def _add_transfer_pairs(pairs: dict, checks: dict, traj, order: list[str], sink: Sink) -> tuple[dict, dict]:
+def _add_transfer_pairs(pairs: dict, checks: dict, traj, order: list[str], notes: list[Note]) -> tuple[dict, dict]:
     """(pairs plus, for every camera that point transfer confirmed, its tracks that follow a
     trajectory (of traj, transfer.Trajectories) paired with both tracks the trajectory was
     triangulated from, {(a, b): track pairs added}); order: the videos' order (a pair's key
@@ -383,8 +378,8 @@ def _add_transfer_pairs(pairs: dict, checks: dict, traj, order: list[str], sink:
             # no chosen_at_offset_s: the new rows follow trajectories at the transfer's offset
             out[key], n_new = _merge_pairs(out[key], np.unique(np.array(rows, np.int64), axis=0))
             added[key] = int(n_new)
-            sink.stage_event("cues", f"{key[0]}__{key[1]}: {n_new} track pairs from point transfer",
-                             pair=f"{key[0]}__{key[1]}", transfer_new=int(n_new))
+            say(notes, f"{key[0]}__{key[1]}: {n_new} track pairs from point transfer",
+                pair=f"{key[0]}__{key[1]}", transfer_new=int(n_new))
     return out, added
 
 
@@ -430,10 +425,10 @@ class _JointChecks:
 
 
 def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cameras: dict,
-                     tracks: dict, vids: dict, cfg: CueConfig, sink: Sink,
-                     said: _JointChecks = _JointChecks()) -> tuple[dict, dict, dict, JointVoteRecord]:
+                     tracks: dict, vids: dict, cfg: CueConfig, notes: list[Note],
+                     said: _JointChecks = _JointChecks()) -> tuple[dict, dict, dict, JointVoteRecord, dict]:
     """(pairs, {(a, b): the joint Δ_ab whose supporters were added}, {(a, b): PairVoteSummary},
-    the JointVoteRecord): the supporters of the jointly chosen offsets
+    the JointVoteRecord, {(a, b): that Δ_ab or None for every pair}): the supporters of the jointly chosen offsets
     (geometric_pairs.joint_offsets) for every pair whose Δ is trusted (_joint_pair_used: both
     cameras' offsets won by at least joint_min_margin, or point transfer confirmed them, and
     joint_min_sure cameras are sure; sure: camera -> whether it is, said: what the checks after
@@ -459,7 +454,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                f"their offsets, but the points the other sure cameras triangulate are not seen there "
                f"(supporters {seen}; a camera needs {cfg.geometric.three_view_min_supporters}, and "
                f"{cfg.geometric.three_view_min_share_of_best:.2g} of those at its best offset)")
-        sink.stage_event("cues", msg)
+        say(notes, msg)
         log.info(msg)
     weak = sorted(n for n, ok in sure.items() if not ok and n not in failed and n not in dissent)
     if weak:
@@ -467,7 +462,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                f"offsets by less than {cfg.geometric.joint_min_margin:g} (margins "
                f"{', '.join(f'{n} {joint.margin[n]:.1f}' for n in weak)})"
                + ("; point transfer did not confirm them" if transfer else ""))
-        sink.stage_event("cues", msg)
+        say(notes, msg)
         log.info(msg)
     # a Δ only when a third camera is sure too (a closed triangle confirms it): with a single
     # sure pair nothing checks it, and Stage 1 accepts the minimum its own supporters make, right
@@ -477,14 +472,14 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
         names = ", ".join(sorted(f"{a}__{b}" for a, b in unconfirmed))
         msg = (f"geometric track pairs not used for {names}: the joint vote is sure of "
                f"{sum(sure.values())} camera(s) only, so no triangle of sure cameras confirms their Δ")
-        sink.stage_event("cues", msg)
+        say(notes, msg)
         log.info(msg)
-    out, summaries = dict(pairs), {}
+    out, summaries, chosen = dict(pairs), {}, {}
     for (a, b), (_, gs) in found.items():
         delta = joint.offsets_s[b] - joint.offsets_s[a]
         both = (a, b) in used
         index = supporters(gs, delta) if both else np.zeros((0, 2), np.int64)
-        _log_votes(sink, a, b, gs, delta if both else None)
+        chosen[(a, b)] = delta if both else None
         desc = pairs[(a, b)]
         n_desc = len(desc.index)
         # an unsure camera's descriptor pairs are filtered too: at a wrong joint Δ few survive
@@ -499,12 +494,12 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
             tuple(gs.peak_votes), geometric_joint_delta_s=round(delta, 4), geometric_joint_votes=votes,
             geometric_joint_margin=(round(joint.margin[a], 2), round(joint.margin[b], 2)),
             descriptor_pairs_kept=int(len(desc.index)), descriptor_pairs_before=int(n_desc))
-        sink.stage_event("cues", f"{a}__{b}: {len(index)} track pairs from epipolar consistency "
-                                 f"(joint vote over all camera pairs: Δ {delta:+.3f} s)",
-                         pair=f"{a}__{b}", votes=votes, informative=gs.informative,
-                         geometric_pairs=int(len(index)), descriptor_pairs_kept=int(len(desc.index)),
-                         descriptor_pairs_before=int(n_desc), margin_a=round(joint.margin[a], 2),
-                         margin_b=round(joint.margin[b], 2))
+        say(notes, f"{a}__{b}: {len(index)} track pairs from epipolar consistency "
+                   f"(joint vote over all camera pairs: Δ {delta:+.3f} s)",
+            pair=f"{a}__{b}", votes=votes, informative=gs.informative,
+            geometric_pairs=int(len(index)), descriptor_pairs_kept=int(len(desc.index)),
+            descriptor_pairs_before=int(n_desc), margin_a=round(joint.margin[a], 2),
+            margin_b=round(joint.margin[b], 2))
         log.info("%s__%s: %d geometric track pairs (%d new) at the joint Δ %+.3f s", a, b,
                  len(index), n_new, delta)
-    return out, used, summaries, record
+    return out, used, summaries, record, chosen

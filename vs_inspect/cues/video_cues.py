@@ -1,5 +1,5 @@
 """Stage 0 of one video on its own: decoding, moving regions, point tracks inside them, keyframe
-features, and the frames camera estimation may need, as an engine task (cues/extract.py runs one
+features, and the frames camera estimation may need, as an engine task (pipeline/stage0.py runs one
 per video and reports what it returns to the sink)."""
 
 from __future__ import annotations
@@ -11,10 +11,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ..analysis.record_views import record_frame, record_mask
 from ..errors import InputError
 from ..geometry.camera_model import scale_points
-from ..record.sink import NullSink, Sink
 from ..types import VideoInfo
 from .config import CueConfig
 from .config import LEARNED_FEATURES
@@ -87,7 +85,9 @@ def _learned_model_possible(cfg) -> bool:
         or aliked_tried_last(cfg.camera)
 
 
-def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) -> VideoCues:
+def _video_cues(src, cfg: CueConfig, need_sfm: bool, timings: dict, shown: dict | None) -> VideoCues:
+    """One video's cues; shown (when not None) gets {frame index: (working-resolution BGR image,
+    (h,w) instance ids)} of cfg.sink_frames frames spread over the video, for the recording."""
     from ..io.video import downscale, iter_frames
 
     info = src.info
@@ -104,8 +104,8 @@ def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) 
             sfm_images[k] = downscale(full, cfg.camera.max_side)
         img = downscale(full, cfg.max_side)
         grey.append(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY))
-        if k in sink_at and sink.options is not None:
-            sink.video_frame(info.name, k, record_frame(img, sink.options))
+        if k in sink_at and shown is not None:
+            shown[k] = img
     frames = np.stack(grey)
     h, w = frames.shape[1:]
     scale = (info.width / w, info.height / h)
@@ -115,9 +115,9 @@ def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) 
     instances, mode, bg = moving_regions(frames, cfg.motion, cfg.camera_motion.get(info.name),
                                              info.frame_interval_s)
     moving_fraction = float((instances > 0).mean())
-    if sink.options is not None:
-        for k in sorted(sink_at):
-            sink.dynamic_mask(info.name, k, record_mask(instances[k], sink.options))
+    if shown is not None:
+        for k in sorted(shown):
+            shown[k] = (shown[k], instances[k].copy())
     timings["motion_s"] = timings.get("motion_s", 0.0) + time.perf_counter() - t0
     log.info("%s: %s camera (background motion %.2f px), moving regions cover %.1f%%",
              info.name, mode, bg, 100 * moving_fraction)
@@ -188,40 +188,24 @@ def registration_images(src, v: VideoCues, cfg: CueConfig, chunk: int = 16):
 
 @dataclass(frozen=True)
 class VideoCuesOutcome:
-    """What one video's Stage 0 task returns: its cues, or why it has none, with the views the
-    recording keeps (the driver hands them to its sink, so tasks need no sink)."""
+    """What one video's Stage 0 task returns: its cues, or why it has none, and the frames the
+    recording shows (the driver hands them to its sink, so tasks need no sink)."""
 
     cues: VideoCues | None  # None when the video could not be read
     error: str | None  # why (None when cues is set)
-    frames: tuple  # ((frame index, (h,w,3) uint8 BGR), ...) as the recording keeps them
-    masks: tuple  # ((frame index, (h,w) instance ids), ...)
+    shown: tuple  # ((frame index, (h,w,3) uint8 BGR working resolution, (h,w) instance ids), ...)
     timings_s: dict  # step -> seconds spent on this video
 
 
-class _Collect(NullSink):
-    """Keeps what _video_cues would show a recording sink, to hand over from a task."""
-
-    def __init__(self, options):
-        self.options = options
-        self.frames: list = []
-        self.masks: list = []
-
-    def video_frame(self, name, frame_index, image_bgr):
-        self.frames.append((frame_index, image_bgr))
-
-    def dynamic_mask(self, name, frame_index, instances):
-        self.masks.append((frame_index, instances))
-
-
 def video_cues_task(task: tuple, src) -> VideoCuesOutcome:
-    """Stage 0 of one video as an engine task. task: (CueConfig, the sink's RecordOptions or None,
-    whether camera-estimation frames are needed); src: its VideoSource (the task opens the file,
-    which must be reachable from the worker)."""
-    cfg, options, need_sfm = task
-    collect, timings = _Collect(options), {}
+    """Stage 0 of one video as an engine task. task: (CueConfig, whether the frames shown are
+    wanted, whether camera-estimation frames are needed); src: its VideoSource (the task opens
+    the file, which must be reachable from the worker)."""
+    cfg, show, need_sfm = task
+    shown, timings = ({} if show else None), {}
     try:
-        cues = _video_cues(src, cfg, collect, need_sfm, timings)
+        cues = _video_cues(src, cfg, need_sfm, timings, shown)
     except InputError as exc:
-        return VideoCuesOutcome(None, str(exc), tuple(collect.frames), tuple(collect.masks), timings)
-    return VideoCuesOutcome(cues, None, tuple(collect.frames), tuple(collect.masks), timings)
-
+        return VideoCuesOutcome(None, str(exc), (), timings)
+    return VideoCuesOutcome(cues, None, tuple((k, img, inst) for k, (img, inst) in sorted((shown or {}).items())),
+                            timings)

@@ -99,37 +99,5 @@ class Sink:
             self.abort()
 
 
-class DeferredSink(Sink):
-    """Holds every report (each hook of Sink but image_frames, close and abort) until replay(),
-    so that of Stage 0's candidate sets of cameras only the one kept reaches the real sink.
-    options are the real sink's, so the same views are computed."""
-
-    def __init__(self, options: RecordOptions | None):
-        self.options = options
-        self._calls: list[tuple[str, tuple, dict]] = []
-
-    def replay(self, sink: Sink) -> None:
-        """Every held report, in order, to sink."""
-        for name, args, kwargs in self._calls:
-            getattr(sink, name)(*args, **kwargs)
-
-
-def _held(name: str):
-    def hold(self: DeferredSink, *args, **kwargs) -> None:
-        self._calls.append((name, args, kwargs))
-
-    hold.__name__ = hold.__qualname__ = name
-    hold.__doc__ = f"Held until replay(): Sink.{name}."
-    return hold
-
-
-# not reports: a query and the end of the recording, which the real sink does itself
-_NOT_HELD = frozenset({"image_frames", "close", "abort"})
-REPORT_HOOKS = tuple(n for n, f in vars(Sink).items()
-                     if callable(f) and not n.startswith("_") and n not in _NOT_HELD)
-for _name in REPORT_HOOKS:
-    setattr(DeferredSink, _name, _held(_name))
-
-
 class NullSink(Sink):
     """Records nothing (the default)."""
