@@ -249,7 +249,7 @@ def test_an_unresolved_videos_pairs_that_share_a_reason_say_it_once():
     video's pairs share is given once, with the pairs named together (the 720p timing scene's
     reasons had repeated one sentence three times each, 840-1065 characters)."""
     from vs_inspect.pipeline.run import _run_result
-    from vs_inspect.pipeline.stage12 import _with_its_pairs
+    from vs_inspect.sync.stage2 import with_its_pairs as _with_its_pairs
     from ..cue_records import cue_stats, withheld
     from vs_inspect.types import SyncResult
 

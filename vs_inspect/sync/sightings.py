@@ -178,3 +178,31 @@ def _decided(a, b, offsets, near, moments, sc, coarse_s, directions, radius) -> 
                             num_pareto_minima=1, at_range_edge=edge, support_fraction=float(top / max(moments[best], 1)))
     return PairLandscape(a, b, offsets, energy, moments, np.array([best]), best_s, 0.0, uncertainty,
                          0, decision, residual=RESIDUAL)
+
+
+def with_sightings(bundle: CueBundle, lands: list[PairLandscape], cfg: SyncConfig) -> list[PairLandscape]:
+    """lands, where a worn camera's sightings (sync/sightings.py) time a pair whose track pairs gave
+    no accepted offset: an accepted sighting landscape takes the pair's place (its reason says
+    what the track pairs gave); a rejected one is kept for a pair that had no landscape, and
+    otherwise adds its reason to the pair's."""
+    out = list(lands)
+    names = bundle.names
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            mine = [k for k, p in enumerate(out) if {p.a, p.b} == {a, b}]
+            if any(out[k].decision.accepted for k in mine):
+                continue
+            land = sighting_pair(bundle, a, b, cfg)
+            if land is None:
+                continue
+            if mine and land.decision.accepted:
+                land = replace(land, decision=replace(
+                    land.decision, reason=f"{land.decision.reason}; its track pairs: {out[mine[0]].decision.reason}"))
+                out[mine[0]] = land
+            elif not mine:
+                out.append(land)
+            else:  # both refused: the pair's reason gives both
+                old = out[mine[0]]
+                out[mine[0]] = replace(old, decision=replace(
+                    old.decision, reason=f"{old.decision.reason}; {land.decision.reason}"))
+    return out
