@@ -610,7 +610,7 @@ def test_sigterm_during_sfm_removes_the_scratch_folder(tmp_path):
         import numpy, sys, time
         from vs_inspect.signals import Terminated, install
         install()  # as vs_inspect.cli.main does
-        import vs_inspect.cues.cameras as c
+        import vs_inspect.cues.cameras.sfm as c
         from vs_inspect import signals
         def slow(*a, **k):
             print("READY", flush=True)

@@ -1,4 +1,4 @@
-"""Stage 0's choice of cameras when none are given (cues/camera_choice.py): the moving points'
+"""Stage 0's choice of cameras when none are given (cues/cameras/choice.py): the moving points'
 cameras fitted once and refused alone in pairs; later camera models tried, kept or not."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from vs_inspect.types import CameraTrack, TrackPairs
 
 from tests.cue_records import joint
 from vs_inspect.cue_stats import CueStats, MovingPointsCameras, SfmRecord
-from vs_inspect.cues.joint_vote import GeometricPairing
+from vs_inspect.cues.pairing.joint import GeometricPairing
 from vs_inspect.cues.records import Note
 
 from .stage0_fakes import K
@@ -29,9 +29,9 @@ def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), m
     (cameras, stats)."""
     from types import SimpleNamespace
 
-    import vs_inspect.cues.pairwise as pairwise_mod
-    from vs_inspect.cues.cameras import CameraEstimate
-    from vs_inspect.cues.camera_choice import _estimate
+    import vs_inspect.cues.cameras.moving_points as pairwise_mod
+    from vs_inspect.cues.cameras.sfm import CameraEstimate
+    from vs_inspect.cues.cameras.choice import _estimate
 
     no_model = "no reconstruction: too few matches"
     est = CameraEstimate({}, dict.fromkeys(names, no_model), None, None, len(names), 0, "sift")
@@ -105,8 +105,8 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
     import dataclasses
     from types import SimpleNamespace
 
-    import vs_inspect.cues.cameras as cameras_mod
-    import vs_inspect.cues.camera_choice as ex
+    import vs_inspect.cues.cameras.sfm as cameras_mod
+    import vs_inspect.cues.cameras.choice as ex
 
     class Models:
         def __init__(self, *args, **kwargs):
@@ -311,8 +311,8 @@ def test_the_record_says_when_sifts_static_images_had_asift_features(monkeypatch
     # every camera moving: no static image had any
     from types import SimpleNamespace
 
-    from vs_inspect.cues.camera_choice import _estimate
-    from vs_inspect.cues.cameras import CameraEstimate
+    from vs_inspect.cues.cameras.choice import _estimate
+    from vs_inspect.cues.cameras.sfm import CameraEstimate
 
     est = CameraEstimate({}, dict.fromkeys("ab", "no reconstruction"), None, None, 2, 0, "sift")
     vids = {n: SimpleNamespace(camera_motion="moving") for n in "ab"}
@@ -354,9 +354,9 @@ def test_the_moving_points_cameras_are_not_fitted_when_they_could_not_replace_a_
     cameras placed, they are fitted (here none come out, so the model is kept)."""
     from types import SimpleNamespace
 
-    import vs_inspect.cues.pairwise as pairwise_mod
-    from vs_inspect.cues.camera_choice import _estimate
-    from vs_inspect.cues.cameras import CameraEstimate, EstimatedCamera
+    import vs_inspect.cues.cameras.moving_points as pairwise_mod
+    from vs_inspect.cues.cameras.choice import _estimate
+    from vs_inspect.cues.cameras.sfm import CameraEstimate, EstimatedCamera
     from vs_inspect.geometry.camera_model import Lens
 
     lens = Lens("SIMPLE_RADIAL", (500.0, 320.0, 240.0, 0.0), 640, 480, 1.0)

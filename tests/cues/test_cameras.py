@@ -19,10 +19,10 @@ import cv2
 import numpy as np
 import pytest
 
-from vs_inspect.cues import cameras
-from vs_inspect.cues.cameras import estimate_cameras, unturn_points
+from vs_inspect.cues.cameras import sfm as cameras
+from vs_inspect.cues.cameras.sfm import estimate_cameras, unturn_points
 from vs_inspect.cues.config import CameraConfig
-from vs_inspect.cues.learned import lightglue_available, xfeat_available
+from vs_inspect.cues.features.learned import lightglue_available, xfeat_available
 from vs_inspect.signals import import_pycolmap
 
 from .scenes import texture
@@ -176,7 +176,7 @@ def test_static_images_get_asift_features_and_moving_ones_colmaps(tmp_path):
     """CameraConfig.asift_per_view: a static video's images hold ASIFT's features (within their
     masks, COLMAP's pixel centres), the same with one OpenCV thread or two; a moving video's
     COLMAP's own SIFT, as without ASIFT."""
-    from vs_inspect.cues.registration import affine_sift
+    from vs_inspect.cues.cameras.registration import affine_sift
 
     _write_images(tmp_path / "images", tmp_path / "masks")
     moving = {"v0": True, "v1": False}
@@ -207,7 +207,7 @@ def test_static_images_get_asift_features_and_moving_ones_colmaps(tmp_path):
 def test_lens_undistorts_as_the_tracks_were():
     """result.json's cues.sfm.lens (plain data) with the camera's K undistorts image points exactly
     as the estimated camera undistorted the tracks, and the lens is not a no-op."""
-    from vs_inspect.cues.cameras import EstimatedCamera, undistort_with_colmap
+    from vs_inspect.cues.cameras.sfm import EstimatedCamera, undistort_with_colmap
     from vs_inspect.geometry.camera_model import Lens
     from vs_inspect.types import CameraTrack
     K = np.array([[600.0, 0, 639.5], [0, 600.0, 359.5], [0, 0, 1]])

@@ -6,20 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vs_inspect.cues.geometric_pairs import (
-    GeometricPairStats,
-    JointChoice,
-    consistent_at,
-    consistent_peaks,
-    disputed_by_other_model,
-    dissenting_cameras,
-    epipolar_extent,
-    geometric_pairs,
-    joint_offsets,
-    joint_vote_share,
-    rival_offsets,
-    supporters,
-)
+from vs_inspect.cues.pairing.votes import (GeometricPairStats, JointChoice, consistent_at, consistent_peaks, disputed_by_other_model, dissenting_cameras, epipolar_extent, geometric_pairs, joint_offsets, joint_vote_share, rival_offsets, supporters)
 from vs_inspect.geometry.epipolar import fundamental_from_cameras, look_at, project
 from vs_inspect.geometry.offsets import OffsetGrid
 from vs_inspect.types import CameraTrack, VideoInfo
@@ -427,7 +414,7 @@ def _one_candidate(y_a: np.ndarray, y_b: np.ndarray, min_share: float):
     """_consistency on one track pair under epipolar lines y_a = y_b (two cameras side by side),
     at three offsets: a's frame q - 1, q, q + 1 for b's frame q (-1 where a has no frame).
     Returns (number of consistent offsets, best offset index)."""
-    from vs_inspect.cues.geometric_pairs import _consistency
+    from vs_inspect.cues.pairing.votes import _consistency
 
     Ta, Tb = len(y_a), len(y_b)
     xa = np.stack([np.full(Ta, 100.0), y_a], 1)[None]  # (1,Ta,2)

@@ -1,4 +1,4 @@
-"""Guided SIFT matching (cues/guided.py): the geometry decides which keypoints may match, so a
+"""Guided SIFT matching (cues/features/guided.py): the geometry decides which keypoints may match, so a
 match that the plain ratio test loses to a look-alike elsewhere in the image is kept, and a
 look-alike off the epipolar line (or off the homography) is not matched; on a real COLMAP
 database it finds the matches of COLMAP's own guided matching."""
@@ -10,8 +10,8 @@ import shutil
 import numpy as np
 import pytest
 
-from vs_inspect.cues import cameras
-from vs_inspect.cues.guided import guided_matches
+from vs_inspect.cues.cameras import sfm as cameras
+from vs_inspect.cues.features.guided import guided_matches
 from vs_inspect.signals import import_pycolmap
 
 from .test_cameras import _write_images
@@ -131,7 +131,7 @@ def test_best_two_is_the_full_matrix_answer(homography):
     """The fit test runs over all of b's keypoints, then only the fits are visited, eight flags
     at a time: every fit is found, in order (the first of equal distances is the nearest), up to
     the last keypoint of a count that is not a multiple of eight, and no padding is read."""
-    from vs_inspect.cues.guided import _best_two
+    from vs_inspect.cues.features.guided import _best_two
 
     rng = np.random.default_rng(4)
     xy_a, xy_b, F = _two_views(rng, 203)

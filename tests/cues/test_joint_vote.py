@@ -1,4 +1,4 @@
-"""Stage 0's joint vote on one set of cameras (cues/joint_vote.py): two moving cameras' pairs need a
+"""Stage 0's joint vote on one set of cameras (cues/pairing/joint.py): two moving cameras' pairs need a
 triangle of sure cameras, sure cameras are checked in three views, cameras fitted to the moving
 points are checked against their own votes."""
 
@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 
 from vs_inspect.cues.config import CueConfig, GeometricPairConfig
-from vs_inspect.cues.geometric_pairs import GeometricPairStats, JointChoice
-from vs_inspect.cues.joint_vote import _add_joint_pairs
+from vs_inspect.cues.pairing.votes import GeometricPairStats, JointChoice
+from vs_inspect.cues.pairing.joint import _add_joint_pairs
 from vs_inspect.geometry.epipolar import look_at
 from vs_inspect.cue_stats import CueStats, PairCueStats, to_json
 from vs_inspect.types import CameraTrack, TrackPairs
@@ -79,8 +79,8 @@ def test_with_the_rule_before_two_moving_cameras_still_need_a_third():
 def test_transfer_matches_join_both_source_pairs_in_video_order():
     """A confirmed camera's tracks that follow a trajectory are paired with both tracks the
     trajectory came from, in each pair's key order (the camera first or second)."""
-    from vs_inspect.cues.joint_vote import _add_transfer_pairs
-    from vs_inspect.cues.transfer import TransferCheck, TransferLandscape, Trajectories
+    from vs_inspect.cues.pairing.joint import _add_transfer_pairs
+    from vs_inspect.cues.pairing.transfer import TransferCheck, TransferLandscape, Trajectories
 
     # trajectories 0 and 1 from pair (a, c): tracks a3-c5 and a4-c6; the checked camera is b
     traj = Trajectories(np.zeros((2, 3)), np.zeros(2), np.array([0, 1]),
@@ -106,9 +106,9 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
     stay (alone, unchecked descriptor pairs put cameras 88-1456 ms off, accepted)."""
     from types import SimpleNamespace
 
-    import vs_inspect.cues.geometric_pairs as gp
+    import vs_inspect.cues.pairing.votes as gp
     from vs_inspect.cues.config import GeometricPairConfig
-    from vs_inspect.cues.joint_vote import add_geometric_pairs
+    from vs_inspect.cues.pairing.joint import add_geometric_pairs
     from vs_inspect.types import Tracks
 
     from .test_transfer import _scene
@@ -157,8 +157,8 @@ def _sure_of_all(monkeypatch, offsets: dict[str, float], estimated: bool = True,
     camera model's vote peaks): (pairs, stats, stage events, the scene's rows of each point)."""
     from types import SimpleNamespace
 
-    import vs_inspect.cues.geometric_pairs as gp
-    from vs_inspect.cues.joint_vote import add_geometric_pairs
+    import vs_inspect.cues.pairing.votes as gp
+    from vs_inspect.cues.pairing.joint import add_geometric_pairs
     from vs_inspect.types import Tracks
 
     from .test_transfer import _scene
@@ -203,7 +203,7 @@ def test_sure_cameras_refuted_in_three_views_get_no_pairs(monkeypatch):
 def test_a_sure_camera_with_a_rival_offset_says_how_far_apart_the_two_offsets_lie(monkeypatch):
     """The rival-offset rule's refusal (geometric_pairs.rival_offsets, replaced here) reaches the
     record with its few words: how far the three-view check's best offset lies from the joint one."""
-    import vs_inspect.cues.geometric_pairs as gp
+    import vs_inspect.cues.pairing.votes as gp
 
     seen = {}
 
@@ -261,7 +261,7 @@ def _videos(names, fps: float = 30.0) -> dict:
 
 
 def test_cameras_from_moving_points_whose_votes_agree_are_kept():
-    from vs_inspect.cues.joint_vote import check_fitted_offsets
+    from vs_inspect.cues.pairing.joint import check_fitted_offsets
 
     # voted Δ within a frame of the fitted ones (caliscope's case)
     voted = {("r", "u"): 0.52, ("r", "v"): -1.03, ("u", "v"): -1.5}
@@ -271,7 +271,7 @@ def test_cameras_from_moving_points_whose_votes_agree_are_kept():
 
 
 def test_cameras_from_moving_points_contradicted_by_their_votes_are_all_refused():
-    from vs_inspect.cues.joint_vote import check_fitted_offsets
+    from vs_inspect.cues.pairing.joint import check_fitted_offsets
 
     # rendered seed 0 with SIFT: fitted at seconds away from where their own votes peak
     voted = {("u", "r"): 0.458, ("u", "v"): -0.133, ("r", "v"): 0.345}
@@ -285,7 +285,7 @@ def test_cameras_from_moving_points_contradicted_by_their_votes_are_all_refused(
 
 
 def test_camera_from_moving_points_without_an_agreeing_vote_is_refused_alone():
-    from vs_inspect.cues.joint_vote import check_fitted_offsets
+    from vs_inspect.cues.pairing.joint import check_fitted_offsets
 
     refused, check = check_fitted_offsets({"r": 0.0, "u": 0.5, "v": -1.0}, {("r", "u"): 0.5}, _videos("ruv"))
     assert list(refused) == ["v"] and "confirmed" in refused["v"]
@@ -301,8 +301,8 @@ def _lone_pair(monkeypatch, moving_b: bool, **geometric):
     pairs. Returns (pairs, stats, stage events)."""
     from types import SimpleNamespace
 
-    import vs_inspect.cues.geometric_pairs as gp
-    from vs_inspect.cues.joint_vote import add_geometric_pairs
+    import vs_inspect.cues.pairing.votes as gp
+    from vs_inspect.cues.pairing.joint import add_geometric_pairs
 
     static = CameraTrack(K, look_at([0.0, 6.0, 2.5], [0, 0, 1]))
     moving = CameraTrack(K, np.stack([look_at([6.0, 0.01 * t, 1.5], [0, 0, 1]) for t in range(50)]))

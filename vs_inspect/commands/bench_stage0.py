@@ -8,7 +8,7 @@ from pathlib import Path
 from ..bench.arcs import DEFAULT_SET, SCENE_SETS
 from ..cues import CueConfig, MatchConfig
 from ..cues.config import CAMERA_FEATURES, CameraConfig, TrackConfig
-from ..cues.learned import MATCHERS
+from ..cues.features.learned import MATCHERS
 from .bench import _default_data
 
 WHAT = ("caliscope", "visualsync", "speed", "rendered", "arcs")

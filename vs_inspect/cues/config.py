@@ -7,7 +7,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from ..errors import check_fields
-# learned features by name (cues/learned.py runs them with the weights their packages ship)
+# learned features by name (cues/features/learned.py runs them with the weights their packages ship)
 LIGHTGLUE_FEATURES = ("aliked", "disk")  # each matched by its LightGlue
 LEARNED_FEATURES = ("xfeat",) + LIGHTGLUE_FEATURES
 MATCHERS = ("mnn", "lighterglue")  # XFeat: mutual nearest neighbours or LighterGlue

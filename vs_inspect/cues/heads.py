@@ -17,7 +17,7 @@ from ..cue_stats import HeadsRecord
 from ..errors import InputError
 from ..types import VideoInfo
 from .config import CueConfig
-from .video_cues import VideoCues, frame_step, to_full_px
+from .video.extract import VideoCues, frame_step, to_full_px
 
 log = logging.getLogger(__name__)
 

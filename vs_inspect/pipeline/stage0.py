@@ -67,7 +67,7 @@ def open_sources(paths: Sequence[PathLike], fps: float | None
 
 def check_cue_config(cfg: CueConfig) -> None:
     """Settings that need an optional package fail before any decoding."""
-    from ..cues.cameras import camera_features_unavailable
+    from ..cues.cameras.sfm import camera_features_unavailable
 
     if why := camera_features_unavailable(cfg.camera.features):
         raise InputError(f"--sfm-features {cfg.camera.features}: {why}")
@@ -184,10 +184,10 @@ def _stage0(sources, calibration: dict | None, cfg: CueConfig, sink: Sink, progr
 
 def _video_cues(sources, cfg: CueConfig, sink: Sink, engine: Engine, progress: bool, need_sfm: bool,
                 timings: dict[str, float], dropped: dict[str, str]) -> tuple[dict, dict[str, VideoCueStats]]:
-    """Step 2: ({name: cues.video_cues.VideoCues} of the videos read, {name: their counts}); a
+    """Step 2: ({name: cues.video.extract.VideoCues} of the videos read, {name: their counts}); a
     video that could not be read goes to dropped."""
     from ..analysis.record_views import record_frame, record_mask
-    from ..cues.video_cues import VideoCuesOutcome, video_cues_task
+    from ..cues.video.extract import VideoCuesOutcome, video_cues_task
 
     vids, videos = {}, {}
     t0 = time.perf_counter()
@@ -232,8 +232,8 @@ def _video_cues(sources, cfg: CueConfig, sink: Sink, engine: Engine, progress: b
 
 def _descriptor_pairs(names: list[str], vids: dict, cfg: CueConfig, sink: Sink, progress: bool
                       ) -> tuple[dict[tuple[str, str], TrackPairs], dict]:
-    """Step 3: ({(a, b): TrackPairs}, {(a, b): cues.matching.PairStats}) of every two videos read."""
-    from ..cues.matching import match_tracks
+    """Step 3: ({(a, b): TrackPairs}, {(a, b): cues.pairing.descriptors.PairStats}) of every two videos read."""
+    from ..cues.pairing.descriptors import match_tracks
 
     pairs, matched = {}, {}
     for a, b in tqdm(list(itertools.combinations(names, 2)), desc="cross-view pairs", unit="pair",
@@ -249,9 +249,9 @@ def _descriptor_pairs(names: list[str], vids: dict, cfg: CueConfig, sink: Sink, 
 
 def _cameras(sources, vids: dict, all_pairs: dict, calibration: dict | None, cfg: CueConfig, progress: bool,
              grid: OffsetGrid):
-    """Step 4: the kept cues.camera_choice.CameraSet, its pairs and records."""
-    from ..cues.camera_choice import calibrated_cameras, estimated_cameras, vote_on_cameras
-    from ..cues.video_cues import registration_images
+    """Step 4: the kept cues.cameras.choice.CameraSet, its pairs and records."""
+    from ..cues.cameras.choice import calibrated_cameras, estimated_cameras, vote_on_cameras
+    from ..cues.video.extract import registration_images
 
     if calibration is not None:
         return vote_on_cameras(calibrated_cameras(calibration, vids), vids, all_pairs, cfg, progress,
@@ -264,7 +264,7 @@ def _cameras(sources, vids: dict, all_pairs: dict, calibration: dict | None, cfg
 
 def _report_cameras(sink: Sink, kept) -> None:
     """The kept camera set's notes, and its pairing's checks and votes, to the sink."""
-    from ..cues.geometric_pairs import vote_z
+    from ..cues.pairing.votes import vote_z
 
     for note in kept.notes:
         sink.stage_event(note.stage, note.message, **note.numbers)

@@ -25,11 +25,10 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
-from ..geometry.offsets import OffsetGrid, span_of
-from ..geometry.two_view import (essential_from_fundamental, focal_from_fundamental, fundamental_ransac,
-                                 normalized_points, pose_from_essential, signed_sampson_px)
-from ..types import CameraTrack, TrackPairs, VideoInfo
+from ...geometry.epipolar import epipolar_residual, fundamental_from_cameras
+from ...geometry.offsets import OffsetGrid, span_of
+from ...geometry.two_view import (essential_from_fundamental, focal_from_fundamental, fundamental_ransac, normalized_points, pose_from_essential, signed_sampson_px)
+from ...types import CameraTrack, TrackPairs, VideoInfo
 
 log = logging.getLogger(__name__)
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from .config import TrackConfig
+from ..config import TrackConfig
 
 
 def track_points(frames: np.ndarray, instances: np.ndarray, cfg: TrackConfig = TrackConfig(),

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .config import LIGHTGLUE_FEATURES, MATCHERS
+from ..config import LIGHTGLUE_FEATURES, MATCHERS
 from .nearest_neighbours import match_descriptors
 
 

@@ -17,10 +17,10 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
 
-from ..types import TrackPairs
-from .config import MatchConfig
-from .config import LIGHTGLUE_FEATURES
-from .nearest_neighbours import match_descriptors
+from ...types import TrackPairs
+from ..config import MatchConfig
+from ..config import LIGHTGLUE_FEATURES
+from ..features.nearest_neighbours import match_descriptors
 
 log = logging.getLogger(__name__)
 
@@ -95,7 +95,7 @@ def sift_detector(cfg: MatchConfig):
 
 def _xfeat_detector(cfg: MatchConfig):
     """(gray image, mask or None) -> (M,2) px, (M,64) XFeat descriptors (unit length)."""
-    from .learned import XFeatMatcher, learned_unavailable
+    from ..features.learned import XFeatMatcher, learned_unavailable
 
     if why := learned_unavailable("xfeat"):
         raise ValueError(f"keyframe descriptor 'xfeat': {why}")
@@ -112,14 +112,14 @@ def _xfeat_detector(cfg: MatchConfig):
 @functools.lru_cache(maxsize=2)
 def _lightglue(kind: str, top_k: int):
     """One loaded ALIKED/DISK + LightGlue per kind (loading takes seconds; every video pair shares it)."""
-    from .learned import LightGlueMatcher
+    from ..features.learned import LightGlueMatcher
 
     return LightGlueMatcher(kind, top_k=top_k)
 
 
 def _lightglue_detector(cfg: MatchConfig):
     """(gray image, mask or None) -> (M,2) px, (M,128) ALIKED or DISK descriptors (unit length)."""
-    from .learned import lightglue_unavailable
+    from ..features.learned import lightglue_unavailable
 
     if why := lightglue_unavailable(cfg.descriptor):
         raise ValueError(f"keyframe descriptor {cfg.descriptor!r}: {why}")
@@ -137,7 +137,7 @@ def _keyframe_matcher(cfg: MatchConfig, fa: KeyframeFeatures, fb: KeyframeFeatur
     aliked/disk, else nearest neighbours with the ratio test (and mutual check)."""
     if cfg.descriptor not in LIGHTGLUE_FEATURES:  # those are matched by their LightGlue
         return lambda sa, sb: match_descriptors(fa.desc[sa], fb.desc[sb], cfg.ratio, cfg.mutual)
-    from .learned import Features
+    from ..features.learned import Features
 
     net = _lightglue(cfg.descriptor, 4 * cfg.max_features)
     return lambda sa, sb: net.match(Features(fa.xy[sa], fa.desc[sa], fa.image_size),

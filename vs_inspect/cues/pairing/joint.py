@@ -3,7 +3,7 @@
 For every pair of cameras, geometric_pairs votes for the offsets at which track pairs stay on
 their epipolar lines. Here those votes become decisions: the offsets of all cameras chosen
 together (or the peaks that close every triangle), which cameras are sure of theirs (their own
-pairs, the three-view checks of cues/transfer.py and another camera model's peaks agree), the
+pairs, the three-view checks of cues/pairing/transfer.py and another camera model's peaks agree), the
 supporters of the trusted offsets added to the descriptor pairs; and which cameras fitted to
 the moving points their own votes refuse (check_fitted_offsets; camera_choice takes them out).
 The pairing's decisions come back as notes in words (the Stage 0 controller reports them). No I/O.
@@ -18,11 +18,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from tqdm import tqdm
 
-from ..cue_stats import FittedOffsetCheck, FittedOffsetPair, JointVoteRecord, PairVoteSummary
-from ..geometry.offsets import OffsetGrid
-from ..types import TrackPairs, VideoInfo
-from .config import CueConfig
-from .records import Note, say
+from ...cue_stats import FittedOffsetCheck, FittedOffsetPair, JointVoteRecord, PairVoteSummary
+from ...geometry.offsets import OffsetGrid
+from ...types import TrackPairs, VideoInfo
+from ..config import CueConfig
+from ..records import Note, say
 
 # The vote's decisions are logged at INFO (`-v`): the recording and result.json hold them in full,
 # and the console ends with one plain reason per unresolved video.
@@ -68,7 +68,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     accepts the pair only if its descriptor pairs alone give the same minimum); with a moving
     camera, none (GeometricPairConfig.unchecked_moving).
     """
-    from .geometric_pairs import consistent_peaks, geometric_pairs, joint_offsets
+    from .votes import consistent_peaks, geometric_pairs, joint_offsets
 
     # every pair of cameras: a moving one with its per-frame poses (two moving ones: the
     # geometry per frame of b and per offset)
@@ -94,7 +94,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     dissent, dissent_short = {}, {}  # camera -> why it was made unsure; the same in a few words
     # three_view is only filled for estimated cameras (a calibration's are given)
     if three_view and cfg.geometric.three_view_rival_frames > 0:
-        from .geometric_pairs import rival_offsets
+        from .votes import rival_offsets
 
         best = {n: (chk.best_offset_s, chk.best_supporters, chk.supporters) for n, chk in three_view.items()
                 if chk.best_offset_s is not None}
@@ -107,14 +107,14 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     # this refuses first could leave another too few trajectories); estimated cameras only: with a
     # calibration a right pair can keep a small share of its top peak's votes
     if cfg.geometric.joint_min_pair_share > 0 and estimated and joint is not None:
-        from .geometric_pairs import dissenting_cameras
+        from .votes import dissenting_cameras
 
         dissenting = dissenting_cameras(votes, joint, sure, cfg.geometric.joint_min_pair_share)
         _not_sure(dissenting, sure, dissent, notes, dissent_short,
                   {n: "a pair of its own has few votes at its joint offset" for n in dissenting})
     overruled = {}  # camera -> why the other model's dispute of it was overruled
     if other_peaks is not None and estimated and joint is not None:
-        from .geometric_pairs import disputed_by_other_model
+        from .votes import disputed_by_other_model
 
         shares = {n: chk.supporters / chk.best_supporters for n, chk in three_view.items() if chk.best_supporters}
         disputed, overruled = disputed_by_other_model(joint, sure, other_peaks,
@@ -282,7 +282,7 @@ def _joint_pair_used(a: str, b: str, sure: dict[str, bool], cameras: dict, min_s
 def _sure_pairs(found: dict, joint, sure: dict[str, bool], cameras: dict) -> dict:
     """The supporters of the joint Δ of every pair that point transfer may triangulate
     (_transfer_source)."""
-    from .geometric_pairs import supporters
+    from .votes import supporters
 
     out = {}
     for (a, b), (_, gs) in found.items():
@@ -332,7 +332,7 @@ def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dic
     """({camera: transfer.TransferCheck}, the transfer.Trajectories projected): a check of every
     camera the joint vote is unsure of (but those of skip), the sure cameras' track pairs
     triangulated at their joint offsets and projected into it over its candidate offsets
-    (cues/transfer.py)."""
+    (cues/pairing/transfer.py)."""
     from .transfer import candidate_offsets, confirm_offset, transfer_landscape, triangulate_pairs
 
     g = cfg.geometric
@@ -387,7 +387,7 @@ def _consistent_descriptor_pairs(desc: TrackPairs, delta_s: float, cameras: dict
                                  vids: dict, cfg: CueConfig) -> TrackPairs:
     """The descriptor pairs of (desc.a, desc.b) that are epipolar-consistent at Δ = delta_s
     (geometric_pairs.consistent_at with the geometric pairs' tolerances)."""
-    from .geometric_pairs import consistent_at
+    from .votes import consistent_at
 
     if not len(desc.index):
         return desc
@@ -436,7 +436,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
     is epipolar-consistent at the joint Δ (with joint_filter_descriptor): the descriptor pairs are
     mostly wrong on small moving objects (BENCHMARKS.md), and the joint Δ is the best evidence
     there is of the moment they share."""
-    from .geometric_pairs import supporters, votes_at
+    from .votes import supporters, votes_at
 
     # the pairs whose joint Δ is trusted, and that Δ: the one decision everything below reads
     used = {(a, b): joint.offsets_s[b] - joint.offsets_s[a] for a, b in found

@@ -31,12 +31,12 @@ import numba as nb
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
-from ..geometry.offsets import OffsetGrid, span_of
-from ..geometry.sampling import camera_at_frames, camera_between_frames, tracks_between_frames
-from ..geometry.timing import frame_brackets
-from ..types import CameraTrack, TrackPairs, VideoInfo
-from .config import GeometricPairConfig
+from ...geometry.epipolar import epipolar_residual, fundamental_from_cameras
+from ...geometry.offsets import OffsetGrid, span_of
+from ...geometry.sampling import camera_at_frames, camera_between_frames, tracks_between_frames
+from ...geometry.timing import frame_brackets
+from ...types import CameraTrack, TrackPairs, VideoInfo
+from ..config import GeometricPairConfig
 
 
 @dataclass(frozen=True)

@@ -1,8 +1,8 @@
 """Stage 0's cameras when none are given: which estimate's cameras the videos get.
 
-pycolmap's models (cues/cameras.py: SIFT's, then XFeat's and ALIKED's when the first leaves a
-video untrusted) and the moving points' own cameras (cues/pairwise.py) are each voted on
-(cues/joint_vote.py); the set whose joint vote trusts the most videos is kept, and every
+pycolmap's models (cues/cameras/sfm.py: SIFT's, then XFeat's and ALIKED's when the first leaves a
+video untrusted) and the moving points' own cameras (cues/cameras/moving_points.py) are each voted on
+(cues/pairing/joint.py); the set whose joint vote trusts the most videos is kept, and every
 video's reason says what each model made of it. No I/O beyond the models' own scratch folders.
 """
 
@@ -17,15 +17,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..cue_stats import (ImagePairMatches, JointCoarseOffsets, JointFit, ModelTried,
-                         MovingPointsCameras, MovingPointsPair, SfmRecord, from_json, refusal_texts)
-from ..errors import InputError
-from ..geometry.offsets import OffsetGrid
-from ..types import FROM_MOVING_POINTS, CameraTrack, Tracks, first_clause
-from .config import CueConfig
-from .records import Note, say_cameras
-from .joint_vote import GeometricPairing, add_geometric_pairs, check_fitted_offsets
-from .video_cues import VideoCues
+from ...cue_stats import (ImagePairMatches, JointCoarseOffsets, JointFit, ModelTried, MovingPointsCameras, MovingPointsPair, SfmRecord, from_json, refusal_texts)
+from ...errors import InputError
+from ...geometry.offsets import OffsetGrid
+from ...types import FROM_MOVING_POINTS, CameraTrack, Tracks, first_clause
+from ..config import CueConfig
+from ..records import Note, say_cameras
+from ..pairing.joint import GeometricPairing, add_geometric_pairs, check_fitted_offsets
+from ..video.extract import VideoCues
 
 log = logging.getLogger(__name__)
 
@@ -73,7 +72,7 @@ def calibrated_cameras(calibration: dict, vids: dict[str, VideoCues]) -> CameraS
     """The cameras of an imported calibration (name -> CameraCalibration) fitted to each video,
     the tracks undistorted with their lenses; a video the calibration cannot serve is dropped
     with the reason."""
-    from ..io.calibration import fit_to_video, to_camera_track, undistort_points
+    from ...io.calibration import fit_to_video, to_camera_track, undistort_points
 
     cams, tracks, dropped, undistort = {}, {}, {}, {}
     for name, v in vids.items():
@@ -149,7 +148,7 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
     (CameraModels.third), held to the first set's peaks too, and kept only when it trusts more videos.
     The kept set's sfm record holds every tried set's counts (models).
     grid: the limits of every offset Stage 0 searches (the moving points' cameras' and the votes')."""
-    from .cameras import CameraModels
+    from .sfm import CameraModels
 
     frames = {n: v.sfm_frames for n, v in vids.items() if v.sfm_frames is not None}
     sizes = {n: (v.info.width, v.info.height) for n, v in vids.items()}
@@ -297,8 +296,8 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict, est,
     may then be fewer). memo: kept between calls on the same videos and pairs, so that the moving
     points' cameras, which do not depend on est, are fitted once. as_built: est's cameras even
     when weak (the moving points' are not fitted nor compared)."""
-    from .cameras import undistort_with_colmap
-    from .pairwise import cameras_from_tracks, epipolar_fit_px
+    from .sfm import undistort_with_colmap
+    from .moving_points import cameras_from_tracks, epipolar_fit_px
 
     static = [n for n, v in vids.items() if v.camera_motion != "moving"]
     regs = {n: c.frame_registration for n, c in est.cameras.items() if c.frame_registration is not None}

@@ -1,6 +1,6 @@
 """Per-frame poses of a moving camera: every frame registered against the scene's reconstruction.
 
-The reconstruction (cues/cameras.py) holds a few dozen frames of each moving video. Between them
+The reconstruction (cues/cameras/sfm.py) holds a few dozen frames of each moving video. Between them
 a head-worn or hand-held camera turns and walks, and a pose slerped over 3 frames at 10 fps is
 off by degrees: the epipolar lines of the moving points, which pairing and the energy read at
 every frame, move with it. So each frame of a moving video is registered on its own: its
@@ -26,8 +26,8 @@ import cv2
 import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
 from tqdm import tqdm
 
-from ..geometry.camera_model import scale_points
-from ..signals import import_pycolmap
+from ...geometry.camera_model import scale_points
+from ...signals import import_pycolmap
 
 
 @dataclass(frozen=True)
@@ -199,7 +199,7 @@ def ratio_matches(ratio: float = 0.8) -> Match:
 def cosine_matches(min_cossim: float = 0.82) -> Match:
     """A learned model's matching: mutual nearest neighbours of unit descriptors above a cosine
     similarity (learned.mutual_cosine_matches); cost = -cosine."""
-    from .learned import mutual_cosine_matches
+    from ..features.learned import mutual_cosine_matches
 
     def match(q: np.ndarray, kf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         m, cos = mutual_cosine_matches(q, kf, min_cossim)

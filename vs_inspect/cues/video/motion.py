@@ -10,7 +10,7 @@ import logging
 import cv2
 import numpy as np
 
-from .config import MotionConfig
+from ..config import MotionConfig
 
 log = logging.getLogger(__name__)
 

@@ -21,13 +21,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..cue_stats import ThreeViewSummary, TransferSummary
-from ..geometry.epipolar import project
-from ..geometry.offsets import OffsetGrid, span_of
-from ..geometry.sampling import camera_at_frames
-from ..geometry.timing import frame_brackets
-from ..geometry.triangulate import triangulate_over_time
-from ..types import CameraTrack, TrackPairs, VideoInfo
+from ...cue_stats import ThreeViewSummary, TransferSummary
+from ...geometry.epipolar import project
+from ...geometry.offsets import OffsetGrid, span_of
+from ...geometry.sampling import camera_at_frames
+from ...geometry.timing import frame_brackets
+from ...geometry.triangulate import triangulate_over_time
+from ...types import CameraTrack, TrackPairs, VideoInfo
 
 _BLOCK_ELEMENTS = 4_000_000  # (offset, sample) brackets held at once
 MIN_OVERLAP_SHARE = 0.25  # offsets with less overlap than this share of the largest are not candidates

@@ -11,12 +11,12 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ..errors import InputError
-from ..geometry.camera_model import scale_points
-from ..types import VideoInfo
-from .config import CueConfig
-from .config import LEARNED_FEATURES
-from .matching import KeyframeFeatures, extract_keyframe_features, keyframe_indices
+from ...errors import InputError
+from ...geometry.camera_model import scale_points
+from ...types import VideoInfo
+from ..config import CueConfig
+from ..config import LEARNED_FEATURES
+from ..pairing.descriptors import KeyframeFeatures, extract_keyframe_features, keyframe_indices
 from .motion import moving_regions
 from .tracking import track_points
 
@@ -54,7 +54,7 @@ def _sfm_indices(T: int, moving: bool, cfg) -> np.ndarray:
 
 
 def _register_indices(info: VideoInfo, cfg) -> np.ndarray:
-    """A moving video's frames to register against the reconstruction (cues/registration.py):
+    """A moving video's frames to register against the reconstruction (cues/cameras/registration.py):
     every cfg.camera.register_every-th, at most about register_max_hz per second, and the SfM
     frames too (registered from their neighbours they check the registration)."""
     step = max(cfg.camera.register_every, frame_step(info, cfg.camera.register_max_hz))
@@ -78,8 +78,8 @@ def _static_mask(moving: np.ndarray, size: tuple[int, int]) -> np.ndarray:
 def _learned_model_possible(cfg) -> bool:
     """Whether camera estimation may build a learned reconstruction: learned features asked for,
     or auto with XFeat installed (its second try) or ALIKED's tried last."""
-    from .cameras import aliked_tried_last
-    from .learned import xfeat_available
+    from ..cameras.sfm import aliked_tried_last
+    from ..features.learned import xfeat_available
 
     return cfg.camera.features in LEARNED_FEATURES or (cfg.camera.features == "auto" and xfeat_available()) \
         or aliked_tried_last(cfg.camera)
@@ -88,7 +88,7 @@ def _learned_model_possible(cfg) -> bool:
 def _video_cues(src, cfg: CueConfig, need_sfm: bool, timings: dict, shown: dict | None) -> VideoCues:
     """One video's cues; shown (when not None) gets {frame index: (working-resolution BGR image,
     (h,w) instance ids)} of cfg.sink_frames frames spread over the video, for the recording."""
-    from ..io.video import downscale, iter_frames
+    from ...io.video import downscale, iter_frames
 
     info = src.info
     t0 = time.perf_counter()
@@ -157,7 +157,7 @@ def _video_cues(src, cfg: CueConfig, need_sfm: bool, timings: dict, shown: dict 
         if cfg.camera.features not in LEARNED_FEATURES:
             # SIFT's features to register each frame with against a SIFT reconstruction (its
             # database's kind; registration.py), found here where the frames are decoded
-            from .registration import frame_features
+            from ..cameras.registration import frame_features
 
             t0 = time.perf_counter()
             frame_feats = frame_features(frames, instances if cfg.camera.mask_moving else None, todo, scale,
@@ -176,7 +176,7 @@ def registration_images(src, v: VideoCues, cfg: CueConfig, chunk: int = 16):
     """(frame index, BGR image at SfM resolution, static mask or None) of v's frames to register
     (v.register_masks), decoded again from src, chunk frames at a time (a long video's frames are
     never all held at once)."""
-    from ..io.video import read_frames
+    from ...io.video import read_frames
 
     todo, packed, w = v.register_masks
     for start in range(0, len(todo), chunk):

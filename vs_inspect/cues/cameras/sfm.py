@@ -22,17 +22,17 @@ from pathlib import Path
 import cv2
 import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
 
-from ..cue_stats import FrameRegistration
-from ..geometry.camera_model import Lens, scale_intrinsics
-from ..geometry.epipolar import camera_centers
-from ..geometry.timing import frame_brackets, interpolate_poses
-from .. import signals
-from ..signals import import_pycolmap
-from ..types import CameraTrack
-from .config import CameraConfig
-from .guided import guided_matches
-from .config import LEARNED_FEATURES
-from .learned import learned_unavailable, lightglue_available, xfeat_available
+from ...cue_stats import FrameRegistration
+from ...geometry.camera_model import Lens, scale_intrinsics
+from ...geometry.epipolar import camera_centers
+from ...geometry.timing import frame_brackets, interpolate_poses
+from ... import signals
+from ...signals import import_pycolmap
+from ...types import CameraTrack
+from ..config import CameraConfig
+from ..features.guided import guided_matches
+from ..config import LEARNED_FEATURES
+from ..features.learned import learned_unavailable, lightglue_available, xfeat_available
 
 log = logging.getLogger(__name__)
 
@@ -514,7 +514,7 @@ def _learned_database(features: str, db: Path, img_dir: Path, mask_dir: Path, re
     per image pair."""
     pycolmap = import_pycolmap()
 
-    from .learned import make_matcher
+    from ..features.learned import make_matcher
 
     pycolmap.Database.open(db).close()  # import_images needs the file to exist
     pycolmap.import_images(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER, options=reader)
@@ -781,8 +781,7 @@ def _registration_inputs(rec, database: Path, name: str, learned, sfm_scale: flo
     was decoded; the database's descriptors) or, for a learned database (learned: (matcher, image
     id -> descriptors)), the matcher's own features on frame_images (name -> (a function giving
     the frames, their number))."""
-    from .registration import (cosine_matches, keyframes_of, learned_frame_features, ratio_matches,
-                               sift_descriptors)
+    from .registration import (cosine_matches, keyframes_of, learned_frame_features, ratio_matches, sift_descriptors)
 
     if learned is None:
         if not frame_features or name not in frame_features:
