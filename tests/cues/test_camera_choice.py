@@ -138,7 +138,8 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
 
     seen = []
 
-    def estimate(vids, cfg, pairs, est, from_tracks=False, memo=None, as_built=False, grid=None):
+    def estimate(vids, cfg, pairs, est, from_tracks=False, memo=None, as_built=False, grid=None, rules=None,
+                 kept=None):
         kind = ex.MOVING_POINTS if from_tracks else est.features + (ex.OWN if as_built else "")
         sfm = SfmRecord(kind, 3, 3, {}, (), {})
         if weak_first and kind == "sift":  # replaced by the moving points' cameras
@@ -152,7 +153,7 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
         return ex.CameraSet({n: CameraTrack(K, look_at([6.0, 0, 2.0], [0, 0, 1])) for n in names}, {}, None, None, {},
                             dropped, sfm=sfm)
 
-    def vote(cams, vids, all_pairs, cfg, progress, estimated, other_peaks=None, other="", grid=None):
+    def vote(cams, vids, all_pairs, cfg, progress, estimated, other_peaks=None, other="", grid=None, **kept):
         kind = cams.sfm.features
         seen.append((kind, other_peaks, other))
         pairing = GeometricPairing({}, {}, {}, "joint", {}, {}, joints.get(kind) if joints else None)

@@ -28,7 +28,7 @@ def test_videos_own_cues_run_two_at_a_time_on_threads_with_sift_keyframes_only()
             raise Stop
 
     asked: list = []
-    sources = [SimpleNamespace(info=SimpleNamespace(name=n)) for n in "ab"]
+    sources = [SimpleNamespace(info=SimpleNamespace(name=n), path=f"{n}.mp4") for n in "ab"]
     for descriptor in ("sift", "xfeat"):
         with pytest.raises(Stop):
             _stage0(sources, None, CueConfig(match=MatchConfig(descriptor=descriptor)), NullSink(), False, Spy(),

@@ -32,7 +32,9 @@ from ..cue_stats import CueStats, PairCueStats, VideoCueStats
 from ..cues.config import CueConfig
 from ..engine import Engine, LocalEngine, TaskFailed
 from ..errors import BadVideoName, InputError, NoUsableVideos
+from ..cues.rules import ALL
 from ..geometry.offsets import OffsetGrid
+from ..memo import NO_MEMO, Memo, digest
 from ..record.sink import NullSink, Sink
 from ..sync.config import SyncConfig
 from ..types import CueBundle, TrackPairs
@@ -75,8 +77,8 @@ def check_cue_config(cfg: CueConfig) -> None:
 
 def run_stage0(videos: Sequence[PathLike], calibration: PathLike | None = None,
                fps: float | None = None, cfg: CueConfig = CueConfig(), sink: Sink | None = None,
-               progress: bool = True, engine: Engine | None = None, sync: SyncConfig = SyncConfig()
-               ) -> tuple[CueBundle, CueStats, dict[str, str]]:
+               progress: bool = True, engine: Engine | None = None, sync: SyncConfig = SyncConfig(),
+               memo: Memo = NO_MEMO, rules: frozenset[str] = ALL) -> tuple[CueBundle, CueStats, dict[str, str]]:
     """Stage 0 on video files or image folders: (bundle, stats, {name: path} of every input).
 
     calibration: a file or folder that io.calibration.load_calibration reads, or None to estimate
@@ -84,7 +86,9 @@ def run_stage0(videos: Sequence[PathLike], calibration: PathLike | None = None,
     engine: where each video's own cues are extracted, one task per video (default: in this
     process); everything else, and every report to the sink, stays here in video order. sync:
     the run's Stage 1 + 2 settings, whose limits of the candidate offsets (--min-overlap-s,
-    --range-s, --around) Stage 0's searches obey too.
+    --range-s, --around) Stage 0's searches obey too. memo: where the expensive steps' results
+    are kept (default: nowhere); rules: the acceptance rules and camera paths applied (cues.rules;
+    default: all).
     InputError when fewer than two videos are given; NoUsableVideos (an InputError that carries
     every video's reason) when fewer than two can be opened or none can be used.
     """
@@ -113,12 +117,14 @@ def run_stage0(videos: Sequence[PathLike], calibration: PathLike | None = None,
         raise InputError(f"video names must be unique, got {dup} more than once "
                          "(rename the files or put them in differently named folders)")
     calib = None if calibration is None else load_calibration(calibration, names)
-    bundle, stats = _stage0(sources, calib, cfg, sink, progress, engine or LocalEngine(), grid, dropped, inputs)
+    bundle, stats = _stage0(sources, calib, cfg, sink, progress, engine or LocalEngine(), grid, dropped, inputs,
+                            memo, rules)
     return bundle, stats, inputs
 
 
 def _stage0(sources, calibration: dict | None, cfg: CueConfig, sink: Sink, progress: bool, engine: Engine,
-            grid: OffsetGrid, dropped: dict[str, str], inputs: dict[str, str]) -> tuple[CueBundle, CueStats]:
+            grid: OffsetGrid, dropped: dict[str, str], inputs: dict[str, str], memo: Memo = NO_MEMO,
+            rules: frozenset[str] = ALL) -> tuple[CueBundle, CueStats]:
     """Steps 2-6 on the opened sources; dropped: the videos left out so far, with their reasons."""
     from ..cues.heads import HeadsAhead, find_heads
 
@@ -126,20 +132,20 @@ def _stage0(sources, calibration: dict | None, cfg: CueConfig, sink: Sink, progr
     t_all = time.perf_counter()
     names = [s.info.name for s in sources]
     # 2. each video's own cues
-    vids, videos = _video_cues(sources, cfg, sink, engine, progress, calibration is None, timings, dropped)
+    vids, videos = _video_cues(sources, cfg, sink, engine, progress, calibration is None, timings, dropped, memo)
     # a camera seen moving: the heads are found on a thread of their own while the cameras are
     # estimated (COLMAP's mapping keeps one core) and the geometric pairs voted; they are only
     # used when a camera moves in the end
     ahead = HeadsAhead.start(sources, vids, cfg) \
-        if cfg.heads and any(v.camera_motion == "moving" for v in vids.values()) else None
+        if cfg.heads and memo.folder is None and any(v.camera_motion == "moving" for v in vids.values()) else None
     with ahead or contextlib.nullcontext():
         # 3. descriptor track pairs
         t0 = time.perf_counter()
-        all_pairs, matched = _descriptor_pairs([n for n in names if n in vids], vids, cfg, sink, progress)
+        all_pairs, matched = _descriptor_pairs([n for n in names if n in vids], vids, cfg, sink, progress, memo)
         timings["matching_s"] = time.perf_counter() - t0
         # 4. the cameras, voted on
         t0 = time.perf_counter()
-        kept = _cameras(sources, vids, all_pairs, calibration, cfg, progress, grid)
+        kept = _cameras(sources, vids, all_pairs, calibration, cfg, progress, grid, rules, memo)
         _report_cameras(sink, kept)
         dropped.update(kept.dropped)
         timings["cameras_s"] = time.perf_counter() - t0 - kept.voting_s
@@ -149,7 +155,9 @@ def _stage0(sources, calibration: dict | None, cfg: CueConfig, sink: Sink, progr
         heads, heads_record = {}, None
         if cfg.heads and any(c.is_moving for c in kept.cameras.values()):
             t0 = time.perf_counter()
-            heads, heads_record = find_heads(sources, vids, kept.cameras, kept.undistort, cfg, progress, ahead)
+            heads, heads_record = memo.get(f"heads-{digest(kept.cameras, cfg.heads_max_hz, cfg.max_side)}",
+                                           lambda: find_heads(sources, vids, kept.cameras, kept.undistort, cfg,
+                                                              progress, ahead))
             _report_heads(sink, heads_record, {n: v.info.num_frames for n, v in vids.items()})
             timings["heads_s"] = time.perf_counter() - t0
     # 6. the bundle and the record
@@ -183,7 +191,8 @@ def _stage0(sources, calibration: dict | None, cfg: CueConfig, sink: Sink, progr
 
 
 def _video_cues(sources, cfg: CueConfig, sink: Sink, engine: Engine, progress: bool, need_sfm: bool,
-                timings: dict[str, float], dropped: dict[str, str]) -> tuple[dict, dict[str, VideoCueStats]]:
+                timings: dict[str, float], dropped: dict[str, str], memo: Memo = NO_MEMO
+                ) -> tuple[dict, dict[str, VideoCueStats]]:
     """Step 2: ({name: cues.video.extract.VideoCues} of the videos read, {name: their counts}); a
     video that could not be read goes to dropped."""
     from ..analysis.record_views import record_frame, record_mask
@@ -194,10 +203,14 @@ def _video_cues(sources, cfg: CueConfig, sink: Sink, engine: Engine, progress: b
     # two videos at a time on threads locally: one video alone keeps 2 cores only partly busy (the
     # tracks are the same either way). Not with learned keyframe descriptors: they set torch's
     # process-wide thread count around each call
-    outcomes = engine.map(video_cues_task, sources, shared=(cfg, sink.options is not None, need_sfm),
-                          desc="cues per video", unit="video", progress=progress,
-                          threads=cfg.match.descriptor == "sift")
-    for src, out in zip(sources, outcomes):
+    task = (cfg, sink.options is not None, need_sfm)
+    keys = {s.info.name: f"video-{s.info.name}-{digest(str(s.path), s.info, task)}" for s in sources}
+    todo = [s for s in sources if not memo.has(keys[s.info.name])]
+    done = dict(zip([s.info.name for s in todo],
+                    engine.map(video_cues_task, todo, shared=task, desc="cues per video", unit="video",
+                               progress=progress, threads=cfg.match.descriptor == "sift")))
+    for src in sources:
+        out = memo.get(keys[src.info.name], lambda: done[src.info.name])
         name = src.info.name
         sink.video(src.info, str(src.path))
         if isinstance(out, TaskFailed):  # its worker or node died
@@ -230,16 +243,16 @@ def _video_cues(sources, cfg: CueConfig, sink: Sink, engine: Engine, progress: b
     return vids, videos
 
 
-def _descriptor_pairs(names: list[str], vids: dict, cfg: CueConfig, sink: Sink, progress: bool
-                      ) -> tuple[dict[tuple[str, str], TrackPairs], dict]:
+def _descriptor_pairs(names: list[str], vids: dict, cfg: CueConfig, sink: Sink, progress: bool,
+                      memo: Memo = NO_MEMO) -> tuple[dict[tuple[str, str], TrackPairs], dict]:
     """Step 3: ({(a, b): TrackPairs}, {(a, b): cues.pairing.descriptors.PairStats}) of every two videos read."""
     from ..cues.pairing.descriptors import match_tracks
 
     pairs, matched = {}, {}
     for a, b in tqdm(list(itertools.combinations(names, 2)), desc="cross-view pairs", unit="pair",
                      disable=not progress, leave=False):
-        tp, ps = match_tracks(a, b, vids[a].features, vids[b].features, vids[a].instance, vids[b].instance,
-                              cfg.match)
+        tp, ps = memo.call("match", match_tracks, a, b, vids[a].features, vids[b].features, vids[a].instance,
+                           vids[b].instance, cfg.match)
         pairs[(a, b)], matched[(a, b)] = tp, ps
         sink.pair_matches(a, b, vids[a].features.keyframes, vids[b].features.keyframes, ps.keyframe_matches)
         log.info("%s__%s: %d matches, %d snapped, %d instance pairs, %d track pairs",
@@ -248,18 +261,18 @@ def _descriptor_pairs(names: list[str], vids: dict, cfg: CueConfig, sink: Sink, 
 
 
 def _cameras(sources, vids: dict, all_pairs: dict, calibration: dict | None, cfg: CueConfig, progress: bool,
-             grid: OffsetGrid):
+             grid: OffsetGrid, rules: frozenset[str] = ALL, memo: Memo = NO_MEMO):
     """Step 4: the kept cues.cameras.choice.CameraSet, its pairs and records."""
     from ..cues.cameras.choice import calibrated_cameras, estimated_cameras, vote_on_cameras
     from ..cues.video.extract import registration_images
 
     if calibration is not None:
         return vote_on_cameras(calibrated_cameras(calibration, vids), vids, all_pairs, cfg, progress,
-                               estimated=False, grid=grid)
+                               estimated=False, grid=grid, rules=rules, memo=memo)
     by_name = {s.info.name: s for s in sources}
     frame_images = {n: (functools.partial(registration_images, by_name[n], v, cfg), len(v.register_masks[0]))
                     for n, v in vids.items() if v.register_masks is not None}
-    return estimated_cameras(vids, cfg, all_pairs, frame_images, progress, grid)
+    return estimated_cameras(vids, cfg, all_pairs, frame_images, progress, grid, rules, memo)
 
 
 def _report_cameras(sink: Sink, kept) -> None:

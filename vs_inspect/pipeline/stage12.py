@@ -12,6 +12,7 @@ import time
 from ..analysis.record_views import pair_record_view, run_record_view
 from ..engine import Engine, LocalEngine, TaskFailed
 from ..errors import InputError
+from ..memo import NO_MEMO, Memo, digest
 from ..record.sink import NullSink, Sink
 from ..sync.config import SyncConfig
 from ..sync.pair import is_pose_free_pair, pair_landscape, pose_free_job
@@ -67,13 +68,14 @@ def _fixed_threads(cfg: SyncConfig) -> SyncConfig:
 def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | None = None,
                 progress: bool = True,
                 pose_free: dict[tuple[str, str], PoseFreePair | None] | None = None,
-                engine: Engine | None = None) -> SyncResult:
+                engine: Engine | None = None, memo: Memo = NO_MEMO) -> SyncResult:
     """Stage 1 over the pairs that cfg.pairs selects, then Stage 2, reported to the sink.
 
     pose_free: estimates of pose-free pairs made earlier (estimate_pose_free_pairs; e.g. the drift
     model's, reused by the benchmark's constant-offset ablation); the others are estimated here.
     engine: where the pairs' landscapes are computed (default: in this process); Stage 2 and
-    everything reported to the sink stay here, in pair order, whatever the engine."""
+    everything reported to the sink stay here, in pair order, whatever the engine. memo: where
+    the pairs' landscapes are kept (default: nowhere)."""
     sink = sink or NullSink()
     engine = engine or LocalEngine()
     names = bundle.names
@@ -99,8 +101,13 @@ def sync_bundle(bundle: CueBundle, cfg: SyncConfig = SyncConfig(), sink: Sink | 
             chosen = [k for k in chosen if k != (a, b)]
     task_cfg = _fixed_threads(cfg)
     items = [(a, b, pose_free.get((a, b)), (a, b) in pose_free) for a, b in chosen]
-    for (a, b), land in zip(chosen, engine.map(_pair_task, items, shared=(bundle, task_cfg),
-                                                desc="pair landscapes", unit="pair", progress=progress)):
+    keys = ["pair-" + digest(item, [(bundle.video(n), bundle.cameras[n], bundle.tracks[n]) for n in item[:2]],
+                             bundle.pair(item[0], item[1]), task_cfg) for item in items]
+    todo = [i for i, k in enumerate(keys) if not memo.has(k)]
+    done = dict(zip(todo, engine.map(_pair_task, [items[i] for i in todo], shared=(bundle, task_cfg),
+                                     desc="pair landscapes", unit="pair", progress=progress)))
+    for i, (a, b) in enumerate(chosen):
+        land = done[i] if isinstance(done.get(i), TaskFailed) else memo.get(keys[i], lambda: done[i])
         if isinstance(land, TaskFailed):  # its worker died: the pair counts as not evaluated
             log.warning("%s__%s: %s", a, b, land.reason)
             sink.stage_event("landscapes", f"{a}__{b}: not evaluated: {land.reason}")

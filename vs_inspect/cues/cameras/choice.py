@@ -8,6 +8,7 @@ video's reason says what each model made of it. No I/O beyond the models' own sc
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import dataclasses
 import functools
@@ -22,7 +23,9 @@ from ...errors import InputError
 from ...geometry.offsets import OffsetGrid
 from ...types import FROM_MOVING_POINTS, CameraTrack, Tracks, first_clause
 from ..config import CueConfig
+from ...memo import NO_MEMO, Memo, digest
 from ..records import Note, say_cameras
+from ..rules import ALL
 from ..pairing.joint import GeometricPairing, add_geometric_pairs, check_fitted_offsets
 from ..video.extract import VideoCues
 
@@ -97,7 +100,8 @@ def calibrated_cameras(calibration: dict, vids: dict[str, VideoCues]) -> CameraS
 
 def vote_on_cameras(cams: CameraSet, vids: dict, all_pairs: dict, cfg: CueConfig,
                     progress: bool, estimated: bool, other_peaks: dict | None = None,
-                    other: str = "", grid: OffsetGrid = OffsetGrid()) -> CameraSet:
+                    other: str = "", grid: OffsetGrid = OffsetGrid(), rules: frozenset[str] = ALL,
+                    memo: Memo = NO_MEMO) -> CameraSet:
     """cams with its pairs: the descriptor pairs of its cameras plus the geometric ones
     (add_geometric_pairs; other_peaks, other: another camera model's vote peaks and its name;
     grid: the limits of the offsets voted for), a camera fitted to the moving points at an offset
@@ -117,11 +121,12 @@ def vote_on_cameras(cams: CameraSet, vids: dict, all_pairs: dict, cfg: CueConfig
     if cfg.geometric.enabled:
         t0 = time.perf_counter()
         pairing = add_geometric_pairs(pairs, cameras, cams.tracks, vids, cfg, progress,
-                                      estimated=estimated, other_peaks=other_peaks, other=other, grid=grid)
+                                      estimated=estimated, other_peaks=other_peaks, other=other, grid=grid,
+                                      rules=rules, memo=memo)
         pairs, voted = pairing.pairs, pairing.voted
         notes += pairing.notes
         fallback = sfm.fallback if sfm is not None else None
-        if fallback is not None and fallback.used:
+        if fallback is not None and fallback.used and "fitted_offsets" in rules:
             refused, check = check_fitted_offsets(fallback.fitted_offsets_s, voted, vids)
             sfm = dataclasses.replace(sfm, fallback=dataclasses.replace(fallback, check=check))
             for n, why in refused.items():
@@ -138,7 +143,8 @@ def vote_on_cameras(cams: CameraSet, vids: dict, all_pairs: dict, cfg: CueConfig
 
 
 def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dict,
-                      frame_images: dict, progress: bool, grid: OffsetGrid = OffsetGrid()) -> CameraSet:
+                      frame_images: dict, progress: bool, grid: OffsetGrid = OffsetGrid(),
+                      rules: frozenset[str] = ALL, memo: Memo = NO_MEMO) -> CameraSet:
     """The cameras pycolmap estimates and their pairs (frame_images: name -> (a function giving a
     moving camera's frames to register, how many), as cameras.CameraModels takes them). With
     camera features "auto", when the joint vote on SIFT's cameras leaves a video without a
@@ -152,21 +158,27 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
 
     frames = {n: v.sfm_frames for n, v in vids.items() if v.sfm_frames is not None}
     sizes = {n: (v.info.width, v.info.height) for n, v in vids.items()}
-    with CameraModels(frames, sizes, {n: v.info.num_frames for n, v in vids.items()},
-                      {n: v.camera_motion == "moving" for n, v in vids.items()}, cfg.camera,
-                      frame_features={n: v.frame_features for n, v in vids.items() if v.frame_features is not None},
-                      frame_images=frame_images,
-                      progress=progress) as models:
+    features = {n: v.frame_features for n, v in vids.items() if v.frame_features is not None}
+    xfeat_first = "xfeat_first" in rules
+    key = digest(cfg.camera, frames, features, xfeat_first)
 
-        memo: dict = {}
+    def build():
+        return CameraModels(frames, sizes, {n: v.info.num_frames for n, v in vids.items()},
+                            {n: v.camera_motion == "moving" for n, v in vids.items()}, cfg.camera,
+                            frame_features=features, frame_images=frame_images, progress=progress,
+                            xfeat_first=xfeat_first)
+
+    with _KeptModels(build, memo, key) as models:
+
+        seen: dict = {}  # the moving points' cameras, fitted once for every model
 
         def attempt(est, other_peaks=None, other="", from_tracks=False,
                     as_built=False) -> tuple[str, CameraSet] | None:
-            cams = _estimate(vids, cfg, all_pairs, est, from_tracks, memo, as_built, grid)
+            cams = _estimate(vids, cfg, all_pairs, est, from_tracks, seen, as_built, grid, rules, memo)
             if from_tracks and not (cams.sfm.fallback is not None and cams.sfm.fallback.used):
                 return None  # est's own cameras again, already voted on
             out = vote_on_cameras(cams, vids, all_pairs, cfg, progress, estimated=True,
-                                  other_peaks=other_peaks, other=other, grid=grid)
+                                  other_peaks=other_peaks, other=other, grid=grid, rules=rules, memo=memo)
             kind = MOVING_POINTS if from_tracks else est.features + (OWN if as_built else "")
             return kind, out
 
@@ -175,11 +187,13 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
         kind, kept = attempt(kept_est)
         first_kind, first_peaks = kind, kept.peaks
         tried, failed = [(kind, kept)], []
-        for which, build in (("second", models.second), ("third", models.third)):
+        for which, build_next in (("second", models.second), ("third", models.third)):
             if not cfg.geometric.enabled or kept.used >= set(vids):
                 break
+            if f"{which}_model" not in rules:
+                continue
             try:
-                est = build()
+                est = build_next()
                 if est is None:
                     continue
                 log.info("the joint vote trusted %d of %d videos on %s's cameras: trying %s's model",
@@ -194,6 +208,7 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
             if len(tried[-1][1].used) > len(kept.used):
                 (kind, kept), kept_est = tried[-1], est
         if (cfg.geometric.enabled and cfg.camera.fallback_when_untrusted and cfg.camera.fallback_from_tracks
+                and "points_when_untrusted" in rules
                 and not kept.used
                 and not any(c.sfm.fallback is not None for _, c in tried)):
             # every model placed the static cameras, and none was trusted: the moving points' own cameras
@@ -204,7 +219,7 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
                 if points[1].used:
                     kind, kept = points
         first_fallback = tried[0][1].sfm.fallback
-        if (cfg.geometric.enabled and cfg.camera.weak_model_when_replaced and not kept.used
+        if (cfg.geometric.enabled and cfg.camera.weak_model_when_replaced and "weak_own" in rules and not kept.used
                 and first_fallback is not None and first_fallback.used and len(first_est.cameras) >= 2):
             # the first model was weak and the moving points' cameras replaced its own, and no video
             # was trusted on any set: its own cameras get their vote too (a weak model may be right:
@@ -232,6 +247,48 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
         sfm = dataclasses.replace(sfm, models_skipped=skipped)
         say_cameras(notes, skipped)
     return dataclasses.replace(kept, sfm=sfm, notes=tuple(notes))
+
+
+class _KeptModels:
+    """CameraModels' first, second and third estimates, each kept in the memo under key; the
+    models are built (and first() run, which the others need) only for an estimate not kept."""
+
+    def __init__(self, build, memo: Memo, key: str):
+        self._build, self._memo, self._key = build, memo, key
+        self._stack = contextlib.ExitStack()
+        self._models = None
+        self._first = None
+        self.third_skipped: str | None = None
+
+    def __enter__(self) -> _KeptModels:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stack.close()
+
+    def _built(self):
+        if self._models is None:
+            self._models = self._stack.enter_context(self._build())
+            self._first = self._models.first()
+        return self._models
+
+    def first(self):
+        def compute():
+            self._built()
+            return self._first
+
+        return self._memo.get(f"model-first-{self._key}", compute)
+
+    def second(self):
+        return self._memo.get(f"model-second-{self._key}", lambda: self._built().second())
+
+    def third(self):
+        def build():
+            models = self._built()
+            return models.third(), models.third_skipped
+
+        est, self.third_skipped = self._memo.get(f"model-third-{self._key}", build)
+        return est
 
 
 def _note_other_models(kind: str, kept: CameraSet, others: list[tuple[str, CameraSet]], vids: dict) -> CameraSet:
@@ -289,7 +346,7 @@ def _verdict(kind: str, c: CameraSet, n: str) -> tuple[str, str]:
 
 def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict, est,
               from_tracks: bool = False, memo: dict | None = None, as_built: bool = False,
-              grid: OffsetGrid = OffsetGrid()) -> CameraSet:
+              grid: OffsetGrid = OffsetGrid(), rules: frozenset[str] = ALL, kept: Memo = NO_MEMO) -> CameraSet:
     """The cameras of est (cameras.CameraEstimate) and the tracks undistorted with them, or the
     cameras the moving points give when their cameras explain the points better and est is weak,
     or from_tracks (the joint vote trusted no video on est's cameras; the moving points' cameras
@@ -322,7 +379,8 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict, est,
     # the moving points give static cameras only, so when the model placed more videos than there
     # are static ones their cameras cannot replace it (`use` below): not fitted (it would cost seconds)
     outnumbered = not from_tracks and len(est.cameras) > len(static)
-    compared = (weak or from_tracks) and cfg.camera.fallback_from_tracks and len(static) >= 2 and not as_built
+    compared = ((weak and "weak_model_replaced" in rules) or from_tracks) and cfg.camera.fallback_from_tracks \
+        and len(static) >= 2 and not as_built
     if compared and outnumbered:
         why = (f"{weak_why}; the moving points' cameras were not fitted: they would be {len(static)} static "
                f"camera(s) at most, fewer than its {len(est.cameras)}, so they could not replace it")
@@ -335,9 +393,10 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict, est,
         if memo is not None and "from_tracks" in memo:  # the same track pairs for every model
             cams, reasons, details = copy.deepcopy(memo["from_tracks"])
         else:
-            cams, reasons, details = cameras_from_tracks(
-                ref, infos, xy, pairs, {n: v.camera_motion == "moving" for n, v in vids.items()},
-                joint=cfg.camera.fallback_joint_offsets, grid=grid)
+            cams, reasons, details = kept.call(
+                "moving_points", cameras_from_tracks, ref, infos, xy, pairs,
+                {n: v.camera_motion == "moving" for n, v in vids.items()},
+                joint=cfg.camera.fallback_joint_offsets and "joint_coarse_offsets" in rules, grid=grid)
             if memo is not None:
                 memo["from_tracks"] = copy.deepcopy((cams, reasons, details))
         if from_tracks:  # the background did reconstruct; these cameras are the static ones only
@@ -350,7 +409,7 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict, est,
             why = weak_why
         else:
             why = "the joint vote trusted no video on any camera model's cameras"
-        if len(cams) == 2 and not cfg.camera.fallback_unchecked_pair:
+        if len(cams) == 2 and not cfg.camera.fallback_unchecked_pair and "two_point_cameras" in rules:
             # the coarse offset and F were chosen by the same track pairs; Stage 1 then finds the
             # minimum they were fitted for, right or wrong, and no third camera can refuse it
             lone = ("only two cameras came out, whose geometry and offset would both come from the same "

@@ -159,7 +159,7 @@ class CameraModels:
     def __init__(self, frames_by_video: dict, sizes: dict[str, tuple[int, int]], num_frames: dict[str, int],
                  moving: dict[str, bool], cfg: CameraConfig = CameraConfig(), workdir: str | None = None,
                  seed: int = 0, frame_features: dict | None = None, frame_images: dict | None = None,
-                 progress: bool = False):
+                 progress: bool = False, xfeat_first: bool = True):
         if why := camera_features_unavailable(cfg.features):
             raise ValueError(f"camera features {cfg.features!r}: {why}")
         self._frames, self._sizes, self._moving, self._cfg = frames_by_video, sizes, moving, cfg
@@ -168,6 +168,7 @@ class CameraModels:
         self._registration = dict(frame_features=frame_features, frame_images=frame_images, progress=progress)
         self._n_images = n_images = sum(len(v[0]) for v in frames_by_video.values())
         self._xfeat_wanted = cfg.features == "auto" and xfeat_available()
+        self._xfeat_first = xfeat_first  # XFeat's model first when SIFT's leaves a video out and XFeat's has more
         self._xfeat_possible = self._xfeat_wanted and n_images <= cfg.auto_xfeat_max_images
         if self._xfeat_wanted and not self._xfeat_possible:
             log.info("XFeat's model not built on %d images (more than %d)", n_images, cfg.auto_xfeat_max_images)
@@ -227,7 +228,7 @@ class CameraModels:
             model = _Model(kind, {}, None, self._tmp / "database.db", None, {}, self._n_images, (), failed=why)
         self._first_model = model
         est = _estimate_from(model, *self._inputs, register=False)
-        if est.unregistered and self._xfeat_possible:
+        if est.unregistered and self._xfeat_possible and self._xfeat_first:
             other, registered = self._xfeat_result()
             other_est = registered if registered is not None else _estimate_from(other, *self._inputs, register=False)
             log.info("SIFT registered %d of %d videos, XFeat %d", len(est.cameras),

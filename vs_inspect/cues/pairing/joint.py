@@ -21,7 +21,9 @@ from tqdm import tqdm
 from ...cue_stats import FittedOffsetCheck, FittedOffsetPair, JointVoteRecord, PairVoteSummary
 from ...geometry.offsets import OffsetGrid
 from ...types import TrackPairs, VideoInfo
+from ...memo import NO_MEMO, Memo
 from ..config import CueConfig
+from ..rules import ALL
 from ..records import Note, say
 
 # The vote's decisions are logged at INFO (`-v`): the recording and result.json hold them in full,
@@ -50,7 +52,8 @@ class GeometricPairing:
 def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
                         progress: bool, estimated: bool,
                         other_peaks: dict | None = None, other: str = "",
-                        grid: OffsetGrid = OffsetGrid()) -> GeometricPairing:
+                        grid: OffsetGrid = OffsetGrid(), rules: frozenset[str] = ALL,
+                        memo: Memo = NO_MEMO) -> GeometricPairing:
     """Descriptor pairs plus epipolar-consistency pairs for every pair of known cameras (a moving
     one with its per-frame poses), the Δ_ab whose supporters were added and every pair's vote peaks.
     estimated: Stage 0 estimated the cameras (no calibration given); only then are sure cameras
@@ -75,8 +78,8 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     todo = list(pairs)
     found = {}
     for a, b in tqdm(todo, desc="geometric pairs", unit="pair", disable=not progress, leave=False):
-        found[(a, b)] = geometric_pairs(a, b, vids[a].info, vids[b].info, cameras[a], cameras[b],
-                                        tracks[a].xy, tracks[b].xy, cfg.geometric, grid)
+        found[(a, b)] = memo.call("votes", geometric_pairs, a, b, vids[a].info, vids[b].info, cameras[a],
+                                  cameras[b], tracks[a].xy, tracks[b].xy, cfg.geometric, grid)
     peaks_s = {k: tuple(gs.peaks_s) for k, (_, gs) in found.items()}
     votes = {k: gs for k, (_, gs) in found.items()}  # each pair's vote evidence
     notes: list[Note] = []
@@ -84,16 +87,18 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     # each of a triangle's three peaks is located to about ±1 frame (its support window), so
     # right peaks close within about 3 frames, while wrong ones miss by far more
     joint = joint_offsets(votes, 3.0 * coarsest) if cfg.geometric.joint else None
-    sure = {} if joint is None else {n: m >= cfg.geometric.joint_min_margin for n, m in joint.margin.items()}
+    sure = {} if joint is None else {n: m >= cfg.geometric.joint_min_margin or "margin" not in rules
+                                     for n, m in joint.margin.items()}
+    third = "moving_pair_third" in rules
     three_view = {}
     # the check is of cameras Stage 0 estimated: a calibration's are given (and a right calibrated
     # camera can follow as few trajectories as a wrong estimated one)
-    if cfg.geometric.three_view_min_supporters > 0 and estimated and sum(sure.values()) >= 3:
-        three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, notes, grid)
+    if "three_view" in rules and cfg.geometric.three_view_min_supporters > 0 and estimated and sum(sure.values()) >= 3:
+        three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, notes, grid, third, memo)
         sure = {n: ok and (n not in three_view or three_view[n].passed) for n, ok in sure.items()}
     dissent, dissent_short = {}, {}  # camera -> why it was made unsure; the same in a few words
     # three_view is only filled for estimated cameras (a calibration's are given)
-    if three_view and cfg.geometric.three_view_rival_frames > 0:
+    if "rival_offset" in rules and three_view and cfg.geometric.three_view_rival_frames > 0:
         from .votes import rival_offsets
 
         best = {n: (chk.best_offset_s, chk.best_supporters, chk.supporters) for n, chk in three_view.items()
@@ -106,14 +111,14 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     # after the three-view check, which triangulates the pairs of the cameras sure then (a camera
     # this refuses first could leave another too few trajectories); estimated cameras only: with a
     # calibration a right pair can keep a small share of its top peak's votes
-    if cfg.geometric.joint_min_pair_share > 0 and estimated and joint is not None:
+    if "pair_share" in rules and cfg.geometric.joint_min_pair_share > 0 and estimated and joint is not None:
         from .votes import dissenting_cameras
 
         dissenting = dissenting_cameras(votes, joint, sure, cfg.geometric.joint_min_pair_share)
         _not_sure(dissenting, sure, dissent, notes, dissent_short,
                   {n: "a pair of its own has few votes at its joint offset" for n in dissenting})
     overruled = {}  # camera -> why the other model's dispute of it was overruled
-    if other_peaks is not None and estimated and joint is not None:
+    if "other_model" in rules and other_peaks is not None and estimated and joint is not None:
         from .votes import disputed_by_other_model
 
         shares = {n: chk.supporters / chk.best_supporters for n, chk in three_view.items() if chk.best_supporters}
@@ -129,18 +134,18 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     refused = bool(dissent) or any(not chk.passed for chk in three_view.values())
     # a camera refused (by its pairs or in three views) keeps the joint path (no geometric pair
     # for it), instead of the triangle fallback below choosing among the same cameras' vote peaks
-    if sum(sure.values()) >= 2 or refused:
+    if sum(sure.values()) >= 2 or refused or ("triangle_fallback" not in rules and joint is not None):
         checks, traj = {}, None
-        if cfg.geometric.transfer and not all(sure.values()) and sum(sure.values()) >= 2:
+        if "transfer" in rules and cfg.geometric.transfer and not all(sure.values()) and sum(sure.values()) >= 2:
             # not of a camera its own pairs contradict: point transfer projects into the same
             # camera, whose biased geometry it can then confirm at a wrong offset
             checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, notes,
-                                                frozenset(dissent), grid)
+                                                frozenset(dissent), grid, third, memo)
         sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
         said = _JointChecks({c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
                             {c: chk.summary() for c, chk in three_view.items()}, dissent, dissent_short, overruled)
         out, used, summaries, record, chosen = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids,
-                                                                cfg, notes, said)
+                                                                cfg, notes, said, rules)
         out, transfer_new = _add_transfer_pairs(out, checks, traj, list(vids), notes)
         return GeometricPairing(out, used, peaks_s, "joint", summaries, transfer_new, record, votes, chosen,
                                 checks, three_view, tuple(notes))
@@ -156,7 +161,8 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     # Stage 1 accepts; kept only where consistent at the joint vote's offsets, unsure as they are,
     # so that a wrong offset leaves too few of them
     unchecked = status in ("inconsistent", "one triangle")
-    filter_desc = unchecked and joint is not None and cfg.geometric.joint_filter_descriptor
+    filter_desc = unchecked and joint is not None and cfg.geometric.joint_filter_descriptor \
+        and "descriptor_filter" in rules
     unchecked_why = unchecked_short = None
     if unchecked:
         unchecked_short = ("vote peaks do not close the triangles" if status == "inconsistent" else
@@ -177,7 +183,8 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
             index = index[gs.pair_peak == pick]
         elif unchecked:
             index, withheld, withheld_short = index[:0], unchecked_why, unchecked_short
-        elif len(index) and (cameras[a].is_moving or cameras[b].is_moving) and not cfg.geometric.unchecked_moving:
+        elif len(index) and (cameras[a].is_moving or cameras[b].is_moving) and not cfg.geometric.unchecked_moving \
+                and "lone_moving_pair" in rules:
             withheld = (f"no triangle checks its vote peaks ({', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s), "
                         f"and a moving camera's per-frame geometry lets wrong tracks fit a wrong offset")
             withheld_short = "a moving camera's vote peaks, no triangle to check them"
@@ -263,30 +270,30 @@ def check_fitted_offsets(fitted: dict[str, float], voted: dict, vids: dict
     return refused, FittedOffsetCheck(verdict, round(tol_s, 4), rows, tuple(sorted(refused)))
 
 
-def _transfer_source(a: str, b: str, sure: dict[str, bool], cameras: dict) -> bool:
+def _transfer_source(a: str, b: str, sure: dict[str, bool], cameras: dict, third: bool = True) -> bool:
     """Whether pair (a, b)'s joint Δ may be triangulated for point transfer: both cameras sure,
     and when both move, a third camera sure too (their per-frame geometry lets wrong tracks fit
     one wrong offset)."""
     if not (sure.get(a) and sure.get(b)):
         return False
-    return not (cameras[a].is_moving and cameras[b].is_moving) or sum(sure.values()) >= 3
+    return not (third and cameras[a].is_moving and cameras[b].is_moving) or sum(sure.values()) >= 3
 
 
-def _joint_pair_used(a: str, b: str, sure: dict[str, bool], cameras: dict, min_sure: int) -> bool:
+def _joint_pair_used(a: str, b: str, sure: dict[str, bool], cameras: dict, min_sure: int, third: bool = True) -> bool:
     """Whether the joint vote's Δ of pair (a, b) is trusted: a transfer source, and at least
     min_sure cameras sure in all (GeometricPairConfig.joint_min_sure: 3 = a closed triangle of
     sure cameras confirms it; see _add_joint_pairs)."""
-    return _transfer_source(a, b, sure, cameras) and sum(sure.values()) >= min_sure
+    return _transfer_source(a, b, sure, cameras, third) and sum(sure.values()) >= min_sure
 
 
-def _sure_pairs(found: dict, joint, sure: dict[str, bool], cameras: dict) -> dict:
+def _sure_pairs(found: dict, joint, sure: dict[str, bool], cameras: dict, third: bool = True) -> dict:
     """The supporters of the joint Δ of every pair that point transfer may triangulate
     (_transfer_source)."""
     from .votes import supporters
 
     out = {}
     for (a, b), (_, gs) in found.items():
-        if not _transfer_source(a, b, sure, cameras):
+        if not _transfer_source(a, b, sure, cameras, third):
             continue
         index = supporters(gs, joint.offsets_s[b] - joint.offsets_s[a])
         out[(a, b)] = TrackPairs(a, b, index, np.ones(len(index)))
@@ -299,7 +306,8 @@ def _transfer_radius_px(info: VideoInfo, g) -> float:
 
 
 def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
-                          vids: dict, cfg: CueConfig, notes: list[Note], grid: OffsetGrid = OffsetGrid()) -> dict:
+                          vids: dict, cfg: CueConfig, notes: list[Note], grid: OffsetGrid = OffsetGrid(),
+                          third: bool = True, memo: Memo = NO_MEMO) -> dict:
     """{camera: transfer.ThreeViewCheck} for every sure camera: the other sure cameras' track
     pairs triangulated at their joint offsets and projected into it at its own. Wrong cameras can
     make the joint vote sure of wrong offsets, consistent in every triangle, since a line through
@@ -312,12 +320,12 @@ def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: di
     checks = {}
     for c in sorted(n for n, ok in sure.items() if ok):
         others = {n: ok and n != c for n, ok in sure.items()}
-        traj = triangulate_pairs(infos, cameras, xy, _sure_pairs(found, joint, others, cameras),
-                                 {n: joint.offsets_s[n] for n, ok in others.items() if ok})
-        chk = check_in_three_views(c, joint.offsets_s[c], traj, infos[c], cameras[c], xy[c],
-                                   _transfer_radius_px(infos[c], g), g.transfer_min_hits,
-                                   g.three_view_min_supporters, g.three_view_min_share_of_best, grid,
-                                   joint.origin)
+        traj = memo.call("triangulated", triangulate_pairs, infos, cameras, xy,
+                         _sure_pairs(found, joint, others, cameras, third),
+                         {n: joint.offsets_s[n] for n, ok in others.items() if ok})
+        chk = memo.call("three_view", check_in_three_views, c, joint.offsets_s[c], traj, infos[c], cameras[c], xy[c],
+                        _transfer_radius_px(infos[c], g), g.transfer_min_hits,
+                        g.three_view_min_supporters, g.three_view_min_share_of_best, grid, joint.origin)
         checks[c] = chk
         msg = f"{c}: {chk.reason}"
         say(notes, msg, camera=c, passed=int(chk.passed), supporters=chk.supporters,
@@ -328,7 +336,7 @@ def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: di
 
 def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
                          vids: dict, cfg: CueConfig, notes: list[Note], skip: frozenset[str] = frozenset(),
-                         grid: OffsetGrid = OffsetGrid()):
+                         grid: OffsetGrid = OffsetGrid(), third: bool = True, memo: Memo = NO_MEMO):
     """({camera: transfer.TransferCheck}, the transfer.Trajectories projected): a check of every
     camera the joint vote is unsure of (but those of skip), the sure cameras' track pairs
     triangulated at their joint offsets and projected into it over its candidate offsets
@@ -337,15 +345,15 @@ def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dic
 
     g = cfg.geometric
     sure_offsets = {n: joint.offsets_s[n] for n, ok in sure.items() if ok}
-    traj = triangulate_pairs({n: v.info for n, v in vids.items()}, cameras,
-                             {n: t.xy for n, t in tracks.items()},
-                             _sure_pairs(found, joint, sure, cameras), sure_offsets)
+    traj = memo.call("triangulated", triangulate_pairs, {n: v.info for n, v in vids.items()}, cameras,
+                     {n: t.xy for n, t in tracks.items()}, _sure_pairs(found, joint, sure, cameras, third), sure_offsets)
     checks = {}
     for c in sorted(n for n, ok in sure.items() if not ok and n not in skip):
         info = vids[c].info
         offsets = candidate_offsets(traj, info, 0.5 * info.frame_interval_s, grid, joint.origin)
-        land = transfer_landscape(traj, info, cameras[c], tracks[c].xy, offsets, _transfer_radius_px(info, g),
-                                  g.transfer_min_hits, allowed=grid.within_window(joint.origin, c, offsets))
+        land = memo.call("transfer", transfer_landscape, traj, info, cameras[c], tracks[c].xy, offsets,
+                         _transfer_radius_px(info, g), g.transfer_min_hits,
+                         allowed=grid.within_window(joint.origin, c, offsets))
         chk = confirm_offset(c, joint.offsets_s[c], land, info.frame_interval_s,
                              g.transfer_agree_frames, g.transfer_min_z, g.transfer_min_supporters)
         checks[c] = chk
@@ -426,7 +434,8 @@ class _JointChecks:
 
 def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cameras: dict,
                      tracks: dict, vids: dict, cfg: CueConfig, notes: list[Note],
-                     said: _JointChecks = _JointChecks()) -> tuple[dict, dict, dict, JointVoteRecord, dict]:
+                     said: _JointChecks = _JointChecks(), rules: frozenset[str] = ALL
+                     ) -> tuple[dict, dict, dict, JointVoteRecord, dict]:
     """(pairs, {(a, b): the joint Δ_ab whose supporters were added}, {(a, b): PairVoteSummary},
     the JointVoteRecord, {(a, b): that Δ_ab or None for every pair}): the supporters of the jointly chosen offsets
     (geometric_pairs.joint_offsets) for every pair whose Δ is trusted (_joint_pair_used: both
@@ -440,7 +449,8 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
 
     # the pairs whose joint Δ is trusted, and that Δ: the one decision everything below reads
     used = {(a, b): joint.offsets_s[b] - joint.offsets_s[a] for a, b in found
-            if _joint_pair_used(a, b, sure, cameras, cfg.geometric.joint_min_sure)}
+            if _joint_pair_used(a, b, sure, cameras, cfg.geometric.joint_min_sure if "min_sure" in rules else 2,
+                                "moving_pair_third" in rules)}
     record = JointVoteRecord(joint.origin, {n: round(o, 4) for n, o in joint.offsets_s.items()},
                              round(joint.score, 2), {n: round(m, 2) for n, m in joint.margin.items()},
                              tuple(sorted(n for n, ok in sure.items() if ok)), tuple(sorted({n for k in used for n in k})),
@@ -484,9 +494,9 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
         n_desc = len(desc.index)
         # an unsure camera's descriptor pairs are filtered too: at a wrong joint Δ few survive
         # (the pair is then refused for too few pairs) instead of a wrong minimum being accepted
-        if cfg.geometric.joint_filter_descriptor:
+        if cfg.geometric.joint_filter_descriptor and "descriptor_filter" in rules:
             desc = _consistent_descriptor_pairs(desc, delta, cameras, tracks, vids, cfg)
-        every = cfg.geometric.joint_filter_descriptor or not n_desc  # every row kept at delta
+        every = (cfg.geometric.joint_filter_descriptor and "descriptor_filter" in rules) or not n_desc  # every row kept at delta
         out[(a, b)], n_new = _merge_pairs(desc, index, chosen_at_offset_s=delta if every else None)
         votes = votes_at(gs, delta)
         summaries[(a, b)] = PairVoteSummary(
