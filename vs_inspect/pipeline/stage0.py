@@ -34,6 +34,7 @@ from ..engine import Engine, LocalEngine, TaskFailed
 from ..errors import BadVideoName, InputError, NoUsableVideos
 from ..cues.rules import ALL
 from ..geometry.offsets import OffsetGrid
+from ..geometry.point_cloud import clean_point_cloud
 from ..memo import NO_MEMO, Memo, digest
 from ..record.sink import NullSink, Sink
 from ..sync.config import SyncConfig
@@ -163,7 +164,10 @@ def _stage0(sources, calibration: dict | None, cfg: CueConfig, sink: Sink, progr
     # 6. the bundle and the record
     cameras, pairs = kept.cameras, kept.pairs
     if cameras:  # after the moving points' cameras were checked: a refused one is not drawn
-        sink.cameras(cameras, kept.points, kept.colors)
+        points, colors = kept.points, kept.colors
+        if points is not None and sink.options is not None:  # strays out, an even density (open3d)
+            points, colors = clean_point_cloud(points, colors)
+        sink.cameras(cameras, points, colors)
     timings["total_s"] = time.perf_counter() - t_all
     for n in names:  # every video left out says why, whatever step lost it
         if n not in cameras and n not in dropped:
