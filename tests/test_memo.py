@@ -26,6 +26,30 @@ def test_the_digest_follows_every_value_and_nothing_else():
     assert digest(frozenset({"a", "b"})) == digest(frozenset({"b", "a"}))
 
 
+@dataclasses.dataclass(frozen=True)
+class _Settings:
+    n: int = 3
+    name: str = "x"
+
+
+@dataclasses.dataclass(frozen=True)
+class _Later:  # the same settings with one more field, as a later version would have them
+    n: int = 3
+    name: str = "x"
+    added: float = 0.5
+
+
+_Later.__name__ = _Settings.__name__
+
+
+def test_settings_count_by_what_differs_from_their_defaults():
+    """A settings record (every field defaulted) digests by the fields that differ from their
+    defaults: a setting added (or removed) at its default keeps the keys; a changed one does not."""
+    assert digest(_Settings()) == digest(_Settings(n=3)) == digest(_Later())
+    assert digest(_Settings(n=4)) == digest(_Later(n=4)) != digest(_Settings())
+    assert digest(_Later(added=0.7)) != digest(_Later())
+
+
 def test_a_kept_value_is_computed_once(tmp_path):
     calls = []
 

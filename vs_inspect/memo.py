@@ -31,9 +31,15 @@ def digest(*parts: Any) -> str:
             h.update(np.ascontiguousarray(x).tobytes())
         elif dataclasses.is_dataclass(x) and not isinstance(x, type):
             h.update(type(x).__name__.encode())
+            # a settings record (every field has a default) counts by what differs from its
+            # defaults, so that settings added, renamed or removed at their defaults keep the keys
+            default = _defaults(type(x))
             for f in dataclasses.fields(x):
+                v = getattr(x, f.name)
+                if default is not None and _same(v, getattr(default, f.name)):
+                    continue
                 h.update(f.name.encode())
-                feed(getattr(x, f.name))
+                feed(v)
         elif isinstance(x, dict):
             h.update(b"{")
             for k in sorted(x, key=repr):
@@ -51,6 +57,21 @@ def digest(*parts: Any) -> str:
     for p in parts:
         feed(p)
     return h.hexdigest()
+
+
+def _defaults(cls: type):
+    """cls() when every field of the dataclass has a default, else None."""
+    if all(f.default is not dataclasses.MISSING or f.default_factory is not dataclasses.MISSING
+           for f in dataclasses.fields(cls)):
+        return cls()
+    return None
+
+
+def _same(a: Any, b: Any) -> bool:
+    try:
+        return bool(a == b) and type(a) is type(b)
+    except ValueError:  # arrays
+        return False
 
 
 class Memo:
