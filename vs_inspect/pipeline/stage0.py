@@ -205,14 +205,13 @@ def _video_cues(sources, cfg: CueConfig, sink: Sink, engine: Engine, progress: b
     vids, videos = {}, {}
     t0 = time.perf_counter()
     # two videos at a time on threads locally: one video alone keeps 2 cores only partly busy (the
-    # tracks are the same either way). Not with learned keyframe descriptors: they set torch's
-    # process-wide thread count around each call
+    # tracks are the same either way)
     task = (cfg, sink.options is not None, need_sfm)
     keys = {s.info.name: f"video-{s.info.name}-{digest(str(s.path), s.info, task)}" for s in sources}
     todo = [s for s in sources if not memo.has(keys[s.info.name])]
     done = dict(zip([s.info.name for s in todo],
                     engine.map(video_cues_task, todo, shared=task, desc="cues per video", unit="video",
-                               progress=progress, threads=cfg.match.descriptor == "sift")))
+                               progress=progress, threads=True)))
     for src in sources:
         out = memo.get(keys[src.info.name], lambda: done[src.info.name])
         name = src.info.name

