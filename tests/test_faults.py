@@ -617,7 +617,7 @@ def test_sigterm_during_sfm_removes_the_scratch_folder(tmp_path):
             for _ in range(600):
                 time.sleep(0.1)
                 signals.checkpoint()
-        c._sift_database = slow
+        c.sift_database = slow
         from vs_inspect.cues.config import CameraConfig
         img = numpy.zeros((64, 64, 3), numpy.uint8)
         frames = {"a": ([0, 1, 2], [img] * 3, [None] * 3), "b": ([0, 1, 2], [img] * 3, [None] * 3)}

@@ -1,5 +1,5 @@
 """Camera estimation: COLMAP's SIFT database does not depend on the number of extraction threads
-(cues/cameras/sfm.SFM_THREADS: the same images, features and matches; matching runs on one
+(cues/cameras/colmap.SFM_THREADS: the same images, features and matches; matching runs on one
 thread); a moving camera's SfM frames are matched sequentially (CameraConfig.sequence_overlap),
 every pair across videos; COLMAP's mapper runs without structure-less registration; the XFeat
 model that "auto" builds beside SIFT's mapping is cancelled when not needed, and its folder goes;
@@ -17,6 +17,7 @@ import cv2
 import numpy as np
 import pytest
 
+from vs_inspect.cues.cameras import colmap
 from vs_inspect.cues.cameras import sfm as cameras
 from vs_inspect.cues.cameras.sfm import estimate_cameras
 from vs_inspect.cues.config import CameraConfig
@@ -53,11 +54,11 @@ def _reader(masks):
 
 def _database(tmp, threads: int, monkeypatch) -> dict:
     pycolmap = import_pycolmap()
-    monkeypatch.setattr(cameras, "SFM_THREADS", threads)
+    monkeypatch.setattr(colmap, "SFM_THREADS", threads)
     db = tmp / f"db{threads}.db"
     reader = _reader(tmp / "masks")
     # COLMAP's own extraction on every image (ASIFT's threads: test_static_images_get_asift_...)
-    cameras._sift_database(db, tmp / "images", reader, CameraConfig(max_features=1024, asift_per_view=0),
+    colmap.sift_database(db, tmp / "images", reader, CameraConfig(max_features=1024, asift_per_view=0),
                            few=False, seed=0)
     d = pycolmap.Database.open(db)
     try:
@@ -87,7 +88,7 @@ def test_sift_database_is_the_same_with_any_number_of_threads(tmp_path, monkeypa
     assert one["verified"].keys() == two["verified"].keys()
     # matching runs on one thread (SFM_MATCH_THREADS): COLMAP's threaded matching was not
     # bit-exact (575 matches of a pair against 576 here once; 235 against 1058 on a rendered scene)
-    assert cameras.SFM_MATCH_THREADS == 1
+    assert colmap.SFM_MATCH_THREADS == 1
     for table in ("matches", "verified"):
         for pid, m in one[table].items():
             np.testing.assert_array_equal(m, two[table][pid], err_msg=f"{table} {pid}")
@@ -95,14 +96,14 @@ def test_sift_database_is_the_same_with_any_number_of_threads(tmp_path, monkeypa
 
 def test_sfm_image_pairs_match_a_moving_video_sequentially():
     names = ["s/000000.jpg"] + [f"m/{k:06d}.jpg" for k in range(0, 200, 10)]  # 20 frames of m
-    pairs = cameras.sfm_image_pairs(names, {"s": False, "m": True}, overlap=3)
+    pairs = colmap.sfm_image_pairs(names, {"s": False, "m": True}, overlap=3)
     gaps = sorted({abs(int(a[2:8]) - int(b[2:8])) // 10 for a, b in pairs if a[0] == b[0] == "m"})
     assert gaps == [1, 2, 3, 4, 8, 16]  # the neighbours, then the powers of two
     assert sum(1 for a, b in pairs if "s/000000.jpg" in (a, b)) == 20  # the static image with every frame
     assert all(names.index(a) < names.index(b) for a, b in pairs)  # in the given order
-    every = cameras.sfm_image_pairs(names, {"s": False, "m": True}, overlap=0)
+    every = colmap.sfm_image_pairs(names, {"s": False, "m": True}, overlap=0)
     assert len(every) == 21 * 20 // 2
-    assert cameras.sfm_image_pairs(names, {"s": False, "m": False}, overlap=3) == every
+    assert colmap.sfm_image_pairs(names, {"s": False, "m": False}, overlap=3) == every
 
 
 def test_sift_database_matches_only_the_chosen_pairs(tmp_path):
@@ -110,7 +111,7 @@ def test_sift_database_matches_only_the_chosen_pairs(tmp_path):
     pycolmap = import_pycolmap()
     reader = _reader(tmp_path / "masks")
     db = tmp_path / "db.db"
-    cameras._sift_database(db, tmp_path / "images", reader, CameraConfig(max_features=1024, sequence_overlap=1),
+    colmap.sift_database(db, tmp_path / "images", reader, CameraConfig(max_features=1024, sequence_overlap=1),
                            few=False, seed=0, moving={"v0": True, "v1": False})
     d = pycolmap.Database.open(db)
     try:
@@ -131,7 +132,7 @@ def _features_in_database(tmp, name: str, cfg: CameraConfig, moving: dict[str, b
     pycolmap = import_pycolmap()
     reader = _reader(tmp / "masks")
     db = tmp / f"{name}.db"
-    cameras._sift_database(db, tmp / "images", reader, cfg, few=False, seed=0, moving=moving)
+    colmap.sift_database(db, tmp / "images", reader, cfg, few=False, seed=0, moving=moving)
     d = pycolmap.Database.open(db)
     try:
         return {im.name: (np.asarray(d.read_keypoints(im.image_id))[:, :2],

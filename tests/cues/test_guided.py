@@ -10,7 +10,7 @@ import shutil
 import numpy as np
 import pytest
 
-from vs_inspect.cues.cameras import sfm as cameras
+from vs_inspect.cues.cameras import colmap
 from vs_inspect.cues.features.guided import guided_matches
 from vs_inspect.signals import import_pycolmap
 
@@ -162,7 +162,7 @@ def test_guided_matching_refuses_wrong_shapes():
 
 
 def test_guided_rematch_finds_colmaps_own_guided_matches(tmp_path):
-    """COLMAP's guided matching on a real database, then cameras._guided_rematch on a copy of it
+    """COLMAP's guided matching on a real database, then colmap.guided_rematch on a copy of it
     (each pair's stored geometry is the one COLMAP guided its matching with; on the 720p timing
     scene's database a fresh verification gave it bit for bit): the same matches."""
     pycolmap = import_pycolmap()
@@ -179,12 +179,12 @@ def test_guided_rematch_finds_colmaps_own_guided_matches(tmp_path):
                               reader_options=reader, extraction_options=ext, device=pycolmap.Device.cpu)
     mopt = pycolmap.FeatureMatchingOptions()
     mopt.guided_matching = True
-    verification = cameras._verification(0)
+    verification = colmap.seeded_verification(0)
     pycolmap.match_exhaustive(db, matching_options=mopt, verification_options=verification,
                               device=pycolmap.Device.cpu)
     ours = tmp_path / "ours.db"
     shutil.copy(db, ours)
-    cameras._guided_rematch(ours, mopt.sift, verification)
+    colmap.guided_rematch(ours, mopt.sift, verification)
 
     def verified(path):
         d = pycolmap.Database.open(path)

@@ -19,15 +19,21 @@ reconstruction uses for a static camera's image.
 from __future__ import annotations
 
 import contextlib
+import logging
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from pathlib import Path
 
 import cv2
 import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
 from tqdm import tqdm
 
 from ...geometry.camera_model import scale_points
+from ...geometry.timing import frame_brackets, interpolate_poses
 from ...signals import import_pycolmap
+from ..config import CameraConfig
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -282,3 +288,92 @@ def register_frames(features: FrameFeatures, keyframes: list[Keyframe], camera, 
         inl.append(int(res["num_inliers"]))
     return FrameRegistration(np.array(frames, int), np.array(poses).reshape(-1, 4, 4),
                              np.array(inl, int), len(features.frames))
+
+
+def registration_inputs(rec, database: Path, name: str, learned, sfm_scale: float,
+                         frame_features: dict | None, frame_images: dict | None, progress: bool = False,
+                         cancel=None):
+    """(keyframes, frame features, match) to register a moving video's frames against rec with,
+    or None when its frames are not available: SIFT's (frame_features, computed where the video
+    was decoded; the database's descriptors) or, for a learned database (learned: (matcher, image
+    id -> descriptors)), the matcher's own features on frame_images (name -> (a function giving
+    the frames, their number))."""
+    from .registration import (cosine_matches, keyframes_of, learned_frame_features, ratio_matches, sift_descriptors)
+
+    if learned is None:
+        if not frame_features or name not in frame_features:
+            return None
+        with sift_descriptors(database) as read:
+            return keyframes_of(rec, name, read), frame_features[name], ratio_matches()
+    if not frame_images or name not in frame_images:
+        return None
+    matcher, descriptors = learned
+    images, total = frame_images[name]
+    label = f"{name}: features to register" if progress else None
+    frames = images() if cancel is None else cancel.each(images())
+    feats = learned_frame_features(frames, matcher, sfm_scale, label, total)
+    return keyframes_of(rec, name, descriptors.__getitem__), feats, cosine_matches()
+
+
+def register_others(rec, name: str, keyframes, features, match, camera, sfm_scale: float, fk: np.ndarray,
+                     poses: np.ndarray, cfg: CameraConfig, seed: int, progress: bool = False,
+                     cancel=None):
+    """A moving video's frames outside the reconstruction registered against it: (frames (R,),
+    cam_from_world (R,4,4) of the SfM frames and the newly registered ones, report). A frame
+    whose rotation is farther from its nearest SfM frame's than a head can turn (10° per frame
+    between them, plus 5°) is refused as a wrong registration."""
+    from scipy.spatial.transform import Rotation
+
+    from .registration import register_frames
+
+    def angle_deg(Ra, Rb):
+        return float(np.degrees((Rotation.from_matrix(Ra) * Rotation.from_matrix(Rb).inv()).magnitude()))
+
+    reg = register_frames(features, keyframes, camera, sfm_scale, match=match,
+                          min_inliers=cfg.register_min_inliers, seed=seed,
+                          progress=f"{name}: registering frames" if progress else None,
+                          check=None if cancel is None else cancel.check)
+    own = np.isin(reg.frames, fk)  # reconstructed frames registered from their neighbours: a check
+    keep = ~own
+    for r, k in enumerate(reg.frames):
+        if own[r]:
+            continue
+        n = int(np.argmin(np.abs(fk - k)))
+        keep[r] = angle_deg(reg.cam_from_world[r, :3, :3], poses[n, :3, :3]) <= 10.0 * abs(int(fk[n]) - int(k)) + 5.0
+    # the check: on the reconstructed frames (not the first or last), the registration from the
+    # neighbours and the slerp between the neighbouring reconstructed frames, against the
+    # reconstruction's own pose (degrees)
+    err_reg, err_slerp = [], []
+    order = np.argsort(fk)
+    for r in np.nonzero(own)[0]:
+        k = int(reg.frames[r])
+        i = int(np.nonzero(fk == k)[0][0])
+        others = np.array([j for j in order if j != i])
+        if len(others) < 2 or k <= fk[others].min() or k >= fk[others].max():
+            continue
+        err_reg.append(angle_deg(reg.cam_from_world[r, :3, :3], poses[i, :3, :3]))
+        T = slerp_poses(fk[others], poses[others], k + 1)[k]
+        err_slerp.append(angle_deg(T[:3, :3], poses[i, :3, :3]))
+    new_frames = reg.frames[keep]
+    info = FrameRegistration(int((~np.isin(features.frames, fk)).sum()), int(keep.sum()), int((~own).sum() - keep.sum()),
+                             float(np.median(reg.inliers[keep])) if keep.any() else 0.0,
+                             tuple(new_frames.tolist()), len(err_reg),
+                             round(float(np.median(err_reg)), 3) if err_reg else None,
+                             round(float(np.median(err_slerp)), 3) if err_slerp else None)
+    log.info("%s: %d of %d other frames registered against the reconstruction (median %.0f inliers, "
+             "%d refused for a jump); on %d reconstructed frames, registered from their neighbours: "
+             "median rotation error %s° (slerp between neighbours: %s°)", name, info.registered,
+             info.tried, info.median_inliers, info.refused, len(err_reg),
+             info.check_rotation_deg_median, info.check_slerp_rotation_deg_median)
+    fk = np.concatenate([fk, new_frames])
+    poses = np.concatenate([poses, reg.cam_from_world[keep]])
+    return fk, poses, info
+
+
+def slerp_poses(frames_known: np.ndarray, poses: np.ndarray, T: int) -> np.ndarray:
+    """(T,4,4) cam_from_world at every frame: rotation slerp and centre lerp between known frames
+    (held constant before the first and after the last)."""
+    order = np.argsort(frames_known)
+    fk = frames_known[order].astype(float)
+    k, w = frame_brackets(fk, np.clip(np.arange(T), fk[0], fk[-1]))
+    return interpolate_poses(poses[order], k, w)

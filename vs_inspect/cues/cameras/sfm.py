@@ -11,8 +11,6 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
-import shutil
-import tempfile
 import threading
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
@@ -25,23 +23,18 @@ import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
 from ...cue_stats import FrameRegistration
 from ...geometry.camera_model import Lens, scale_intrinsics
 from ...geometry.epipolar import camera_centers
-from ...geometry.timing import frame_brackets, interpolate_poses
 from ... import signals
 from ...signals import import_pycolmap
 from ...types import CameraTrack
 from ..config import CameraConfig
-from ..features.guided import guided_matches
+from .colmap import (image_pair_matches, learned_database, log_into, scratch, sfm_image_file, sfm_image_pairs,
+                     sift_database)
+from .registration import register_others, registration_inputs, slerp_poses
 from ..config import LEARNED_FEATURES
 from ..features.learned import learned_unavailable, lightglue_available, xfeat_available
 
 log = logging.getLogger(__name__)
 
-# threads of SIFT extraction; -1 = all cores. Matching and the mapper stay on one: with two
-# matching threads, 2 of 10 runs on one database gave other matches (a pair 235 instead of 1058,
-# so another camera model), with one 12 of 12 were identical at about the same wall time; with
-# several mapper threads other cameras registered from run to run
-SFM_THREADS = -1
-SFM_MATCH_THREADS = 1
 
 
 @dataclass(frozen=True)
@@ -71,15 +64,6 @@ def _pose_matrix(rigid) -> np.ndarray:
     M = np.eye(4)
     M[:3, :4] = np.asarray(rigid.matrix())
     return M
-
-
-def _slerp_poses(frames_known: np.ndarray, poses: np.ndarray, T: int) -> np.ndarray:
-    """(T,4,4) cam_from_world at every frame: rotation slerp and centre lerp between known frames
-    (held constant before the first and after the last)."""
-    order = np.argsort(frames_known)
-    fk = frames_known[order].astype(float)
-    k, w = frame_brackets(fk, np.clip(np.arange(T), fk[0], fk[-1]))
-    return interpolate_poses(poses[order], k, w)
 
 
 def _mean_pose(poses: np.ndarray) -> np.ndarray:
@@ -181,10 +165,10 @@ class CameraModels:
         self._xfeat_built = None  # (XFeat's _Model, its registered estimate or None) once awaited
 
     def __enter__(self) -> CameraModels:
-        tmp = self._stack.enter_context(_scratch(self._workdir))
+        tmp = self._stack.enter_context(scratch(self._workdir))
         self._tmp = tmp
         self._xfeat = self._stack.enter_context(_SideModel(self._xfeat_model, self._workdir))
-        _log_into(import_pycolmap(), tmp)  # COLMAP's log files (both models') go to the scratch folder
+        log_into(import_pycolmap(), tmp)  # COLMAP's log files (both models') go to the scratch folder
         return self
 
     def __exit__(self, *exc) -> None:
@@ -254,7 +238,7 @@ class CameraModels:
         self._third_done = True
         frames = fewer_frames(self._frames, self._moving, cfg.auto_aliked_frames)
         pixels = max((im.shape[0] * im.shape[1] for _, images, _ in frames.values() for im in images), default=0)
-        names = [f"{n}/{_sfm_image_file(k)}" for n, (idx, _, _) in frames.items() for k in idx]
+        names = [f"{n}/{sfm_image_file(k)}" for n, (idx, _, _) in frames.items() for k in idx]
         pairs = len(sfm_image_pairs(names, self._moving, cfg.sequence_overlap))
         too_much = None
         if pixels > cfg.auto_aliked_max_pixels:
@@ -267,7 +251,7 @@ class CameraModels:
             return None
         cfg = replace(cfg, features="aliked", max_features=cfg.auto_aliked_max_features,
                       moving_frames=cfg.auto_aliked_frames)
-        tmp = self._stack.enter_context(_scratch(self._workdir))
+        tmp = self._stack.enter_context(scratch(self._workdir))
         model = _build_model("aliked", frames, self._sizes, self._moving, cfg, tmp, self._seed)
         _, num_frames, moving, _, seed = self._inputs
         return _estimate_from(model, frames, num_frames, moving, cfg, seed, **self._registration)
@@ -338,7 +322,7 @@ class _SideModel:
     def start(self) -> None:
         if self._future is not None or (os.cpu_count() or 1) < 2:
             return
-        tmp = self._stack.enter_context(_scratch(self._workdir))
+        tmp = self._stack.enter_context(scratch(self._workdir))
         cancel = _Cancel()
         pool = self._stack.enter_context(ThreadPoolExecutor(1, thread_name_prefix="side-model"))
         self._stack.callback(cancel.cancel)  # on leaving: cancel first, then the pool waits, then tmp goes
@@ -346,254 +330,8 @@ class _SideModel:
 
     def result(self):
         if self._future is None:
-            return self._build(self._stack.enter_context(_scratch(self._workdir)), None)
+            return self._build(self._stack.enter_context(scratch(self._workdir)), None)
         return self._future.result()
-
-
-def _sfm_image_file(frame_index) -> str:
-    """The file an SfM frame is written to in its video's folder; zero-padded, so name order is frame order."""
-    return f"{int(frame_index):06d}.jpg"
-
-
-def sfm_image_pairs(names: list[str], moving: dict[str, bool], overlap: int) -> list[tuple[str, str]]:
-    """The SfM image pairs to match, names "video/frame.jpg" in the given order.
-
-    Images of different videos: every pair. Two frames of one moving video, i < j in its sorted
-    SfM frames: when j - i <= overlap or j - i is a power of two (COLMAP's sequential matching
-    with quadratic overlap); overlap 0: every pair.
-    """
-    video = {n: n.split("/")[0] for n in names}
-    seen: dict[str, int] = {}
-    rank: dict[str, int] = {}  # place of each frame in its video's sorted frames
-    for n in sorted(names):
-        rank[n] = seen[video[n]] = seen.get(video[n], -1) + 1
-    out = []
-    for ia, a in enumerate(names):
-        sequential = overlap > 0 and moving.get(video[a], False)
-        for b in names[ia + 1:]:
-            gap = abs(rank[a] - rank[b])
-            if sequential and video[b] == video[a] and gap > overlap and gap & (gap - 1):
-                continue  # neither a neighbour nor a power of two apart
-            out.append((a, b))
-    return out
-
-
-def _verification(seed: int):
-    """COLMAP's two-view geometric verification with a seeded RANSAC.
-
-    Its RANSAC runs in worker threads that set_random_seed does not reach: unseeded, repeated runs
-    on one input registered different numbers of cameras."""
-    pycolmap = import_pycolmap()
-
-    verify = pycolmap.TwoViewGeometryOptions()
-    verify.ransac.random_seed = seed
-    return verify
-
-
-def _sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool, seed: int,
-                   moving: dict[str, bool] | None = None,
-                   after_extraction: Callable[[], None] | None = None) -> None:
-    """COLMAP's SIFT features and matching (the pairs of sfm_image_pairs: exhaustive when that is
-    every pair) with geometric verification. after_extraction: called once the features are in
-    the database, before the matching."""
-    pycolmap = import_pycolmap()
-
-    ext = pycolmap.FeatureExtractionOptions()
-    ext.sift.max_num_features = cfg.max_features
-    # images are numbered first, in name order: extraction threads finish in any order, and the
-    # mapper's result depends on the numbering. Each image's features do not depend on the
-    # thread (tests/cues/test_cameras.py)
-    ext.num_threads = SFM_THREADS
-    ext.sift.estimate_affine_shape = few  # wide baselines between few views: affine + DSP SIFT
-    ext.sift.domain_size_pooling = few
-    pycolmap.Database.open(db).close()  # import_images needs the file to exist
-    pycolmap.import_images(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER, options=reader)
-    if cfg.asift_per_view:
-        _asift_static_images(db, img_dir, Path(reader.mask_path), cfg.asift_per_view, moving or {})
-    # COLMAP's extractor skips the images that have features already (the static ones with ASIFT)
-    pycolmap.extract_features(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER,
-                              reader_options=reader, extraction_options=ext,
-                              device=pycolmap.Device.cpu)
-    if after_extraction is not None:
-        after_extraction()
-    mopt = pycolmap.FeatureMatchingOptions()
-    mopt.num_threads = SFM_MATCH_THREADS
-    verification = _verification(seed)
-    names = sorted(str(p.relative_to(img_dir)) for p in img_dir.glob("*/*.jpg"))
-    pairs = sfm_image_pairs(names, moving or {}, cfg.sequence_overlap)
-    if len(pairs) == len(names) * (len(names) - 1) // 2:
-        pycolmap.match_exhaustive(db, matching_options=mopt, verification_options=verification,
-                                  device=pycolmap.Device.cpu)
-    else:
-        log.info("SIFT matching: %d of the %d image pairs (moving cameras' frames: sequential)",
-                 len(pairs), len(names) * (len(names) - 1) // 2)
-        pairing = pycolmap.ImportedPairingOptions()
-        pairing.match_list_path = str(_write_pairs(db.parent / "pairs.txt", pairs))
-        pycolmap.match_image_pairs(db, matching_options=mopt, pairing_options=pairing,
-                                   verification_options=verification, device=pycolmap.Device.cpu)
-    _guided_rematch(db, mopt.sift, verification)
-
-
-def _asift_static_images(db: Path, img_dir: Path, mask_dir: Path, per_view: int,
-                         moving: dict[str, bool]) -> None:
-    """ASIFT features (registration.affine_sift, per_view per simulated view) of every static
-    video's images written into the database, in COLMAP's form: cameras far apart around one floor
-    see it foreshortened along different headings, and SIFT matches almost none of it."""
-    pycolmap = import_pycolmap()
-
-    from .registration import affine_sift
-
-    database = pycolmap.Database.open(db)
-    try:
-        for im in sorted(database.read_all_images(), key=lambda im: im.image_id):
-            if moving.get(im.name.split("/")[0], False):
-                continue
-            grey = cv2.imread(str(img_dir / im.name), cv2.IMREAD_GRAYSCALE)
-            mask = cv2.imread(str(mask_dir / (im.name + ".png")), cv2.IMREAD_GRAYSCALE)
-            xy, desc = affine_sift(grey, mask, per_view)
-            database.write_keypoints(im.image_id, xy + 0.5)  # COLMAP: pixel centres at +0.5
-            database.write_descriptors(im.image_id,
-                                       pycolmap.FeatureDescriptors(pycolmap.FeatureExtractorType.SIFT, desc))
-            log.info("%s: %d ASIFT features", im.name, len(xy))
-    finally:
-        database.close()
-
-
-def _guided_rematch(db: Path, sift_options, verification) -> None:
-    """Every verified pair matched again along its two-view geometry (COLMAP's guided matching,
-    done by guided.py: its own took 10x the CPU for the same matches). A pair keeps its first
-    matches when the guided ones are fewer than verification asks for."""
-    pycolmap = import_pycolmap()
-
-    config = pycolmap.TwoViewGeometryConfiguration
-    by_f = {config.CALIBRATED, config.UNCALIBRATED}
-    by_h = {config.PLANAR, config.PANORAMIC, config.PLANAR_OR_PANORAMIC}
-    database = pycolmap.Database.open(db)
-    try:
-        pair_ids, geometries = database.read_two_view_geometries()
-        todo = [(pycolmap.pair_id_to_image_pair(pid), g)
-                for pid, g in zip(pair_ids, geometries) if g.config in by_f | by_h]
-        ids = sorted({i for pair, _ in todo for i in pair})
-        # copies: the arrays outlive pycolmap's objects and are read from other threads
-        xy = {i: np.array(database.read_keypoints(i)[:, :2], np.float32) for i in ids}  # guided.py's type
-        desc = {i: np.array(database.read_descriptors(i).data, np.uint8) for i in ids}
-
-        def rematch(item):
-            (a, b), g = item
-            homography = g.config in by_h
-            return guided_matches(xy[a], desc[a], xy[b], desc[b], g.H if homography else g.F, homography,
-                                  verification.ransac.max_error, sift_options.max_ratio,
-                                  sift_options.max_distance)
-
-        # the kernel releases the GIL; each pair's matches do not depend on the thread. The first
-        # pair runs alone so that numba compiles (or loads) the kernel once, not in every thread
-        found = [rematch(item) for item in todo[:1]]
-        with ThreadPoolExecutor(os.cpu_count() or 1) as pool:
-            found += pool.map(rematch, todo[1:])
-        for ((a, b), g), m in zip(todo, found):
-            if len(m) >= verification.min_num_inliers:
-                g.inlier_matches = m.astype(np.uint32)
-                database.update_two_view_geometry(a, b, g)
-    finally:
-        database.close()
-
-
-def _write_pairs(path: Path, pairs: list[tuple[str, str]]) -> Path:
-    """COLMAP's image pair list: one "name_a name_b" per line."""
-    path.write_text("".join(f"{a} {b}\n" for a, b in pairs))
-    return path
-
-
-def _learned_database(features: str, db: Path, img_dir: Path, mask_dir: Path, reader, cfg: CameraConfig,
-                      seed: int, moving: dict[str, bool] | None = None,
-                      cancel: _Cancel | None = None) -> tuple[object, dict[int, np.ndarray]]:
-    """Learned keypoints and their matches written into COLMAP's database, then COLMAP's geometric
-    verification, so the mapper runs as with SIFT: XFeat (mutual nearest neighbours) or ALIKED with
-    its LightGlue; the pairs of sfm_image_pairs. Returns the matcher and each image's descriptors
-    (image id -> (N,D), in the order of its keypoints in the database), which the database does not
-    hold. cancel: checked per image and per image pair."""
-    pycolmap = import_pycolmap()
-
-    from ..features.learned import make_matcher
-
-    pycolmap.Database.open(db).close()  # import_images needs the file to exist
-    pycolmap.import_images(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER, options=reader)
-    matcher = make_matcher(features, top_k=cfg.max_features)
-    database = pycolmap.Database.open(db)
-    try:
-        feats = {}
-        images = sorted(database.read_all_images(), key=lambda im: im.image_id)
-        for im in images:
-            if cancel is not None:
-                cancel.check()
-            img = cv2.imread(str(img_dir / im.name))
-            mask = cv2.imread(str(mask_dir / (im.name + ".png")), cv2.IMREAD_GRAYSCALE)
-            feats[im.image_id] = matcher.features(img, None if mask is None else mask > 0)
-            # COLMAP: pixel centres at +0.5
-            database.write_keypoints(im.image_id, feats[im.image_id].keypoints.astype(np.float32) + 0.5)
-        lines = []
-        by_name = {im.name: im for im in images}
-        for na, nb in sfm_image_pairs([im.name for im in images], moving or {}, cfg.sequence_overlap):
-            if cancel is not None:
-                cancel.check()
-            a, b = by_name[na], by_name[nb]
-            m = matcher.match(feats[a.image_id], feats[b.image_id])
-            if len(m):
-                database.write_matches(a.image_id, b.image_id, m.astype(np.uint32))
-                lines.append((a.name, b.name))
-    finally:
-        database.close()
-    pycolmap.verify_matches(db, _write_pairs(db.parent / "pairs.txt", lines), options=_verification(seed))
-    return matcher, {iid: f.descriptors for iid, f in feats.items()}
-
-
-def _image_pair_matches(db: Path) -> tuple:
-    """Matches and geometrically verified matches of every matched SfM image pair (the recording
-    and result.json show them: which frames of which videos the reconstruction could tie)."""
-    pycolmap = import_pycolmap()
-
-    database = pycolmap.Database.open(db)
-    try:
-        names = {im.image_id: im.name for im in database.read_all_images()}
-        raw = dict(zip(*database.read_all_matches()))
-        verified = {pid: len(g.inlier_matches) for pid, g in zip(*database.read_two_view_geometries())}
-    finally:
-        database.close()
-    out = []
-    for pid in sorted(set(raw) | set(verified)):
-        a, b = pycolmap.pair_id_to_image_pair(pid)
-        out.append({"a": names.get(a, str(a)), "b": names.get(b, str(b)),
-                    "matches": int(len(raw.get(pid, ()))), "verified": int(verified.get(pid, 0))})
-    log.info("SfM image pairs (matches/verified): %s",
-             ", ".join(f"{p['a']}-{p['b']} {p['matches']}/{p['verified']}" for p in out))
-    return tuple(out)
-
-
-def _log_into(pycolmap, folder: Path) -> None:
-    """Send pycolmap's (glog) log files into `folder` instead of $TMPDIR, and its thousands of
-    lines per reconstruction off stderr unless debug logging is on (`-vv`): pycolmap sets
-    alsologtostderr. Each level gets its own file name: glog names a file prefix + time + pid,
-    and a second level on the same name fails ("Could not create log file: File exists")."""
-    try:
-        pycolmap.logging.log_dir = str(folder)
-        pycolmap.logging.alsologtostderr = log.isEnabledFor(logging.DEBUG)
-        for level in (pycolmap.logging.INFO, pycolmap.logging.WARNING, pycolmap.logging.ERROR):
-            pycolmap.logging.set_log_destination(level, str(folder / f"colmap.{level.name}."))
-    except (AttributeError, TypeError):  # an older pycolmap without these controls
-        pass
-
-
-@contextlib.contextmanager
-def _scratch(workdir: str | None):
-    """A scratch folder for one reconstruction (images, masks, database, COLMAP's logs), removed
-    afterwards."""
-    tmp = Path(tempfile.mkdtemp(prefix="vs_inspect_sfm_", dir=workdir))
-    signals.register_temporary(tmp)  # removed also when the process is ended from the watchdog
-    try:
-        yield tmp
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
-        signals.unregister_temporary(tmp)
 
 
 @dataclass(frozen=True)
@@ -608,7 +346,7 @@ class _Model:
     learned: tuple | None  # (matcher, image id -> descriptors) of a learned database
     scales: dict[str, float]  # video -> SfM pixels per full-resolution pixel
     num_images: int
-    image_pairs: tuple  # _image_pair_matches
+    image_pairs: tuple  # image_pair_matches
     failed: str | None = None  # why building it failed (then no reconstruction)
 
 
@@ -632,7 +370,7 @@ def _build_model(features: str, frames_by_video, sizes, moving, cfg: CameraConfi
         (img_dir / name).mkdir(parents=True)
         (mask_dir / name).mkdir(parents=True)
         for k, img, m in zip(idx, images, masks):
-            fn = _sfm_image_file(k)
+            fn = sfm_image_file(k)
             cv2.imwrite(str(img_dir / name / fn), img, [cv2.IMWRITE_JPEG_QUALITY, 95])
             mm = np.full(img.shape[:2], 255, np.uint8) if m is None else (m.astype(np.uint8) * 255)
             cv2.imwrite(str(mask_dir / name / (fn + ".png")), mm)
@@ -644,13 +382,13 @@ def _build_model(features: str, frames_by_video, sizes, moving, cfg: CameraConfi
     pycolmap.set_random_seed(seed)  # COLMAP's RANSAC in matching and mapping
     learned = None
     if features in LEARNED_FEATURES:
-        learned = _learned_database(features, db, img_dir, mask_dir, reader, cfg, seed, moving, cancel)
+        learned = learned_database(features, db, img_dir, mask_dir, reader, cfg, seed, moving, cancel)
         if one_thread_ahead is not None:
             one_thread_ahead()
     else:
-        _sift_database(db, img_dir, reader, cfg, few=n_images <= 16, seed=seed, moving=moving,
+        sift_database(db, img_dir, reader, cfg, few=n_images <= 16, seed=seed, moving=moving,
                        after_extraction=one_thread_ahead)
-    image_pairs = _image_pair_matches(db)
+    image_pairs = image_pair_matches(db)
     opts = pycolmap.IncrementalPipelineOptions()
     opts.random_seed = seed
     # one thread everywhere and a fixed seed: with several threads COLMAP registered
@@ -722,13 +460,13 @@ def _estimate_from(model: _Model, frames_by_video, num_frames, moving, cfg: Came
         if register and moving[name] and cfg.register_every > 0:
             # the other frames registered on their own, with features of the database's kind:
             # replaces the slerp where it succeeds
-            reg = _registration_inputs(rec, model.database, name, model.learned, s, frame_features,
+            reg = registration_inputs(rec, model.database, name, model.learned, s, frame_features,
                                        frame_images, progress, cancel)
             if reg is not None:
-                fk, poses, reg_info = _register_others(rec, name, *reg, cam, s, fk, poses, cfg, seed,
+                fk, poses, reg_info = register_others(rec, name, *reg, cam, s, fk, poses, cfg, seed,
                                                        progress, cancel)
         if moving[name]:
-            T_all = _slerp_poses(fk, poses, num_frames[name])
+            T_all = slerp_poses(fk, poses, num_frames[name])
             valid = np.zeros(num_frames[name], bool)
             valid[fk.min():fk.max() + 1] = True
             track = CameraTrack(K, T_all, valid)
@@ -740,86 +478,6 @@ def _estimate_from(model: _Model, frames_by_video, num_frames, moving, cfg: Came
     cols = np.array([p.color for p in rec.points3D.values()], np.uint8) if rec.num_points3D() else None
     return CameraEstimate(cams, unreg, pts, cols, model.num_images, rec.num_reg_images(), model.features,
                           model.image_pairs)
-
-
-def _registration_inputs(rec, database: Path, name: str, learned, sfm_scale: float,
-                         frame_features: dict | None, frame_images: dict | None, progress: bool = False,
-                         cancel: _Cancel | None = None):
-    """(keyframes, frame features, match) to register a moving video's frames against rec with,
-    or None when its frames are not available: SIFT's (frame_features, computed where the video
-    was decoded; the database's descriptors) or, for a learned database (learned: (matcher, image
-    id -> descriptors)), the matcher's own features on frame_images (name -> (a function giving
-    the frames, their number))."""
-    from .registration import (cosine_matches, keyframes_of, learned_frame_features, ratio_matches, sift_descriptors)
-
-    if learned is None:
-        if not frame_features or name not in frame_features:
-            return None
-        with sift_descriptors(database) as read:
-            return keyframes_of(rec, name, read), frame_features[name], ratio_matches()
-    if not frame_images or name not in frame_images:
-        return None
-    matcher, descriptors = learned
-    images, total = frame_images[name]
-    label = f"{name}: features to register" if progress else None
-    frames = images() if cancel is None else cancel.each(images())
-    feats = learned_frame_features(frames, matcher, sfm_scale, label, total)
-    return keyframes_of(rec, name, descriptors.__getitem__), feats, cosine_matches()
-
-
-def _register_others(rec, name: str, keyframes, features, match, camera, sfm_scale: float, fk: np.ndarray,
-                     poses: np.ndarray, cfg: CameraConfig, seed: int, progress: bool = False,
-                     cancel: _Cancel | None = None):
-    """A moving video's frames outside the reconstruction registered against it: (frames (R,),
-    cam_from_world (R,4,4) of the SfM frames and the newly registered ones, report). A frame
-    whose rotation is farther from its nearest SfM frame's than a head can turn (10° per frame
-    between them, plus 5°) is refused as a wrong registration."""
-    from scipy.spatial.transform import Rotation
-
-    from .registration import register_frames
-
-    def angle_deg(Ra, Rb):
-        return float(np.degrees((Rotation.from_matrix(Ra) * Rotation.from_matrix(Rb).inv()).magnitude()))
-
-    reg = register_frames(features, keyframes, camera, sfm_scale, match=match,
-                          min_inliers=cfg.register_min_inliers, seed=seed,
-                          progress=f"{name}: registering frames" if progress else None,
-                          check=None if cancel is None else cancel.check)
-    own = np.isin(reg.frames, fk)  # reconstructed frames registered from their neighbours: a check
-    keep = ~own
-    for r, k in enumerate(reg.frames):
-        if own[r]:
-            continue
-        n = int(np.argmin(np.abs(fk - k)))
-        keep[r] = angle_deg(reg.cam_from_world[r, :3, :3], poses[n, :3, :3]) <= 10.0 * abs(int(fk[n]) - int(k)) + 5.0
-    # the check: on the reconstructed frames (not the first or last), the registration from the
-    # neighbours and the slerp between the neighbouring reconstructed frames, against the
-    # reconstruction's own pose (degrees)
-    err_reg, err_slerp = [], []
-    order = np.argsort(fk)
-    for r in np.nonzero(own)[0]:
-        k = int(reg.frames[r])
-        i = int(np.nonzero(fk == k)[0][0])
-        others = np.array([j for j in order if j != i])
-        if len(others) < 2 or k <= fk[others].min() or k >= fk[others].max():
-            continue
-        err_reg.append(angle_deg(reg.cam_from_world[r, :3, :3], poses[i, :3, :3]))
-        T = _slerp_poses(fk[others], poses[others], k + 1)[k]
-        err_slerp.append(angle_deg(T[:3, :3], poses[i, :3, :3]))
-    new_frames = reg.frames[keep]
-    info = FrameRegistration(int((~np.isin(features.frames, fk)).sum()), int(keep.sum()), int((~own).sum() - keep.sum()),
-                             float(np.median(reg.inliers[keep])) if keep.any() else 0.0,
-                             tuple(new_frames.tolist()), len(err_reg),
-                             round(float(np.median(err_reg)), 3) if err_reg else None,
-                             round(float(np.median(err_slerp)), 3) if err_slerp else None)
-    log.info("%s: %d of %d other frames registered against the reconstruction (median %.0f inliers, "
-             "%d refused for a jump); on %d reconstructed frames, registered from their neighbours: "
-             "median rotation error %s° (slerp between neighbours: %s°)", name, info.registered,
-             info.tried, info.median_inliers, info.refused, len(err_reg),
-             info.check_rotation_deg_median, info.check_slerp_rotation_deg_median)
-    fk = np.concatenate([fk, new_frames])
-    poses = np.concatenate([poses, reg.cam_from_world[keep]])
-    return fk, poses, info
 
 
 def undistort_with_colmap(cam: EstimatedCamera, xy: np.ndarray) -> np.ndarray:
