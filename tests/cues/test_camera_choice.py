@@ -11,7 +11,7 @@ from vs_inspect.types import CameraTrack, TrackPairs
 
 from tests.cue_records import joint
 from vs_inspect.cue_stats import CueStats, MovingPointsCameras, SfmRecord
-from vs_inspect.cues.pairing.joint import GeometricPairing
+from vs_inspect.cues.pairing.pairing import GeometricPairing
 from vs_inspect.cues.records import Note
 
 from .stage0_fakes import K

@@ -6,7 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vs_inspect.cues.pairing.votes import (GeometricPairStats, JointChoice, consistent_at, consistent_peaks, disputed_by_other_model, dissenting_cameras, epipolar_extent, geometric_pairs, joint_offsets, joint_vote_share, rival_offsets, supporters)
+from vs_inspect.cues.pairing.joint import JointChoice, consistent_peaks, joint_offsets
+from vs_inspect.cues.pairing.rules import disputed_by_other_model, dissenting_cameras, joint_vote_share, rival_offsets
+from vs_inspect.cues.pairing.votes import GeometricPairStats, consistent_at, epipolar_extent, geometric_pairs, supporters
 from vs_inspect.geometry.epipolar import fundamental_from_cameras, look_at, project
 from vs_inspect.geometry.offsets import OffsetGrid
 from vs_inspect.types import CameraTrack, VideoInfo

@@ -7,8 +7,11 @@ from __future__ import annotations
 import numpy as np
 
 from vs_inspect.cues.config import CueConfig, GeometricPairConfig
-from vs_inspect.cues.pairing.votes import GeometricPairStats, JointChoice
-from vs_inspect.cues.pairing.joint import _add_joint_pairs
+import vs_inspect.cues.pairing.joint as joint_mod
+import vs_inspect.cues.pairing.rules as rules_mod
+from vs_inspect.cues.pairing.joint import JointChoice
+from vs_inspect.cues.pairing.votes import GeometricPairStats
+from vs_inspect.cues.pairing.pairing import _add_joint_pairs
 from vs_inspect.geometry.epipolar import look_at
 from vs_inspect.cue_stats import CueStats, PairCueStats, to_json
 from vs_inspect.types import CameraTrack, TrackPairs
@@ -79,7 +82,7 @@ def test_with_the_rule_before_two_moving_cameras_still_need_a_third():
 def test_transfer_matches_join_both_source_pairs_in_video_order():
     """A confirmed camera's tracks that follow a trajectory are paired with both tracks the
     trajectory came from, in each pair's key order (the camera first or second)."""
-    from vs_inspect.cues.pairing.joint import _add_transfer_pairs
+    from vs_inspect.cues.pairing.pairing import _add_transfer_pairs
     from vs_inspect.cues.pairing.transfer import TransferCheck, TransferLandscape, Trajectories
 
     # trajectories 0 and 1 from pair (a, c): tracks a3-c5 and a4-c6; the checked camera is b
@@ -106,9 +109,8 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
     stay (alone, unchecked descriptor pairs put cameras 88-1456 ms off, accepted)."""
     from types import SimpleNamespace
 
-    import vs_inspect.cues.pairing.votes as gp
     from vs_inspect.cues.config import GeometricPairConfig
-    from vs_inspect.cues.pairing.joint import add_geometric_pairs
+    from vs_inspect.cues.pairing.pairing import add_geometric_pairs
     from vs_inspect.types import Tracks
 
     from .test_transfer import _scene
@@ -125,7 +127,7 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
     vids = {n: SimpleNamespace(info=infos[n]) for n in "abc"}
     tracks = {n: Tracks(xy[n], None) for n in "abc"}
     cfg = CueConfig(geometric=GeometricPairConfig(joint_min_margin=1e9))  # no camera sure
-    monkeypatch.setattr(gp, "consistent_peaks", lambda *a, **k: (None, "inconsistent"))
+    monkeypatch.setattr(joint_mod, "consistent_peaks", lambda *a, **k: (None, "inconsistent"))
     got = add_geometric_pairs(pairs, cams, tracks, vids, cfg, progress=False, estimated=True)
     out, voted, stats = got.pairs, got.voted, _as_json(got)
     messages = [n.message for n in got.notes]
@@ -157,15 +159,14 @@ def _sure_of_all(monkeypatch, offsets: dict[str, float], estimated: bool = True,
     camera model's vote peaks): (pairs, stats, stage events, the scene's rows of each point)."""
     from types import SimpleNamespace
 
-    import vs_inspect.cues.pairing.votes as gp
-    from vs_inspect.cues.pairing.joint import add_geometric_pairs
+    from vs_inspect.cues.pairing.pairing import add_geometric_pairs
     from vs_inspect.types import Tracks
 
     from .test_transfer import _scene
 
     infos, cams, xy, _, row_of = _scene({"a": 0.0, "b": 0.42, "c": -0.3})
     pairs = {k: TrackPairs(*k, np.zeros((0, 2), np.int64)) for k in (("a", "b"), ("a", "c"), ("b", "c"))}
-    monkeypatch.setattr(gp, "joint_offsets", lambda *a, **k: JointChoice(dict(offsets), 30.0, dict.fromkeys(offsets, 10.0)))
+    monkeypatch.setattr(joint_mod, "joint_offsets", lambda *a, **k: JointChoice(dict(offsets), 30.0, dict.fromkeys(offsets, 10.0)))
     got = add_geometric_pairs(pairs, cams, {n: Tracks(xy[n], None) for n in "abc"},
                               {n: SimpleNamespace(info=infos[n]) for n in "abc"}, cfg,
                               progress=False, estimated=estimated, other_peaks=other_peaks,
@@ -203,7 +204,6 @@ def test_sure_cameras_refuted_in_three_views_get_no_pairs(monkeypatch):
 def test_a_sure_camera_with_a_rival_offset_says_how_far_apart_the_two_offsets_lie(monkeypatch):
     """The rival-offset rule's refusal (geometric_pairs.rival_offsets, replaced here) reaches the
     record with its few words: how far the three-view check's best offset lies from the joint one."""
-    import vs_inspect.cues.pairing.votes as gp
 
     seen = {}
 
@@ -211,7 +211,7 @@ def test_a_sure_camera_with_a_rival_offset_says_how_far_apart_the_two_offsets_li
         seen.update(best=best, joint=dict(joint.offsets_s))
         return {"c": "its three-view check follows more trajectories elsewhere: two offsets"}
 
-    monkeypatch.setattr(gp, "rival_offsets", rivals)
+    monkeypatch.setattr(rules_mod, "rival_offsets", rivals)
     out, stats, msgs, _ = _sure_of_all(monkeypatch, {"a": 0.0, "b": 0.42, "c": -0.3})
     joint = stats["geometric_joint"]
     apart = abs(seen["best"]["c"][0] - seen["joint"]["c"])
@@ -261,7 +261,7 @@ def _videos(names, fps: float = 30.0) -> dict:
 
 
 def test_cameras_from_moving_points_whose_votes_agree_are_kept():
-    from vs_inspect.cues.pairing.joint import check_fitted_offsets
+    from vs_inspect.cues.pairing.pairing import check_fitted_offsets
 
     # voted Δ within a frame of the fitted ones (caliscope's case)
     voted = {("r", "u"): 0.52, ("r", "v"): -1.03, ("u", "v"): -1.5}
@@ -271,7 +271,7 @@ def test_cameras_from_moving_points_whose_votes_agree_are_kept():
 
 
 def test_cameras_from_moving_points_contradicted_by_their_votes_are_all_refused():
-    from vs_inspect.cues.pairing.joint import check_fitted_offsets
+    from vs_inspect.cues.pairing.pairing import check_fitted_offsets
 
     # rendered seed 0 with SIFT: fitted at seconds away from where their own votes peak
     voted = {("u", "r"): 0.458, ("u", "v"): -0.133, ("r", "v"): 0.345}
@@ -285,7 +285,7 @@ def test_cameras_from_moving_points_contradicted_by_their_votes_are_all_refused(
 
 
 def test_camera_from_moving_points_without_an_agreeing_vote_is_refused_alone():
-    from vs_inspect.cues.pairing.joint import check_fitted_offsets
+    from vs_inspect.cues.pairing.pairing import check_fitted_offsets
 
     refused, check = check_fitted_offsets({"r": 0.0, "u": 0.5, "v": -1.0}, {("r", "u"): 0.5}, _videos("ruv"))
     assert list(refused) == ["v"] and "confirmed" in refused["v"]
@@ -301,8 +301,7 @@ def _lone_pair(monkeypatch, moving_b: bool, **geometric):
     pairs. Returns (pairs, stats, stage events)."""
     from types import SimpleNamespace
 
-    import vs_inspect.cues.pairing.votes as gp
-    from vs_inspect.cues.pairing.joint import add_geometric_pairs
+    from vs_inspect.cues.pairing.pairing import add_geometric_pairs
 
     static = CameraTrack(K, look_at([0.0, 6.0, 2.5], [0, 0, 1]))
     moving = CameraTrack(K, np.stack([look_at([6.0, 0.01 * t, 1.5], [0, 0, 1]) for t in range(50)]))
@@ -310,7 +309,7 @@ def _lone_pair(monkeypatch, moving_b: bool, **geometric):
     index = np.stack([np.arange(36), np.arange(36)], 1)
     stats_ab = GeometricPairStats(900, 60, 36, (0.5, 1.3, -0.7), (12, 12, 12), np.repeat([0, 1, 2], 12))
     monkeypatch.setattr(gp, "geometric_pairs", lambda *a, **k: (TrackPairs("a", "b", index, np.ones(36)), stats_ab))
-    monkeypatch.setattr(gp, "joint_offsets", lambda *a, **k: JointChoice({"a": 0.0, "b": 0.5}, 1.0,
+    monkeypatch.setattr(joint_mod, "joint_offsets", lambda *a, **k: JointChoice({"a": 0.0, "b": 0.5}, 1.0,
                                                                          {"a": 1.0, "b": 1.0}))
     desc = np.array([[100, 100], [101, 101], [102, 102]])
     vids = {n: SimpleNamespace(info=SimpleNamespace(frame_interval_s=1 / 30)) for n in "ab"}

@@ -26,7 +26,7 @@ from ..config import CueConfig
 from ...memo import NO_MEMO, Memo, digest
 from ..records import Note, say_cameras
 from ..rules import ALL
-from ..pairing.joint import GeometricPairing, add_geometric_pairs, check_fitted_offsets
+from ..pairing.pairing import GeometricPairing, add_geometric_pairs, check_fitted_offsets
 from ..video.extract import VideoCues
 
 log = logging.getLogger(__name__)

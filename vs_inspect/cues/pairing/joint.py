@@ -1,515 +1,140 @@
-"""Stage 0's joint vote on one set of cameras: which cross-view track pairs Stage 1 gets.
-
-For every pair of cameras, geometric_pairs votes for the offsets at which track pairs stay on
-their epipolar lines. Here those votes become decisions: the offsets of all cameras chosen
-together (or the peaks that close every triangle), which cameras are sure of theirs (their own
-pairs, the three-view checks of cues/pairing/transfer.py and another camera model's peaks agree), the
-supporters of the trusted offsets added to the descriptor pairs; and which cameras fitted to
-the moving points their own votes refuse (check_fitted_offsets; camera_choice takes them out).
-The pairing's decisions come back as notes in words (the Stage 0 controller reports them). No I/O.
-"""
+"""The joint choice of every camera's offset from all camera pairs' votes (joint_offsets), and
+when it is not sure, the vote peaks that close every triangle (consistent_peaks). Pure functions
+of the votes, no I/O."""
 
 from __future__ import annotations
 
-import dataclasses
-import logging
-from dataclasses import dataclass, field
+import itertools
+from dataclasses import dataclass
 
 import numpy as np
-from tqdm import tqdm
 
-from ...cue_stats import FittedOffsetCheck, FittedOffsetPair, JointVoteRecord, PairVoteSummary
-from ...geometry.offsets import OffsetGrid
-from ...types import TrackPairs, VideoInfo
-from ...memo import NO_MEMO, Memo
-from ..config import CueConfig
-from ..rules import ALL
-from ..records import Note, say
-
-# The vote's decisions are logged at INFO (`-v`): the recording and result.json hold them in full,
-# and the console ends with one plain reason per unresolved video.
-log = logging.getLogger(__name__)
+from .votes import GeometricPairStats, vote_z
 
 
 @dataclass(frozen=True)
-class GeometricPairing:
-    """What add_geometric_pairs made of one set of cameras."""
+class JointChoice:
+    """Offsets of all cameras chosen at once from every pair's vote histogram."""
 
-    pairs: dict  # (a, b) -> TrackPairs: the descriptor pairs kept plus the geometric ones
-    voted: dict  # (a, b) -> the Δ_ab (s) whose supporters were added
-    peaks_s: dict  # (a, b) -> tuple of the pair's vote peaks Δ_ab (s), as the vote found them
-    status: str  # how the peaks were chosen: "joint", or consistent_peaks' status
-    votes: dict  # (a, b) -> PairVoteSummary of what its vote found and kept
-    transfer_new: dict  # (a, b) -> track pairs point transfer added
-    joint: JointVoteRecord | None  # the joint vote, None when the triangles decided
-    found: dict = field(default_factory=dict)  # (a, b) -> GeometricPairStats: the pair's vote
-    chosen_s: dict = field(default_factory=dict)  # (a, b) -> the Δ_ab whose supporters were kept, or None
-    transfer: dict = field(default_factory=dict)  # camera -> transfer.TransferCheck of an unsure camera
-    three_view: dict = field(default_factory=dict)  # camera -> transfer.ThreeViewCheck of a sure camera
-    notes: tuple[Note, ...] = ()  # the decisions in words, in order
+    offsets_s: dict[str, float]  # camera -> offset_s (the first camera's is 0)
+    score: float  # Σ over pairs of the vote z-score at the implied Δ_ab
+    margin: dict[str, float]  # camera -> score lost by the best choice that moves it by > tol_s
+
+    @property
+    def origin(self) -> str:
+        """The camera whose offset is 0: the first by name (joint_offsets)."""
+        return min(self.offsets_s)
 
 
-def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
-                        progress: bool, estimated: bool,
-                        other_peaks: dict | None = None, other: str = "",
-                        grid: OffsetGrid = OffsetGrid(), rules: frozenset[str] = ALL,
-                        memo: Memo = NO_MEMO) -> GeometricPairing:
-    """Descriptor pairs plus epipolar-consistency pairs for every pair of known cameras (a moving
-    one with its per-frame poses), the Δ_ab whose supporters were added and every pair's vote peaks.
-    estimated: Stage 0 estimated the cameras (no calibration given); only then are sure cameras
-    checked in three views. other_peaks: (a, b) -> the vote peaks of another camera model (named
-    other), which a sure camera's joint offset must meet in one of its pairs
-    (geometric_pairs.disputed_by_other_model). grid: the limits of every vote's offsets (overlap,
-    range), the point transfer's included; its --around windows hold the peaks and offsets chosen.
+def joint_offsets(found: dict[tuple[str, str], GeometricPairStats], tol_s: float,
+                  candidates: int = 10, max_combinations: int = 200_000) -> JointChoice | None:
+    """Offsets of every camera that together collect the most votes over all pairs.
 
-    With three or more such cameras, the vote peaks whose offsets close every triangle
-    (Δ_ab + Δ_bc ≈ Δ_ac) are chosen and only their supporters kept. When no choice closes the
-    triangles, the peaks of at least one pair are all wrong and Stage 1 could not tell (the
-    pairs were picked to agree with them), so no geometric pair is added; nor with three cameras,
-    whose one triangle's closure is too weak a check (consistent_peaks: "one triangle"). With two static
-    cameras (no triangle) every kept peak's supporters are added, marked TrackPairs.unchecked (Stage 1
-    accepts the pair only if its descriptor pairs alone give the same minimum); with a moving
-    camera, none (GeometricPairConfig.unchecked_moving).
+    Each pair's votes are z-scored (vote_z); a choice of offsets scores the sum over pairs of
+    the z-score at its Δ_ab = offset_b - offset_a (a Δ outside a pair's grid or its --around window scores -5). The
+    choices tried: with each camera in turn as the reference, every combination of the
+    `candidates` highest z-peaks of its pairs with the others. A single pair can have a false
+    peak above its true one (a repeated motion, points moving along their epipolar lines), but
+    the false peaks of several pairs rarely close. margin says how much each camera's offset is
+    preferred over the best choice that moves it by more than tol_s against every other camera. None when no camera is
+    paired with every other (or there are fewer than three cameras).
     """
-    from .votes import consistent_peaks, geometric_pairs, joint_offsets
+    found = {k: st for k, st in found.items() if st.votes is not None and len(st.votes)}
+    names = sorted({n for k in found for n in k})
+    if len(names) < 3:
+        return None
+    zs = {k: vote_z(st) for k, st in found.items()}
 
-    # every pair of cameras: a moving one with its per-frame poses (two moving ones: the
-    # geometry per frame of b and per offset)
-    todo = list(pairs)
-    found = {}
-    for a, b in tqdm(todo, desc="geometric pairs", unit="pair", disable=not progress, leave=False):
-        found[(a, b)] = memo.call("votes", geometric_pairs, a, b, vids[a].info, vids[b].info, cameras[a],
-                                  cameras[b], tracks[a].xy, tracks[b].xy, cfg.geometric, grid)
-    peaks_s = {k: tuple(gs.peaks_s) for k, (_, gs) in found.items()}
-    votes = {k: gs for k, (_, gs) in found.items()}  # each pair's vote evidence
-    notes: list[Note] = []
-    coarsest = max((vids[n].info.frame_interval_s for k in found for n in k), default=0.0)
-    # each of a triangle's three peaks is located to about ±1 frame (its support window), so
-    # right peaks close within about 3 frames, while wrong ones miss by far more
-    joint = joint_offsets(votes, 3.0 * coarsest) if cfg.geometric.joint else None
-    sure = {} if joint is None else {n: m >= cfg.geometric.joint_min_margin or "margin" not in rules
-                                     for n, m in joint.margin.items()}
-    third = "moving_pair_third" in rules
-    three_view = {}
-    # the check is of cameras Stage 0 estimated: a calibration's are given (and a right calibrated
-    # camera can follow as few trajectories as a wrong estimated one)
-    if "three_view" in rules and cfg.geometric.three_view_min_supporters > 0 and estimated and sum(sure.values()) >= 3:
-        three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, notes, grid, third, memo)
-        sure = {n: ok and (n not in three_view or three_view[n].passed) for n, ok in sure.items()}
-    dissent, dissent_short = {}, {}  # camera -> why it was made unsure; the same in a few words
-    # three_view is only filled for estimated cameras (a calibration's are given)
-    if "rival_offset" in rules and three_view and cfg.geometric.three_view_rival_frames > 0:
-        from .votes import rival_offsets
+    def lookup(a: str, b: str, delta: np.ndarray) -> np.ndarray:
+        offs, z = zs[(a, b)]  # called for the pairs of zs only
+        i = np.clip(np.searchsorted(offs, delta), 1, max(1, len(offs) - 1))
+        i = np.where(np.abs(offs[i] - delta) < np.abs(offs[i - 1] - delta), i, i - 1)
+        inside = (delta >= offs[0] - 1e-9) & (delta <= offs[-1] + 1e-9) & found[(a, b)].allows(delta)
+        return np.where(inside, z[i], -5.0)
 
-        best = {n: (chk.best_offset_s, chk.best_supporters, chk.supporters) for n, chk in three_view.items()
-                if chk.best_offset_s is not None}
-        rivals = rival_offsets(votes, joint, sure, best, cfg.geometric.three_view_rival_frames * coarsest,
-                               cfg.geometric.three_view_rival_vote_share)
-        _not_sure(rivals, sure, dissent, notes, dissent_short,
-                  {n: f"two offsets {abs(best[n][0] - joint.offsets_s[n]):.2f} s apart, as a repeated motion gives"
-                   for n in rivals})
-    # after the three-view check, which triangulates the pairs of the cameras sure then (a camera
-    # this refuses first could leave another too few trajectories); estimated cameras only: with a
-    # calibration a right pair can keep a small share of its top peak's votes
-    if "pair_share" in rules and cfg.geometric.joint_min_pair_share > 0 and estimated and joint is not None:
-        from .votes import dissenting_cameras
-
-        dissenting = dissenting_cameras(votes, joint, sure, cfg.geometric.joint_min_pair_share)
-        _not_sure(dissenting, sure, dissent, notes, dissent_short,
-                  {n: "a pair of its own has few votes at its joint offset" for n in dissenting})
-    overruled = {}  # camera -> why the other model's dispute of it was overruled
-    if "other_model" in rules and other_peaks is not None and estimated and joint is not None:
-        from .votes import disputed_by_other_model
-
-        shares = {n: chk.supporters / chk.best_supporters for n, chk in three_view.items() if chk.best_supporters}
-        disputed, overruled = disputed_by_other_model(joint, sure, other_peaks,
-                                                      cfg.geometric.other_model_agree_frames * coarsest, other,
-                                                      shares, cfg.geometric.other_model_overrule_share)
-        for n, why in overruled.items():
-            msg = f"joint vote still sure of {n}: {why}"
-            say(notes, msg)
-            log.info(msg)
-        _not_sure(disputed, sure, dissent, notes, dissent_short,
-                  {n: f"{other}'s vote peaks disagree" for n in disputed})
-    refused = bool(dissent) or any(not chk.passed for chk in three_view.values())
-    # a camera refused (by its pairs or in three views) keeps the joint path (no geometric pair
-    # for it), instead of the triangle fallback below choosing among the same cameras' vote peaks
-    if sum(sure.values()) >= 2 or refused or ("triangle_fallback" not in rules and joint is not None):
-        checks, traj = {}, None
-        if "transfer" in rules and cfg.geometric.transfer and not all(sure.values()) and sum(sure.values()) >= 2:
-            # not of a camera its own pairs contradict: point transfer projects into the same
-            # camera, whose biased geometry it can then confirm at a wrong offset
-            checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, notes,
-                                                frozenset(dissent), grid, third, memo)
-        sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
-        said = _JointChecks({c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
-                            {c: chk.summary() for c, chk in three_view.items()}, dissent, dissent_short, overruled)
-        out, used, summaries, record, chosen = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids,
-                                                                cfg, notes, said, rules)
-        out, transfer_new = _add_transfer_pairs(out, checks, traj, list(vids), notes)
-        return GeometricPairing(out, used, peaks_s, "joint", summaries, transfer_new, record, votes, chosen,
-                                checks, three_view, tuple(notes))
-    if joint is not None:
-        # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
-        # decides (and refuses when the triangles do not close)
-        say(notes, "joint vote sure of fewer than two cameras (margins "
-            + ", ".join(f"{n} {m:.1f}" for n, m in joint.margin.items())
-            + "): geometric peaks chosen by triangle closure")
-    chosen, status = consistent_peaks({k: (gs.peaks_s, gs.peak_votes) for k, (_, gs) in found.items()},
-                                      3.0 * coarsest)
-    # the descriptor pairs are unchecked too then: alone they can put a camera a wrong offset that
-    # Stage 1 accepts; kept only where consistent at the joint vote's offsets, unsure as they are,
-    # so that a wrong offset leaves too few of them
-    unchecked = status in ("inconsistent", "one triangle")
-    filter_desc = unchecked and joint is not None and cfg.geometric.joint_filter_descriptor \
-        and "descriptor_filter" in rules
-    unchecked_why = unchecked_short = None
-    if unchecked:
-        unchecked_short = ("vote peaks do not close the triangles" if status == "inconsistent" else
-                           "three cameras, one triangle: too weak a check of the vote peaks")
-        unchecked_why = ("the vote peaks of the camera pairs do not close the triangles (Δ_ab + Δ_bc ≠ Δ_ac), "
-                         "so some peaks are wrong" if status == "inconsistent" else
-                         "three cameras give one triangle, and its closure (Δ_ab + Δ_bc ≈ Δ_ac) is a single "
-                         "check on 27 choices of vote peaks, some of which close by chance")
-        msg = (f"geometric track pairs not used: {unchecked_why}"
-               + ("; descriptor pairs kept only where consistent at the joint vote's offsets" if filter_desc else ""))
-        say(notes, msg)
-        log.info(msg)
-    out, summaries, chosen_s = dict(pairs), {}, {}
-    for (a, b), (gp, gs) in found.items():
-        pick = chosen.get((a, b)) if chosen is not None else None  # index of the chosen peak
-        index, withheld, withheld_short = gp.index, None, None
-        if pick is not None:
-            index = index[gs.pair_peak == pick]
-        elif unchecked:
-            index, withheld, withheld_short = index[:0], unchecked_why, unchecked_short
-        elif len(index) and (cameras[a].is_moving or cameras[b].is_moving) and not cfg.geometric.unchecked_moving \
-                and "lone_moving_pair" in rules:
-            withheld = (f"no triangle checks its vote peaks ({', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s), "
-                        f"and a moving camera's per-frame geometry lets wrong tracks fit a wrong offset")
-            withheld_short = "a moving camera's vote peaks, no triangle to check them"
-            msg = f"geometric track pairs not used for {a}__{b}: {withheld}"
-            say(notes, msg, pair=f"{a}__{b}")
-            log.info(msg)
-            index = index[:0]
-        chosen_s[(a, b)] = gs.peaks_s[pick] if pick is not None else None
-        desc = pairs[(a, b)]
-        n_desc = len(desc.index)
-        if filter_desc:
-            desc = _consistent_descriptor_pairs(desc, joint.offsets_s[b] - joint.offsets_s[a], cameras,
-                                                tracks, vids, cfg)
-        # supporters of a peak no triangle chose: Stage 1 must find the pair's minimum without them too
-        # with no geometric pair, every row was kept at the joint vote's Δ
-        kept_at = joint.offsets_s[b] - joint.offsets_s[a] if filter_desc and not len(index) else None
-        out[(a, b)], n_new = _merge_pairs(desc, index, unchecked=pick is None, chosen_at_offset_s=kept_at)
-        summaries[(a, b)] = PairVoteSummary(
-            gs.candidates, gs.informative, int(len(index)), n_new, tuple(round(p, 4) for p in gs.peaks_s),
-            tuple(gs.peak_votes), geometric_chosen_peak_s=round(gs.peaks_s[pick], 4) if pick is not None else None,
-            geometric_withheld=withheld, geometric_withheld_short=withheld_short,
-            geometric_unchecked=int(n_new) if pick is None and n_new else None,
-            descriptor_pairs_kept=int(len(desc.index)) if filter_desc else None,
-            descriptor_pairs_before=int(n_desc) if filter_desc else None)
-        which = (f"peak {gs.peaks_s[pick]:+.3f} s chosen: the peaks of all static pairs close every triangle"
-                 if pick is not None else
-                 f"vote peaks at {', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s")
-        say(notes, f"{a}__{b}: {len(index)} track pairs from epipolar consistency ({which})")
-        log.info("%s__%s: %d geometric track pairs (%d new), %s", a, b, len(index), n_new, which)
-    used = {k: found[k][1].peaks_s[i] for k, i in (chosen or {}).items() if i is not None}
-    return GeometricPairing(out, used, peaks_s, status, summaries, {}, None, votes, chosen_s, {}, {}, tuple(notes))
-
-
-def _not_sure(refused: dict[str, str], sure: dict[str, bool], dissent: dict[str, str], notes: list[Note],
-              dissent_short: dict[str, str], short: dict[str, str]) -> None:
-    """Marks each camera of refused ({camera: why}) not sure, keeps why in dissent (and short's
-    few words in dissent_short), and says so."""
-    for n, why in refused.items():
-        sure[n] = False
-        dissent[n] = why
-        dissent_short[n] = short[n]
-        msg = f"joint vote not sure of {n}: {why}"
-        say(notes, msg)
-        log.info(msg)
-
-
-def check_fitted_offsets(fitted: dict[str, float], voted: dict, vids: dict
-                         ) -> tuple[dict[str, str], FittedOffsetCheck]:
-    """Cameras from the moving points that their own epipolar votes contradict or leave
-    unconfirmed: ({camera: reason}, the record of every pair's comparison).
-
-    Those cameras were fitted to track pairs aligned at coarse offsets (fitted: camera ->
-    offset_s relative to the reference). Right cameras at right offsets make the votes over all
-    track pairs peak at the same Δ (within about a frame); cameras fitted to wrong pairs at wrong
-    offsets put the peaks elsewhere (up to seconds away), and Stage 1 then accepts minima at
-    offsets the cameras were never fitted for. Any contradiction refuses every such camera (they
-    were fitted jointly); a camera in no agreeing pair is refused as unconfirmed. Two cameras give
-    no check (their votes peak where their own F was fitted): they pass, marked unchecked (they
-    are used only with camera.fallback_unchecked_pair; by default _estimate refuses them)."""
-    if len(fitted) < 3:
-        return {}, FittedOffsetCheck("unchecked (two cameras: no third to confirm their offset)")
-    tol_s = 3.0 * max(vids[n].info.frame_interval_s for n in fitted)
-    rows, agreeing, contradicted = {}, set(), []
-    for (a, b), delta in sorted(voted.items()):
-        if a not in fitted or b not in fitted:
-            continue
-        expect = fitted[b] - fitted[a]
-        ok = abs(delta - expect) <= tol_s
-        rows[f"{a}__{b}"] = FittedOffsetPair(round(expect, 4), round(delta, 4), ok)
-        if ok:
-            agreeing |= {a, b}
-        else:
-            contradicted.append(f"{a}__{b} fitted at Δ {expect:+.3f} s, voted {delta:+.3f} s")
-    if contradicted:
-        why = ("camera from the moving points refused: its own epipolar votes contradict the offsets "
-               f"it was fitted at ({'; '.join(contradicted)}; tolerance {tol_s:.3f} s), so the track "
-               "pairs it was fitted to were wrong")
-        refused = {n: why for n in fitted}
-    else:
-        refused = {n: ("camera from the moving points refused: no pair of it with a sure epipolar vote "
-                       "confirmed the offset it was fitted at") for n in fitted if n not in agreeing}
-    verdict = "contradicted" if contradicted else "confirmed" if not refused else "partly unconfirmed"
-    return refused, FittedOffsetCheck(verdict, round(tol_s, 4), rows, tuple(sorted(refused)))
-
-
-def _transfer_source(a: str, b: str, sure: dict[str, bool], cameras: dict, third: bool = True) -> bool:
-    """Whether pair (a, b)'s joint Δ may be triangulated for point transfer: both cameras sure,
-    and when both move, a third camera sure too (their per-frame geometry lets wrong tracks fit
-    one wrong offset)."""
-    if not (sure.get(a) and sure.get(b)):
-        return False
-    return not (third and cameras[a].is_moving and cameras[b].is_moving) or sum(sure.values()) >= 3
-
-
-def _joint_pair_used(a: str, b: str, sure: dict[str, bool], cameras: dict, min_sure: int, third: bool = True) -> bool:
-    """Whether the joint vote's Δ of pair (a, b) is trusted: a transfer source, and at least
-    min_sure cameras sure in all (GeometricPairConfig.joint_min_sure: 3 = a closed triangle of
-    sure cameras confirms it; see _add_joint_pairs)."""
-    return _transfer_source(a, b, sure, cameras, third) and sum(sure.values()) >= min_sure
-
-
-def _sure_pairs(found: dict, joint, sure: dict[str, bool], cameras: dict, third: bool = True) -> dict:
-    """The supporters of the joint Δ of every pair that point transfer may triangulate
-    (_transfer_source)."""
-    from .votes import supporters
-
-    out = {}
-    for (a, b), (_, gs) in found.items():
-        if not _transfer_source(a, b, sure, cameras, third):
-            continue
-        index = supporters(gs, joint.offsets_s[b] - joint.offsets_s[a])
-        out[(a, b)] = TrackPairs(a, b, index, np.ones(len(index)))
-    return out
-
-
-def _transfer_radius_px(info: VideoInfo, g) -> float:
-    """How near a projected point a track of the camera must be (GeometricPairConfig.transfer_radius_diag)."""
-    return max(3.0, g.transfer_radius_diag * float(np.hypot(info.width, info.height)))
-
-
-def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
-                          vids: dict, cfg: CueConfig, notes: list[Note], grid: OffsetGrid = OffsetGrid(),
-                          third: bool = True, memo: Memo = NO_MEMO) -> dict:
-    """{camera: transfer.ThreeViewCheck} for every sure camera: the other sure cameras' track
-    pairs triangulated at their joint offsets and projected into it at its own. Wrong cameras can
-    make the joint vote sure of wrong offsets, consistent in every triangle, since a line through
-    a wrong epipole still meets some track; a point in a third view rarely does."""
-    from .transfer import check_in_three_views, triangulate_pairs
-
-    g = cfg.geometric
-    infos = {n: v.info for n, v in vids.items()}
-    xy = {n: t.xy for n, t in tracks.items()}
-    checks = {}
-    for c in sorted(n for n, ok in sure.items() if ok):
-        others = {n: ok and n != c for n, ok in sure.items()}
-        traj = memo.call("triangulated", triangulate_pairs, infos, cameras, xy,
-                         _sure_pairs(found, joint, others, cameras, third),
-                         {n: joint.offsets_s[n] for n, ok in others.items() if ok})
-        chk = memo.call("three_view", check_in_three_views, c, joint.offsets_s[c], traj, infos[c], cameras[c], xy[c],
-                        _transfer_radius_px(infos[c], g), g.transfer_min_hits,
-                        g.three_view_min_supporters, g.three_view_min_share_of_best, grid, joint.origin)
-        checks[c] = chk
-        msg = f"{c}: {chk.reason}"
-        say(notes, msg, camera=c, passed=int(chk.passed), supporters=chk.supporters,
-            best_supporters=chk.best_supporters, trajectories=chk.trajectories)
-        log.info(msg)
-    return checks
-
-
-def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
-                         vids: dict, cfg: CueConfig, notes: list[Note], skip: frozenset[str] = frozenset(),
-                         grid: OffsetGrid = OffsetGrid(), third: bool = True, memo: Memo = NO_MEMO):
-    """({camera: transfer.TransferCheck}, the transfer.Trajectories projected): a check of every
-    camera the joint vote is unsure of (but those of skip), the sure cameras' track pairs
-    triangulated at their joint offsets and projected into it over its candidate offsets
-    (cues/pairing/transfer.py)."""
-    from .transfer import candidate_offsets, confirm_offset, transfer_landscape, triangulate_pairs
-
-    g = cfg.geometric
-    sure_offsets = {n: joint.offsets_s[n] for n, ok in sure.items() if ok}
-    traj = memo.call("triangulated", triangulate_pairs, {n: v.info for n, v in vids.items()}, cameras,
-                     {n: t.xy for n, t in tracks.items()}, _sure_pairs(found, joint, sure, cameras, third), sure_offsets)
-    checks = {}
-    for c in sorted(n for n, ok in sure.items() if not ok and n not in skip):
-        info = vids[c].info
-        offsets = candidate_offsets(traj, info, 0.5 * info.frame_interval_s, grid, joint.origin)
-        land = memo.call("transfer", transfer_landscape, traj, info, cameras[c], tracks[c].xy, offsets,
-                         _transfer_radius_px(info, g), g.transfer_min_hits,
-                         allowed=grid.within_window(joint.origin, c, offsets))
-        chk = confirm_offset(c, joint.offsets_s[c], land, info.frame_interval_s,
-                             g.transfer_agree_frames, g.transfer_min_z, g.transfer_min_supporters)
-        checks[c] = chk
-        msg = f"{c}: {chk.reason}"
-        say(notes, msg, camera=c, confirmed=int(chk.confirmed), z=round(land.z, 2),
-            trajectories=traj.num_trajectories)
-        log.info(msg)
-    return checks, traj
-
-
-def _add_transfer_pairs(pairs: dict, checks: dict, traj, order: list[str], notes: list[Note]) -> tuple[dict, dict]:
-    """(pairs plus, for every camera that point transfer confirmed, its tracks that follow a
-    trajectory (of traj, transfer.Trajectories) paired with both tracks the trajectory was
-    triangulated from, {(a, b): track pairs added}); order: the videos' order (a pair's key
-    names the earlier one first)."""
-    out, added = dict(pairs), {}
-    for c, chk in checks.items():
-        if not chk.confirmed:
-            continue
-        new: dict[tuple[str, str], list] = {}
-        for t, j in chk.landscape.matches.tolist():
-            pair_no, ta, tb, _ = traj.source[t].tolist()
-            a, b = traj.pairs[pair_no]
-            for other, track in ((a, ta), (b, tb)):
-                key = (other, c) if order.index(other) < order.index(c) else (c, other)
-                new.setdefault(key, []).append((track, j) if key[0] == other else (j, track))
-        for key, rows in new.items():
-            if key not in out:
+    def peaks_of(a: str, b: str) -> list[float]:
+        offs, z = zs[(a, b)] if (a, b) in zs else (-zs[(b, a)][0], zs[(b, a)][1])
+        st = found[(a, b)] if (a, b) in found else found[(b, a)].swapped()
+        sep = max(st.halfwidth_s, 1e-6) * 2
+        out: list[float] = []
+        for i in np.argsort(-z, kind="stable"):
+            if len(out) >= per:
+                break
+            if not st.allows(offs[i]):  # outside the pair's --around window
                 continue
-            # no chosen_at_offset_s: the new rows follow trajectories at the transfer's offset
-            out[key], n_new = _merge_pairs(out[key], np.unique(np.array(rows, np.int64), axis=0))
-            added[key] = int(n_new)
-            say(notes, f"{key[0]}__{key[1]}: {n_new} track pairs from point transfer",
-                pair=f"{key[0]}__{key[1]}", transfer_new=int(n_new))
-    return out, added
+            if all(abs(offs[i] - o) > sep for o in out):
+                out.append(float(offs[i]))
+        return out
+
+    per = max(1, min(candidates, int(max_combinations ** (1.0 / (len(names) - 1)))))
+    rows, scores = [], []
+    for ref in names:
+        others = [n for n in names if n != ref]
+        if not all((ref, c) in zs or (c, ref) in zs for c in others):
+            continue
+        grids = np.meshgrid(*[np.array(peaks_of(ref, c)) for c in others], indexing="ij")
+        combo = np.zeros((grids[0].size, len(names)))
+        for c, g in zip(others, grids):
+            combo[:, names.index(c)] = g.ravel()
+        score = np.zeros(len(combo))
+        for (a, b) in zs:
+            score += lookup(a, b, combo[:, names.index(b)] - combo[:, names.index(a)])
+        rows.append(combo - combo[:, :1])  # first camera at 0
+        scores.append(score)
+    if not rows:
+        return None
+    combo, score = np.concatenate(rows), np.concatenate(scores)
+    top = int(np.argmax(score))
+    margin = {}
+    for c, n in enumerate(names):
+        # c moved against every other camera (the first camera's offset is 0 by definition, so
+        # "moved" must be relative, or it would never move)
+        rel = (combo - combo[:, c:c + 1]) - (combo[top] - combo[top, c])
+        away = np.all(np.abs(np.delete(rel, c, axis=1)) > tol_s, axis=1)
+        margin[n] = float(score[top] - score[away].max()) if away.any() else float("inf")
+    return JointChoice({n: float(combo[top, c]) for c, n in enumerate(names)}, float(score[top]), margin)
 
 
-def _consistent_descriptor_pairs(desc: TrackPairs, delta_s: float, cameras: dict, tracks: dict,
-                                 vids: dict, cfg: CueConfig) -> TrackPairs:
-    """The descriptor pairs of (desc.a, desc.b) that are epipolar-consistent at Δ = delta_s
-    (geometric_pairs.consistent_at with the geometric pairs' tolerances)."""
-    from .votes import consistent_at
+def consistent_peaks(peaks: dict[tuple[str, str], tuple[tuple[float, ...], tuple[int, ...]]],
+                     tol_s: float, max_pairs: int = 10
+                     ) -> tuple[dict[tuple[str, str], int] | None, str]:
+    """One vote peak per camera pair such that every triangle closes, Δ_ab + Δ_bc ≈ Δ_ac.
 
-    if not len(desc.index):
-        return desc
-    a, b, g = desc.a, desc.b, cfg.geometric
-    tau = max(2.0, g.tau_diag * float(np.hypot(vids[b].info.width, vids[b].info.height)))
-    ok = consistent_at(vids[a].info, vids[b].info, cameras[a], cameras[b], tracks[a].xy,
-                       tracks[b].xy, desc.index, delta_s, tau, g.min_inlier_share, g.min_frames)
-    return TrackPairs(a, b, desc.index[ok], None if desc.weight is None else desc.weight[ok])
+    peaks: (a, b) -> (peak offsets Δ_ab in s, votes), names in a fixed order within each key.
+    A choice must close every triangle within tol_s. Among those, the one with the least cost
+    Σ_pairs ((v_top - v) / √v_top)² + Σ_triangles (closure / (tol_s / 3))² wins: vote counts
+    vary like Poisson counts, so peaks a few √v apart are near-ties that the closure decides
+    (each peak is located to about a frame, tol_s is about three). Returns (choice, "chosen"), or
+    (None, why): "no triangle" (fewer than three cameras with peaks), "too many pairs" (the
+    search tries every combination), "inconsistent" (no choice closes every triangle) or "one
+    triangle" (three cameras: a single closure is one check on 27 choices of three peaks, and
+    some close within tol_s by chance).
+    """
+    keys = [k for k in peaks if len(peaks[k][0])]
+    if len(keys) > max_pairs:
+        return None, "too many pairs"
 
+    def delta(ch, u, v):
+        return peaks[(u, v)][0][ch[(u, v)]] if (u, v) in ch else -peaks[(v, u)][0][ch[(v, u)]]
 
-def _merge_pairs(tp: TrackPairs, index: np.ndarray, unchecked: bool = False,
-                 chosen_at_offset_s: float | None = None) -> tuple[TrackPairs, int]:
-    """Descriptor pairs tp plus the geometric pairs index (P,2) not already in it: (pairs, new).
-    unchecked: the new rows are marked TrackPairs.unchecked (no triangle checked their vote peak);
-    chosen_at_offset_s: the Δ_ab at which every row of both was kept (TrackPairs), if one was."""
-    w_desc = tp.weight if tp.weight is not None else np.ones(len(tp.index))
-    have = {tuple(x) for x in tp.index.tolist()}
-    new = np.array([x for x in index.tolist() if tuple(x) not in have], np.int64).reshape(-1, 2)
-    mark = None
-    if unchecked and len(new):
-        mark = np.concatenate([np.zeros(len(tp.index), bool), np.ones(len(new), bool)])
-    return TrackPairs(tp.a, tp.b, np.concatenate([tp.index, new]),
-                      np.concatenate([w_desc, np.ones(len(new))]), mark, chosen_at_offset_s), len(new)
-
-
-@dataclass(frozen=True)
-class _JointChecks:
-    """What the checks after the joint vote said of its cameras, kept in result.json."""
-
-    transfer: dict = dataclasses.field(default_factory=dict)  # camera -> TransferSummary
-    three_view: dict = dataclasses.field(default_factory=dict)  # camera -> ThreeViewSummary
-    dissent: dict = dataclasses.field(default_factory=dict)  # camera -> why its pairs (or the other model) contradict it
-    dissent_short: dict = dataclasses.field(default_factory=dict)  # camera -> that in a few words (a null's headline)
-    overruled: dict = dataclasses.field(default_factory=dict)  # camera -> why the other model's dispute was overruled
-
-
-def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cameras: dict,
-                     tracks: dict, vids: dict, cfg: CueConfig, notes: list[Note],
-                     said: _JointChecks = _JointChecks(), rules: frozenset[str] = ALL
-                     ) -> tuple[dict, dict, dict, JointVoteRecord, dict]:
-    """(pairs, {(a, b): the joint Δ_ab whose supporters were added}, {(a, b): PairVoteSummary},
-    the JointVoteRecord, {(a, b): that Δ_ab or None for every pair}): the supporters of the jointly chosen offsets
-    (geometric_pairs.joint_offsets) for every pair whose Δ is trusted (_joint_pair_used: both
-    cameras' offsets won by at least joint_min_margin, or point transfer confirmed them, and
-    joint_min_sure cameras are sure; sure: camera -> whether it is, said: what the checks after
-    the vote said, for result.json); nothing for the others. A descriptor pair is kept only if it
-    is epipolar-consistent at the joint Δ (with joint_filter_descriptor): the descriptor pairs are
-    mostly wrong on small moving objects (BENCHMARKS.md), and the joint Δ is the best evidence
-    there is of the moment they share."""
-    from .votes import supporters, votes_at
-
-    # the pairs whose joint Δ is trusted, and that Δ: the one decision everything below reads
-    used = {(a, b): joint.offsets_s[b] - joint.offsets_s[a] for a, b in found
-            if _joint_pair_used(a, b, sure, cameras, cfg.geometric.joint_min_sure if "min_sure" in rules else 2,
-                                "moving_pair_third" in rules)}
-    record = JointVoteRecord(joint.origin, {n: round(o, 4) for n, o in joint.offsets_s.items()},
-                             round(joint.score, 2), {n: round(m, 2) for n, m in joint.margin.items()},
-                             tuple(sorted(n for n, ok in sure.items() if ok)), tuple(sorted({n for k in used for n in k})),
-                             # an empty check is left out
-                             **{k: dict(v) for k, v in dataclasses.asdict(said).items() if v})
-    three_view, dissent, transfer = said.three_view, said.dissent, said.transfer
-    failed = sorted(n for n, chk in three_view.items() if not chk.passed and not sure[n])
-    if failed:
-        seen = ", ".join(f"{n} {three_view[n].supporters}" for n in failed)
-        msg = (f"geometric track pairs not used for {', '.join(failed)}: the joint vote was sure of "
-               f"their offsets, but the points the other sure cameras triangulate are not seen there "
-               f"(supporters {seen}; a camera needs {cfg.geometric.three_view_min_supporters}, and "
-               f"{cfg.geometric.three_view_min_share_of_best:.2g} of those at its best offset)")
-        say(notes, msg)
-        log.info(msg)
-    weak = sorted(n for n, ok in sure.items() if not ok and n not in failed and n not in dissent)
-    if weak:
-        msg = (f"geometric track pairs not used for {', '.join(weak)}: the joint vote prefers their "
-               f"offsets by less than {cfg.geometric.joint_min_margin:g} (margins "
-               f"{', '.join(f'{n} {joint.margin[n]:.1f}' for n in weak)})"
-               + ("; point transfer did not confirm them" if transfer else ""))
-        say(notes, msg)
-        log.info(msg)
-    # a Δ only when a third camera is sure too (a closed triangle confirms it): with a single
-    # sure pair nothing checks it, and Stage 1 accepts the minimum its own supporters make, right
-    # or wrong
-    unconfirmed = {(a, b) for (a, b) in found if sure.get(a) and sure.get(b) and (a, b) not in used}
-    if unconfirmed:
-        names = ", ".join(sorted(f"{a}__{b}" for a, b in unconfirmed))
-        msg = (f"geometric track pairs not used for {names}: the joint vote is sure of "
-               f"{sum(sure.values())} camera(s) only, so no triangle of sure cameras confirms their Δ")
-        say(notes, msg)
-        log.info(msg)
-    out, summaries, chosen = dict(pairs), {}, {}
-    for (a, b), (_, gs) in found.items():
-        delta = joint.offsets_s[b] - joint.offsets_s[a]
-        both = (a, b) in used
-        index = supporters(gs, delta) if both else np.zeros((0, 2), np.int64)
-        chosen[(a, b)] = delta if both else None
-        desc = pairs[(a, b)]
-        n_desc = len(desc.index)
-        # an unsure camera's descriptor pairs are filtered too: at a wrong joint Δ few survive
-        # (the pair is then refused for too few pairs) instead of a wrong minimum being accepted
-        if cfg.geometric.joint_filter_descriptor and "descriptor_filter" in rules:
-            desc = _consistent_descriptor_pairs(desc, delta, cameras, tracks, vids, cfg)
-        every = (cfg.geometric.joint_filter_descriptor and "descriptor_filter" in rules) or not n_desc  # every row kept at delta
-        out[(a, b)], n_new = _merge_pairs(desc, index, chosen_at_offset_s=delta if every else None)
-        votes = votes_at(gs, delta)
-        summaries[(a, b)] = PairVoteSummary(
-            gs.candidates, gs.informative, int(len(index)), int(n_new), tuple(round(p, 4) for p in gs.peaks_s),
-            tuple(gs.peak_votes), geometric_joint_delta_s=round(delta, 4), geometric_joint_votes=votes,
-            geometric_joint_margin=(round(joint.margin[a], 2), round(joint.margin[b], 2)),
-            descriptor_pairs_kept=int(len(desc.index)), descriptor_pairs_before=int(n_desc))
-        say(notes, f"{a}__{b}: {len(index)} track pairs from epipolar consistency "
-                   f"(joint vote over all camera pairs: Δ {delta:+.3f} s)",
-            pair=f"{a}__{b}", votes=votes, informative=gs.informative,
-            geometric_pairs=int(len(index)), descriptor_pairs_kept=int(len(desc.index)),
-            descriptor_pairs_before=int(n_desc), margin_a=round(joint.margin[a], 2),
-            margin_b=round(joint.margin[b], 2))
-        log.info("%s__%s: %d geometric track pairs (%d new) at the joint Δ %+.3f s", a, b,
-                 len(index), n_new, delta)
-    return out, used, summaries, record, chosen
+    names = sorted({n for k in keys for n in k})
+    triangles = [t for t in itertools.combinations(names, 3)
+                 if all((u, v) in keys or (v, u) in keys for u, v in itertools.combinations(t, 2))]
+    if not triangles:
+        return None, "no triangle"
+    top = {k: max(peaks[k][1]) for k in keys}
+    sigma_s = tol_s / 3.0
+    best, best_cost = None, np.inf
+    for choice in itertools.product(*[range(len(peaks[k][0])) for k in keys]):
+        ch = dict(zip(keys, choice))
+        closure = np.array([delta(ch, a, b) + delta(ch, b, c) - delta(ch, a, c) for a, b, c in triangles])
+        if np.all(np.abs(closure) <= tol_s):
+            cost = sum(((top[k] - peaks[k][1][ch[k]]) / np.sqrt(max(top[k], 1))) ** 2 for k in keys)
+            cost += float(np.sum((closure / sigma_s) ** 2)) if sigma_s > 0 else 0.0
+            if cost < best_cost:
+                best, best_cost = ch, cost
+    if best is None:
+        return None, "inconsistent"
+    if len(triangles) == 1:
+        return None, "one triangle"
+    return best, "chosen"
