@@ -9,6 +9,7 @@ import numpy as np
 from vs_inspect.cues.config import CueConfig, GeometricPairConfig
 import vs_inspect.cues.pairing.joint as joint_mod
 import vs_inspect.cues.pairing.rules as rules_mod
+import vs_inspect.cues.pairing.votes as votes_mod
 from vs_inspect.cues.pairing.joint import JointChoice
 from vs_inspect.cues.pairing.votes import GeometricPairStats
 from vs_inspect.cues.pairing.pairing import _add_joint_pairs
@@ -308,7 +309,7 @@ def _lone_pair(monkeypatch, moving_b: bool, **geometric):
     cams = {"a": static, "b": moving if moving_b else static}
     index = np.stack([np.arange(36), np.arange(36)], 1)
     stats_ab = GeometricPairStats(900, 60, 36, (0.5, 1.3, -0.7), (12, 12, 12), np.repeat([0, 1, 2], 12))
-    monkeypatch.setattr(gp, "geometric_pairs", lambda *a, **k: (TrackPairs("a", "b", index, np.ones(36)), stats_ab))
+    monkeypatch.setattr(votes_mod, "geometric_pairs", lambda *a, **k: (TrackPairs("a", "b", index, np.ones(36)), stats_ab))
     monkeypatch.setattr(joint_mod, "joint_offsets", lambda *a, **k: JointChoice({"a": 0.0, "b": 0.5}, 1.0,
                                                                          {"a": 1.0, "b": 1.0}))
     desc = np.array([[100, 100], [101, 101], [102, 102]])
