@@ -42,7 +42,7 @@ def test_a_video_whose_heads_cannot_be_found_is_named_and_the_others_kept(monkey
              "c": SimpleNamespace(name="c", num_frames=7, frame_interval_s=1 / 30)}
     sources = [SimpleNamespace(info=infos[n], frame=None if n == "b" else frame) for n in "abc"]
     vids = {n: SimpleNamespace(info=infos[n], scale_xy=(2.0, 2.0)) for n in "abc"}
-    heads, record = find_heads(sources, vids, dict.fromkeys("abc"), {}, SimpleNamespace(max_side=640, heads_max_hz=10.0),
+    heads, record = find_heads(sources, vids, dict.fromkeys("abc"), {}, SimpleNamespace(max_side=640),
                                False)
     assert list(heads) == ["a", "c"]
     np.testing.assert_allclose(heads["a"], np.tile([20.5, 40.5], (T, 1)))  # working px x2, centres kept
@@ -80,7 +80,7 @@ def _fake_videos(monkeypatch, frames_of, poses: list, seen: list):
     infos = {n: SimpleNamespace(name=n, num_frames=6, frame_interval_s=0.1) for n in "abc"}
     sources = [SimpleNamespace(info=infos[n]) for n in "abc"]
     vids = {n: SimpleNamespace(info=infos[n], scale_xy=(1.0, 1.0)) for n in "abc"}
-    return sources, vids, SimpleNamespace(max_side=640, heads_max_hz=10.0)
+    return sources, vids, SimpleNamespace(max_side=640)
 
 
 def test_heads_found_ahead_on_their_own_thread_are_the_heads_found_after(monkeypatch):

@@ -11,7 +11,7 @@ import pytest
 from vs_inspect.commands import cues as cues_cmd
 from vs_inspect.commands import sync as sync_cmd
 from vs_inspect.commands._common import run_config
-from vs_inspect.cues.config import CameraConfig, CueConfig, TrackConfig
+from vs_inspect.cues.config import CameraConfig, CueConfig
 from vs_inspect.errors import InputError
 from vs_inspect.pipeline import RunConfig
 from vs_inspect.pipeline.config import field_doc
@@ -28,7 +28,7 @@ RECORD_FLAGS = ("--rrd", "--no-rrd", "--rrd-minimal", "--rrd-all-offsets", "--rr
                 "--rrd-all-tracks")
 
 CUSTOM = RunConfig(
-    cues=CueConfig(max_side=480, track=TrackConfig(max_points=700),
+    cues=CueConfig(max_side=480, max_tracks=700,
                    camera=CameraConfig(static_frames=5, moving_frames=12, features="sift"),
                    camera_motion={"cam1": "static"}),
     sync=SyncConfig(landscape=LandscapeConfig(residual="cosine", range_s=2.5, min_overlap_s=0.5),
@@ -95,7 +95,7 @@ def test_bad_value_is_an_input_error():
     ({"sync": {"solve": {"huber_delta_s": float("inf")}}}, "--huber-delta-s must be a finite number"),
     ({"sync": {"pairs": {"fraction": 0.0}}}, r"--pairs fraction must be in \(0,1\]"),
     ({"cues": {"max_side": 0}}, "--max-side must be positive"),
-    ({"cues": {"track": {"fb_max_px": -1.0}}}, "fb_max_px must be >= 0"),
+    ({"cues": {"max_tracks": 0}}, "--max-tracks must be positive"),
     ({"cues": {"camera": {"max_side": 0}}}, "max_side must be positive"),
     ({"record": {"jpeg_quality": 101}}, "jpeg_quality must be <= 100"),
     ({"record": {"max_asset_mb": float("nan")}}, "max_asset_mb must be a finite number"),
@@ -118,7 +118,7 @@ def test_every_flag_is_there_with_its_docstring_as_help():
         assert f in flags, f
     assert flags["--energy"].help.startswith(field_doc(LandscapeConfig, "residual"))
     assert flags["--min-overlap-s"].help.startswith(field_doc(LandscapeConfig, "min_overlap_s"))
-    assert flags["--max-tracks"].help.startswith(field_doc(TrackConfig, "max_points"))
+    assert flags["--max-tracks"].help.startswith(field_doc(CueConfig, "max_tracks"))
     cue_sub = _parser(cues_cmd)._subparsers._group_actions[0].choices["cues"]
     assert {s for a in cue_sub._actions for s in a.option_strings} >= set(CUE_FLAGS)
 
@@ -139,8 +139,7 @@ def test_flags_set_the_fields_they_name():
         decision=DecisionConfig(enabled=False),
         solve=SolveConfig(solver="ls", reference="cam2", huber_delta_s=0.02),
         pairs=PairSelection("fraction", 0.5, 3))
-    assert cfg.cues == CueConfig(max_side=480, match=dataclasses.replace(CueConfig().match, num_keyframes=6),
-                                 track=TrackConfig(max_points=700),
+    assert cfg.cues == CueConfig(max_side=480, keyframes=6, max_tracks=700,
                                  camera=CameraConfig(static_frames=5, moving_frames=12, features="sift",
                                                      max_features=1024),
                                  camera_motion={"a": "static", "b": "moving"})

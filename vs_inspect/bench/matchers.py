@@ -65,10 +65,9 @@ class _Sift:
     """The pipeline's keyframe matcher: its RootSIFT detector, ratio 0.8 + mutual check."""
 
     def __init__(self, top_k: int):
-        from ..cues.config import MatchConfig
         from ..cues.pairing.descriptors import sift_detector
 
-        self._detect = sift_detector(MatchConfig(max_features=top_k))
+        self._detect = sift_detector(top_k)
 
     def features(self, img, mask=None):
         from ..cues.features.learned import Features
@@ -194,7 +193,7 @@ def _moving_masks(path: Path, frames: list[int], size: tuple[int, int]) -> dict[
     cfg = CueConfig()
     src = open_video(path)
     grey = np.stack([cv2.cvtColor(img, cv2.COLOR_BGR2GRAY) for _, img in iter_frames(src, max_side=cfg.max_side)])
-    inst, _, _ = moving_regions(grey, cfg.motion, frame_interval_s=src.info.frame_interval_s)
+    inst, _, _ = moving_regions(grey, frame_interval_s=src.info.frame_interval_s)
     out = {}
     for k in frames:
         m = cv2.resize((inst[k] > 0).astype(np.uint8), size, interpolation=cv2.INTER_NEAREST)
@@ -336,7 +335,7 @@ def sfm_inputs(paths: list[Path], static_frames: int = 9, moving_frames: int = 3
     for p in paths:
         src = open_video(p)
         grey = np.stack([cv2.cvtColor(img, cv2.COLOR_BGR2GRAY) for _, img in iter_frames(src, max_side=cfg.max_side)])
-        inst, mode, _ = moving_regions(grey, cfg.motion, frame_interval_s=src.info.frame_interval_s)
+        inst, mode, _ = moving_regions(grey, frame_interval_s=src.info.frame_interval_s)
         n = moving_frames if mode == "moving" else static_frames
         idx = np.unique(np.linspace(0, len(grey) - 1, max(1, min(n, len(grey)))).round().astype(int))
         imgs = read_frames(src, idx, max_side=max_side)

@@ -35,8 +35,8 @@ from pathlib import Path
 
 import numpy as np  # before pycolmap
 
-from ..cues import CueConfig, MatchConfig
-from ..cues.config import CameraConfig, GeometricPairConfig, TrackConfig
+from ..cues import CueConfig
+from ..cues.config import CameraConfig, GeometricPairConfig
 from ..io.atomic import write_json_atomic
 from ..io.calibration import rig_to_json
 from ..io.video import VideoWriter, iter_frames, open_video
@@ -77,12 +77,6 @@ def write_cut(src_path: Path, dest: Path, cut: int, last: int | None = None) -> 
         for k, img in iter_frames(src):
             if k >= cut and (last is None or k < last):
                 w.write(img)
-
-
-def track_config(args) -> TrackConfig:
-    """The tracks asked for on the command line (--klt-window, --anchor-max-px, --no-anchor)."""
-    return TrackConfig(win_size=args.klt_window, anchor_refine=not args.no_anchor,
-                       anchor_max_px=args.anchor_max_px)
 
 
 def camera_config(args) -> CameraConfig:
@@ -141,8 +135,7 @@ def bench_caliscope(args) -> None:
                 paths.append(p)
             truth = caliscope_truth(ft, cuts)
             cfg = CueConfig(max_side=args.max_side,
-                            match=MatchConfig(num_keyframes=args.keyframes),
-                            camera=camera_config(args), track=track_config(args),
+                            keyframes=args.keyframes, camera=camera_config(args),
                             geometric=GeometricPairConfig(joint=args.geometric == "joint"))
             calib, tb = (None if args.estimate else root / "camera_array.toml"), 0.0
             if args.board:
@@ -182,11 +175,8 @@ def bench_visualsync(args) -> None:
     for scene in args.scenes:
         paths = sorted((root / scene).glob("*.mp4"))
         truth = visualsync_truth(paths)
-        res, stats, tc, ts = run(paths, None, CueConfig(camera=camera_config(args),
-                                                        match=MatchConfig(),
-                                                        track=track_config(args),
-                                                        geometric=GeometricPairConfig(
-                                                            joint=args.geometric == "joint")))
+        res, stats, tc, ts = run(paths, None, CueConfig(camera=camera_config(args), geometric=GeometricPairConfig(
+            joint=args.geometric == "joint")))
         err = errors_ms(res, truth)
         fr = {k: (None if v is None else round(v / 100.0, 2)) for k, v in err.items()}
         print(f"{scene}: error in frames {fr}  cues {tc:.1f}s sync {ts:.1f}s  "
@@ -245,8 +235,7 @@ def bench_rendered(args) -> None:
     with (contextlib.nullcontext(args.workdir) if args.workdir else tempfile.TemporaryDirectory()) as tmp:
         for seed in args.seeds:
             for label in rows:
-                cfg = CueConfig(geometric=GeometricPairConfig(enabled="geometric" in label),
-                                track=track_config(args))
+                cfg = CueConfig(geometric=GeometricPairConfig(enabled="geometric" in label))
                 data, s0, err = rendered_scene(seed, Path(tmp), cfg)
                 if err is not None:
                     print(f"seed {seed} {label}: Stage 0 failed: {err}")

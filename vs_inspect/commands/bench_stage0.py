@@ -6,8 +6,8 @@ import argparse
 from pathlib import Path
 
 from ..bench.arcs import DEFAULT_SET, SCENE_SETS
-from ..cues import CueConfig, MatchConfig
-from ..cues.config import CAMERA_FEATURES, CameraConfig, TrackConfig
+from ..cues import CueConfig
+from ..cues.config import CAMERA_FEATURES, CameraConfig
 from .bench import _default_data
 
 WHAT = ("caliscope", "visualsync", "speed", "rendered", "arcs")
@@ -29,8 +29,8 @@ def register(sub) -> None:
     c.add_argument("--estimate", action="store_true", help="estimate cameras instead of the calibration")
     c.add_argument("--board", action="store_true",
                    help="cameras from the ChArUco board in the videos (vs-inspect calibrate-board)")
-    c.add_argument("--keyframes", type=int, default=MatchConfig.num_keyframes,
-                   help=f"keyframes per video (default: {MatchConfig.num_keyframes})")
+    c.add_argument("--keyframes", type=int, default=CueConfig.keyframes,
+                   help=f"keyframes per video (default: {CueConfig.keyframes})")
     c.add_argument("--max-side", type=int, default=CueConfig.max_side,
                    help=f"working image side (default: {CueConfig.max_side})")
     c.add_argument("--first-zero", action="store_true", help="trial 0 without cuts")
@@ -63,8 +63,6 @@ def register(sub) -> None:
         q.add_argument("--geometric", choices=["joint", "triangles"], default="joint",
                        help="geometric track pairs: every camera's offset chosen at once from all pairs' "
                             "votes (joint), or each pair's top peaks closing the triangles (default: joint)")
-    for q in (c, v, r):
-        _track_options(q)
     p.set_defaults(func=run)
 
 
@@ -84,14 +82,6 @@ def _camera_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--sfm-asift", type=int, metavar="N", default=d.asift_per_view,
                    help=f"ASIFT features per simulated view on a static camera's SfM image; 0: COLMAP's SIFT "
                         f"(default: {d.asift_per_view})")
-
-
-def _track_options(p: argparse.ArgumentParser) -> None:
-    d = TrackConfig()
-    p.add_argument("--klt-window", type=int, default=d.win_size, help=f"KLT window, working px (default: {d.win_size})")
-    p.add_argument("--anchor-max-px", type=float, default=d.anchor_max_px,
-                   help=f"largest correction the anchor refinement may make, working px (default: {d.anchor_max_px})")
-    p.add_argument("--no-anchor", action="store_true", help="frame-to-frame KLT only, without the anchor refinement")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -2,6 +2,6 @@
 features), cross-view track pairs, and the cameras (imported or estimated) with the joint vote
 on them. The Stage 0 controller (pipeline/stage0.py) calls them in order and reports their records."""
 
-from .config import CameraConfig, CueConfig, MatchConfig, MotionConfig, TrackConfig
+from .config import CameraConfig, CueConfig
 
-__all__ = ["CameraConfig", "CueConfig", "MatchConfig", "MotionConfig", "TrackConfig"]
+__all__ = ["CameraConfig", "CueConfig"]

@@ -21,16 +21,18 @@ from .video.extract import VideoCues, frame_step, to_full_px
 
 log = logging.getLogger(__name__)
 
+HEADS_MAX_HZ = 10.0  # heads looked for in at most about this many frames a second (every 3rd at 30 fps)
+
 
 def _video_landmarks(src, info: VideoInfo, cfg: CueConfig, pose=None, stop: threading.Event | None = None
                      ) -> tuple[np.ndarray, np.ndarray]:
     """(frames looked at (K,), their (K,33,3) BlazePose landmarks) of one video decoded again at
-    working resolution, at most about cfg.heads_max_hz frames a second. pose: a started tracker
+    working resolution, at most about HEADS_MAX_HZ frames a second. pose: a started tracker
     (people.start_pose) or None; stop: set to end early (InterruptedError)."""
     from ..io.video import iter_frames
     from .people import detect_landmarks
 
-    step = frame_step(info, cfg.heads_max_hz)
+    step = frame_step(info, HEADS_MAX_HZ)
 
     def frames():
         for _, img in iter_frames(src, step=step, max_side=cfg.max_side):
@@ -111,7 +113,7 @@ def find_heads(sources, vids: dict[str, VideoCues], cameras: dict, undistort: di
                progress: bool, ahead: HeadsAhead | None = None
                ) -> tuple[dict[str, np.ndarray], HeadsRecord]:
     """({video: (T,2) undistorted full-resolution px of the head the person detector found in a
-    frame (NaN: none, or a frame beyond cfg.heads_max_hz not looked at)}, the record of the run)
+    frame (NaN: none, or a frame beyond HEADS_MAX_HZ not looked at)}, the record of the run)
     for every video with a camera, decoded again at working resolution (or taken from ahead); {}
     with the reason in the record when the detector is not installed."""
     from .people import head_points, heads_unavailable

@@ -127,7 +127,7 @@ def _stage0(sources, calibration: dict | None, cfg: CueConfig, sink: Sink, progr
             grid: OffsetGrid, dropped: dict[str, str], inputs: dict[str, str], memo: Memo = NO_MEMO,
             rules: frozenset[str] = ALL) -> tuple[CueBundle, CueStats]:
     """Steps 2-6 on the opened sources; dropped: the videos left out so far, with their reasons."""
-    from ..cues.heads import HeadsAhead, find_heads
+    from ..cues.heads import HEADS_MAX_HZ, HeadsAhead, find_heads
 
     timings: dict[str, float] = {}
     t_all = time.perf_counter()
@@ -142,7 +142,7 @@ def _stage0(sources, calibration: dict | None, cfg: CueConfig, sink: Sink, progr
     with ahead or contextlib.nullcontext():
         # 3. descriptor track pairs
         t0 = time.perf_counter()
-        all_pairs, matched = _descriptor_pairs([n for n in names if n in vids], vids, cfg, sink, progress, memo)
+        all_pairs, matched = _descriptor_pairs([n for n in names if n in vids], vids, sink, progress, memo)
         timings["matching_s"] = time.perf_counter() - t0
         # 4. the cameras, voted on
         t0 = time.perf_counter()
@@ -156,7 +156,7 @@ def _stage0(sources, calibration: dict | None, cfg: CueConfig, sink: Sink, progr
         heads, heads_record = {}, None
         if cfg.heads and any(c.is_moving for c in kept.cameras.values()):
             t0 = time.perf_counter()
-            heads, heads_record = memo.get(f"heads-{digest(kept.cameras, cfg.heads_max_hz, cfg.max_side)}",
+            heads, heads_record = memo.get(f"heads-{digest(kept.cameras, HEADS_MAX_HZ, cfg.max_side)}",
                                            lambda: find_heads(sources, vids, kept.cameras, kept.undistort, cfg,
                                                               progress, ahead))
             _report_heads(sink, heads_record, {n: v.info.num_frames for n, v in vids.items()})
@@ -246,7 +246,7 @@ def _video_cues(sources, cfg: CueConfig, sink: Sink, engine: Engine, progress: b
     return vids, videos
 
 
-def _descriptor_pairs(names: list[str], vids: dict, cfg: CueConfig, sink: Sink, progress: bool,
+def _descriptor_pairs(names: list[str], vids: dict, sink: Sink, progress: bool,
                       memo: Memo = NO_MEMO) -> tuple[dict[tuple[str, str], TrackPairs], dict]:
     """Step 3: ({(a, b): TrackPairs}, {(a, b): cues.pairing.descriptors.PairStats}) of every two videos read."""
     from ..cues.pairing.descriptors import match_tracks
@@ -255,7 +255,7 @@ def _descriptor_pairs(names: list[str], vids: dict, cfg: CueConfig, sink: Sink, 
     for a, b in tqdm(list(itertools.combinations(names, 2)), desc="cross-view pairs", unit="pair",
                      disable=not progress, leave=False):
         tp, ps = memo.call("match", match_tracks, a, b, vids[a].features, vids[b].features, vids[a].instance,
-                           vids[b].instance, cfg.match)
+                           vids[b].instance)
         pairs[(a, b)], matched[(a, b)] = tp, ps
         sink.pair_matches(a, b, vids[a].features.keyframes, vids[b].features.keyframes, ps.keyframe_matches)
         log.info("%s__%s: %d matches, %d snapped, %d instance pairs, %d track pairs",

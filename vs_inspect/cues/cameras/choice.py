@@ -353,7 +353,7 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict, est,
     may then be fewer). memo: kept between calls on the same videos and pairs, so that the moving
     points' cameras, which do not depend on est, are fitted once. as_built: est's cameras even
     when weak (the moving points' are not fitted nor compared)."""
-    from .sfm import undistort_with_colmap
+    from .sfm import MIN_INLIERS, undistort_with_colmap
     from .moving_points import cameras_from_tracks, epipolar_fit_px
 
     static = [n for n, v in vids.items() if v.camera_motion != "moving"]
@@ -372,7 +372,7 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict, est,
     # moving points: such models can pass the point threshold with wrong focals and rotations
     fewest = min((c.points_seen for c in est.cameras.values()), default=0)
     weak = len(est.cameras) < 2 or any(n not in est.cameras for n in static) or \
-        fewest < 2 * cfg.camera.min_inliers
+        fewest < 2 * MIN_INLIERS
     weak_why = (f"the background reconstruction rests on few points (fewest {fewest} per image) or left a "
                 f"static camera out")
     # the moving points give static cameras only, so when the model placed more videos than there

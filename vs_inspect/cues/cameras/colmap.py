@@ -30,6 +30,9 @@ log = logging.getLogger(__name__)
 # several mapper threads other cameras registered from run to run
 SFM_THREADS = -1
 SFM_MATCH_THREADS = 1
+# a moving camera's images matched with its own up to this many places away and a power of two
+# away (COLMAP's sequential matching), and with every other video's; 0: every pair
+SEQUENCE_OVERLAP = 5
 
 
 def sfm_image_file(frame_index) -> str:
@@ -102,7 +105,7 @@ def sift_database(db: Path, img_dir: Path, reader, cfg: CameraConfig, few: bool,
     mopt.num_threads = SFM_MATCH_THREADS
     verification = seeded_verification(seed)
     names = sorted(str(p.relative_to(img_dir)) for p in img_dir.glob("*/*.jpg"))
-    pairs = sfm_image_pairs(names, moving or {}, cfg.sequence_overlap)
+    pairs = sfm_image_pairs(names, moving or {}, SEQUENCE_OVERLAP)
     if len(pairs) == len(names) * (len(names) - 1) // 2:
         pycolmap.match_exhaustive(db, matching_options=mopt, verification_options=verification,
                                   device=pycolmap.Device.cpu)
@@ -215,7 +218,7 @@ def learned_database(features: str, db: Path, img_dir: Path, mask_dir: Path, rea
             database.write_keypoints(im.image_id, feats[im.image_id].keypoints.astype(np.float32) + 0.5)
         lines = []
         by_name = {im.name: im for im in images}
-        for na, nb in sfm_image_pairs([im.name for im in images], moving or {}, cfg.sequence_overlap):
+        for na, nb in sfm_image_pairs([im.name for im in images], moving or {}, SEQUENCE_OVERLAP):
             if cancel is not None:
                 cancel.check()
             a, b = by_name[na], by_name[nb]

@@ -28,12 +28,15 @@ import cv2
 import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
 from tqdm import tqdm
 
+from ...cue_stats import FrameRegistration as FrameRegistrationRecord
 from ...geometry.camera_model import scale_points
 from ...geometry.timing import frame_brackets, interpolate_poses
 from ...signals import import_pycolmap
 from ..config import CameraConfig
 
 log = logging.getLogger(__name__)
+
+REGISTER_MIN_INLIERS = 20  # 2D-3D inliers a frame needs to be registered (fewer: it keeps the slerped pose)
 
 
 @dataclass(frozen=True)
@@ -330,7 +333,7 @@ def register_others(rec, name: str, keyframes, features, match, camera, sfm_scal
         return float(np.degrees((Rotation.from_matrix(Ra) * Rotation.from_matrix(Rb).inv()).magnitude()))
 
     reg = register_frames(features, keyframes, camera, sfm_scale, match=match,
-                          min_inliers=cfg.register_min_inliers, seed=seed,
+                          min_inliers=REGISTER_MIN_INLIERS, seed=seed,
                           progress=f"{name}: registering frames" if progress else None,
                           check=None if cancel is None else cancel.check)
     own = np.isin(reg.frames, fk)  # reconstructed frames registered from their neighbours: a check
@@ -355,7 +358,7 @@ def register_others(rec, name: str, keyframes, features, match, camera, sfm_scal
         T = slerp_poses(fk[others], poses[others], k + 1)[k]
         err_slerp.append(angle_deg(T[:3, :3], poses[i, :3, :3]))
     new_frames = reg.frames[keep]
-    info = FrameRegistration(int((~np.isin(features.frames, fk)).sum()), int(keep.sum()), int((~own).sum() - keep.sum()),
+    info = FrameRegistrationRecord(int((~np.isin(features.frames, fk)).sum()), int(keep.sum()), int((~own).sum() - keep.sum()),
                              float(np.median(reg.inliers[keep])) if keep.any() else 0.0,
                              tuple(new_frames.tolist()), len(err_reg),
                              round(float(np.median(err_reg)), 3) if err_reg else None,

