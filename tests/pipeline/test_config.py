@@ -89,8 +89,7 @@ def test_bad_value_is_an_input_error():
 @pytest.mark.parametrize("data,needle", [
     ({"sync": {"landscape": {"step_s": float("nan")}}}, "--step-s must be a finite number"),
     ({"sync": {"landscape": {"min_overlap_s": -1}}}, "--min-overlap-s must be >= 0"),
-    ({"sync": {"landscape": {"min_terms": 0}}}, "min_terms must be positive"),
-    ({"sync": {"decision": {"min_contrast": 1.5}}}, r"min_contrast must be in \[0, 1\]"),
+    ({"sync": {"decision": {"min_track_pairs": -1}}}, "min_track_pairs must be >= 0"),
     ({"sync": {"solve": {"max_iterations": 0}}}, "max_iterations must be positive"),
     ({"sync": {"solve": {"huber_delta_s": float("inf")}}}, "--huber-delta-s must be a finite number"),
     ({"sync": {"pairs": {"fraction": 0.0}}}, r"--pairs fraction must be in \(0,1\]"),

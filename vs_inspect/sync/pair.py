@@ -14,7 +14,7 @@ import numpy as np
 from ..geometry.offsets import OffsetGrid, grid_between, span_of
 from ..types import CameraTrack, CueBundle, PairDecision, PairLandscape, TrackPairs
 from .config import SyncConfig
-from .decision import check_chosen_offset, check_inliers, check_track_pairs_at_best, check_uncertainty, decide
+from .decision import INLIER_PX_FRACTION, check_chosen_offset, check_inliers, check_track_pairs_at_best, check_uncertainty, decide
 from .landscape import (PairEnergy, PairInput, RawLandscape, compute_landscape, curvature_uncertainty,
                         landscape_step_s, refine_minimum)
 from .posefree import PoseFreeConfig, PoseFreePair
@@ -108,7 +108,7 @@ def _decided_landscape(a: PairInput, b: PairInput, tp: TrackPairs, cfg: SyncConf
         best, best_e = refine_minimum(pe, raw, best_idx)
         sigma = curvature_uncertainty(raw, best_idx, best_e, len(tp.index))
         va, vb = a.video, b.video
-        tau_px = decision_cfg.inlier_px_fraction * max(np.hypot(va.width, va.height),
+        tau_px = INLIER_PX_FRACTION * max(np.hypot(va.width, va.height),
                                                        np.hypot(vb.width, vb.height))
         r = pe.residuals(best, kind="sampson")
         seen = int(np.isfinite(r).any(axis=1).sum()) if r.ndim == 2 else 0
@@ -149,6 +149,8 @@ def _confirm_without_unchecked(a: PairInput, b: PairInput, tp: TrackPairs, cfg: 
                                    f"track pairs found by appearance alone ({own_best:+.3f} s)"), confirm
     return dataclasses.replace(decision, accepted=False, reason=why), confirm
 
+
+POSE_FREE_WINDOW_S = 2.0  # a pose-free pair's energy is searched over the shift its tracks gave ± this
 
 MIN_POSE_FREE_INLIERS = 0.5
 """A pose-free pair whose refined F explains fewer of its matches than this has no geometry to
@@ -200,7 +202,7 @@ def _pose_free_inputs(bundle: CueBundle, a: str, b: str, side: dict[str, PairInp
     side = {a: dataclasses.replace(side[a], camera=cam_a),
             b: dataclasses.replace(side[b], camera=cam_b, video=vb)}
     step = landscape_step_s(side[a].video, vb, cfg.landscape)
-    half = cfg.pose_free.window_s
+    half = POSE_FREE_WINDOW_S
     lo, hi = grid.pair_bounds(a, span_of(side[a].video.timestamps_s), b, span_of(bundle.video(b).timestamps_s),
                               window=False)
     offsets = grid_between(max(pf.offset_s - half, lo), min(pf.offset_s + half, hi), step, grid.max_count,
