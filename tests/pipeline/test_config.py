@@ -188,3 +188,46 @@ def test_engine_and_knn_flags():
     assert run_config(_parser(sync_cmd).parse_args(["sync", "--out", "o"])).engine == EngineConfig("local")
     with pytest.raises(InputError, match="knn:K"):
         run_config(_parser(sync_cmd).parse_args(["sync", "--out", "o", "--pairs", "knn:0"]))
+
+
+def test_any_setting_by_its_path_and_an_unknown_path_named(tmp_path):
+    from vs_inspect.pipeline.config import parse_set, with_settings
+
+    cfg = with_settings(RunConfig(), parse_set(["sync.landscape.range_s=5", "cues.heads=no",
+                                                "cues.camera.features=sift", "sync.solve.reference=cam2",
+                                                'sync.landscape.around={"cam1": [1.5, 0.25]}',
+                                                "sync.landscape.step_s=null"]))
+    assert cfg.sync.landscape.range_s == 5.0 and cfg.cues.heads is False and cfg.cues.camera.features == "sift"
+    assert cfg.sync.solve.reference == "cam2" and cfg.sync.landscape.around == {"cam1": (1.5, 0.25)}
+    with pytest.raises(InputError, match=r"unknown setting 'sync.landscape.rang_s' \(known in sync.landscape: .*range_s"):
+        with_settings(RunConfig(), parse_set(["sync.landscape.rang_s=5"]))
+    with pytest.raises(InputError, match="unknown setting 'nothing'"):
+        with_settings(RunConfig(), {"nothing": 1})
+    with pytest.raises(InputError, match="must be a number"):
+        with_settings(RunConfig(), parse_set(["sync.landscape.range_s=soon"]))
+    with pytest.raises(InputError, match="PATH=VALUE"):
+        parse_set(["sync.landscape.range_s"])
+
+
+def test_presets_on_the_command_line(tmp_path):
+    from vs_inspect.pipeline.config import PRESETS
+
+    fast = run_config(_parser(sync_cmd).parse_args(["sync", "--out", "o", "--preset", "fast", "--keyframes", "6"]))
+    assert fast.cues.max_tracks == 800 and fast.cues.camera.features == "sift" and fast.cues.heads is False
+    assert fast.cues.keyframes == 6  # the options given apply on top of the preset
+    paper = run_config(_parser(sync_cmd).parse_args(["sync", "--out", "o", "--preset", "paper"]))
+    assert paper.sync.landscape.loss == "mean" and not paper.sync.sightings.enabled
+    assert run_config(_parser(sync_cmd).parse_args(["sync", "--out", "o", "--preset", "estimated"])) == RunConfig()
+    calibrated = ["sync", "--out", "o", "--preset", "calibrated"]
+    with pytest.raises(InputError, match="--preset calibrated: give the rig's calibration with --calib"):
+        run_config(_parser(sync_cmd).parse_args(calibrated))
+    assert run_config(_parser(sync_cmd).parse_args(calibrated + ["--calib", "c.toml"])) == RunConfig()
+    RunConfig().save(tmp_path)
+    with pytest.raises(InputError, match="give one of them"):
+        run_config(_parser(sync_cmd).parse_args(["sync", "--out", "o", "--preset", "fast", "--config",
+                                                 str(tmp_path / "config.json")]))
+    assert set(PRESETS) == {"calibrated", "estimated", "fast", "paper"}
+    # --set wins over everything
+    late = run_config(_parser(sync_cmd).parse_args(["sync", "--out", "o", "--preset", "fast", "--keyframes", "6",
+                                                    "--set", "cues.keyframes=9"]))
+    assert late.cues.keyframes == 9
