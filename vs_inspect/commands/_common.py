@@ -70,7 +70,7 @@ def add_config_file_option(p: argparse.ArgumentParser) -> None:
                    help="settings from a config.json that `sync` wrote (OUT/config.json); options "
                         "given on the command line override the file's values")
     p.add_argument("--preset", choices=list(PRESETS), default=None,
-                   help="named settings instead of the defaults (the other options apply on top): "
+                   help="named settings in place of the usual ones (the other options apply on top): "
                         + "; ".join(f"{n}: {doc}" for n, (doc, _) in PRESETS.items()))
     p.add_argument("--set", action="append", default=[], metavar="PATH=VALUE", dest="set_items",
                    help="any setting by its path in config.json, e.g. sync.landscape.range_s=5 or "

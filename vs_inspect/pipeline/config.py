@@ -86,10 +86,10 @@ class RunConfig:
 # ---- presets and dotted paths -------------------------------------------------------------------
 
 PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
-    "estimated": ("cameras estimated from the videos (the defaults): each camera model tried while a video "
-                  "is untrusted", {}),
+    "estimated": ("cameras estimated from the videos, each camera model tried while a video is untrusted "
+                  "(the usual settings)", {}),
     "calibrated": ("cameras from --calib, which the run then needs (it is refused without one rather than "
-                   "estimating them); the rest as the defaults", {}),
+                   "estimating them); otherwise the usual settings", {}),
     "fast": ("quicker, less thorough: 480 px working frames, 800 tracks and 8 keyframes per video, SIFT's "
              "camera model only on fewer frames, no heads",
              {"cues.max_side": 480, "cues.max_tracks": 800, "cues.keyframes": 8, "cues.camera.features": "sift",
