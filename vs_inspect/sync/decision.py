@@ -195,6 +195,15 @@ def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_t
     nums = dict(contrast=float(contrast), second_depth_ratio=second, num_minima=significant,
                 num_pareto_minima=len(pareto), at_range_edge=bool(edge), support_fraction=share)
 
+    accepted, reason = _verdict(cfg, offsets_s, support, best, first_rival, weaker_lowest, contrast, second,
+                                significant, edge, share, usual)
+    return PairDecision(accepted, reason, **nums), minima
+
+
+def _verdict(cfg: DecisionConfig, offsets_s: np.ndarray, support: np.ndarray, best: int, first_rival: int,
+             weaker_lowest: int | None, contrast: float, second: float, significant: int, edge: bool,
+             share: float, usual: float) -> tuple[bool, str]:
+    """(accepted, reason) of decide's measures, the first failed check named."""
     accepted, reason = True, f"single clear minimum (contrast {contrast:.2f}, rival/best prominence {second:.2f})"
     if weaker_lowest is not None:
         reason += (f"; the lowest energy, at {offsets_s[weaker_lowest]:+.3f} s, rests on "
@@ -222,4 +231,4 @@ def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_t
                   f"landscape's usual overlap ({int(support[best])} of a median {usual:.0f} "
                   f"(track pair, frame) terms; fewer than {100 * MIN_SUPPORT_FRACTION:.0f}%): "
                   "a mean over few terms dips by chance")
-    return PairDecision(accepted, reason, **nums), minima
+    return accepted, reason

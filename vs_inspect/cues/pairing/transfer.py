@@ -137,6 +137,18 @@ def transfer_landscape(traj: Trajectories, info_c: VideoInfo, camera_c: CameraTr
                               -1, 0.0, np.zeros((0, 2), np.int64))
     if D == 0 or S == 0 or Tc < 2:
         return empty
+    hits, overlap = _hits(traj, info_c, camera_c, xy_c, offsets_s, radius_px, neighbours)
+    if not len(hits):  # no sample within the radius of a track (tracks within reach are not hits)
+        return empty
+    return _best_offset(hits, overlap, offsets_s, K, Nc, min_hits, min_overlap_share, allowed)
+
+
+def _hits(traj: Trajectories, info_c: VideoInfo, camera_c: CameraTrack, xy_c: np.ndarray, offsets_s: np.ndarray,
+          radius_px: float, neighbours: int) -> tuple[np.ndarray, np.ndarray]:
+    """(hits as numbers (offset d * K + trajectory) * N + track j, one per sample that lands on
+    track j of c at offset d; overlap (D,) samples inside c's video at each offset)."""
+    D, S, K = len(offsets_s), len(traj.time_s), traj.num_trajectories
+    Nc, Tc = xy_c.shape[:2]
     at_c = camera_at_frames(camera_c, np.arange(Tc))
     X = traj.points_world
     fixed = None if camera_c.is_moving else project(at_c.K[0], at_c.cam_from_world[0], X)  # (S,2)
@@ -183,9 +195,14 @@ def transfer_landscape(traj: Trajectories, info_c: VideoInfo, camera_c: CameraTr
                 hit = np.linalg.norm(xj - p[has], axis=1) <= radius_px
                 dd, ss = d0 + d_idx[has][hit], s_idx[has][hit]
                 keys.append((dd.astype(np.int64) * K + traj.trajectory[ss]) * Nc + j[hit])
-    hits = np.concatenate(keys) if keys else np.zeros(0, np.int64)
-    if not len(hits):  # no sample within the radius of a track (tracks within reach are not hits)
-        return empty
+    return (np.concatenate(keys) if keys else np.zeros(0, np.int64)), overlap
+
+
+def _best_offset(hits: np.ndarray, overlap: np.ndarray, offsets_s: np.ndarray, K: int, Nc: int, min_hits: int,
+                 min_overlap_share: float, allowed: np.ndarray | None) -> TransferLandscape:
+    """The landscape of the hits (_hits): each trajectory's most-hit track counted at min_hits,
+    the best candidate offset by share, its robust z-score and matches."""
+    D = len(offsets_s)
     u, count = np.unique(hits, return_counts=True)
     dk, jj = u // Nc, u % Nc  # (offset, trajectory) and track
     # each (offset, trajectory)'s most-hit track

@@ -359,6 +359,28 @@ def _one_to_one(cand_a: np.ndarray, cand_b: np.ndarray, res: np.ndarray) -> np.n
     return np.sort(which[rows[ok], cols[ok]])
 
 
+def _peak_supporters(peaks: list[int], informative: np.ndarray, best: np.ndarray, cand_a: np.ndarray,
+                     cand_b: np.ndarray, res: np.ndarray, halfwidth: int) -> tuple[np.ndarray, np.ndarray, list[int]]:
+    """(index (P,2) of the track pairs kept, (P,) which peak each supports, votes per peak): at each
+    peak one partner per track, the one-to-one choice of least total residual; a track pair
+    supporting two peaks is kept once, with the first (highest)."""
+    keep_a, keep_b, keep_p, peak_votes = [], [], [], []
+    for pi, p in enumerate(peaks):
+        near = informative & (np.abs(best - p) <= halfwidth)
+        peak_votes.append(int(near.sum()))
+        sel = np.nonzero(near)[0]
+        if not len(sel):
+            continue
+        sel = sel[_one_to_one(cand_a[sel], cand_b[sel], res[sel])]
+        keep_a += cand_a[sel].tolist()
+        keep_b += cand_b[sel].tolist()
+        keep_p += [pi] * len(sel)
+    index = np.stack([np.array(keep_a, np.int64), np.array(keep_b, np.int64)], 1) \
+        if keep_a else np.zeros((0, 2), np.int64)
+    index, first = np.unique(index, axis=0, return_index=True)
+    return index, np.array(keep_p, np.int64)[first], peak_votes
+
+
 def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a: CameraTrack,
                     cam_b: CameraTrack, xy_a: np.ndarray, xy_b: np.ndarray,
                     cfg: GeometricPairConfig = GeometricPairConfig(), grid: OffsetGrid = OffsetGrid()
@@ -419,27 +441,12 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
     informative = best >= 0
     votes = np.bincount(best[informative], minlength=len(offsets)).astype(float)
     peaks = _peaks(votes, cfg.peaks, cfg.peak_halfwidth, None if allowed.all() else allowed)
-    keep_a, keep_b, keep_p, peak_votes = [], [], [], []
-    for pi, p in enumerate(peaks):
-        near = informative & (np.abs(best - p) <= cfg.peak_halfwidth)
-        peak_votes.append(int(near.sum()))
-        sel = np.nonzero(near)[0]
-        if not len(sel):
-            continue
-        # one partner per track at this peak: the one-to-one choice of least total residual
-        sel = sel[_one_to_one(cand_a[sel], cand_b[sel], res[sel])]
-        keep_a += cand_a[sel].tolist()
-        keep_b += cand_b[sel].tolist()
-        keep_p += [pi] * len(sel)
-    index = np.stack([np.array(keep_a, np.int64), np.array(keep_b, np.int64)], 1) \
-        if keep_a else np.zeros((0, 2), np.int64)
-    # a track pair supporting two peaks is kept once, with the first (highest) peak
-    index, first = np.unique(index, axis=0, return_index=True)
+    index, pair_peak, peak_votes = _peak_supporters(peaks, informative, best, cand_a, cand_b, res, cfg.peak_halfwidth)
     coarser = max(info_a.frame_interval_s, info_b.frame_interval_s)
     inf = np.nonzero(informative)[0]
     stats = GeometricPairStats(len(cand_a), int(informative.sum()), len(index),
                                tuple(float(offsets[p]) for p in peaks), tuple(peak_votes),
-                               np.array(keep_p, np.int64)[first], offsets, votes,
+                               pair_peak, offsets, votes,
                                max(step * cfg.peak_halfwidth, 0.5 * coarser),
                                np.stack([cand_a[inf], cand_b[inf]], 1), offsets[best[inf]], res[inf],
                                grid.pair_window(a, b))
