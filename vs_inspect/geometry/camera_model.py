@@ -106,26 +106,26 @@ class Lens:
 
     def undistort(self, K: np.ndarray, xy: np.ndarray) -> np.ndarray:
         """(...,2) full-resolution px through the lens -> pinhole px of K (3,3); NaN stays NaN."""
-        K = check_shape("K", np.asarray(K, np.float64), (3, 3), batched=False)
-        xy = check_shape("xy", np.asarray(xy, np.float64), (2,))
-        flat = xy.reshape(-1, 2)
-        ok = np.isfinite(flat).all(1)
-        out = np.full_like(flat, np.nan)
-        if ok.any():
-            sfm = (flat[ok] + 0.5) * self.sfm_scale  # COLMAP puts pixel centres at +0.5
-            norm = np.asarray(self.colmap_camera().cam_from_img(sfm))
-            out[ok] = norm[:, :2] * [K[0, 0], K[1, 1]] + [K[0, 2], K[1, 2]]
-        return out.reshape(xy.shape)
+        def through(K, p):
+            norm = np.asarray(self.colmap_camera().cam_from_img((p + 0.5) * self.sfm_scale))  # COLMAP: centres at +0.5
+            return norm[:, :2] * [K[0, 0], K[1, 1]] + [K[0, 2], K[1, 2]]
+        return _finite_points(K, xy, through)
 
     def distort(self, K: np.ndarray, xy: np.ndarray) -> np.ndarray:
         """The inverse of undistort: (...,2) pinhole px of K -> full-resolution px through the lens."""
-        K = check_shape("K", np.asarray(K, np.float64), (3, 3), batched=False)
-        xy = check_shape("xy", np.asarray(xy, np.float64), (2,))
-        flat = xy.reshape(-1, 2)
-        ok = np.isfinite(flat).all(1)
-        out = np.full_like(flat, np.nan)
-        if ok.any():
-            rays = np.column_stack([(flat[ok] - [K[0, 2], K[1, 2]]) / [K[0, 0], K[1, 1]], np.ones(ok.sum())])
-            sfm = np.asarray(self.colmap_camera().img_from_cam(rays, check_cheirality=False))
-            out[ok] = sfm / self.sfm_scale - 0.5
-        return out.reshape(xy.shape)
+        def back(K, p):
+            rays = np.column_stack([(p - [K[0, 2], K[1, 2]]) / [K[0, 0], K[1, 1]], np.ones(len(p))])
+            return np.asarray(self.colmap_camera().img_from_cam(rays, check_cheirality=False)) / self.sfm_scale - 0.5
+        return _finite_points(K, xy, back)
+
+
+def _finite_points(K: np.ndarray, xy: np.ndarray, fn) -> np.ndarray:
+    """fn(K, (M,2) finite points) -> (M,2) over the finite points of xy (...,2); NaN elsewhere."""
+    K = check_shape("K", np.asarray(K, np.float64), (3, 3), batched=False)
+    xy = check_shape("xy", np.asarray(xy, np.float64), (2,))
+    flat = xy.reshape(-1, 2)
+    ok = np.isfinite(flat).all(1)
+    out = np.full_like(flat, np.nan)
+    if ok.any():
+        out[ok] = fn(K, flat[ok])
+    return out.reshape(xy.shape)
