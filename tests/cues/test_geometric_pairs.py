@@ -295,7 +295,7 @@ def test_points_near_the_epipole_do_not_vote():
     of a fits them at some offset. Such moments are not counted; the true pairs still vote."""
     from dataclasses import replace
 
-    from vs_inspect.cues.config import GeometricPairConfig
+    from vs_inspect.cues.pairing.votes import VOTE
 
     shift = 8
     info_a, info_b, poses_a, poses_b, xy_a, xy_b, a_of_b = _two_moving(shift)
@@ -308,7 +308,7 @@ def test_points_near_the_epipole_do_not_vote():
     xy_b = np.concatenate([xy_b, xy_heads + rng.normal(0, 0.3, xy_heads.shape)])
     head_rows = set(range(len(xy_b) - 10, len(xy_b)))
     cam_a, cam_b = CameraTrack(K, poses_a), CameraTrack(K, poses_b)
-    off = replace(GeometricPairConfig(), epipole_margin_tau=0.0)
+    off = replace(VOTE, epipole_margin_tau=0.0)
     _, st_off = geometric_pairs("a", "b", info_a, info_b, cam_a, cam_b, xy_a, xy_b, off)
     tp, st = geometric_pairs("a", "b", info_a, info_b, cam_a, cam_b, xy_a, xy_b)
     def head_votes(stats):  # (votes of pairs with a head track, the most at one offset)

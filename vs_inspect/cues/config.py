@@ -27,26 +27,6 @@ def _check_numbers(cfg, positive: tuple[str, ...] = (), signed: tuple[str, ...] 
 class GeometricPairConfig:
     enabled: bool = True
     """Add track pairs found by epipolar consistency (static cameras with known geometry)."""
-    tau_diag: float = 0.004
-    """Sampson distance (fraction of the image diagonal, at least 2 px) below which a moment fits."""
-    min_frames: int = 8
-    """Common moments a candidate needs at an offset."""
-    min_inlier_share: float = 0.8
-    """Share of those moments that must fit."""
-    max_band_share: float = 0.08
-    """A pair consistent at more than this share of the offsets is uninformative and dropped."""
-    min_sweep_tau: float = 4.0
-    """A candidate track must sweep at least this many tau across the epipolar lines (motion along them fits any offset)."""
-    epipole_margin_tau: float = 10.0
-    """A fitting moment where either point lies within this many tau of its epipole is not counted (every epipolar line passes there, so any partner fits at any offset); 0 counts every moment."""
-    max_tracks: int = 300
-    """Longest tracks per video taken as candidates (cost grows with the product)."""
-    max_rate_hz: float = 30.0
-    """b's frames are read at about this rate at most (every 2nd frame at 60 fps); 0 = all frames."""
-    peaks: int = 3
-    """Vote-histogram peaks whose supporters are kept."""
-    peak_halfwidth: int = 2
-    """Grid steps either side of a peak that count as supporting it."""
     unchecked_moving: bool = False
     """Without a triangle to check a pair's vote peaks (two cameras, or too many pairs), keep the supporters of every peak of a pair with a moving camera too. Off: it keeps its descriptor pairs only."""
     joint: bool = True

@@ -72,7 +72,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     camera, none (GeometricPairConfig.unchecked_moving).
     """
     from .joint import consistent_peaks, joint_offsets
-    from .votes import geometric_pairs
+    from .votes import VOTE, geometric_pairs
 
     # every pair of cameras: a moving one with its per-frame poses (two moving ones: the
     # geometry per frame of b and per offset)
@@ -80,7 +80,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     found = {}
     for a, b in tqdm(todo, desc="geometric pairs", unit="pair", disable=not progress, leave=False):
         found[(a, b)] = memo.call("votes", geometric_pairs, a, b, vids[a].info, vids[b].info, cameras[a],
-                                  cameras[b], tracks[a].xy, tracks[b].xy, cfg.geometric, grid)
+                                  cameras[b], tracks[a].xy, tracks[b].xy, VOTE, grid)
     peaks_s = {k: tuple(gs.peaks_s) for k, (_, gs) in found.items()}
     votes = {k: gs for k, (_, gs) in found.items()}  # each pair's vote evidence
     notes: list[Note] = []
@@ -396,11 +396,11 @@ def _consistent_descriptor_pairs(desc: TrackPairs, delta_s: float, cameras: dict
                                  vids: dict, cfg: CueConfig) -> TrackPairs:
     """The descriptor pairs of (desc.a, desc.b) that are epipolar-consistent at Δ = delta_s
     (geometric_pairs.consistent_at with the geometric pairs' tolerances)."""
-    from .votes import consistent_at
+    from .votes import VOTE, consistent_at
 
     if not len(desc.index):
         return desc
-    a, b, g = desc.a, desc.b, cfg.geometric
+    a, b, g = desc.a, desc.b, VOTE
     tau = max(2.0, g.tau_diag * float(np.hypot(vids[b].info.width, vids[b].info.height)))
     ok = consistent_at(vids[a].info, vids[b].info, cameras[a], cameras[b], tracks[a].xy,
                        tracks[b].xy, desc.index, delta_s, tau, g.min_inlier_share, g.min_frames)

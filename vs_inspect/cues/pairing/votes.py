@@ -35,7 +35,25 @@ from ...geometry.offsets import OffsetGrid, span_of
 from ...geometry.sampling import camera_at_frames, camera_between_frames, tracks_between_frames
 from ...geometry.timing import frame_brackets
 from ...types import CameraTrack, TrackPairs, VideoInfo
-from ..config import GeometricPairConfig
+
+
+@dataclass(frozen=True)
+class VoteParams:
+    """The epipolar vote's own parameters (not user settings: measured defaults, BENCHMARKS.md)."""
+
+    tau_diag: float = 0.004  # Sampson distance (share of the image diagonal, at least 2 px) below which a moment fits
+    min_frames: int = 8  # common moments a candidate needs at an offset
+    min_inlier_share: float = 0.8  # share of those moments that must fit
+    max_band_share: float = 0.08  # a pair consistent at more than this share of the offsets is uninformative
+    min_sweep_tau: float = 4.0  # a track must sweep this many tau across the epipolar lines (along them fits any offset)
+    epipole_margin_tau: float = 10.0  # a moment within this many tau of an epipole does not count (0: every moment)
+    max_tracks: int = 300  # longest tracks per video taken as candidates (cost grows with the product)
+    max_rate_hz: float = 30.0  # b's frames read at about this rate at most (every 2nd at 60 fps); 0: all
+    peaks: int = 3  # vote-histogram peaks whose supporters are kept
+    peak_halfwidth: int = 2  # grid steps either side of a peak that count as supporting it
+
+
+VOTE = VoteParams()
 
 
 @dataclass(frozen=True)
@@ -383,7 +401,7 @@ def _peak_supporters(peaks: list[int], informative: np.ndarray, best: np.ndarray
 
 def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a: CameraTrack,
                     cam_b: CameraTrack, xy_a: np.ndarray, xy_b: np.ndarray,
-                    cfg: GeometricPairConfig = GeometricPairConfig(), grid: OffsetGrid = OffsetGrid()
+                    params: VoteParams = VOTE, grid: OffsetGrid = OffsetGrid()
                     ) -> tuple[TrackPairs, GeometricPairStats]:
     """Track pairs between cameras a and b from epipolar consistency over time.
 
@@ -395,7 +413,7 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
     peaks only, so that the votes' statistics (vote_z) stay the whole range's.
     """
     if cam_a.is_moving and not cam_b.is_moving:  # a moving camera is b inside: Δ_ba = -Δ_ab
-        tp, st = geometric_pairs(b, a, info_b, info_a, cam_b, cam_a, xy_b, xy_a, cfg, grid)
+        tp, st = geometric_pairs(b, a, info_b, info_a, cam_b, cam_a, xy_b, xy_a, params, grid)
         return TrackPairs(a, b, tp.index[:, ::-1].copy(), tp.weight), st.swapped()
     empty = TrackPairs(a, b, np.zeros((0, 2), np.int64), np.zeros(0))
     Tb = xy_b.shape[1]
@@ -413,7 +431,7 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
     if not posed.any():
         return empty, GeometricPairStats(0, 0, 0, (), ())
     diag = float(np.hypot(info_b.width, info_b.height))
-    tau = max(2.0, cfg.tau_diag * diag)
+    tau = max(2.0, params.tau_diag * diag)
     u, _, vt = np.linalg.svd(np.where(posed[..., None, None], G, np.eye(3)))
     e_a, e_b = u[..., -1], vt[..., -1, :]  # (Dg,Tb,3) unit null vectors: Gᵀ e_a = 0, G e_b = 0
     # a moving camera's extent is judged at a middle pose (both moving: the offset nearest 0
@@ -421,13 +439,13 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
     rows = np.nonzero(posed.any(1))[0]
     g_mid = rows[np.argmin(np.abs(offsets[rows]))] if len(G) > 1 else 0
     mid = np.nonzero(posed[g_mid])[0][posed[g_mid].sum() // 2]
-    ia = _candidates(xy_a, cfg.max_tracks, cfg.min_frames, epipolar_extent(xy_a, e_a[g_mid, mid]),
-                     cfg.min_sweep_tau * tau)
-    ib = _candidates(xy_b, cfg.max_tracks, cfg.min_frames, epipolar_extent(xy_b, e_b[g_mid, mid]),
-                     cfg.min_sweep_tau * tau)
+    ia = _candidates(xy_a, params.max_tracks, params.min_frames, epipolar_extent(xy_a, e_a[g_mid, mid]),
+                     params.min_sweep_tau * tau)
+    ib = _candidates(xy_b, params.max_tracks, params.min_frames, epipolar_extent(xy_b, e_b[g_mid, mid]),
+                     params.min_sweep_tau * tau)
     if not len(ia) or not len(ib):
         return empty, GeometricPairStats(0, 0, 0, (), ())
-    qstep = max(1, int(1.0 / (info_b.frame_interval_s * cfg.max_rate_hz))) if cfg.max_rate_hz > 0 else 1
+    qstep = max(1, int(1.0 / (info_b.frame_interval_s * params.max_rate_hz))) if params.max_rate_hz > 0 else 1
     cand_a = np.repeat(ia, len(ib))
     cand_b = np.tile(ib, len(ia))
     _, best, res = _consistency(np.ascontiguousarray(xy_a, np.float64),
@@ -435,19 +453,19 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
                                 np.ascontiguousarray(G), np.ascontiguousarray(e_a),
                                 np.ascontiguousarray(e_b),
                                 np.ascontiguousarray(k), np.ascontiguousarray(w), tau * tau,
-                                cfg.min_frames, cfg.min_inlier_share,
-                                max(1, int(cfg.max_band_share * len(offsets))),
-                                cfg.min_sweep_tau * tau, qstep, (cfg.epipole_margin_tau * tau) ** 2)
+                                params.min_frames, params.min_inlier_share,
+                                max(1, int(params.max_band_share * len(offsets))),
+                                params.min_sweep_tau * tau, qstep, (params.epipole_margin_tau * tau) ** 2)
     informative = best >= 0
     votes = np.bincount(best[informative], minlength=len(offsets)).astype(float)
-    peaks = _peaks(votes, cfg.peaks, cfg.peak_halfwidth, None if allowed.all() else allowed)
-    index, pair_peak, peak_votes = _peak_supporters(peaks, informative, best, cand_a, cand_b, res, cfg.peak_halfwidth)
+    peaks = _peaks(votes, params.peaks, params.peak_halfwidth, None if allowed.all() else allowed)
+    index, pair_peak, peak_votes = _peak_supporters(peaks, informative, best, cand_a, cand_b, res, params.peak_halfwidth)
     coarser = max(info_a.frame_interval_s, info_b.frame_interval_s)
     inf = np.nonzero(informative)[0]
     stats = GeometricPairStats(len(cand_a), int(informative.sum()), len(index),
                                tuple(float(offsets[p]) for p in peaks), tuple(peak_votes),
                                pair_peak, offsets, votes,
-                               max(step * cfg.peak_halfwidth, 0.5 * coarser),
+                               max(step * params.peak_halfwidth, 0.5 * coarser),
                                np.stack([cand_a[inf], cand_b[inf]], 1), offsets[best[inf]], res[inf],
                                grid.pair_window(a, b))
     return TrackPairs(a, b, index, np.ones(len(index))), stats
