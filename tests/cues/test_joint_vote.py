@@ -158,6 +158,13 @@ def _sure_of_all(monkeypatch, offsets: dict[str, float], estimated: bool = True,
     """Stage 0's geometric pairs of the transfer scene (cameras a, b, c, true geometry) with the
     joint vote replaced by one sure (margin 10) of every camera at `offsets` (other_peaks: a first
     camera model's vote peaks): (pairs, stats, stage events, the scene's rows of each point)."""
+    got, row_of = _pairing(monkeypatch, offsets, estimated, other_peaks, cfg)
+    return got.pairs, _as_json(got), [n.message for n in got.notes], row_of
+
+
+def _pairing(monkeypatch, offsets: dict[str, float], estimated: bool = True, other_peaks: dict | None = None,
+             cfg: CueConfig = CueConfig()):
+    """(the GeometricPairing of _sure_of_all, the scene's rows of each point)."""
     from types import SimpleNamespace
 
     from vs_inspect.cues.pairing.pairing import add_geometric_pairs
@@ -172,7 +179,18 @@ def _sure_of_all(monkeypatch, offsets: dict[str, float], estimated: bool = True,
                               {n: SimpleNamespace(info=infos[n]) for n in "abc"}, cfg,
                               progress=False, estimated=estimated, other_peaks=other_peaks,
                               other="SIFT's model")
-    return got.pairs, _as_json(got), [n.message for n in got.notes], row_of
+    return got, row_of
+
+
+def test_the_joint_record_keeps_its_checks_typed(monkeypatch):
+    """The record of a refused set is read in memory (what the other camera models made of a
+    video): its three-view checks are ThreeViewSummary records, not dicts."""
+    from vs_inspect.cue_stats import ThreeViewSummary, refusal_texts
+
+    got, _ = _pairing(monkeypatch, {"a": 0.0, "b": 0.42, "c": 0.2})
+    assert all(isinstance(v, ThreeViewSummary) for v in got.joint.three_view.values())
+    assert got.joint.refused_in_three_views() == ["a", "b", "c"]
+    assert "three views" in refusal_texts({}, {}, got.joint, "c")[1]
 
 
 def test_sure_cameras_that_see_each_others_points_keep_their_pairs(monkeypatch):

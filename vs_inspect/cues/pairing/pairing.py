@@ -455,8 +455,9 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
     record = JointVoteRecord(joint.origin, {n: round(o, 4) for n, o in joint.offsets_s.items()},
                              round(joint.score, 2), {n: round(m, 2) for n, m in joint.margin.items()},
                              tuple(sorted(n for n, ok in sure.items() if ok)), tuple(sorted({n for k in used for n in k})),
-                             # an empty check is left out
-                             **{k: dict(v) for k, v in dataclasses.asdict(said).items() if v})
+                             # an empty check is left out; its summaries stay typed (asdict would not)
+                             **{f.name: dict(getattr(said, f.name)) for f in dataclasses.fields(said)
+                                if getattr(said, f.name)})
     three_view, dissent, transfer = said.three_view, said.dissent, said.transfer
     failed = sorted(n for n, chk in three_view.items() if not chk.passed and not sure[n])
     if failed:
