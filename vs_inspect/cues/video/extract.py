@@ -15,7 +15,7 @@ from ...errors import InputError
 from ...geometry.camera_model import scale_points
 from ...types import VideoInfo
 from ..config import CueConfig
-from ..config import LEARNED_FEATURES
+from ..features import LEARNED_FEATURES
 from ..pairing.descriptors import KeyframeFeatures, extract_keyframe_features, keyframe_indices
 from .motion import moving_regions
 from .tracking import track_points
