@@ -59,3 +59,17 @@ def test_caliscope_cuts_through_the_command(shared_data, tmp_path, capsys):
     assert out[4].startswith("1 sets, 3 offsets: 3 resolved") and "**0 over 2 frames**" in out[4]
     folder = sets[0].name.replace("/", "_").replace(" ", "_")  # caliscope_t0_cuts_...
     assert (tmp_path / "w" / "runs" / folder / "cues" / "bundle.json").is_file()
+
+
+@pytest.mark.timeout(900)
+def test_the_speed_set_prints_every_steps_seconds(shared_data, tmp_path, capsys):
+    """caliscope blended to 30 fps, 1 s per video (too short to synchronize: the path, not the
+    offsets), through `bench stage0 speed`: the row, then the run's seconds per step."""
+    assert main(["bench", "stage0", "speed", "--seconds", "1", "--data", str(shared_data),
+                 "--workdir", str(tmp_path)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert _cells(out[2])[0] == "speed/1s 720p 30fps" and out[4].startswith("1 sets, 3 offsets: ")
+    steps = dict(line.split() for line in out[6:] if line and not line.startswith("run folders"))
+    assert {"stage0_decode_s", "stage0_with_io_s", "stage1_s", "total_s"} <= set(steps)
+    assert float(steps["total_s"]) >= float(steps["stage0_with_io_s"]) > 0
+    assert len(list((tmp_path / "speed_1s").glob("cam_*.mp4"))) == 4

@@ -228,13 +228,12 @@ def run_dataset(data: BenchData, opts: PlanOptions, stage0_s: float = float("nan
     """Every method and variant on one dataset's cue bundle; default: the result of the run that
     made the bundle from videos (else Stage 1 + 2 on the bundle are the default run)."""
     rows: list[Row] = []
-    bundle = data.bundle
-    base_cfg = SyncConfig()
+    bundle, lands = data.bundle, None
     try:
         res, peak_mb = default, float("nan")  # a video run's memory is not traced (it would slow Stage 0)
         if res is None:
             with Meter() as m:
-                res = sync_bundle(bundle, base_cfg, progress=False)
+                res = sync_bundle(bundle, SyncConfig(), progress=False)
             peak_mb = m.peak_mb
         rows.append(score(data, res.offsets_s, "vs_inspect", "default", stage0_s=stage0_s,
                           stage1_s=res.timings_s["stage1_s"], stage2_s=res.timings_s["stage2_s"],
@@ -242,75 +241,78 @@ def run_dataset(data: BenchData, opts: PlanOptions, stage0_s: float = float("nan
         lands = list(res.pairs)
     except Exception as exc:  # noqa: BLE001  (a failure is a result)
         rows.append(failed(data, "vs_inspect", "default", _text(exc), stage0_s=stage0_s))
-        lands = None
-
     if lands is not None:
-        # Stage 2 ablations on the same landscapes.
-        t = time.perf_counter()
-        rows.append(score(data, solve_stage2(bundle, lands, SolveConfig(solver="ls")).offsets_s, "vs_inspect",
-                          "solver=ls", stage2_s=time.perf_counter() - t))
-        t = time.perf_counter()
-        rows.append(score(data, solve_stage2(bundle, without_filter(lands), SolveConfig()).offsets_s, "vs_inspect",
-                          "filter=off", stage2_s=time.perf_counter() - t))
-        a100, a500 = stage1_pairwise(data, lands)
-        rows.append(Row(data.name, data.group, "vs_inspect", "stage1-only", a100, a500, float("nan"),
-                        float("nan"), float("nan"), 0, len(bundle.gt_offsets_s)))
-        # candidates: the pairs with track pairs, and those a worn-camera sighting timed
-        has = {k for k, v in bundle.pairs.items() if len(v.index)} | {(p.a, p.b) for p in lands
-                                                                       if p.residual == SIGHTING}
-        by = {(p.a, p.b): p for p in lands}
-        for mode in PAIR_MODES:
-            for seed in opts.pair_seeds:
-                sel = PairSelection.parse(mode, seed)
-                chosen = select_pairs(bundle.names, has, sel)
-                t = time.perf_counter()
-                offs = solve_stage2(bundle, [by[p] for p in chosen], SolveConfig()).offsets_s
-                rows.append(score(data, offs, "vs_inspect", f"pairs={mode}/seed={seed}",
-                                  stage2_s=time.perf_counter() - t))
-
-    # Stage 1 ablations: other residuals, exact cameras.
+        rows += stage2_ablations(data, lands, opts.pair_seeds)
+    # Stage 1 ablations: other residuals, exact cameras
     for r in opts.residuals:
-        if r == base_cfg.landscape.residual:
-            continue
-        cfg = SyncConfig(landscape=LandscapeConfig(residual=r))
-        try:
-            with Meter() as m:
-                res = sync_bundle(bundle, cfg, progress=False)
-            rows.append(score(data, res.offsets_s, "vs_inspect", f"residual={r}",
-                              stage1_s=res.timings_s["stage1_s"], stage2_s=res.timings_s["stage2_s"],
-                              peak_mb=m.peak_mb))
-        except Exception as exc:  # noqa: BLE001
-            rows.append(failed(data, "vs_inspect", f"residual={r}", _text(exc)))
+        if r != SyncConfig().landscape.residual:
+            rows.append(_variant(data, f"residual={r}", bundle, SyncConfig(landscape=LandscapeConfig(residual=r))))
     if opts.true_cameras and data.true_cameras is not None:
+        rows.append(_variant(data, "cameras=true", dataclasses.replace(bundle, cameras=dict(data.true_cameras)),
+                             SyncConfig()))
+    if opts.peers:
+        rows += _peers(data, stage0_s)
+    return rows
+
+
+def stage2_ablations(data: BenchData, lands: list[PairLandscape], pair_seeds: tuple[int, ...]) -> list[Row]:
+    """The Stage 2 ablations on the default run's landscapes: least squares, the spurious-pair
+    filter off, Stage 1 alone, and fewer pairs (PAIR_MODES, each with every pair seed)."""
+    bundle = data.bundle
+    rows = []
+    for variant, chosen, cfg in (("solver=ls", lands, SolveConfig(solver="ls")),
+                                 ("filter=off", without_filter(lands), SolveConfig())):
+        t = time.perf_counter()
+        rows.append(score(data, solve_stage2(bundle, chosen, cfg).offsets_s, "vs_inspect", variant,
+                          stage2_s=time.perf_counter() - t))
+    a100, a500 = stage1_pairwise(data, lands)
+    rows.append(Row(data.name, data.group, "vs_inspect", "stage1-only", a100, a500, float("nan"),
+                    float("nan"), float("nan"), 0, len(bundle.gt_offsets_s)))
+    # candidates: the pairs with track pairs, and those a worn-camera sighting timed
+    has = {k for k, v in bundle.pairs.items() if len(v.index)} | {(p.a, p.b) for p in lands
+                                                                   if p.residual == SIGHTING}
+    by = {(p.a, p.b): p for p in lands}
+    for mode in PAIR_MODES:
+        for seed in pair_seeds:
+            chosen = select_pairs(bundle.names, has, PairSelection.parse(mode, seed))
+            t = time.perf_counter()
+            offs = solve_stage2(bundle, [by[p] for p in chosen], SolveConfig()).offsets_s
+            rows.append(score(data, offs, "vs_inspect", f"pairs={mode}/seed={seed}",
+                              stage2_s=time.perf_counter() - t))
+    return rows
+
+
+def _variant(data: BenchData, variant: str, bundle, cfg: SyncConfig) -> Row:
+    """Stage 1 + 2 again on a bundle with other settings (timed, memory traced)."""
+    try:
+        with Meter() as m:
+            res = sync_bundle(bundle, cfg, progress=False)
+        return score(data, res.offsets_s, "vs_inspect", variant, stage1_s=res.timings_s["stage1_s"],
+                     stage2_s=res.timings_s["stage2_s"], peak_mb=m.peak_mb)
+    except Exception as exc:  # noqa: BLE001
+        return failed(data, "vs_inspect", variant, _text(exc))
+
+
+def _peers(data: BenchData, stage0_s: float) -> list[Row]:
+    """The two classical peers on the dataset (the motion peer on every decoded video when there
+    are videos, also those Stage 0 left out of the bundle: it needs no cameras)."""
+    bundle = data.bundle
+    signals, every_video = data.notes.get("motion_signals"), data.notes.get("videos_info")
+
+    def motion():
+        if every_video is not None:
+            from ..baselines.motion_xcorr import sync_motion_xcorr_videos
+            return sync_motion_xcorr_videos(list(every_video), signals, reference=bundle.names[0])
+        return sync_motion_xcorr(bundle, signals=signals)
+
+    rows = []
+    for method, fn in (("motion-xcorr", motion), ("ransac-inlier", lambda: sync_ransac_inlier(bundle))):
         try:
-            exact = dataclasses.replace(bundle, cameras=dict(data.true_cameras))
             with Meter() as m:
-                res = sync_bundle(exact, base_cfg, progress=False)
-            rows.append(score(data, res.offsets_s, "vs_inspect", "cameras=true",
-                              stage1_s=res.timings_s["stage1_s"], stage2_s=res.timings_s["stage2_s"],
+                pr = fn()
+            rows.append(score(data, pr.offsets_s, method, "default", stage0_s=stage0_s,
+                              stage1_s=pr.timings_s["stage1_s"], stage2_s=pr.timings_s["stage2_s"],
                               peak_mb=m.peak_mb))
         except Exception as exc:  # noqa: BLE001
-            rows.append(failed(data, "vs_inspect", "cameras=true", _text(exc)))
-
-    if opts.peers:
-        signals = data.notes.get("motion_signals")
-        every_video = data.notes.get("videos_info")  # decoded videos: the motion peer needs no cameras,
-        # so it runs on every video, also those that Stage 0 left out of the bundle
-
-        def motion():
-            if every_video is not None:
-                from ..baselines.motion_xcorr import sync_motion_xcorr_videos
-                return sync_motion_xcorr_videos(list(every_video), signals, reference=bundle.names[0])
-            return sync_motion_xcorr(bundle, signals=signals)
-
-        for method, fn in (("motion-xcorr", motion),
-                           ("ransac-inlier", lambda: sync_ransac_inlier(bundle))):
-            try:
-                with Meter() as m:
-                    pr = fn()
-                rows.append(score(data, pr.offsets_s, method, "default", stage0_s=stage0_s,
-                                  stage1_s=pr.timings_s["stage1_s"], stage2_s=pr.timings_s["stage2_s"],
-                                  peak_mb=m.peak_mb))
-            except Exception as exc:  # noqa: BLE001
-                rows.append(failed(data, method, "default", _text(exc), stage0_s=stage0_s))
+            rows.append(failed(data, method, "default", _text(exc), stage0_s=stage0_s))
     return rows
