@@ -1,7 +1,7 @@
 """The vs-inspect command line: glue only. Each subcommand lives in vs_inspect/commands/<name>.py
-and registers itself with register(subparsers); this module lists them (COMMANDS), runs one, and turns
-every failure into one clear line `vs-inspect COMMAND: error: ...` and an exit code, never a
-traceback (-vv logs the traceback for debugging).
+and registers itself with register(subparsers); this module lists them (COMMANDS), runs one, and
+turns every failure into one clear line `vs-inspect COMMAND: error: ...` and an exit code, never
+a traceback (-vv logs the traceback for debugging).
 
 Exit codes: 0 done; 2 no result could be produced (bad input or option, an unreadable or
 unwritable file, out of memory, another run writing the same output); 130 interrupted by Ctrl-C
@@ -35,8 +35,8 @@ EXIT_INTERRUPTED = 130   # 128 + SIGINT
 EXIT_TERMINATED = 143    # 128 + SIGTERM
 
 # every command, in the order --help lists them
-COMMANDS = (bench, calib, calibrate_board, cues, demo, eval_command, export, import_drone, import_visualsync,
-            inspect, report, sync, synth_cues, synth_video)
+COMMANDS = (bench, calib, calibrate_board, cues, demo, eval_command, export, import_drone,
+            import_visualsync, inspect, report, sync, synth_cues, synth_video)
 
 
 class _Parser(argparse.ArgumentParser):

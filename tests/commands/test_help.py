@@ -12,7 +12,6 @@ import pytest
 from vs_inspect.cli import build_parser, main
 
 
-
 def _commands(parser: argparse.ArgumentParser, prefix: str = "") -> dict[str, argparse.ArgumentParser]:
     """{"sync": parser, "bench": parser, "bench stage0": parser, ...}: every command, depth first."""
     out = {}

@@ -86,12 +86,12 @@ def caliscope_truth(frame_times: dict[str, np.ndarray], cuts: dict[str, int]) ->
     return {n: float(frame_times[n][c]) for n, c in cuts.items()}
 
 
-def write_cut(src_path: Path, dest: Path, first: int, last: int | None = None) -> None:
-    """Frames first..last-1 of a video re-encoded at its nominal rate."""
+def write_cut(src_path: Path, dest: Path, first: int) -> None:
+    """A video from its frame `first` on, re-encoded at its nominal rate."""
     src = open_video(src_path)
     with VideoWriter(dest, src.info.width, src.info.height, src.info.fps or CALISCOPE_FPS, crf=16) as w:
         for k, img in iter_frames(src):
-            if k >= first and (last is None or k < last):
+            if k >= first:
                 w.write(img)
 
 
