@@ -53,7 +53,7 @@ test: $(STAMP)
 	  if [ $$rc -eq 5 ]; then echo "no tests collected" >&2; exit 1; fi; exit $$rc
 
 bench: $(STAMP)
-	$(PY) -m vs_inspect bench-energy
+	$(PY) -m vs_inspect bench energy
 
 clean:
 	rm -rf $(VENV) .cache
