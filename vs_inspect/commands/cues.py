@@ -10,7 +10,7 @@ from ..errors import InputError
 from ..io.bundle import write_bundle
 from ..io.result import write_cue_stats
 from ..pipeline.stage0 import check_cue_config, run_stage0
-from ._common import add_config_file_option, add_cue_options, add_force_option, run_config
+from ._common import add_config_file_option, add_cue_options, add_force_option, check_videos_exist, run_config
 
 
 def register(sub) -> None:
@@ -35,6 +35,7 @@ def run(args: argparse.Namespace) -> int:
     if args.out.exists() and any(args.out.iterdir()) and not args.force:
         raise InputError(f"{args.out} exists and is not empty (use --force)")
     cfg = run_config(args)
+    check_videos_exist(args.videos)
     check_cue_config(cfg.cues)  # before the output folder is touched
     bundle, stats, inputs = run_stage0(args.videos, args.calib, args.fps, cfg.cues,
                                        progress=not args.no_progress)

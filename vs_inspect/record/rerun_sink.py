@@ -619,7 +619,8 @@ class RerunSink(Sink):
                              rr.LineStrips3D([C[np.isfinite(C).all(1)].astype(np.float32)],
                                              colors=[self._camera_color(v.name)],
                                              radii=rr.Radius.ui_points(1.5),
-                                             labels=[f"{v.name} path"]), static=True)
+                                             labels=[f"{self.display_names().get(v.name, v.name)} path"]),
+                             static=True)
         if new:
             self._eye = _eye_behind(cams)
             names = [n for n in self._cams_logged if n in cams]
@@ -629,7 +630,7 @@ class RerunSink(Sink):
                 C = C[np.isfinite(C).all(1)]
                 if len(C):
                     centres.append(C[len(C) // 2])
-                    labels.append(n)
+                    labels.append(self.display_names().get(n, n))
                     colors.append(self._camera_color(n))
             if centres:
                 self.rec.log(camera_labels_path(), rr.Points3D(np.array(centres, dtype=np.float32),
@@ -900,7 +901,10 @@ class RerunSink(Sink):
         if land.confirm_energy is not None:  # the grey curve of the landscape
             rows.append(("appearance pairs alone", f"minimum {_fmt(land.confirm_offset_s, ' s')}"
                          if math.isfinite(land.confirm_offset_s) else "no accepted minimum"))
-        md = (f"## {land.a} → {land.b}: {verdict}\n\n**reason:** {d.reason}\n\n| | |\n|---|---|\n"
+        short = self.display_names()
+        sa, sb = short.get(land.a, land.a), short.get(land.b, land.b)
+        full = f"\n\n{land.a} → {land.b}" if (sa, sb) != (land.a, land.b) else ""
+        md = (f"## {sa} → {sb}: {verdict}{full}\n\n**reason:** {d.reason}\n\n| | |\n|---|---|\n"
               + "\n".join(f"| {k} | {v} |" for k, v in rows)
               + f"\n\n**minima (best first):** {minima or 'none'}\n")
         self.rec.log(pair_decision_path(land.a, land.b), rr.TextDocument(md, media_type=rr.MediaType.MARKDOWN),
