@@ -26,8 +26,8 @@ TRUTH_ON_DARK: RGB = (255, 255, 255)  # in the viewer
 SOLVED: RGB = (204, 121, 167)  # reddish purple
 NEUTRAL: RGB = (150, 150, 150)  # unknown, no data
 OTHER_MINIMA: RGB = (190, 190, 190)  # a landscape's minima other than the chosen one
-CAMERA: tuple[RGB, ...] = ((0, 114, 178), (86, 180, 233), (136, 102, 204), (150, 225, 245),
-                           (90, 120, 150), (60, 60, 200))
+CAMERA: tuple[RGB, ...] = ((0, 114, 178), (136, 102, 204), (86, 180, 233), (90, 120, 150),
+                           (150, 225, 245), (60, 60, 200))  # neighbours in a run differ most
 INSTANCE: tuple[RGB, ...] = ((255, 170, 187), (200, 200, 200), (255, 120, 200), (245, 245, 245),
                              (210, 170, 255), (120, 130, 140))
 PAIR: tuple[RGB, ...] = ((0, 114, 178), (230, 159, 0), (86, 180, 233), (136, 102, 204),
