@@ -1029,7 +1029,8 @@ class RerunSink(Sink):
             colour = palette.category(self._pairs_logged.index(key) if key in self._pairs_logged else e,
                                       palette.PAIR)
             x = its + (e + 0.5) / (E + 1) - 0.5
-            for path, values in ((irls_residual_path(a, b), np.abs(R[:, e])), (irls_weight_path(a, b), Wt[:, e])):
+            sa, sb = (self.display_names().get(n, n) for n in (a, b))  # the legend shows the path
+            for path, values in ((irls_residual_path(sa, sb), np.abs(R[:, e])), (irls_weight_path(sa, sb), Wt[:, e])):
                 self.rec.log(path, rr.BarChart(np.nan_to_num(values), abscissa=x, widths=[0.9 / (E + 1)] * len(x),
                                                color=colour), static=True)
 
