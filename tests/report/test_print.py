@@ -134,8 +134,8 @@ def test_figures_fit_their_printed_width_with_long_names(long_names, monkeypatch
 
 
 def test_pair_graph_labels_fit_inside_their_node():
-    """A node is as wide as its bold label, so the label sits on the node's own colour (a long
-    label in a fixed node ran onto the white page in white)."""
+    """A node is as wide as its bold label, so the label sits on the node's own colour (a label
+    wider than its node would run onto the white page, in white)."""
     import matplotlib.pyplot as plt
     fig = plt.figure(dpi=72)
     r = fig.canvas.get_renderer()

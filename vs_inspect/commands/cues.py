@@ -35,8 +35,8 @@ def run(args: argparse.Namespace) -> int:
     if args.out.exists() and any(args.out.iterdir()) and not args.force:
         raise InputError(f"{args.out} exists and is not empty (use --force)")
     cfg = run_config(args)
-    check_videos_exist(args.videos)
     check_cue_config(cfg.cues)  # before the output folder is touched
+    check_videos_exist(args.videos)
     bundle, stats, inputs = run_stage0(args.videos, args.calib, args.fps, cfg.cues,
                                        progress=not args.no_progress)
     write_bundle(bundle, args.out, overwrite=args.force)

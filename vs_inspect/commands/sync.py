@@ -55,8 +55,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("nothing to synchronize: give --bundle DIR or video files")
     if args.videos:
         from ..pipeline.stage0 import check_cue_config
-        check_videos_exist(args.videos)  # a missing one is named now, not after the others' cues
         check_cue_config(cfg.cues)
+        check_videos_exist(args.videos)  # a missing one is named now, not after the others' cues
     out = Path(args.out)
     with ExitStack() as stack:
         # one run at a time into --out and the recording: taken before anything is checked
