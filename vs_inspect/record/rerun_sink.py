@@ -1125,7 +1125,9 @@ each video has no offset; **decision log** and the notes at the end of this guid
 stage decided. The rest of this guide describes a run with pairs.""" if lo is None else
                    f"""The viewer opens on the **`offset_ms`** timeline: the candidate pair offset Δ_ab in milliseconds
 over the whole search range{rng}. Δ_ab = offset_s[b] − offset_s[a]: video b started Δ_ab later
-than a. Move the time cursor (drag it, or type a value in the time field) to sweep Δ.""")
+than a. `vs-inspect view FILE` puts the time cursor at the chosen Δ of the pair in front (`rerun
+FILE` opens at the start of the range). Move the cursor (drag it, or type a value in the time
+field) to sweep Δ.""")
         md = f"""# How to read this recording
 
 {opening}
