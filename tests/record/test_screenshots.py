@@ -206,14 +206,16 @@ def test_a_run_that_synchronized_nothing_opens_with_frames_and_its_reasons(tmp_p
 
 
 def _small_run(path: Path, sink_class=None):
-    """Two static cameras, no frames: a Stage 1 + 2 run recorded to path."""
+    """Three static cameras, no frames: a Stage 1 + 2 run recorded to path."""
     from vs_inspect.pipeline import run as run_pipeline
     from vs_inspect.record.rerun_sink import RerunSink
     from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
 
-    scene = make_cue_scene(CueSceneConfig(cameras=2, moving=0, variable_rate=0, seconds=3.0,
-                                          max_offset_s=0.8, points_per_object=8, pairs_per_view_pair=80,
-                                          no_match_pairs=0, all_wrong_pair=False, fps_choices=(15.0,), seed=5))
+    scene = make_cue_scene(CueSceneConfig(cameras=3, moving=0, variable_rate=0, seconds=3.0,
+                                          max_offset_s=0.8, points_per_object=10, pairs_per_view_pair=100,
+                                          no_match_pairs=0, all_wrong_pair=False, fps_choices=(25.0, 30.0),
+                                          noise_px=0.5, wrong_fraction=0.0, pose_error_deg=0.0,
+                                          track_life_s=(3.0, 3.0), seed=4))
     with (sink_class or RerunSink)(path, progress=False) as sink:
         result = run_pipeline(scene.bundle, sink=sink, progress=False)
     return scene, result
@@ -252,7 +254,7 @@ def test_a_panel_with_only_a_border_or_a_cursor_is_empty(tmp_path):
 
     rrd = tmp_path / "planted.rrd"
     scene, result = _small_run(rrd, Planted)
-    chosen = round(result.pairs[0].best_offset_s * 1000)
+    chosen = round(next(p for p in result.pairs if p.decision.accepted).best_offset_s * 1000)
     shots = _viewer_or_skip(lambda: take_screenshots(rrd, tmp_path / "shots", {"chosen": chosen},
                                                      mode="headless", settle_s=0.6))
     panels = {p.name: p for p in shots[0].panels}
@@ -276,17 +278,19 @@ def test_recording_without_frames_has_no_video_panel_and_opens_at_the_front_pair
     from vs_inspect.record.screenshots import chosen_and_wrong_ms, viewer
     from vs_inspect.record.viewer import open_recording
 
+    from vs_inspect.record.viewer import front_offset_ms
     rrd = tmp_path / "noframes.rrd"
     scene, result = _small_run(rrd)
-    (p,) = result.pairs
-    chosen = round(p.best_offset_s * 1000)
     rec = read_recording(rrd)
-    assert chosen_and_wrong_ms(rec)[0] == chosen
-    wrong = chosen_and_wrong_ms(rec)[1]
+    front = front_offset_ms(rec)
+    p = next(q for q in result.pairs if q.decision.accepted)
+    chosen, wrong = chosen_and_wrong_ms(rec, (p.a, p.b))
+    assert chosen == round(p.best_offset_s * 1000)
     sweep = read_epipolar_sweep(rrd, p.a, p.b)
     at = int(np.argmin(np.abs(sweep.offset_ms - wrong)))
     assert sweep.lines[at] >= 3 and wrong != chosen  # lines on screen, missing the points
-    assert sweep.median_px[at] > 4 * sweep.median_px[int(np.argmin(np.abs(sweep.offset_ms - chosen)))]
+    i = int(np.argmin(np.abs(sweep.offset_ms - chosen)))
+    assert sweep.median_px[at] > 4 * np.nanmin(sweep.median_px[max(0, i - 2):i + 3])
 
     def opened():
         with viewer("headless") as client:
@@ -295,9 +299,9 @@ def test_recording_without_frames_has_no_video_panel_and_opens_at_the_front_pair
             return at_ms, state.current_timeline, state.current_time, \
                 min(t.start for t in state.timelines if t.name == "offset_ms")
     at_ms, timeline, now, start = _viewer_or_skip(opened)
-    assert (at_ms, timeline, now) == (chosen, "offset_ms", chosen) and start < chosen
+    assert (at_ms, timeline, now) == (front, "offset_ms", front) and start < front
 
-    shots = _viewer_or_skip(lambda: take_screenshots(rrd, tmp_path / "shots", {"chosen": chosen},
+    shots = _viewer_or_skip(lambda: take_screenshots(rrd, tmp_path / "shots", {"front": front},
                                                      mode="headless", settle_s=0.6,
                                                      tabs=("pairs (failed first)", "IRLS solve")))
     names = {x.name for x in shots[0].panels}

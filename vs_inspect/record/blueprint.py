@@ -90,6 +90,24 @@ def _axis(range_ms: tuple[int, int] | None):
                                                 end=rrb.TimeRangeBoundary.absolute(seq=hi)))
 
 
+def _redundant(pairs) -> bool:
+    """The accepted pairs hold a loop (more pairs than a spanning forest of their videos): only
+    then do residuals and weights of the robust solve say anything (else they are 0 and 1)."""
+    parent: dict[str, str] = {}
+
+    def root(v: str) -> str:
+        while parent.setdefault(v, v) != v:
+            v = parent[v]
+        return v
+
+    for a, b in pairs:
+        ra, rb = root(a), root(b)
+        if ra == rb:
+            return True
+        parent[ra] = rb
+    return False
+
+
 def shown_pairs(pairs_logged: list[str], result: SyncResult | None) -> list[tuple[str, str, bool | None]]:
     """(a, b, accepted) of the pairs that get a container, in order (None: verdict unknown)."""
     if result is not None and result.pairs:
@@ -148,7 +166,7 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
                                            plot_legend=rrb.PlotLegend(visible=True)))
     if result is not None:
         overview.append(rrb.GraphView(origin=SYNC_GRAPH, name="pair graph"))
-        if result.iterations:  # bars (static: on every timeline), one colour per pair
+        if result.iterations and _redundant(result.solve_pairs):  # bars (static: on every timeline)
             overview.append(rrb.Vertical(
                 rrb.BarChartView(origin=f"{SYNC_IRLS}/residual_ms", name="IRLS: |residual| per pair, ms (bars: iterations)",
                                  plot_legend=rrb.PlotLegend(visible=True)),

@@ -285,13 +285,16 @@ def chosen_and_wrong_ms(rec, pair: tuple[str, str] | None = None) -> tuple[int, 
 def wrong_ms(sweep, chosen_ms: int) -> int | None:
     """A wrong Δ of an epipolar sweep (io.recording.EpipolarSweepSeries) worth a screenshot: the
     offset nearest the chosen one whose lines are on screen (at least half as many as at the
-    chosen Δ, and 3) but miss the points (median distance at least 4 times the chosen one's and
-    5 px more); None when no logged offset is such."""
+    chosen Δ, and 3) but miss the points (median distance at least 4 times the smallest one near
+    the chosen Δ, and 5 px more); None when no logged offset is such."""
     ms, lines, med = sweep.offset_ms, sweep.lines, sweep.median_px
     if not len(ms):
         return None
     i = int(np.argmin(np.abs(ms - chosen_ms)))
-    at = med[i] if np.isfinite(med[i]) else np.nanmin(med) if np.isfinite(med).any() else np.nan
+    # the best the lines meet the points near the chosen Δ (the sweep's offsets are the search
+    # grid's: the nearest may be half a frame off the refined Δ)
+    near = med[max(0, i - 2):i + 3]
+    at = np.nanmin(near) if np.isfinite(near).any() else np.nan
     if not np.isfinite(at):
         return None
     ok = (lines >= max(3, 0.5 * lines[i])) & np.isfinite(med) & (med >= max(4 * at, at + 5.0))
