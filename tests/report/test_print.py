@@ -199,3 +199,23 @@ def test_html_speaks_in_the_figures_colours(long_names, tmp_path):
     assert "solid green edges" in html and "dashed vermillion edges" in html
     assert "[px]</th>" in html and "px²" not in html
     assert "<th>in the figures</th>" in html and "<td class='l'>cam06</td>" in html
+
+
+def test_static_points_of_a_recording_are_drawn_not_denied(tmp_path):
+    """A recording that holds the static reconstruction (world/points) gets it in its 3D scene;
+    no note says there is none."""
+    from vs_inspect.analysis.report_data import report_data_from_recording
+    from vs_inspect.record.rerun_sink import RerunSink
+    from vs_inspect.report.scene3d import _title
+
+    scene = make_cue_scene(SCENE)
+    rng = np.random.default_rng(1)
+    points = rng.normal(size=(211, 3))
+    with RerunSink(tmp_path / "run.rrd", progress=False) as sink:
+        sink.cameras(scene.bundle.cameras, points, np.full((211, 3), 120, np.uint8))
+        run_pipeline(scene.bundle, sink=sink, progress=False)
+    data = report_data_from_recording(tmp_path / "run.rrd")
+    assert data.static_points is not None and len(data.static_points) == 211
+    assert np.allclose(data.static_points, points, atol=1e-5)
+    assert not any("static reconstruction" in n for n in data.notes)
+    assert "211 static points" in _title(data)
