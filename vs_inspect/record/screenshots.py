@@ -65,6 +65,7 @@ class Screenshots:
     full: Path  # PNG of the whole viewer
     panels: tuple[PanelShot, ...]  # every panel on screen
     timeline_on_open: str | None  # the timeline the viewer showed when the recording opened
+    time_on_open: int | None = None  # where its cursor was then (record/viewer.open_recording's)
 
     @property
     def empty_panels(self) -> list[str]:
@@ -442,6 +443,7 @@ def take_screenshots(rrd: str | Path, out_dir: str | Path, offsets_ms: dict[str,
         _paint(client, 2 * settle_s, min_rounds=4)
         state = next((r for r in client.get_state().recordings if r.store_id == store), None)
         opened_on = state.current_timeline if state is not None else None
+        time_on_open = state.current_time if state is not None else None
         timelines = list(state.timelines) if state is not None else []
         if (state is not None and any(ms is not None for ms in offsets_ms.values())
                 and not any(t.name == TIMELINE_OFFSET_MS and t.start is not None for t in state.timelines)):
@@ -491,7 +493,7 @@ def take_screenshots(rrd: str | Path, out_dir: str | Path, offsets_ms: dict[str,
             cv2.imwrite(str(path), img)
             panels.append(PanelShot(v.name, v.view_class, path, ink(img, base, v.view_class in PLOTS),
                                     tuple(f"{r.severity}: {r.summary}" for r in v.reports)))
-        shots.append(Screenshots(label, ms, full_path, tuple(panels), opened_on))
+        shots.append(Screenshots(label, ms, full_path, tuple(panels), opened_on, time_on_open))
         cv2.imwrite(str(out_dir / label / "empty_layout.png"), blanks[label])
     return shots
 
