@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..geometry.offsets import OffsetGrid
+from ..progress import stage
 from ..record.sink import DeferredSink, Sink
 from ..types import FROM_MOVING_POINTS, CameraTrack, Tracks, first_clause, refusal_texts
 from .config import CueConfig
@@ -138,7 +139,8 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, a
             kind = MOVING_POINTS if from_tracks else est.features + (OWN if as_built else "")
             return kind, dataclasses.replace(out, stats=own, events=events)
 
-        kept_est = models.first()
+        with stage("cameras: estimating them from the videos (pycolmap)", progress):
+            kept_est = models.first()
         first_est = kept_est
         kind, kept = attempt(kept_est)
         first_kind, first_peaks = kind, kept.peaks
@@ -147,7 +149,8 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, stats: dict, a
             if not cfg.geometric.enabled or kept.used >= set(vids):
                 break
             try:
-                est = build()
+                with stage(f"cameras: the {which} camera model", progress):
+                    est = build()
                 if est is None:
                     continue
                 log.info("the joint vote trusted %d of %d videos on %s's cameras: trying %s's model",
