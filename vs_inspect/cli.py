@@ -24,7 +24,7 @@ import numpy  # noqa: F401  (before anything that may import pycolmap; see ENVIR
 
 from . import __version__, signals
 from .commands import (_help, bench, calib, calibrate_board, cues, demo, export, import_drone,
-                       import_visualsync, inspect, report, sync, synth_cues, synth_video)
+                       import_visualsync, inspect, report, sync, synth_cues, synth_video, view)
 from .commands import eval as eval_command
 from .errors import VsInspectError
 
@@ -36,7 +36,7 @@ EXIT_TERMINATED = 143    # 128 + SIGTERM
 
 # every command, in the order --help lists them
 COMMANDS = (bench, calib, calibrate_board, cues, demo, eval_command, export, import_drone,
-            import_visualsync, inspect, report, sync, synth_cues, synth_video)
+            import_visualsync, inspect, report, sync, synth_cues, synth_video, view)
 
 
 class _Parser(argparse.ArgumentParser):
