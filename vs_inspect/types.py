@@ -658,3 +658,80 @@ class CommonSpan:
     anchor: str  # the slowest video, whose frames set start_s and end_s
     videos: dict[str, VideoSpan]  # the synchronized videos (offset known), input order
     skipped: dict[str, str]  # video -> why it has no span
+
+
+# ---- people as cross-view correspondences (cues/people_*.py, sync/people_pairs.py) ----------
+
+
+@dataclass(frozen=True)
+class VideoPeople:
+    """The people followed over time in one video, one track per person (cues/people_tracking.py):
+    BlazePose's 33 landmarks (geometry/skeleton.py) per frame."""
+
+    name: str
+    landmarks: np.ndarray  # (P,T,33,3) x px, y px (the video's full-resolution pixels), visibility 0..1;
+    # NaN where person p is not found in frame t
+    times_s: np.ndarray  # (T,) the video's local frame times, s
+    min_visibility: float = 0.5  # a landmark counts as seen from this visibility on
+
+    def __post_init__(self) -> None:
+        lm = np.asarray(self.landmarks, dtype=np.float64)
+        t = np.asarray(self.times_s, dtype=np.float64)
+        object.__setattr__(self, "landmarks", lm)
+        object.__setattr__(self, "times_s", t)
+        _require_shape(f"{self.name}: times_s", t, (None,))
+        _require_shape(f"{self.name}: landmarks", lm, (None, len(t), 33, 3))
+
+    @property
+    def num_people(self) -> int:
+        return self.landmarks.shape[0]
+
+    def seen_xy(self, landmarks: tuple[int, ...] | None = None) -> np.ndarray:
+        """(P,T,L,2) px of the landmarks (indices; None: all 33), NaN where not seen."""
+        lm = self.landmarks if landmarks is None else self.landmarks[:, :, list(landmarks)]
+        seen = np.nan_to_num(lm[..., 2], nan=0.0) >= self.min_visibility
+        return np.where(seen[..., None], lm[..., :2], np.nan)
+
+    def frames_seen(self) -> np.ndarray:
+        """(P,) frames in which each person is found."""
+        return np.isfinite(self.landmarks[..., 0]).any(-1).sum(-1)
+
+
+@dataclass(frozen=True)
+class PeopleAssociation:
+    """One person of video a who is one person of video b (sync/people_pairs.py)."""
+
+    person_a: int  # track index in a's VideoPeople
+    person_b: int  # track index in b's VideoPeople
+    mirrored: bool  # b's labelling is left/right swapped against a's (most frames both see)
+
+
+@dataclass(frozen=True)
+class PeoplePair:
+    """What the people of videos a and b gave: association, F_ab and Δ_ab (DESIGN.md convention),
+    or a refusal with its reason; and the evidence at every candidate shift."""
+
+    a: str
+    b: str
+    offset_s: float | None  # Δ_ab refined below the frame, s; None: refused (reason says why)
+    reason: str  # why the shift was taken, or why it was refused
+    noise_px: float  # the median noise unit of the person pairings (inlier: Sampson distance under one), px
+    offsets_s: np.ndarray  # (D,) candidate Δ_ab, s
+    cost: np.ndarray | None = None  # (D,) the chosen association's mean truncated squared Sampson distance in
+    # noise units at each Δ, its F fitted there, 0..1; lower is better
+    inliers: np.ndarray | None = None  # (D,) its inlier correspondences at each Δ (its F's inliers)
+    search_score: np.ndarray | None = None  # (D,) inliers per frame of the best association found at each Δ
+    peak_offset_s: float | None = None  # the Δ of search_score's peak, s
+    search_second_offset_s: float | None = None  # its next-best distinct Δ, s
+    search_margin: float | None = None  # (peak - median) / (second - median) of search_score
+    associations: tuple[PeopleAssociation, ...] = ()  # the people both videos see, at the chosen shift
+    F_ab: np.ndarray | None = None  # (3,3) x_aᵀ F_ab x_b = 0, px (refined when accepted)
+    best_grid_offset_s: float | None = None  # the best Δ on the candidate grid, s
+    second_offset_s: float | None = None  # the next-best distinct Δ of cost, s
+    margin: float | None = None  # (median - best) / (median - second) of cost
+    offset_std_s: float | None = None  # 1-sigma of offset_s from the refinement's Jacobian, s
+    refined_inliers: int | None = None  # inliers at the refined Δ and F
+
+    @property
+    def accepted(self) -> bool:
+        return self.offset_s is not None
