@@ -720,18 +720,49 @@ class PeoplePair:
     cost: np.ndarray | None = None  # (D,) the chosen association's mean truncated squared Sampson distance in
     # noise units at each Δ, its F fitted there, 0..1; lower is better
     inliers: np.ndarray | None = None  # (D,) its inlier correspondences at each Δ (its F's inliers)
+    evidence: np.ndarray | None = None  # (D,) (median cost - cost) x sqrt(correspondences) at each Δ: the
+    # landscape the shift is chosen on (higher is better)
     search_score: np.ndarray | None = None  # (D,) inliers per frame of the best association found at each Δ
-    peak_offset_s: float | None = None  # the Δ of search_score's peak, s
-    search_second_offset_s: float | None = None  # its next-best distinct Δ, s
-    search_margin: float | None = None  # (peak - median) / (second - median) of search_score
     associations: tuple[PeopleAssociation, ...] = ()  # the people both videos see, at the chosen shift
     F_ab: np.ndarray | None = None  # (3,3) x_aᵀ F_ab x_b = 0, px (refined when accepted)
     best_grid_offset_s: float | None = None  # the best Δ on the candidate grid, s
-    second_offset_s: float | None = None  # the next-best distinct Δ of cost, s
-    margin: float | None = None  # (median - best) / (median - second) of cost
+    contrast: float | None = None  # (median - best) / median of cost
+    second_offset_s: float | None = None  # the next-best distinct Δ of evidence, s
+    margin: float | None = None  # best / second of evidence
+    rival_offset_s: float | None = None  # another association's best Δ, when it decided, s
+    rival_margin: float | None = None  # best / that association's best of evidence
     offset_std_s: float | None = None  # 1-sigma of offset_s from the refinement's Jacobian, s
     refined_inliers: int | None = None  # inliers at the refined Δ and F
 
     @property
     def accepted(self) -> bool:
         return self.offset_s is not None
+
+
+@dataclass(frozen=True)
+class PeopleCue:
+    """What the people in the videos gave Stage 0 (cues/people_cue.py): each video's people, every
+    pair's association, F and shift (or refusal), the cameras made from them (or a refusal per
+    video), and their landmarks as point tracks with cross-view track pairs (the CueBundle terms)."""
+
+    videos: tuple[VideoInfo, ...]
+    reference: str  # the video whose offset is 0
+    people: dict[str, VideoPeople]  # video -> its people
+    pairs: tuple[PeoplePair, ...]  # every pair of videos tried, accepted or refused
+    offsets_s: dict[str, float]  # video -> offset_s from the accepted pairs (DESIGN.md convention), s
+    cameras: dict[str, CameraTrack]  # video -> its camera, for the videos placed
+    refused: dict[str, str]  # video -> why it has no camera
+    tracks: dict[str, Tracks]  # placed video -> landmarks as tracks (P·L,T,2) px, instance = person track
+    track_pairs: dict[tuple[str, str], TrackPairs]  # (a, b) -> the same landmark of one person in both
+    points_world: np.ndarray  # (N,3) landmarks triangulated by the bundle adjustment, world frame
+    reprojection_px: dict[str, float]  # placed video -> median reprojection distance of its landmarks, px
+    landmarks: tuple[int, ...]  # the BlazePose landmarks each person's tracks hold, in order
+    timings_s: dict[str, float]  # "people", "pairs", "cameras", "total"
+
+    def bundle(self, gt_offsets_s: dict[str, float] | None = None) -> CueBundle:
+        """The placed videos with their cameras, landmark tracks and track pairs, for Stage 1."""
+        placed = tuple(v for v in self.videos if v.name in self.cameras)
+        pairs = {k: tp for k, tp in self.track_pairs.items() if k[0] in self.cameras and k[1] in self.cameras}
+        gt = None if gt_offsets_s is None else {v.name: gt_offsets_s[v.name] for v in placed if v.name in gt_offsets_s}
+        return CueBundle(placed, {v.name: self.cameras[v.name] for v in placed},
+                         {v.name: self.tracks[v.name] for v in placed}, pairs, gt)

@@ -35,7 +35,7 @@ class TrackingConfig:
     """...or when their landmark boxes overlap this much (intersection over union)."""
     max_gap_s: float = 0.5
     """A track not continued for this long ends."""
-    min_track_s: float = 0.5
+    min_track_s: float = 1.0
     """Tracks shorter than this (from first to last frame) are dropped."""
     min_landmarks: int = 6
     """A pose with fewer seen landmarks is ignored."""

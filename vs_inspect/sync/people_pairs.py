@@ -18,15 +18,17 @@ Steps, each a pure function of the people's landmarks (no I/O):
    it better and on the side of the epipole most are on (the oriented epipolar constraint, which
    a fit with its epipole amid the people breaks); people are associated greedily (most inliers
    first, one partner per person and frame); F is refitted on the associated people and they are
-   associated again. The shift's score is the best association's inliers per frame: the
-   search's landscape;
-2. its peak's association, grown by every pairing that fits there over all frames, held over
+   associated again. The associations found at the search's best shifts are the candidates;
+2. each candidate, grown by every pairing that fits at its shift over all frames, held over
    every shift: the F minimizing a robust Sampson cost there (fundamental_irls, from the
-   neighbouring shift's F and now and then from a fresh RANSAC fit, whichever ends lower),
-   each frame's labelling chosen under it; its mean truncated cost is the association's
-   landscape, smooth in the shift;
-3. refusal: too few inliers at the best shift, either landscape's best not clearly better than
-   its next-best distinct shift, or the two landscapes' bests apart: each with its plain reason;
+   neighbouring shift's F and now and then from a fresh RANSAC fit, whichever ends lower), each
+   frame's labelling chosen under it. Its landscape is the evidence at each shift: how far the
+   mean truncated cost lies below the landscape's median, times the square root of the number
+   of correspondences (a standardized depth: a short overlap fits a few landmarks well by
+   chance, and weighs little);
+3. refusal: too few inliers at the best shift, a next-best distinct shift with evidence within
+   min_margin of the best, or another candidate of other people whose best lies elsewhere with
+   such evidence: each with its plain reason;
 4. a continuous refinement of (Δ, F) on the inliers' Sampson distances, b's landmarks
    interpolated in time (scipy least_squares, soft L1), and its 1-sigma.
 """
@@ -59,11 +61,16 @@ class PeoplePairConfig:
     the box around its landmarks); a correspondence is an inlier within this many of those."""
     min_noise_px: float = 1.5
     """The noise unit is at least this many px (very small people)."""
-    search_frames: int = 30
+    search_step_s: float = 0.2
+    """The search tries the candidate shifts this far apart (at least every candidate)..."""
+    search_noise: float = 2.0
+    """...measuring distances in this many noise units, so that a shift half a step from the
+    right one still shows its association."""
+    search_frames: int = 24
     """Frames of the overlap (evenly spread) the search scores at each shift."""
     sample_points: int = 200
     """Correspondences (evenly spread in time) each RANSAC sees."""
-    max_hypotheses: int = 6
+    max_hypotheses: int = 10
     """Person pairings (with the most correspondences) that propose an F at each shift, each as
     labelled and mirrored."""
     min_pair_points: int = 40
@@ -74,9 +81,14 @@ class PeoplePairConfig:
     """Two shifts closer than this are one valley of the landscape."""
     min_inliers: int = 150
     """A pair is refused with fewer inlier correspondences at its best shift."""
+    min_contrast: float = 0.3
+    """The best shift's mean cost must lie this share below the landscape's median, else the
+    landscape is flat (people who hardly move fit one geometry at every shift)."""
     min_margin: float = 1.5
-    """Each landscape's best shift must stand out from its median this many times more than its
-    next-best distinct shift, else refused."""
+    """The best shift's evidence must be this many times the next-best distinct shift's (and
+    than another candidate's of other people at another shift), else refused."""
+    candidates: int = 3
+    """Associations (of the search's best distinct shifts) whose landscapes are computed."""
     irls_iterations: int = 5
     """Reweighting steps of each F fitted on the landscape."""
     fresh_every: int = 4
@@ -88,7 +100,7 @@ class PeoplePairConfig:
 
     def __post_init__(self) -> None:
         subset_mirror(self.landmarks)  # ValueError when not closed under the mirror
-        if self.noise_share <= 0 or self.search_frames < 8 or self.sample_points < 8 \
+        if self.noise_share <= 0 or self.search_frames < 8 or self.search_step_s <= 0 or self.search_noise < 1 or self.sample_points < 8 \
                 or self.min_pair_points < 8 or self.min_margin < 1 or self.fresh_every < 1:
             raise ValueError(f"PeoplePairConfig out of range: {self}")
 
@@ -265,12 +277,34 @@ class _Association:
     F_ab: np.ndarray
 
 
+def _settle(xa: np.ndarray, xb: np.ndarray, F: np.ndarray, delta: float, mirror: np.ndarray, unit: np.ndarray,
+            cfg: PeoplePairConfig) -> _Association | None:
+    """From an F: associate, refit on the associated people, associate again (twice); the
+    association (None: no pairing fits)."""
+    Q = xa.shape[1]
+    pairs: list = []
+    for _ in range(2):
+        sc = _score(F, xa, xb, mirror, unit)
+        pairs = _associate(sc, cfg)
+        if not pairs:
+            return None
+        mirrored = {p: bool(2 * sc.mirrored[p] > sc.frames[p].sum()) for p in pairs}
+        x_a, x_b, _, u = _pooled(xa, xb, pairs, mirrored, mirror, unit)
+        F = fundamental_irls(x_a, x_b, F, u, 3)
+    sc = _score(F, xa, xb, mirror, unit)
+    pairs = _associate(sc, cfg)
+    if not pairs:
+        return None
+    key = tuple(sorted(pairs))
+    return _Association(delta, float(sum(sc.counts[p] for p in pairs)) / Q, key,
+                        {p: bool(2 * sc.mirrored[p] > sc.frames[p].sum()) for p in key}, F)
+
+
 def _search_at(a: _Side, b: _Side, delta: float, mirror: np.ndarray, unit: np.ndarray,
                cfg: PeoplePairConfig) -> list[_Association]:
-    """The distinct associations found at one shift, best first."""
+    """The distinct associations RANSAC over person pairings finds at one shift, best first."""
     _, xa, xb = _moments(a, b, delta, cfg.search_frames)
-    Q = xa.shape[1]
-    if not Q or not a.people or not b.people:
+    if not xa.shape[1] or not a.people or not b.people:
         return []
     points = np.einsum("iql,jql->ij", np.isfinite(xa[..., 0]).astype(np.int32),
                        np.isfinite(xb[..., 0]).astype(np.int32))
@@ -285,26 +319,23 @@ def _search_at(a: _Side, b: _Side, delta: float, mirror: np.ndarray, unit: np.nd
             F = _ransac(x_a, x_b, fr, u, cfg, reweigh=False)
             if F is None or (_sampson2(F, x_a, x_b) < u ** 2).sum() < cfg.min_pair_inlier_share * len(x_a):
                 continue
-            for _ in range(2):  # associate, refit on all associated, associate again
-                sc = _score(F, xa, xb, mirror, unit)
-                pairs = _associate(sc, cfg)
-                if not pairs:
-                    break
-                mirrored = {p: bool(2 * sc.mirrored[p] > sc.frames[p].sum()) for p in pairs}
-                x_a, x_b, fr, u = _pooled(xa, xb, pairs, mirrored, mirror, unit)
-                F = fundamental_irls(x_a, x_b, F, u, 3)
-            if not pairs:
-                continue
-            sc = _score(F, xa, xb, mirror, unit)
-            pairs = _associate(sc, cfg)
-            if not pairs:
-                continue
-            key = tuple(sorted(pairs))
-            res = _Association(delta, float(sum(sc.counts[p] for p in pairs)) / Q, key,
-                               {p: bool(2 * sc.mirrored[p] > sc.frames[p].sum()) for p in key}, F)
-            if key not in found or res.score > found[key].score:
-                found[key] = res
+            res = _settle(xa, xb, F, delta, mirror, unit, cfg)
+            if res is not None and (res.pairs not in found or res.score > found[res.pairs].score):
+                found[res.pairs] = res
     return sorted(found.values(), key=lambda r: -r.score)
+
+
+def _carried(a: _Side, b: _Side, delta: float, assoc: _Association, mirror: np.ndarray, unit: np.ndarray,
+             cfg: PeoplePairConfig) -> _Association | None:
+    """An association found at a nearby shift, settled at delta from its F."""
+    _, xa, xb = _moments(a, b, delta, cfg.search_frames)
+    if not xa.shape[1]:
+        return None
+    x_a, x_b, _, u = _pooled(xa, xb, assoc.pairs, assoc.mirrored, mirror, unit)
+    if len(x_a) < 8:
+        return None
+    F = fundamental_irls(x_a, x_b, assoc.F_ab, u, 3)
+    return _settle(xa, xb, F, delta, mirror, unit, cfg)
 
 
 # ---- the landscape of one association -----------------------------------------------------------
@@ -317,6 +348,7 @@ class _Fit:
     F_ab: np.ndarray
     cost: float  # mean truncated squared Sampson distance in noise units, 0..1
     inliers: int
+    points: int  # correspondences
     mirrored: dict  # (i, j) -> (Q,) bool, each frame's labelling
 
 
@@ -390,7 +422,7 @@ def _fit_held(xa, xb, assoc: _Association, starts: list, mirror, unit, cfg: Peop
         if len(ya) >= 8:
             F = fundamental_irls(ya, yb, F, yu, cfg.irls_iterations)
         labels, total, inl, n = _labels(F, rows)
-        fit = _Fit(F, total / max(n, 1), inl, {p: labels[k] for k, p in enumerate(assoc.pairs)})
+        fit = _Fit(F, total / max(n, 1), inl, n, {p: labels[k] for k, p in enumerate(assoc.pairs)})
         if best is None or fit.cost < best.cost:
             best = fit
     return best
@@ -413,6 +445,17 @@ def _landscape(a: _Side, b: _Side, offsets_s: np.ndarray, assoc: _Association, m
             if fit is not None:
                 F = fit.F_ab
     return out
+
+
+def _evidence(fits: list[_Fit | None]) -> np.ndarray:
+    """(D,) how far each shift's mean cost lies below the landscape's median, times the square
+    root of its correspondences (0 where there are none)."""
+    cost = np.array([f.cost if f is not None else np.nan for f in fits])
+    n = np.array([f.points if f is not None else 0 for f in fits], dtype=np.float64)
+    if not np.isfinite(cost).any():
+        return np.zeros(len(fits))
+    median = float(np.nanmedian(cost))
+    return np.where(np.isfinite(cost), (median - np.nan_to_num(cost)) * np.sqrt(n), 0.0)
 
 
 def _local_minima(cost: np.ndarray) -> np.ndarray:
@@ -577,55 +620,79 @@ def estimate_people_pair(a: str, times_a_s: np.ndarray, xy_a: np.ndarray, b: str
     if not A.people or not B.people:
         return refused(f"no person followed in {a if not A.people else b}")
 
-    # 1. the search at every shift
-    found = [_search_at(A, B, float(d), mirror, unit, cfg) for d in offsets_s]
+    # 1. the search: RANSAC every search_step_s (distances in search_noise units), each
+    # association found carried to the shifts around it (in noise units)
+    stride = max(int(round(cfg.search_step_s / _step(offsets_s))), 1)
+    fresh = {int(k): _search_at(A, B, float(offsets_s[k]), mirror, cfg.search_noise * unit, cfg)[:2]
+             for k in range(0, len(offsets_s), stride)}
+    found: list[list[_Association]] = []
+    for k in range(len(offsets_s)):
+        near = {}
+        for j in range(max(k - stride, 0), min(k + stride, len(offsets_s) - 1) + 1):
+            for c in fresh.get(j, []):
+                near.setdefault(c.pairs, c)
+        here = [c for c in (_carried(A, B, float(offsets_s[k]), c, mirror, unit, cfg) for c in near.values())
+                if c is not None]
+        found.append(sorted(here, key=lambda r: -r.score))
     score = np.array([f[0].score if f else 0.0 for f in found])
     kw: dict = dict(search_score=score)
     if not score.max(initial=0):
         return refused("no person pairing fits one epipolar geometry at any shift (too few landmarks seen "
                        "in both videos at once)", **kw)
-    peak = int(np.argmax(score))
-    kw.update(peak_offset_s=float(offsets_s[peak]))
+    cands: list[_Association] = []
+    for k in np.argsort(-score, kind="stable"):
+        if score[k] <= 0 or len(cands) == cfg.candidates:
+            break
+        if all(found[k][0].pairs != c.pairs and abs(offsets_s[k] - c.offset_s) >= cfg.distinct_s - EPS_S
+               for c in cands):
+            cands.append(found[k][0])
 
-    # 2. the peak's association, grown, held over every shift
-    start = _grown(A, B, found[peak][0], mirror, unit, cfg) or found[peak][0]
-    land = _landscape(A, B, offsets_s, start, mirror, unit, cfg)
-    cost = np.array([f.cost if f is not None else 1.0 for f in land])
-    best_i = int(np.argmin(cost))
+    # 2. each candidate's landscape
+    lands = []
+    for c in cands:
+        c = _grown(A, B, c, mirror, unit, cfg) or c
+        fits = _landscape(A, B, offsets_s, c, mirror, unit, cfg)
+        lands.append((c, fits, _evidence(fits)))
+    which = int(np.argmax([ev.max() for _, _, ev in lands]))
+    start, land, evidence = lands[which]
+    best_i = int(np.argmax(evidence))
     fit = land[best_i]
+    cost = np.array([f.cost if f is not None else 1.0 for f in land])
     inliers = np.array([f.inliers if f is not None else 0 for f in land])
     assoc = tuple(PeopleAssociation(i, j, bool(2 * fit.mirrored[(i, j)].sum() > len(fit.mirrored[(i, j)])))
                   for i, j in start.pairs)
-    kw.update(cost=cost, inliers=inliers, associations=assoc, F_ab=fit.F_ab,
+    kw.update(cost=cost, inliers=inliers, evidence=evidence, associations=assoc, F_ab=fit.F_ab,
               best_grid_offset_s=float(offsets_s[best_i]))
 
     # 3. refusals, in order
     if fit.inliers < cfg.min_inliers:
         return refused(f"too few landmarks fit one epipolar geometry ({fit.inliers} inlier correspondences at "
                        f"the best shift, at least {cfg.min_inliers} needed)", **kw)
-    search_second = _next_distinct(offsets_s, -score, peak, cfg.distinct_s)
-    search_median = float(np.median(score))
-    search_margin = np.inf
-    if search_second is not None:
-        search_margin = (score[peak] - search_median) / max(score[search_second] - search_median, 1e-12)
-        kw.update(search_second_offset_s=float(offsets_s[search_second]), search_margin=float(search_margin))
-    if search_margin < cfg.min_margin:
-        return refused(f"ambiguous people: at {offsets_s[search_second]:+.2f} s the people pair up about as well "
-                       f"as at {offsets_s[peak]:+.2f} s (margin {search_margin:.2f}, {cfg.min_margin:g} needed)", **kw)
     median = float(np.median(cost))
-    depth = median - cost[best_i]
-    second = _next_distinct(offsets_s, cost, best_i, cfg.distinct_s)
+    contrast = (median - cost[best_i]) / median if median > 0 else 0.0
+    kw.update(contrast=float(contrast))
+    if evidence[best_i] <= 0 or contrast < cfg.min_contrast:
+        return refused(f"flat landscape: the best shift's cost is only {100 * contrast:.0f}% below the median "
+                       f"(at least {100 * cfg.min_contrast:.0f}% needed): the people move too little to time them",
+                       **kw)
+    second = _next_distinct(offsets_s, -evidence, best_i, cfg.distinct_s)
     margin = np.inf
     if second is not None:
-        margin = depth / max(median - cost[second], 1e-12)
+        margin = evidence[best_i] / max(evidence[second], 1e-12)
         kw.update(second_offset_s=float(offsets_s[second]), margin=float(margin))
-    if depth <= 0 or margin < cfg.min_margin:
-        where = f"{offsets_s[second]:+.2f} s" if second is not None else "every shift"
-        return refused(f"ambiguous shift: {where} fits almost as well as {offsets_s[best_i]:+.2f} s "
-                       f"(margin {margin:.2f} over the median, {cfg.min_margin:g} needed)", **kw)
-    if abs(offsets_s[best_i] - offsets_s[peak]) >= cfg.distinct_s - EPS_S:
-        return refused(f"the people pair up best at {offsets_s[peak]:+.2f} s but fit one geometry best at "
-                       f"{offsets_s[best_i]:+.2f} s", **kw)
+    if margin < cfg.min_margin:
+        return refused(f"ambiguous shift: {offsets_s[second]:+.2f} s fits almost as well as {offsets_s[best_i]:+.2f} s "
+                       f"(margin {margin:.2f}, {cfg.min_margin:g} needed)", **kw)
+    for k, (other, _, ev) in enumerate(lands):
+        r = int(np.argmax(ev))
+        if k == which or set(other.pairs) & set(start.pairs) \
+                or abs(offsets_s[r] - offsets_s[best_i]) < cfg.distinct_s - EPS_S:
+            continue  # the same people, or other people at the same shift: no rival
+        rival_margin = evidence[best_i] / max(ev[r], 1e-12)
+        if rival_margin < cfg.min_margin:
+            kw.update(rival_offset_s=float(offsets_s[r]), rival_margin=float(rival_margin))
+            return refused(f"ambiguous people: other people paired up fit almost as well at {offsets_s[r]:+.2f} s "
+                           f"(margin {rival_margin:.2f}, {cfg.min_margin:g} needed)", **kw)
 
     # 4. continuous refinement
     delta, F, std, n_in = _refine(A, B, float(offsets_s[best_i]), fit, start.pairs, mirror, unit,
@@ -633,5 +700,5 @@ def estimate_people_pair(a: str, times_a_s: np.ndarray, xy_a: np.ndarray, b: str
     if abs(delta - offsets_s[best_i]) > 2 * _step(offsets_s):
         return refused(f"the refinement left the best shift ({offsets_s[best_i]:+.3f} s -> {delta:+.3f} s)", **kw)
     kw.update(F_ab=F, offset_std_s=std, refined_inliers=n_in)
-    return PeoplePair(a, b, delta, f"clear best shift (margins {search_margin:.2f} and {margin:.2f})", noise_px=noise,
+    return PeoplePair(a, b, delta, f"clear best shift (margin {margin:.2f})", noise_px=noise,
                       offsets_s=offsets_s, **kw)
