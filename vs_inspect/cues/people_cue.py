@@ -121,8 +121,24 @@ def find_people_cameras(videos: Sequence, grid: OffsetGrid = OffsetGrid(), confi
             people[v.info.name] = out
     timings["people"] = time.perf_counter() - t0
 
-    # 2. pairs
-    t1 = time.perf_counter()
+    cue = cameras_from_people(people, [infos[n] for n in names], grid, config, reference, engine, progress, failed)
+    return PeopleCue(cue.videos, cue.reference, cue.people, cue.pairs, cue.offsets_s, cue.cameras, cue.refused,
+                     cue.tracks, cue.track_pairs, cue.points_world, cue.reprojection_px, cue.landmarks,
+                     {**timings, **cue.timings_s, "total": time.perf_counter() - t0})
+
+
+def cameras_from_people(people: dict[str, VideoPeople], videos: Sequence[VideoInfo], grid: OffsetGrid = OffsetGrid(),
+                        config: PeopleCueConfig = PeopleCueConfig(), reference: str | None = None,
+                        engine: Engine | None = None, progress: bool = False,
+                        failed: dict[str, str] | None = None) -> PeopleCue:
+    """Steps 2-4 of find_people_cameras, from each video's people already found (a video of
+    videos without people in `people` is refused with failed's reason, or "no people found")."""
+    t0 = time.perf_counter()
+    engine = engine or LocalEngine()
+    infos = {v.name: v for v in videos}
+    names = list(infos)
+    reference = reference or grid.reference or names[0]
+    timings = {}
     items = [(a, b) for i, a in enumerate(names) for b in names[i + 1:] if a in people and b in people]
     pairs: list[PeoplePair] = []
     for item, out in zip(items, engine.map(_pair_task, items, shared=(people, infos, grid, config.pairs),
@@ -131,24 +147,23 @@ def find_people_cameras(videos: Sequence, grid: OffsetGrid = OffsetGrid(), confi
             out = PeoplePair(item[0], item[1], None, f"its search failed: {out.reason}", float("nan"), np.zeros(0))
         pairs.append(out)
         log.info("%s__%s: %s", out.a, out.b, out.reason if out.offset_s is None else f"Δ {out.offset_s:+.3f} s")
-    timings["pairs"] = time.perf_counter() - t1
+    timings["pairs"] = time.perf_counter() - t0
 
-    # 3. offsets, identities, cameras
-    t2 = time.perf_counter()
+    t1 = time.perf_counter()
     offsets, refused, kept = _offsets(names, reference, infos, pairs, config)
-    refused.update({v: why for v, why in failed.items() if v not in refused})
+    for v in names:
+        if v not in people:
+            refused[v] = (failed or {}).get(v, "no people found")
     placed = [v for v in names if v in offsets]
     identity, flip = _identities(people, kept)
     cameras, points, reproj, cam_refused = _cameras(placed, reference, infos, people, kept, offsets, identity, flip,
                                                     config)
     refused.update(cam_refused)
-    timings["cameras"] = time.perf_counter() - t2
+    timings["cameras"] = time.perf_counter() - t1
 
-    # 4. landmarks as tracks and track pairs
     L = len(config.pairs.landmarks)
     tracks = {v: _landmark_tracks(people[v], config.pairs.landmarks) for v in cameras}
     track_pairs = _track_pairs([v for v in names if v in cameras], people, identity, flip, config.pairs.landmarks, L)
-    timings["total"] = time.perf_counter() - t0
     return PeopleCue(tuple(infos[n] for n in names), reference, people, tuple(pairs),
                      {v: offsets[v] for v in cameras}, cameras, refused, tracks, track_pairs, points, reproj,
                      tuple(config.pairs.landmarks), timings)
