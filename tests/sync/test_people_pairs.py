@@ -82,7 +82,7 @@ def test_people_standing_still_give_no_shift():
     sc = people_scene(_cameras(), still, {"a": ViewOptions(seed=1), "b": ViewOptions(seed=2)})
     r = _estimate(sc)
     assert not r.accepted
-    assert r.reason.startswith("flat landscape"), r.reason
+    assert r.reason.startswith(("flat landscape", "ambiguous shift")), r.reason
 
 
 def test_no_people_is_refused_with_its_reason(scene):

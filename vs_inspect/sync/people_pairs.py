@@ -37,6 +37,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
@@ -70,7 +71,7 @@ class PeoplePairConfig:
     """Frames of the overlap (evenly spread) the search scores at each shift."""
     sample_points: int = 200
     """Correspondences (evenly spread in time) each RANSAC sees."""
-    max_hypotheses: int = 10
+    max_hypotheses: int = 8
     """Person pairings (with the most correspondences) that propose an F at each shift, each as
     labelled and mirrored."""
     min_pair_points: int = 40
@@ -87,9 +88,9 @@ class PeoplePairConfig:
     min_margin: float = 1.5
     """The best shift's evidence must be this many times the next-best distinct shift's (and
     than another candidate's of other people at another shift), else refused."""
-    candidates: int = 3
+    candidates: int = 2
     """Associations (of the search's best distinct shifts) whose landscapes are computed."""
-    irls_iterations: int = 5
+    irls_iterations: int = 4
     """Reweighting steps of each F fitted on the landscape."""
     fresh_every: int = 4
     """On the landscape, a fresh RANSAC start at every this many shifts (the neighbour's F at all)."""
@@ -185,26 +186,71 @@ class _Scored:
     frames: np.ndarray  # (Pa,Pb,Q) bool, frames both see
 
 
+@nb.njit(cache=True)
+def _score_kernel(F, e, xa, xb, mirror, unit2):
+    """_score's loops: two passes over every (pairing, frame, landmark, labelling), the first for
+    the majority side of the epipole among the correspondences near their lines, the second for
+    the inliers on that side."""
+    Pa, Q, L = xa.shape[0], xa.shape[1], xa.shape[2]
+    Pb = xb.shape[0]
+    vote = 0.0
+    for pass_ in range(2):
+        majority = 1.0 if vote >= 0 else -1.0
+        counts = np.zeros((Pa, Pb), np.int64)
+        points = np.zeros((Pa, Pb), np.int64)
+        mirrored = np.zeros((Pa, Pb), np.int64)
+        frames = np.zeros((Pa, Pb, Q), np.bool_)
+        for i in range(Pa):
+            for q in range(Q):
+                for j in range(Pb):
+                    nd = 0
+                    nm = 0
+                    for l in range(L):
+                        a0, a1 = xa[i, q, l, 0], xa[i, q, l, 1]
+                        if not (np.isfinite(a0) and np.isfinite(a1)):
+                            continue
+                        lb0 = F[0, 0] * a0 + F[1, 0] * a1 + F[2, 0]
+                        lb1 = F[0, 1] * a0 + F[1, 1] * a1 + F[2, 1]
+                        if np.isfinite(xb[j, q, l, 0]) and np.isfinite(xb[j, q, l, 1]):
+                            points[i, j] += 1
+                            frames[i, j, q] = True
+                        for m in range(2):
+                            k = l if m == 0 else mirror[l]
+                            b0, b1 = xb[j, q, k, 0], xb[j, q, k, 1]
+                            if not (np.isfinite(b0) and np.isfinite(b1)):
+                                continue
+                            la0 = F[0, 0] * b0 + F[0, 1] * b1 + F[0, 2]
+                            la1 = F[1, 0] * b0 + F[1, 1] * b1 + F[1, 2]
+                            la2 = F[2, 0] * b0 + F[2, 1] * b1 + F[2, 2]
+                            num = a0 * la0 + a1 * la1 + la2
+                            if num * num >= unit2[i, j] * (la0 * la0 + la1 * la1 + lb0 * lb0 + lb1 * lb1):
+                                continue
+                            side = (e[1] - e[2] * a1) * la0 + (e[2] * a0 - e[0]) * la1 + (e[0] * a1 - e[1] * a0) * la2
+                            if pass_ == 0:
+                                vote += 1.0 if side > 0 else (-1.0 if side < 0 else 0.0)
+                            elif side * majority > 0:
+                                if m == 0:
+                                    nd += 1
+                                else:
+                                    nm += 1
+                    if pass_ == 1:
+                        counts[i, j] += max(nd, nm)
+                        if nm > nd:
+                            mirrored[i, j] += 1
+    return counts, points, mirrored, frames
+
+
 def _score(F: np.ndarray, xa: np.ndarray, xb: np.ndarray, mirror: np.ndarray, unit: np.ndarray) -> _Scored:
-    """xa (Pa,Q,L,2), xb (Pb,Q,L,2) at the same moments; unit (Pa,Pb) px. The epipolar lines of
-    each side are computed once, every pairing's distances from them by broadcasting. An inlier
-    is near its line and on the side most inliers are (_side_of)."""
-    lb = xa @ F[:2] + F[2]  # (Pa,Q,L,3): Fᵀ x_a
-    la = xb @ F[:, :2].T + F[:, 2]  # (Pb,Q,L,3): F x_b
-    na = (lb[..., 0] ** 2 + lb[..., 1] ** 2)[:, None]
-    xa0, xa1 = xa[:, None, ..., 0], xa[:, None, ..., 1]
-    u2 = (unit ** 2)[:, :, None, None]
-    near, side = [], []
-    for lab in (slice(None), mirror):
-        l = la[:, :, lab][None]
-        num = xa0 * l[..., 0] + xa1 * l[..., 1] + l[..., 2]
-        with np.errstate(invalid="ignore"):
-            near.append(num * num < u2 * (na + l[..., 0] ** 2 + l[..., 1] ** 2))  # NaN: False
-        side.append(_side_of(F, xa[:, None], l))
-    majority = 1.0 if sum(float(sd[nr].sum()) for sd, nr in zip(side, near)) >= 0 else -1.0
-    nd, ns = ((nr & (sd == majority)).sum(-1) for nr, sd in zip(near, side))
-    seen = np.isfinite(xa[:, None, ..., 0]) & np.isfinite(xb[None, ..., 0])
-    return _Scored(np.maximum(nd, ns).sum(-1), seen.sum((-1, -2)), (ns > nd).sum(-1), seen.any(-1))
+    """xa (Pa,Q,L,2), xb (Pb,Q,L,2) at the same moments; unit (Pa,Pb) px. An inlier is near its
+    epipolar line (Sampson distance under one unit) and on the side of the epipole most such
+    correspondences are on (_side_of); each frame of a pairing counts under its better labelling."""
+    e = np.linalg.svd(F)[0][:, 2]
+    counts, points, mirrored, frames = _score_kernel(np.ascontiguousarray(F, np.float64), np.ascontiguousarray(e),
+                                                     np.ascontiguousarray(xa, np.float64),
+                                                     np.ascontiguousarray(xb, np.float64),
+                                                     np.ascontiguousarray(mirror, np.int64),
+                                                     np.ascontiguousarray(unit ** 2, np.float64))
+    return _Scored(counts, points, mirrored, frames)
 
 
 def _associate(sc: _Scored, cfg: PeoplePairConfig) -> list[tuple[int, int]]:
@@ -403,7 +449,7 @@ def _chosen(rows, labels: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def _fit_held(xa, xb, assoc: _Association, starts: list, mirror, unit, cfg: PeoplePairConfig) -> _Fit | None:
     """The association at one shift: from each start F (None: a fresh RANSAC fit), IRLS, each
-    frame's labelling under it, IRLS again; the lowest cost."""
+    frame's labelling under it (IRLS again when some frames changed labelling); the lowest cost."""
     rows = _rows(xa, xb, assoc.pairs, mirror, unit)
     init = {k: np.full(xa.shape[1], assoc.mirrored[p]) for k, p in enumerate(assoc.pairs)}
     x_a, x_b, u = _chosen(rows, init)
@@ -417,11 +463,12 @@ def _fit_held(xa, xb, assoc: _Association, starts: list, mirror, unit, cfg: Peop
             if F is None:
                 continue
         F = fundamental_irls(x_a, x_b, F, u, cfg.irls_iterations)
-        labels, *_ = _labels(F, rows)
-        ya, yb, yu = _chosen(rows, labels)
-        if len(ya) >= 8:
-            F = fundamental_irls(ya, yb, F, yu, cfg.irls_iterations)
         labels, total, inl, n = _labels(F, rows)
+        if any((labels[k] != init[k]).any() for k in labels):  # some frames fit better the other way
+            ya, yb, yu = _chosen(rows, labels)
+            if len(ya) >= 8:
+                F = fundamental_irls(ya, yb, F, yu, cfg.irls_iterations)
+                labels, total, inl, n = _labels(F, rows)
         fit = _Fit(F, total / max(n, 1), inl, n, {p: labels[k] for k, p in enumerate(assoc.pairs)})
         if best is None or fit.cost < best.cost:
             best = fit
