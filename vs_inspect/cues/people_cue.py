@@ -36,6 +36,7 @@ from ..geometry.skeleton import subset_mirror
 from ..sync.people_pairs import PeoplePairConfig, estimate_people_pair
 from ..sync.solve import PairMeasurement, solve_offsets
 from ..types import CameraTrack, PeopleCue, PeoplePair, TrackPairs, Tracks, VideoInfo, VideoPeople
+from .config import MotionConfig
 from .people_video import PeopleVideoConfig, find_people
 
 log = logging.getLogger(__name__)
@@ -47,6 +48,9 @@ class PeopleCueConfig:
 
     video: PeopleVideoConfig = field(default_factory=PeopleVideoConfig)
     pairs: PeoplePairConfig = field(default_factory=PeoplePairConfig)
+    static_max_motion_px: float = MotionConfig.static_max_motion_px
+    """A camera whose background moves less than this between frames (px, at the people step's
+    motion_side) is static; the cue places static cameras only (cues/motion.py's rule)."""
     focal_range: tuple[float, float] = (0.3, 5.0)
     """Focal lengths are searched within these multiples of the image's larger side."""
     max_pair_residual_frames: float = 1.0
@@ -74,12 +78,12 @@ def _frames_of(video):
     return video.info, iter_frames(video)
 
 
-def _people_task(cfg: PeopleVideoConfig, video) -> VideoPeople:
+def _people_task(cfg: PeopleVideoConfig, video) -> tuple[VideoPeople, float]:
     info, frames = _frames_of(video)
     people, stats = find_people(info.name, frames, info.timestamps_s, cfg)
-    log.info("%s: %d people followed (%d frames, %d crops, %.1f s)", info.name, people.num_people,
-             stats.frames, stats.crops, stats.seconds)
-    return people
+    log.info("%s: %d people followed (%d frames, %d crops, %.1f s, background moves %.2f px)", info.name,
+             people.num_people, stats.frames, stats.crops, stats.seconds, stats.background_motion_px)
+    return people, stats.background_motion_px
 
 
 def _pair_task(shared, item) -> PeoplePair:
@@ -93,12 +97,14 @@ def _pair_task(shared, item) -> PeoplePair:
 
 
 def find_people_cameras(videos: Sequence, grid: OffsetGrid = OffsetGrid(), config: PeopleCueConfig = PeopleCueConfig(),
-                        reference: str | None = None, engine: Engine | None = None,
-                        progress: bool = False) -> PeopleCue:
-    """The people cue of the videos (opened io.video.VideoSource's or VideoFrames, static cameras):
-    people, pair geometries, offsets, cameras and landmark track pairs; reference (default: the
-    grid's, else the first video) has offset 0. engine: where the per-video and per-pair work runs
-    (default: this process, two videos at a time on threads)."""
+                        reference: str | None = None, engine: Engine | None = None, progress: bool = False,
+                        camera_motion: dict[str, str] | None = None) -> PeopleCue:
+    """The people cue of the videos (opened io.video.VideoSource's or VideoFrames): people, pair
+    geometries, offsets, cameras and landmark track pairs; reference (default: the grid's, else
+    the first video) has offset 0. engine: where the per-video and per-pair work runs (default:
+    this process, two videos at a time on threads). camera_motion: {video: "static" | "moving"}
+    known (else measured from each video's background); a moving camera is refused (its F
+    changes from frame to frame: this cue fits one per pair)."""
     t0 = time.perf_counter()
     engine = engine or LocalEngine()
     infos = {v.info.name: v.info for v in videos}
@@ -115,10 +121,15 @@ def find_people_cameras(videos: Sequence, grid: OffsetGrid = OffsetGrid(), confi
     failed: dict[str, str] = {}
     for v, out in zip(videos, engine.map(_people_task, list(videos), shared=config.video, desc="people",
                                          unit="video", progress=progress, threads=True)):
+        n = v.info.name
         if isinstance(out, TaskFailed):
-            failed[v.info.name] = f"finding its people failed: {out.reason}"
-        else:
-            people[v.info.name] = out
+            failed[n] = f"finding its people failed: {out.reason}"
+            continue
+        people[n], motion = out
+        moving = (camera_motion or {}).get(n, "moving" if motion >= config.static_max_motion_px else "static")
+        if moving == "moving":
+            failed[n] = (f"a moving camera (its background moves {motion:.1f} px between frames): the people cue "
+                         f"fits one epipolar geometry per pair of static cameras")
     timings["people"] = time.perf_counter() - t0
 
     cue = cameras_from_people(people, [infos[n] for n in names], grid, config, reference, engine, progress, failed)
@@ -131,15 +142,17 @@ def cameras_from_people(people: dict[str, VideoPeople], videos: Sequence[VideoIn
                         config: PeopleCueConfig = PeopleCueConfig(), reference: str | None = None,
                         engine: Engine | None = None, progress: bool = False,
                         failed: dict[str, str] | None = None) -> PeopleCue:
-    """Steps 2-4 of find_people_cameras, from each video's people already found (a video of
-    videos without people in `people` is refused with failed's reason, or "no people found")."""
+    """Steps 2-4 of find_people_cameras, from each video's people already found; a video in failed
+    ({video: why}) or without people in `people` is left out (refused with failed's reason, or
+    "no people found")."""
     t0 = time.perf_counter()
     engine = engine or LocalEngine()
     infos = {v.name: v for v in videos}
     names = list(infos)
     reference = reference or grid.reference or names[0]
     timings = {}
-    items = [(a, b) for i, a in enumerate(names) for b in names[i + 1:] if a in people and b in people]
+    usable = [n for n in names if n in people and n not in (failed or {})]
+    items = [(a, b) for i, a in enumerate(usable) for b in usable[i + 1:]]
     pairs: list[PeoplePair] = []
     for item, out in zip(items, engine.map(_pair_task, items, shared=(people, infos, grid, config.pairs),
                                            desc="people pairs", unit="pair", progress=progress, processes=True)):
@@ -152,7 +165,7 @@ def cameras_from_people(people: dict[str, VideoPeople], videos: Sequence[VideoIn
     t1 = time.perf_counter()
     offsets, refused, kept = _offsets(names, reference, infos, pairs, config)
     for v in names:
-        if v not in people:
+        if v not in usable:
             refused[v] = (failed or {}).get(v, "no people found")
     placed = [v for v in names if v in offsets]
     identity, flip = _identities(people, kept)

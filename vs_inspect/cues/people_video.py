@@ -17,6 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..geometry.skeleton import person_scale_px, pose_distance
+from ..io.video import downscale
+from .motion import background_motion
 from ..types import VideoPeople
 from .people_detect import DetectorConfig, PeopleDetector, frame_windows, merge_duplicates
 from .people_tracking import PeopleTracker, TrackingConfig, seen_xy
@@ -35,6 +37,11 @@ class PeopleVideoConfig:
     around their last landmarks..."""
     min_crop_px: int = 128
     """...and at least this many px wide."""
+    motion_pairs: int = 8
+    """Pairs of successive frames (spread over the video) whose background motion tells a static
+    camera from a moving one."""
+    motion_side: int = 640
+    """...measured with the frames' longer side at most this many px (Stage 0's working size)."""
 
     def __post_init__(self) -> None:
         if self.discover_s < 0 or self.crop_scale < 1 or self.min_crop_px < 32:
@@ -74,6 +81,8 @@ class PeopleVideoStats:
     discovery_frames: int  # frames searched whole for new people
     crops: int  # crops around people followed
     seconds: float
+    background_motion_px: float  # typical motion of the background between frames (cues/motion.py), px at
+    # motion_side
 
 
 def find_people(name: str, frames: Iterable[tuple[int, np.ndarray]], times_s: np.ndarray,
@@ -90,9 +99,14 @@ def find_people(name: str, frames: Iterable[tuple[int, np.ndarray]], times_s: np
     own = detector is None
     detector = detector or PeopleDetector(cfg.detector)
     last_discovery, n_frames, n_disc, n_crops = -np.inf, 0, 0, 0
+    T = len(times_s)
+    firsts = set(np.unique(np.linspace(0, max(T - 2, 0), min(cfg.motion_pairs, max(T - 1, 0))).astype(int)).tolist())
+    grey: dict[int, np.ndarray] = {}
     try:
         for k, bgr in frames:
             h, w = bgr.shape[:2]
+            if k in firsts or k - 1 in firsts:
+                grey[k] = cv2.cvtColor(downscale(bgr, cfg.motion_side), cv2.COLOR_BGR2GRAY)
             rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
             poses, windows, window_of = [], [], []
             for _, pose in tracker.live(k):
@@ -118,5 +132,8 @@ def find_people(name: str, frames: Iterable[tuple[int, np.ndarray]], times_s: np
     finally:
         if own:
             detector.close()
-    return tracker.result(), PeopleVideoStats(n_frames, n_disc, n_crops, time.perf_counter() - t0)
+    moves = [background_motion(np.stack([grey[t], grey[t + 1]]), samples=1) for t in sorted(firsts)
+             if t in grey and t + 1 in grey]
+    motion = float(np.median(moves)) if moves else 0.0
+    return tracker.result(), PeopleVideoStats(n_frames, n_disc, n_crops, time.perf_counter() - t0, motion)
 

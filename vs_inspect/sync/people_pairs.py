@@ -18,7 +18,8 @@ Steps, each a pure function of the people's landmarks (no I/O):
    it better and on the side of the epipole most are on (the oriented epipolar constraint, which
    a fit with its epipole amid the people breaks); people are associated greedily (most inliers
    first, one partner per person and frame); F is refitted on the associated people and they are
-   associated again. The associations found at the search's best shifts are the candidates;
+   associated again. The associations found where the search's score stands out most (above
+   its median, times the square root of the frames the shift overlaps) are the candidates;
 2. each candidate, grown by every pairing that fits at its shift over all frames, held over
    every shift: the F minimizing a robust Sampson cost there (fundamental_irls, from the
    neighbouring shift's F and now and then from a fresh RANSAC fit, whichever ends lower), each
@@ -88,7 +89,7 @@ class PeoplePairConfig:
     min_margin: float = 1.5
     """The best shift's evidence must be this many times the next-best distinct shift's (and
     than another candidate's of other people at another shift), else refused."""
-    candidates: int = 2
+    candidates: int = 3
     """Associations (of the search's best distinct shifts) whose landscapes are computed."""
     irls_iterations: int = 4
     """Reweighting steps of each F fitted on the landscape."""
@@ -686,8 +687,13 @@ def estimate_people_pair(a: str, times_a_s: np.ndarray, xy_a: np.ndarray, b: str
     if not score.max(initial=0):
         return refused("no person pairing fits one epipolar geometry at any shift (too few landmarks seen "
                        "in both videos at once)", **kw)
+    # candidates in the order of the search's own evidence: its score above the median, times the
+    # square root of the frames the shift overlaps (a short overlap pairs people up by chance)
+    overlap = np.array([np.count_nonzero((A.times_s - d >= B.times_s[0] - EPS_S) & (A.times_s - d <= B.times_s[-1] + EPS_S))
+                        for d in offsets_s], dtype=np.float64)
+    ranked = (score - np.median(score)) * np.sqrt(overlap)
     cands: list[_Association] = []
-    for k in np.argsort(-score, kind="stable"):
+    for k in np.argsort(-ranked, kind="stable"):
         if score[k] <= 0 or len(cands) == cfg.candidates:
             break
         if all(found[k][0].pairs != c.pairs and abs(offsets_s[k] - c.offset_s) >= cfg.distinct_s - EPS_S
