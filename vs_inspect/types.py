@@ -721,7 +721,7 @@ class PeoplePair:
     # noise units at each Δ, its F fitted there, 0..1; lower is better
     inliers: np.ndarray | None = None  # (D,) its inlier correspondences at each Δ (its F's inliers)
     evidence: np.ndarray | None = None  # (D,) (median cost - cost) x sqrt(correspondences) at each Δ: the
-    # landscape the shift is chosen on (higher is better)
+    # landscape the shift is chosen on (higher is better); NaN where the videos share too little time
     search_score: np.ndarray | None = None  # (D,) inliers per frame of the best association found at each Δ
     associations: tuple[PeopleAssociation, ...] = ()  # the people both videos see, at the chosen shift
     F_ab: np.ndarray | None = None  # (3,3) x_aᵀ F_ab x_b = 0, px (refined when accepted)

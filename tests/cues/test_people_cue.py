@@ -11,6 +11,7 @@ from vs_inspect.cues.people_cue import PeopleCueConfig, cameras_from_people
 from vs_inspect.geometry.epipolar import fundamental_from_cameras, project
 from vs_inspect.geometry.offsets import OffsetGrid
 from vs_inspect.geometry.two_view import sampson_px
+from vs_inspect.sync.people_pairs import PeoplePairConfig
 from vs_inspect.synth.people import ViewOptions, default_walkers, people_scene, ring_camera
 from vs_inspect.types import VideoInfo
 
@@ -38,7 +39,8 @@ def scene():
 @pytest.fixture(scope="module")
 def cue(scene):
     infos = [VideoInfo.constant_rate(c.name, c.width, c.height, c.num_frames, c.fps) for c in scene.cameras]
-    return cameras_from_people(scene.views, infos, GRID, PeopleCueConfig())
+    cfg = PeopleCueConfig(pairs=PeoplePairConfig(search_frames=16, max_hypotheses=6, candidates=2))
+    return cameras_from_people(scene.views, infos, GRID, cfg)
 
 
 def test_offsets_from_the_pairs(cue):
@@ -97,3 +99,27 @@ def test_recording(cue, tmp_path):
     rec.disconnect()
     assert path.stat().st_size > 10_000
     assert rerun_verify(path, tmp_path).returncode == 0
+
+
+def test_a_real_pair_of_webcams(shared_data):
+    """caliscope's cam_2 and cam_3 (one person moving a board, seen about 90 degrees apart): the
+    people cue alone times the pair within a frame of the recorded frame times."""
+    from vs_inspect.bench.datasets import read_caliscope_frame_times
+    from vs_inspect.cues.people_cue import find_people_cameras
+    from vs_inspect.cues.people_detect import people_unavailable
+    from vs_inspect.io.video import open_video
+
+    if people_unavailable():
+        pytest.skip(people_unavailable())
+    root = shared_data / "caliscope_post_optimization"
+    paths = [root / "calibration" / "extrinsic" / f"cam_{i}.mp4" for i in (2, 3)]
+    if not all(p.is_file() for p in paths):
+        pytest.skip(f"caliscope videos not in {root}")
+    times = read_caliscope_frame_times(root)
+    cue = find_people_cameras([open_video(p) for p in paths], OffsetGrid(min_overlap_s=1.0))
+    (pair,) = cue.pairs
+    assert pair.accepted, pair.reason
+    truth = times["cam_3"][0] - times["cam_2"][0]
+    frame = float(np.median(np.diff(times["cam_2"])))
+    assert abs(pair.offset_s - truth) < frame, (pair.offset_s, truth)
+    assert set(cue.cameras) == {"cam_2", "cam_3"} and not cue.refused

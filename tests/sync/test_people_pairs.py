@@ -17,7 +17,8 @@ FPS = 10.0
 OFFSET_TOL_S = 0.1 / FPS  # a tenth of a frame
 K_A = np.array([[820.0, 0, 470], [0, 800, 275], [0, 0, 1]])
 K_B = np.array([[1100.0, 0, 490], [0, 1130, 262], [0, 0, 1]])
-CFG = PeoplePairConfig()
+CFG = PeoplePairConfig(search_frames=16, max_hypotheses=6, candidates=2)
+GRID = OffsetGrid(min_overlap_s=3.0, range_s=2.5)
 
 
 def _cameras(num_a=80, num_b=70):
@@ -29,7 +30,7 @@ def _cameras(num_a=80, num_b=70):
 
 def _estimate(scene, first="a", second="b", cfg=CFG):
     A, B = scene.views[first], scene.views[second]
-    offs = OffsetGrid(min_overlap_s=3.0).pair_offsets(first, (0.0, A.times_s[-1]), second, (0.0, B.times_s[-1]), 1 / FPS)
+    offs = GRID.pair_offsets(first, (0.0, A.times_s[-1]), second, (0.0, B.times_s[-1]), 1 / FPS)
     return estimate_people_pair(first, A.times_s, A.seen_xy(cfg.landmarks), second, B.times_s,
                                 B.seen_xy(cfg.landmarks), offs, cfg)
 

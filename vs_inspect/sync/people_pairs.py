@@ -21,13 +21,14 @@ Steps, each a pure function of the people's landmarks (no I/O):
    associated again. The associations found where the search's score stands out most (above
    its median, times the square root of the frames the shift overlaps) are the candidates;
 2. each candidate, grown by every pairing that fits at its shift over all frames, held over
-   every shift: the F minimizing a robust Sampson cost there (fundamental_irls, from the
+   every third shift (a sketch), the best sketched ones over every shift: the F minimizing a robust Sampson cost there (fundamental_irls, from the
    neighbouring shift's F and now and then from a fresh RANSAC fit, whichever ends lower), each
    frame's labelling chosen under it. Its landscape is the evidence at each shift: how far the
    mean truncated cost lies below the landscape's median, times the square root of the number
    of correspondences (a standardized depth: a short overlap fits a few landmarks well by
    chance, and weighs little);
-3. refusal: too few inliers at the best shift, a next-best distinct shift with evidence within
+3. refusal (shifts with little common time neither chosen nor rivals): too few inliers at the
+   best shift, a next-best distinct shift with evidence within
    min_margin of the best, or another candidate of other people whose best lies elsewhere with
    such evidence: each with its plain reason;
 4. a continuous refinement of (Δ, F) on the inliers' Sampson distances, b's landmarks
@@ -83,14 +84,22 @@ class PeoplePairConfig:
     """Two shifts closer than this are one valley of the landscape."""
     min_inliers: int = 150
     """A pair is refused with fewer inlier correspondences at its best shift."""
+    min_support_fraction: float = 0.4
+    """Shifts that leave the videos fewer common frames than this share of the median over the
+    candidate shifts are neither candidates nor rivals (Stage 1's rule: a fit over few frames is
+    good by chance)."""
     min_contrast: float = 0.3
     """The best shift's mean cost must lie this share below the landscape's median, else the
     landscape is flat (people who hardly move fit one geometry at every shift)."""
     min_margin: float = 1.5
     """The best shift's evidence must be this many times the next-best distinct shift's (and
     than another candidate's of other people at another shift), else refused."""
-    candidates: int = 3
-    """Associations (of the search's best distinct shifts) whose landscapes are computed."""
+    candidates: int = 6
+    """Associations (of the search's best distinct shifts) whose landscapes are sketched (at every
+    sketch_every-th shift)..."""
+    sketch_every: int = 3
+    full_landscapes: int = 2
+    """...and the ones of these whose sketch has the most evidence, computed at every shift."""
     irls_iterations: int = 4
     """Reweighting steps of each F fitted on the landscape."""
     fresh_every: int = 4
@@ -102,7 +111,7 @@ class PeoplePairConfig:
 
     def __post_init__(self) -> None:
         subset_mirror(self.landmarks)  # ValueError when not closed under the mirror
-        if self.noise_share <= 0 or self.search_frames < 8 or self.search_step_s <= 0 or self.search_noise < 1 or self.sample_points < 8 \
+        if self.sketch_every < 1 or self.full_landscapes < 1 or self.noise_share <= 0 or self.search_frames < 8 or self.search_step_s <= 0 or self.search_noise < 1 or self.sample_points < 8 \
                 or self.min_pair_points < 8 or self.min_margin < 1 or self.fresh_every < 1:
             raise ValueError(f"PeoplePairConfig out of range: {self}")
 
@@ -477,13 +486,14 @@ def _fit_held(xa, xb, assoc: _Association, starts: list, mirror, unit, cfg: Peop
 
 
 def _landscape(a: _Side, b: _Side, offsets_s: np.ndarray, assoc: _Association, mirror: np.ndarray,
-               unit: np.ndarray, cfg: PeoplePairConfig) -> list[_Fit | None]:
+               unit: np.ndarray, cfg: PeoplePairConfig, every: int = 1) -> list[_Fit | None]:
     """The association held at every shift (a _Fit, None: too few correspondences there), swept
     outwards from the shift where it was found, each shift started from its neighbour's F (and
-    every fresh_every shifts from a fresh RANSAC fit too)."""
+    every fresh_every shifts from a fresh RANSAC fit too); every > 1: at every that many shifts
+    only (a sketch)."""
     out: list[_Fit | None] = [None] * len(offsets_s)
     i0 = int(np.argmin(np.abs(offsets_s - assoc.offset_s)))
-    for sweep in (range(i0, len(offsets_s)), range(i0 - 1, -1, -1)):
+    for sweep in (range(i0, len(offsets_s), every), range(i0 - every, -1, -every)):
         F = assoc.F_ab
         for n, i in enumerate(sweep):
             _, xa, xb = _moments(a, b, float(offsets_s[i]), None)
@@ -692,20 +702,28 @@ def estimate_people_pair(a: str, times_a_s: np.ndarray, xy_a: np.ndarray, b: str
     overlap = np.array([np.count_nonzero((A.times_s - d >= B.times_s[0] - EPS_S) & (A.times_s - d <= B.times_s[-1] + EPS_S))
                         for d in offsets_s], dtype=np.float64)
     ranked = (score - np.median(score)) * np.sqrt(overlap)
+    usual = float(np.median(overlap))
+    supported = overlap >= cfg.min_support_fraction * usual
     cands: list[_Association] = []
-    for k in np.argsort(-ranked, kind="stable"):
-        if score[k] <= 0 or len(cands) == cfg.candidates:
+    for k in np.argsort(-np.where(supported, ranked, -np.inf), kind="stable"):
+        if score[k] <= 0 or not supported[k] or len(cands) == cfg.candidates:
             break
         if all(found[k][0].pairs != c.pairs and abs(offsets_s[k] - c.offset_s) >= cfg.distinct_s - EPS_S
                for c in cands):
             cands.append(found[k][0])
 
     # 2. each candidate's landscape
-    lands = []
+    sketched = []
     for c in cands:
         c = _grown(A, B, c, mirror, unit, cfg) or c
+        sketch = _evidence(_landscape(A, B, offsets_s, c, mirror, unit, cfg, every=cfg.sketch_every))
+        sketched.append((float(np.where(supported, sketch, -np.inf).max()), c))
+    lands = []
+    for _, c in sorted(sketched, key=lambda x: -x[0])[:cfg.full_landscapes]:
         fits = _landscape(A, B, offsets_s, c, mirror, unit, cfg)
         lands.append((c, fits, _evidence(fits)))
+    # shifts with little common time are no candidates for the best, nor rivals
+    lands = [(c, fits, np.where(supported, ev, -np.inf)) for c, fits, ev in lands]
     which = int(np.argmax([ev.max() for _, _, ev in lands]))
     start, land, evidence = lands[which]
     best_i = int(np.argmax(evidence))
@@ -714,7 +732,8 @@ def estimate_people_pair(a: str, times_a_s: np.ndarray, xy_a: np.ndarray, b: str
     inliers = np.array([f.inliers if f is not None else 0 for f in land])
     assoc = tuple(PeopleAssociation(i, j, bool(2 * fit.mirrored[(i, j)].sum() > len(fit.mirrored[(i, j)])))
                   for i, j in start.pairs)
-    kw.update(cost=cost, inliers=inliers, evidence=evidence, associations=assoc, F_ab=fit.F_ab,
+    kw.update(cost=cost, inliers=inliers, evidence=np.where(np.isfinite(evidence), evidence, np.nan),
+              associations=assoc, F_ab=fit.F_ab,
               best_grid_offset_s=float(offsets_s[best_i]))
 
     # 3. refusals, in order
