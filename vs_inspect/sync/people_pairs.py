@@ -11,26 +11,27 @@ proportion to the person's size in the image, so every distance is measured in u
 noise_share × that size (the geometric mean of the two views').
 
 Steps, each a pure function of the people's landmarks (no I/O):
-1. search, at every candidate shift: RANSAC over person pairings. A pairing of one person of a
-   with one of b, labelled as given or mirrored (left and right swapped,
-   geometry/skeleton.MIRROR), proposes an F from its own landmarks (MAGSAC, on frames spread
-   over the overlap); every pairing is scored on it, each frame under whichever labelling fits
-   it better and on the side of the epipole most are on (the oriented epipolar constraint, which
-   a fit with its epipole amid the people breaks); people are associated greedily (most inliers
-   first, one partner per person and frame); F is refitted on the associated people and they are
-   associated again. The associations found where the search's score stands out most (above
-   its median, times the square root of the frames the shift overlaps) are the candidates;
-2. each candidate, grown by every pairing that fits at its shift over all frames, held over
-   every third shift (a sketch), the best sketched ones over every shift: the F minimizing a robust Sampson cost there (fundamental_irls, from the
-   neighbouring shift's F and now and then from a fresh RANSAC fit, whichever ends lower), each
-   frame's labelling chosen under it. Its landscape is the evidence at each shift: how far the
-   mean truncated cost lies below the landscape's median, times the square root of the number
-   of correspondences (a standardized depth: a short overlap fits a few landmarks well by
-   chance, and weighs little);
-3. refusal (shifts with little common time neither chosen nor rivals): too few inliers at the
-   best shift, a next-best distinct shift with evidence within
-   min_margin of the best, or another candidate of other people whose best lies elsewhere with
-   such evidence: each with its plain reason;
+1. search: every search_step_s, RANSAC over person pairings. A pairing of one person of a with
+   one of b, labelled as given or mirrored (left and right swapped, geometry/skeleton.MIRROR),
+   proposes an F from its own landmarks (MAGSAC, on frames spread over the overlap); every
+   pairing is scored on it, each frame under whichever labelling fits it better and on the side
+   of the epipole most are on (the oriented epipolar constraint, which a fit with its epipole
+   amid the people breaks); people are associated greedily (most inliers first, one partner per
+   person and frame); F is refitted on the associated people and they are associated again.
+   Each association found is carried to the shifts around it. The associations found where the
+   search's score stands out most (above its median, times the square root of the frames the
+   shift overlaps) are the candidates;
+2. each candidate, grown by every pairing that fits at its shift over all frames, is held over
+   every fourth shift (a sketch), the best sketched ones over every shift: at each, the F
+   minimizing a robust Sampson cost (fundamental_irls, from the neighbouring shift's F and now
+   and then from a fresh RANSAC fit, whichever ends lower), each frame's labelling chosen under
+   it. Its landscape is the evidence at each shift: how far the mean truncated cost lies below
+   the landscape's median, times the square root of the number of correspondences (a
+   standardized depth: a short overlap fits a few landmarks well by chance, and weighs little);
+3. refusal (shifts with little common time are neither chosen nor rivals): too few inliers at
+   the best shift, a flat landscape, another peak of evidence at a distinct shift whose
+   prominence is within min_margin of the best's, or another candidate of other people whose
+   best lies elsewhere with such evidence: each with its plain reason;
 4. a continuous refinement of (Δ, F) on the inliers' Sampson distances, b's landmarks
    interpolated in time (scipy least_squares, soft L1), and its 1-sigma.
 """
@@ -49,6 +50,7 @@ from ..geometry.skeleton import GEOMETRY_LANDMARKS, person_scale_px, subset_mirr
 from ..geometry.timing import frame_brackets
 from ..geometry.two_view import fundamental_irls, fundamental_ransac, sampson_px
 from ..types import PeopleAssociation, PeoplePair
+from .decision import local_minima
 
 EPS_S = 1e-9
 
@@ -92,12 +94,12 @@ class PeoplePairConfig:
     """The best shift's mean cost must lie this share below the landscape's median, else the
     landscape is flat (people who hardly move fit one geometry at every shift)."""
     min_margin: float = 1.5
-    """The best shift's evidence must be this many times the next-best distinct shift's (and
-    than another candidate's of other people at another shift), else refused."""
-    candidates: int = 6
+    """The best peak of evidence must be this many times as prominent as the next distinct one
+    (and as high as another candidate's of other people at another shift), else refused."""
+    candidates: int = 12
     """Associations (of the search's best distinct shifts) whose landscapes are sketched (at every
     sketch_every-th shift)..."""
-    sketch_every: int = 3
+    sketch_every: int = 4
     full_landscapes: int = 2
     """...and the ones of these whose sketch has the most evidence, computed at every shift."""
     irls_iterations: int = 4
@@ -516,21 +518,18 @@ def _evidence(fits: list[_Fit | None]) -> np.ndarray:
     return np.where(np.isfinite(cost), (median - np.nan_to_num(cost)) * np.sqrt(n), 0.0)
 
 
-def _local_minima(cost: np.ndarray) -> np.ndarray:
-    """Indices of the local minima (a plateau once) of a 1D cost, lowest first."""
-    c = np.where(np.isfinite(cost), cost, np.inf)
-    left = np.r_[np.inf, c[:-1]]
-    right = np.r_[c[1:], np.inf]
-    idx = np.nonzero((c <= left) & (c < right) & np.isfinite(c))[0]
-    return idx[np.argsort(c[idx], kind="stable")]
-
-
-def _next_distinct(offsets_s: np.ndarray, cost: np.ndarray, best: int, distinct_s: float) -> int | None:
-    """The lowest local minimum at least distinct_s away from offsets_s[best], or None."""
-    for i in _local_minima(cost):
-        if abs(offsets_s[i] - offsets_s[best]) >= distinct_s - EPS_S:
-            return int(i)
-    return None
+def _rival_peak(offsets_s: np.ndarray, evidence: np.ndarray, best: int, distinct_s: float) -> tuple[int | None, float]:
+    """(the most prominent other peak of evidence at least distinct_s from offsets_s[best], the
+    best peak's prominence over that one's; inf without one). Peaks are compared by their
+    prominence, as Stage 1 compares minima (sync/decision.local_minima): a bump on the side of a
+    broad valley is no rival."""
+    minima, prom = local_minima(-np.where(np.isfinite(evidence), evidence, np.nan), 0.0)
+    own = prom[minima == best]
+    rivals = [(p, int(m)) for m, p in zip(minima, prom) if abs(offsets_s[m] - offsets_s[best]) >= distinct_s - EPS_S]
+    if not len(own) or not rivals:
+        return None, np.inf
+    p, m = max(rivals)
+    return m, float(own[0] / max(p, 1e-12))
 
 
 def _grown(a: _Side, b: _Side, assoc: _Association, mirror: np.ndarray, unit: np.ndarray,
@@ -747,10 +746,8 @@ def estimate_people_pair(a: str, times_a_s: np.ndarray, xy_a: np.ndarray, b: str
         return refused(f"flat landscape: the best shift's cost is only {100 * contrast:.0f}% below the median "
                        f"(at least {100 * cfg.min_contrast:.0f}% needed): the people move too little to time them",
                        **kw)
-    second = _next_distinct(offsets_s, -evidence, best_i, cfg.distinct_s)
-    margin = np.inf
+    second, margin = _rival_peak(offsets_s, evidence, best_i, cfg.distinct_s)
     if second is not None:
-        margin = evidence[best_i] / max(evidence[second], 1e-12)
         kw.update(second_offset_s=float(offsets_s[second]), margin=float(margin))
     if margin < cfg.min_margin:
         return refused(f"ambiguous shift: {offsets_s[second]:+.2f} s fits almost as well as {offsets_s[best_i]:+.2f} s "
