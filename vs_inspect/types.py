@@ -728,9 +728,9 @@ class PeoplePair:
     best_grid_offset_s: float | None = None  # the best Δ on the candidate grid, s
     contrast: float | None = None  # (median - best) / median of cost
     second_offset_s: float | None = None  # the next-best distinct Δ of evidence, s
-    margin: float | None = None  # best / second of evidence
+    margin: float | None = None  # prominence of the best peak of evidence / that of the next distinct peak
     rival_offset_s: float | None = None  # another association's best Δ, when it decided, s
-    rival_margin: float | None = None  # best / that association's best of evidence
+    rival_margin: float | None = None  # the best evidence / that association's best
     offset_std_s: float | None = None  # 1-sigma of offset_s from the refinement's Jacobian, s
     refined_inliers: int | None = None  # inliers at the refined Δ and F
 
@@ -758,6 +758,8 @@ class PeopleCue:
     reprojection_px: dict[str, float]  # placed video -> median reprojection distance of its landmarks, px
     landmarks: tuple[int, ...]  # the BlazePose landmarks each person's tracks hold, in order
     timings_s: dict[str, float]  # "people", "pairs", "cameras", "total"
+    background_motion_px: dict[str, float] = field(default_factory=dict)  # video -> its background's motion
+    # between frames (cues/motion.py), px: a moving camera is refused
 
     def bundle(self, gt_offsets_s: dict[str, float] | None = None) -> CueBundle:
         """The placed videos with their cameras, landmark tracks and track pairs, for Stage 1."""

@@ -20,6 +20,7 @@ the other clips, and none for caliscope (not in the paper).
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import os
 import tempfile
 import time
@@ -92,25 +93,66 @@ def _relative(offsets: dict[str, float | None], ref: str, truth: dict[str, float
     return {v: None if o is None else o - offsets[ref] + truth[ref] for v, o in offsets.items()}
 
 
+def _cached_people(srcs, folder: Path | None):
+    """({video: VideoPeople}, {video: background motion px}) saved in folder by an earlier run,
+    or None when any is missing."""
+    from ..types import VideoPeople
+
+    if folder is None:
+        return None
+    people, motion = {}, {}
+    for s in srcs:
+        f = Path(folder) / f"{s.info.name}.npz"
+        if not f.is_file():
+            return None
+        with np.load(f) as z:
+            people[s.info.name] = VideoPeople(s.info.name, z["landmarks"], z["times_s"], float(z["min_visibility"]))
+            motion[s.info.name] = float(z["background_motion_px"])
+    return people, motion
+
+
+def _save_people(cue: PeopleCue, folder: Path) -> None:
+    from ..io.atomic import atomic_path
+
+    Path(folder).mkdir(parents=True, exist_ok=True)
+    for n, p in cue.people.items():
+        with atomic_path(Path(folder) / f"{n}.npz") as tmp, open(tmp, "wb") as fh:
+            np.savez(fh, landmarks=p.landmarks, times_s=p.times_s, min_visibility=p.min_visibility,
+                     background_motion_px=cue.background_motion_px.get(n, np.nan))
+
+
 def run_scene(scene: str, paths: list[Path], truth: dict[str, float], grid: OffsetGrid, config: PeopleCueConfig,
-              rrd_folder: Path | None = None) -> SceneRun:
-    """The people cue, then Stage 1 + 2, on one scene's videos."""
+              rrd_folder: Path | None = None, people_folder: Path | None = None) -> SceneRun:
+    """The people cue, then Stage 1 + 2, on one scene's videos. people_folder: each video's people
+    reused from there when all are (the people step's time is then 0), else saved there."""
     from ..io.video import open_video
     from ..pipeline.stage12 import sync_bundle
-    from ..sync.config import SyncConfig
+    from ..sync.config import LandscapeConfig, SyncConfig
 
     load0 = os.getloadavg()[0]
     t0 = time.perf_counter()
     srcs = [open_video(p) for p in paths]
     names = [s.info.name for s in srcs]
     ref = names[0]
-    cue = find_people_cameras(srcs, grid, config, reference=ref)
+    cached = _cached_people(srcs, people_folder)
+    if cached is not None:
+        from ..cues.people_cue import cameras_from_people, moving_cameras
+
+        people, motion = cached
+        cue = cameras_from_people(people, [s.info for s in srcs], grid, config, ref,
+                                  failed=moving_cameras(motion, config))
+        cue = dataclasses.replace(cue, timings_s={**cue.timings_s, "people": 0.0}, background_motion_px=motion)
+    else:
+        cue = find_people_cameras(srcs, grid, config, reference=ref)
+        if people_folder is not None:
+            _save_people(cue, people_folder)
     cue_s = time.perf_counter() - t0
     final: dict[str, float | None] = {n: None for n in names}
     reasons = {n: cue.refused[n] for n in names if n in cue.refused}
     if len(cue.cameras) >= 2:
         bundle = cue.bundle({n: truth[n] for n in names})
-        sync = sync_bundle(bundle, SyncConfig(min_overlap_s=grid.min_overlap_s, range_s=grid.range_s), progress=False)
+        cfg = SyncConfig(landscape=LandscapeConfig(min_overlap_s=grid.min_overlap_s, range_s=grid.range_s))
+        sync = sync_bundle(bundle, cfg, progress=False)
         final.update(_relative(dict(sync.offsets_s), sync.reference, truth))
         for n, why in sync.unresolved_reason.items():
             reasons.setdefault(n, f"Stage 1/2: {why}")
@@ -172,17 +214,18 @@ def caliscope_cut_paths(data: Path, seed: int, max_cut: int = 12):
 
 def run_benchmark(data: Path, scenes=SCENES, grid: OffsetGrid = OffsetGrid(min_overlap_s=1.0),
                   config: PeopleCueConfig = PeopleCueConfig(), seed: int = 0, rrd_folder: Path | None = None,
-                  log=print) -> list[SceneRun]:
+                  people_folder: Path | None = None, log=print) -> list[SceneRun]:
     """Every scene in order; log(line) reports each as it ends."""
     runs = []
     for scene in scenes:
         if scene == "caliscope":
             with caliscope_cut_paths(data, seed) as (paths, truth, cuts):
                 log(f"caliscope: leading frames cut {cuts}")
-                run = run_scene(scene, paths, truth, grid, config, rrd_folder)
+                run = run_scene(scene, paths, truth, grid, config, rrd_folder,
+                                None if people_folder is None else Path(people_folder) / f"caliscope-seed{seed}")
         else:
             paths, truth = clip_scene_paths(data, scene)
-            run = run_scene(scene, paths, truth, grid, config, rrd_folder)
+            run = run_scene(scene, paths, truth, grid, config, rrd_folder, people_folder)
         runs.append(run)
         log(format_scene(run))
     return runs

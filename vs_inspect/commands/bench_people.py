@@ -27,6 +27,9 @@ def register(sub) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of caliscope's leading cuts (default: 0)")
     p.add_argument("--rrd", type=Path, default=None, metavar="DIR",
                    help="write each scene's people cue as a recording people-<scene>.rrd into DIR")
+    p.add_argument("--people", type=Path, default=None, metavar="DIR",
+                   help="reuse each video's people saved in DIR by an earlier run (saved there when missing): "
+                        "the people step's time is then 0")
     p.set_defaults(func=run)
 
 
@@ -35,7 +38,8 @@ def run(args: argparse.Namespace) -> int:
     if not data.is_dir():
         raise InputError(f"{data}: no data folder (give --data or set VS_INSPECT_DATA)")
     grid = OffsetGrid(min_overlap_s=args.min_overlap_s, range_s=args.range_s)
-    runs = run_benchmark(data, args.scenes, grid, seed=args.seed, rrd_folder=args.rrd, log=lambda s: print(s, flush=True))
+    runs = run_benchmark(data, args.scenes, grid, seed=args.seed, rrd_folder=args.rrd, people_folder=args.people,
+                         log=lambda s: print(s, flush=True))
     print()
     print(format_table(runs))
     return 0

@@ -119,23 +119,34 @@ def find_people_cameras(videos: Sequence, grid: OffsetGrid = OffsetGrid(), confi
     # 1. people per video
     people: dict[str, VideoPeople] = {}
     failed: dict[str, str] = {}
+    motions: dict[str, float] = {}
     for v, out in zip(videos, engine.map(_people_task, list(videos), shared=config.video, desc="people",
                                          unit="video", progress=progress, threads=True)):
         n = v.info.name
         if isinstance(out, TaskFailed):
             failed[n] = f"finding its people failed: {out.reason}"
             continue
-        people[n], motion = out
-        moving = (camera_motion or {}).get(n, "moving" if motion >= config.static_max_motion_px else "static")
-        if moving == "moving":
-            failed[n] = (f"a moving camera (its background moves {motion:.1f} px between frames): the people cue "
-                         f"fits one epipolar geometry per pair of static cameras")
+        people[n], motions[n] = out
+    failed.update(moving_cameras(motions, config, camera_motion))
     timings["people"] = time.perf_counter() - t0
 
     cue = cameras_from_people(people, [infos[n] for n in names], grid, config, reference, engine, progress, failed)
     return PeopleCue(cue.videos, cue.reference, cue.people, cue.pairs, cue.offsets_s, cue.cameras, cue.refused,
                      cue.tracks, cue.track_pairs, cue.points_world, cue.reprojection_px, cue.landmarks,
-                     {**timings, **cue.timings_s, "total": time.perf_counter() - t0})
+                     {**timings, **cue.timings_s, "total": time.perf_counter() - t0}, motions)
+
+
+def moving_cameras(background_motion_px: dict[str, float], config: PeopleCueConfig = PeopleCueConfig(),
+                   camera_motion: dict[str, str] | None = None) -> dict[str, str]:
+    """{video: why it is refused} of the moving cameras: those camera_motion says move, else those
+    whose background moves config.static_max_motion_px or more between frames."""
+    out = {}
+    for n, motion in background_motion_px.items():
+        moving = (camera_motion or {}).get(n, "moving" if motion >= config.static_max_motion_px else "static")
+        if moving == "moving":
+            out[n] = (f"a moving camera (its background moves {motion:.1f} px between frames): the people cue "
+                      f"fits one epipolar geometry per pair of static cameras")
+    return out
 
 
 def cameras_from_people(people: dict[str, VideoPeople], videos: Sequence[VideoInfo], grid: OffsetGrid = OffsetGrid(),

@@ -14,6 +14,7 @@ from __future__ import annotations
 import functools
 import io
 import math
+import threading
 import warnings
 import zipfile
 from dataclasses import dataclass
@@ -171,16 +172,20 @@ def merge_duplicates(poses: list[np.ndarray], windows: list[tuple[int, int, int,
     return FramePeople(P[kept], np.array([window_of[k] for k in kept], dtype=np.int64))
 
 
+_STARTING = threading.Lock()  # one detector starts at a time: each silences the process's stderr meanwhile
+
+
 class PeopleDetector:
     """BlazePose PoseLandmarker over a frame's windows (frame_windows). Starting it writes native
-    notes to stderr, silenced meanwhile; use it from one thread; close() (or a with block) frees it."""
+    notes to stderr, silenced meanwhile (one start at a time, so that stderr comes back); use each
+    detector from one thread; close() (or a with block) frees it."""
 
     def __init__(self, cfg: DetectorConfig = DetectorConfig()):
         self.cfg = cfg
         # its protobuf 4 code calls a deprecated protobuf function (see cues/people.start_pose)
         warnings.filterwarnings("ignore", message="SymbolDatabase.GetPrototype", category=UserWarning)
         model = pose_task_bundle()
-        with _quiet_native_logs():
+        with _STARTING, _quiet_native_logs():
             from mediapipe.tasks.python import BaseOptions, vision
 
             opts = vision.PoseLandmarkerOptions(
