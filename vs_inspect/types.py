@@ -727,6 +727,7 @@ class PeoplePair:
     F_ab: np.ndarray | None = None  # (3,3) x_aᵀ F_ab x_b = 0, px (refined when accepted)
     best_grid_offset_s: float | None = None  # the best Δ on the candidate grid, s
     contrast: float | None = None  # (median - best) / median of cost
+    indistinct_s: tuple[float, float] | None = None  # (lo, hi) Δ around the best that fit about as well, s
     second_offset_s: float | None = None  # the next-best distinct Δ of evidence, s
     margin: float | None = None  # prominence of the best peak of evidence / that of the next distinct peak
     rival_offset_s: float | None = None  # another association's best Δ, when it decided, s

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numba as nb
 import numpy as np
 from scipy.optimize import least_squares
@@ -93,6 +94,13 @@ class PeoplePairConfig:
     min_contrast: float = 0.3
     """The best shift's mean cost must lie this share below the landscape's median, else the
     landscape is flat (people who hardly move fit one geometry at every shift)."""
+    max_uncertainty_frames: float = 1.0
+    """Refused when shifts more than this many frames (of the slower video) from the best fit
+    about as well (the paired per-frame cost difference under t_min): the people move too
+    slowly to time them this finely."""
+    t_min: float = 2.0
+    """A shift fits worse than the best when the paired difference of their per-frame costs has a
+    t-statistic of at least this."""
     min_margin: float = 1.5
     """The best peak of evidence must be this many times as prominent as the next distinct one
     (and as high as another candidate's of other people at another shift), else refused."""
@@ -110,6 +118,8 @@ class PeoplePairConfig:
     """soft L1 scale of the continuous refinement, in noise units."""
     refine_max_points: int = 1500
     """Inlier correspondences (evenly spread) the continuous refinement uses."""
+    seed: int = 0
+    """Seed of OpenCV's random generator for this pair's RANSAC fits."""
 
     def __post_init__(self) -> None:
         subset_mirror(self.landmarks)  # ValueError when not closed under the mirror
@@ -408,6 +418,8 @@ class _Fit:
     inliers: int
     points: int  # correspondences
     mirrored: dict  # (i, j) -> (Q,) bool, each frame's labelling
+    frames: np.ndarray  # (Q,) frames of a the shift pairs with b's moments
+    frame_cost: np.ndarray  # (K,Q) each pairing's mean cost in each frame (NaN: no correspondence)
 
 
 def _rows(xa, xb, pairs, mirror, unit):
@@ -415,10 +427,10 @@ def _rows(xa, xb, pairs, mirror, unit):
     return [(xa[i], xb[j], xb[j][:, mirror], unit[i, j]) for i, j in pairs]
 
 
-def _labels(F: np.ndarray, rows) -> tuple[dict, float, int, int]:
+def _labels(F: np.ndarray, rows) -> tuple[dict, float, int, int, np.ndarray]:
     """Each frame's better labelling under F: ({k: (Q,) bool mirrored}, total truncated cost,
-    inliers, correspondences). A correspondence on the minority side of the epipole (_side_of)
-    costs as much as a misfit."""
+    inliers, correspondences, (K,Q) each pairing's mean cost per frame (NaN: none)). A
+    correspondence on the minority side of the epipole (_side_of) costs as much as a misfit."""
     terms = []
     for xa, xb, xm, u in rows:
         per = []
@@ -430,6 +442,7 @@ def _labels(F: np.ndarray, rows) -> tuple[dict, float, int, int]:
     votes = sum(float(np.where(r2 < 1, sd, 0.0).sum()) for per in terms for r2, sd in per)
     majority = 1.0 if votes >= 0 else -1.0
     out, total, inl, n = {}, 0.0, 0, 0
+    per_frame = []
     for k, per in enumerate(terms):
         costs = []
         for r2, sd in per:
@@ -441,10 +454,13 @@ def _labels(F: np.ndarray, rows) -> tuple[dict, float, int, int]:
         miss_m = costs[1][0] + (costs[0][1] - costs[1][1]).clip(0)
         m = miss_m < miss_d
         out[k] = m
-        total += float(np.where(m, costs[1][0], costs[0][0]).sum())
-        n += int(np.where(m, costs[1][1], costs[0][1]).sum())
+        c_sum, c_n = np.where(m, costs[1][0], costs[0][0]), np.where(m, costs[1][1], costs[0][1])
+        total += float(c_sum.sum())
+        n += int(c_n.sum())
         inl += int(np.where(m, costs[1][2], costs[0][2]).sum())
-    return out, total, inl, n
+        with np.errstate(invalid="ignore", divide="ignore"):
+            per_frame.append(np.where(c_n > 0, c_sum / c_n, np.nan))
+    return out, total, inl, n, np.array(per_frame).reshape(len(terms), -1)
 
 
 def _chosen(rows, labels: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -459,7 +475,7 @@ def _chosen(rows, labels: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return np.concatenate(xs), np.concatenate(ys), np.concatenate(us)
 
 
-def _fit_held(xa, xb, assoc: _Association, starts: list, mirror, unit, cfg: PeoplePairConfig) -> _Fit | None:
+def _fit_held(frames, xa, xb, assoc: _Association, starts: list, mirror, unit, cfg: PeoplePairConfig) -> _Fit | None:
     """The association at one shift: from each start F (None: a fresh RANSAC fit), IRLS, each
     frame's labelling under it (IRLS again when some frames changed labelling); the lowest cost."""
     rows = _rows(xa, xb, assoc.pairs, mirror, unit)
@@ -475,13 +491,13 @@ def _fit_held(xa, xb, assoc: _Association, starts: list, mirror, unit, cfg: Peop
             if F is None:
                 continue
         F = fundamental_irls(x_a, x_b, F, u, cfg.irls_iterations)
-        labels, total, inl, n = _labels(F, rows)
+        labels, total, inl, n, per_frame = _labels(F, rows)
         if any((labels[k] != init[k]).any() for k in labels):  # some frames fit better the other way
             ya, yb, yu = _chosen(rows, labels)
             if len(ya) >= 8:
                 F = fundamental_irls(ya, yb, F, yu, cfg.irls_iterations)
-                labels, total, inl, n = _labels(F, rows)
-        fit = _Fit(F, total / max(n, 1), inl, n, {p: labels[k] for k, p in enumerate(assoc.pairs)})
+                labels, total, inl, n, per_frame = _labels(F, rows)
+        fit = _Fit(F, total / max(n, 1), inl, n, {p: labels[k] for k, p in enumerate(assoc.pairs)}, frames, per_frame)
         if best is None or fit.cost < best.cost:
             best = fit
     return best
@@ -498,9 +514,9 @@ def _landscape(a: _Side, b: _Side, offsets_s: np.ndarray, assoc: _Association, m
     for sweep in (range(i0, len(offsets_s), every), range(i0 - every, -1, -every)):
         F = assoc.F_ab
         for n, i in enumerate(sweep):
-            _, xa, xb = _moments(a, b, float(offsets_s[i]), None)
+            frames, xa, xb = _moments(a, b, float(offsets_s[i]), None)
             starts = [F] + ([None] if n % cfg.fresh_every == 0 else [])
-            fit = _fit_held(xa, xb, assoc, starts, mirror, unit, cfg)
+            fit = _fit_held(frames, xa, xb, assoc, starts, mirror, unit, cfg)
             out[i] = fit
             if fit is not None:
                 F = fit.F_ab
@@ -516,6 +532,31 @@ def _evidence(fits: list[_Fit | None]) -> np.ndarray:
         return np.zeros(len(fits))
     median = float(np.nanmedian(cost))
     return np.where(np.isfinite(cost), (median - np.nan_to_num(cost)) * np.sqrt(n), 0.0)
+
+
+def _indistinct_span(offsets_s: np.ndarray, fits: list[_Fit | None], best: int, t_min: float) -> tuple[float, float]:
+    """(lo, hi) Δ around the best shift over which the cost is not significantly higher than the
+    best's: walking outwards, a shift is indistinct while the paired difference of the pairings'
+    per-frame costs (the same frames of a, at both shifts) has a t-statistic under t_min."""
+    ref = fits[best]
+    span = [float(offsets_s[best]), float(offsets_s[best])]
+    for side, step in ((0, -1), (1, 1)):
+        j = best + step
+        while 0 <= j < len(fits):
+            f = fits[j]
+            if f is None:
+                break
+            common, ia, ib = np.intersect1d(ref.frames, f.frames, return_indices=True)
+            d = (f.frame_cost[:, ib] - ref.frame_cost[:, ia]).ravel()
+            d = d[np.isfinite(d)]
+            if len(d) < 2:
+                break
+            t = float(d.mean() / max(d.std(ddof=1) / np.sqrt(len(d)), 1e-12))
+            if t >= t_min:
+                break
+            span[side] = float(offsets_s[j])
+            j += step
+    return span[0], span[1]
 
 
 def _rival_peak(offsets_s: np.ndarray, evidence: np.ndarray, best: int, distinct_s: float) -> tuple[int | None, float]:
@@ -665,6 +706,7 @@ def estimate_people_pair(a: str, times_a_s: np.ndarray, xy_a: np.ndarray, b: str
             raise ValueError(f"{n}: people must be (P,{len(t)},{L},2), got {xy.shape}")
     offsets_s = np.asarray(offsets_s, np.float64)
     mirror = subset_mirror(cfg.landmarks)
+    cv2.setRNGSeed(cfg.seed)  # OpenCV's RANSAC draws from its global generator: the same pair, the same answer
     A, B = _Side.of(times_a_s, xy_a), _Side.of(times_b_s, xy_b)
     unit = _noise_px(A, B, cfg)
     noise = float(np.median(unit)) if unit.size else cfg.min_noise_px
@@ -711,6 +753,10 @@ def estimate_people_pair(a: str, times_a_s: np.ndarray, xy_a: np.ndarray, b: str
                for c in cands):
             cands.append(found[k][0])
 
+    if not cands:
+        return refused("no person pairing fits one epipolar geometry at a shift that leaves the videos enough "
+                       "common time", **kw)
+
     # 2. each candidate's landscape
     sketched = []
     for c in cands:
@@ -746,6 +792,13 @@ def estimate_people_pair(a: str, times_a_s: np.ndarray, xy_a: np.ndarray, b: str
         return refused(f"flat landscape: the best shift's cost is only {100 * contrast:.0f}% below the median "
                        f"(at least {100 * cfg.min_contrast:.0f}% needed): the people move too little to time them",
                        **kw)
+    lo, hi = _indistinct_span(offsets_s, land, best_i, cfg.t_min)
+    frame_s = max(_step(times_a_s), _step(times_b_s))
+    kw.update(indistinct_s=(lo, hi))
+    if max(offsets_s[best_i] - lo, hi - offsets_s[best_i]) > cfg.max_uncertainty_frames * frame_s + EPS_S:
+        return refused(f"uncertain shift: from {lo:+.2f} to {hi:+.2f} s the people fit about as well as at "
+                       f"{offsets_s[best_i]:+.2f} s (more than {cfg.max_uncertainty_frames:g} frame either way): "
+                       f"they move too slowly to time them within a frame", **kw)
     second, margin = _rival_peak(offsets_s, evidence, best_i, cfg.distinct_s)
     if second is not None:
         kw.update(second_offset_s=float(offsets_s[second]), margin=float(margin))
