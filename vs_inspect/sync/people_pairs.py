@@ -88,16 +88,14 @@ class PeoplePairConfig:
     min_inliers: int = 150
     """A pair is refused with fewer inlier correspondences at its best shift."""
     min_support_fraction: float = 0.4
-    """Shifts that leave the videos fewer common frames than this share of the median over the
-    candidate shifts are neither candidates nor rivals (Stage 1's rule: a fit over few frames is
-    good by chance)."""
+    """Shifts with fewer common frames than this share of the median shift's are neither chosen
+    nor rivals (a fit over few frames is good by chance)."""
     min_contrast: float = 0.3
     """The best shift's mean cost must lie this share below the landscape's median, else the
     landscape is flat (people who hardly move fit one geometry at every shift)."""
     max_uncertainty_frames: float = 1.0
     """Refused when shifts more than this many frames (of the slower video) from the best fit
-    about as well (the paired per-frame cost difference under t_min): the people move too
-    slowly to time them this finely."""
+    about as well (their per-frame costs not worse by t_min)."""
     t_min: float = 2.0
     """A shift fits worse than the best when the paired difference of their per-frame costs has a
     t-statistic of at least this."""
