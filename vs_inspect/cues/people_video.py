@@ -2,10 +2,10 @@
 
 Every discover_s (and on the first frame) the detector looks over the whole frame and its
 windows (cues/people_detect.frame_windows) for people; on every frame each person followed is
-looked for again in a square crop around where they last were, where the detector sees them
-large (a person a tenth of the frame high is found in a crop far more often than in the whole
-frame). The poses of a frame are merged (one per person) and linked to the tracks
-(cues/people_tracking.PeopleTracker).
+looked for again in a square crop around where they last were, where the detector's 224 px
+input sees them large. The poses of a frame are merged (one per person) and linked to the tracks
+(cues/people_tracking.PeopleTracker). A few pairs of successive frames also measure how much the
+background moves (cues/motion.py), which tells a static camera from a moving one.
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ import numpy as np
 
 from ..geometry.skeleton import person_scale_px, pose_distance
 from ..io.video import downscale
-from .motion import background_motion
 from ..types import VideoPeople
+from .motion import background_motion
 from .people_detect import DetectorConfig, PeopleDetector, frame_windows, merge_duplicates
 from .people_tracking import PeopleTracker, TrackingConfig, seen_xy
 
