@@ -35,6 +35,8 @@ EXAMPLES: dict[str, list[tuple[str, str]]] = {
                        "precision and recall of the rendered scene's track pairs, then its offsets"),
                       ("vs-inspect bench-pairing demo --geometric triangles",
                        "the demo's scene, geometric pairs by triangle closure")],
+    "bench-people": [("vs-inspect bench-people --scenes pan160906 --rrd /tmp/people",
+                      "people as correspondences on one scene, its recording kept in /tmp/people")],
     "bench-recording": [("vs-inspect bench-recording demo", "the demo scene's recordings: size and write time"),
                         ("vs-inspect bench-recording budget --out /tmp/rrd",
                          "4 x 10 s 720p videos with every frame and mask recorded, files kept in /tmp/rrd")],
