@@ -42,6 +42,8 @@ EXAMPLES: dict[str, list[tuple[str, str]]] = {
     "bench drift": [("vs-inspect bench drift --seeds 5",
                      "--drift against constant offsets on cue scenes whose clocks drift ±200 ppm"),
                     ("vs-inspect bench drift --drift-ppm 500 --seconds 60", "larger drift on longer scenes")],
+    "bench people": [("vs-inspect bench people --scenes pan160906 --rrd /tmp/people",
+                      "people as correspondences on one scene, its recording kept in /tmp/people")],
     "bench recording": [("vs-inspect bench recording demo", "the demo scene's recordings: size and write time"),
                         ("vs-inspect bench recording budget --out /tmp/rrd",
                          "4 x 10 s 720p videos with every frame and mask recorded, files kept in /tmp/rrd")],

@@ -26,7 +26,7 @@ def register(sub) -> None:
     benches = p.add_subparsers(dest="bench", metavar="BENCHMARK", required=True)
     for name, add in (("accuracy", _accuracy), ("stage0", _stage0), ("timing", _timing),
                       ("energy", _energy), ("scale", _scale), ("drone", _drone), ("drift", _drift),
-                      ("recording", _recording), ("interrupts", _interrupts)):
+                      ("people", _people), ("recording", _recording), ("interrupts", _interrupts)):
         add(benches, name)
         _help.apply(benches.choices[name], f"bench {name}")
 
@@ -333,6 +333,43 @@ def _run_drone(args) -> int:
 
     bundle, drift = load_drone_bundle(args.path)
     print(format_table(run_drone_bench(bundle, drift, workers=args.workers), bundle))
+    return 0
+
+
+def _people(benches, name):
+    from ..bench.people import SCENES
+
+    q = _parser(benches, name, "people as cross-view correspondences: cameras and offsets from video alone",
+                "Finds and follows the people of every video (BlazePose), pairs them up across videos "
+                "with each pair's epipolar geometry and time shift, makes cameras from those pairs (no "
+                "background cameras), then runs Stage 1 + 2 on the landmarks; prints each video's error "
+                "against the truth, the reason of every null and the seconds spent, beside the "
+                "VisualSync paper's numbers.", _run_people)
+    q.add_argument("--scenes", nargs="+", default=list(SCENES), choices=list(SCENES),
+                   help=f"scenes (default: {' '.join(SCENES)})")
+    q.add_argument("--data", type=Path, default=None, help=DATA_HELP)
+    q.add_argument("--range-s", type=float, default=None, help="search only |Δ| <= this many seconds")
+    q.add_argument("--min-overlap-s", type=float, default=1.0, help="least common time of two videos (s)")
+    q.add_argument("--seed", type=int, default=0, help="seed of caliscope's leading cuts")
+    q.add_argument("--rrd", type=Path, default=None, metavar="DIR",
+                   help="write each scene's people cue as a recording people-<scene>.rrd into DIR")
+    q.add_argument("--people", type=Path, default=None, metavar="DIR",
+                   help="reuse each video's people saved in DIR by an earlier run (saved there when "
+                        "missing): the people step's time is then 0")
+
+
+def _run_people(args) -> int:
+    from ..bench.people import format_table, run_benchmark
+    from ..geometry.offsets import OffsetGrid
+
+    data = data_folder(args)
+    if not data.is_dir():
+        raise InputError(f"{data}: no data folder (give --data or set VS_INSPECT_DATA)")
+    grid = OffsetGrid(min_overlap_s=args.min_overlap_s, range_s=args.range_s)
+    runs = run_benchmark(data, args.scenes, grid, seed=args.seed, rrd_folder=args.rrd,
+                         people_folder=args.people, log=lambda s: print(s, flush=True))
+    print()
+    print(format_table(runs))
     return 0
 
 
