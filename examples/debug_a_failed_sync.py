@@ -35,7 +35,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from scipy.spatial.transform import Rotation  # noqa: E402
 
 from vs_inspect.report import figures  # noqa: E402
-from vs_inspect.report.figures import fmt_px2  # noqa: E402
+from vs_inspect.report.figures import fmt_px  # noqa: E402
 from vs_inspect.report.build import render_report  # noqa: E402
 from vs_inspect.analysis.report_data import report_data_from_recording  # noqa: E402
 from vs_inspect.pipeline import run  # noqa: E402
@@ -121,12 +121,12 @@ def main() -> int:
         print(f"   {p.key}: {'accepted' if p.accepted else 'rejected'}{err} — {p.reason}")
     e = posed.epipolar
     if e is not None:
-        print(f"   epipolar panel {e.a}–{e.b}: median Sampson error {fmt_px2(e.chosen.median_sampson_px2)} px² "
-              f"at the chosen Δ vs {fmt_px2(e.wrong.median_sampson_px2)} px² at a wrong one "
-              f"(a healthy pair reaches a few px²) -> {wp_png}")
+        print(f"   epipolar panel {e.a}–{e.b}: median distance to the lines {fmt_px(e.chosen.median_distance_px)} px "
+              f"at the chosen Δ vs {fmt_px(e.wrong.median_distance_px)} px at a wrong one "
+              f"(a healthy pair reaches a pixel or two) -> {wp_png}")
     good = data.epipolar
     if good is not None:
-        print(f"   for comparison, healthy pair {good.a}–{good.b}: {fmt_px2(good.chosen.median_sampson_px2)} px² "
+        print(f"   for comparison, healthy pair {good.a}–{good.b}: {fmt_px(good.chosen.median_distance_px)} px "
               f"at the chosen Δ")
     print("   in the recording: pairs/<a>__<b>/landscape and .../epipolar of its pairs; "
           "world/cameras shows the frustum turned away")
@@ -136,7 +136,7 @@ def main() -> int:
     if p is not None:
         print(f"   {key}: {'accepted' if p.accepted else 'rejected'} — {p.reason}")
     if allwrong.epipolar is not None:
-        print(f"   its epipolar panel: {fmt_px2(allwrong.epipolar.chosen.median_sampson_px2)} px² at "
+        print(f"   its epipolar panel: {fmt_px(allwrong.epipolar.chosen.median_distance_px)} px at "
               f"the 'best' Δ -> {aw_png}")
     print("   in the report: its landscape is framed vermillion (rejected), flat; the graph shows a dashed edge")
     print(f"\n3. {BLIND} never sees the motion:")

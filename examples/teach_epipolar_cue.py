@@ -11,8 +11,9 @@ Writes, into --out:
   step5_ambiguity.png  one point at one moment is not enough: a's track crosses b's line twice,
                        so two offsets fit; averaging over all points and frames leaves one minimum
   step6_sweep.gif      an animated sweep of Δ: a's points slide along their tracks and meet b's
-                       lines at the true offset, while the energy E(Δ) is traced (also
-                       step6_sweep.mp4 when ffmpeg is on PATH)
+                       lines at the true offset, where the animation pauses, while the energy
+                       E(Δ) is traced (also step6_sweep.mp4 when ffmpeg is on PATH)
+  steps.json           the one moment of b every step shows, and the offsets of the sweep's frames
   report/              the standard report (3D scene, landscape, graph, timeline, epipolar panel)
   teach.rrd            the recording: open it with `rerun teach.rrd` and scrub the `offset_ms`
                        timeline under pairs/cam0__cam1/epipolar to watch the lines meet the points
@@ -25,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
 import os
 import sys
 import time
@@ -51,7 +53,10 @@ from vs_inspect.analysis.report_data import report_data_from_run  # noqa: E402
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene  # noqa: E402
 from vs_inspect.types import RunInputs  # noqa: E402
 
-ACCEPT, REJECT, B_COLOR = "#0072B2", "#D55E00", "#E69F00"  # Okabe-Ito: colour-blind safe
+from vs_inspect import palette  # noqa: E402  (the recording's and the report's colours)
+
+ACCEPT, REJECT = palette.hex_of(palette.ACCEPTED), palette.hex_of(palette.REJECTED)  # right / wrong Δ
+A_COLOR, B_COLOR = (palette.hex_of(c) for c in palette.CAMERA[:2])  # the two cameras
 SCENE = CueSceneConfig(cameras=2, moving=0, variable_rate=0, seconds=6.0, max_offset_s=1.5,
                        noise_px=0.5, wrong_fraction=0.0, pose_error_deg=0.0, points_per_object=12,
                        pairs_per_view_pair=300, no_match_pairs=0, all_wrong_pair=False,
@@ -67,10 +72,11 @@ def sample(xy: np.ndarray, ts: np.ndarray, q: float) -> np.ndarray:
     return xy[:, k] + w * (xy[:, k + 1] - xy[:, k])
 
 
-def px2(x: float) -> str:
-    """A squared pixel error for people (the report's format)."""
-    from vs_inspect.report.figures import fmt_px2
-    return fmt_px2(x)
+def px(sampson_px2: float) -> str:
+    """A Sampson error as the distance it stands for (its square root), px, for people (the
+    report's format)."""
+    from vs_inspect.report.figures import fmt_px
+    return fmt_px(float(np.sqrt(sampson_px2)) if np.isfinite(sampson_px2) else float("nan"))
 
 
 def _frustum(ax, K: np.ndarray, T: np.ndarray, w: int, h: int, depth: float, color: str, name: str):
@@ -107,7 +113,7 @@ def step4_plane(path: Path, bundle, a: str, b: str, ia: int, ib: int, t_b: float
     fig = plt.figure(figsize=(20, 6.8), dpi=100, layout="constrained")
     gs = fig.add_gridspec(1, 3, width_ratios=[1.35, 1, 1])
     ax3 = fig.add_subplot(gs[0], projection="3d")
-    _frustum(ax3, Ka, Ta, va.width, va.height, 0.25 * base, ACCEPT, a)
+    _frustum(ax3, Ka, Ta, va.width, va.height, 0.25 * base, A_COLOR, a)
     _frustum(ax3, Kb, Tb, vb.width, vb.height, 0.25 * base, B_COLOR, b)
     ok = np.isfinite(path3d[:, 0])
     ax3.plot(*path3d[ok].T, color="#333333", lw=2.0, label="the point's path")
@@ -120,7 +126,7 @@ def step4_plane(path: Path, bundle, a: str, b: str, ia: int, ib: int, t_b: float
     quad = np.array([Ca + s0 * u - 0.15 * height * v, Ca + s1 * u - 0.15 * height * v,
                      Ca + s1 * u + height * v, Ca + s0 * u + height * v])
     ax3.add_collection3d(Poly3DCollection([quad], alpha=0.28, facecolor="#56B4E9", edgecolor="#0072B2"))
-    for C, col in ((Ca, ACCEPT), (Cb, B_COLOR)):
+    for C, col in ((Ca, A_COLOR), (Cb, B_COLOR)):
         ax3.plot(*zip(C, X), color=col, lw=1.8, ls="--")
     ax3.plot(*zip(Ca, Cb), color="black", lw=1.5, label="baseline (through both epipoles)")
     ax3.scatter(*X, s=60, color="black", depthshade=False, label=f"X at global time of {b}'s t = {t_b:.2f} s")
@@ -144,7 +150,7 @@ def step4_plane(path: Path, bundle, a: str, b: str, ia: int, ib: int, t_b: float
     e_b = project(Kb, Tb, Ca)
     line_b = epipolar_lines(F_ab.T, x_a)
     axb.plot(path_b[:, 0], path_b[:, 1], color="#bbbbbb", lw=1.5, label=f"{b}'s track over time")
-    axb.axline((0.0, -line_b[2] / line_b[1]), slope=-line_b[0] / line_b[1], color=ACCEPT, lw=2,
+    axb.axline((0.0, -line_b[2] / line_b[1]), slope=-line_b[0] / line_b[1], color=A_COLOR, lw=2,
                label=f"line in {b} of {a}'s point at the same moment")
     axb.scatter(*x_b, s=110, color=B_COLOR, edgecolors="black", zorder=5, label=f"{b}'s point at t")
     inside = np.all(np.isfinite(e_b)) and 0 <= e_b[0] <= vb.width and 0 <= e_b[1] <= vb.height
@@ -163,7 +169,7 @@ def step4_plane(path: Path, bundle, a: str, b: str, ia: int, ib: int, t_b: float
     axa.plot(tr[:, 0], tr[:, 1], color="#bbbbbb", lw=1.5, label=f"{a}'s track over time")
     axa.axline((0.0, -line_a[2] / line_a[1]), slope=-line_a[0] / line_a[1], color=B_COLOR, lw=2,
                label=f"line in {a} of {b}'s point")
-    axa.scatter(*x_a, s=110, color=ACCEPT, edgecolors="black", zorder=5, label=f"{a}'s point at t + Δ")
+    axa.scatter(*x_a, s=110, color=A_COLOR, edgecolors="black", zorder=5, label=f"{a}'s point at t + Δ")
     axa.set(xlim=(0, va.width), ylim=(va.height, 0), xlabel="x [px]", ylabel="y [px]")
     axa.set_aspect("equal")
     axa.legend(loc="lower left", fontsize=8.5)
@@ -185,14 +191,21 @@ def _crossings(line: np.ndarray, xy: np.ndarray, ts: np.ndarray) -> np.ndarray:
     return ts[k] + w * (ts[k + 1] - ts[k])
 
 
-def step5_ambiguity(path: Path, bundle, a: str, b: str, F_ab: np.ndarray, delta: float, land) -> Path:
-    """A matched point whose track in a crosses b's line twice: two Δ fit that one observation."""
+def step5_ambiguity(path: Path, bundle, a: str, b: str, F_ab: np.ndarray, delta: float, land,
+                    k_ref: int) -> tuple[Path, int | None]:
+    """A matched point whose track in a crosses b's line twice: two Δ fit that one observation.
+    Looked for at the reference moment (b's frame k_ref), else at the nearest frame of b that has
+    one. Returns (path, the frame of b shown, None when no track crosses its line twice)."""
     va, vb = bundle.video(a), bundle.video(b)
     xa, xb = bundle.tracks[a].xy, bundle.tracks[b].xy
     lo, hi = float(np.nanmin(land.offsets_s)), float(np.nanmax(land.offsets_s))
     best = None
-    for i, j in bundle.pair(a, b).index:
-        for k in range(0, vb.num_frames, 4):
+    # the reference moment first, then ever farther from it
+    order = sorted(range(0, vb.num_frames), key=lambda k: (abs(k - k_ref), k))
+    for k in order:
+        if best is not None and best[0] > 0:
+            break  # the nearest moment with a clean double crossing
+        for i, j in bundle.pair(a, b).index:
             if not np.isfinite(xb[j, k, 0]):
                 continue
             line = F_ab @ np.array([xb[j, k, 0], xb[j, k, 1], 1.0])
@@ -228,7 +241,8 @@ def step5_ambiguity(path: Path, bundle, a: str, b: str, F_ab: np.ndarray, delta:
             ax.scatter(*p, s=200, facecolors="none", edgecolors=ACCEPT if true else REJECT, lw=2.5,
                        zorder=5)
             ax.annotate(f"Δ = {d:+.2f} s" + (" (true)" if true else " (also fits!)"), p,
-                        xytext=(12, 12 if n % 2 else -18), textcoords="offset points", fontsize=10,
+                        xytext=(14, 14) if n % 2 else (-14, -16), ha="left" if n % 2 else "right",
+                        va="bottom" if n % 2 else "top", textcoords="offset points", fontsize=10,
                         color=ACCEPT if true else REJECT, fontweight="bold")
         pad = 60
         ax.set(xlim=(max(0, np.nanmin(tr[:, 0]) - pad), min(va.width, np.nanmax(tr[:, 0]) + pad)),
@@ -236,24 +250,26 @@ def step5_ambiguity(path: Path, bundle, a: str, b: str, F_ab: np.ndarray, delta:
                xlabel="x [px]", ylabel="y [px]")
         ax.set_aspect("equal")
         ax.legend(loc="lower left", fontsize=9)
-        ax.set_title(f"one matched point, one moment: {a}'s track crosses {b}'s line "
+        when = ("the moment of steps 2, 4 and 6" if k == k_ref else
+                f"the moment nearest steps 2, 4 and 6 ({float(vb.timestamps_s[k_ref]):.2f} s) with such a track")
+        ax.set_title(f"one matched point at t = {t_b:.2f} s, {when}:\n{a}'s track crosses {b}'s line "
                      f"{len(ds)} times", fontsize=11)
         # the error of this one observation against Δ, and the energy over all of them
         grid = np.union1d(land.offsets_s, ds)  # the crossings themselves too: exact zeros
         x_b = xb[j, k]
         one = np.array([epipolar_residual(F_ab, sample(tr[None], va.timestamps_s, t_b + d)[0], x_b,
                                           "sampson") for d in grid], float)
-        floor = 1e-3  # px²: the log axis shows the zeros at the crossings as this floor
-        ax2.plot(grid, np.maximum(one, floor), color=REJECT, lw=1.4,
-                 label="this one observation: Sampson error")
+        floor = 1e-2  # px: the log axis shows the zeros at the crossings as this floor
+        ax2.plot(grid, np.maximum(np.sqrt(one), floor), color=REJECT, lw=1.4,
+                 label="this one observation: its distance from the line (Sampson)")
         ax2.set_yscale("log")
         ax2.set_ylim(bottom=floor / 2)
-        ax2.set_ylabel("Sampson error of one observation [px²]", color=REJECT)
+        ax2.set_ylabel("distance of one observation from its line [px]", color=REJECT)
         for d in ds:
             ax2.axvline(d, color=ACCEPT if abs(d - delta) < 0.05 else REJECT, ls=":", lw=1.5)
         tw = ax2.twinx()
-        tw.plot(land.offsets_s, land.energy, color=ACCEPT, lw=2, label="E(Δ): all points, all frames")
-        tw.set_ylabel("energy over all observations", color=ACCEPT)
+        tw.plot(land.offsets_s, land.energy, color=A_COLOR, lw=2, label="E(Δ): all points, all frames")
+        tw.set_ylabel("energy over all observations", color=A_COLOR)
         ax2.axvline(delta, color="black", ls="--", lw=1.2)
         ax2.set_xlabel(f"Δ = offset({b}) − offset({a}) [s]")
         h1, l1 = ax2.get_legend_handles_labels()
@@ -265,23 +281,28 @@ def step5_ambiguity(path: Path, bundle, a: str, b: str, F_ab: np.ndarray, delta:
                  "than once", fontsize=12)
     fig.savefig(path)
     plt.close(fig)
-    return path
+    return path, (None if best is None else int(best[3]))
 
 
-def step6_sweep(path: Path, bundle, a: str, b: str, F_ab: np.ndarray, delta: float, land,
-                frames: int = 33) -> list[Path]:
-    """An animation: Δ sweeps across the true offset; b's lines stay, a's points slide."""
+FRAME_MS = 160  # the sweep's frames, ms each
+PAUSE_MS = 2400  # how long the sweep rests at the true Δ
+
+
+def step6_sweep(path: Path, bundle, a: str, b: str, F_ab: np.ndarray, delta: float, land, k: int,
+                frames: int = 33) -> tuple[list[Path], list[float], list[int]]:
+    """An animation: Δ sweeps across the true offset (one of its frames exactly), where it rests
+    PAUSE_MS; b's lines (its points at the reference moment, frame k) stay, a's points slide.
+    Returns (files written, the Δ of each frame, each frame's duration in ms)."""
     import shutil
 
     va, vb = bundle.video(a), bundle.video(b)
     xa, xb = bundle.tracks[a].xy, bundle.tracks[b].xy
     idx = bundle.pair(a, b).index
-    k = int(np.argmax(np.isfinite(xb[idx[:, 1], :, 0]).sum(0)))  # b's frame with most points
     t_b = float(vb.timestamps_s[k])
     seen = np.flatnonzero(np.isfinite(xb[idx[:, 1], k, 0]))
     pick = idx[seen[np.linspace(0, len(seen) - 1, min(12, len(seen))).round().astype(int)]]
     lines = epipolar_lines(F_ab, xb[pick[:, 1], k])
-    deltas = np.linspace(delta - 0.8, delta + 0.8, frames)
+    deltas = delta + np.linspace(-0.8, 0.8, frames | 1)  # odd: the middle frame is the true Δ
     colors = plt.get_cmap("tab20")(np.arange(len(pick)) % 20)
 
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(13, 4.8), dpi=80, layout="constrained",
@@ -311,8 +332,8 @@ def step6_sweep(path: Path, bundle, a: str, b: str, F_ab: np.ndarray, delta: flo
         near = abs(d - delta) < 0.5 * (deltas[1] - deltas[0])
         cursor.set_xdata([d, d])
         cursor.set_color(ACCEPT if near else REJECT)
-        title.set_text(f"Δ = {d:+.3f} s: median Sampson error {px2(float(np.nanmedian(err)))} px²"
-                       + ("  — on the lines" if near else ""))
+        title.set_text(f"Δ = {d:+.3f} s: median distance to the lines {px(float(np.nanmedian(err)))} px"
+                       + ("  — the true Δ: on the lines" if near else ""))
         title.set_color(ACCEPT if near else "black")
         return dots, cursor, title
 
@@ -326,20 +347,24 @@ def step6_sweep(path: Path, bundle, a: str, b: str, F_ab: np.ndarray, delta: flo
         draw(n)
         fig.canvas.draw()
         images.append(np.asarray(fig.canvas.buffer_rgba())[..., :3].copy())
+    pause = int(np.argmin(np.abs(deltas - delta)))
+    durations = [PAUSE_MS if n == pause else FRAME_MS for n in range(len(deltas))]
     frames_pil = [Image.fromarray(im) for im in images]
-    frames_pil[0].save(path, save_all=True, append_images=frames_pil[1:], duration=160, loop=0)
+    frames_pil[0].save(path, save_all=True, append_images=frames_pil[1:], duration=durations, loop=0)
     written = [path]
     if shutil.which("ffmpeg"):
         import subprocess
         h, w = images[0].shape[:2]
         mp4 = path.with_suffix(".mp4")
+        fps = round(1000 / FRAME_MS)
+        repeats = [max(1, round(d / FRAME_MS)) for d in durations]  # the pause as the same frame again
         cmd = ["ffmpeg", "-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgb24",
-               "-s", f"{w}x{h}", "-r", "6", "-i", "-", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+               "-s", f"{w}x{h}", "-r", str(fps), "-i", "-", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2",
                "-c:v", "libx264", "-pix_fmt", "yuv420p", str(mp4)]
-        subprocess.run(cmd, input=b"".join(im.tobytes() for im in images), check=True)
+        subprocess.run(cmd, input=b"".join(im.tobytes() * r for im, r in zip(images, repeats)), check=True)
         written.append(mp4)
     plt.close(fig)
-    return written
+    return written, [float(d) for d in deltas], durations
 
 
 def main() -> int:
@@ -378,7 +403,7 @@ def main() -> int:
 
     # ---- step 1: epipolar geometry with a moving point ----
     fig, axes = plt.subplots(1, 2, figsize=(14, 6), dpi=100, layout="constrained")
-    for ax, v, tr, col in ((axes[0], va, xa_all[ia], ACCEPT), (axes[1], vb, xb_all[ib], B_COLOR)):
+    for ax, v, tr, col in ((axes[0], va, xa_all[ia], A_COLOR), (axes[1], vb, xb_all[ib], B_COLOR)):
         ok = np.isfinite(tr[:, 0])
         sc = ax.scatter(tr[ok, 0], tr[ok, 1], c=v.timestamps_s[ok], cmap="viridis", s=10)
         zoom(ax, tr, v)
@@ -402,9 +427,13 @@ def main() -> int:
                 for d in (trials[0], trials[2])]
         return float(np.nan_to_num(min(errs), nan=-1.0))
 
-    ok_b = np.flatnonzero(np.isfinite(xb_all[ib, :, 0]))
-    t_b = max((float(vb.timestamps_s[k]) for k in ok_b[::3]), key=wrong_error)
-    x_b = sample(xb_all[ib:ib + 1], vb.timestamps_s, t_b)[0]
+    # one reference moment for every step: a frame of b where the followed point is seen together
+    # with most of b's matched points (the sweep draws them) and both wrong offsets clearly miss
+    seen = np.isfinite(xb_all[pairs[:, 1], :, 0]).sum(0)
+    ok_b = np.flatnonzero(np.isfinite(xb_all[ib, :, 0]) & (seen >= 0.7 * seen.max()))
+    k_ref = max(ok_b, key=lambda k: wrong_error(float(vb.timestamps_s[k])))
+    t_b = float(vb.timestamps_s[k_ref])
+    x_b = xb_all[ib, k_ref]
     line = F_ab @ np.array([x_b[0], x_b[1], 1.0])
     fig, axes = plt.subplots(1, 3, figsize=(18, 4.4), dpi=100, layout="constrained")
     for ax, d in zip(axes, trials):
@@ -419,7 +448,7 @@ def main() -> int:
                    edgecolors="black", label=f"{a}'s point at t + Δ")
         zoom(ax, tr, va)
         ax.set_aspect("equal")
-        ax.set_title(f"Δ = {d:+.3f} s{'  (true)' if good else ''}: Sampson error {px2(err)} px²",
+        ax.set_title(f"Δ = {d:+.3f} s{'  (true)' if good else ''}: {px(err)} px from the line",
                      fontsize=11, color=ACCEPT if good else REJECT)
         ax.set_xlabel("x [px]")
         ax.set_ylabel("y [px]")
@@ -448,12 +477,27 @@ def main() -> int:
     ax.axvline(land.best_offset_s, color=ACCEPT, lw=2, alpha=0.7,
                label=f"found Δ = {land.best_offset_s:+.3f} s "
                      f"(error {1000 * abs(land.best_offset_s - true_delta):.1f} ms)")
-    ax.set_xlabel(f"Δ = offset({b}) − offset({a}) [s]")
-    ax.set_ylabel("energy")
+    ax.set_xlabel(f"Δ = offset({b}) − offset({a}) [s]", fontsize=11)
+    ax.set_ylabel("energy", fontsize=11)
+    ax.tick_params(labelsize=10)
     ax.set_title("Step 3. Try every Δ, average the error over all matched points and frames, "
                  "take the minimum", fontsize=12)
-    ax.legend()
+    ax.legend(loc="upper left", fontsize=10)
     ax.grid(True, alpha=0.3)
+    # the minimum up close: ± a few frames, where the true and the found Δ part
+    half = 6.0 / min(va.fps or 30.0, vb.fps or 30.0)
+    near = np.abs(land.offsets_s - land.best_offset_s) <= half
+    # below the curve's plateau, away from its dip: the inset hides none of the landscape
+    left = 0.04 if (land.best_offset_s - land.offsets_s.min()) / np.ptp(land.offsets_s) > 0.5 else 0.56
+    zoom_ax = ax.inset_axes([left, 0.08, 0.4, 0.62])
+    zoom_ax.plot(land.offsets_s[near], land.energy[near], color="#3b4cc0", lw=1.5, marker="o", ms=3)
+    zoom_ax.axvline(true_delta, color="black", ls="--")
+    zoom_ax.axvline(land.best_offset_s, color=ACCEPT, lw=2, alpha=0.7)
+    zoom_ax.set_xlim(land.best_offset_s - half, land.best_offset_s + half)
+    zoom_ax.set_title(f"the minimum, ± {half:.2f} s (dots: the candidate offsets)", fontsize=10)
+    zoom_ax.tick_params(labelsize=9)
+    zoom_ax.grid(True, alpha=0.3)
+    ax.indicate_inset_zoom(zoom_ax, edgecolor="0.4")
     fig.savefig(out / "step3_search.png")
     plt.close(fig)
 
@@ -463,10 +507,18 @@ def main() -> int:
     step4_plane(out / "step4_plane.png", bundle, a, b, ia, ib, t_b, true_delta, x_b, x_a_true, F_ab)
 
     # ---- step 5: the two-crossings ambiguity ----
-    step5_ambiguity(out / "step5_ambiguity.png", bundle, a, b, F_ab, true_delta, land)
+    _, k5 = step5_ambiguity(out / "step5_ambiguity.png", bundle, a, b, F_ab, true_delta, land, k_ref)
 
     # ---- step 6: an animated sweep of Δ ----
-    sweep = step6_sweep(out / "step6_sweep.gif", bundle, a, b, F_ab, true_delta, land)
+    sweep, sweep_deltas, sweep_ms = step6_sweep(out / "step6_sweep.gif", bundle, a, b, F_ab, true_delta,
+                                                land, k_ref)
+    (out / "steps.json").write_text(json.dumps({
+        "reference": {"video": b, "frame": int(k_ref), "time_s": t_b},
+        "frames_of_b": {"step2_cue": int(k_ref), "step4_plane": int(k_ref),
+                        "step5_ambiguity": k5, "step6_sweep": int(k_ref)},
+        "true_delta_s": true_delta, "found_delta_s": float(land.best_offset_s),
+        "step3_search": {"zoom_s": [float(land.best_offset_s - half), float(land.best_offset_s + half)]},
+        "step6_sweep": {"delta_s": sweep_deltas, "duration_ms": sweep_ms}}, indent=1))
 
     # ---- the standard report from a run folder ----
     run_dir = out / "run"

@@ -1,7 +1,7 @@
 """Ctrl-C and SIGTERM at arbitrary moments of the long commands, locks on outputs, leftovers of
 killed writers, and arrays whose dtype is not a number type.
 
-The interrupt runs are a small subset of `vs-inspect bench-interrupts` (vs_inspect.bench.interrupts):
+The interrupt runs are a small subset of `vs-inspect bench interrupts` (vs_inspect.bench.interrupts):
 real commands in subprocesses on small synthetic inputs, a real signal at a fixed moment, and the
 same checks (exit 130/143, one line, no traceback, no crash, the outputs exactly as before).
 """

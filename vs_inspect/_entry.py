@@ -21,8 +21,10 @@ def main(argv: list[str] | None = None) -> None:
     code = 1
     try:
         from .cli import main as run_command
+        from .progress import plain_lines_when_logged
 
-        code = run_command(argv)
+        with plain_lines_when_logged():  # in a log: progress as plain lines, no carriage returns
+            code = run_command(argv)
     except SystemExit as exc:
         code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 2)
     except KeyboardInterrupt as exc:  # interrupted before the command started (an import)

@@ -1,7 +1,7 @@
 """The vs-inspect command line: glue only. Each subcommand lives in vs_inspect/commands/<name>.py
-and registers itself with register(subparsers); this module finds them, runs one, and turns
-every failure into one clear line `vs-inspect COMMAND: error: ...` and an exit code, never a
-traceback (-vv logs the traceback for debugging).
+and registers itself with register(subparsers); this module lists them (COMMANDS), runs one, and
+turns every failure into one clear line `vs-inspect COMMAND: error: ...` and an exit code, never
+a traceback (-vv logs the traceback for debugging).
 
 Exit codes: 0 done; 2 no result could be produced (bad input or option, an unreadable or
 unwritable file, out of memory, another run writing the same output); 130 interrupted by Ctrl-C
@@ -14,17 +14,18 @@ from __future__ import annotations
 
 import argparse
 import errno
-import importlib
 import logging
 import os
-import pkgutil
 import signal
 import sys
 from contextlib import ExitStack
 
 import numpy  # noqa: F401  (before anything that may import pycolmap; see ENVIRONMENT.md)
 
-from . import __version__, commands, signals
+from . import __version__, signals
+from .commands import (_help, bench, calib, calibrate_board, cues, demo, export, import_drone,
+                       import_visualsync, inspect, report, sync, synth_cues, synth_video, view)
+from .commands import eval as eval_command
 from .errors import VsInspectError
 
 log = logging.getLogger(__name__)
@@ -32,6 +33,10 @@ log = logging.getLogger(__name__)
 EXIT_FAILED = 2
 EXIT_INTERRUPTED = 130   # 128 + SIGINT
 EXIT_TERMINATED = 143    # 128 + SIGTERM
+
+# every command, in the order --help lists them
+COMMANDS = (bench, calib, calibrate_board, cues, demo, eval_command, export, import_drone,
+            import_visualsync, inspect, report, sync, synth_cues, synth_video, view)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -54,12 +59,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-v", "--verbose", action="count", default=0,
                         help="more log output (-v info, -vv debug, with tracebacks of errors)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda m: m.name):
-        if info.name.startswith("_"):
-            continue
-        module = importlib.import_module(f"{commands.__name__}.{info.name}")
-        module.register(sub)
-    from .commands import _help
+    for command in COMMANDS:
+        command.register(sub)
     for name, p in sub.choices.items():  # one --help style: defaults once, an Examples epilog
         _help.apply(p, name)
     return parser

@@ -1,4 +1,4 @@
-"""`vs-inspect bench --quick` (run through the CLI as CI does): its tables come out, every method
+"""`vs-inspect bench accuracy --quick` (run through the CLI as CI does): its tables come out, every method
 runs on the same data, and its numbers equal the same rows of the full plan (fixed seeds)."""
 
 import json
@@ -17,7 +17,7 @@ def quick(tmp_path_factory):
     from contextlib import redirect_stdout
     buf = io.StringIO()
     with redirect_stdout(buf):
-        rc = main(["bench", "--quick", "--no-progress", "--json", str(out / "q.json"),
+        rc = main(["bench", "accuracy", "--quick", "--no-progress", "--json", str(out / "q.json"),
                    "--out", str(out / "q.md")])
     return rc, buf.getvalue(), json.loads((out / "q.json").read_text()), (out / "q.md").read_text()
 
@@ -73,9 +73,9 @@ def test_tables_from_runs_of_different_commits_say_which_rows_came_from_which(qu
     import io
     from contextlib import redirect_stdout
     with redirect_stdout(io.StringIO()):
-        assert main(["bench", "--from-json", str(tmp_path / "full.json"), str(tmp_path / "clips.json"),
+        assert main(["bench", "accuracy", "--from-json", str(tmp_path / "full.json"), str(tmp_path / "clips.json"),
                      "--out", str(tmp_path / "two.md")]) == 0
-        assert main(["bench", "--from-json", str(tmp_path / "full.json"), str(tmp_path / "same.json"),
+        assert main(["bench", "accuracy", "--from-json", str(tmp_path / "full.json"), str(tmp_path / "same.json"),
                      "--out", str(tmp_path / "one.md")]) == 0
     assert "git_commit aaaaaaa (full.json), bbbbbbb (clips.json)," in (tmp_path / "two.md").read_text()
     assert "git_commit aaaaaaa," in (tmp_path / "one.md").read_text()

@@ -1,4 +1,4 @@
-"""bench-drift-cues' error bookkeeping (the full run is `vs-inspect bench-drift-cues`)."""
+"""bench drift's error bookkeeping (the full run is `vs-inspect bench drift`)."""
 
 from __future__ import annotations
 

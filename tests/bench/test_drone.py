@@ -1,4 +1,4 @@
-"""bench-drone's per-camera errors (the slow full run is `vs-inspect bench-drone`)."""
+"""bench drone's per-camera errors (the slow full run is `vs-inspect bench drone`)."""
 
 from __future__ import annotations
 

@@ -1,51 +1,75 @@
-"""vs-inspect bench-stage0: its options, the caliscope cut's truth and the VisualSync clips' names."""
+"""vs-inspect bench stage0: one table row per set of videos from its run, and the summary."""
 
 from __future__ import annotations
 
-from pathlib import Path
+import dataclasses
+import re
 
-import numpy as np
 import pytest
 
-from vs_inspect.bench.arcs import DEFAULT_SET
-from vs_inspect.bench.stage0 import camera_config, caliscope_truth, track_config, visualsync_truth
-from vs_inspect.cli import build_parser
+from vs_inspect.bench.stage0 import HEAD, bench_sets, row, summary_line
+from vs_inspect.bench.videos import Summary, caliscope_sets
+from vs_inspect.cli import main
+from vs_inspect.pipeline.config import RunConfig
 
 
-def _args(*argv):
-    return build_parser().parse_args(["bench-stage0", *argv])
+
+def _cells(line: str) -> list[str]:
+    return [c.strip() for c in line.strip().strip("|").split("|")]
 
 
-def test_each_benchmark_parses_its_options():
-    a = _args("arcs")
-    assert a.what == "arcs" and a.set == DEFAULT_SET and a.scenes is None and not a.calibrated
-    assert camera_config(a).features == "auto"
-    c = _args("caliscope", "--trials", "2", "--estimate", "--features", "sift", "--sfm-frames", "5", "20",
-              "--klt-window", "21", "--no-anchor")
-    assert (c.trials, c.estimate, c.board, c.data) == (2, True, False, None)
-    cam, tr = camera_config(c), track_config(c)
-    assert (cam.features, cam.static_frames, cam.moving_frames) == ("sift", 5, 20)
-    assert (tr.win_size, tr.anchor_refine) == (21, False)
-    assert _args("visualsync", "--scenes", "blenderbox").scenes == ["blenderbox"]
-    assert _args("rendered", "--seeds", "4").seeds == [4]
-    assert _args("speed").seconds == 10
-    with pytest.raises(SystemExit):
-        _args("arcs", "--set", "nonsense")
-    with pytest.raises(SystemExit):
-        _args("speed", "--features", "sift")  # camera options belong to the benchmarks that estimate
+@pytest.mark.timeout(900)
+def test_rendered_scene_with_its_calibration_judges_the_track_pairs(small, tmp_path):
+    lines = []
+    runs = bench_sets([small], RunConfig(), tmp_path, lines.append)
+    assert lines[0] == HEAD and lines[2] == ""
+    cells = _cells(lines[1])
+    assert cells[0] == "small" and cells[1] == runs[0].result.reference
+    assert "null" not in cells[2] and cells[3] == "calibration 4/4"
+    m = re.fullmatch(r"(\d+), precision ([\d.]+), recall ([\d.]+)", cells[4])
+    assert m and int(m.group(1)) == runs[0].result.cues.track_pairs > 0
+    assert 0.5 < float(m.group(2)) <= 1 and 0 < float(m.group(3)) <= 1  # measured: 0.85 and 0.18
+    assert float(cells[5]) > 0 and float(cells[6]) > 0
+    assert lines[3].startswith("1 sets, 3 offsets: 3 resolved (") and "**0 over 2 frames**), 0 null" in lines[3]
+    assert (tmp_path / "small" / "result.json").is_file()
+    # without the true cameras given to the run, the row only counts the pairs
+    unjudged = dataclasses.replace(runs[0], videos=dataclasses.replace(small, true_cameras=None))
+    assert _cells(row(unjudged))[4] == cells[4].split(",")[0]
 
 
-def test_caliscope_truth_is_each_cut_clips_first_frame_time():
-    ft = {"cam_0": np.array([10.0, 10.2, 10.4]), "cam_1": np.array([10.05, 10.25, 10.45])}
-    truth = caliscope_truth(ft, {"cam_0": 2, "cam_1": 0})
-    assert truth == {"cam_0": 10.4, "cam_1": 10.05}
-    # offset of cam_1 against cam_0 (DESIGN.md): its local time 0 is 0.35 s before cam_0's
-    assert truth["cam_1"] - truth["cam_0"] == pytest.approx(-0.35)
+def test_a_null_says_why_and_an_offset_over_two_frames_is_marked():
+    s = Summary(4, 3, 1, 1, 1, 1.5, 36.6, 50.0, 1200.0)
+    assert summary_line(s, 2) == ("2 sets, 4 offsets: 3 resolved (1 within 1 frame, 1 at 1-2 frames, "
+                                  "**1 over 2 frames**), 1 null; |error| median 1.50 frames (50.00 ms), "
+                                  "max 36.60 frames (1200.00 ms)")
 
 
-def test_visualsync_truth_reads_the_start_frame_at_10_fps():
-    names = ["blenderbox_cam10_12_140_0.mp4", "blenderbox_cam13_0_128_0.mp4"]
-    assert visualsync_truth([Path("/clips") / n for n in names]) == {"blenderbox_cam10_12_140_0": 1.2,
-                                                                      "blenderbox_cam13_0_128_0": 0.0}
-    with pytest.raises(ValueError, match="not a VisualSync clip name"):
-        visualsync_truth(["cam0.mp4"])
+@pytest.mark.timeout(900)
+def test_caliscope_cuts_through_the_command(shared_data, tmp_path, capsys):
+    """One random cut of the real webcams with their calibration, through `bench stage0` (at
+    320 px, so that it takes seconds; measured: every offset within 0.5 frame)."""
+    first = next(caliscope_sets(shared_data, tmp_path / "cuts", 1, max_cut=12, seed=0))
+    assert first.name == "caliscope/t0 cuts 11-8-6-3"  # the seeded cuts of trial 0
+    assert first.calibration.name == "camera_array.toml" and len(first.videos) == 4
+    assert main(["bench", "stage0", "caliscope", "--trials", "1", "--data", str(shared_data),
+                 "--workdir", str(tmp_path / "w"), "--sync-args", "--max-side 320"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0] + "\n" + out[1] == HEAD
+    cells = _cells(out[2])
+    assert cells[0] == first.name and cells[3] == "calibration 4/4"
+    assert out[4].startswith("1 sets, 3 offsets: 3 resolved") and "**0 over 2 frames**" in out[4]
+    assert (tmp_path / "w" / "runs" / "caliscope_t0_cuts_11-8-6-3" / "cues" / "bundle.json").is_file()
+
+
+@pytest.mark.timeout(900)
+def test_the_speed_set_prints_every_steps_seconds(shared_data, tmp_path, capsys):
+    """caliscope blended to 30 fps, 1 s per video (too short to synchronize: the path, not the
+    offsets), through `bench stage0 speed`: the row, then the run's seconds per step."""
+    assert main(["bench", "stage0", "speed", "--seconds", "1", "--data", str(shared_data),
+                 "--workdir", str(tmp_path)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert _cells(out[2])[0] == "speed/1s 720p 30fps" and out[4].startswith("1 sets, 3 offsets: ")
+    steps = dict(line.split() for line in out[6:] if line and not line.startswith("run folders"))
+    assert {"stage0_decode_s", "stage0_with_io_s", "stage1_s", "total_s"} <= set(steps)
+    assert float(steps["total_s"]) >= float(steps["stage0_with_io_s"]) > 0
+    assert len(list((tmp_path / "speed_1s").glob("cam_*.mp4"))) == 4

@@ -1,4 +1,4 @@
-"""bench-timing on a tiny rendered scene: a real render, real `sync` processes, the table."""
+"""bench timing on a tiny rendered scene: a real render, real `sync` processes, the table."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ def test_tiny_scene_table_and_offsets(tmp_path, capsys):
     # with the calibration: the table and its bookkeeping are the point, not camera estimation
     # on small images (its rows are the same code path). 320x240 and 4 s with offsets in ±0.4 s:
     # at 3 s one view shares under 1 s of enough motion for Stage 0's votes (--min-overlap-s)
-    code = main(["bench-timing", "--width", "320", "--height", "240", "--seconds", "4",
+    code = main(["bench", "timing", "--width", "320", "--height", "240", "--seconds", "4",
                  "--max-offset-s", "0.4", "--cameras", "calibration", "--workdir", str(tmp_path),
                  "--timeout-s", "1000"])
     assert code == 0
@@ -56,7 +56,10 @@ def test_target_needs_every_video_and_the_time():
     overlapped = dataclasses.replace(row(179.0, 4), videos_s=2.0)
     assert _cells(format_table([overlapped]).splitlines()[2])[COLUMNS.index("other")] == \
         f"{179.0 - (len(STAGES) - len(PER_VIDEO) + 2.0):.1f}"
-    # which reconstruction an estimated run used is part of its time
-    with_xfeat = TimingRow("s", "estimated", {}, 10.0, 300.0, 5.0, 300.0, 0, 4, math.nan, math.nan,
-                           sfm_features="xfeat")
-    assert _cells(format_table([with_xfeat]).splitlines()[2])[1] == "estimated (xfeat)"
+    # where an estimated run's cameras came from is part of its time
+    moving = TimingRow("s", "estimated", {}, 10.0, 300.0, 5.0, 300.0, 0, 4, math.nan, math.nan,
+                       camera_source="estimated from moving points (two-view geometry)")
+    assert _cells(format_table([moving]).splitlines()[2])[1] == \
+        "estimated (estimated from moving points (two-view geometry))"
+    plain = dataclasses.replace(moving, camera_source="estimated")
+    assert _cells(format_table([plain]).splitlines()[2])[1] == "estimated"

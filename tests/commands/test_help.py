@@ -1,5 +1,6 @@
-"""Every subcommand's --help: each default said once, never "(default: None)", no default on a
-required option or a switch, an Examples epilog naming the command, no literal %%."""
+"""Every command's and sub-command's --help (bench stage0 clips, calib convert, ...): each default
+said once, never "(default: None)", no default on a required option or a switch, an Examples
+epilog naming the command, no literal %%."""
 
 from __future__ import annotations
 
@@ -10,8 +11,19 @@ import pytest
 
 from vs_inspect.cli import build_parser, main
 
-PARSER = build_parser()
-SUBCOMMANDS = next(a for a in PARSER._actions if isinstance(a, argparse._SubParsersAction)).choices
+
+def _commands(parser: argparse.ArgumentParser, prefix: str = "") -> dict[str, argparse.ArgumentParser]:
+    """{"sync": parser, "bench": parser, "bench stage0": parser, ...}: every command, depth first."""
+    out = {}
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                out[f"{prefix}{name}"] = sub
+                out.update(_commands(sub, f"{prefix}{name} "))
+    return out
+
+
+SUBCOMMANDS = _commands(build_parser())
 
 
 def _option_blocks(text: str) -> dict[str, str]:
@@ -32,12 +44,12 @@ def _option_blocks(text: str) -> dict[str, str]:
 
 @pytest.mark.parametrize("name", sorted(SUBCOMMANDS))
 def test_help_of_every_subcommand(name, capsys):
-    assert main([name, "--help"]) == 0
+    assert main([*name.split(), "--help"]) == 0
     text = capsys.readouterr().out
     assert "%%" not in text
     assert "(default: None)" not in text
     blocks = _option_blocks(text.split("Examples:")[0])
-    assert blocks, name
+    assert blocks and "-h" in blocks, name
     sub = SUBCOMMANDS[name]
     required = {s for a in sub._actions if a.required for s in a.option_strings}
     switches = {s for a in sub._actions if a.nargs == 0 for s in a.option_strings}
@@ -50,6 +62,14 @@ def test_help_of_every_subcommand(name, capsys):
     examples = text.split("Examples:", 1)
     assert len(examples) == 2, f"{name}: no Examples section"
     assert f"vs-inspect {name}" in examples[1]
+
+
+def test_every_benchmark_is_a_bench_sub_command_with_an_example():
+    benches = [n for n in SUBCOMMANDS if n.startswith("bench ")]
+    assert {"bench accuracy", "bench stage0", "bench stage0 caliscope", "bench stage0 clips",
+            "bench stage0 rendered", "bench stage0 speed", "bench timing", "bench energy", "bench scale",
+            "bench drone", "bench drift", "bench people", "bench rules", "bench recording", "bench interrupts"} == set(benches)
+    assert not [n for n in SUBCOMMANDS if n.startswith("bench-")]
 
 
 def test_negated_filter_says_what_it_does(capsys):

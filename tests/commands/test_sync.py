@@ -67,3 +67,23 @@ def test_commands_are_thin():
         if path.name in ("inspect.py", "report.py"):  # converted in another branch
             continue
         assert not stage_calls.search(path.read_text()), path.name
+
+
+def test_a_missing_video_is_named_before_any_work(tmp_path, capsys):
+    """One of two videos missing: one line naming it (and what is in its folder), exit 2, nothing
+    written (not "need at least 2 videos", not a run with a null)."""
+    import numpy as np
+
+    from vs_inspect.io.video import VideoWriter
+    here = tmp_path / "clips"
+    here.mkdir()
+    with VideoWriter(here / "cam0.mp4", 64, 48, 10.0) as w:
+        for k in range(5):
+            w.write(np.full((48, 64, 3), 20 * k, np.uint8))
+    code = main(["sync", str(here / "cam0.mp4"), str(here / "cam1.mp4"), "--out", str(tmp_path / "o"),
+                 "--rrd", str(tmp_path / "r.rrd"), "--no-progress"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1, err
+    assert f"no such video file or image folder: {here / 'cam1.mp4'}" in err[0] and "cam0.mp4" in err[0]
+    assert "at least 2" not in err[0]
+    assert not (tmp_path / "o").exists() and not (tmp_path / "r.rrd").exists()

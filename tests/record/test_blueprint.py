@@ -91,3 +91,12 @@ def test_a_run_that_searched_no_pair_opens_on_frames_and_its_offsets_table():
     assert tabs.active_tab == 0 and "offsets" in [v.name for v in tabs.contents]
     tabs = blueprint(["a", "b"], [], None, {}).root_container.contents[0].contents[0]
     assert "offsets" not in [v.name for v in tabs.contents]
+
+
+def test_the_robust_solve_gets_a_tab_only_when_its_pairs_hold_a_loop():
+    """Residuals and weights say something only when the accepted pairs hold a loop (a tree of
+    pairs is solved exactly: 0 and 1 everywhere, an empty-looking tab)."""
+    from vs_inspect.record.blueprint import _redundant
+    assert not _redundant([("a", "b")]) and not _redundant([("a", "b"), ("b", "c"), ("d", "e")])
+    assert _redundant([("a", "b"), ("b", "c"), ("a", "c")])
+    assert _redundant([("a", "b"), ("c", "d"), ("d", "e"), ("c", "e")])

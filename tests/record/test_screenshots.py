@@ -203,3 +203,104 @@ def test_a_run_that_synchronized_nothing_opens_with_frames_and_its_reasons(tmp_p
     assert shots[0].empty_panels == [], {p.name: p.ink for p in shots[0].panels}
     with pytest.raises(ValueError, match="no offset_ms timeline"):
         take_screenshots(rrd, tmp_path / "shots2", {"at_0ms": 0}, mode="headless")
+
+
+def _small_run(path: Path, sink_class=None):
+    """Three static cameras, no frames: a Stage 1 + 2 run recorded to path."""
+    from vs_inspect.pipeline import run as run_pipeline
+    from vs_inspect.record.rerun_sink import RerunSink
+    from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
+
+    scene = make_cue_scene(CueSceneConfig(cameras=3, moving=0, variable_rate=0, seconds=3.0,
+                                          max_offset_s=0.8, points_per_object=10, pairs_per_view_pair=100,
+                                          no_match_pairs=0, all_wrong_pair=False, fps_choices=(25.0, 30.0),
+                                          noise_px=0.5, wrong_fraction=0.0, pose_error_deg=0.0,
+                                          track_life_s=(3.0, 3.0), seed=4))
+    with (sink_class or RerunSink)(path, progress=False) as sink:
+        result = run_pipeline(scene.bundle, sink=sink, progress=False)
+    return scene, result
+
+
+def _viewer_or_skip(fn):
+    try:
+        return fn()
+    except RuntimeError as exc:
+        if "did not come up" in str(exc):
+            pytest.skip(f"the rerun viewer cannot render here: {str(exc).splitlines()[0]}")
+        raise
+
+
+def test_a_panel_with_only_a_border_or_a_cursor_is_empty(tmp_path):
+    """Panels planted with nothing to show on offset_ms: a video view whose video has no frame
+    (only its image border is logged) and a plot of the solve (its data are on the `iteration`
+    timeline: on offset_ms it shows axes and the time cursor). The check reports both EMPTY, the
+    panels with data stay ok, and the command exits 1."""
+    if rerun_executable() is None:
+        pytest.skip("no rerun viewer executable beside this Python or on PATH")
+    import rerun.blueprint as rrb
+
+    from vs_inspect.io.recording import SYNC_SOLVE, video_path
+    from vs_inspect.record.rerun_sink import RerunSink
+    from vs_inspect.record.screenshots import main
+
+    class Planted(RerunSink):
+        def blueprint(self, names):
+            return rrb.Blueprint(rrb.Horizontal(
+                rrb.TextDocumentView(origin="guide", name="how to read this recording"),
+                rrb.Vertical(rrb.Spatial2DView(origin=video_path(names[0]), name="planted video"),
+                             rrb.TimeSeriesView(origin=SYNC_SOLVE, name="planted solve plot")),
+                rrb.TimeSeriesView(origin=f"pairs/{self._pairs_logged[0]}/landscape", name="landscape")),
+                rrb.TimePanel(state="expanded", timeline="offset_ms", play_state="paused"), auto_views=False)
+
+    rrd = tmp_path / "planted.rrd"
+    scene, result = _small_run(rrd, Planted)
+    chosen = round(next(p for p in result.pairs if p.decision.accepted).best_offset_s * 1000)
+    import contextlib
+    import io
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        code = _viewer_or_skip(lambda: main([str(rrd), "--out", str(tmp_path / "shots"), "--mode", "headless",
+                                             "--at", str(chosen)]))
+    rows = {line.split(maxsplit=4)[-1]: line.split()[0] for line in out.getvalue().splitlines()
+            if line.startswith("  ")}
+    assert rows == {"how to read this recording": "ok", "landscape": "ok",
+                    "planted video": "EMPTY", "planted solve plot": "EMPTY"}, out.getvalue()
+    assert code == 1
+
+
+def test_recording_without_frames_has_no_video_panel_and_opens_at_the_front_pairs_delta(tmp_path):
+    """A run without frames (a cue bundle's) has no video view in its layout; the viewer, opened
+    as `vs-inspect view` opens it, puts the cursor at the front pair's chosen Δ, not at the start
+    of the range; the tabs are found by the titles they show; the default wrong offset has lines
+    on screen; and no panel is empty at the chosen offset, the IRLS tab included."""
+    if rerun_executable() is None:
+        pytest.skip("no rerun viewer executable beside this Python or on PATH")
+    from vs_inspect.io.recording import read_epipolar_sweep, read_recording
+    from vs_inspect.record.screenshots import chosen_and_wrong_ms
+    from vs_inspect.record.viewer import open_recording
+
+    from vs_inspect.record.viewer import front_offset_ms
+    rrd = tmp_path / "noframes.rrd"
+    scene, result = _small_run(rrd)
+    rec = read_recording(rrd)
+    front = front_offset_ms(rec)
+    p = next(q for q in result.pairs if q.decision.accepted)
+    chosen, wrong = chosen_and_wrong_ms(rec, (p.a, p.b))
+    assert chosen == round(p.best_offset_s * 1000)
+    sweep = read_epipolar_sweep(rrd, p.a, p.b)
+    at = int(np.argmin(np.abs(sweep.offset_ms - wrong)))
+    assert sweep.lines[at] >= 3 and wrong != chosen  # lines on screen, missing the points
+    i = int(np.argmin(np.abs(sweep.offset_ms - chosen)))
+    assert sweep.median_px[at] > 4 * np.nanmin(sweep.median_px[max(0, i - 2):i + 3])
+
+    shots = _viewer_or_skip(lambda: take_screenshots(rrd, tmp_path / "shots", {"front": front},
+                                                     mode="headless", settle_s=0.6,
+                                                     tabs=("pairs (failed first)", "IRLS solve")))
+    # opened as `vs-inspect view` opens it: at the front pair's Δ, not at the start of offset_ms
+    assert (shots[0].timeline_on_open, shots[0].time_on_open) == ("offset_ms", front)
+    assert front > round(min(q.offsets_s[0] for q in result.pairs) * 1000)
+    names = {x.name for x in shots[0].panels}
+    assert not names & set(result.offsets_s), names  # no video panel
+    assert {"pairs (failed first)", "3D"} <= names
+    assert any(n.startswith("IRLS:") for n in names), names
+    assert shots[0].empty_panels == [], {x.name: x.ink for x in shots[0].panels}

@@ -30,9 +30,24 @@ def test_teach_epipolar_cue(tmp_path):
                  "step5_ambiguity.png", "step6_sweep.gif", "teach.rrd", "report/index.html",
                  "report/epipolar.png"):
         assert (tmp_path / name).is_file(), name
+    import json
+
     from PIL import Image
+    steps = json.loads((tmp_path / "steps.json").read_text())
+    # one moment of b in every step (the one the sweep draws b's lines at)
+    assert set(steps["frames_of_b"].values()) == {steps["reference"]["frame"]}
+    durations = []
     with Image.open(tmp_path / "step6_sweep.gif") as gif:
         assert gif.n_frames >= 20  # an animation, not a still
+        for k in range(gif.n_frames):
+            gif.seek(k)
+            durations.append(gif.info["duration"])
+    # it rests at the true Δ (a frame exactly there), not 0.16 s like every other frame
+    pause = max(range(len(durations)), key=durations.__getitem__)
+    assert durations[pause] >= 1500 and sorted(durations)[-2] <= 200
+    assert abs(steps["step6_sweep"]["delta_s"][pause] - steps["true_delta_s"]) < 1e-9
+    lo, hi = steps["step3_search"]["zoom_s"]  # step 3 zooms on its minimum
+    assert lo < steps["found_delta_s"] < hi and hi - lo < 1.0
     import shutil
     if shutil.which("ffmpeg"):
         assert (tmp_path / "step6_sweep.mp4").stat().st_size > 10_000

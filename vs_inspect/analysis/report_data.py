@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..analysis.display_names import display_names
 from ..analysis.record_views import over_range
 from ..analysis.trajectories import run_trajectories
 from ..errors import InputError
@@ -295,14 +296,12 @@ def build_report_data(result: RunResult, bundle: CueBundle | None, *, source: st
     if mosaic is None:
         notes.append("no mosaic of one moment across all videos: no video frames (result.json "
                      "lists no readable input.videos, or the recording carries no frames)")
-    if static_points is None:
-        notes.append("no static reconstruction in the input (cue bundles carry cameras and "
-                     "tracks only)")
+    names = [v.name for v in videos] or list(result.offsets_s)
     return ReportData(source, result.reference, videos, offsets, unc, dict(result.unresolved), pairs,
                       gt, cameras, static_points, static_colors, trajs, panel, mosaic,
                       transfer_views(result, gt), tuple(notes),
                       {k: float(v) for k, v in result.timings_s.items()}, three_view_views(result, gt),
-                      result.headlines())
+                      result.headlines(), display_names(names))
 
 
 # ---- the report's data of a run folder or of a recording alone ------------------------------
@@ -358,16 +357,27 @@ def report_data_from_run(run_dir: str | os.PathLike, pair: tuple[str, str] | Non
     gt = gt or result.gt_offsets_s
     if gt is None and bdir is not None and (bdir / "gt.json").is_file():
         gt = read_gt(bdir / "gt.json")
-    return build_report_data(result, bundle, source=str(run_dir), gt=gt,
+    data = build_report_data(result, bundle, source=str(run_dir), gt=gt,
                              video_paths=_video_paths(result, run_dir), pair=pair,
                              frame_reader=_frame_reader)
+    if _estimated(result):  # its static points are in the recording only
+        data = replace(data, notes=data.notes + (
+            "the static reconstruction of the estimated cameras is kept in the run's recording, not in "
+            "its folder: `vs-inspect report RECORDING.rrd` draws it in the 3D scene",))
+    return data
+
+
+def _estimated(result: RunResult) -> bool:
+    """Stage 0 estimated the run's cameras (they come with a static reconstruction)."""
+    return result.cues is not None and result.cues.camera_source.startswith("estimated")
 
 
 def report_data_from_recording(path: str | os.PathLike, pair: tuple[str, str] | None = None,
                                gt: dict[str, float] | None = None) -> ReportData:
     """ReportData from a recording alone (no run folder, no videos, no recompute): its result,
     its embedded cue bundle and the frames it carries."""
-    from ..io.recording import META_BUNDLE, META_RESULT, read_recorded_bundle, read_recording, read_rrd_frames
+    from ..io.recording import (META_BUNDLE, META_RESULT, read_recorded_bundle, read_recording, read_rrd_frames,
+                                read_static_points)
 
     path = Path(path)
     if not path.is_file():
@@ -394,8 +404,14 @@ def report_data_from_recording(path: str | os.PathLike, pair: tuple[str, str] | 
         def reader(p: str, index: int, exact: bool = True):
             return frames.read(p[4:], index, exact)
     gt = gt or rec.result.gt_offsets_s or (bundle.gt_offsets_s if bundle is not None else None)
+    points, colors = read_static_points(path)
     data = build_report_data(rec.result, bundle, source=str(path), gt=gt,
-                             pair=pair, video_paths=video_paths, frame_reader=reader)
+                             pair=pair, video_paths=video_paths, frame_reader=reader,
+                             static_points=points if len(points) else None,
+                             static_colors=colors if len(points) else None)
+    if not len(points) and _estimated(rec.result):
+        data = replace(data, notes=data.notes + ("the recording holds no static reconstruction of its "
+                                                 "estimated cameras",))
     if bundle is None:
         data = replace(data, notes=data.notes + (f"the recording has no {META_BUNDLE}",))
     return data

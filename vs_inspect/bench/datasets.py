@@ -3,7 +3,7 @@
 - Cue-level synthetic scenes (vs_inspect.synth.cues) at three difficulty levels and several seeds.
 - The caliscope session (../shared/data/caliscope_post_optimization): REAL detected ChArUco corners
   of 4 synchronized webcams, one track per corner id and camera, exact cross-view pairs by corner
-  id, the session's own calibration (points undistorted with cv2.undistortPoints(P=K)), per-frame
+  id, the session's own calibration (points undistorted with it as the pipeline undistorts), per-frame
   timestamps from timestamps.csv (variable-rate bundle). Offsets are made by cutting a different
   number of leading frames from each camera; the true offset is the frame_time of the first kept
   frame.
@@ -12,14 +12,13 @@
 from __future__ import annotations
 
 import csv
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import cv2
 import numpy as np
 
 from ..errors import InputError
+from ..io.calibration import load_calibration, to_camera_track, undistort_points
 from ..synth.cues import CueSceneConfig, make_cue_scene
 from ..types import CameraTrack, CueBundle, TrackPairs, Tracks, VideoInfo
 
@@ -100,7 +99,6 @@ def load_caliscope(root: Path) -> CaliscopeSession:
     for f in (root / "camera_array.toml", ext / "timestamps.csv", ext / "xy.csv"):
         if not f.is_file():
             raise InputError(f"caliscope session incomplete: {f} not found")
-    arr = tomllib.loads((root / "camera_array.toml").read_text())["cameras"]
     stamps = read_caliscope_timestamps(root)
     cam_ids = sorted(stamps)
     frame_of = {c: {int(si): k for k, si in enumerate(stamps[c][0])} for c in cam_ids}
@@ -113,26 +111,17 @@ def load_caliscope(root: Path) -> CaliscopeSession:
     keys = sorted({(o, k) for _, _, o, k, _, _ in rows})
     kpos = {key: i for i, key in enumerate(keys)}
     names = [f"cam_{c}" for c in cam_ids]
+    calib = load_calibration(root / "camera_array.toml", names)
     ft, xy, cams, size = {}, {}, {}, {}
     for c, name in zip(cam_ids, names):
-        spec = arr[str(c)]
-        K = np.array(spec["matrix"], dtype=np.float64)
-        dist = np.array(spec["distortions"], dtype=np.float64)
-        T = np.eye(4)
-        T[:3, :3] = np.array(spec["rotation"], dtype=np.float64)
-        T[:3, 3] = np.array(spec["translation"], dtype=np.float64)
-        cams[name] = CameraTrack(K, T)
-        size[name] = (int(spec["size"][0]), int(spec["size"][1]))
+        cams[name] = to_camera_track(calib[name])
+        size[name] = calib[name].size
         ft[name] = stamps[c][1]
         raw = np.full((len(keys), len(ft[name]), 2), np.nan)
         for cc, si, o, k, x, y in rows:
             if cc == c and si in frame_of[c]:
                 raw[kpos[(o, k)], frame_of[c][si]] = (x, y)
-        seen = np.isfinite(raw[..., 0])
-        und = cv2.undistortPoints(raw[seen].reshape(-1, 1, 2), K, dist, P=K).reshape(-1, 2)
-        out = np.full_like(raw, np.nan)
-        out[seen] = und
-        xy[name] = out
+        xy[name] = undistort_points(calib[name], raw)
     return CaliscopeSession(names, ft, np.array([k for _, k in keys]), xy, cams, size)
 
 
@@ -164,20 +153,6 @@ def caliscope_cut(session: CaliscopeSession, cuts: dict[str, int], name: str) ->
     bundle = CueBundle(tuple(videos), dict(session.cameras), tracks, pairs, gt)
     fi = float(np.median(np.concatenate([np.diff(session.frame_time_s[v]) for v in session.names])))
     return BenchData(name, "caliscope", bundle, None, fi, {"cuts": dict(cuts)})
-
-
-def corner_sync_bias_s(session: CaliscopeSession) -> dict[str, float]:
-    """Per camera: the offset that Stage 1 finds from the session's ChArUco corners (perfect
-    cross-view tracks) on the uncut videos, minus the offset of the recorded frame times (s,
-    against the reference). A camera whose frames reach the host earlier or later than the
-    others shows up here whatever the cues."""
-    from ..pipeline.stage12 import sync_bundle
-
-    bundle = caliscope_cut(session, {}, "caliscope/uncut").bundle
-    res = sync_bundle(bundle, progress=False)
-    truth, ref = bundle.gt_offsets_s, res.reference
-    return {n: (res.offsets_s[n] - res.offsets_s[ref]) - (truth[n] - truth[ref])
-            for n in session.names if res.offsets_s.get(n) is not None}
 
 
 def caliscope_cuts(session: CaliscopeSession, num: int, max_cut: int = 12, seed: int = 0) -> list[BenchData]:

@@ -20,11 +20,11 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..engine import Engine, EngineConfig, LocalEngine, TaskFailed, open_engine
+from ..engine import EngineConfig, open_engine
 from ..eval.metrics import VideoTimeError, time_errors
 from ..sync.config import DriftConfig, SyncConfig
 from ..sync.drift import DriftSolution
-from ..sync.posefree import PoseFreeConfig, PoseFreePair, fit_at_time_map
+from ..sync.posefree import PoseFreePair
 from ..types import CueBundle, SyncResult
 
 log = logging.getLogger(__name__)
@@ -37,7 +37,6 @@ class DroneBenchResult:
     sync_drift: SyncResult
     sync_constant: SyncResult
     pairs: dict[tuple[str, str], PoseFreePair | None]  # what each pair's tracks gave (sync.posefree)
-    fit_at_truth: dict[tuple[str, str], tuple[float, float]]  # (median Sampson px, inlier share)
     errors_drift: dict[str, VideoTimeError | None]  # per camera against the README (eval.metrics.time_errors)
     errors_constant: dict[str, VideoTimeError | None]
     gt_drift_ppm: dict[str, float]  # the README's, per camera (camera 0: 0)
@@ -45,29 +44,6 @@ class DroneBenchResult:
     wall_constant_s: float  # the ablation's energies and Stage 2 (its pairs' estimates reused)
     workers: int  # Ray CPUs (1: in this process)
     engine_start_s: float  # starting the embedded Ray (0 in this process), not in wall_s
-
-
-def _truth_fit(shared: tuple[CueBundle, dict[str, float], dict[str, float], PoseFreeConfig],
-               pair: tuple[str, str]) -> tuple[float, float]:
-    """fit_at_time_map of one pair at the ground truth's time map (an engine task)."""
-    bundle, gt_offsets_s, gt_drift_ppm, cfg = shared
-    a, b = pair
-    va, vb = bundle.video(a), bundle.video(b)
-    da, db = gt_drift_ppm[a] * 1e-6, gt_drift_ppm[b] * 1e-6
-    return fit_at_time_map(va.timestamps_s, bundle.tracks[a].xy[0], bundle.cameras[a].K,
-                           vb.timestamps_s, bundle.tracks[b].xy[0], bundle.cameras[b].K,
-                           (gt_offsets_s[b] - gt_offsets_s[a]) / (1 + da), (1 + db) / (1 + da), cfg)
-
-
-def fits_at_truth(bundle: CueBundle, gt_offsets_s: dict[str, float], gt_drift_ppm: dict[str, float],
-                  cfg: PoseFreeConfig, engine: Engine | None = None) -> dict[tuple[str, str], tuple[float, float]]:
-    """Per pair, how well the ground truth's time map explains the tracks (F refitted), on the
-    engine (default: in this process); a pair whose task died is left out."""
-    names = bundle.names
-    pairs = [(a, b) for i, a in enumerate(names) for b in names[i + 1:]]
-    out = (engine or LocalEngine()).map(_truth_fit, pairs, shared=(bundle, gt_offsets_s, gt_drift_ppm, cfg),
-                                        desc="fits at the truth", unit="pair", progress=False)
-    return {k: fit for k, fit in zip(pairs, out) if not isinstance(fit, TaskFailed)}
 
 
 def camera_errors(sol: DriftSolution, bundle: CueBundle, gt_offsets_s: dict[str, float],
@@ -90,14 +66,12 @@ def _as_solution(res: SyncResult) -> DriftSolution:
                          {v: float(std.get(v) or 0.0) for v in ok}, {}, res.drift_ppm is not None)
 
 
-def run_drone_bench(bundle: CueBundle, gt_drift_ppm: dict[str, float], workers: int = 2,
-                    truth_fit: bool = True,
-                    estimates: dict[tuple[str, str], PoseFreePair | None] | None = None) -> DroneBenchResult:
+def run_drone_bench(bundle: CueBundle, gt_drift_ppm: dict[str, float], workers: int = 2) -> DroneBenchResult:
     """The product's path (pipeline.stage12.sync_bundle on the pose-free bundle) with --drift, then
     the constant-offset model on the same pairs' estimates (the ablation, timed apart).
     workers > 1: the pairs run as Ray tasks on an embedded Ray of that many CPUs (`sync --engine
     ray --ray-cpus N`), started before the clock does (its start is reported apart); 1: in this
-    process. estimates: the pairs' sync.posefree estimates of an earlier run (then not timed again)."""
+    process."""
     from ..pipeline.stage12 import estimate_pose_free_pairs, sync_bundle
 
     if bundle.gt_offsets_s is None:
@@ -109,17 +83,14 @@ def run_drone_bench(bundle: CueBundle, gt_drift_ppm: dict[str, float], workers: 
     with open_engine(EngineConfig("ray", ray_cpus=workers) if workers > 1 else EngineConfig()) as engine:
         start_s = time.perf_counter() - t_start
         t0 = time.perf_counter()
-        est = (dict(estimates) if estimates is not None else
-               estimate_pose_free_pairs(bundle, pairs, cfg_d, engine=engine))
+        est = estimate_pose_free_pairs(bundle, pairs, cfg_d, engine=engine)
         res_d = sync_bundle(bundle, cfg_d, progress=False, pose_free=est, engine=engine)
         wall = time.perf_counter() - t0
         t1 = time.perf_counter()
         res_c = sync_bundle(bundle, SyncConfig(), progress=False, pose_free=est, engine=engine)
         wall_c = time.perf_counter() - t1
-        at_truth = (fits_at_truth(bundle, bundle.gt_offsets_s, gt_drift_ppm, PoseFreeConfig(), engine)
-                    if truth_fit else {})  # not timed
     sol, sol_c = _as_solution(res_d), _as_solution(res_c)
-    return DroneBenchResult(sol, sol_c, res_d, res_c, est, at_truth,
+    return DroneBenchResult(sol, sol_c, res_d, res_c, est,
                             camera_errors(sol, bundle, bundle.gt_offsets_s, gt_drift_ppm),
                             camera_errors(sol_c, bundle, bundle.gt_offsets_s, gt_drift_ppm), dict(gt_drift_ppm),
                             wall, wall_c, workers, start_s)
@@ -157,8 +128,6 @@ def format_table(res: DroneBenchResult, bundle: CueBundle) -> str:
         head = (f"  {a}-{b}: tracks {p.offset_s:+10.4f} s {p.drift_ppm:+8.1f} ± {p.drift_std_ppm:6.1f} ppm "
                 f"inliers {p.inlier_share:.2f} of {p.num_matches} ({p.median_sampson_px:.2f} px)"
                 if p is not None else f"  {a}-{b}: tracks gave nothing")
-        if (a, b) in res.fit_at_truth:
-            head += f"; truth's fit {res.fit_at_truth[(a, b)][0]:.2f} px {res.fit_at_truth[(a, b)][1]:.2f}"
         if land.decision.accepted and a in gt and b in gt:
             da, db = gd.get(a, 0.0) * 1e-6, gd.get(b, 0.0) * 1e-6
             t_off, t_ppm = (gt[b] - gt[a]) / (1 + da), ((1 + db) / (1 + da) - 1) * 1e6

@@ -1,4 +1,4 @@
-"""Size and write time of vs_inspect recordings (.rrd), one line per case (vs-inspect bench-recording).
+"""Size and write time of vs_inspect recordings (.rrd), one line per case (vs-inspect bench recording).
 
     demo       the demo scene (cue-level synthetic, no frames): default options, --rrd-minimal,
                --rrd-all-offsets --rrd-all-tracks

@@ -88,22 +88,22 @@ def _fps_of(paths: Sequence[Path]) -> dict[str, float]:
 def clip_scenes(data: Path, names: Sequence[str] = CLIP_SCENES) -> list[Scene]:
     """The VisualSync clips: clip <scene>_<cam>_<start>_<end>_<k>.mp4 starts at frame start of a
     common 10 fps timeline."""
-    from .stage0 import visualsync_truth
+    from .videos import clip_truth
 
     out = []
     for name in names:
         paths = tuple(sorted((data / "visualsync_clips" / name).glob("*.mp4")))
         if not paths:
             raise InputError(f"no clips of {name} in {data / 'visualsync_clips'}")
-        out.append(Scene("clips", name, paths, None, visualsync_truth(paths), _fps_of(paths)))
+        out.append(Scene("clips", name, paths, None, clip_truth(paths), _fps_of(paths)))
     return out
 
 
 def caliscope_scenes(data: Path, scratch: Path, trials: int = 3, max_cut: int = 12, seed: int = 0) -> list[Scene]:
     """caliscope's four webcams, each cut by a random number of leading frames (the cuts of
-    `bench-stage0 caliscope --trials N`), estimated cameras; truth from the frames' timestamps."""
+    `bench stage0 caliscope --trials N`), estimated cameras; truth from the frames' timestamps."""
     from .datasets import read_caliscope_frame_times
-    from .stage0 import caliscope_truth, write_cut
+    from .videos import caliscope_truth, write_cut
 
     root = data / "caliscope_post_optimization"
     frame_times = read_caliscope_frame_times(root)
@@ -140,13 +140,12 @@ def demo_scene(scratch: Path) -> Scene:
 def arc_scenes(set_name: str, scratch: Path) -> list[Scene]:
     """The rendered scenes of one arcs set (vs_inspect.bench.arcs), estimated cameras."""
     from ..synth.videos import render_unless_cached
-    from .arcs import SCENE_SETS, parse_scene
+    from .scenes import SCENE_SETS, scene_config
 
     out = []
     for name in SCENE_SETS[set_name]:
-        sc = parse_scene(name)
         folder = scratch / "inputs" / name
-        render_unless_cached(folder, sc.scene_config(), progress=False)
+        render_unless_cached(folder, scene_config(name), progress=False)
         paths = tuple(sorted(folder.glob("cam*.mp4")))
         truth = json.loads((folder / "gt.json").read_text())["offsets_s"]
         rates = {c["name"]: c["fps"] for c in json.loads((folder / "scene.json").read_text())["cameras"]}
@@ -171,7 +170,7 @@ def run_scene(scene: Scene, scratch: Path, off: frozenset[str] = frozenset(),
     from ..errors import NoUsableVideos
     from ..pipeline.stage0 import run_stage0
     from ..pipeline.stage12 import sync_bundle
-    from .arcs import frame_errors
+    from .videos import offset_errors_s
 
     unknown = off - set(RULES)
     if unknown:
@@ -187,7 +186,9 @@ def run_scene(scene: Scene, scratch: Path, off: frozenset[str] = frozenset(),
         return Outcome({v: None for v in scene.truth_s if v != ref}, time.perf_counter() - t0)
     res = sync_bundle(bundle, stage1_config(sync, frozenset(RULES) - off), progress=False, memo=memo)
     offsets = {v: res.offsets_s.get(v) for v in scene.truth_s}
-    return Outcome(frame_errors(res.reference, offsets, scene.truth_s, scene.fps), time.perf_counter() - t0)
+    errors = offset_errors_s(res.reference, offsets, scene.truth_s)
+    frames = {v: None if e is None else e * min(scene.fps[v], scene.fps[res.reference]) for v, e in errors.items()}
+    return Outcome(frames, time.perf_counter() - t0)
 
 
 # ---- the ablation ------------------------------------------------------------------------------

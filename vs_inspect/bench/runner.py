@@ -12,6 +12,7 @@ import logging
 import math
 import os
 import platform
+import tempfile
 import time
 from collections import defaultdict
 from dataclasses import asdict, dataclass, replace
@@ -21,10 +22,11 @@ import numpy as np
 from tqdm import tqdm
 
 from .. import __version__
-from .datasets import CALISCOPE, DIFFICULTIES, caliscope_cuts, cue_scene, load_caliscope
-from .suite import PlanOptions, Row, failed, run_dataset, stage0_failed
-from .videos import (CLIP_SCENES, RENDERED_SCENES, clip_scene, rendered_scene,
-                     video_pipeline_available)
+from ..errors import InputError
+from ..io.atomic import write_json_atomic, write_text_atomic
+from .datasets import CALISCOPE, DIFFICULTIES, BenchData, caliscope_cuts, cue_scene, load_caliscope
+from .suite import PlanOptions, Row, failed, run_dataset, run_videos
+from .videos import CLIP_SCENES, CLIPS, clip_set, rendered_set
 
 log = logging.getLogger(__name__)
 
@@ -43,7 +45,7 @@ def full_plan() -> list[DatasetPlan]:
     plan = [DatasetPlan(f"caliscope/cut{i}", PlanOptions()) for i in range(CALISCOPE_CUTS)]
     plan += [DatasetPlan(f"cue/{d}/s{s}", PlanOptions()) for s in CUE_SEEDS for d in DIFFICULTIES]
     plan += [DatasetPlan(f"clips/{s}", PlanOptions()) for s in CLIP_SCENES]
-    plan += [DatasetPlan(f"rendered/s{s}", PlanOptions()) for s in RENDERED_SCENES]
+    plan += [DatasetPlan("rendered/s0", PlanOptions())]
     return plan
 
 
@@ -65,56 +67,50 @@ def run_plan(plan: list[DatasetPlan], data_root: Path, progress: bool = True,
     save partial results of a long run)."""
     rows: list[Row] = []
     skipped: list[Skipped] = []
-    session = None
+    sessions: dict = {}
     for dp in tqdm(plan, desc="benchmark datasets", unit="dataset", disable=not progress):
         if after_each is not None and (rows or skipped):
             after_each(rows, skipped)
-        kind = dp.name.split("/")[0]
-        if kind == "cue":
-            _, diff, seed = dp.name.split("/")
-            rows += run_dataset(cue_scene(diff, int(seed[1:])), dp.opts)
-        elif kind == "caliscope":
-            root = Path(data_root) / CALISCOPE
-            if not root.is_dir():
-                skipped.append(Skipped(dp.name, f"not run: {root} not found"))
-                continue
-            session = session or load_caliscope(root)
-            i = int(dp.name.split("cut")[1])
-            rows += run_dataset(caliscope_cuts(session, i + 1)[i], dp.opts)
-        elif kind == "clips":
-            scene = dp.name.split("/")[1]
-            root = Path(data_root) / "visualsync_clips"
-            if not video_pipeline_available():
-                skipped.append(Skipped(dp.name, "not run: video pipeline not available in this build"))
-                continue
-            if not (root / scene).is_dir():
-                skipped.append(Skipped(dp.name, f"not run: {root / scene} not found"))
-                continue
-            try:
-                data, stage0, error = clip_scene(root, scene)
-            except Exception as exc:  # noqa: BLE001  (unreadable clips are a result too)
-                from .datasets import BenchData
-                n = len(list((root / scene).glob("*.mp4")))
-                dummy = BenchData(dp.name, "clips", None, None, 0.1, {"videos": n})
-                for method in ("vs_inspect", "motion-xcorr", "ransac-inlier"):
-                    rows.append(failed(dummy, method, "default", exc))
-                continue
-            if error is not None:
-                rows += stage0_failed(data, error, stage0)
-                continue
-            rows += run_dataset(data, dp.opts, stage0_s=stage0)
-        elif kind == "rendered":
-            import tempfile
-            seed = int(dp.name.split("/s")[1])
-            with tempfile.TemporaryDirectory(prefix="vs_bench_render_") as tmp:
-                data, stage0, error = rendered_scene(seed, Path(tmp))
-            if error is not None:
-                rows += stage0_failed(data, error, stage0)
-                continue
-            rows += run_dataset(data, dp.opts, stage0_s=stage0)
+        got = _dataset_rows(dp, Path(data_root), sessions)
+        if isinstance(got, Skipped):
+            skipped.append(got)
         else:
-            raise ValueError(f"unknown dataset {dp.name!r}")
+            rows += got
     return rows, skipped
+
+
+def _dataset_rows(dp: DatasetPlan, data_root: Path, sessions: dict) -> list[Row] | Skipped:
+    """One dataset's rows (sessions: the caliscope session, parsed once)."""
+    kind, _, rest = dp.name.partition("/")
+    if kind == "cue":
+        diff, seed = rest.split("/")
+        return run_dataset(cue_scene(diff, int(seed[1:])), dp.opts)
+    if kind == "caliscope":
+        root = data_root / CALISCOPE
+        if not root.is_dir():
+            return Skipped(dp.name, f"not run: {root} not found")
+        sessions.setdefault(CALISCOPE, load_caliscope(root))
+        i = int(rest.removeprefix("cut"))
+        return run_dataset(caliscope_cuts(sessions[CALISCOPE], i + 1)[i], dp.opts)
+    if kind == "clips":
+        if not (data_root / CLIPS / rest).is_dir():
+            return Skipped(dp.name, f"not run: {data_root / CLIPS / rest} not found")
+        return _videos(dp, lambda: clip_set(data_root, rest), "clips")
+    if kind == "rendered":
+        with tempfile.TemporaryDirectory(prefix="vs_bench_render_") as tmp:
+            return _videos(dp, lambda: rendered_set(f"rendered_{rest}", Path(tmp)), "rendered")
+    raise ValueError(f"unknown dataset {dp.name!r}")
+
+
+def _videos(dp: DatasetPlan, make, group: str) -> list[Row]:
+    """A video dataset's rows (suite.run_videos), or failed rows when its videos cannot be read."""
+    try:
+        vs = make()
+        return run_videos(vs, dp.name, group, dp.opts)
+    except Exception as exc:  # noqa: BLE001  (unreadable videos are a result too)
+        data = BenchData(dp.name, group, None, None, float("nan"), {})
+        return [failed(data, m, "default", f"{type(exc).__name__}: {exc}")
+                for m in ("vs_inspect", "motion-xcorr", "ransac-inlier")]
 
 
 # ---- tables ---------------------------------------------------------------------------------
@@ -344,7 +340,8 @@ def to_markdown(rows: list[Row], skipped: list[Skipped], wall_s: float, command:
         "cue bundle) counts as failed in every variant of its group, so that each setting is averaged over the "
         "same datasets. Times: stage 0 = cue extraction from video, stage 1 = "
         "pair landscapes (peers: pair scores), stage 2 = global solve; `–` where a variant reuses the default "
-        "run's Stage 1. Peak MB = peak traced Python/numpy memory of one run (tracemalloc).", "",
+        "run's Stage 1. Peak MB = peak traced Python/numpy memory of one run from a cue bundle (tracemalloc; "
+        "not traced for the video datasets' default runs, which go from the videos through pipeline.run).", "",
         "Data: `cue/<level>` = cue-level synthetic scenes (vs_inspect.synth.cues, 5 cameras of which 2 "
         "hand-held, 1 variable-rate, 1 pair without matches and 1 pair with only wrong matches; easy = 0.3 px "
         "noise, 10 % wrong pairs, 0.1° pose error; default = 0.8 px, 25 %, 0.5°; hard = 1.5 px, 35 %, 1°; "
@@ -388,7 +385,6 @@ def rows_from_json(d: dict) -> tuple[list[Row], list[Skipped]]:
 
 def write_outputs(rows, skipped, wall_s, command, out: Path | None, json_out: Path | None,
                   machine_info: dict | None = None) -> None:
-    from ..io.atomic import write_json_atomic, write_text_atomic
     if out is not None:
         keep = ""
         if out.is_file():
@@ -400,11 +396,50 @@ def write_outputs(rows, skipped, wall_s, command, out: Path | None, json_out: Pa
         write_json_atomic(rows_to_json(rows, skipped, wall_s, command, machine_info), json_out)
 
 
-def timed_run(plan, data_root, progress=True, after_each=None):
-    t = time.perf_counter()
-    rows, skipped = run_plan(plan, data_root, progress, after_each)
-    return rows, skipped, time.perf_counter() - t
+def run_accuracy(quick: bool, data_root: Path, only: str | None = None, skip: str | None = None,
+                 out: Path | None = None, json_out: Path | None = None, progress: bool = True
+                 ) -> tuple[str, list[Row], list[Skipped], float]:
+    """Run the quick or full plan (only / skip: comma-separated dataset name prefixes), write the
+    markdown (out) and the rows (json_out, also after every dataset); (text tables, rows,
+    skipped, wall s)."""
+    plan = quick_plan() if quick else full_plan()
+    if only:
+        plan = [d for d in plan if d.name.startswith(tuple(only.split(",")))]
+    if skip:
+        plan = [d for d in plan if not d.name.startswith(tuple(skip.split(",")))]
+    cmd = "vs-inspect bench accuracy" + (" --quick" if quick else "") + (f" --only {only}" if only else "") \
+        + (f" --skip {skip}" if skip else "")
+    info, t0 = machine(), time.perf_counter()
+
+    def save_partial(rows, skipped):  # a long run keeps what it has measured so far
+        if json_out is not None:
+            write_json_atomic(rows_to_json(rows, skipped, time.perf_counter() - t0, cmd + " (partial)", info,
+                                           [d.name for d in plan]), json_out)
+
+    rows, skipped = run_plan(plan, data_root, progress, save_partial)
+    wall = time.perf_counter() - t0
+    write_outputs(rows, skipped, wall, cmd, out, json_out, info)
+    return to_text(rows, skipped), rows, skipped, wall
 
 
-__all__ = ["DatasetPlan", "full_plan", "quick_plan", "run_plan", "timed_run", "tables", "to_text",
-           "to_markdown", "write_outputs", "rows_to_json", "rows_from_json", "json"]
+def tables_from_json(files: list[Path], out: Path | None) -> str:
+    """The tables of earlier runs' JSON files (a dataset in a later file replaces its rows from
+    earlier ones), written to out when given; the text tables."""
+    rows, skipped, walls, cmds, info, commits = [], [], [], [], None, {}
+    for f in files:
+        if not f.is_file():
+            raise InputError(f"{f} not found")
+        d = json.loads(f.read_text())
+        r, s = rows_from_json(d)
+        again = {x.dataset for x in r} | {x.name for x in s}
+        rows = [x for x in rows if x.dataset not in again] + r
+        skipped = [x for x in skipped if x.name not in again] + s
+        walls.append(d.get("wall_s") or float("nan"))
+        cmds.append(d.get("command", "vs-inspect bench accuracy"))
+        info = info or d.get("machine")
+        commits[f.name] = (d.get("machine") or {}).get("git_commit")
+    if info is not None and len(set(commits.values())) > 1:  # rows of different code: say which is which
+        info = {**info, "git_commit": ", ".join(f"{c} ({n})" for n, c in commits.items())}
+    cmd = "; ".join(f"{c} --json {f.name}" for c, f in zip(cmds, files))
+    write_outputs(rows, skipped, max(walls), cmd, out, None, info)
+    return to_text(rows, skipped)

@@ -1,4 +1,4 @@
-"""Scaling of Stage 1 + 2 with the rig size, on both engines (vs-inspect bench-scale).
+"""Scaling of Stage 1 + 2 with the rig size, on both engines (vs-inspect bench scale).
 
 A cue-level synthetic ring rig (vs_inspect.synth.cues) of N cameras, run from its cue bundle with
 every pair, a random spanning tree (rst) or each camera's k nearest cameras (knn:K), on the local
@@ -80,7 +80,7 @@ def _worker_peaks_mb() -> list[float]:
 
 
 def run_cell(cameras: int, engine: str, pairs_mode: str, ray_cpus: int | None, seed: int = 0) -> ScaleRow:
-    """One cell in this process (bench-scale runs each in a fresh process)."""
+    """One cell in this process (bench scale runs each in a fresh process)."""
     from ..engine import EngineConfig, open_engine
     from ..pipeline.config import RunConfig
     from ..pipeline.run import run

@@ -15,6 +15,7 @@ import math
 import time
 import tracemalloc
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -27,8 +28,10 @@ from ..sync.decision import decide
 from ..sync.pairs import select_pairs
 from ..pipeline.stage12 import solve_stage2, sync_bundle
 from ..sync.sightings import RESIDUAL as SIGHTING
-from ..types import PairLandscape
+from ..pipeline.config import RunConfig
+from ..types import PairLandscape, RunResult
 from .datasets import BenchData
+from .videos import VideoSet
 
 log = logging.getLogger(__name__)
 
@@ -111,30 +114,78 @@ def score(data: BenchData, offsets_s: dict, method: str, variant: str, **extra) 
                m.num_unresolved, len(truth), **extra)
 
 
-def stage0_failed(data: BenchData, exc: BaseException, stage0_s: float) -> list[Row]:
-    """Stage 0 (cue extraction) failed: vs_inspect and the RANSAC peer (which needs the tracks
-    and track pairs) fail with it; the motion peer runs on the decoded frames alone."""
+def stage0_failed(data: BenchData, error: str, stage0_s: float) -> list[Row]:
+    """Stage 0 gave no cue bundle: vs_inspect and the RANSAC peer (which needs the tracks and
+    track pairs) fail with it; the motion peer runs on the decoded frames alone."""
     from ..baselines.motion_xcorr import sync_motion_xcorr_videos
 
-    rows = [failed(data, m, "default", exc, stage0_s=stage0_s) for m in ("vs_inspect", "ransac-inlier")]
+    rows = [failed(data, m, "default", error, stage0_s=stage0_s) for m in ("vs_inspect", "ransac-inlier")]
     try:
         with Meter() as m:
             pr = sync_motion_xcorr_videos(list(data.notes["videos_info"]), data.notes["motion_signals"])
         rows.insert(1, score(data, pr.offsets_s, "motion-xcorr", "default", stage1_s=pr.timings_s["stage1_s"],
                              stage2_s=pr.timings_s["stage2_s"], peak_mb=m.peak_mb))
-    except Exception as exc2:  # noqa: BLE001
-        rows.insert(1, failed(data, "motion-xcorr", "default", exc2))
+    except Exception as exc:  # noqa: BLE001
+        rows.insert(1, failed(data, "motion-xcorr", "default", _text(exc)))
     return rows
 
 
-def failed(data: BenchData, method: str, variant: str, exc: BaseException, **extra) -> Row:
+def _text(exc: BaseException) -> str:
+    return f"{type(exc).__name__}: {exc}"
+
+
+def failed(data: BenchData, method: str, variant: str, error: str, **extra) -> Row:
     if data.bundle is not None:
         n = len(data.bundle.gt_offsets_s)
     else:
         n = len(data.notes["truth"]) if "truth" in data.notes else int(data.notes.get("videos", 0))
-    log.warning("%s %s %s failed: %s", data.name, method, variant, exc)
+    log.warning("%s %s %s failed: %s", data.name, method, variant, error)
     return Row(data.name, data.group, method, variant, 0.0, 0.0, float("nan"), float("nan"),
-               float("nan"), n, n, error=f"{type(exc).__name__}: {exc}"[:200], **extra)
+               float("nan"), n, n, error=error[:200], **extra)
+
+
+def frame_motion_signal(src, max_side: int = 320) -> tuple[np.ndarray, np.ndarray]:
+    """Mean absolute grey-level difference of consecutive frames per second (the motion peer on video)."""
+    import cv2
+
+    from ..baselines.motion_xcorr import motion_signal_from_frames
+    from ..io.video import iter_frames
+
+    frames = (cv2.cvtColor(img, cv2.COLOR_BGR2GRAY) for _, img in iter_frames(src, max_side=max_side))
+    return motion_signal_from_frames(frames, src.info.timestamps_s)
+
+
+def run_videos(vs: VideoSet, name: str, group: str, opts: PlanOptions) -> list[Row]:
+    """A video dataset: the motion peer's signals from the decoded frames, then the videos through
+    pipeline.run as `vs-inspect sync` runs them (its result is the default row), then the
+    ablations and the RANSAC peer on the cue bundle that run wrote (the truth kept for every
+    input video, so that a video Stage 0 left out counts as unresolved everywhere)."""
+    import tempfile
+
+    from ..io.bundle import read_bundle
+    from ..io.calibration import load_calibration, to_camera_track
+    from ..io.video import open_video
+    from .videos import run_set
+
+    srcs = [open_video(p) for p in vs.videos]
+    notes = {"motion_signals": {s.info.name: frame_motion_signal(s) for s in srcs}, "truth": vs.truth_s,
+             "videos_info": [s.info for s in srcs], "videos": len(srcs)}
+    frame_s = 1.0 / float(np.median(list(vs.fps.values())))
+    with tempfile.TemporaryDirectory(prefix="vs_bench_run_") as tmp:
+        run = run_set(vs, RunConfig(), Path(tmp))
+        cues = run.folder / "cues"
+        bundle = read_bundle(cues) if (cues / "bundle.json").is_file() else None
+    res, stage0_s = run.result, run.result.timings_s["stage0_with_io_s"]
+    if bundle is None:
+        data = BenchData(name, group, None, None, frame_s, notes)
+        return stage0_failed(data, f"NoUsableVideos: {res.headlines().get(res.reference, 'no video could be used')}",
+                             stage0_s)
+    exact = None
+    if vs.true_cameras is not None:
+        exact = {n: to_camera_track(c) for n, c in load_calibration(vs.true_cameras, bundle.names).items()}
+    data = BenchData(name, group, dataclasses.replace(bundle, gt_offsets_s=dict(vs.truth_s)), exact,
+                     frame_s, notes)
+    return run_dataset(data, opts, stage0_s=stage0_s, default=res)
 
 
 # ---- Stage 2 from given landscapes (ablations that keep Stage 1: pipeline.solve_stage2) --------
@@ -172,88 +223,96 @@ def stage1_pairwise(data: BenchData, lands: list[PairLandscape]) -> tuple[float,
 # ---- one dataset ------------------------------------------------------------------------------
 
 
-def run_dataset(data: BenchData, opts: PlanOptions, stage0_s: float = float("nan")) -> list[Row]:
+def run_dataset(data: BenchData, opts: PlanOptions, stage0_s: float = float("nan"),
+                default: RunResult | None = None) -> list[Row]:
+    """Every method and variant on one dataset's cue bundle; default: the result of the run that
+    made the bundle from videos (else Stage 1 + 2 on the bundle are the default run)."""
     rows: list[Row] = []
-    bundle = data.bundle
-    base_cfg = SyncConfig()
+    bundle, lands = data.bundle, None
     try:
-        with Meter() as m:
-            res = sync_bundle(bundle, base_cfg, progress=False)
+        res, peak_mb = default, float("nan")  # a video run's memory is not traced (it would slow Stage 0)
+        if res is None:
+            with Meter() as m:
+                res = sync_bundle(bundle, SyncConfig(), progress=False)
+            peak_mb = m.peak_mb
         rows.append(score(data, res.offsets_s, "vs_inspect", "default", stage0_s=stage0_s,
-                          stage1_s=res.timings_s.get("stage1_s", m.seconds),
-                          stage2_s=res.timings_s.get("stage2_s", float("nan")), peak_mb=m.peak_mb))
+                          stage1_s=res.timings_s["stage1_s"], stage2_s=res.timings_s["stage2_s"],
+                          peak_mb=peak_mb))
         lands = list(res.pairs)
     except Exception as exc:  # noqa: BLE001  (a failure is a result)
-        rows.append(failed(data, "vs_inspect", "default", exc, stage0_s=stage0_s))
-        lands = None
-
+        rows.append(failed(data, "vs_inspect", "default", _text(exc), stage0_s=stage0_s))
     if lands is not None:
-        # Stage 2 ablations on the same landscapes.
-        t = time.perf_counter()
-        rows.append(score(data, solve_stage2(bundle, lands, SolveConfig(solver="ls")).offsets_s, "vs_inspect",
-                          "solver=ls", stage2_s=time.perf_counter() - t))
-        t = time.perf_counter()
-        rows.append(score(data, solve_stage2(bundle, without_filter(lands), SolveConfig()).offsets_s, "vs_inspect",
-                          "filter=off", stage2_s=time.perf_counter() - t))
-        a100, a500 = stage1_pairwise(data, lands)
-        rows.append(Row(data.name, data.group, "vs_inspect", "stage1-only", a100, a500, float("nan"),
-                        float("nan"), float("nan"), 0, len(bundle.gt_offsets_s)))
-        # candidates: the pairs with track pairs, and those a worn-camera sighting timed
-        has = {k for k, v in bundle.pairs.items() if len(v.index)} | {(p.a, p.b) for p in lands
-                                                                       if p.residual == SIGHTING}
-        by = {(p.a, p.b): p for p in lands}
-        for mode in PAIR_MODES:
-            for seed in opts.pair_seeds:
-                sel = PairSelection.parse(mode, seed)
-                chosen = select_pairs(bundle.names, has, sel)
-                t = time.perf_counter()
-                offs = solve_stage2(bundle, [by[p] for p in chosen], SolveConfig()).offsets_s
-                rows.append(score(data, offs, "vs_inspect", f"pairs={mode}/seed={seed}",
-                                  stage2_s=time.perf_counter() - t))
-
-    # Stage 1 ablations: other residuals, exact cameras.
+        rows += stage2_ablations(data, lands, opts.pair_seeds)
+    # Stage 1 ablations: other residuals, exact cameras
     for r in opts.residuals:
-        if r == base_cfg.landscape.residual:
-            continue
-        cfg = SyncConfig(landscape=LandscapeConfig(residual=r))
-        try:
-            with Meter() as m:
-                res = sync_bundle(bundle, cfg, progress=False)
-            rows.append(score(data, res.offsets_s, "vs_inspect", f"residual={r}",
-                              stage1_s=res.timings_s["stage1_s"], stage2_s=res.timings_s["stage2_s"],
-                              peak_mb=m.peak_mb))
-        except Exception as exc:  # noqa: BLE001
-            rows.append(failed(data, "vs_inspect", f"residual={r}", exc))
+        if r != SyncConfig().landscape.residual:
+            rows.append(_variant(data, f"residual={r}", bundle, SyncConfig(landscape=LandscapeConfig(residual=r))))
     if opts.true_cameras and data.true_cameras is not None:
+        rows.append(_variant(data, "cameras=true", dataclasses.replace(bundle, cameras=dict(data.true_cameras)),
+                             SyncConfig()))
+    if opts.peers:
+        rows += _peers(data, stage0_s)
+    return rows
+
+
+def stage2_ablations(data: BenchData, lands: list[PairLandscape], pair_seeds: tuple[int, ...]) -> list[Row]:
+    """The Stage 2 ablations on the default run's landscapes: least squares, the spurious-pair
+    filter off, Stage 1 alone, and fewer pairs (PAIR_MODES, each with every pair seed)."""
+    bundle = data.bundle
+    rows = []
+    for variant, chosen, cfg in (("solver=ls", lands, SolveConfig(solver="ls")),
+                                 ("filter=off", without_filter(lands), SolveConfig())):
+        t = time.perf_counter()
+        rows.append(score(data, solve_stage2(bundle, chosen, cfg).offsets_s, "vs_inspect", variant,
+                          stage2_s=time.perf_counter() - t))
+    a100, a500 = stage1_pairwise(data, lands)
+    rows.append(Row(data.name, data.group, "vs_inspect", "stage1-only", a100, a500, float("nan"),
+                    float("nan"), float("nan"), 0, len(bundle.gt_offsets_s)))
+    # candidates: the pairs with track pairs, and those a worn-camera sighting timed
+    has = {k for k, v in bundle.pairs.items() if len(v.index)} | {(p.a, p.b) for p in lands
+                                                                   if p.residual == SIGHTING}
+    by = {(p.a, p.b): p for p in lands}
+    for mode in PAIR_MODES:
+        for seed in pair_seeds:
+            chosen = select_pairs(bundle.names, has, PairSelection.parse(mode, seed))
+            t = time.perf_counter()
+            offs = solve_stage2(bundle, [by[p] for p in chosen], SolveConfig()).offsets_s
+            rows.append(score(data, offs, "vs_inspect", f"pairs={mode}/seed={seed}",
+                              stage2_s=time.perf_counter() - t))
+    return rows
+
+
+def _variant(data: BenchData, variant: str, bundle, cfg: SyncConfig) -> Row:
+    """Stage 1 + 2 again on a bundle with other settings (timed, memory traced)."""
+    try:
+        with Meter() as m:
+            res = sync_bundle(bundle, cfg, progress=False)
+        return score(data, res.offsets_s, "vs_inspect", variant, stage1_s=res.timings_s["stage1_s"],
+                     stage2_s=res.timings_s["stage2_s"], peak_mb=m.peak_mb)
+    except Exception as exc:  # noqa: BLE001
+        return failed(data, "vs_inspect", variant, _text(exc))
+
+
+def _peers(data: BenchData, stage0_s: float) -> list[Row]:
+    """The two classical peers on the dataset (the motion peer on every decoded video when there
+    are videos, also those Stage 0 left out of the bundle: it needs no cameras)."""
+    bundle = data.bundle
+    signals, every_video = data.notes.get("motion_signals"), data.notes.get("videos_info")
+
+    def motion():
+        if every_video is not None:
+            from ..baselines.motion_xcorr import sync_motion_xcorr_videos
+            return sync_motion_xcorr_videos(list(every_video), signals, reference=bundle.names[0])
+        return sync_motion_xcorr(bundle, signals=signals)
+
+    rows = []
+    for method, fn in (("motion-xcorr", motion), ("ransac-inlier", lambda: sync_ransac_inlier(bundle))):
         try:
-            exact = dataclasses.replace(bundle, cameras=dict(data.true_cameras))
             with Meter() as m:
-                res = sync_bundle(exact, base_cfg, progress=False)
-            rows.append(score(data, res.offsets_s, "vs_inspect", "cameras=true",
-                              stage1_s=res.timings_s["stage1_s"], stage2_s=res.timings_s["stage2_s"],
+                pr = fn()
+            rows.append(score(data, pr.offsets_s, method, "default", stage0_s=stage0_s,
+                              stage1_s=pr.timings_s["stage1_s"], stage2_s=pr.timings_s["stage2_s"],
                               peak_mb=m.peak_mb))
         except Exception as exc:  # noqa: BLE001
-            rows.append(failed(data, "vs_inspect", "cameras=true", exc))
-
-    if opts.peers:
-        signals = data.notes.get("motion_signals")
-        every_video = data.notes.get("videos_info")  # decoded videos: the motion peer needs no cameras,
-        # so it runs on every video, also those that Stage 0 left out of the bundle
-
-        def motion():
-            if every_video is not None:
-                from ..baselines.motion_xcorr import sync_motion_xcorr_videos
-                return sync_motion_xcorr_videos(list(every_video), signals, reference=bundle.names[0])
-            return sync_motion_xcorr(bundle, signals=signals)
-
-        for method, fn in (("motion-xcorr", motion),
-                           ("ransac-inlier", lambda: sync_ransac_inlier(bundle))):
-            try:
-                with Meter() as m:
-                    pr = fn()
-                rows.append(score(data, pr.offsets_s, method, "default", stage0_s=stage0_s,
-                                  stage1_s=pr.timings_s["stage1_s"], stage2_s=pr.timings_s["stage2_s"],
-                                  peak_mb=m.peak_mb))
-            except Exception as exc:  # noqa: BLE001
-                rows.append(failed(data, method, "default", exc, stage0_s=stage0_s))
+            rows.append(failed(data, method, "default", _text(exc), stage0_s=stage0_s))
     return rows

@@ -1,4 +1,4 @@
-"""End-to-end time of `vs-inspect sync` on videos (vs-inspect bench-timing), against the time
+"""End-to-end time of `vs-inspect sync` on videos (vs-inspect bench timing), against the time
 target: 4 × 10 s 720p videos in under 3 minutes on 2 cores, Stage 0 from video to offsets.
 
 A rendered scene (vs_inspect.synth: 3 static + 1 hand-held camera, every video as long, exact
@@ -27,6 +27,8 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..eval.metrics import evaluate_offsets
+from ..synth.world import SceneConfig
+from .scenes import RENDERED
 
 TARGET_S = 180.0  # the time target: 4 × 10 s 720p videos in under 3 minutes on 2 cores
 
@@ -42,42 +44,21 @@ COLUMNS = ("scene", "cameras") + tuple(c for c, _ in STAGES) + (
     "other", "wall_s", "cpu_s", "rss_mb", "resolved", "med_ms", "max_ms", "target")
 
 
-@dataclass(frozen=True)
-class TimingScene:
-    """The rendered scene a timing run synchronizes."""
-
-    width: int = 1280  # px
-    height: int = 720  # px
-    seconds: float = 10.0  # length of every video
-    fps: float | None = 30.0  # None = drawn per camera from 24-60 (the bench's mixed rates)
-    cameras: int = 4
-    moving: int = 1  # hand-held cameras among them
-    variable_rate: int = 0  # static cameras with a variable frame rate
-    same_length: bool = True  # every video lasts `seconds` (a fixed workload)
-    max_offset_s: float = 1.5  # start offsets drawn in ± this around cam0 (SceneConfig's default)
-    seed: int = 0
-
-    @property
-    def label(self) -> str:
-        rate = f"{self.fps:g}fps" if self.fps else "mixed-fps"
-        return f"{self.cameras}x{self.seconds:g}s {self.width}x{self.height} {rate}"
-
-    def scene_config(self):
-        from ..synth.world import SceneConfig
-        return SceneConfig(cameras=self.cameras, moving=self.moving, seconds=self.seconds,
-                           same_length=self.same_length, width=self.width, height=self.height,
-                           fps=self.fps, variable_rate=self.variable_rate,
-                           max_offset_s=self.max_offset_s, seed=self.seed)
+# the timed scene: 3 static + 1 hand-held camera, every video 10 s of 1280x720 at 30 fps
+TIMING_SCENE = SceneConfig(cameras=4, moving=1, seconds=10.0, same_length=True, width=1280, height=720,
+                           fps=30.0, seed=0)
+REFERENCE_SCENE = RENDERED  # the bench's 480x360 5 s rendered scene, as a load reference
 
 
-# the bench's "rendered" scene (bench.videos.rendered_scene), as a load reference
-REFERENCE_SCENE = TimingScene(width=480, height=360, seconds=5.0, fps=None, variable_rate=1,
-                              same_length=False)
+def label(scene: SceneConfig) -> str:
+    """'4x10s 1280x720 30fps': cameras, length, size and rate of a scene."""
+    rate = f"{scene.fps:g}fps" if scene.fps else "mixed-fps"
+    return f"{scene.cameras}x{scene.seconds:g}s {scene.width}x{scene.height} {rate}"
 
 
 @dataclass(frozen=True)
 class TimingRow:
-    scene: str  # TimingScene.label
+    scene: str  # label(the scene)
     cameras: str  # "estimated" or "calibration"
     stages_s: dict[str, float]  # column of STAGES -> s (absent stages are not in it)
     total_s: float  # the run's own total (result.json timings_s.total_s), s
@@ -91,9 +72,7 @@ class TimingRow:
     offsets_s: dict[str, float | None] = field(default_factory=dict)
     target_s: float | None = TARGET_S  # None: no target for this scene (the reference)
     videos_s: float | None = None  # wall time of the videos' own steps together (None: not recorded)
-    sfm_features: str | None = None  # estimated cameras: what the cameras came from ("sift",
-    # "xfeat" when auto's second try won: it roughly doubles the camera step on 720p, or
-    # "moving points" when the moving points' own two-view geometry replaced the reconstruction)
+    camera_source: str | None = None  # result.json's cues.camera_source: where the cameras came from
 
     @property
     def met(self) -> bool | None:
@@ -102,16 +81,15 @@ class TimingRow:
         return self.wall_s < self.target_s and self.resolved == self.videos
 
 
-def render(scene: TimingScene, workdir: Path, progress: bool = False) -> Path:
+def render(scene: SceneConfig, workdir: Path, progress: bool = False) -> Path:
     """The scene's folder in workdir, rendered unless a finished rendering of it is there."""
     from ..synth.videos import render_unless_cached
 
-    cfg = scene.scene_config()
     folder = Path(workdir) / (f"timing_{scene.width}x{scene.height}_{scene.seconds:g}s_"
                               f"{scene.fps or 'mixed'}_c{scene.cameras}_s{scene.seed}"
                               f"{'' if scene.max_offset_s == 1.5 else f'_o{scene.max_offset_s:g}'}"
                               f"{'' if scene.same_length else '_varlen'}")
-    render_unless_cached(folder, cfg, progress=progress)
+    render_unless_cached(folder, scene, progress=progress)
     return folder
 
 
@@ -163,14 +141,12 @@ def time_sync(folder: Path, out: Path, calibrated: bool, scene_label: str,
     m = evaluate_offsets({n: offsets.get(n) for n in truth}, truth, result["reference"])
     t = result.get("timings_s", {})
     stages = {col: float(t[key]) for col, key in STAGES if key in t}
-    sfm = (result.get("cues") or {}).get("sfm") or {}
-    features = "moving points" if (sfm.get("fallback") or {}).get("used") else sfm.get("features")
     return TimingRow(scene_label, "calibration" if calibrated else "estimated", stages,
                      float(t.get("total_s", math.nan)), wall, cpu, rss_mb,
                      sum(1 for n in truth if offsets.get(n) is not None), len(truth),
                      m.delta_med_ms, m.delta_max_ms, offsets, target_s,
                      videos_s=float(t["stage0_videos_s"]) if "stage0_videos_s" in t else None,
-                     sfm_features=features)
+                     camera_source=(result.get("cues") or {}).get("camera_source"))
 
 
 def _fmt(v: float | None, digits: int = 1) -> str:
@@ -190,7 +166,8 @@ def table_line(r: TimingRow) -> str:
     target = "-" if r.met is None else f"{'met' if r.met else 'MISSED'} (<{r.target_s:g} s)"
     if r.met is False and r.wall_s < r.target_s:  # say which half failed: fast, but not every video
         target = f"MISSED: in time (<{r.target_s:g} s), {r.resolved}/{r.videos} resolved"
-    cameras = f"{r.cameras} ({r.sfm_features})" if r.sfm_features else r.cameras
+    source = r.camera_source
+    cameras = r.cameras if source in (None, r.cameras) else f"{r.cameras} ({source})"
     cells = [r.scene, cameras] + [_fmt(r.stages_s.get(c)) for c, _ in STAGES] + [
         _fmt(r.wall_s - staged), _fmt(r.wall_s), _fmt(r.cpu_s), _fmt(r.max_rss_mb, 0),
         f"{r.resolved}/{r.videos}", _fmt(r.median_error_ms, 2), _fmt(r.max_error_ms, 2), target]
@@ -213,7 +190,7 @@ def ratios(rows: list[TimingRow], reference: list[TimingRow]) -> list[str]:
     return out
 
 
-def run_timing_bench(workdir: Path, scene: TimingScene = TimingScene(),
+def run_timing_bench(workdir: Path, scene: SceneConfig = TIMING_SCENE,
                      modes: tuple[str, ...] = ("estimated", "calibration"), with_reference: bool = False,
                      target_s: float = TARGET_S, extra_args: tuple[str, ...] = (),
                      timeout_s: float | None = None, progress: bool = False,
@@ -231,11 +208,11 @@ def run_timing_bench(workdir: Path, scene: TimingScene = TimingScene(),
             raise InputError(f"unknown camera mode {m!r}: use estimated or calibration")
     workdir = Path(workdir)
     folder = render(scene, workdir, progress)
-    rows = [done(time_sync(folder, workdir / f"run_{m}", m == "calibration", scene.label, target_s,
+    rows = [done(time_sync(folder, workdir / f"run_{m}", m == "calibration", label(scene), target_s,
                            extra_args, timeout_s)) for m in modes]
     ref_rows = []
     if with_reference:
         ref_folder = render(REFERENCE_SCENE, workdir, progress)
         ref_rows = [done(time_sync(ref_folder, workdir / f"ref_{m}", m == "calibration",
-                                   REFERENCE_SCENE.label, None, extra_args, timeout_s)) for m in modes]
+                                   label(REFERENCE_SCENE), None, extra_args, timeout_s)) for m in modes]
     return rows, ref_rows

@@ -53,6 +53,19 @@ def check_output_folder(out: Path, force: bool, option: str = "--out") -> None:
                          "use --force to replace it")
 
 
+def check_videos_exist(videos) -> None:
+    """Before any work: every video file or image folder given exists (InputError naming the
+    missing ones, and the files found beside them that look alike)."""
+    missing = [Path(v) for v in videos if not Path(v).exists()]
+    if not missing:
+        return
+    names = ", ".join(str(m) for m in missing)
+    there = sorted({p.name for m in missing if m.parent.is_dir() for p in m.parent.iterdir()
+                    if p.suffix.lower() == m.suffix.lower() and p.suffix})[:8]
+    raise InputError(f"no such video file or image folder: {names}"
+                     + (f" (in {missing[0].parent}: {', '.join(there)})" if there else ""))
+
+
 def check_output_file(path: Path, force: bool, option: str) -> None:
     """Before any work: `path` must name a file in a folder (not a folder), new unless force."""
     path = Path(path)

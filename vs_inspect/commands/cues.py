@@ -10,7 +10,7 @@ from ..errors import InputError
 from ..io.bundle import write_bundle
 from ..io.result import write_cue_stats
 from ..pipeline.stage0 import check_cue_config, run_stage0
-from ._common import add_config_file_option, add_cue_options, add_force_option, run_config
+from ._common import add_config_file_option, add_cue_options, add_force_option, check_videos_exist, run_config
 
 
 def register(sub) -> None:
@@ -36,6 +36,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"{args.out} exists and is not empty (use --force)")
     cfg = run_config(args)
     check_cue_config(cfg.cues)  # before the output folder is touched
+    check_videos_exist(args.videos)
     bundle, stats, inputs = run_stage0(args.videos, args.calib, args.fps, cfg.cues,
                                        progress=not args.no_progress)
     write_bundle(bundle, args.out, overwrite=args.force)

@@ -105,15 +105,16 @@ def video_rrd_path(true_cues_rrd: Path) -> Path:
 def run_video_pipeline(out: Path, scene_dir: Path, run_config: RunConfig = RunConfig(),
                        progress: bool = True, sink: Sink | None = None, final: bool = False) -> int:
     """The rendered videos through the whole pipeline, exactly as a user's videos would go
-    (`vs-inspect sync cam*.mp4 --calib calibration.json`), printed against the truth; recorded
-    to sink when given."""
+    (`vs-inspect sync cam*.mp4 --calib calibration.json --gt gt.json`), printed against the
+    truth; recorded to sink when given, with the truth (each pair's true Δ)."""
     videos = sorted(scene_dir.glob("cam*.mp4"))
     truth = read_gt(scene_dir / "gt.json")
     print("\n== the rendered videos through the whole pipeline (Stage 0 + 1 + 2), as "
           f"`vs-inspect sync cam*.mp4 --calib calibration.json --out {out}` ==")
     out = Path(out)
+    # with the truth, as `sync --gt`: the recording's decision panels and result.json carry it
     result = run_pipeline(videos, run_config, sink, calibration=scene_dir / "calibration.json",
-                          bundle_out=out / "cues", progress=progress)
+                          bundle_out=out / "cues", progress=progress, truth_offsets_s=truth)
     if final:  # as run_demo's final
         signals.begin_commit()
     path = write_run_result(result, out / "result.json")

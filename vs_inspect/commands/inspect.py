@@ -37,6 +37,18 @@ def _pair_entry(result: RunResult, a: str, b: str) -> tuple[PairLandscape | None
     return None, 1.0
 
 
+def _not_a_run_folder(path: Path) -> None:
+    """InputError pointing to `report` (and to the run's recording) for a run folder or a
+    result.json: inspect reads recordings."""
+    folder = path if path.is_dir() else path.parent if path.name == "result.json" or path.suffix == ".json" else None
+    if folder is None or not path.exists():
+        return
+    raise InputError(f"{path} is {'a run folder' if path.is_dir() else 'a run' + chr(39) + 's ' + path.name}, "
+                     f"not a recording: `vs-inspect report {folder}` draws its figures and index.html; "
+                     "`inspect` reads the run's .rrd (sync printed where it wrote it: recordings/<name of --out>-<hash>.rrd "
+                     "by default)")
+
+
 def _opt(x: float) -> float | None:
     return x if math.isfinite(x) else None
 
@@ -45,8 +57,14 @@ def run(args: argparse.Namespace) -> int:
     from ..analysis.diagnose import CAUSE_LOOPS, CAUSE_MEANING, diagnose
     from ..io.recording import pair_key, read_recording
 
+    _not_a_run_folder(args.rrd)
     rec = read_recording(args.rrd)
     res = rec.result
+    if args.pair and res is not None:  # a pair the run did not evaluate fails before the report
+        a, b = args.pair
+        if _pair_entry(res, a, b)[0] is None:
+            known = ", ".join(f"{q.a} {q.b}" for q in res.pairs)
+            raise InputError(f"--pair {a} {b}: this run evaluated no such pair; its pairs: {known or 'none'}")
     size_mb = args.rrd.stat().st_size / 1e6
     print(f"recording {args.rrd} ({size_mb:.1f} MB, vs_inspect {rec.meta.get('vs_inspect_version')}, "
           f"rerun {rec.meta.get('rerun_version')})")

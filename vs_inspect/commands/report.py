@@ -24,8 +24,11 @@ def register(sub) -> None:
                    help="pair for the epipolar panel (default: the accepted pair with the sharpest landscape)")
     p.add_argument("--format", default="png", metavar="LIST",
                    help="comma-separated figure formats: png, pdf, svg (default: png)")
-    p.add_argument("--dpi", type=float, default=100.0,
-                   help="resolution of the PNGs (and of the pictures in PDF/SVG), dots per inch")
+    p.add_argument("--dpi", type=float, default=200.0,
+                   help="resolution of the PNGs (and of the 3D scene's picture in PDF/SVG), dots per inch")
+    p.add_argument("--size", choices=("column", "page"), default="page",
+                   help="printed width the figures are made for: a paper's column (3.5 in) or its "
+                        "text width (7.1 in); their text is 7-9 pt at that width (default: page)")
     add_gt_option(p)
     add_force_option(p)
     p.set_defaults(func=run)
@@ -43,7 +46,7 @@ def _run(args: argparse.Namespace) -> int:
     from ..report.build import render_report
     from ..report.figures import checked_render_options
 
-    formats = checked_render_options(args.format, args.dpi)  # before any loading
+    formats = checked_render_options(args.format, args.dpi, args.size)  # before any loading
     gt = None
     if args.gt is not None:
         from ..io.bundle import read_gt
@@ -58,7 +61,7 @@ def _run(args: argparse.Namespace) -> int:
         if data.reference not in gt:
             raise InputError(f"--gt {args.gt}: no true offset for the reference video {data.reference!r}")
     t1 = time.perf_counter()
-    paths = render_report(data, args.out, overwrite=args.force, formats=formats, dpi=args.dpi)
+    paths = render_report(data, args.out, overwrite=args.force, formats=formats, dpi=args.dpi, size=args.size)
     t2 = time.perf_counter()
     for key, p in paths.items():
         print(f"{key:<11} {p}")
@@ -73,5 +76,5 @@ def _run(args: argparse.Namespace) -> int:
             print(f"  {v:<16}" + ("unresolved" if e is None else
                                   f"{e:8.1f} ms" + (f"  {f:6.2f} frames" if f is not None else "")))
     print(f"report: loaded in {t1 - t0:.2f} s, rendered {len(paths) - 1} figures "
-          f"({', '.join(formats)}, {args.dpi:g} dpi) in {t2 - t1:.2f} s")
+          f"({', '.join(formats)}, {args.size} size, {args.dpi:g} dpi) in {t2 - t1:.2f} s")
     return 0

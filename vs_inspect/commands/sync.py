@@ -14,7 +14,8 @@ from ..io.lock import lock_outputs
 from ..io.result import write_run_result
 from ..pipeline import run as run_pipeline
 from ._common import (add_config_file_option, add_cue_options, add_force_option, add_gt_option,
-                      add_sync_options, check_output_folder, gt_with_reference, print_run, run_config)
+                      add_sync_options, check_output_folder, check_videos_exist, gt_with_reference, print_run,
+                      run_config)
 from ._record import add_record_options, check_rrd_path, describe, open_sink, rrd_path
 
 log = logging.getLogger(__name__)
@@ -55,6 +56,7 @@ def run(args: argparse.Namespace) -> int:
     if args.videos:
         from ..pipeline.stage0 import check_cue_config
         check_cue_config(cfg.cues)
+        check_videos_exist(args.videos)  # a missing one is named now, not after the others' cues
     out = Path(args.out)
     with ExitStack() as stack:
         # one run at a time into --out and the recording: taken before anything is checked

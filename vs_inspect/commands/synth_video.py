@@ -13,8 +13,8 @@ from ._common import add_force_option, positive_int
 
 
 def add_image_and_clock_options(p: argparse.ArgumentParser, d) -> None:
-    """--width, --height, --fps, --max-offset-s of a rendered scene (synth-video, bench-timing),
-    with d's values as defaults (a SceneConfig or a bench.timing.TimingScene)."""
+    """--width, --height, --fps, --max-offset-s of a rendered scene (synth-video, bench timing),
+    with d's values as defaults (a SceneConfig)."""
     p.add_argument("--width", type=positive_int, default=d.width, help="image width (px)")
     p.add_argument("--height", type=positive_int, default=d.height, help="image height (px)")
     p.add_argument("--fps", type=float, default=d.fps,

@@ -1,5 +1,5 @@
 """Stage 0's acceptance rules and camera paths by name, in the order they apply, each with what it
-does in one line. A run takes them all; `vs-inspect bench-rules` leaves each out in turn to
+does in one line. A run takes them all; `vs-inspect bench rules` leaves each out in turn to
 measure what it is worth (BENCHMARKS.md)."""
 
 from __future__ import annotations

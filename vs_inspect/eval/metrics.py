@@ -104,7 +104,7 @@ def time_errors(estimated_s: dict[str, float | None], true_s: dict[str, float], 
                 span_s: dict[str, tuple[float, float]] | None = None) -> dict[str, VideoTimeError | None]:
     """Signed per-video errors of offset (s and frames), drift (ppm) and, given a video's span
     (its first and last local times, s), at its end and at its worst, relative to the reference.
-    The one definition of these errors (eval, bench-drone, bench-drift-cues). A result without
+    The one definition of these errors (eval, bench drone, bench drift). A result without
     drift counts as drift 0 (the constant-offset model); a truth without drift (or without this
     video's) as drift 0 in the time map, and then no drift error is given. None where the video
     or the reference is unresolved."""

@@ -133,3 +133,45 @@ def signed_sampson_px(F_ab: np.ndarray, h_a: np.ndarray, h_b: np.ndarray) -> np.
     Fb, Fta = h_b @ F_ab.T, h_a @ F_ab
     num = np.sum(h_a * Fb, axis=1)
     return num / np.sqrt(Fb[:, 0] ** 2 + Fb[:, 1] ** 2 + Fta[:, 0] ** 2 + Fta[:, 1] ** 2 + 1e-300)
+
+
+def _normalizing_transform(x: np.ndarray) -> np.ndarray:
+    """(3,3) Hartley's similarity: centroid to 0, mean distance to √2."""
+    c = x.mean(0)
+    s = np.sqrt(2.0) / max(float(np.mean(np.linalg.norm(x - c, axis=1))), 1e-12)
+    return np.array([[s, 0, -s * c[0]], [0, s, -s * c[1]], [0, 0, 1.0]])
+
+
+def fundamental_irls(x_a: np.ndarray, x_b: np.ndarray, F0: np.ndarray, scale_px, iterations: int = 6
+                     ) -> np.ndarray:
+    """(3,3) F_ab that minimizes Σ ρ(Sampson distance / scale) over x_a, x_b (M,2) px, ρ Cauchy's
+    with scale scale_px (a number, or (M,) px per correspondence): iteratively reweighted
+    normalized 8-point from F0 (3,3), rank 2 each step. Deterministic and smooth in the points,
+    unlike a RANSAC fit (for landscapes over a shift)."""
+    x_a = np.asarray(x_a, dtype=np.float64)
+    x_b = np.asarray(x_b, dtype=np.float64)
+    check_shape("x_a", x_a, (None, 2), batched=False)
+    check_shape("x_b", x_b, (len(x_a), 2), batched=False)
+    check_shape("F0", np.asarray(F0), (3, 3), batched=False)
+    if len(x_a) < 8:
+        raise ValueError(f"fundamental_irls needs at least 8 correspondences, got {len(x_a)}")
+    scale2 = np.broadcast_to(np.asarray(scale_px, dtype=np.float64), (len(x_a),)) ** 2
+    Ta, Tb = _normalizing_transform(x_a), _normalizing_transform(x_b)
+    na = x_a * Ta[0, 0] + Ta[:2, 2]
+    nb = x_b * Tb[0, 0] + Tb[:2, 2]
+    ha = np.concatenate([na, np.ones((len(na), 1))], 1)
+    hb = np.concatenate([nb, np.ones((len(nb), 1))], 1)
+    A = (ha[:, :, None] * hb[:, None, :]).reshape(-1, 9)  # x_aᵀ F x_b = A vec(F), F row-major
+    F = np.asarray(F0, np.float64)
+    for _ in range(iterations):
+        la = x_b @ F[:, :2].T + F[:, 2]  # F x_b
+        lb = x_a @ F[:2] + F[2]  # Fᵀ x_a
+        g2 = np.maximum(la[:, 0] ** 2 + la[:, 1] ** 2 + lb[:, 0] ** 2 + lb[:, 1] ** 2, 1e-300)
+        r = x_a[:, 0] * la[:, 0] + x_a[:, 1] * la[:, 1] + la[:, 2]
+        w = 1.0 / (g2 * (1.0 + r * r / g2 / scale2))
+        # the normalized problem's algebraic residual is the pixel one times a constant
+        _, vecs = np.linalg.eigh((A * w[:, None]).T @ A)
+        U, S, Vt = np.linalg.svd(vecs[:, 0].reshape(3, 3))
+        F = Ta.T @ (U @ np.diag([S[0], S[1], 0.0]) @ Vt) @ Tb
+        F = F / np.linalg.norm(F)
+    return F

@@ -137,7 +137,7 @@ def lock_outputs(stack: ExitStack, *outputs: tuple[str | os.PathLike | None, str
 # the options that name what a command writes, locked for every command (export's positional
 # `out` is its input run folder, not an output)
 OUTPUT_OPTIONS = {"out": "--out", "mosaic": "--mosaic", "json": "--json", "jsonl": "--jsonl",
-                  "workdir": "--workdir", "estimates": "--estimates"}
+                  "workdir": "--workdir"}
 INPUT_OUT = frozenset({"export"})
 
 

@@ -42,6 +42,7 @@ PAIRS = "pairs"
 SYNC_GRAPH = "sync/graph"
 SYNC_OFFSETS = "sync/offsets"
 SYNC_SOLVE = "sync/solve"
+SYNC_IRLS = "sync/irls"  # the robust solve's residual and weight per pair and iteration as bar charts (any timeline)
 SYNC_PAIRS = "sync/pairs"  # every pair's verdict, Δ and reason as one table (failed pairs first)
 SYNC_LOOPS = "sync/loops"  # loop-closure residual Δ_ab + Δ_bc − Δ_ac per triangle of pairs
 CUES_TRANSFER = "cues/transfer"  # Stage 0's point-transfer checks of cameras the joint vote was unsure of
@@ -185,6 +186,14 @@ def solve_residual_path(a: str, b: str) -> str:
 
 def solve_weight_path(a: str, b: str) -> str:
     return f"{SYNC_SOLVE}/weight/{pair_key(a, b)}"
+
+
+def irls_residual_path(a: str, b: str) -> str:
+    return f"{SYNC_IRLS}/residual_ms/{pair_key(a, b)}"
+
+
+def irls_weight_path(a: str, b: str) -> str:
+    return f"{SYNC_IRLS}/weight/{pair_key(a, b)}"
 
 
 def log_path(stage: str) -> str:
@@ -439,6 +448,44 @@ def read_rate_landscape(path: str | Path, a: str, b: str) -> tuple[np.ndarray | 
             shape = [int(s) for s in t["shape"]]
             energy = np.asarray(t["buffer"], dtype=np.float32).reshape(shape)
     return image, energy
+
+
+@dataclass(frozen=True)
+class EpipolarSweepSeries:
+    """What a pair's epipolar view shows over the offsets it was logged at."""
+
+    offset_ms: np.ndarray  # (D,) int, candidate Δ_ab on the offset_ms timeline
+    lines: np.ndarray  # (D,) int, epipolar line segments drawn over a's image at each offset
+    median_px: np.ndarray  # (D,) median distance of a's points from their lines, px (NaN: none)
+
+
+def read_epipolar_sweep(path: str | Path, a: str, b: str) -> EpipolarSweepSeries | None:
+    """The line counts and median point-line distances of pair (a, b)'s epipolar view (None:
+    the pair has no epipolar view)."""
+    base = pair_epipolar_path(a, b)
+    counts: dict[int, int] = {}
+    for rb in _entity_rows(Path(path), f"{base}/lines"):
+        t = _column(rb, TIMELINE_OFFSET_MS)
+        for ms, strips in zip(t, _column(rb, "LineStrips2D:strips")):
+            if ms is not None and strips is not None:
+                counts[int(ms)] = len(strips)
+    if not counts:
+        return None
+    med: dict[int, float] = {}
+    for rb in _entity_rows(Path(path), f"{base}/median_distance_px"):
+        t, v = _scalars(rb, TIMELINE_OFFSET_MS)
+        med.update(zip(t.tolist(), v.tolist()))
+    ms = np.array(sorted(counts), dtype=np.int64)
+    return EpipolarSweepSeries(ms, np.array([counts[m] for m in ms], dtype=np.int64),
+                               np.array([med.get(int(m), np.nan) for m in ms], dtype=float))
+
+
+def read_chunks(path: str | Path, entities: list[str]) -> list:
+    """The chunks of the given entities (exact paths), as rerun.chunk.Chunk (InputError if the
+    file cannot be read); for copying a recording's parts into another."""
+    wanted = {e.strip("/") for e in entities}
+    return [c for c in _chunks(Path(path), [f"/{e}" for e in sorted(wanted)])
+            if c.entity_path.strip("/") in wanted]
 
 
 def read_static_points(path: str | Path) -> tuple[np.ndarray, np.ndarray | None]:

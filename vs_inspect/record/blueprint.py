@@ -7,15 +7,19 @@ the time panel expanded over the whole search range. Three columns:
   (tabs); below them all landscapes (one series per pair), the pair graph and the IRLS solve;
 - middle: one container per pair (landscape, epipolar lines over the tracklets, decision text),
   failed pairs first, at most MAX_PAIR_CONTAINERS of them;
-- right: the videos and the 3D world (cameras, trajectories).
+- right: the videos that have frames and the 3D world (cameras, trajectories).
+
+Videos are named by their short display names (analysis.display_names) in titles and legends.
+The viewer has no setting for where its time cursor starts: it opens at the smallest offset of the
+range; `vs-inspect view` (record/viewer.py) opens a recording with the cursor at the front pair's Δ.
 """
 
 from __future__ import annotations
 
 import math
 
-from ..io.recording import (GUIDE, LOG, SYNC_GRAPH, SYNC_LOOPS, SYNC_OFFSETS, SYNC_PAIRS, SYNC_SOLVE,
-                            TIMELINE_OFFSET_MS, VIDEOS, WORLD, pair_decision_path, pair_epipolar_path,
+from ..io.recording import (GUIDE, LOG, SYNC_GRAPH, SYNC_IRLS, SYNC_LOOPS, SYNC_OFFSETS, SYNC_PAIRS,
+                            TIMELINE_OFFSET_MS, WORLD, pair_decision_path, pair_epipolar_path,
                             pair_landscape_path, pair_votes_path, video_path)
 from ..types import PairLandscape, SyncResult
 
@@ -41,10 +45,17 @@ def _bounds(size: tuple[int, int] | None):
     return rrb.VisualBounds2D(x_range=[0, size[0]], y_range=[0, size[1]])
 
 
+def pair_title(a: str, b: str, labels: dict[str, str] | None = None) -> str:
+    """"a→b" in the videos' display names: the end of a pair container's title."""
+    labels = labels or {}
+    return f"{labels.get(a, a)}→{labels.get(b, b)}"
+
+
 def _pair_container(a: str, b: str, accepted: bool | None, views: set[str],
-                    range_ms: tuple[int, int] | None, size_a: tuple[int, int] | None = None):
+                    range_ms: tuple[int, int] | None, size_a: tuple[int, int] | None = None,
+                    labels: dict[str, str] | None = None):
     import rerun.blueprint as rrb
-    arrow = f"{a}→{b}"
+    arrow = pair_title(a, b, labels)
     mark = "" if accepted is None else ("✓ " if accepted else "✗ ")
     lower = []
     if "epipolar" in views:
@@ -79,6 +90,24 @@ def _axis(range_ms: tuple[int, int] | None):
                                                 end=rrb.TimeRangeBoundary.absolute(seq=hi)))
 
 
+def _redundant(pairs) -> bool:
+    """The accepted pairs hold a loop (more pairs than a spanning forest of their videos): only
+    then do residuals and weights of the robust solve say anything (else they are 0 and 1)."""
+    parent: dict[str, str] = {}
+
+    def root(v: str) -> str:
+        while parent.setdefault(v, v) != v:
+            v = parent[v]
+        return v
+
+    for a, b in pairs:
+        ra, rb = root(a), root(b)
+        if ra == rb:
+            return True
+        parent[ra] = rb
+    return False
+
+
 def shown_pairs(pairs_logged: list[str], result: SyncResult | None) -> list[tuple[str, str, bool | None]]:
     """(a, b, accepted) of the pairs that get a container, in order (None: verdict unknown)."""
     if result is not None and result.pairs:
@@ -92,7 +121,8 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
               sizes: dict[str, tuple[int, int]] | None = None, eye: tuple | None = None,
               transfer_origin: str | None = None, three_view_origin: str | None = None,
               votes_logged: list[str] | None = None,
-              show_world: bool = True, offsets_logged: bool = False):
+              show_world: bool = True, offsets_logged: bool = False,
+              labels: dict[str, str] | None = None, with_frames: set[str] | None = None):
     """The default blueprint.
 
     pairs_logged: "a__b" of every pair in the order they were logged (their order when the result
@@ -107,12 +137,14 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
     show_world: whether the 3D view is shown (False: no camera was logged, e.g. Stage 0 refused
     every one, and the view would open empty). offsets_logged: the run's offsets table was logged
     (also without a SyncResult: Stage 0 could use no video); with no pair logged it opens in front.
+    labels: video -> the short name its titles use (default: its name). with_frames: the videos
+    with images (frames or an embedded video); only these get a video view (None: all of them).
     """
     import rerun.blueprint as rrb
-    pair_views, sizes = pair_views or {}, sizes or {}
+    pair_views, sizes, labels = pair_views or {}, sizes or {}, labels or {}
     shown = shown_pairs(pairs_logged, result)
     containers = [_pair_container(a, b, acc, pair_views.get(f"{a}__{b}", {"landscape", "epipolar"}),
-                                  range_ms, sizes.get(a)) for a, b, acc in shown]
+                                  range_ms, sizes.get(a), labels) for a, b, acc in shown]
     info = [rrb.TextDocumentView(origin=GUIDE, name="how to read this recording")]
     if result is not None:
         info.append(rrb.TextDocumentView(origin=SYNC_PAIRS, name="pairs (failed first)"))
@@ -124,8 +156,9 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
     if has_loops:
         info.append(rrb.TextDocumentView(origin=SYNC_LOOPS, name="loop closure"))
     info.append(rrb.TextLogView(origin=LOG, name="decision log"))
-    energies = [f"+ /{pair_landscape_path(*k.split('__', 1))}/energy" for k in pairs_logged
-                if "landscape" in pair_views.get(k, {"landscape"})]
+    # every pair's energy in its colour, with its chosen Δ marked by verdict (diamond / cross)
+    energies = [f"+ /{pair_landscape_path(*k.split('__', 1))}/{part}" for k in pairs_logged
+                if "landscape" in pair_views.get(k, {"landscape"}) for part in ("energy", "chosen")]
     overview = []
     if energies:
         overview.append(rrb.TimeSeriesView(origin="/", contents=energies, name="all landscapes",
@@ -133,8 +166,13 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
                                            plot_legend=rrb.PlotLegend(visible=True)))
     if result is not None:
         overview.append(rrb.GraphView(origin=SYNC_GRAPH, name="pair graph"))
-        if result.iterations:
-            overview.append(rrb.TimeSeriesView(origin=SYNC_SOLVE, name="IRLS solve (timeline: iteration)"))
+        if result.iterations and _redundant(result.solve_pairs):  # bars (static: on every timeline)
+            overview.append(rrb.Vertical(
+                rrb.BarChartView(origin=f"{SYNC_IRLS}/residual_ms", name="IRLS: |residual| per pair, ms (bars: iterations)",
+                                 plot_legend=rrb.PlotLegend(visible=True)),
+                rrb.BarChartView(origin=f"{SYNC_IRLS}/weight", name="IRLS: weight per pair (bars: iterations)",
+                                 plot_legend=rrb.PlotLegend(visible=True)),
+                name="IRLS solve"))
     if votes_logged:
         overview.append(rrb.TimeSeriesView(
             origin="/", contents=[f"+ /{pair_votes_path(*k.split('__', 1))}/{part}" for k in votes_logged
@@ -149,18 +187,22 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
                                            time_ranges=_full_range(), plot_legend=rrb.PlotLegend(visible=True)))
     left = rrb.Vertical(rrb.Tabs(*info, active_tab=active), *( [rrb.Tabs(*overview, active_tab=0)] if overview else []),
                         row_shares=[1, 1][: 1 + bool(overview)])
-    video_views = [rrb.Spatial2DView(origin=video_path(v), name=v, visual_bounds=_bounds(sizes.get(v)))
-                   for v in video_names[:MAX_VIDEO_VIEWS]]
-    videos = rrb.Grid(*video_views, name="videos") if video_views else rrb.TextDocumentView(origin=VIDEOS)
+    framed = [v for v in video_names if with_frames is None or v in with_frames]
+    video_views = [rrb.Spatial2DView(origin=video_path(v), name=labels.get(v, v), visual_bounds=_bounds(sizes.get(v)))
+                   for v in framed[:MAX_VIDEO_VIEWS]]
     world = [rrb.Spatial3DView(origin=WORLD, name="3D",
                                eye_controls=rrb.EyeControls3D(position=eye[0], look_target=eye[1], eye_up=eye[2])
                                if eye else None)] if show_world else []
-    right = rrb.Vertical(videos, *world, row_shares=[1] * (1 + len(world)))
+    # no panel for what the recording does not hold: no video view without frames, no column
+    # without videos and 3D (a run that wrote no frame and no camera)
+    right = [rrb.Grid(*video_views, name="videos")] if video_views else []
+    right += world
     columns = [left]
     if containers:
-        columns.append(rrb.Tabs(*containers, active_tab=0, name="pairs (failed first)"))
-    columns.append(right)
-    shares = [2, 3, 3] if containers else [2, 3]
+        columns.append(rrb.Tabs(*containers, active_tab=0, name="pair containers"))
+    if right:
+        columns.append(rrb.Vertical(*right, row_shares=[1] * len(right)) if len(right) > 1 else right[0])
+    shares = ([2, 3] if containers else [2]) + ([3] if right else [])
     return rrb.Blueprint(rrb.Horizontal(*columns, column_shares=shares),
                          rrb.BlueprintPanel(state="collapsed"), rrb.SelectionPanel(state="collapsed"),
                          rrb.TimePanel(state="expanded", timeline=timeline, play_state="paused"),

@@ -38,10 +38,11 @@ from ..io.recording import (APPLICATION_ID, CUES_THREE_VIEW, CUES_TRANSFER, GUID
                             TIMELINE_OFFSET_MS, TIMELINE_TIME, WORLD_POINTS, camera_labels_path,
                             camera_path, camera_trail_path, check_entity_names, entity_name, log_path, pair_decision_path,
                             pair_epipolar_path, pair_landscape_path, pair_matches_path, pair_rate_landscape_path, pair_votes_path,
-                            solve_residual_path,
+                            irls_residual_path, irls_weight_path, solve_residual_path,
                             solve_weight_path, three_view_path, trajectory_path, transfer_path, video_asset_path, video_image_path,
                             video_mask_path, video_path, video_still_path,
                             video_tracks_path)
+from ..analysis.display_names import display_names as short_names_of, legend_lines
 from ..analysis.record_views import over_range
 from ..io.result import run_result_to_dict
 from ..types import CameraTrack, CueBundle, PairLandscape, RunResult, SyncResult, VideoInfo
@@ -56,14 +57,14 @@ log = logging.getLogger(__name__)
 
 # Colours: vs_inspect.palette, shared with the report (green and red mean only accepted/rejected).
 ACCEPTED, REJECTED = palette.ACCEPTED, palette.REJECTED
-GREY = (150, 150, 150)  # unknown, no data
-MINIMA = (86, 180, 233)  # sky blue
-TRUTH = (240, 228, 66)  # yellow
+GREY = palette.NEUTRAL  # unknown, no data
+MINIMA = palette.OTHER_MINIMA
+TRUTH = palette.TRUTH_ON_DARK  # the viewer's background is dark
 APPEARANCE_ONLY = GREY  # a pair's landscape without its unchecked track pairs
-WINDOW = (204, 121, 167)  # reddish purple: the --around window of a pair's Δ
-PALETTE = np.array(palette.CATEGORY, dtype=np.uint8)
+WINDOW = palette.SOLVED  # the --around window of a pair's Δ
+PALETTE = np.array(palette.INSTANCE, dtype=np.uint8)  # moving instances (masks, tracks, lines)
 # point-to-line distance in the epipolar views: blue (far) through grey to yellow (on the line)
-RAMP = np.array([(70, 90, 210), (150, 150, 160), (253, 234, 69)], dtype=float)  # visible on black
+RAMP = np.array([palette.FAR, (150, 150, 160), palette.ON_LINE], dtype=float)  # visible on black
 H264_LIKE = {"h264", "av1"}
 MIN_RAMP_PX = 1.0  # the distance ramp spans at least this many px, so sub-pixel noise keeps one colour
 FRUSTUM_SCALE = 0.3  # frustum depth as a share of the cameras' spread around their median
@@ -261,6 +262,8 @@ class RerunSink(Sink):
         self._eye: tuple | None = None  # 3D view's (position, look target, up), world
         self._events = 0
         self._cams_logged: set[str] = set()
+        self._labels: dict[str, str] | None = None  # display_names of the videos so far
+        self._framed: set[str] = set()  # videos with images (JPEG frames or an embedded video)
         self.hook_s = 0.0
         self.stats: dict[str, float] = {}
 
@@ -285,6 +288,7 @@ class RerunSink(Sink):
                 if len(ts) >= info.num_frames:
                     self.rec.log(video_asset_path(info.name), asset, static=True)
                     buf.asset, buf.asset_timestamps_ns = True, ts[: info.num_frames]
+                    self._framed.add(info.name)
                     buf.image_size = (info.width, info.height)
             except Exception as exc:  # noqa: BLE001 - rerun could not parse it: use JPEG frames
                 log.info("%s: not embedded as a video asset (%s); logging JPEG frames", info.name, exc)
@@ -301,6 +305,7 @@ class RerunSink(Sink):
         if ok:
             buf.jpeg[int(frame_index)] = data.tobytes()
             buf.image_size = (img.shape[1], img.shape[0])
+            self._framed.add(name)
 
     @_timed
     def dynamic_mask(self, name: str, frame_index: int, instances: np.ndarray) -> None:
@@ -399,7 +404,7 @@ class RerunSink(Sink):
         mark = "✓" if confirmed else "✗"
         self._on_offsets(f"{base}/share", rr.SeriesLines(colors=[color], widths=[1.5],
                                                          names=[f"{mark} {camera}: samples on their track"]), ms, share)
-        for what, at, colour, marker in (("joint", joint_offset_s, MINIMA, "circle"),
+        for what, at, colour, marker in (("joint", joint_offset_s, palette.SOLVED, "circle"),
                                          ("peak", transfer_offset_s, color, "diamond")):
             if at is None or not len(ms):
                 continue
@@ -422,7 +427,7 @@ class RerunSink(Sink):
             colors=[color], widths=[1.5], names=[f"{'✓' if passed else '✗'} {camera}: trajectories followed"]),
             ms, supporters)
         i = int(np.argmin(np.abs(offsets_s - joint_offset_s)))
-        self._on_offsets(f"{base}/joint", rr.SeriesPoints(colors=[MINIMA], markers=["circle"], marker_sizes=[6.0],
+        self._on_offsets(f"{base}/joint", rr.SeriesPoints(colors=[palette.SOLVED], markers=["circle"], marker_sizes=[6.0],
                                                            names=[f"{camera}: joint offset"]),
                          _offset_ms([joint_offset_s]), supporters[i:i + 1])
 
@@ -489,7 +494,8 @@ class RerunSink(Sink):
                 "format": RECORDING_FORMAT, "version": RECORDING_VERSION,
                 "vs_inspect_version": __version__, "rerun_version": rr.__version__,
                 "has_result": summary is not None, "options": asdict(self.options),
-                "pairs": self._pairs_logged}), media_type="text/plain"), static=True)
+                "pairs": self._pairs_logged, "labels": self.display_names()}), media_type="text/plain"),
+                static=True)
             names = list(self._videos) or (self._bundle.names if self._bundle else [])
             if not self._pairs_logged and self._notes and self._offset_ms_min is not None:
                 # a run that stopped in Stage 0 has no pair decisions on offset_ms, where the
@@ -533,7 +539,8 @@ class RerunSink(Sink):
                          three_view_origin=CUES_THREE_VIEW if self._three_view_logged else None,
                          votes_logged=self._votes_logged,
                          show_world=bool(self._world_cameras) or self._bundle is not None,
-                         offsets_logged=self._summary is not None)
+                         offsets_logged=self._summary is not None, labels=self.display_names(),
+                         with_frames=self._framed)
 
     def abort(self) -> None:
         """Stop writing and delete the temporary file; nothing that looks complete is left."""
@@ -565,6 +572,20 @@ class RerunSink(Sink):
         C = np.array(C)
         return float(np.median(np.linalg.norm(C - C.mean(0), axis=1))) or 1.0
 
+    def _truth(self) -> dict[str, float] | None:
+        """The true offsets when the run knows them (its cue bundle's, or the run summary's)."""
+        if self._bundle is not None and self._bundle.gt_offsets_s:
+            return self._bundle.gt_offsets_s
+        return self._summary.gt_offsets_s if self._summary is not None else None
+
+    def display_names(self) -> dict[str, str]:
+        """Video -> the short name panel titles and legends draw it by (analysis.display_names),
+        from every video the run was given, in their order."""
+        names = list(self._videos) or (self._bundle.names if self._bundle else [])
+        if self._labels is None or list(self._labels) != names:
+            self._labels = short_names_of(names)
+        return self._labels
+
     def _camera_color(self, name: str) -> tuple[int, int, int]:
         names = list(self._videos) or (self._bundle.names if self._bundle else [])
         return palette.category(names.index(name) if name in names else len(names))
@@ -585,7 +606,8 @@ class RerunSink(Sink):
             base = camera_path(v.name)
             K0 = cam.K if cam.K.ndim == 2 else cam.K[0]
             self.rec.log(base, rr.Pinhole(image_from_camera=K0, resolution=[v.width, v.height],
-                                          camera_xyz=rr.ViewCoordinates.RDF, image_plane_distance=dist),
+                                          camera_xyz=rr.ViewCoordinates.RDF, image_plane_distance=dist,
+                                          color=self._camera_color(v.name), line_width=rr.Radius.ui_points(1.5)),
                          static=True)
             if not cam.is_moving:
                 T = cam.cam_from_world
@@ -597,7 +619,8 @@ class RerunSink(Sink):
                              rr.LineStrips3D([C[np.isfinite(C).all(1)].astype(np.float32)],
                                              colors=[self._camera_color(v.name)],
                                              radii=rr.Radius.ui_points(1.5),
-                                             labels=[f"{v.name} path"]), static=True)
+                                             labels=[f"{self.display_names().get(v.name, v.name)} path"]),
+                             static=True)
         if new:
             self._eye = _eye_behind(cams)
             names = [n for n in self._cams_logged if n in cams]
@@ -607,7 +630,7 @@ class RerunSink(Sink):
                 C = C[np.isfinite(C).all(1)]
                 if len(C):
                     centres.append(C[len(C) // 2])
-                    labels.append(n)
+                    labels.append(self.display_names().get(n, n))
                     colors.append(self._camera_color(n))
             if centres:
                 self.rec.log(camera_labels_path(), rr.Points3D(np.array(centres, dtype=np.float32),
@@ -777,9 +800,13 @@ class RerunSink(Sink):
         ok = np.isfinite(e)
         color = ACCEPTED if land.decision.accepted else REJECTED
         mark = "✓" if land.decision.accepted else "✗"
-        # the pair in the series' name: "all landscapes" shows every pair's energy in one plot
-        self.rec.log(f"{base}/energy", rr.SeriesLines(colors=[color], names=[f"{mark} {land.a}→{land.b}"],
-                                                      widths=[1.5]), static=True)
+        short = self.display_names()
+        # one colour per pair (its verdict is the chosen marker's colour and shape), the pair in
+        # the series' name: "all landscapes" shows every pair's energy in one plot
+        self.rec.log(f"{base}/energy", rr.SeriesLines(
+            colors=[palette.category(len(self._pairs_logged) - 1, palette.PAIR)],
+            names=[f"{mark} {short.get(land.a, land.a)}→{short.get(land.b, land.b)}"],
+            widths=[1.5 if land.decision.accepted else 1.0]), static=True)
         if ok.any():
             self._pair_views.setdefault(key, set()).add("landscape")
             self.rec.send_columns(f"{base}/energy", [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms[ok])],
@@ -791,8 +818,9 @@ class RerunSink(Sink):
             self.rec.send_columns(f"{base}/minima", [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms[mi])],
                                   rr.Scalars.columns(scalars=e[mi]))
         if math.isfinite(land.best_offset_s) and math.isfinite(land.best_energy):
-            self.rec.log(f"{base}/chosen", rr.SeriesPoints(colors=[color], names=["chosen"],
-                                                           markers=["diamond"], marker_sizes=[7.0]), static=True)
+            self.rec.log(f"{base}/chosen", rr.SeriesPoints(
+                colors=[color], names=[f"{mark} chosen" if land.decision.accepted else f"{mark} best (rejected)"],
+                markers=["diamond" if land.decision.accepted else "cross"], marker_sizes=[7.0]), static=True)
             self.rec.send_columns(f"{base}/chosen",
                                   [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=[round(land.best_offset_s * 1000)])],
                                   rr.Scalars.columns(scalars=[land.best_energy]))
@@ -802,7 +830,7 @@ class RerunSink(Sink):
             self._log_window(base, land, e[ok])
         if view is not None and view.true_offset_s is not None and view.true_energy is not None:
             self.rec.log(f"{base}/truth", rr.SeriesPoints(colors=[TRUTH], names=["true Δ"],
-                                                          markers=["cross"], marker_sizes=[7.0]), static=True)
+                                                          markers=["plus"], marker_sizes=[7.0]), static=True)
             self.rec.send_columns(f"{base}/truth",
                                   [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=[round(view.true_offset_s * 1000)])],
                                   rr.Scalars.columns(scalars=[view.true_energy]))
@@ -873,7 +901,10 @@ class RerunSink(Sink):
         if land.confirm_energy is not None:  # the grey curve of the landscape
             rows.append(("appearance pairs alone", f"minimum {_fmt(land.confirm_offset_s, ' s')}"
                          if math.isfinite(land.confirm_offset_s) else "no accepted minimum"))
-        md = (f"## {land.a} → {land.b}: {verdict}\n\n**reason:** {d.reason}\n\n| | |\n|---|---|\n"
+        short = self.display_names()
+        sa, sb = short.get(land.a, land.a), short.get(land.b, land.b)
+        full = f"\n\n{land.a} → {land.b}" if (sa, sb) != (land.a, land.b) else ""
+        md = (f"## {sa} → {sb}: {verdict}{full}\n\n**reason:** {d.reason}\n\n| | |\n|---|---|\n"
               + "\n".join(f"| {k} | {v} |" for k, v in rows)
               + f"\n\n**minima (best first):** {minima or 'none'}\n")
         self.rec.log(pair_decision_path(land.a, land.b), rr.TextDocument(md, media_type=rr.MediaType.MARKDOWN),
@@ -958,9 +989,11 @@ class RerunSink(Sink):
 
     def _log_graph(self, result: SyncResult, view: RunRecordView) -> None:
         ids, labels, cols, radii, P = [], [], [], [], []
+        short = self.display_names()
         for v, off in result.offsets_s.items():
             ids.append(v)
-            labels.append(f"{v} {_fmt(off, ' s', 3)}" if off is not None else f"{v} unresolved")
+            name = short.get(v, v)
+            labels.append(f"{name} {_fmt(off, ' s', 3)}" if off is not None else f"{name} unresolved")
             cols.append(self._camera_color(v) if off is not None else GREY)
             radii.append(18.0)
             P.append(view.graph_xy[v])
@@ -985,10 +1018,21 @@ class RerunSink(Sink):
         its = np.arange(len(result.iterations), dtype=np.int64)
         R = np.array([it.residual_s for it in result.iterations], dtype=float) * 1000.0  # (I,E)
         Wt = np.array([it.weight for it in result.iterations], dtype=float)
+        E = len(result.solve_pairs)
         for e, (a, b) in enumerate(result.solve_pairs):
             tcol = [rr.TimeColumn(TIMELINE_ITERATION, sequence=its)]
             self.rec.send_columns(solve_residual_path(a, b), tcol, rr.Scalars.columns(scalars=R[:, e]))
             self.rec.send_columns(solve_weight_path(a, b), tcol, rr.Scalars.columns(scalars=Wt[:, e]))
+            # the same numbers as bars grouped by iteration, static: shown on every timeline,
+            # in the colour of the pair's landscape
+            key = f"{a}__{b}"
+            colour = palette.category(self._pairs_logged.index(key) if key in self._pairs_logged else e,
+                                      palette.PAIR)
+            x = its + (e + 0.5) / (E + 1) - 0.5
+            sa, sb = (self.display_names().get(n, n) for n in (a, b))  # the legend shows the path
+            for path, values in ((irls_residual_path(sa, sb), np.abs(R[:, e])), (irls_weight_path(sa, sb), Wt[:, e])):
+                self.rec.log(path, rr.BarChart(np.nan_to_num(values), abscissa=x, widths=[0.9 / (E + 1)] * len(x),
+                                               color=colour), static=True)
 
     def _log_final_offsets(self) -> None:
         """The offsets table, once, when the recording closes: the run's summary (every input
@@ -1045,11 +1089,12 @@ class RerunSink(Sink):
         r = self._result
         if r is None or not r.pairs:
             return
-        truth = self._bundle.gt_offsets_s if self._bundle is not None else None
+        truth = self._truth()
+        short = self.display_names()
         rows = []
         for i, p in enumerate(pair_order(r.pairs)):
             true = (truth[p.b] - truth[p.a]) if truth and p.a in truth and p.b in truth else None
-            rows.append(f"| {'✓' if p.decision.accepted else '✗'} | {p.a} → {p.b} | "
+            rows.append(f"| {'✓' if p.decision.accepted else '✗'} | {short.get(p.a, p.a)} → {short.get(p.b, p.b)} | "
                         f"{_fmt(p.best_offset_s, '', 3)} | {_fmt(true, '', 3) if true is not None else '-'} | "
                         f"{p.decision.contrast:.2f} | {p.num_track_pairs} | {p.decision.reason} |"
                         + (" (no container)" if i >= MAX_PAIR_CONTAINERS else ""))
@@ -1062,6 +1107,10 @@ class RerunSink(Sink):
     def _log_guide(self, names: list[str]) -> None:
         """The "how to read this recording" document."""
         r = self._result
+        legend = legend_lines(self.display_names())
+        names_legend = ("\n\nPanel titles, legends and the pair graph draw the videos by short names: "
+                        + "; ".join(f"**{line.split(' = ', 1)[0]}** = {line.split(' = ', 1)[1]}" for line in legend)
+                        + ".") if legend else ""
         n_pairs = len(r.pairs) if r is not None else len(self._pairs_logged)
         shown = min(n_pairs, MAX_PAIR_CONTAINERS)
         lo, hi = self._offset_ms_min, self._offset_ms_max
@@ -1076,7 +1125,9 @@ each video has no offset; **decision log** and the notes at the end of this guid
 stage decided. The rest of this guide describes a run with pairs.""" if lo is None else
                    f"""The viewer opens on the **`offset_ms`** timeline: the candidate pair offset Δ_ab in milliseconds
 over the whole search range{rng}. Δ_ab = offset_s[b] − offset_s[a]: video b started Δ_ab later
-than a. Move the time cursor (drag it, or type a value in the time field) to sweep Δ.""")
+than a. `vs-inspect view FILE` puts the time cursor at the chosen Δ of the pair in front (`rerun
+FILE` opens at the start of the range). Move the cursor (drag it, or type a value in the time
+field) to sweep Δ.""")
         md = f"""# How to read this recording
 
 {opening}
@@ -1084,8 +1135,9 @@ than a. Move the time cursor (drag it, or type a value in the time field) to swe
 **Middle column: one tab per pair a→b, failed pairs first.** ✗ marks a rejected pair, ✓ an accepted
 one.{capped}
 
-- *landscape*: the energy E(Δ) of the pair, low where the epipolar constraint holds. The diamond is
-  the chosen Δ, circles the significant minima, a cross the true Δ when known. A rejected pair usually shows no clear single
+- *landscape*: the energy E(Δ) of the pair, low where the epipolar constraint holds. The green
+  diamond is the chosen Δ (a vermillion cross: a rejected pair's best), grey circles the
+  significant minima, a white plus the true Δ when known. A rejected pair usually shows no clear single
   minimum, or its minimum sits at the edge of the search range. A pair timed by the person carrying
   a moving camera seen in the other video (its decision says "sightings of a camera's carrier")
   shows 1 − the share of heads on that camera's centre instead, 0 at the peak; it has no epipolar view. Its
@@ -1102,24 +1154,28 @@ one.{capped}
 − Δ_ac per triangle of pairs: large residuals point at wrong pairs); the **decision log** (one line
 per pair at its chosen Δ). Below: **all landscapes** (every pair's E(Δ), named a→b), the **pair
 graph** (videos with their offsets; a node on each evaluated pair's edge, ✓ with Δ or ✗) and the
-**IRLS solve** (residual and weight per accepted pair; switch the timeline to `iteration`).
+**IRLS solve** (|residual| and weight per accepted pair, one group of bars per iteration, in the
+colours of the pairs' landscapes; the same numbers are on the `iteration` timeline under `sync/solve`).
 
-**Right column**: the videos and the 3D world. On `offset_ms` each video shows one still frame with
-its moving-region mask and tracks. Switch the timeline to **`time`** (seconds after
+**Right column**: the videos whose frames the recording holds, and the 3D world. On `offset_ms`
+each video shows one still frame with its moving-region mask and tracks. Switch the timeline to **`time`** (seconds after
 synchronization) to play the videos together at the solved offsets, or **`frame`** for each
 video's own frame index. In 3D: the camera frustums, each labelled with its video's name, a
 moving camera's path, and the tracks of accepted pairs triangulated at the solved offsets.
 
-**Colours**: green means only *accepted* and red (vermillion) only *rejected*. Moving instances,
-cameras and masks use an Okabe-Ito palette without green or red; the static background of a mask
-is transparent.
+**Colours** (the report's too): green means only *accepted* and vermillion only *rejected* (a
+landscape's chosen Δ: green diamond, or vermillion cross for a rejected pair's best); each pair's
+curve has a colour of its own; white marks the true Δ (a plus); purple the --around window and
+Stage 0's joint vote; yellow a point on its epipolar line and blue one far from it. Each camera has
+one colour (its frustum, label and graph node) and each moving object another (its tracks, mask
+and lines), never a camera's; the static background of a mask is transparent.
 
 **Video panels empty?** Videos embedded as H.264/AV1 files are decoded by the viewer: the native
 viewer runs the `ffmpeg` executable for H.264, which must be on PATH (else the panels say "Failed
 to decode: Couldn't find an installation of the FFmpeg executable"); the web viewer
 (`rerun --web-viewer FILE.rrd`) decodes in the browser.
 
-Videos in this recording: {", ".join(names) or "none"}.
+Videos in this recording: {", ".join(names) or "none"}.{names_legend}
 """
         if self._notes:
             md += "\n## Notes from the stages\n\n" + "\n".join(f"- {n}" for n in self._notes[-30:]) + "\n"

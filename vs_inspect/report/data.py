@@ -120,6 +120,12 @@ class EpipolarState:
     sampson_px2: np.ndarray  # (N,) Sampson error of each match, px², NaN where undefined
     median_sampson_px2: float  # median over finite entries, px² (NaN if none)
 
+    @property
+    def median_distance_px(self) -> float:
+        """The median Sampson distance, px: the square root of the median Sampson error, the
+        first-order distance of a match from its epipolar geometry (what decisions speak in)."""
+        return float(np.sqrt(self.median_sampson_px2)) if np.isfinite(self.median_sampson_px2) else float("nan")
+
 
 @dataclass(frozen=True)
 class EpipolarPanel:
@@ -209,10 +215,20 @@ class ReportData:
     three_view: tuple[ThreeViewView, ...] = ()  # Stage 0's three-view checks (none: no estimated camera sure)
     unresolved_headline: dict[str, str] = field(default_factory=dict)  # video -> why, one plain sentence
     # (RunResult.headlines, which falls back to the whole reason where the run gave no headline)
+    labels: dict[str, str] = field(default_factory=dict)  # video -> short name figures draw it by
+    # (analysis.display_names; a video missing here is drawn by its name)
 
     @property
     def names(self) -> list[str]:
         return [v.name for v in self.videos]
+
+    def label(self, name: str) -> str:
+        """The short name `name` is drawn by."""
+        return self.labels.get(name, name)
+
+    def label_legend(self) -> list[str]:
+        """"short = full name" for each video drawn by a short name (none when no name was cut)."""
+        return [f"{s} = {n}" for n, s in self.labels.items() if s != n]
 
     def video(self, name: str) -> VideoClock:
         for v in self.videos:

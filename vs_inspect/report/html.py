@@ -6,8 +6,9 @@ import html
 import math
 from pathlib import Path
 
+from .. import palette
 from .data import ReportData
-from .figures import fmt_px2
+from .figures import fmt_px
 
 
 def _s(x: float | None, digits: int = 4, sign: bool = True) -> str:
@@ -28,11 +29,11 @@ body { font-family: system-ui, sans-serif; margin: 24px; max-width: 1700px; colo
 table { border-collapse: collapse; margin: 8px 0 24px 0; font-size: 14px; }
 th, td { border: 1px solid #ccc; padding: 4px 8px; text-align: right; }
 th { background: #f2f2f2; } td.l { text-align: left; }
-tr.acc td.d { color: #0072B2; font-weight: bold; } tr.rej td.d { color: #D55E00; font-weight: bold; }
+tr.acc td.d { color: ACC; font-weight: bold; } tr.rej td.d { color: REJ; font-weight: bold; }
 figure { margin: 12px 0 32px 0; } figure img { max-width: 100%; border: 1px solid #ddd; }
 figcaption { font-size: 14px; color: #444; margin-top: 4px; }
 .notes li { color: #8a5a00; }
-"""
+""".replace("ACC", palette.hex_of(palette.ACCEPTED)).replace("REJ", palette.hex_of(palette.REJECTED))
 
 
 def write_index(data: ReportData, images: dict[str, tuple[str, str]], path: Path) -> Path:
@@ -48,13 +49,16 @@ def write_index(data: ReportData, images: dict[str, tuple[str, str]], path: Path
            f"<p>reference video: <b>{e(data.reference)}</b> (offset 0). A frame at local time τ of "
            "video v shows global time τ + offset(v); Δ<sub>ab</sub> = offset(b) − offset(a).</p>"]
 
-    out.append("<h2>Offsets</h2><table id='offsets'><tr><th>video</th><th>offset [s]</th>"
+    short = bool(data.label_legend())  # the figures draw videos by short names: say which
+    out.append("<h2>Offsets</h2><table id='offsets'><tr><th>video</th>"
+               + ("<th>in the figures</th>" if short else "") + "<th>offset [s]</th>"
                "<th>± [s]</th>" + ("<th>true [s]</th><th>error [ms]</th><th>error [frames]</th>" if gt else "")
                + "<th>status</th></tr>")
     ref_gt = gt.get(data.reference, 0.0) if gt else 0.0
     for v in data.names or list(data.offsets_s):
         off = data.offsets_s.get(v)
-        row = f"<tr><td class='l'>{e(v)}</td><td>{_s(off)}</td>" \
+        row = f"<tr><td class='l'>{e(v)}</td>" + (f"<td class='l'>{e(data.label(v))}</td>" if short else "") + \
+              f"<td>{_s(off)}</td>" \
               f"<td>{_s(data.uncertainty_s.get(v), 4, False)}</td>"
         if gt:
             row += (f"<td>{_s(gt[v] - ref_gt) if v in gt else '—'}</td><td>{_s(errs.get(v), 1, False)}</td>"
@@ -88,11 +92,11 @@ def write_index(data: ReportData, images: dict[str, tuple[str, str]], path: Path
     if data.epipolar is not None:
         ep = data.epipolar
         out.append("<h2>Epipolar check</h2><table id='epipolar'><tr><th>pair</th><th>frame of a</th>"
-                   "<th>Δ [s]</th><th>median Sampson error [px²]</th></tr>")
+                   "<th>Δ [s]</th><th>median distance to the line [px]</th></tr>")
         best = "chosen" if ep.accepted else "best of a rejected pair"
         for label, st in (("wrong", ep.wrong), (best, ep.chosen)):
             out.append(f"<tr><td class='l'>{e(ep.a)} – {e(ep.b)} ({label})</td><td>{ep.frame_a}</td>"
-                       f"<td>{_s(st.offset_s, 3)}</td><td>{e(fmt_px2(st.median_sampson_px2))}</td></tr>")
+                       f"<td>{_s(st.offset_s, 3)}</td><td>{e(fmt_px(st.median_distance_px))}</td></tr>")
         out.append("</table>")
 
     out.append("<h2>Figures</h2>")

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import os
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -58,42 +59,69 @@ def _title_lines(text: str, width: int) -> str:
     return "\n".join(textwrap.wrap(text, width))
 
 
-def render_scene(data: ReportData, path: Path, size: tuple[int, int], dpi: float = 100.0,
+def render_scene(data: ReportData, path: Path, size: tuple[int, int], dpi: float = 200.0,
                  formats: tuple[str, ...] = ("png",)) -> Path:
-    """The 3D scene as a PNG of size (px, already at dpi: fonts scale by dpi/100); PDF and SVG
-    embed that picture."""
-    png = _render_png(data, Path(path).with_suffix(".png"), size, dpi / 100.0)
-    out = [png] if "png" in formats else []
-    for fmt in formats:
-        if fmt == "png":
-            continue
-        signals.checkpoint()  # between files
-        import matplotlib.pyplot as plt
+    """The 3D scene in a figure of size (px at dpi): the off-screen render (cameras with their
+    labels, points, trajectories) as a picture, and its title, colour bar and names drawn by
+    matplotlib, so that in PDF and SVG they are text (the figures' fonts and sizes)."""
+    import matplotlib.pyplot as plt
+    from matplotlib import cm, colors as mcolors
+
+    from . import figures
+
+    w_in, h_in = size[0] / dpi, size[1] / dpi
+    title = _title(data)
+    bar = bool(data.trajectories)
+    fig = plt.figure(figsize=(w_in, h_in), dpi=dpi, layout="constrained")
+    grid = fig.add_gridspec(1, 2, width_ratios=[1, 0.035]) if bar else fig.add_gridspec(1, 1)
+    ax = fig.add_subplot(grid[0, 0])
+    fig.suptitle(figures._wrap(title, figures._chars(w_in, figures.FONT_PT)), fontsize=figures.FONT_PT)
+    figures._finish(fig, data, figures.size_of_width(w_in))
+    # the picture at about the size it is shown (labels stay near 8 pt)
+    text_in = 0.18 * (title.count("\n") + 2) + figures.LINE_IN * len(data.label_legend() and [1] or [])
+    render_px = (max(64, int((w_in - (0.75 if bar else 0.1)) * dpi)), max(64, int((h_in - text_in) * dpi)))
+    with tempfile.TemporaryDirectory(prefix="vs-inspect-3d-") as tmp:
+        png = _render_png(data, Path(tmp) / "scene.png", render_px, dpi / 72.0)
         img = plt.imread(png)
-        fig = plt.figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
-        fig.figimage(img, resize=False)
-        p = Path(path).with_suffix("." + fmt)
-        fig.savefig(p, format=fmt, dpi=dpi, metadata={"pdf": {"CreationDate": None},
-                                                     "svg": {"Date": None}}.get(fmt))
-        plt.close(fig)
-        out.append(p)
-    if "png" not in formats:
-        png.unlink()
-    return out[0]
+    ax.imshow(img, interpolation="antialiased")
+    ax.set_axis_off()
+    if bar:
+        lo, hi, n_labels, dec = nice_ticks(*_time_range(data))
+        cb = fig.colorbar(cm.ScalarMappable(mcolors.Normalize(lo, hi), "viridis"), cax=fig.add_subplot(grid[0, 1]))
+        cb.set_ticks(np.linspace(lo, hi, n_labels))
+        cb.ax.yaxis.set_major_formatter(f"{{x:.{dec}f}}")
+        cb.set_label("global time [s]", fontsize=figures.FONT_PT)
+    return figures._save(fig, path, dpi, formats)
 
 
-def _render_png(data: ReportData, path: Path, size: tuple[int, int], scale: float) -> Path:
+def _title(data: ReportData) -> str:
+    n_traj = len(data.trajectories)
+    n_moving = sum(c.is_moving for c in data.cameras)
+    title = f"3D scene: {len(data.cameras)} cameras" + \
+            (f" ({n_moving} moving, with {'its' if n_moving == 1 else 'their'} path)" if n_moving else "") + \
+            f", {n_traj} trajectories triangulated at the solved offsets, coloured by global time"
+    if data.static_points is not None and len(data.static_points):
+        title += f"; {len(data.static_points)} static points"
+    return title
+
+
+def _time_range(data: ReportData) -> tuple[float, float]:
+    times = np.concatenate([t.time_s for t in data.trajectories])
+    return float(np.nanmin(times)), float(np.nanmax(times))
+
+
+def _render_png(data: ReportData, path: Path, size: tuple[int, int], px_per_pt: float) -> Path:
     import pyvista as pv
 
     from .figures import video_colors
 
     colors = video_colors(data.names or [c.name for c in data.cameras])
-    zoom = scale  # font scale with the dpi
+    zoom = px_per_pt  # text and line sizes below are in points at the printed size
     scale = _scene_scale(data)
     signals.checkpoint()  # VTK's rendering below cannot be stopped halfway
     pl = pv.Plotter(off_screen=True, window_size=list(size))
     try:
-        _draw(pl, pv, data, colors, zoom, scale, size)
+        _draw(pl, pv, data, colors, zoom, scale)
         signals.checkpoint()
         pl.screenshot(str(path))
     finally:
@@ -102,27 +130,26 @@ def _render_png(data: ReportData, path: Path, size: tuple[int, int], scale: floa
     return path
 
 
-def _draw(pl, pv, data: ReportData, colors, zoom: float, scale: float, size: tuple[int, int]) -> None:
+def _draw(pl, pv, data: ReportData, colors, zoom: float, scale: float) -> None:
     pl.set_background("white")
-    centers_all = []
     for cam in data.cameras:
         col = colors.get(cam.name, (0.3, 0.3, 0.3))
-        pl.add_mesh(_camera_mesh(pv, cam, 0.08 * scale), color=col, line_width=3)
+        pl.add_mesh(_camera_mesh(pv, cam, 0.08 * scale), color=col, line_width=max(1.0, 0.9 * zoom))
         C = cam.centers()
-        centers_all.append(C)
         if cam.is_moving:
-            pl.add_mesh(pv.lines_from_points(C), color=col, line_width=5)
-        pl.add_point_labels(C[:1] + np.array([0, 0, (0.15 if cam.is_moving else 0.06) * scale]), [cam.name],
-                            font_size=int(22 * zoom),
+            pl.add_mesh(pv.lines_from_points(C), color=col, line_width=max(1.0, 1.2 * zoom))
+        pl.add_point_labels(C[:1] + np.array([0, 0, (0.15 if cam.is_moving else 0.06) * scale]),
+                            [data.label(cam.name)], font_size=int(8 * zoom),
                             text_color=col, shape=None, show_points=False, bold=True,
                             always_visible=True)
     if data.static_points is not None and len(data.static_points):
         cloud = pv.PolyData(np.asarray(data.static_points, float))
         if data.static_colors is not None:
             cloud["rgb"] = np.asarray(data.static_colors, np.uint8)
-            pl.add_mesh(cloud, scalars="rgb", rgb=True, point_size=3, render_points_as_spheres=False)
+            pl.add_mesh(cloud, scalars="rgb", rgb=True, point_size=max(1.0, 1.2 * zoom),
+                        render_points_as_spheres=False)
         else:
-            pl.add_mesh(cloud, color="#888888", point_size=3)
+            pl.add_mesh(cloud, color="#888888", point_size=max(1.0, 1.2 * zoom))
     if data.trajectories:
         pts = np.concatenate([t.points_world for t in data.trajectories])
         times = np.concatenate([t.time_s for t in data.trajectories])
@@ -133,24 +160,10 @@ def _draw(pl, pv, data: ReportData, colors, zoom: float, scale: float, size: tup
             base += n
         poly = pv.PolyData(pts, lines=np.array(lines))
         poly["global time [s]"] = times
-        lo, hi, n_labels, dec = nice_ticks(float(np.nanmin(times)), float(np.nanmax(times)))
-        pl.add_mesh(poly, scalars="global time [s]", cmap="viridis", line_width=3.5 * zoom,
-                    clim=(lo, hi),
-                    scalar_bar_args=dict(title="global time [s]", title_font_size=int(22 * zoom),
-                                         label_font_size=int(18 * zoom), color="black", vertical=True,
-                                         position_x=0.88, position_y=0.25, width=0.05, height=0.5,
-                                         n_labels=n_labels, fmt=f"%.{dec}f"))
+        lo, hi, _, _ = nice_ticks(float(np.nanmin(times)), float(np.nanmax(times)))
+        pl.add_mesh(poly, scalars="global time [s]", cmap="viridis", line_width=1.2 * zoom,
+                    clim=(lo, hi), show_scalar_bar=False)
     # an oblique view from above, fitted to everything drawn
     pl.view_vector((0.55, -0.75, 0.75), viewup=(0.0, 0.0, 1.0))
     pl.reset_camera()
     pl.camera.zoom(1.3)
-    n_traj = len(data.trajectories)
-    n_moving = sum(c.is_moving for c in data.cameras)
-    title = f"3D scene: {len(data.cameras)} cameras" + \
-            (f" ({n_moving} moving, with {'its' if n_moving == 1 else 'their'} path)" if n_moving else "") + \
-            f", {n_traj} trajectories triangulated at the solved offsets, coloured by global time"
-    if data.static_points is None:
-        title += "; no static reconstruction in the input"
-    # wrapped to the window's width, placed with a margin: nothing runs off an edge
-    pl.add_text(_title_lines(title, int(size[0] / (15.0 * zoom))), position=(int(12 * zoom), size[1] - int(70 * zoom)),
-                font_size=int(13 * zoom), color="black")

@@ -24,6 +24,7 @@ from ...geometry.offsets import OffsetGrid
 from ...types import FROM_MOVING_POINTS, CameraTrack, Tracks, first_clause
 from ..config import CueConfig
 from ...memo import NO_MEMO, Memo, digest
+from ...progress import stage
 from ..records import Note, say_cameras
 from ..rules import ALL
 from ..pairing.pairing import GeometricPairing, add_geometric_pairs, check_fitted_offsets
@@ -182,7 +183,8 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
             kind = MOVING_POINTS if from_tracks else est.features + (OWN if as_built else "")
             return kind, out
 
-        kept_est = models.first()
+        with stage("cameras: estimating them from the videos (pycolmap)", progress):
+            kept_est = models.first()
         first_est = kept_est
         kind, kept = attempt(kept_est)
         first_kind, first_peaks = kind, kept.peaks
@@ -193,7 +195,8 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
             if f"{which}_model" not in rules:
                 continue
             try:
-                est = build_next()
+                with stage(f"cameras: the {which} camera model", progress):
+                    est = build_next()
                 if est is None:
                     continue
                 log.info("the joint vote trusted %d of %d videos on %s's cameras: trying %s's model",
