@@ -37,9 +37,8 @@ def pair_people_path(a: str, b: str) -> str:
 
 def _skeleton(num_people: int) -> rr.AnnotationContext:
     keypoints = [rr.AnnotationInfo(id=k, label=n) for k, n in enumerate(LANDMARK_NAMES)]
-    colors = np.array(palette.CATEGORY, dtype=np.uint8)
     return rr.AnnotationContext([
-        rr.ClassDescription(info=rr.AnnotationInfo(id=p, label=f"person {p}", color=tuple(int(c) for c in colors[p % len(colors)])),
+        rr.ClassDescription(info=rr.AnnotationInfo(id=p, label=f"person {p}", color=palette.instance_colour(p)),
                             keypoint_annotations=keypoints, keypoint_connections=list(SKELETON_EDGES))
         for p in range(max(num_people, 1))])
 
