@@ -610,14 +610,14 @@ def test_sigterm_during_sfm_removes_the_scratch_folder(tmp_path):
         import numpy, sys, time
         from vs_inspect.signals import Terminated, install
         install()  # as vs_inspect.cli.main does
-        import vs_inspect.cues.cameras as c
+        import vs_inspect.cues.cameras.sfm as c
         from vs_inspect import signals
         def slow(*a, **k):
             print("READY", flush=True)
             for _ in range(600):
                 time.sleep(0.1)
                 signals.checkpoint()
-        c._sift_database = slow
+        c.sift_database = slow
         from vs_inspect.cues.config import CameraConfig
         img = numpy.zeros((64, 64, 3), numpy.uint8)
         frames = {"a": ([0, 1, 2], [img] * 3, [None] * 3), "b": ([0, 1, 2], [img] * 3, [None] * 3)}

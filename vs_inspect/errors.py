@@ -29,7 +29,7 @@ class BadVideoName(InputError):
 class NoUsableVideos(InputError):
     """Stage 0 could use no video (none opened, or none got a camera).
 
-    stats (types.CueStats) says why for each video and inputs ({name: path}) lists every input,
+    stats (cue_stats.CueStats) says why for each video and inputs ({name: path}) lists every input,
     so that a run can still report every video as unresolved with its reason.
     """
 

@@ -7,11 +7,14 @@ naming what they received; the bundle reader turns those into BundleError with t
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .geometry.epipolar import camera_centers
+
+if TYPE_CHECKING:
+    from .cue_stats import CueStats
 
 
 def frame_length_s(fps: float | None, duration_s: float, num_frames: int) -> float:
@@ -41,7 +44,7 @@ def pairs_by_reason(items: list[tuple[str, str]], verb: str = "", max_names: int
 
 
 # how a dropped video's reason adds why the moving points' own cameras did not place it either
-# (cues/camera_choice.py); a headline keeps that clause too
+# (cues/cameras/choice.py); a headline keeps that clause too
 FROM_MOVING_POINTS = "from the moving points: "
 
 
@@ -453,137 +456,6 @@ class RunInputs:
 
 
 @dataclass(frozen=True)
-class VideoCueStats:
-    """Stage 0's counts for one video."""
-
-    path: str
-    camera_motion: str  # "static" | "moving"
-    background_motion_px: float  # median background motion between sampled frames, px
-    moving_fraction: float  # share of pixels in moving regions, 0..1
-    tracks: int
-    instances: int  # moving regions (connected instances) found
-    keyframe_features: int
-    snapped_features: int  # keyframe features snapped to a track
-    note: str | None = None  # why the video gives no cues (no moving regions, no tracks)
-
-
-@dataclass(frozen=True)
-class CueStats:
-    """What Stage 0 found and how long it took, for result.json's "cues" and the recording."""
-
-    camera_source: str  # "calibration" | "estimated" | "estimated from moving points (...)"
-    registered_cameras: int
-    tracks: int
-    track_pairs: int
-    videos: dict[str, VideoCueStats]
-    pairs: dict[str, dict[str, Any]]  # "a__b" -> counts (matches, snapped, geometric_*), JSON values
-    dropped: dict[str, str]  # video -> why it was left out of the bundle
-    timings_s: dict[str, float]  # per Stage 0 step, seconds
-    geometric_peaks: str | None = None  # "joint" | "chosen" | "inconsistent" | "one triangle" | "no triangle" | "too many pairs" (None: not run)
-    sfm: dict[str, Any] | None = None  # estimated cameras' diagnostics, JSON values (None: calibrated)
-    geometric_joint: dict[str, Any] | None = None  # the joint vote (offsets, margins, cameras sure and used) and
-    # its point-transfer checks of unsure cameras ("transfer": camera -> verdict) and of sure ones in
-    # three views ("three_view": camera -> verdict), JSON values; "dissent": camera -> why it was made
-    # unsure, "overruled": camera -> why another camera model's dispute of it was overruled
-    heads: dict[str, Any] | None = None  # the person detector's run: frames with a head per video, the
-    # seconds of those found beside the cameras ("found_ahead_s"), or "skipped" with why (None: no
-    # camera moved, or turned off)
-
-    def refused_in_three_views(self) -> list[str]:
-        """The cameras Stage 0's three-view check refused (geometric_joint's "three_view"), by name."""
-        return refused_in_three_views(self.geometric_joint)
-
-    def geometric_refusal(self, video: str) -> str | None:
-        """Why Stage 0 gave `video` no geometric track pairs (geometric_refusal below), or None."""
-        return geometric_refusal(self.pairs, self.dropped, self.geometric_joint, video)
-
-    def headline(self, video: str, later: str | None = None) -> str:
-        """Why `video` has no offset, in a few words: why Stage 0 left it out, or the kept camera
-        model's refusal (refusal_headline, the model named when others were tried) and later's
-        first clause (Stage 1 and 2's reason, e.g. "not connected to the reference ..."), then
-        what the other camera models made of it."""
-        sfm = self.sfm or {}
-        if video in self.dropped:
-            first, *rest = self.dropped[video].split("; ")
-            cause, later = first_clause(first), None
-            why = "; ".join([cause, *(first_clause(c) for c in rest if c.startswith(FROM_MOVING_POINTS))])
-        else:
-            cause = why = refusal_headline(self.pairs, self.dropped, self.geometric_joint, video)
-        others = (sfm.get("other_models_headline") or {}).get(video) or {}
-        parts = [f"{sfm['kept_model']}: {why}" if why and others and sfm.get("kept_model") else why,
-                 first_clause(later) if later else None]
-        if others:  # models whose cause is the kept one's are named, not repeated
-            said = [(m, "the same" if c == cause else c) for m, c in others.items()]
-            parts.append("other camera models: " + "; ".join(pairs_by_reason(said)))
-        return "; ".join(p for p in parts if p) or "no offset"
-
-    def other_models_note(self, video: str) -> str | None:
-        """What the camera models Stage 0 tried and did not keep made of `video`, when the kept
-        one placed its camera but did not trust its offset (sfm's "other_models"), or None."""
-        return ((self.sfm or {}).get("other_models") or {}).get(video)
-
-
-def refused_in_three_views(joint: dict[str, Any] | None) -> list[str]:
-    """The cameras a joint vote's three-view check refused (its "three_view"), by name."""
-    checks = (joint or {}).get("three_view") or {}
-    return sorted(v for v, chk in checks.items() if not chk["passed"])
-
-
-def geometric_refusal(pairs: dict[str, dict[str, Any]], dropped: dict[str, str], joint: dict[str, Any] | None,
-                      video: str) -> str | None:
-    """Why Stage 0 gave `video` no geometric track pairs, from CueStats' pairs, dropped and
-    geometric_joint (of the kept camera model, or of another one tried): its pairs with a moving
-    camera had no triangle to check their vote peaks, or its joint vote was unsure of it (with
-    point transfer's verdict), sure of it but refuted in three views or by a pair of its own
-    (dissent), or sure of too few cameras to close a triangle; else None (used, dropped, or no
-    joint vote)."""
-    refusal = refusal_texts(pairs, dropped, joint, video)
-    return None if refusal is None else refusal[1]
-
-
-def refusal_headline(pairs: dict[str, dict[str, Any]], dropped: dict[str, str], joint: dict[str, Any] | None,
-                     video: str) -> str | None:
-    """geometric_refusal's cause in a few words ("refuted in three views", "two offsets 1.22 s
-    apart, as a repeated motion gives"), or None when it gives none."""
-    refusal = refusal_texts(pairs, dropped, joint, video)
-    return None if refusal is None else refusal[0]
-
-
-def refusal_texts(pairs: dict[str, dict[str, Any]], dropped: dict[str, str], joint: dict[str, Any] | None,
-                  video: str) -> tuple[str, str] | None:
-    """(refusal_headline, geometric_refusal) of `video`, worked out once, or None."""
-    withheld = [(k, p) for k, p in pairs.items() if video in k.split("__") and p.get("geometric_withheld")]
-    if withheld and video not in dropped:
-        short = next((p["geometric_withheld_short"] for _, p in withheld if p.get("geometric_withheld_short")),
-                     "vote peaks unchecked")
-        return short, "Stage 0 gave " + "; ".join(pairs_by_reason([(k, p["geometric_withheld"]) for k, p in withheld],
-                                                                  " no geometric track pairs"))
-    joint = joint or {}
-    if video not in joint.get("margin", {}) or video in joint.get("used", ()) or video in dropped:
-        return None
-    margin = joint["margin"][video]
-    if video in refused_in_three_views(joint):
-        three_view = joint["three_view"][video]
-        return ("refuted in three views",
-                f"Stage 0's joint vote was sure of its offset (margin {margin:.1f}), but "
-                f"not in three views ({three_view['reason']}), so it got no geometric track pairs")
-    dissent = (joint.get("dissent") or {}).get(video)
-    if dissent:  # point transfer does not check such a camera (cues/joint_vote.add_geometric_pairs)
-        return ((joint.get("dissent_short") or {}).get(video, "its offset disputed"),
-                f"Stage 0's joint vote chose its offset (margin {margin:.1f}), but {dissent}, "
-                f"so it got no geometric track pairs")
-    if video in joint.get("sure", ()):
-        return (f"sure of {len(joint['sure'])} camera(s) only, no triangle to confirm it",
-                f"Stage 0's joint vote was sure of its offset (margin {margin:.1f}) but of "
-                f"{len(joint['sure'])} camera(s) only, so no triangle of sure cameras confirmed it and it "
-                f"got no geometric track pairs")
-    check = (joint.get("transfer") or {}).get(video)
-    return (f"joint vote unsure of it (margin {margin:.1f})",
-            f"Stage 0's joint vote was not sure of its offset (margin {margin:.1f}), "
-            f"so it got no geometric track pairs" + (f" ({check['reason']})" if check else ""))
-
-
-@dataclass(frozen=True)
 class RunResult:
     """A whole run: one offset per input video (None with a reason), and how it was reached.
 
@@ -760,7 +632,7 @@ class PeopleCue:
     landmarks: tuple[int, ...]  # the BlazePose landmarks each person's tracks hold, in order
     timings_s: dict[str, float]  # "people", "pairs", "cameras", "total"
     background_motion_px: dict[str, float] = field(default_factory=dict)  # video -> its background's motion
-    # between frames (cues/motion.py), px: a moving camera is refused
+    # between frames (cues/video/motion.py), px: a moving camera is refused
 
     def bundle(self, gt_offsets_s: dict[str, float] | None = None) -> CueBundle:
         """The placed videos with their cameras, landmark tracks and track pairs, for Stage 1."""

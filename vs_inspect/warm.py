@@ -26,32 +26,35 @@ SCENE = dict(cameras=3, moving=1, seconds=2.0, width=240, height=180, fps=None, 
              exposure=True, points_per_object=30, seed=0)
 
 
-def cached_kernels() -> dict[str, int]:
-    """{kernel: specializations compiled or loaded in this process} of the cached kernels."""
-    import numba
+# the modules whose numba kernels are cached, under the package
+KERNEL_MODULES = ("sync.kernels", "sync.people_pairs", "cues.pairing.votes", "cues.features.guided",
+                  "cues.features.nearest_neighbours")
 
-    from .cues import geometric_pairs, guided, nearest_neighbours
-    from .sync import kernels, people_pairs
+
+def _kernels() -> dict[str, object]:
+    """{"module.path.name" (under the package): dispatcher} of the cached kernels."""
+    import importlib
+
+    import numba
     out = {}
-    for module in (kernels, geometric_pairs, guided, nearest_neighbours, people_pairs):
+    for path in KERNEL_MODULES:
+        module = importlib.import_module(f"vs_inspect.{path}")
         for name, f in vars(module).items():
             if isinstance(f, numba.core.registry.CPUDispatcher) and f._cache.__class__.__name__ != "NullCache":
-                out[f"{module.__name__.rsplit('.', 1)[-1]}.{name}"] = len(f.signatures)
+                out[f"{path}.{name}"] = f
     return out
 
 
+def cached_kernels() -> dict[str, int]:
+    """{kernel ("module.path.name" under the package): specializations compiled or loaded in this
+    process} of the cached kernels."""
+    return {k: len(f.signatures) for k, f in _kernels().items()}
+
+
 def _has_cache_index(kernel: str) -> bool:
-    """Whether numba's cache holds an index for `kernel` ("module.name", as cached_kernels names it)."""
-    import importlib
+    """Whether numba's cache holds an index for `kernel` (as cached_kernels names it)."""
     import os
-    module, name = kernel.split(".")
-    for package in ("cues", "sync"):
-        try:
-            f = getattr(importlib.import_module(f"vs_inspect.{package}.{module}"), name)
-        except (ImportError, AttributeError):
-            continue
-        return os.path.exists(f._cache._cache_file._index_path)
-    return False
+    return os.path.exists(_kernels()[kernel]._cache._cache_file._index_path)
 
 
 def warm(workdir: str | Path | None = None) -> dict[str, float]:
@@ -75,7 +78,7 @@ def warm(workdir: str | Path | None = None) -> dict[str, float]:
         times["videos_s"] = time.perf_counter() - t
     # guided matching refines an estimated camera model's matches (pycolmap): its arguments are
     # normalised to one set of types, so two made-up images compile it
-    from .cues.guided import guided_matches
+    from .cues.features.guided import guided_matches
     t = time.perf_counter()
     rng = np.random.default_rng(0)
     xy = rng.uniform(0, 200, (16, 2)).astype(np.float32)

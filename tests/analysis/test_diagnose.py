@@ -176,10 +176,10 @@ def test_most_pairs_failing_for_one_reason_is_a_global_cause():
     # the same run where Stage 0's three-view check refused three estimated cameras: it says so
     import dataclasses
 
-    from vs_inspect.types import CueStats
+    from ..cue_records import cue_stats, joint
     three_view = {n: {"passed": n == "cam0", "supporters": 0 if n != "cam0" else 9} for n in names}
-    joint = {"margin": dict.fromkeys(names, 10.0), "sure": ["cam0"], "used": [], "three_view": three_view}
-    cues = CueStats("estimated", 4, 100, 0, {}, {}, {}, {}, "joint", None, joint)
+    cues = cue_stats(joint_vote=joint(dict.fromkeys(names, 10.0), sure=("cam0",), three_view=three_view),
+                     registered=4, tracks=100, track_pairs=0)
     msg = diagnose(dataclasses.replace(r, cues=cues)).suspects[0].message
     assert "Stage 0 refused cam1, cam2, cam3 in three views" in msg and "--calib" in msg
     assert "moved" not in msg  # no video statistics, no claim about them
@@ -191,7 +191,7 @@ def test_no_cross_view_pairs_shows_what_stage0_had_to_pair():
     import dataclasses
 
     from vs_inspect.analysis.diagnose import diagnose
-    from vs_inspect.types import CueStats, VideoCueStats
+    from vs_inspect.cue_stats import CueStats, VideoCueStats
 
     r, names = _no_pairs_result()
     videos = {n: VideoCueStats(f"{n}.mp4", "moving" if n == "cam3" else "static", 0.0,
@@ -241,16 +241,15 @@ def test_a_blind_video_that_stage0_refused_is_named_with_stage0s_reason():
     import dataclasses
 
     from vs_inspect.analysis.diagnose import CAUSE_NO_PAIRS, diagnose
-    from vs_inspect.types import CueStats
+    from ..cue_records import cue_stats, joint
 
     videos = [VideoInfo.constant_rate(n, 640, 480, 100, 25.0) for n in FIVE_S]
     plain = next(s for s in diagnose(_planted(), videos).suspects if s.name == "E")
     assert "does not see the shared motion" in plain.message
-    joint = {"origin": "A", "offsets_s": dict(FIVE_S), "score": 9.0, "used": ["A", "B", "C", "D"],
-             "margin": {"A": 9.0, "B": 8.0, "C": 7.5, "D": 6.0, "E": 3.3},
-             "transfer": {"E": {"reason": "point transfer puts it at +0.150 s, the joint vote at "
-                                          "+0.200 s (2.7 frames apart): they disagree", "confirmed": False}}}
-    cues = CueStats("calibration", 5, 100, 10, {}, {}, {}, {}, "joint", None, joint)
+    vote = joint({"A": 9.0, "B": 8.0, "C": 7.5, "D": 6.0, "E": 3.3}, used=("A", "B", "C", "D"), origin="A",
+                 transfer={"E": {"reason": "point transfer puts it at +0.150 s, the joint vote at "
+                                           "+0.200 s (2.7 frames apart): they disagree", "confirmed": False}})
+    cues = cue_stats("calibration", joint_vote=vote, registered=5, tracks=100)
     e = next(s for s in diagnose(dataclasses.replace(_planted(), cues=cues), videos).suspects if s.name == "E")
     assert e.cause == CAUSE_NO_PAIRS
     assert "joint vote was not sure of its offset (margin 3.3)" in e.message

@@ -68,7 +68,7 @@ def test_every_benchmark_is_a_bench_sub_command_with_an_example():
     benches = [n for n in SUBCOMMANDS if n.startswith("bench ")]
     assert {"bench accuracy", "bench stage0", "bench stage0 caliscope", "bench stage0 clips",
             "bench stage0 rendered", "bench stage0 speed", "bench timing", "bench energy", "bench scale",
-            "bench drone", "bench drift", "bench people", "bench recording", "bench interrupts"} == set(benches)
+            "bench drone", "bench drift", "bench people", "bench rules", "bench recording", "bench interrupts"} == set(benches)
     assert not [n for n in SUBCOMMANDS if n.startswith("bench-")]
 
 

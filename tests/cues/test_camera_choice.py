@@ -1,4 +1,4 @@
-"""Stage 0's choice of cameras when none are given (cues/camera_choice.py): the moving points'
+"""Stage 0's choice of cameras when none are given (cues/cameras/choice.py): the moving points'
 cameras fitted once and refused alone in pairs; later camera models tried, kept or not."""
 
 from __future__ import annotations
@@ -9,7 +9,17 @@ from vs_inspect.cues.config import CueConfig
 from vs_inspect.geometry.epipolar import look_at
 from vs_inspect.types import CameraTrack, TrackPairs
 
-from .stage0_fakes import Events, K
+from tests.cue_records import joint
+from vs_inspect.cue_stats import CueStats, MovingPointsCameras, SfmRecord
+from vs_inspect.cues.pairing.pairing import GeometricPairing
+from vs_inspect.cues.records import Note
+
+from .stage0_fakes import K
+
+
+def _as_json(cams) -> dict:
+    """A camera set's records as result.json's "cues" holds them (a stats-like dict)."""
+    return {"camera_source": cams.source, "dropped": dict(cams.dropped), "sfm": cams.sfm.to_json()}
 
 
 def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), memo: dict | None = None,
@@ -19,9 +29,9 @@ def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), m
     (cameras, stats)."""
     from types import SimpleNamespace
 
-    import vs_inspect.cues.pairwise as pairwise_mod
-    from vs_inspect.cues.cameras import CameraEstimate
-    from vs_inspect.cues.camera_choice import _estimate
+    import vs_inspect.cues.cameras.moving_points as pairwise_mod
+    from vs_inspect.cues.cameras.sfm import CameraEstimate
+    from vs_inspect.cues.cameras.choice import _estimate
 
     no_model = "no reconstruction: too few matches"
     est = CameraEstimate({}, dict.fromkeys(names, no_model), None, None, len(names), 0, "sift")
@@ -38,8 +48,8 @@ def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), m
                                register_masks=None, xy_full=np.zeros((0, 50, 2)),
                                instance=np.zeros(0, np.int64)) for n in names}
     pairs = {(a, b): TrackPairs(a, b, np.zeros((0, 2), np.int64)) for a, b in zip(names, names[1:])}
-    stats = {"dropped": {}, "camera_source": "estimated"}
-    return _estimate(vids, config, stats, pairs, est, memo=memo).cameras, stats
+    got = _estimate(vids, config, pairs, est, memo=memo)
+    return got.cameras, _as_json(got)
 
 
 def test_the_moving_points_cameras_are_fitted_once_for_every_model(monkeypatch):
@@ -70,10 +80,7 @@ def test_two_cameras_from_the_moving_points_alone_are_refused(monkeypatch):
         assert stats["dropped"][n].startswith("no reconstruction: too few matches; from the moving points: "
                                               "only two cameras came out"), stats["dropped"][n]
     # in a few words, both causes are kept (e.g. "only 2 track pairs" as the second)
-    from vs_inspect.cues.extract import _cue_stats
-
-    stats.update(registered_cameras=0, tracks=0, track_pairs=0, videos={}, pairs={}, timings_s={})
-    head = _cue_stats(stats).headline("a")
+    head = CueStats.from_json(stats).headline("a")
     assert head.startswith("no reconstruction: too few matches; from the moving points: only two cameras came out")
     # three are used (their fitted offsets are then checked against their votes), and so are two
     # when the config asks for them
@@ -98,8 +105,8 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
     import dataclasses
     from types import SimpleNamespace
 
-    import vs_inspect.cues.cameras as cameras_mod
-    import vs_inspect.cues.camera_choice as ex
+    import vs_inspect.cues.cameras.sfm as cameras_mod
+    import vs_inspect.cues.cameras.choice as ex
 
     class Models:
         def __init__(self, *args, **kwargs):
@@ -131,28 +138,28 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
 
     seen = []
 
-    def estimate(vids, cfg, stats, pairs, est, from_tracks=False, memo=None, as_built=False, grid=None):
+    def estimate(vids, cfg, pairs, est, from_tracks=False, memo=None, as_built=False, grid=None, rules=None,
+                 kept=None):
         kind = ex.MOVING_POINTS if from_tracks else est.features + (ex.OWN if as_built else "")
-        stats["sfm"] = {"features": kind}
+        sfm = SfmRecord(kind, 3, 3, {}, (), {})
         if weak_first and kind == "sift":  # replaced by the moving points' cameras
-            stats["sfm"]["fallback"] = {"used": True}
+            sfm = dataclasses.replace(sfm, fallback=MovingPointsCameras("weak", True))
         if from_tracks:  # the moving points' cameras, used when the test's trusted names them
-            stats["sfm"]["fallback"] = {"used": kind in trusted}
+            sfm = dataclasses.replace(sfm, fallback=MovingPointsCameras("none trusted", kind in trusted))
             if kind not in trusted:
-                return ex.CameraSet({}, {}, None, None, {})
+                return ex.CameraSet({}, {}, None, None, {}, sfm=sfm)
         names = (registered or {}).get(kind, "".join(vids))
-        stats["dropped"].update({n: f"{kind} matched too little; the moving points' cameras refused"
-                                 for n in vids if n not in names})
-        return ex.CameraSet({n: CameraTrack(K, look_at([6.0, 0, 2.0], [0, 0, 1])) for n in names}, {}, None, None, {})
+        dropped = {n: f"{kind} matched too little; the moving points' cameras refused" for n in vids if n not in names}
+        return ex.CameraSet({n: CameraTrack(K, look_at([6.0, 0, 2.0], [0, 0, 1])) for n in names}, {}, None, None, {},
+                            dropped, sfm=sfm)
 
-    def vote(cams, vids, all_pairs, cfg, stats, sink, progress, estimated, other_peaks=None, other="", grid=None):
-        kind = stats["sfm"]["features"]
+    def vote(cams, vids, all_pairs, cfg, progress, estimated, other_peaks=None, other="", grid=None, **kept):
+        kind = cams.sfm.features
         seen.append((kind, other_peaks, other))
-        if kind in (joints or {}):
-            stats["geometric_joint"] = joints[kind]
-        sink.stage_event("cues", f"voted on {kind}")
-        return dataclasses.replace(cams, pairs={}, used=frozenset(trusted[kind]),
-                                   peaks={("a", "b"): (0.1,) if kind == "sift" else (0.2,)})
+        pairing = GeometricPairing({}, {}, {}, "joint", {}, {}, joints.get(kind) if joints else None)
+        return dataclasses.replace(cams, pairs={}, used=frozenset(trusted[kind]), pairing=pairing,
+                                   peaks={("a", "b"): (0.1,) if kind == "sift" else (0.2,)},
+                                   notes=(Note("cues", f"voted on {kind}"),))
 
     monkeypatch.setattr(cameras_mod, "CameraModels", Models)
     monkeypatch.setattr(ex, "_estimate", estimate)
@@ -160,12 +167,8 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
     info = SimpleNamespace(width=640, height=480, num_frames=50)
     vids = {n: SimpleNamespace(sfm_frames=None, info=info, camera_motion="static", frame_features=None,
                                register_masks=None) for n in "abc"}
-    timings = {}
-    stats = {"dropped": {}, "pairs": {}, "camera_source": "estimated", "timings_s": timings}
-    sink = Events()
-    kept = ex.estimated_cameras(vids, config, stats, {}, {}, sink, progress=False)
-    assert stats["timings_s"] is timings  # the caller's timings stay the ones written to
-    return kept, stats, sink, seen
+    kept = ex.estimated_cameras(vids, config, {}, {}, progress=False)
+    return kept, _as_json(kept), SimpleNamespace(messages=[n.message for n in kept.notes]), seen
 
 
 def test_second_camera_model_is_kept_when_its_joint_vote_trusts_more_videos(monkeypatch):
@@ -238,8 +241,8 @@ def test_a_video_placed_but_not_timed_says_what_the_other_models_made_of_it(monk
     a trusted video gets no such note."""
     rival = ("its three-view check follows 55 trajectories at -1.217 s against 45 at its joint offset "
              "+0.000 s: two offsets, as a repeated motion gives")
-    joints = {"xfeat": {"margin": {"a": 9.0, "b": 8.0, "c": 7.5}, "sure": ["a", "b"], "used": ["a", "b"],
-                        "dissent": {"c": rival}, "dissent_short": {"c": "two offsets 1.22 s apart"}}}
+    joints = {"xfeat": joint({"a": 9.0, "b": 8.0, "c": 7.5}, sure=("a", "b"), used=("a", "b"),
+                             dissent={"c": rival}, dissent_short={"c": "two offsets 1.22 s apart"})}
     kept, stats, _, _ = _two_camera_models(monkeypatch, {"sift": {"a", "b"}, "xfeat": {"a", "b"}, "aliked": {"a"}},
                                            joints=joints)
     assert stats["sfm"]["features"] == "sift" and set(kept.cameras) == {"a", "b", "c"} and "c" not in kept.used
@@ -252,10 +255,8 @@ def test_a_video_placed_but_not_timed_says_what_the_other_models_made_of_it(monk
     assert stats["sfm"]["other_models_headline"] == {"c": {"XFEAT's model": "two offsets 1.22 s apart",
                                                            "ALIKED's model": "not trusted"}}
     # the typed record the run reads it from
-    from vs_inspect.cues.extract import _cue_stats
-
-    stats.update(registered_cameras=3, tracks=0, track_pairs=0, videos={}, pairs={})
-    assert _cue_stats(stats).other_models_note("c") == note and _cue_stats(stats).other_models_note("a") is None
+    assert CueStats.from_json(stats).other_models_note("c") == note
+    assert CueStats.from_json(stats).other_models_note("a") is None
     # one model tried: nothing to say
     _, stats, _, _ = _two_camera_models(monkeypatch, {"sift": {"a", "b"}}, second_fails=True)
     assert "other_models" not in stats["sfm"] and "other_models_headline" not in stats["sfm"]
@@ -311,13 +312,12 @@ def test_the_record_says_when_sifts_static_images_had_asift_features(monkeypatch
     # every camera moving: no static image had any
     from types import SimpleNamespace
 
-    from vs_inspect.cues.camera_choice import _estimate
-    from vs_inspect.cues.cameras import CameraEstimate
+    from vs_inspect.cues.cameras.choice import _estimate
+    from vs_inspect.cues.cameras.sfm import CameraEstimate
 
     est = CameraEstimate({}, dict.fromkeys("ab", "no reconstruction"), None, None, 2, 0, "sift")
     vids = {n: SimpleNamespace(camera_motion="moving") for n in "ab"}
-    stats = {"dropped": {}, "camera_source": "estimated"}
-    _estimate(vids, CueConfig(), stats, {}, est)
+    stats = _as_json(_estimate(vids, CueConfig(), {}, est))
     assert stats["sfm"]["features"] == "sift" and "static_images" not in stats["sfm"]
 
 
@@ -355,12 +355,12 @@ def test_the_moving_points_cameras_are_not_fitted_when_they_could_not_replace_a_
     cameras placed, they are fitted (here none come out, so the model is kept)."""
     from types import SimpleNamespace
 
-    import vs_inspect.cues.pairwise as pairwise_mod
-    from vs_inspect.cues.camera_choice import _estimate
-    from vs_inspect.cues.cameras import CameraEstimate, EstimatedCamera
-    from vs_inspect.signals import import_pycolmap
+    import vs_inspect.cues.cameras.moving_points as pairwise_mod
+    from vs_inspect.cues.cameras.choice import _estimate
+    from vs_inspect.cues.cameras.sfm import CameraEstimate, EstimatedCamera
+    from vs_inspect.geometry.camera_model import Lens
 
-    lens = import_pycolmap().Camera(model="SIMPLE_RADIAL", width=640, height=480, params=[500.0, 320.0, 240.0, 0.0])
+    lens = Lens("SIMPLE_RADIAL", (500.0, 320.0, 240.0, 0.0), 640, 480, 1.0)
     motion = {"a": "static", "b": "static", "h": "moving"}
     info = SimpleNamespace(width=640, height=480, num_frames=50)
     vids = {n: SimpleNamespace(info=info, camera_motion=m, xy_full=np.zeros((0, 50, 2)),
@@ -376,10 +376,10 @@ def test_the_moving_points_cameras_are_not_fitted_when_they_could_not_replace_a_
 
     def estimate(names):
         cams = {n: EstimatedCamera(CameraTrack(K, look_at([6.0 * np.cos(i), 6.0 * np.sin(i), 2.0], [0, 0, 1])),
-                                   lens, 1.0, np.arange(1), points_seen=40) for i, n in enumerate(names)}
+                                   lens, np.arange(1), points_seen=40) for i, n in enumerate(names)}
         est = CameraEstimate(cams, {}, None, None, 3, 3, "sift")
-        stats = {"dropped": {}, "camera_source": "estimated"}
-        return _estimate(vids, CueConfig(), stats, pairs, est), stats
+        got = _estimate(vids, CueConfig(), pairs, est)
+        return got, _as_json(got)
 
     kept, stats = estimate("abh")
     assert calls == [] and set(kept.cameras) == {"a", "b", "h"}

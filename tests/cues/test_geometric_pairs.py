@@ -6,20 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vs_inspect.cues.geometric_pairs import (
-    GeometricPairStats,
-    JointChoice,
-    consistent_at,
-    consistent_peaks,
-    disputed_by_other_model,
-    dissenting_cameras,
-    epipolar_extent,
-    geometric_pairs,
-    joint_offsets,
-    joint_vote_share,
-    rival_offsets,
-    supporters,
-)
+from vs_inspect.cues.pairing.joint import JointChoice, consistent_peaks, joint_offsets
+from vs_inspect.cues.pairing.rules import disputed_by_other_model, dissenting_cameras, joint_vote_share, rival_offsets
+from vs_inspect.cues.pairing.votes import GeometricPairStats, consistent_at, epipolar_extent, geometric_pairs, supporters
 from vs_inspect.geometry.epipolar import fundamental_from_cameras, look_at, project
 from vs_inspect.geometry.offsets import OffsetGrid
 from vs_inspect.types import CameraTrack, VideoInfo
@@ -306,7 +295,7 @@ def test_points_near_the_epipole_do_not_vote():
     of a fits them at some offset. Such moments are not counted; the true pairs still vote."""
     from dataclasses import replace
 
-    from vs_inspect.cues.config import GeometricPairConfig
+    from vs_inspect.cues.pairing.votes import VOTE
 
     shift = 8
     info_a, info_b, poses_a, poses_b, xy_a, xy_b, a_of_b = _two_moving(shift)
@@ -319,7 +308,7 @@ def test_points_near_the_epipole_do_not_vote():
     xy_b = np.concatenate([xy_b, xy_heads + rng.normal(0, 0.3, xy_heads.shape)])
     head_rows = set(range(len(xy_b) - 10, len(xy_b)))
     cam_a, cam_b = CameraTrack(K, poses_a), CameraTrack(K, poses_b)
-    off = replace(GeometricPairConfig(), epipole_margin_tau=0.0)
+    off = replace(VOTE, epipole_margin_tau=0.0)
     _, st_off = geometric_pairs("a", "b", info_a, info_b, cam_a, cam_b, xy_a, xy_b, off)
     tp, st = geometric_pairs("a", "b", info_a, info_b, cam_a, cam_b, xy_a, xy_b)
     def head_votes(stats):  # (votes of pairs with a head track, the most at one offset)
@@ -427,7 +416,7 @@ def _one_candidate(y_a: np.ndarray, y_b: np.ndarray, min_share: float):
     """_consistency on one track pair under epipolar lines y_a = y_b (two cameras side by side),
     at three offsets: a's frame q - 1, q, q + 1 for b's frame q (-1 where a has no frame).
     Returns (number of consistent offsets, best offset index)."""
-    from vs_inspect.cues.geometric_pairs import _consistency
+    from vs_inspect.cues.pairing.votes import _consistency
 
     Ta, Tb = len(y_a), len(y_b)
     xa = np.stack([np.full(Ta, 100.0), y_a], 1)[None]  # (1,Ta,2)

@@ -1,4 +1,4 @@
-"""Guided SIFT matching (cues/guided.py): the geometry decides which keypoints may match, so a
+"""Guided SIFT matching (cues/features/guided.py): the geometry decides which keypoints may match, so a
 match that the plain ratio test loses to a look-alike elsewhere in the image is kept, and a
 look-alike off the epipolar line (or off the homography) is not matched; on a real COLMAP
 database it finds the matches of COLMAP's own guided matching."""
@@ -10,8 +10,8 @@ import shutil
 import numpy as np
 import pytest
 
-from vs_inspect.cues import cameras
-from vs_inspect.cues.guided import guided_matches
+from vs_inspect.cues.cameras import colmap
+from vs_inspect.cues.features.guided import guided_matches
 from vs_inspect.signals import import_pycolmap
 
 from .test_cameras import _write_images
@@ -131,7 +131,7 @@ def test_best_two_is_the_full_matrix_answer(homography):
     """The fit test runs over all of b's keypoints, then only the fits are visited, eight flags
     at a time: every fit is found, in order (the first of equal distances is the nearest), up to
     the last keypoint of a count that is not a multiple of eight, and no padding is read."""
-    from vs_inspect.cues.guided import _best_two
+    from vs_inspect.cues.features.guided import _best_two
 
     rng = np.random.default_rng(4)
     xy_a, xy_b, F = _two_views(rng, 203)
@@ -162,7 +162,7 @@ def test_guided_matching_refuses_wrong_shapes():
 
 
 def test_guided_rematch_finds_colmaps_own_guided_matches(tmp_path):
-    """COLMAP's guided matching on a real database, then cameras._guided_rematch on a copy of it
+    """COLMAP's guided matching on a real database, then colmap.guided_rematch on a copy of it
     (each pair's stored geometry is the one COLMAP guided its matching with; on the 720p timing
     scene's database a fresh verification gave it bit for bit): the same matches."""
     pycolmap = import_pycolmap()
@@ -179,12 +179,12 @@ def test_guided_rematch_finds_colmaps_own_guided_matches(tmp_path):
                               reader_options=reader, extraction_options=ext, device=pycolmap.Device.cpu)
     mopt = pycolmap.FeatureMatchingOptions()
     mopt.guided_matching = True
-    verification = cameras._verification(0)
+    verification = colmap.seeded_verification(0)
     pycolmap.match_exhaustive(db, matching_options=mopt, verification_options=verification,
                               device=pycolmap.Device.cpu)
     ours = tmp_path / "ours.db"
     shutil.copy(db, ours)
-    cameras._guided_rematch(ours, mopt.sift, verification)
+    colmap.guided_rematch(ours, mopt.sift, verification)
 
     def verified(path):
         d = pycolmap.Database.open(path)

@@ -22,7 +22,6 @@ def test_a_video_whose_heads_cannot_be_found_is_named_and_the_others_kept(monkey
 
     import vs_inspect.io.video as video_mod
     from vs_inspect.cues.heads import find_heads
-    from vs_inspect.record.sink import NullSink
 
     T = 4
 
@@ -43,15 +42,14 @@ def test_a_video_whose_heads_cannot_be_found_is_named_and_the_others_kept(monkey
              "c": SimpleNamespace(name="c", num_frames=7, frame_interval_s=1 / 30)}
     sources = [SimpleNamespace(info=infos[n], frame=None if n == "b" else frame) for n in "abc"]
     vids = {n: SimpleNamespace(info=infos[n], scale_xy=(2.0, 2.0)) for n in "abc"}
-    stats: dict = {}
-    heads = find_heads(sources, vids, dict.fromkeys("abc"), {}, SimpleNamespace(max_side=640, heads_max_hz=10.0),
-                   stats, NullSink(), False)
+    heads, record = find_heads(sources, vids, dict.fromkeys("abc"), {}, SimpleNamespace(max_side=640),
+                               False)
     assert list(heads) == ["a", "c"]
     np.testing.assert_allclose(heads["a"], np.tile([20.5, 40.5], (T, 1)))  # working px x2, centres kept
     # at 30 fps every third frame is looked at (at most about 10 a second), NaN between
     assert np.flatnonzero(np.isfinite(heads["c"][:, 0])).tolist() == [0, 3, 6]
-    assert stats["heads"]["frames_with_a_head"] == {"a": T, "c": 3}
-    assert stats["heads"]["failed"] == {"b": "RuntimeError: the decoder gave up"}
+    assert record.frames_with_a_head == {"a": T, "c": 3}
+    assert record.failed == {"b": "RuntimeError: the decoder gave up"}
 
 
 class _FakePose:
@@ -82,12 +80,11 @@ def _fake_videos(monkeypatch, frames_of, poses: list, seen: list):
     infos = {n: SimpleNamespace(name=n, num_frames=6, frame_interval_s=0.1) for n in "abc"}
     sources = [SimpleNamespace(info=infos[n]) for n in "abc"]
     vids = {n: SimpleNamespace(info=infos[n], scale_xy=(1.0, 1.0)) for n in "abc"}
-    return sources, vids, SimpleNamespace(max_side=640, heads_max_hz=10.0)
+    return sources, vids, SimpleNamespace(max_side=640)
 
 
 def test_heads_found_ahead_on_their_own_thread_are_the_heads_found_after(monkeypatch):
     from vs_inspect.cues.heads import HeadsAhead, find_heads
-    from vs_inspect.record.sink import NullSink
 
     def frame(name, k):
         if name == "b":
@@ -95,14 +92,13 @@ def test_heads_found_ahead_on_their_own_thread_are_the_heads_found_after(monkeyp
         return np.full((8, 10, 3), 1 + k + 10 * "abc".index(name), np.uint8)
     poses, seen = [], []
     sources, vids, cfg = _fake_videos(monkeypatch, frame, poses, seen)
-    after = find_heads(sources, vids, dict.fromkeys("abc"), {}, cfg, {}, NullSink(), False)
+    after, _ = find_heads(sources, vids, dict.fromkeys("abc"), {}, cfg, False)
     assert set(seen) == {"MainThread"} and len(seen) == 18 and all(p.closed for p in poses)
     poses.clear(), seen.clear()
-    stats: dict = {}
     monkeypatch.setattr(HeadsAhead, "max_videos", 2)  # each tracker holds memory till its video is done
     with HeadsAhead(sources, vids, cfg) as ahead:
         assert len(poses) == 2  # the trackers start on the calling thread
-        found = find_heads(sources, vids, dict.fromkeys("abc"), {}, cfg, stats, NullSink(), False, ahead)
+        found, record = find_heads(sources, vids, dict.fromkeys("abc"), {}, cfg, False, ahead)
     assert len(seen) == 18 and all(name.startswith("heads") for name in seen[:12]), set(seen)
     assert set(seen[12:]) == {"MainThread"}  # c's heads: found by find_heads itself
     assert all(p.closed for p in poses)
@@ -110,8 +106,8 @@ def test_heads_found_ahead_on_their_own_thread_are_the_heads_found_after(monkeyp
     for n in "abc":
         np.testing.assert_array_equal(found[n], after[n])
     np.testing.assert_allclose(found["b"][:, 0], 11 + np.arange(6))  # the nose at the frame's value
-    assert stats["heads"]["frames_with_a_head"] == {"a": 6, "b": 6, "c": 6}
-    spent = stats["heads"]["found_ahead_s"]  # the heads thread's own time, per video found ahead
+    assert record.frames_with_a_head == {"a": 6, "b": 6, "c": 6}
+    spent = record.found_ahead_s  # the heads thread's own time, per video found ahead
     assert spent.keys() == {"a", "b"} and spent["b"] >= 0.3 > spent["a"] >= 0.0, spent
 
 

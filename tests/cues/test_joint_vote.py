@@ -1,4 +1,4 @@
-"""Stage 0's joint vote on one set of cameras (cues/joint_vote.py): two moving cameras' pairs need a
+"""Stage 0's joint vote on one set of cameras (cues/pairing/joint.py): two moving cameras' pairs need a
 triangle of sure cameras, sure cameras are checked in three views, cameras fitted to the moving
 points are checked against their own votes."""
 
@@ -7,13 +7,31 @@ from __future__ import annotations
 import numpy as np
 
 from vs_inspect.cues.config import CueConfig, GeometricPairConfig
-from vs_inspect.cues.geometric_pairs import GeometricPairStats, JointChoice
-from vs_inspect.cues.joint_vote import _add_joint_pairs
+import vs_inspect.cues.pairing.joint as joint_mod
+import vs_inspect.cues.pairing.rules as rules_mod
+import vs_inspect.cues.pairing.votes as votes_mod
+from vs_inspect.cues.pairing.joint import JointChoice
+from vs_inspect.cues.pairing.votes import GeometricPairStats
+from vs_inspect.cues.pairing.pairing import _add_joint_pairs
 from vs_inspect.geometry.epipolar import look_at
-from vs_inspect.record.sink import NullSink
-from vs_inspect.types import CameraTrack, CueStats, TrackPairs
+from vs_inspect.cue_stats import CueStats, PairCueStats, to_json
+from vs_inspect.types import CameraTrack, TrackPairs
 
-from .stage0_fakes import Events, K
+from .stage0_fakes import K
+
+
+def _as_json(pairing) -> dict:
+    """A pairing's records as result.json's "cues" holds them (a stats-like dict)."""
+    pairs = {f"{a}__{b}": to_json(PairCueStats(0, 0, 0, 0, v, pairing.transfer_new.get((a, b))))
+             for (a, b), v in pairing.votes.items()}
+    out = {"pairs": pairs, "geometric_peaks": pairing.status}
+    if pairing.joint is not None:
+        out["geometric_joint"] = to_json(pairing.joint)
+    return out
+
+
+def _cue_stats(stats: dict) -> CueStats:
+    return CueStats.from_json({"camera_source": "estimated", **stats})
 
 
 def _stats(delta_s: float, n: int = 12) -> GeometricPairStats:
@@ -32,10 +50,10 @@ def _run(moving_b: bool, sure_c: bool, min_sure: int = 3):
     pairs = {k: TrackPairs(*k, np.zeros((0, 2), np.int64)) for k in found}
     joint = JointChoice(offs, 10.0, {"a": 5.0, "b": 5.0, "c": 5.0 if sure_c else 1.0})
     sure = {"a": True, "b": True, "c": sure_c}
-    sink, stats = Events(), {"pairs": {}}
+    notes = []
     cfg = CueConfig(geometric=GeometricPairConfig(joint_min_sure=min_sure))
-    out, _ = _add_joint_pairs(pairs, found, joint, sure, cams, {}, {}, cfg, stats, sink)
-    return {k: len(v.index) for k, v in out.items()}, sink.messages, stats
+    out, _, _, record, _ = _add_joint_pairs(pairs, found, joint, sure, cams, {}, {}, cfg, notes)
+    return {k: len(v.index) for k, v in out.items()}, [n.message for n in notes], {"geometric_joint": to_json(record)}
 
 
 def test_two_sure_cameras_alone_get_no_pairs():
@@ -65,8 +83,8 @@ def test_with_the_rule_before_two_moving_cameras_still_need_a_third():
 def test_transfer_matches_join_both_source_pairs_in_video_order():
     """A confirmed camera's tracks that follow a trajectory are paired with both tracks the
     trajectory came from, in each pair's key order (the camera first or second)."""
-    from vs_inspect.cues.joint_vote import _add_transfer_pairs
-    from vs_inspect.cues.transfer import TransferCheck, TransferLandscape, Trajectories
+    from vs_inspect.cues.pairing.pairing import _add_transfer_pairs
+    from vs_inspect.cues.pairing.transfer import TransferCheck, TransferLandscape, Trajectories
 
     # trajectories 0 and 1 from pair (a, c): tracks a3-c5 and a4-c6; the checked camera is b
     traj = Trajectories(np.zeros((2, 3)), np.zeros(2), np.array([0, 1]),
@@ -74,17 +92,15 @@ def test_transfer_matches_join_both_source_pairs_in_video_order():
     land = TransferLandscape(np.zeros(1), np.ones(1), np.ones(1, np.int64), np.ones(1, np.int64), 0, 9.0,
                              np.array([[0, 7], [1, 8]]))
     pairs = {k: TrackPairs(*k, np.array([[1, 1]])) for k in (("a", "b"), ("a", "c"), ("b", "c"))}
-    stats = {"pairs": {}}
     checks = {"b": TransferCheck("b", 0.0, land, True, "confirmed")}
-    out = _add_transfer_pairs(pairs, checks, traj, ["a", "b", "c"], stats, NullSink())
+    out, added = _add_transfer_pairs(pairs, checks, traj, ["a", "b", "c"], [])
     assert out[("a", "b")].index.tolist() == [[1, 1], [3, 7], [4, 8]]  # a's track, then b's
     assert out[("b", "c")].index.tolist() == [[1, 1], [7, 5], [8, 6]]  # b's track, then c's
     assert out[("a", "c")].index.tolist() == [[1, 1]]
-    assert stats["pairs"]["a__b"]["transfer_new"] == 2
+    assert added[("a", "b")] == 2
     # an unconfirmed camera gets nothing
-    stats = {"pairs": {}}
     checks = {"b": TransferCheck("b", 0.0, land, False, "they disagree")}
-    out = _add_transfer_pairs(pairs, checks, traj, ["a", "b", "c"], stats, NullSink())
+    out, added = _add_transfer_pairs(pairs, checks, traj, ["a", "b", "c"], [])
     assert all(len(v.index) == 1 for v in out.values())
 
 
@@ -94,9 +110,8 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
     stay (alone, unchecked descriptor pairs put cameras 88-1456 ms off, accepted)."""
     from types import SimpleNamespace
 
-    import vs_inspect.cues.geometric_pairs as gp
     from vs_inspect.cues.config import GeometricPairConfig
-    from vs_inspect.cues.joint_vote import add_geometric_pairs
+    from vs_inspect.cues.pairing.pairing import add_geometric_pairs
     from vs_inspect.types import Tracks
 
     from .test_transfer import _scene
@@ -113,23 +128,23 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
     vids = {n: SimpleNamespace(info=infos[n]) for n in "abc"}
     tracks = {n: Tracks(xy[n], None) for n in "abc"}
     cfg = CueConfig(geometric=GeometricPairConfig(joint_min_margin=1e9))  # no camera sure
-    monkeypatch.setattr(gp, "consistent_peaks", lambda *a, **k: (None, "inconsistent"))
-    sink, stats = Events(), {"pairs": {}}
-    got = add_geometric_pairs(pairs, cams, tracks, vids, cfg, stats, sink, progress=False, estimated=True)
-    out, voted = got.pairs, got.voted
+    monkeypatch.setattr(joint_mod, "consistent_peaks", lambda *a, **k: (None, "inconsistent"))
+    got = add_geometric_pairs(pairs, cams, tracks, vids, cfg, progress=False, estimated=True)
+    out, voted, stats = got.pairs, got.voted, _as_json(got)
+    messages = [n.message for n in got.notes]
     assert stats["geometric_peaks"] == "inconsistent"
     assert voted == {}  # no Δ chosen, so none is reported as voted
     # each pair and each video's null reason say why it got no geometric pair
     assert all(p["geometric_withheld"].startswith("the vote peaks of the camera pairs do not close")
                for p in stats["pairs"].values())
-    why = CueStats("estimated", 3, 90, 0, {}, stats["pairs"], {}, {}, "inconsistent").geometric_refusal("c")
+    why = _cue_stats(stats).geometric_refusal("c")
     # c's two pairs share the reason, which is given once
     assert why.startswith("Stage 0 gave a__c and b__c no geometric track pairs: the vote peaks"), why
     assert why.count("the vote peaks") == 1, why
     # and in a few words, for the offsets table (result.json's "unresolved_headline")
-    assert CueStats("estimated", 3, 90, 0, {}, stats["pairs"], {}, {}, "inconsistent").headline("c") == (
+    assert _cue_stats(stats).headline("c") == (
         "vote peaks do not close the triangles")
-    assert any("descriptor pairs kept only where consistent" in m for m in sink.messages)
+    assert any("descriptor pairs kept only where consistent" in m for m in messages)
     for (u, v), tp in out.items():
         right = {(row_of[u][p], row_of[v][p]) for p in range(30)}
         kept = {tuple(x) for x in tp.index.tolist()}
@@ -143,23 +158,39 @@ def _sure_of_all(monkeypatch, offsets: dict[str, float], estimated: bool = True,
     """Stage 0's geometric pairs of the transfer scene (cameras a, b, c, true geometry) with the
     joint vote replaced by one sure (margin 10) of every camera at `offsets` (other_peaks: a first
     camera model's vote peaks): (pairs, stats, stage events, the scene's rows of each point)."""
+    got, row_of = _pairing(monkeypatch, offsets, estimated, other_peaks, cfg)
+    return got.pairs, _as_json(got), [n.message for n in got.notes], row_of
+
+
+def _pairing(monkeypatch, offsets: dict[str, float], estimated: bool = True, other_peaks: dict | None = None,
+             cfg: CueConfig = CueConfig()):
+    """(the GeometricPairing of _sure_of_all, the scene's rows of each point)."""
     from types import SimpleNamespace
 
-    import vs_inspect.cues.geometric_pairs as gp
-    from vs_inspect.cues.joint_vote import add_geometric_pairs
+    from vs_inspect.cues.pairing.pairing import add_geometric_pairs
     from vs_inspect.types import Tracks
 
     from .test_transfer import _scene
 
     infos, cams, xy, _, row_of = _scene({"a": 0.0, "b": 0.42, "c": -0.3})
     pairs = {k: TrackPairs(*k, np.zeros((0, 2), np.int64)) for k in (("a", "b"), ("a", "c"), ("b", "c"))}
-    monkeypatch.setattr(gp, "joint_offsets", lambda *a, **k: JointChoice(dict(offsets), 30.0, dict.fromkeys(offsets, 10.0)))
-    sink, stats = Events(), {"pairs": {}}
-    out = add_geometric_pairs(pairs, cams, {n: Tracks(xy[n], None) for n in "abc"},
+    monkeypatch.setattr(joint_mod, "joint_offsets", lambda *a, **k: JointChoice(dict(offsets), 30.0, dict.fromkeys(offsets, 10.0)))
+    got = add_geometric_pairs(pairs, cams, {n: Tracks(xy[n], None) for n in "abc"},
                               {n: SimpleNamespace(info=infos[n]) for n in "abc"}, cfg,
-                              stats, sink, progress=False, estimated=estimated, other_peaks=other_peaks,
-                               other="SIFT's model").pairs
-    return out, stats, sink.messages, row_of
+                              progress=False, estimated=estimated, other_peaks=other_peaks,
+                              other="SIFT's model")
+    return got, row_of
+
+
+def test_the_joint_record_keeps_its_checks_typed(monkeypatch):
+    """The record of a refused set is read in memory (what the other camera models made of a
+    video): its three-view checks are ThreeViewSummary records, not dicts."""
+    from vs_inspect.cue_stats import ThreeViewSummary, refusal_texts
+
+    got, _ = _pairing(monkeypatch, {"a": 0.0, "b": 0.42, "c": 0.2})
+    assert all(isinstance(v, ThreeViewSummary) for v in got.joint.three_view.values())
+    assert got.joint.refused_in_three_views() == ["a", "b", "c"]
+    assert "three views" in refusal_texts({}, {}, got.joint, "c")[1]
 
 
 def test_sure_cameras_that_see_each_others_points_keep_their_pairs(monkeypatch):
@@ -183,7 +214,7 @@ def test_sure_cameras_refuted_in_three_views_get_no_pairs(monkeypatch):
     assert joint["sure"] == [] and joint["used"] == [] and stats["geometric_peaks"] == "joint"
     assert all(len(tp.index) == 0 for tp in out.values())
     assert any("geometric track pairs not used for a, b, c: the joint vote was sure" in m for m in msgs), msgs
-    cue_stats = CueStats("estimated", 3, 90, 0, {}, stats["pairs"], {}, {}, "joint", None, joint)
+    cue_stats = _cue_stats(stats)
     why = cue_stats.geometric_refusal("c")
     assert "sure of its offset (margin 10.0), but not in three views" in why and "+0.200 s" in why
     assert cue_stats.headline("c", "not connected; its pairs: ...") == "refuted in three views; not connected"
@@ -192,7 +223,6 @@ def test_sure_cameras_refuted_in_three_views_get_no_pairs(monkeypatch):
 def test_a_sure_camera_with_a_rival_offset_says_how_far_apart_the_two_offsets_lie(monkeypatch):
     """The rival-offset rule's refusal (geometric_pairs.rival_offsets, replaced here) reaches the
     record with its few words: how far the three-view check's best offset lies from the joint one."""
-    import vs_inspect.cues.geometric_pairs as gp
 
     seen = {}
 
@@ -200,13 +230,13 @@ def test_a_sure_camera_with_a_rival_offset_says_how_far_apart_the_two_offsets_li
         seen.update(best=best, joint=dict(joint.offsets_s))
         return {"c": "its three-view check follows more trajectories elsewhere: two offsets"}
 
-    monkeypatch.setattr(gp, "rival_offsets", rivals)
+    monkeypatch.setattr(rules_mod, "rival_offsets", rivals)
     out, stats, msgs, _ = _sure_of_all(monkeypatch, {"a": 0.0, "b": 0.42, "c": -0.3})
     joint = stats["geometric_joint"]
     apart = abs(seen["best"]["c"][0] - seen["joint"]["c"])
     assert joint["dissent_short"] == {"c": f"two offsets {apart:.2f} s apart, as a repeated motion gives"}
     assert "c" not in joint["sure"] and "c" not in joint["used"]
-    cue_stats = CueStats("estimated", 3, 90, 0, {}, stats["pairs"], {}, {}, "joint", None, joint)
+    cue_stats = _cue_stats(stats)
     assert cue_stats.headline("c") == joint["dissent_short"]["c"]
     assert cue_stats.geometric_refusal("c").startswith("Stage 0's joint vote chose its offset (margin 10.0), but "
                                                       "its three-view check follows more")
@@ -242,8 +272,6 @@ def test_cameras_from_a_calibration_are_not_checked_in_three_views(monkeypatch):
     assert not any("three views" in m for m in msgs)
 
 
-def _fallback(fitted: dict[str, float]) -> dict:
-    return {"used": True, "fitted_offsets_s": dict(fitted)}
 
 
 def _videos(names, fps: float = 30.0) -> dict:
@@ -252,43 +280,38 @@ def _videos(names, fps: float = 30.0) -> dict:
 
 
 def test_cameras_from_moving_points_whose_votes_agree_are_kept():
-    from vs_inspect.cues.joint_vote import check_fitted_offsets
+    from vs_inspect.cues.pairing.pairing import check_fitted_offsets
 
-    fb = _fallback({"r": 0.0, "u": 0.5, "v": -1.0})
     # voted Δ within a frame of the fitted ones (caliscope's case)
     voted = {("r", "u"): 0.52, ("r", "v"): -1.03, ("u", "v"): -1.5}
-    assert check_fitted_offsets(fb, voted, _videos("ruv")) == {}
-    assert fb["check"]["verdict"] == "confirmed"
-    assert all(row["agrees"] for row in fb["check"]["pairs"].values())
+    refused, check = check_fitted_offsets({"r": 0.0, "u": 0.5, "v": -1.0}, voted, _videos("ruv"))
+    assert refused == {} and check.verdict == "confirmed"
+    assert all(row.agrees for row in check.pairs.values())
 
 
 def test_cameras_from_moving_points_contradicted_by_their_votes_are_all_refused():
-    from vs_inspect.cues.joint_vote import check_fitted_offsets
+    from vs_inspect.cues.pairing.pairing import check_fitted_offsets
 
     # rendered seed 0 with SIFT: fitted at seconds away from where their own votes peak
-    fb = _fallback({"r": 0.0, "u": -2.717, "v": 1.79})
     voted = {("u", "r"): 0.458, ("u", "v"): -0.133, ("r", "v"): 0.345}
-    refused = check_fitted_offsets(fb, voted, _videos("ruv"))
+    refused, check = check_fitted_offsets({"r": 0.0, "u": -2.717, "v": 1.79}, voted, _videos("ruv"))
     assert set(refused) == {"r", "u", "v"}
     assert "contradict" in refused["u"] and "u__r" in refused["u"]
-    assert fb["check"]["verdict"] == "contradicted"
+    assert check.verdict == "contradicted"
     # one pair off by 4 frames (tolerance 3) is enough
-    fb = _fallback({"r": 0.0, "u": 0.5, "v": -1.0})
     voted = {("r", "u"): 0.5, ("r", "v"): -1.0, ("u", "v"): -1.5 + 4 / 30}
-    assert set(check_fitted_offsets(fb, voted, _videos("ruv"))) == {"r", "u", "v"}
+    assert set(check_fitted_offsets({"r": 0.0, "u": 0.5, "v": -1.0}, voted, _videos("ruv"))[0]) == {"r", "u", "v"}
 
 
 def test_camera_from_moving_points_without_an_agreeing_vote_is_refused_alone():
-    from vs_inspect.cues.joint_vote import check_fitted_offsets
+    from vs_inspect.cues.pairing.pairing import check_fitted_offsets
 
-    fb = _fallback({"r": 0.0, "u": 0.5, "v": -1.0})
-    refused = check_fitted_offsets(fb, {("r", "u"): 0.5}, _videos("ruv"))
+    refused, check = check_fitted_offsets({"r": 0.0, "u": 0.5, "v": -1.0}, {("r", "u"): 0.5}, _videos("ruv"))
     assert list(refused) == ["v"] and "confirmed" in refused["v"]
-    assert fb["check"]["verdict"] == "partly unconfirmed"
+    assert check.verdict == "partly unconfirmed"
     # two cameras: nothing to check against, marked so
-    fb = _fallback({"r": 0.0, "u": 0.5})
-    assert check_fitted_offsets(fb, {("r", "u"): 3.0}, _videos("ru")) == {}
-    assert fb["check"]["verdict"].startswith("unchecked")
+    refused, check = check_fitted_offsets({"r": 0.0, "u": 0.5}, {("r", "u"): 3.0}, _videos("ru"))
+    assert refused == {} and check.verdict.startswith("unchecked")
 
 
 def _lone_pair(monkeypatch, moving_b: bool, **geometric):
@@ -297,25 +320,23 @@ def _lone_pair(monkeypatch, moving_b: bool, **geometric):
     pairs. Returns (pairs, stats, stage events)."""
     from types import SimpleNamespace
 
-    import vs_inspect.cues.geometric_pairs as gp
-    from vs_inspect.cues.joint_vote import add_geometric_pairs
+    from vs_inspect.cues.pairing.pairing import add_geometric_pairs
 
     static = CameraTrack(K, look_at([0.0, 6.0, 2.5], [0, 0, 1]))
     moving = CameraTrack(K, np.stack([look_at([6.0, 0.01 * t, 1.5], [0, 0, 1]) for t in range(50)]))
     cams = {"a": static, "b": moving if moving_b else static}
     index = np.stack([np.arange(36), np.arange(36)], 1)
     stats_ab = GeometricPairStats(900, 60, 36, (0.5, 1.3, -0.7), (12, 12, 12), np.repeat([0, 1, 2], 12))
-    monkeypatch.setattr(gp, "geometric_pairs", lambda *a, **k: (TrackPairs("a", "b", index, np.ones(36)), stats_ab))
-    monkeypatch.setattr(gp, "joint_offsets", lambda *a, **k: JointChoice({"a": 0.0, "b": 0.5}, 1.0,
+    monkeypatch.setattr(votes_mod, "geometric_pairs", lambda *a, **k: (TrackPairs("a", "b", index, np.ones(36)), stats_ab))
+    monkeypatch.setattr(joint_mod, "joint_offsets", lambda *a, **k: JointChoice({"a": 0.0, "b": 0.5}, 1.0,
                                                                          {"a": 1.0, "b": 1.0}))
     desc = np.array([[100, 100], [101, 101], [102, 102]])
     vids = {n: SimpleNamespace(info=SimpleNamespace(frame_interval_s=1 / 30)) for n in "ab"}
-    sink, stats = Events(), {"pairs": {}}
     tracks = {n: SimpleNamespace(xy=None) for n in "ab"}  # read by the vote only, replaced here
-    out = add_geometric_pairs({("a", "b"): TrackPairs("a", "b", desc, np.ones(3))}, cams, tracks, vids,
-                              CueConfig(geometric=GeometricPairConfig(**geometric)), stats, sink,
-                              progress=False, estimated=True).pairs
-    return out, stats, sink.messages
+    got = add_geometric_pairs({("a", "b"): TrackPairs("a", "b", desc, np.ones(3))}, cams, tracks, vids,
+                              CueConfig(geometric=GeometricPairConfig(**geometric)),
+                              progress=False, estimated=True)
+    return got.pairs, _as_json(got), [n.message for n in got.notes]
 
 
 def test_a_lone_pair_with_a_moving_camera_keeps_only_its_descriptor_pairs(monkeypatch):
@@ -328,7 +349,7 @@ def test_a_lone_pair_with_a_moving_camera_keeps_only_its_descriptor_pairs(monkey
     info = stats["pairs"]["a__b"]
     assert info["geometric_pairs"] == 0 and "+0.500, +1.300, -0.700 s" in info["geometric_withheld"]
     assert any(m.startswith("geometric track pairs not used for a__b: no triangle") for m in msgs), msgs
-    cue_stats = CueStats("estimated", 2, 90, 3, {}, stats["pairs"], {}, {}, "no triangle")
+    cue_stats = _cue_stats(stats)
     assert cue_stats.geometric_refusal("b").startswith("Stage 0 gave a__b no geometric track pairs: no triangle")
     assert cue_stats.geometric_refusal("a") == cue_stats.geometric_refusal("b")
     assert cue_stats.headline("b") == "a moving camera's vote peaks, no triangle to check them"
@@ -340,4 +361,4 @@ def test_a_lone_pair_with_a_moving_camera_keeps_only_its_descriptor_pairs(monkey
     # ...marked unchecked (Stage 1 confirms their minimum with the 3 descriptor pairs alone)
     assert out[("a", "b")].unchecked.tolist() == [False] * 3 + [True] * 36
     assert stats["pairs"]["a__b"]["geometric_unchecked"] == 36
-    assert CueStats("estimated", 2, 90, 39, {}, stats["pairs"], {}, {}, "no triangle").geometric_refusal("b") is None
+    assert _cue_stats(stats).geometric_refusal("b") is None

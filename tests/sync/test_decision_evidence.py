@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from vs_inspect.sync import decision as decision_mod
 from vs_inspect.sync.config import DecisionConfig
 from vs_inspect.sync.decision import (check_chosen_offset, check_track_pairs_at_best, check_uncertainty, decide,
                                       support_fraction)
@@ -48,14 +49,15 @@ def test_minimum_with_its_usual_overlap_or_more_stays_accepted():
     assert dec.support_fraction == pytest.approx(600 / 700, abs=0.01)
 
 
-def test_support_share_at_the_threshold_is_accepted_and_the_filter_off_accepts_all():
+def test_support_share_at_the_threshold_is_accepted_and_the_filter_off_accepts_all(monkeypatch):
     support = np.full(201, 1000)
     support[125] = 400
     assert decide(bowl(0.25), support, OFFS, 100, DecisionConfig())[0].accepted
     support[125] = 399
     assert not decide(bowl(0.25), support, OFFS, 100, DecisionConfig())[0].accepted
     assert decide(bowl(0.25), support, OFFS, 100, DecisionConfig(enabled=False))[0].accepted
-    assert decide(bowl(0.25), support, OFFS, 100, DecisionConfig(min_support_fraction=0.3))[0].accepted
+    monkeypatch.setattr(decision_mod, "MIN_SUPPORT_FRACTION", 0.3)
+    assert decide(bowl(0.25), support, OFFS, 100, DecisionConfig())[0].accepted
 
 
 def test_few_track_pairs_in_all_is_refused_with_the_count():

@@ -6,7 +6,7 @@ from vs_inspect.geometry.sampling import sample_video, tracks_between_frames
 from vs_inspect.sync.config import LandscapeConfig, SyncConfig
 from vs_inspect.sync.landscape import PairEnergy, PairInput, search_offsets
 from vs_inspect.sync.reference import reference_energy
-from vs_inspect.pipeline.stage12 import pair_landscape
+from vs_inspect.sync.pair import pair_landscape
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
 from vs_inspect.types import VideoInfo
 

@@ -3,7 +3,7 @@
 import numpy as np
 
 from vs_inspect.bench.datasets import cue_scene
-from vs_inspect.pipeline.stage12 import pair_landscape
+from vs_inspect.sync.pair import pair_landscape
 from vs_inspect.sync.config import DriftConfig, SyncConfig
 from vs_inspect.sync.rate import overlap_pivot_s, scaled_video
 from vs_inspect.types import VideoInfo

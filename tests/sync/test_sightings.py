@@ -11,6 +11,7 @@ import pytest
 
 from vs_inspect.geometry.epipolar import look_at, project
 from vs_inspect.pipeline.stage12 import sync_bundle
+from vs_inspect.sync import sightings as sightings_mod
 from vs_inspect.sync.config import SightingConfig, SyncConfig
 from vs_inspect.types import CameraTrack, CueBundle, Tracks, VideoInfo
 
@@ -107,7 +108,7 @@ def test_the_benchmark_ablations_keep_a_sighting_pair():
 
 
 @pytest.mark.parametrize("seed, viewer_is_pair_b", [(0, False), (1, False), (0, True)])
-def test_a_head_beside_the_worn_camera_is_fitted_out_of_the_offset(seed, viewer_is_pair_b):
+def test_a_head_beside_the_worn_camera_is_fitted_out_of_the_offset(seed, viewer_is_pair_b, monkeypatch):
     """The heads sit 12 px beside b's centre (the face is not the camera) and are seen mostly
     while the wearer walks one way: the counted peak comes out 1-1.5 frames late; the fit with one
     constant shift puts the offset back within a fifth of a frame, and the reason gives the shift.
@@ -119,7 +120,9 @@ def test_a_head_beside_the_worn_camera_is_fitted_out_of_the_offset(seed, viewer_
     head[(t < 1.5) | (t > 4.5)] = np.nan  # seen from its turn at about 2 s on
     b = dataclasses.replace(b, heads={"a": head}, videos=b.videos[::-1] if viewer_is_pair_b else b.videos)
     b_after_a = lambda r: r.offsets_s["b"] - r.offsets_s["a"]  # noqa: E731
-    counted = sync_bundle(b, SyncConfig(sightings=SightingConfig(refine_frames=0)), progress=False)
+    monkeypatch.setattr(sightings_mod, "REFINE_FRAMES", 0)
+    counted = sync_bundle(b, progress=False)
+    monkeypatch.undo()
     assert b_after_a(counted) - TRUE_B_S >= 0.08, counted.offsets_s
     res = sync_bundle(b, progress=False)
     assert b_after_a(res) == pytest.approx(TRUE_B_S, abs=0.02), res.pairs[0].decision.reason
@@ -128,7 +131,8 @@ def test_a_head_beside_the_worn_camera_is_fitted_out_of_the_offset(seed, viewer_
     assert land.best_offset_s == pytest.approx(-TRUE_B_S if viewer_is_pair_b else TRUE_B_S, abs=0.02)
     dx, dy = (float(v) for v in land.decision.reason.split("(a: (")[1].split(")")[0].replace(" px", "").split(","))
     assert (dx, dy) == pytest.approx((12.0, 0.0), abs=1.5), land.decision.reason
-    narrow = sync_bundle(b, SyncConfig(sightings=SightingConfig(refine_frames=0.2)), progress=False)
+    monkeypatch.setattr(sightings_mod, "REFINE_FRAMES", 0.2)
+    narrow = sync_bundle(b, progress=False)
     assert b_after_a(narrow) == pytest.approx(b_after_a(counted))
     assert "not refined" in narrow.pairs[0].decision.reason
 

@@ -204,31 +204,30 @@ def _downscale(img: np.ndarray, max_width: int = 480) -> np.ndarray:
 
 
 def _camera_checks(result: RunResult, key: str, gt: dict[str, float] | None):
-    """(camera, check, origin, true offset or None) of each of Stage 0's per-camera checks that
-    result.json keeps with its curve under cues.geometric_joint[key]."""
-    joint = (result.cues.geometric_joint if result.cues is not None else None) or {}
-    origin = joint.get("origin")
-    for cam, t in (joint.get(key) or {}).items():
-        if "offsets_s" in t and origin is not None:
+    """(camera, check, origin, true offset or None) of each of Stage 0's per-camera checks (key:
+    "transfer" or "three_view") that result.json keeps with its curve."""
+    joint = result.cues.geometric_joint if result.cues is not None else None
+    if joint is None:
+        return
+    origin = joint.origin
+    for cam, t in (getattr(joint, key) or {}).items():
+        if len(t.offsets_s):
             yield cam, t, origin, gt[cam] - gt[origin] if gt and cam in gt and origin in gt else None
 
 
 def transfer_views(result: RunResult, gt: dict[str, float] | None) -> tuple[TransferView, ...]:
     """Stage 0's point-transfer checks as result.json keeps them (cues.geometric_joint.transfer);
     () when the run made none or has no Stage 0."""
-    return tuple(TransferView(cam, np.asarray(t["offsets_s"], float), np.asarray(t["share"], float), origin,
-                              float(t["joint_offset_s"]),
-                              None if t.get("transfer_offset_s") is None else float(t["transfer_offset_s"]), truth,
-                              bool(t["confirmed"]), str(t.get("reason", "")))
+    return tuple(TransferView(cam, np.asarray(t.offsets_s, float), np.asarray(t.share, float), origin,
+                              float(t.joint_offset_s), t.transfer_offset_s, truth, bool(t.confirmed), t.reason)
                  for cam, t, origin, truth in _camera_checks(result, "transfer", gt))
 
 
 def three_view_views(result: RunResult, gt: dict[str, float] | None) -> tuple[ThreeViewView, ...]:
     """Stage 0's three-view checks as result.json keeps them (cues.geometric_joint.three_view);
     () when the run made none."""
-    return tuple(ThreeViewView(cam, np.asarray(t["offsets_s"], float), np.asarray(t["supporters_by_offset"], float),
-                               origin, float(t["joint_offset_s"]), float(t["needed"]), truth, bool(t["passed"]),
-                               str(t.get("reason", "")))
+    return tuple(ThreeViewView(cam, np.asarray(t.offsets_s, float), np.asarray(t.supporters_by_offset, float),
+                               origin, float(t.joint_offset_s), float(t.needed), truth, bool(t.passed), t.reason)
                  for cam, t, origin, truth in _camera_checks(result, "three_view", gt))
 
 

@@ -249,7 +249,7 @@ def _window(phase: str, lines: list[tuple[float, str]], wall: float) -> tuple[fl
 
     start = min(0.3, 0.05 * wall)  # the interpreter and the handlers start first
     if phase == "stage0":
-        end = first("vs_inspect.pipeline.stage12") or first("joint_vote") or 0.8 * wall
+        end = first("vs_inspect.pipeline.stage12") or first("vs_inspect.cues.pairing.") or 0.8 * wall
         return start, max(start + 0.1, end - 0.2)
     if phase == "stage1":
         begin = last("vs_inspect.cues.") or 0.8 * wall

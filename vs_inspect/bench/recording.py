@@ -13,7 +13,6 @@ hooks plus closing the file (the cost of recording); "run s" is the whole run wi
 
 from __future__ import annotations
 
-import dataclasses
 import subprocess
 import time
 from collections.abc import Callable
@@ -99,13 +98,17 @@ def bench_budget(out: Path, caliscope: Path, say: Callable[[str], None], full_fr
 
 
 def bench_caliscope(out: Path, caliscope: Path, say: Callable[[str], None]) -> None:
-    from ..cues import CueConfig
+    from unittest import mock
+
+    from ..cues.video import extract
+
     paths = sorted((caliscope / "calibration" / "extrinsic").glob("cam_*.mp4"))
-    for case, cfg in (("caliscope 4 x 57 frames 720p (8 frames/video)", CueConfig()),
-                      ("caliscope, every frame sent to the sink", dataclasses.replace(CueConfig(), sink_frames=10_000))):
+    for case, shown in (("caliscope 4 x 57 frames 720p (8 frames/video)", extract.SHOWN_FRAMES),
+                        ("caliscope, every frame sent to the sink", 10_000)):
         t = time.perf_counter()
-        with RerunSink(out / f"caliscope-{cfg.sink_frames}.rrd", progress=False) as sink:
-            run(paths, RunConfig(cues=cfg), sink, calibration=caliscope / "camera_array.toml", progress=False)
+        with mock.patch.object(extract, "SHOWN_FRAMES", shown), \
+                RerunSink(out / f"caliscope-{shown}.rrd", progress=False) as sink:
+            run(paths, RunConfig(), sink, calibration=caliscope / "camera_array.toml", progress=False)
         say(line(case, sink, time.perf_counter() - t))
 
 

@@ -77,9 +77,17 @@ def check_output_file(path: Path, force: bool, option: str) -> None:
 
 
 def add_config_file_option(p: argparse.ArgumentParser) -> None:
+    from ..pipeline.config import PRESETS
+
     p.add_argument("--config", type=Path, default=None, metavar="FILE",
                    help="settings from a config.json that `sync` wrote (OUT/config.json); options "
                         "given on the command line override the file's values")
+    p.add_argument("--preset", choices=list(PRESETS), default=None,
+                   help="named settings in place of the usual ones (the other options apply on top): "
+                        + "; ".join(f"{n}: {doc}" for n, (doc, _) in PRESETS.items()))
+    p.add_argument("--set", action="append", default=[], metavar="PATH=VALUE", dest="set_items",
+                   help="any setting by its path in config.json, e.g. sync.landscape.range_s=5 or "
+                        "cues.camera.features=sift (repeatable; applied last)")
 
 
 def add_sync_options(p: argparse.ArgumentParser) -> None:
@@ -102,11 +110,22 @@ def add_cue_options(p: argparse.ArgumentParser) -> None:
 
 
 def run_config(args: argparse.Namespace) -> RunConfig:
-    """The run's config: --config FILE (or the defaults), then the options on the command line,
-    then the recording presets (--rrd-minimal, --rrd-all-*)."""
+    """The run's config: --config FILE, --preset or the defaults, then the options on the command
+    line, then --set, then the recording presets (--rrd-minimal, --rrd-all-*)."""
+    from ..pipeline.config import parse_set, preset, with_settings
+
     path = getattr(args, "config", None)
     base = RunConfig.load(path) if path is not None else RunConfig()
+    if getattr(args, "preset", None):
+        if path is not None:
+            raise InputError(f"--preset {args.preset} and --config {path}: a config.json holds every setting "
+                             "already; give one of them")
+        if args.preset == "calibrated" and getattr(args, "calib", None) is None and not getattr(args, "bundle", None):
+            raise InputError("--preset calibrated: give the rig's calibration with --calib")
+        base = with_settings(RunConfig(), preset(args.preset), f"--preset {args.preset}")
     cfg = config_from_args(args, base)
+    if getattr(args, "set_items", None):
+        cfg = with_settings(cfg, parse_set(args.set_items))
     if hasattr(args, "rrd_minimal"):
         from ._record import record_options
         cfg = dataclasses.replace(cfg, record=record_options(args, cfg.record))

@@ -26,7 +26,8 @@ def register(sub) -> None:
     benches = p.add_subparsers(dest="bench", metavar="BENCHMARK", required=True)
     for name, add in (("accuracy", _accuracy), ("stage0", _stage0), ("timing", _timing),
                       ("energy", _energy), ("scale", _scale), ("drone", _drone), ("drift", _drift),
-                      ("people", _people), ("recording", _recording), ("interrupts", _interrupts)):
+                      ("people", _people), ("rules", _rules), ("recording", _recording),
+                      ("interrupts", _interrupts)):
         add(benches, name)
         _help.apply(benches.choices[name], f"bench {name}")
 
@@ -370,6 +371,39 @@ def _run_people(args) -> int:
                          people_folder=args.people, log=lambda s: print(s, flush=True))
     print()
     print(format_table(runs))
+    return 0
+
+
+def _rules(benches, name):
+    q = _parser(benches, name, "each of Stage 0's acceptance rules left out in turn, offsets counted per set",
+                "Runs the whole pipeline on the measured sets with every acceptance rule and camera "
+                "path, then with each one left out, and prints per set the offsets within 1 frame, over "
+                "2 frames and null; then drops, in order, each rule whose absence makes no set worse. "
+                "Each scene's expensive steps are kept in --scratch, so the variants replay decisions "
+                "only and a stopped run resumes.", _run_rules)
+    q.add_argument("--sets", nargs="+", default=["clips", "caliscope", "demo", "arcs:seeds-10-21"],
+                   help="clips, caliscope, demo, arcs:SET (default: all four, arcs:seeds-10-21)")
+    q.add_argument("--scratch", type=Path, required=True, help="folder for the inputs made and the kept steps")
+    q.add_argument("--rules", nargs="+", help="only these rules (default: all, in their order)")
+    q.add_argument("--markdown", type=Path, help="also write the tables here")
+    q.add_argument("--data", type=Path, default=None, help=DATA_HELP)
+
+
+def _run_rules(args) -> int:
+    import datetime
+
+    from ..bench.rules import run as ablate
+    from ..bench.runner import machine
+    from ..io.atomic import write_text_atomic
+
+    args.scratch.mkdir(parents=True, exist_ok=True)
+    tables = ablate(args.sets, data_folder(args), args.scratch, args.rules, lambda m: print(m, flush=True))
+    m = machine()
+    text = (f"Command: `vs-inspect bench rules --sets {' '.join(args.sets)}`, {datetime.date.today()}, commit "
+            f"{m.get('git_commit', '?')}, {m.get('cpu', m['processor'])}, {m['cpu_count']} cores.\n\n{tables}")
+    print(text)
+    if args.markdown:
+        write_text_atomic(text, args.markdown)
     return 0
 
 

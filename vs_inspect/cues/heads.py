@@ -13,24 +13,26 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 from tqdm import tqdm
 
+from ..cue_stats import HeadsRecord
 from ..errors import InputError
-from ..record.sink import Sink
 from ..types import VideoInfo
 from .config import CueConfig
-from .video_cues import VideoCues, frame_step, to_full_px
+from .video.extract import VideoCues, frame_step, to_full_px
 
 log = logging.getLogger(__name__)
+
+HEADS_MAX_HZ = 10.0  # heads looked for in at most about this many frames a second (every 3rd at 30 fps)
 
 
 def _video_landmarks(src, info: VideoInfo, cfg: CueConfig, pose=None, stop: threading.Event | None = None
                      ) -> tuple[np.ndarray, np.ndarray]:
     """(frames looked at (K,), their (K,33,3) BlazePose landmarks) of one video decoded again at
-    working resolution, at most about cfg.heads_max_hz frames a second. pose: a started tracker
+    working resolution, at most about HEADS_MAX_HZ frames a second. pose: a started tracker
     (people.start_pose) or None; stop: set to end early (InterruptedError)."""
     from ..io.video import iter_frames
     from .people import detect_landmarks
 
-    step = frame_step(info, cfg.heads_max_hz)
+    step = frame_step(info, HEADS_MAX_HZ)
 
     def frames():
         for _, img in iter_frames(src, step=step, max_side=cfg.max_side):
@@ -107,20 +109,19 @@ class HeadsAhead:
         self._pool.shutdown(wait=True)
 
 
-def find_heads(sources, vids: dict[str, VideoCues], cameras: dict, undistort: dict, cfg: CueConfig, stats: dict,
-           sink: Sink, progress: bool, ahead: HeadsAhead | None = None) -> dict[str, np.ndarray]:
-    """{video: (T,2) undistorted full-resolution px of the head the person detector found in a
-    frame (NaN: none, or a frame beyond cfg.heads_max_hz not looked at)}, for every video with a
-    camera, decoded again at working resolution (or taken from ahead); {} with the reason in
-    stats["heads"] when the detector is not installed."""
+def find_heads(sources, vids: dict[str, VideoCues], cameras: dict, undistort: dict, cfg: CueConfig,
+               progress: bool, ahead: HeadsAhead | None = None
+               ) -> tuple[dict[str, np.ndarray], HeadsRecord]:
+    """({video: (T,2) undistorted full-resolution px of the head the person detector found in a
+    frame (NaN: none, or a frame beyond HEADS_MAX_HZ not looked at)}, the record of the run)
+    for every video with a camera, decoded again at working resolution (or taken from ahead); {}
+    with the reason in the record when the detector is not installed."""
     from .people import head_points, heads_unavailable
 
     why = heads_unavailable()
     if why:
-        stats["heads"] = {"skipped": why}
         log.info("worn-camera sightings skipped: %s", why)
-        sink.stage_event("cues", f"worn-camera sightings skipped: {why}")
-        return {}
+        return {}, HeadsRecord(skipped=why)
     out, found, failed = {}, {}, {}
     for src in tqdm([s for s in sources if s.info.name in cameras], desc="heads", unit="video",
                     disable=not progress, leave=False):
@@ -140,15 +141,11 @@ def find_heads(sources, vids: dict[str, VideoCues], cameras: dict, undistort: di
         raw = to_full_px(heads, vids[n].scale_xy)
         out[n] = undistort[n](raw) if n in undistort else raw
         found[n] = int(np.isfinite(out[n][:, 0]).sum())
-        sink.stage_event("cues", f"{n}: a person's head in {found[n]} of {len(raw)} frames", heads=found[n])
     for n, why in failed.items():
         log.warning("%s: no heads: %s", n, why)
-        sink.stage_event("cues", f"{n}: no heads: {why}")
-    stats["heads"] = {"detector": "mediapipe BlazePose (pose_landmark_full)", "frames_with_a_head": found}
-    if ahead is not None and (spent := ahead.seconds()):
-        stats["heads"]["found_ahead_s"] = {n: round(t, 3) for n, t in spent.items()}
-    if failed:
-        stats["heads"]["failed"] = failed
+    spent = ahead.seconds() if ahead is not None else {}
     log.info("heads found: %s", ", ".join(f"{n} {k}" for n, k in found.items()))
-    return out
+    return out, HeadsRecord(detector="mediapipe BlazePose (pose_landmark_full)", frames_with_a_head=found,
+                            found_ahead_s={n: round(t, 3) for n, t in spent.items()} or None,
+                            failed=failed or None)
 

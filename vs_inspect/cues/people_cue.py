@@ -36,7 +36,7 @@ from ..geometry.skeleton import subset_mirror
 from ..sync.people_pairs import PeoplePairConfig, estimate_people_pair
 from ..sync.solve import PairMeasurement, solve_offsets
 from ..types import CameraTrack, PeopleCue, PeoplePair, TrackPairs, Tracks, VideoInfo, VideoPeople
-from .config import MotionConfig
+from .video.motion import STATIC_MAX_MOTION_PX
 from .people_video import PeopleVideoConfig, find_people
 
 log = logging.getLogger(__name__)
@@ -48,9 +48,9 @@ class PeopleCueConfig:
 
     video: PeopleVideoConfig = field(default_factory=PeopleVideoConfig)
     pairs: PeoplePairConfig = field(default_factory=PeoplePairConfig)
-    static_max_motion_px: float = MotionConfig.static_max_motion_px
+    static_max_motion_px: float = STATIC_MAX_MOTION_PX
     """A camera whose background moves less than this between frames (px, at the people step's
-    motion_side) is static; the cue places static cameras only (cues/motion.py's rule)."""
+    motion_side) is static; the cue places static cameras only (cues/video/motion.py)."""
     focal_range: tuple[float, float] = (0.3, 5.0)
     """Focal lengths are searched within these multiples of the image's larger side."""
     max_pair_residual_frames: float = 1.0

@@ -5,7 +5,7 @@ windows (cues/people_detect.frame_windows) for people; on every frame each perso
 looked for again in a square crop around where they last were, where the detector's 224 px
 input sees them large. The poses of a frame are merged (one per person) and linked to the tracks
 (cues/people_tracking.PeopleTracker). A few pairs of successive frames also measure how much the
-background moves (cues/motion.py), which tells a static camera from a moving one.
+background moves (cues/video/motion.py), which tells a static camera from a moving one.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import numpy as np
 from ..geometry.skeleton import person_scale_px, pose_distance
 from ..io.video import downscale
 from ..types import VideoPeople
-from .motion import background_motion
+from .video.motion import background_motion
 from .people_detect import DetectorConfig, PeopleDetector, frame_windows, merge_duplicates
 from .people_tracking import PeopleTracker, TrackingConfig, seen_xy
 
@@ -81,7 +81,7 @@ class PeopleVideoStats:
     discovery_frames: int  # frames searched whole for new people
     crops: int  # crops around people followed
     seconds: float
-    background_motion_px: float  # typical motion of the background between frames (cues/motion.py), px at
+    background_motion_px: float  # typical motion of the background between frames (cues/video/motion.py), px at
     # motion_side
 
 

@@ -6,4 +6,5 @@ sampling     a video's tracks and camera at any local times (the paper's "video 
 triangulate  two-view DLT and the one filter for the points kept
 offsets      the candidate time offsets of every pair: overlap, range and per-video windows
 two_view     F and E from correspondences, focal from F, relative pose, Sampson distances
+camera_model intrinsics fitted to another image size, OpenCV's and COLMAP's lenses and their inverses
 """

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import BundleError
-from ..types import CameraTrack, CueBundle, CueStats, TrackPairs, Tracks, VideoInfo
+from ..types import CameraTrack, CueBundle, TrackPairs, Tracks, VideoInfo
 from .atomic import atomic_dir, write_json_atomic
 from .names import check_video_name
 

@@ -12,10 +12,10 @@ import re
 from dataclasses import replace
 from pathlib import Path
 
-import numpy as np  # noqa: I001  (numpy before pycolmap: see ENVIRONMENT.md)
-import cv2
+import numpy as np
 
 from ..errors import InputError
+from ..geometry.camera_model import scale_intrinsics, shift_principal_point, undistort_opencv
 from .atomic import write_json_atomic
 from ..types import CameraCalibration, CameraTrack
 from .calib import read
@@ -141,12 +141,7 @@ def fit_to_video(cal: CameraCalibration, width: int, height: int, name: str = "c
             f"neither a crop of at most {CROP_MAX_FRACTION:.0%} of a side nor a uniform scale: "
             f"calibration for other cameras?"
         )
-    K = cal.K.copy()
-    K[0, 0] *= sx
-    K[0, 1] *= sx
-    K[1, 1] *= sy
-    K[0, 2] = (K[0, 2] + 0.5) * sx - 0.5
-    K[1, 2] = (K[1, 2] + 0.5) * sy - 0.5
+    K = scale_intrinsics(cal.K, sx, sy)
     binned = round(1 / sx) if sx < 1 and abs(cw / width - round(cw / width)) < 1e-9 \
         and abs(ch / height - round(ch / height)) < 1e-9 else None
     how = f"binned by {binned}" if binned else f"resized by {sx:.4g}"
@@ -173,9 +168,7 @@ def _cropped(cal: CameraCalibration, width: int, height: int, name: str, warn: b
             shift.append(d / 2)
             where.append(f"{d} {side} cut evenly from both sides (principal point moved by "
                          f"{d / 2:g} px)")
-    K = cal.K.copy()
-    K[0, 2] -= shift[0]
-    K[1, 2] -= shift[1]
+    K = shift_principal_point(cal.K, shift[0], shift[1])
     (log.warning if warn else log.debug)("%s: video %dx%d, calibration %dx%d: assumed a crop, %s",
                                          name, width, height, cw, ch, "; ".join(where))
     return replace(cal, K=K, size=(int(width), int(height)))
@@ -184,40 +177,10 @@ def _cropped(cal: CameraCalibration, width: int, height: int, name: str, warn: b
 # ---- using a calibration ---------------------------------------------------------------------
 
 
-UNDISTORT_ITERATIONS = 500  # strong barrel distortion converges slowly near the corners
-UNDISTORT_CHECK_PX = 0.05  # re-distorted point must land this close to the input, else NaN
-
-
 def undistort_points(cal: CameraCalibration, xy: np.ndarray) -> np.ndarray:
-    """(...,2) distorted px -> undistorted px with the same K; NaN stays NaN.
-
-    OpenCV's iterative inversion is run to convergence (its default 5 iterations leave errors
-    of tenths of a pixel at the corners of a wide-angle webcam). Points where the lens model
-    cannot be inverted (outside its valid region, the re-distorted point misses the input by
-    more than UNDISTORT_CHECK_PX) become NaN.
-    """
-    xy = np.asarray(xy, dtype=np.float64)
-    if xy.shape[-1:] != (2,):
-        raise ValueError(f"xy must have shape (...,2), got {xy.shape}")
-    if not np.any(cal.dist != 0):
-        return xy.copy()
-    out = np.full_like(xy, np.nan)
-    flat = xy.reshape(-1, 2)
-    ok = np.all(np.isfinite(flat), axis=1)
-    if ok.any():
-        crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, UNDISTORT_ITERATIONS, 1e-10)
-        und = cv2.undistortPoints(flat[ok].reshape(-1, 1, 2), cal.K, cal.dist, R=np.eye(3),
-                                  P=cal.K, criteria=crit).reshape(-1, 2)
-        Kinv = np.linalg.inv(cal.K)
-        rays = np.c_[und, np.ones(len(und))] @ Kinv.T
-        back = cv2.projectPoints(rays, np.zeros(3), np.zeros(3), cal.K, cal.dist)[0].reshape(-1, 2)
-        miss = np.linalg.norm(back - flat[ok], axis=1) > UNDISTORT_CHECK_PX
-        if miss.any():
-            log.debug("undistort_points: %d of %d points outside the lens model's valid region",
-                      int(miss.sum()), len(miss))
-            und[miss] = np.nan
-        out.reshape(-1, 2)[ok] = und
-    return out
+    """(...,2) distorted px -> undistorted px with the calibration's K and lens (NaN stays NaN;
+    geometry.camera_model.undistort_opencv)."""
+    return undistort_opencv(cal.K, cal.dist, xy)
 
 
 def to_camera_track(cal: CameraCalibration) -> CameraTrack:

@@ -14,8 +14,8 @@ import numpy as np
 from ..errors import InputError
 from .atomic import write_json_atomic
 from .names import check_video_name
-from ..types import (CueStats, PairDecision, PairLandscape, RateLandscape, RunInputs, RunResult,
-                     SolveIteration, VideoCueStats)
+from ..cue_stats import CueStats
+from ..types import PairDecision, PairLandscape, RateLandscape, RunInputs, RunResult, SolveIteration
 
 
 def _num(x: float) -> float | None:
@@ -113,35 +113,6 @@ def _opt_float(x: Any, what: str) -> float | None:
     return float(x)
 
 
-def cue_stats_to_dict(c: CueStats) -> dict[str, Any]:
-    out: dict[str, Any] = {
-        "camera_source": c.camera_source, "registered_cameras": c.registered_cameras,
-        "tracks": c.tracks, "track_pairs": c.track_pairs,
-        "videos": {n: {k: v for k, v in dataclasses.asdict(s).items() if not (k == "note" and v is None)}
-                   for n, s in c.videos.items()},
-        "pairs": c.pairs, "dropped": c.dropped}
-    if c.geometric_peaks is not None:
-        out["geometric_peaks"] = c.geometric_peaks
-    if c.sfm is not None:
-        out["sfm"] = c.sfm
-    if c.geometric_joint is not None:
-        out["geometric_joint"] = c.geometric_joint
-    if c.heads is not None:
-        out["heads"] = c.heads
-    return out
-
-
-def cue_stats_from_dict(d: dict[str, Any], timings_s: dict[str, float] | None = None) -> CueStats:
-    names = {f.name for f in dataclasses.fields(VideoCueStats)}
-    videos = {n: VideoCueStats(**{k: v for k, v in s.items() if k in names})
-              for n, s in (d.get("videos") or {}).items()}
-    return CueStats(str(d.get("camera_source", "")), int(d.get("registered_cameras", 0)),
-                    int(d.get("tracks", 0)), int(d.get("track_pairs", 0)), videos,
-                    dict(d.get("pairs") or {}), dict(d.get("dropped") or {}),
-                    dict(timings_s or {}), d.get("geometric_peaks"), d.get("sfm"),
-                    d.get("geometric_joint"), d.get("heads"))
-
-
 def run_result_to_dict(r: RunResult) -> dict[str, Any]:
     """result.json's dictionary (DESIGN.md): the keys of format version 1 in the same places, and
     version 2's (above)."""
@@ -176,7 +147,7 @@ def run_result_to_dict(r: RunResult) -> dict[str, Any]:
     if r.gt_drift_ppm is not None:
         out["gt_drift_ppm"] = dict(r.gt_drift_ppm)
     if r.cues is not None:
-        out["cues"] = cue_stats_to_dict(r.cues)
+        out["cues"] = r.cues.to_json()
     return out
 
 
@@ -264,7 +235,7 @@ def run_result_from_dict(d: dict[str, Any], source: str = "result") -> RunResult
                            inp.get("scene"), inp.get("cues"), _opt_float(inp.get("fps"), "input.fps"))
         cues = None
         if isinstance(d.get("cues"), dict):
-            cues = cue_stats_from_dict(d["cues"], {k.removeprefix("stage0_"): v for k, v in timings.items()
+            cues = CueStats.from_json(d["cues"], {k.removeprefix("stage0_"): v for k, v in timings.items()
                                                    if k.startswith("stage0_")})
         gt = d.get("gt_offsets_s")
         version = d.get("version", 1)
@@ -314,7 +285,7 @@ def read_run_result(path: str | os.PathLike) -> RunResult:
 def write_cue_stats(stats: CueStats, folder: str | os.PathLike, inputs: dict[str, str],
                     total_with_io_s: float | None = None) -> Path:
     """FOLDER/cues_stats.json (atomic): Stage 0's counts, timings and the videos it was given."""
-    data = cue_stats_to_dict(stats)
+    data = stats.to_json()
     data["timings_s"] = dict(stats.timings_s)
     if total_with_io_s is not None:
         data["timings_s"]["total_with_io_s"] = total_with_io_s

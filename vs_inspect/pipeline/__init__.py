@@ -5,7 +5,8 @@
     print(result.offsets_s)
 
 Stage 0 (stage0.run_stage0): videos -> cue bundle. Stage 1 + 2 (stage12.sync_bundle): cue bundle
--> SyncResult, with stage12.pair_landscape (one pair) and stage12.solve_stage2 (the global solve).
+-> SyncResult, sequencing sync.pair.pair_landscape (one pair) and sync.stage2.solve_stage2 (the
+global solve).
 """
 
 from .config import RunConfig

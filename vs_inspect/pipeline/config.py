@@ -1,10 +1,11 @@
 """The one root config of a run: Stage 0, Stage 1+2 and recording settings in one record.
 
 RunConfig.to_dict()/from_dict() give the JSON that `sync` saves as OUT/config.json and reads back
-with --config (unknown keys and wrong types are errors naming the key). The command-line options
-are generated from the same dataclasses: a field whose metadata names a "flag" becomes that
-option, with the field's docstring as its help, so there is no second list of settings to keep
-in step.
+with --config (unknown keys and wrong types are errors naming the key). Every field can be set by
+its dotted path (`--set sync.landscape.range_s=5`, with_settings) and a few named presets set
+several at once (`--preset fast`, PRESETS). The command-line options are generated from the same
+dataclasses: a field whose metadata names a "flag" becomes that option, with the field's one-line
+docstring as its help, so there is no second list of settings to keep in step.
 
 Field metadata understood by add_config_options:
   flag     the option, e.g. "--energy"
@@ -80,6 +81,96 @@ class RunConfig:
             return RunConfig.from_dict(data)
         except (InputError, ValueError) as exc:
             raise InputError(f"{path}: {exc}") from None
+
+
+# ---- presets and dotted paths -------------------------------------------------------------------
+
+PRESETS: dict[str, tuple[str, dict[str, Any]]] = {
+    "estimated": ("cameras estimated from the videos, each camera model tried while a video is untrusted "
+                  "(the usual settings)", {}),
+    "calibrated": ("cameras from --calib, which the run then needs (it is refused without one rather than "
+                   "estimating them); otherwise the usual settings", {}),
+    "fast": ("quicker, less thorough: 480 px working frames, 800 tracks and 8 keyframes per video, SIFT's "
+             "camera model only on fewer frames, no heads",
+             {"cues.max_side": 480, "cues.max_tracks": 800, "cues.keyframes": 8, "cues.camera.features": "sift",
+              "cues.camera.static_frames": 5, "cues.camera.moving_frames": 15, "cues.heads": False}),
+    "paper": ("the VisualSync paper's energy and solve where vs_inspect differs: the plain mean of the "
+              "Sampson errors, no drift, no worn-camera sightings",
+              {"sync.landscape.loss": "mean", "sync.drift.enabled": False, "sync.sightings.enabled": False,
+               "cues.heads": False}),
+}
+
+
+def settings(cls: type = None, prefix: str = "") -> dict[str, tuple[type, str]]:
+    """{dotted path: (its class, its field name)} of every setting of RunConfig (or of cls)."""
+    cls = cls or RunConfig
+    out: dict[str, tuple[type, str]] = {}
+    for f in dataclasses.fields(cls):
+        tp = _hints(cls)[f.name]
+        path = f"{prefix}{f.name}"
+        if dataclasses.is_dataclass(tp):
+            out.update(settings(tp, path + "."))
+        else:
+            out[path] = (cls, f.name)
+    return out
+
+
+def _parse_value(text: str) -> Any:
+    """A --set value: JSON when it reads as JSON (numbers, true/false, null, lists, objects), yes/no
+    and on/off as booleans, else the text itself."""
+    import json
+
+    low = text.strip().lower()
+    if low in ("yes", "on"):
+        return True
+    if low in ("no", "off"):
+        return False
+    try:
+        return json.loads(text)
+    except ValueError:
+        return text
+
+
+def with_settings(base: RunConfig, items: dict[str, Any], source: str = "--set") -> RunConfig:
+    """base with each dotted path of items set to its value, checked as a config file's would be;
+    InputError naming an unknown path (and the known ones nearby) or a wrong value."""
+    known = settings()
+    data = base.to_dict()
+    for path, value in items.items():
+        if path not in known:
+            section = path.rsplit(".", 1)[0] if "." in path else ""
+            near = sorted(p for p in known if p.startswith(section + ".")) if section else []
+            raise InputError(f"{source}: unknown setting {path!r}" + (
+                f" (known in {section}: {', '.join(p.removeprefix(section + '.') for p in near)})" if near else
+                f" (known: {', '.join(sorted({p.split('.')[0] for p in known}))} and their fields; "
+                "`vs-inspect sync --help` lists them)"))
+        owner = data
+        *head, last = path.split(".")
+        for key in head:
+            owner = owner[key]
+        owner[last] = value
+    try:
+        return RunConfig.from_dict(data)
+    except InputError as exc:
+        raise InputError(f"{source}: {exc}") from None
+
+
+def parse_set(items: list[str]) -> dict[str, Any]:
+    """--set PATH=VALUE items as {path: value}; InputError for an item without '='."""
+    out: dict[str, Any] = {}
+    for item in items:
+        path, eq, value = item.partition("=")
+        if not eq or not path.strip():
+            raise InputError(f"--set must be PATH=VALUE (e.g. sync.landscape.range_s=5), got {item!r}")
+        out[path.strip()] = _parse_value(value)
+    return out
+
+
+def preset(name: str) -> dict[str, Any]:
+    """The settings of a preset by name; InputError naming the presets for another name."""
+    if name not in PRESETS:
+        raise InputError(f"--preset {name!r}: unknown; use {', '.join(PRESETS)}")
+    return dict(PRESETS[name][1])
 
 
 # ---- dict <-> dataclasses, checked -------------------------------------------------------------

@@ -8,7 +8,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from ..types import CueStats, refusal_headline
+from ..cue_stats import CueStats
 
 CALIB = "giving a calibration (--calib)"
 WINDOW = "a rough offset window (--range-s or --around)"
@@ -49,8 +49,7 @@ def plain_reason(video: str, why: str, stats: CueStats | None, pairs: Sequence[A
     if "sightings of camera carriers in a chain" in why:
         return ("its offset would rest on a chain of sightings of people carrying cameras, whose small errors "
                 "add up" + _try("another camera that sees the same motion as it and the reference"))
-    refusal = (refusal_headline(stats.pairs, stats.dropped, stats.geometric_joint, video)
-               if stats is not None else None)
+    refusal = stats.refusal_headline(video) if stats is not None else None
     if refusal is not None and "repeated motion" in refusal:
         return "the motion it sees repeats, so more than one offset fits" + _try(WINDOW, CAMERA)
     if refusal is not None:

@@ -20,7 +20,8 @@ from ..engine import Engine, open_engine
 from ..errors import InputError, NoUsableVideos
 from ..record.sink import NullSink, Sink
 from ..sync.config import SyncConfig
-from ..types import CueBundle, CueStats, RunInputs, RunResult, SyncResult
+from ..cue_stats import CueStats
+from ..types import CueBundle, RunInputs, RunResult, SyncResult
 from .config import RunConfig
 from .reasons import plain_reason, with_plain_reason
 from .stage0 import run_stage0

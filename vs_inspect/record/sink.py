@@ -46,19 +46,19 @@ class Sink:
 
     def pair_votes(self, a: str, b: str, offsets_s: np.ndarray, votes: np.ndarray, z: np.ndarray,
                    chosen_s: float | None) -> None:
-        """The geometric pairing's votes of pair (a, b) (cues/geometric_pairs.py): informative
+        """The geometric pairing's votes of pair (a, b) (cues/pairing/votes.py): informative
         candidates per Δ_ab (offsets_s (D,) s, votes (D,)), their robust z-scores (D,) that the
         joint vote sums, and the Δ_ab whose supporters Stage 0 kept (None: none)."""
 
     def transfer_landscape(self, camera: str, offsets_s: np.ndarray, share: np.ndarray,
                            joint_offset_s: float, transfer_offset_s: float | None, confirmed: bool) -> None:
-        """Point transfer's check of a camera the joint vote was unsure of (cues/transfer.py):
+        """Point transfer's check of a camera the joint vote was unsure of (cues/pairing/transfer.py):
         share (D,) of the projected samples that land on their track at each candidate offset_s
         (D,) of the camera, the joint vote's offset, the transfer's peak and the verdict."""
 
     def three_view_landscape(self, camera: str, offsets_s: np.ndarray, supporters: np.ndarray,
                              joint_offset_s: float, passed: bool) -> None:
-        """The three-view check of a camera the joint vote was sure of (cues/transfer.py,
+        """The three-view check of a camera the joint vote was sure of (cues/pairing/transfer.py,
         check_in_three_views): supporters (D,) over its candidate offset_s (D,), the joint
         vote's offset and the verdict."""
 
@@ -97,38 +97,6 @@ class Sink:
             self.close()
         else:
             self.abort()
-
-
-class DeferredSink(Sink):
-    """Holds every report (each hook of Sink but image_frames, close and abort) until replay(),
-    so that of Stage 0's candidate sets of cameras only the one kept reaches the real sink.
-    options are the real sink's, so the same views are computed."""
-
-    def __init__(self, options: RecordOptions | None):
-        self.options = options
-        self._calls: list[tuple[str, tuple, dict]] = []
-
-    def replay(self, sink: Sink) -> None:
-        """Every held report, in order, to sink."""
-        for name, args, kwargs in self._calls:
-            getattr(sink, name)(*args, **kwargs)
-
-
-def _held(name: str):
-    def hold(self: DeferredSink, *args, **kwargs) -> None:
-        self._calls.append((name, args, kwargs))
-
-    hold.__name__ = hold.__qualname__ = name
-    hold.__doc__ = f"Held until replay(): Sink.{name}."
-    return hold
-
-
-# not reports: a query and the end of the recording, which the real sink does itself
-_NOT_HELD = frozenset({"image_frames", "close", "abort"})
-REPORT_HOOKS = tuple(n for n, f in vars(Sink).items()
-                     if callable(f) and not n.startswith("_") and n not in _NOT_HELD)
-for _name in REPORT_HOOKS:
-    setattr(DeferredSink, _name, _held(_name))
 
 
 class NullSink(Sink):

@@ -12,25 +12,12 @@ from pathlib import Path
 import numpy as np
 
 from .. import signals
+from ..geometry.point_cloud import frustum_lines
 from .data import CameraView, ReportData
 
 os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")  # before vtk is imported
 
 FRUSTUMS_PER_MOVING_CAMERA = 5
-
-
-def _frustum_lines(K: np.ndarray, cam_from_world: np.ndarray, w: int, h: int, depth: float):
-    """(5,3) apex + 4 image corners at `depth` in world coordinates, and the line segments."""
-    Kinv = np.linalg.inv(K)
-    corners = np.array([[0, 0, 1], [w, 0, 1], [w, h, 1], [0, h, 1]], float)
-    rays = corners @ Kinv.T
-    rays = rays / rays[:, 2:3] * depth
-    R, t = cam_from_world[:3, :3], cam_from_world[:3, 3]
-    world = (rays - t) @ R  # R^T (x - t)
-    apex = -R.T @ t
-    pts = np.vstack([apex, world])
-    segs = [(0, 1), (0, 2), (0, 3), (0, 4), (1, 2), (2, 3), (3, 4), (4, 1)]
-    return pts, segs
 
 
 def _scene_scale(data: ReportData) -> float:
@@ -45,7 +32,7 @@ def _camera_mesh(pv, cam: CameraView, depth: float):
     pts_all, lines = [], []
     for j, f in enumerate(idx):
         K = cam.K if cam.K.ndim == 2 else cam.K[min(f, len(cam.K) - 1)]
-        pts, segs = _frustum_lines(K, cam.cam_from_world[f], cam.width, cam.height, depth)
+        pts, segs = frustum_lines(K, cam.cam_from_world[f], cam.width, cam.height, depth)
         base = 5 * j
         pts_all.append(pts)
         for s0, s1 in segs:

@@ -20,6 +20,16 @@ from scipy.signal import find_peaks
 from ..types import PairDecision
 from .config import DecisionConfig
 
+MIN_SUPPORT_FRACTION = 0.4  # a minimum resting on fewer terms than this share of the landscape's median is refused
+MIN_CONTRAST = 0.3  # refused when the best energy is less than this fraction below the median (flat)
+MAX_SECOND_RATIO = 0.7  # refused when a rival minimum is at least this prominent relative to the best
+MAX_MINIMA = 2  # refused when more minima than this are at least half as prominent as the best (the paper: 2)
+MIN_RIVAL_SUPPORT = 0.5  # a minimum rivals the best only with at least this share of its terms
+MIN_PROMINENCE = 0.1  # a local minimum counts from this fraction of the best depth
+MIN_INLIER_FRACTION = 0.45  # refused when fewer observations lie this close to their epipolar lines...
+INLIER_PX_FRACTION = 0.01  # ...within this fraction of the larger image diagonal (14.7 px at 720p)
+REJECT_RANGE_EDGE = True  # refused when the best minimum lies on the border of the search range
+
 
 def local_minima(energy: np.ndarray, min_prominence: float) -> tuple[np.ndarray, np.ndarray]:
     """Local minima (edges included) with at least that prominence: (indices, prominences), best first.
@@ -64,10 +74,10 @@ def check_inliers(decision: PairDecision, inlier_fraction: float, tau_px: float,
     """
     out = replace(decision, inlier_fraction=float(inlier_fraction), inlier_tau_px=float(tau_px))
     if decision.accepted and cfg.enabled and np.isfinite(inlier_fraction) \
-            and inlier_fraction < cfg.min_inlier_fraction:
+            and inlier_fraction < MIN_INLIER_FRACTION:
         out = replace(out, accepted=False, reason=(
             f"few epipolar inliers at the best offset: {100 * inlier_fraction:.0f}% of observations "
-            f"within {tau_px:.1f} px (< {100 * cfg.min_inlier_fraction:.0f}%): wrong matches or wrong "
+            f"within {tau_px:.1f} px (< {100 * MIN_INLIER_FRACTION:.0f}%): wrong matches or wrong "
             "camera poses"))
     return out
 
@@ -146,7 +156,7 @@ def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_t
     e_best = float(np.nanmin(energy))
     e_base = float(np.nanmedian(energy))
     e_range = float(np.nanmax(energy)) - e_best
-    minima, prom = local_minima(energy, cfg.min_prominence * e_range)
+    minima, prom = local_minima(energy, MIN_PROMINENCE * e_range)
     if allowed is not None:
         inside = np.asarray(allowed, bool)[minima]
         if not inside.any():
@@ -158,8 +168,8 @@ def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_t
     # then the weaker of the two, so the better supported minimum becomes the best.
     weaker_lowest = None
     for i in range(1, len(minima) if cfg.enabled else 1):
-        if prom[i] >= cfg.max_second_ratio * prom[0] \
-                and support[minima[0]] < cfg.min_rival_support * support[minima[i]]:
+        if prom[i] >= MAX_SECOND_RATIO * prom[0] \
+                and support[minima[0]] < MIN_RIVAL_SUPPORT * support[minima[i]]:
             weaker_lowest = int(minima[0])
             order = [i] + [j for j in range(len(minima)) if j != i]
             minima, prom = minima[order], prom[order]
@@ -172,7 +182,7 @@ def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_t
     # deep. A minimum resting on much less overlap than the best is a weaker rival: its energy
     # is a mean over fewer terms and dips by chance (dominated in energy and overlap).
     keep = [i for i in range(1, len(minima))
-            if support[minima[i]] >= cfg.min_rival_support * support[best]]
+            if support[minima[i]] >= MIN_RIVAL_SUPPORT * support[best]]
     rivals = minima[keep]
     rival_prom = prom[keep]
     best_prom = prom[0] if prom[0] > 0 else 1e-300
@@ -185,31 +195,40 @@ def decide(energy: np.ndarray, support: np.ndarray, offsets_s: np.ndarray, num_t
     nums = dict(contrast=float(contrast), second_depth_ratio=second, num_minima=significant,
                 num_pareto_minima=len(pareto), at_range_edge=bool(edge), support_fraction=share)
 
+    accepted, reason = _verdict(cfg, offsets_s, support, best, first_rival, weaker_lowest, contrast, second,
+                                significant, edge, share, usual)
+    return PairDecision(accepted, reason, **nums), minima
+
+
+def _verdict(cfg: DecisionConfig, offsets_s: np.ndarray, support: np.ndarray, best: int, first_rival: int,
+             weaker_lowest: int | None, contrast: float, second: float, significant: int, edge: bool,
+             share: float, usual: float) -> tuple[bool, str]:
+    """(accepted, reason) of decide's measures, the first failed check named."""
     accepted, reason = True, f"single clear minimum (contrast {contrast:.2f}, rival/best prominence {second:.2f})"
     if weaker_lowest is not None:
         reason += (f"; the lowest energy, at {offsets_s[weaker_lowest]:+.3f} s, rests on "
                    f"{100 * support[weaker_lowest] / support[best]:.0f}% of this minimum's overlap")
     if not cfg.enabled:
         reason = "accepted without checks (spurious-pair filter off)"
-    elif contrast < cfg.min_contrast:
+    elif contrast < MIN_CONTRAST:
         accepted = False
         reason = (f"flat landscape: best energy only {100 * contrast:.0f}% below the median "
-                  f"(< {100 * cfg.min_contrast:.0f}%): wrong matches, wrong poses or no shared motion")
-    elif second >= cfg.max_second_ratio:
+                  f"(< {100 * MIN_CONTRAST:.0f}%): wrong matches, wrong poses or no shared motion")
+    elif second >= MAX_SECOND_RATIO:
         accepted = False
         reason = (f"ambiguous: another minimum at {offsets_s[first_rival]:+.3f} s is {100 * second:.0f}% "
                   f"as prominent as the best at {offsets_s[best]:+.3f} s")
-    elif significant > cfg.max_minima:
+    elif significant > MAX_MINIMA:
         accepted = False
-        reason = f"ambiguous: {significant} minima at least half as prominent as the best (> {cfg.max_minima})"
-    elif edge and cfg.reject_range_edge:
+        reason = f"ambiguous: {significant} minima at least half as prominent as the best (> {MAX_MINIMA})"
+    elif edge and REJECT_RANGE_EDGE:
         accepted = False
         reason = (f"best minimum at the edge of the search range ({offsets_s[best]:+.3f} s): "
                   "the true offset may lie outside it")
-    elif share < cfg.min_support_fraction:
+    elif share < MIN_SUPPORT_FRACTION:
         accepted = False
         reason = (f"minimum at {offsets_s[best]:+.3f} s supported by {100 * share:.0f}% of the "
                   f"landscape's usual overlap ({int(support[best])} of a median {usual:.0f} "
-                  f"(track pair, frame) terms; fewer than {100 * cfg.min_support_fraction:.0f}%): "
+                  f"(track pair, frame) terms; fewer than {100 * MIN_SUPPORT_FRACTION:.0f}%): "
                   "a mean over few terms dips by chance")
-    return PairDecision(accepted, reason, **nums), minima
+    return accepted, reason

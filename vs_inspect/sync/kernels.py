@@ -16,7 +16,7 @@ LOSS_CODE = {"mean": 0, "truncated": 1}
 # fast-math without the no-NaN/no-inf flags (the NaN tests below must survive optimization) and
 # without reassociation: with it, a freshly compiled kernel and the same kernel loaded from
 # numba's cache summed in different orders, so a machine's first run gave other offsets (in the
-# 5th digit) than its later runs and than Ray workers; without it, the same speed (bench-energy).
+# 5th digit) than its later runs and than Ray workers; without it, the same speed (bench energy).
 _FAST = {"nsz", "arcp", "contract", "afn"}
 
 

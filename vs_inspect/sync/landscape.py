@@ -25,6 +25,8 @@ from .config import LandscapeConfig
 
 log = logging.getLogger(__name__)
 
+MIN_TERMS = 30  # an offset with fewer (track pair, frame) terms gets no energy (NaN)
+
 
 @dataclass(frozen=True)
 class PairInput:
@@ -38,7 +40,7 @@ class PairInput:
 @dataclass(frozen=True)
 class RawLandscape:
     offsets_s: np.ndarray  # (D,) Δ_ab candidates, seconds
-    energy: np.ndarray  # (D,) normalized energy, NaN where support < min_terms
+    energy: np.ndarray  # (D,) normalized energy, NaN where support < MIN_TERMS
     support: np.ndarray  # (D,) int, number of terms
     robust_scale: float  # truncation level used (residual units), NaN for the plain mean
 
@@ -127,7 +129,7 @@ class PairEnergy:
         acc, wsum, cnt = self.sums(offsets_s, self.cfg.loss, scale)
         with np.errstate(invalid="ignore", divide="ignore"):
             e = acc / wsum
-        e[cnt < self.cfg.min_terms] = np.nan
+        e[cnt < MIN_TERMS] = np.nan
         return e, cnt
 
     def residuals(self, offset_s: float, max_pairs: int | None = None,
@@ -160,7 +162,7 @@ class PairEnergy:
         for d in coarse:
             r = self.residuals(float(d), max_pairs=300)
             r = r[np.isfinite(r)]
-            if r.size >= self.cfg.min_terms:
+            if r.size >= MIN_TERMS:
                 best = min(best, float(np.median(r)))
         if not np.isfinite(best) or best <= 0:
             return np.inf
@@ -179,9 +181,7 @@ def compute_landscape(a: PairInput, b: PairInput, pairs: TrackPairs, cfg: Landsc
         return RawLandscape(offsets, nan, np.zeros(len(offsets), dtype=np.int64), np.nan), pe
     if cfg.loss == "mean":
         scale = np.nan
-    elif cfg.robust_scale is not None:
-        scale = float(cfg.robust_scale)
-    else:
+    else:  # the truncation level: 9 x the median residual at the best coarse offset
         scale = pe.auto_scale(offsets)
     energy, support = pe.energy(offsets, scale if np.isfinite(scale) else 0.0)
     return RawLandscape(offsets, energy, support, scale), pe

@@ -18,6 +18,12 @@ import numpy as np
 
 from ..types import RateLandscape, TrackPairs, VideoInfo
 from .config import DriftConfig, LandscapeConfig
+
+RATE_HALF_WIDTH_PPM = 1000.0  # the (Δ, rate) search spans the pair's rate ± this (pose-free: the rate its tracks gave)
+RATE_STEP_PPM = 100.0  # its rows (the rate is then refined continuously)
+OFFSET_HALF_WIDTH_FRAMES = 4.0  # its columns: the 1-D minimum ± this many frames of the finer video...
+OFFSET_COLUMNS = 17  # ...in this many columns
+FIT_ROWS = 3  # the rate: the vertex of a parabola through the row minima within this many rows of the lowest
 from .landscape import PairEnergy, PairInput
 
 
@@ -64,10 +70,10 @@ def rate_landscape(a: PairInput, b: PairInput, pairs: TrackPairs, cfg: Landscape
     step = min(a.video.frame_interval_s, b.video.frame_interval_s * rate0)
     pivot = overlap_pivot_s(a.video, b.video, offset_s, rate0)
     c0 = offset_s + (rate0 - 1.0) * pivot
-    cols = c0 + np.linspace(-drift.offset_half_width_frames * step, drift.offset_half_width_frames * step,
-                            drift.offset_columns)
+    cols = c0 + np.linspace(-OFFSET_HALF_WIDTH_FRAMES * step, OFFSET_HALF_WIDTH_FRAMES * step,
+                            OFFSET_COLUMNS)
     ppm0 = (rate0 - 1.0) * 1e6
-    rates_ppm = ppm0 + np.arange(-drift.rate_half_width_ppm, drift.rate_half_width_ppm + 1e-9, drift.rate_step_ppm)
+    rates_ppm = ppm0 + np.arange(-RATE_HALF_WIDTH_PPM, RATE_HALF_WIDTH_PPM + 1e-9, RATE_STEP_PPM)
     img = np.stack([_energy_row(a, b, pairs, cfg, pivot, scale, cols, 1.0 + r * 1e-6) for r in rates_ppm])
     if not np.isfinite(img).any():
         return None
@@ -103,7 +109,7 @@ def fit_rate(a: PairInput, b: PairInput, pairs: TrackPairs, cfg: LandscapeConfig
             if a2 > 0 and abs(x - cols[j]) <= cols[1] - cols[0]:
                 row_c[r], row_e[r], row_a[r] = x, e, a2
     i = int(np.nanargmin(row_e))
-    near = [k for k in range(i - drift.fit_rows, i + drift.fit_rows + 1)
+    near = [k for k in range(i - FIT_ROWS, i + FIT_ROWS + 1)
             if 0 <= k < len(rates_ppm) and np.isfinite(row_e[k])]
     u_std = float("nan")
     ppm = float(rates_ppm[i])

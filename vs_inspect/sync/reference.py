@@ -11,7 +11,7 @@ import numpy as np
 
 from ..geometry.epipolar import epipolar_residual
 from ..geometry.sampling import tracks_between_frames
-from .landscape import PairEnergy
+from .landscape import MIN_TERMS, PairEnergy
 
 
 def reference_energy(pe: PairEnergy, offsets_s: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray]:
@@ -30,6 +30,6 @@ def reference_energy(pe: PairEnergy, offsets_s: np.ndarray, scale: float) -> tup
             r = np.minimum(r, scale)
         wgt = pe.weight[:, None] * valid
         support[d] = int(valid.sum())
-        if support[d] >= pe.cfg.min_terms:
+        if support[d] >= MIN_TERMS:
             out[d] = float(np.sum(np.where(valid, r, 0.0) * wgt) / wgt.sum())
     return out, support

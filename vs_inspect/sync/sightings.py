@@ -3,8 +3,9 @@
 When camera b moves (worn on a head) and camera a's person detector found a head in its frames
 (CueBundle.heads), the heads that sit on b's camera centre projected at b's time t − Δ count for
 Δ (geometry/sightings.py); both directions of a pair add up. The pair's energy is 1 − (heads at
-Δ) / (heads at the peak), 0 at the peak, and its decision asks for a single clear peak: at least `min_sightings` heads, and no offset farther than `rival_frames` from it with
-more than `max_rival_ratio` of them. The result is a PairLandscape like any other pair's
+Δ) / (heads at the peak), 0 at the peak, and its decision asks for a single clear peak: at least
+MIN_SIGHTINGS heads, and no offset farther than RIVAL_FRAMES from it with more than
+MAX_RIVAL_RATIO of them. The result is a PairLandscape like any other pair's
 (residual "sighting", no track pairs), so Stage 2, result.json and the recording take it as they
 take the epipolar ones. It is used for a pair whose track pairs gave no accepted offset.
 """
@@ -24,6 +25,11 @@ from .config import SyncConfig
 from .landscape import search_offsets
 
 RESIDUAL = "sighting"
+RADIUS_FRACTION = 0.015  # a head is on the worn camera's centre within this share of the viewer's diagonal
+MIN_SIGHTINGS = 8  # the peak needs this many heads there (both directions of the pair together)
+MAX_RIVAL_RATIO = 0.34  # refused when an offset beyond RIVAL_FRAMES has more than this share of its heads
+RIVAL_FRAMES = 3.0  # frames of the coarser video beyond which another offset rivals the peak
+REFINE_FRAMES = 2.0  # an accepted peak's Δ fitted again within this many frames (one constant shift head-centre)
 
 
 def sighting_directions(bundle: CueBundle, a: str, b: str) -> list[tuple[str, str]]:
@@ -75,23 +81,22 @@ def sighting_pair(bundle: CueBundle, a: str, b: str, cfg: SyncConfig) -> PairLan
     offsets = offsets[grid.within_window(a, b, offsets)]  # the peak and its rivals within --around's window
     if not directions or len(offsets) == 0:
         return None
-    sc = cfg.sightings
     near = np.zeros(len(offsets), int)
     moments = np.zeros(len(offsets), int)
     radius = {}
     for viewer, worn in directions:
         v_info = bundle.video(viewer)
-        radius[viewer] = sc.radius_fraction * math.hypot(v_info.width, v_info.height)
+        radius[viewer] = RADIUS_FRACTION * math.hypot(v_info.width, v_info.height)
         # Δ of (viewer, worn) is Δ_ab when the viewer is a, -Δ_ab when it is b
         sign = 1.0 if viewer == a else -1.0
         land = direction_landscape(bundle, viewer, worn, sign * offsets, radius[viewer])
         near += land.near
         moments += land.moments
     coarse_s = max(va.frame_interval_s, vb.frame_interval_s)
-    land = _decided(a, b, offsets, near, moments, sc, coarse_s, directions, radius)
-    if not land.decision.accepted or sc.refine_frames <= 0:
+    land = _decided(a, b, offsets, near, moments, coarse_s, directions, radius)
+    if not land.decision.accepted or REFINE_FRAMES <= 0:
         return land
-    peak = refine_peak(bundle, a, directions, land.best_offset_s, coarse_s, radius, sc.refine_frames,
+    peak = refine_peak(bundle, a, directions, land.best_offset_s, coarse_s, radius, REFINE_FRAMES,
                        (float(offsets[0]), float(offsets[-1])))
     best = int(np.argmin(np.abs(offsets - peak.offset_s)))
     decision = replace(land.decision, reason=f"{land.decision.reason}; {peak.note()}")
@@ -146,11 +151,11 @@ def refine_peak(bundle: CueBundle, a: str, directions, peak_s: float, coarse_s: 
     return RefinedPeak(float(fine[i]), True, {v: s[i] for v, s in shifts.items()}, math.sqrt(cost[i]), window_frames)
 
 
-def _decided(a, b, offsets, near, moments, sc, coarse_s, directions, radius) -> PairLandscape:
+def _decided(a, b, offsets, near, moments, coarse_s, directions, radius) -> PairLandscape:
     top = int(near.max())
     energy = 1.0 - near / max(top, 1)
     energy = np.where(moments > 0, energy, np.nan)
-    best_s, lo, hi, rival = sighting_peak(offsets, near, sc.rival_frames * coarse_s)
+    best_s, lo, hi, rival = sighting_peak(offsets, near, RIVAL_FRAMES * coarse_s)
     best = int(np.argmin(np.abs(offsets - best_s)))
     # the half-height width over √(heads) (heads scatter about the peak like samples of it), at
     # least a frame of the coarser video: a counted peak can be a frame or more late, as the head is
@@ -161,12 +166,12 @@ def _decided(a, b, offsets, near, moments, sc, coarse_s, directions, radius) -> 
         uncertainty = float(max(uncertainty, (half.max() - half.min()) / (2.0 * math.sqrt(top))))
     edge = lo == 0 or hi == len(near) - 1
     who = "; ".join(f"{v} sees the person carrying {w}" for v, w in directions)
-    if top < sc.min_sightings:
+    if top < MIN_SIGHTINGS:
         ok, why = False, (f"sightings of a camera's carrier: {top} heads at most on the camera's centre ({who}), "
-                          f"need {sc.min_sightings}")
-    elif rival > sc.max_rival_ratio * top:
+                          f"need {MIN_SIGHTINGS}")
+    elif rival > MAX_RIVAL_RATIO * top:
         ok, why = False, (f"sightings of a camera's carrier ambiguous: {top} heads at Δ={best_s:+.3f} s, {rival} at "
-                          f"an offset more than {sc.rival_frames:g} frames away ({who})")
+                          f"an offset more than {RIVAL_FRAMES:g} frames away ({who})")
     elif edge:
         ok, why = False, f"sightings of a camera's carrier peak on the border of the search range ({who})"
     else:
@@ -178,3 +183,31 @@ def _decided(a, b, offsets, near, moments, sc, coarse_s, directions, radius) -> 
                             num_pareto_minima=1, at_range_edge=edge, support_fraction=float(top / max(moments[best], 1)))
     return PairLandscape(a, b, offsets, energy, moments, np.array([best]), best_s, 0.0, uncertainty,
                          0, decision, residual=RESIDUAL)
+
+
+def with_sightings(bundle: CueBundle, lands: list[PairLandscape], cfg: SyncConfig) -> list[PairLandscape]:
+    """lands, where a worn camera's sightings (sync/sightings.py) time a pair whose track pairs gave
+    no accepted offset: an accepted sighting landscape takes the pair's place (its reason says
+    what the track pairs gave); a rejected one is kept for a pair that had no landscape, and
+    otherwise adds its reason to the pair's."""
+    out = list(lands)
+    names = bundle.names
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            mine = [k for k, p in enumerate(out) if {p.a, p.b} == {a, b}]
+            if any(out[k].decision.accepted for k in mine):
+                continue
+            land = sighting_pair(bundle, a, b, cfg)
+            if land is None:
+                continue
+            if mine and land.decision.accepted:
+                land = replace(land, decision=replace(
+                    land.decision, reason=f"{land.decision.reason}; its track pairs: {out[mine[0]].decision.reason}"))
+                out[mine[0]] = land
+            elif not mine:
+                out.append(land)
+            else:  # both refused: the pair's reason gives both
+                old = out[mine[0]]
+                out[mine[0]] = replace(old, decision=replace(
+                    old.decision, reason=f"{old.decision.reason}; {land.decision.reason}"))
+    return out

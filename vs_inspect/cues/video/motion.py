@@ -10,9 +10,17 @@ import logging
 import cv2
 import numpy as np
 
-from .config import MotionConfig
-
 log = logging.getLogger(__name__)
+
+STATIC_MAX_MOTION_PX = 0.5  # a camera whose slower features (30th percentile) move less is static
+DIFF_THRESHOLD = 22.0  # grey-level difference (0-255) from the background or the neighbour that moves
+BACKGROUND_FRAMES = 60  # static camera: frames (evenly spread) of the temporal-median background
+NEIGHBOUR_FRAMES = 2  # moving camera: frame t against t-d and t+d, d at least this many frames...
+NEIGHBOUR_S = 0.08  # ...and the whole number of frames nearest this when the rate is known
+OPEN_PX = 3  # morphological opening (working px): speckle removed
+CLOSE_PX = 15  # morphological closing (working px): holes filled
+MIN_REGION_FRACTION = 0.002  # connected regions smaller than this share of the image are dropped
+LINK_IOU = 0.05  # a region continues an instance of the previous frame from this overlap (IoU)
 
 
 def _check_frames(frames: np.ndarray) -> None:
@@ -51,41 +59,39 @@ def background_motion(frames: np.ndarray, samples: int = 8, gap: int = 1) -> flo
     return float(np.median(meds)) if meds else 0.0
 
 
-def decide_camera_motion(frames: np.ndarray, cfg: MotionConfig) -> tuple[str, float]:
+def decide_camera_motion(frames: np.ndarray) -> tuple[str, float]:
     """('static' | 'moving', measured background motion in px)."""
     motion = background_motion(frames)
-    if cfg.camera_motion in ("static", "moving"):
-        return cfg.camera_motion, motion
-    return ("static" if motion < cfg.static_max_motion_px else "moving"), motion
+    return ("static" if motion < STATIC_MAX_MOTION_PX else "moving"), motion
 
 
-def _clean(mask: np.ndarray, cfg: MotionConfig) -> np.ndarray:
+def _clean(mask: np.ndarray) -> np.ndarray:
     """Opening, closing, and removal of small regions: (H,W) bool -> (H,W) bool."""
     m = mask.astype(np.uint8)
-    if cfg.open_px > 1:
+    if OPEN_PX > 1:
         m = cv2.morphologyEx(m, cv2.MORPH_OPEN, cv2.getStructuringElement(
-            cv2.MORPH_ELLIPSE, (cfg.open_px, cfg.open_px)))
-    if cfg.close_px > 1:
+            cv2.MORPH_ELLIPSE, (OPEN_PX, OPEN_PX)))
+    if CLOSE_PX > 1:
         m = cv2.morphologyEx(m, cv2.MORPH_CLOSE, cv2.getStructuringElement(
-            cv2.MORPH_ELLIPSE, (cfg.close_px, cfg.close_px)))
+            cv2.MORPH_ELLIPSE, (CLOSE_PX, CLOSE_PX)))
     n, lab, stats, _ = cv2.connectedComponentsWithStats(m, connectivity=8)
-    min_area = cfg.min_region_fraction * mask.size
+    min_area = MIN_REGION_FRACTION * mask.size
     keep = np.zeros(n, bool)
     keep[1:] = stats[1:, cv2.CC_STAT_AREA] >= min_area
     return keep[lab]
 
 
-def static_camera_masks(frames: np.ndarray, cfg: MotionConfig) -> np.ndarray:
+def static_camera_masks(frames: np.ndarray) -> np.ndarray:
     """(T,H,W) bool moving regions of a static camera: difference from a temporal-median background."""
     _check_frames(frames)
     T = frames.shape[0]
-    idx = np.unique(np.linspace(0, T - 1, min(cfg.background_frames, T)).round().astype(int))
+    idx = np.unique(np.linspace(0, T - 1, min(BACKGROUND_FRAMES, T)).round().astype(int))
     blur = np.stack([cv2.GaussianBlur(f, (5, 5), 0) for f in frames])
     background = np.median(blur[idx], axis=0).astype(np.int16)
     masks = np.empty(frames.shape, bool)
     for t in range(T):
         diff = np.abs(blur[t].astype(np.int16) - background)
-        masks[t] = _clean(diff > cfg.diff_threshold, cfg)
+        masks[t] = _clean(diff > DIFF_THRESHOLD)
     return masks
 
 
@@ -103,24 +109,23 @@ def _warp_to(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, np.ndarray] 
     return warped, valid
 
 
-def neighbour_gap(cfg: MotionConfig, frame_interval_s: float | None = None) -> int:
+def neighbour_gap(frame_interval_s: float | None = None) -> int:
     """d, in frames, between a moving camera's frame and the neighbours it is compared with: at
-    least cfg.neighbour_frames and, when the frame spacing is known, the whole number of frames
-    nearest cfg.neighbour_s."""
-    d = max(1, cfg.neighbour_frames)
+    least NEIGHBOUR_FRAMES and, when the frame spacing is known, the whole number of frames
+    nearest NEIGHBOUR_S."""
+    d = max(1, NEIGHBOUR_FRAMES)
     if frame_interval_s is not None and frame_interval_s > 0:
-        d = max(d, int(round(cfg.neighbour_s / frame_interval_s)))
+        d = max(d, int(round(NEIGHBOUR_S / frame_interval_s)))
     return d
 
 
-def moving_camera_masks(frames: np.ndarray, cfg: MotionConfig,
-                        frame_interval_s: float | None = None) -> np.ndarray:
+def moving_camera_masks(frames: np.ndarray, frame_interval_s: float | None = None) -> np.ndarray:
     """(T,H,W) bool moving regions of a moving camera: residual difference after compensating the
     camera's own motion (a homography to the neighbours t-d and t+d, min of the two differences;
     d from neighbour_gap)."""
     _check_frames(frames)
     T = frames.shape[0]
-    d = neighbour_gap(cfg, frame_interval_s)
+    d = neighbour_gap(frame_interval_s)
     blur = np.stack([cv2.GaussianBlur(f, (5, 5), 0) for f in frames])
     masks = np.zeros(frames.shape, bool)
     for t in range(T):
@@ -137,14 +142,14 @@ def moving_camera_masks(frames: np.ndarray, cfg: MotionConfig,
         if not diffs:
             continue
         diff = np.minimum.reduce(diffs) if len(diffs) > 1 else diffs[0]
-        masks[t] = _clean(diff > cfg.diff_threshold, cfg)
+        masks[t] = _clean(diff > DIFF_THRESHOLD)
     return masks
 
 
-def link_instances(masks: np.ndarray, cfg: MotionConfig) -> np.ndarray:
+def link_instances(masks: np.ndarray) -> np.ndarray:
     """(T,H,W) int16 (int32 if many) instance ids (0 = background) from per-frame masks.
 
-    Connected regions of consecutive frames that overlap (IoU >= link_iou) belong to one
+    Connected regions of consecutive frames that overlap (IoU >= LINK_IOU) belong to one
     instance; a region that overlaps several earlier instances merges them (union-find), so
     an object that splits and re-joins keeps one id. Overlaps are counted per region pair, not
     per pixel id, so any number of instances keeps distinct ids.
@@ -183,7 +188,7 @@ def link_instances(masks: np.ndarray, cfg: MotionConfig) -> np.ndarray:
                 np.add.at(prev_area, of_region, np.bincount(prev_lab.ravel(), minlength=m))
                 with np.errstate(invalid="ignore", divide="ignore"):
                     iou = overlap / (area[:, None] + prev_area[None, :] - overlap)
-                iou_ok = (overlap > 0) & (iou >= cfg.link_iou) & (instances > 0)[None, :]
+                iou_ok = (overlap > 0) & (iou >= LINK_IOU) & (instances > 0)[None, :]
         for c in range(1, n):
             ids = instances[iou_ok[c]].tolist() if iou_ok is not None else []
             if ids:
@@ -210,14 +215,13 @@ def link_instances(masks: np.ndarray, cfg: MotionConfig) -> np.ndarray:
     return out
 
 
-def moving_regions(frames: np.ndarray, cfg: MotionConfig, camera_motion: str | None = None,
+def moving_regions(frames: np.ndarray, camera_motion: str | None = None,
                    frame_interval_s: float | None = None):
     """(instances (T,H,W) int16, int32 if many (link_instances), camera_motion, background_motion_px)
     for one video.
     frame_interval_s: its typical frame spacing (s), when known (a moving camera's neighbours)."""
-    mode, bg = decide_camera_motion(frames, cfg)
-    if camera_motion in ("static", "moving"):
+    mode, bg = decide_camera_motion(frames)
+    if camera_motion in ("static", "moving"):  # the user's word for this video
         mode = camera_motion
-    masks = static_camera_masks(frames, cfg) if mode == "static" else \
-        moving_camera_masks(frames, cfg, frame_interval_s)
-    return link_instances(masks, cfg), mode, bg
+    masks = static_camera_masks(frames) if mode == "static" else moving_camera_masks(frames, frame_interval_s)
+    return link_instances(masks), mode, bg

@@ -8,7 +8,6 @@ unmatched instances are dropped (VisualSync appendix, "Correspondence Filtering"
 
 from __future__ import annotations
 
-import functools
 import logging
 from dataclasses import dataclass
 
@@ -17,12 +16,17 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
 
-from ..types import TrackPairs
-from .config import MatchConfig
-from .config import LIGHTGLUE_FEATURES
-from .nearest_neighbours import match_descriptors
+from ...types import TrackPairs
+from ..features.nearest_neighbours import match_descriptors
 
 log = logging.getLogger(__name__)
+
+MAX_FEATURES = 1500  # SIFT features per keyframe at most
+RATIO = 0.8  # Lowe's ratio test
+MUTUAL = True  # mutual nearest neighbours only
+MASK_DILATE_PX = 9  # the moving regions are dilated by this (working px) for the descriptors
+SNAP_PX = 3.0  # a match snaps to the nearest track within this distance at its keyframe (working px)
+MIN_INSTANCE_SUPPORT = 5  # matched instance pairs with fewer votes are dropped (the paper: 100, dense)
 
 
 @dataclass(frozen=True)
@@ -31,10 +35,10 @@ class KeyframeFeatures:
 
     frame: np.ndarray  # (M,) int, keyframe index of each feature
     xy: np.ndarray  # (M,2) float32 working px
-    desc: np.ndarray  # (M,D) float32, L2-normalised (RootSIFT D=128, XFeat D=64)
+    desc: np.ndarray  # (M,128) float32 RootSIFT, L2-normalised
     track: np.ndarray  # (M,) int, index of the track within snap distance at that frame, -1 if none
     keyframes: np.ndarray  # (K,) int, the keyframe indices
-    image_size: tuple[int, int] = (0, 0)  # (width, height) working px of the keyframes (LightGlue normalizes by it)
+    image_size: tuple[int, int] = (0, 0)  # (width, height) working px of the keyframes
 
 
 def keyframe_indices(num_frames: int, num_keyframes: int) -> np.ndarray:
@@ -44,14 +48,14 @@ def keyframe_indices(num_frames: int, num_keyframes: int) -> np.ndarray:
 
 
 def extract_keyframe_features(frames: np.ndarray, masks: np.ndarray | None, keyframes: np.ndarray,
-                              track_xy: np.ndarray, cfg: MatchConfig = MatchConfig()) -> KeyframeFeatures:
-    """RootSIFT (or XFeat) on the keyframes, inside the dilated masks when given, snapped to tracks.
+                              track_xy: np.ndarray) -> KeyframeFeatures:
+    """RootSIFT on the keyframes, inside the dilated masks when given, snapped to tracks.
 
     frames (T,H,W) uint8; masks (T,H,W) bool or None; track_xy (N,T,2) working px.
     """
-    detect = {"sift": sift_detector, "xfeat": _xfeat_detector}.get(cfg.descriptor, _lightglue_detector)(cfg)
+    detect = sift_detector()
     size = (int(frames.shape[2]), int(frames.shape[1]))
-    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (max(1, cfg.mask_dilate_px),) * 2)
+    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (max(1, MASK_DILATE_PX),) * 2)
     fr, xys, descs, trk = [], [], [], []
     for k in keyframes:
         m = None
@@ -66,21 +70,20 @@ def extract_keyframe_features(frames: np.ndarray, masks: np.ndarray | None, keyf
         alive = np.isfinite(track_xy[:, k, 0]) if len(track_xy) else np.zeros(0, bool)
         if alive.any():
             ids = np.nonzero(alive)[0]
-            dist, j = cKDTree(track_xy[ids, k]).query(xy, distance_upper_bound=cfg.snap_px)
+            dist, j = cKDTree(track_xy[ids, k]).query(xy, distance_upper_bound=SNAP_PX)
             hit = np.isfinite(dist)
             snap[hit] = ids[j[hit]]
         fr.append(np.full(len(xy), k)), xys.append(xy), descs.append(d), trk.append(snap)
     if not fr:
-        dim = 64 if cfg.descriptor == "xfeat" else 128
         return KeyframeFeatures(np.zeros(0, int), np.zeros((0, 2), np.float32),
-                                np.zeros((0, dim), np.float32), np.zeros(0, np.int64), keyframes, size)
+                                np.zeros((0, 128), np.float32), np.zeros(0, np.int64), keyframes, size)
     return KeyframeFeatures(np.concatenate(fr), np.concatenate(xys), np.concatenate(descs),
                             np.concatenate(trk), keyframes, size)
 
 
-def sift_detector(cfg: MatchConfig):
+def sift_detector(max_features: int = MAX_FEATURES):
     """(gray image, mask or None) -> (M,2) px, (M,128) RootSIFT descriptors."""
-    sift = cv2.SIFT_create(nfeatures=cfg.max_features)
+    sift = cv2.SIFT_create(nfeatures=max_features)
 
     def detect(gray: np.ndarray, mask: np.ndarray | None):
         kps, d = sift.detectAndCompute(gray, mask)
@@ -93,57 +96,6 @@ def sift_detector(cfg: MatchConfig):
     return detect
 
 
-def _xfeat_detector(cfg: MatchConfig):
-    """(gray image, mask or None) -> (M,2) px, (M,64) XFeat descriptors (unit length)."""
-    from .learned import XFeatMatcher, learned_unavailable
-
-    if why := learned_unavailable("xfeat"):
-        raise ValueError(f"keyframe descriptor 'xfeat': {why}")
-    # the masks cover a small part of the frame: detect many, keep those inside, at most max_features
-    xfeat = XFeatMatcher(top_k=4 * cfg.max_features)
-
-    def detect(gray: np.ndarray, mask: np.ndarray | None):
-        f = xfeat.features(np.repeat(gray[..., None], 3, axis=2), None if mask is None else mask > 0)
-        return f.keypoints[:cfg.max_features], f.descriptors[:cfg.max_features]
-
-    return detect
-
-
-@functools.lru_cache(maxsize=2)
-def _lightglue(kind: str, top_k: int):
-    """One loaded ALIKED/DISK + LightGlue per kind (loading takes seconds; every video pair shares it)."""
-    from .learned import LightGlueMatcher
-
-    return LightGlueMatcher(kind, top_k=top_k)
-
-
-def _lightglue_detector(cfg: MatchConfig):
-    """(gray image, mask or None) -> (M,2) px, (M,128) ALIKED or DISK descriptors (unit length)."""
-    from .learned import lightglue_unavailable
-
-    if why := lightglue_unavailable(cfg.descriptor):
-        raise ValueError(f"keyframe descriptor {cfg.descriptor!r}: {why}")
-    net = _lightglue(cfg.descriptor, 4 * cfg.max_features)
-
-    def detect(gray: np.ndarray, mask: np.ndarray | None):
-        f = net.features(np.repeat(gray[..., None], 3, axis=2), None if mask is None else mask > 0)
-        return f.keypoints[:cfg.max_features], f.descriptors[:cfg.max_features]
-
-    return detect
-
-
-def _keyframe_matcher(cfg: MatchConfig, fa: KeyframeFeatures, fb: KeyframeFeatures):
-    """(indices into a's rows, into b's rows) -> (P,2) matches: the descriptor's LightGlue for
-    aliked/disk, else nearest neighbours with the ratio test (and mutual check)."""
-    if cfg.descriptor not in LIGHTGLUE_FEATURES:  # those are matched by their LightGlue
-        return lambda sa, sb: match_descriptors(fa.desc[sa], fb.desc[sb], cfg.ratio, cfg.mutual)
-    from .learned import Features
-
-    net = _lightglue(cfg.descriptor, 4 * cfg.max_features)
-    return lambda sa, sb: net.match(Features(fa.xy[sa], fa.desc[sa], fa.image_size),
-                                    Features(fb.xy[sb], fb.desc[sb], fb.image_size)).astype(np.int64)
-
-
 @dataclass(frozen=True)
 class PairStats:
     matches: int  # descriptor matches over all keyframe pairs
@@ -154,9 +106,8 @@ class PairStats:
 
 
 def match_tracks(a: str, b: str, fa: KeyframeFeatures, fb: KeyframeFeatures, inst_a: np.ndarray,
-                 inst_b: np.ndarray, cfg: MatchConfig = MatchConfig()) -> tuple[TrackPairs, PairStats]:
+                 inst_b: np.ndarray) -> tuple[TrackPairs, PairStats]:
     """Track pairs between videos a and b from keyframe descriptor matches (every keyframe pair)."""
-    match = _keyframe_matcher(cfg, fa, fb)
     votes_a, votes_b = [], []
     total = 0
     per_pair = np.zeros((len(fa.keyframes), len(fb.keyframes)), np.int64)
@@ -168,7 +119,7 @@ def match_tracks(a: str, b: str, fa: KeyframeFeatures, fb: KeyframeFeatures, ins
             sb = np.nonzero(fb.frame == kb)[0]
             if len(sb) < 2:
                 continue
-            m = match(sa, sb)
+            m = match_descriptors(fa.desc[sa], fb.desc[sb], RATIO, MUTUAL)
             total += len(m)
             per_pair[i, j] = len(m)
             ta, tb = fa.track[sa[m[:, 0]]], fb.track[sb[m[:, 1]]]
@@ -183,22 +134,21 @@ def match_tracks(a: str, b: str, fa: KeyframeFeatures, fb: KeyframeFeatures, ins
     key, count = np.unique(va * nb + vb, return_counts=True)
     ta, tb, w = key // nb, key % nb, count.astype(float)
 
-    kept_inst = 0
-    if cfg.use_instances:
-        ia, ib = inst_a[ta], inst_b[tb]
-        ua, ra = np.unique(ia, return_inverse=True)
-        ub, rb = np.unique(ib, return_inverse=True)
-        C = np.zeros((len(ua), len(ub)))
-        np.add.at(C, (ra, rb), w)
-        C[ua == 0, :] = 0  # tracks never inside a moving region do not form instances
-        C[:, ub == 0] = 0
-        rows, cols = linear_sum_assignment(-C)
-        good = C[rows, cols] >= cfg.min_instance_support
-        allowed = set(zip(ua[rows[good]].tolist(), ub[cols[good]].tolist()))
-        kept_inst = len(allowed)
-        keep = np.array([(x, y) in allowed for x, y in zip(ia.tolist(), ib.tolist())], bool)
-        ta, tb, w = ta[keep], tb[keep], w[keep]
-    if cfg.mutual_best_tracks and len(ta):
+    # one-to-one instance matching (Hungarian method on vote counts)
+    ia, ib = inst_a[ta], inst_b[tb]
+    ua, ra = np.unique(ia, return_inverse=True)
+    ub, rb = np.unique(ib, return_inverse=True)
+    C = np.zeros((len(ua), len(ub)))
+    np.add.at(C, (ra, rb), w)
+    C[ua == 0, :] = 0  # tracks never inside a moving region do not form instances
+    C[:, ub == 0] = 0
+    rows, cols = linear_sum_assignment(-C)
+    good = C[rows, cols] >= MIN_INSTANCE_SUPPORT
+    allowed = set(zip(ua[rows[good]].tolist(), ub[cols[good]].tolist()))
+    kept_inst = len(allowed)
+    keep = np.array([(x, y) in allowed for x, y in zip(ia.tolist(), ib.tolist())], bool)
+    ta, tb, w = ta[keep], tb[keep], w[keep]
+    if len(ta):  # each track the other's most voted partner
         order = np.lexsort((-w, ta))
         best_b = {}
         for i in order:

@@ -25,11 +25,10 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
-from ..geometry.offsets import OffsetGrid, span_of
-from ..geometry.two_view import (essential_from_fundamental, focal_from_fundamental, fundamental_ransac,
-                                 normalized_points, pose_from_essential, signed_sampson_px)
-from ..types import CameraTrack, TrackPairs, VideoInfo
+from ...geometry.epipolar import epipolar_residual, fundamental_from_cameras
+from ...geometry.offsets import OffsetGrid, span_of
+from ...geometry.two_view import (essential_from_fundamental, focal_from_fundamental, fundamental_ransac, normalized_points, pose_from_essential, signed_sampson_px)
+from ...types import CameraTrack, TrackPairs, VideoInfo
 
 log = logging.getLogger(__name__)
 
@@ -245,28 +244,37 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
     for v in found:
         details[v]["scale_from_shared_points"] = with_scale[v]
     if refine and len(cams) >= 3:
-        # the joint fit is not convex: start it from the per-pair focals and from shared guesses
-        size = float(np.median([max(i.width, i.height) for i in infos.values()]))
-        coarse = {v: g.offset_s for v, (g, _) in found.items()}
-        best = None
-        for start in ["per pair"] + list(FOCAL_STARTS):
-            init = cams if start == "per pair" else \
-                _cameras_at(ref, infos, found, {v: start * size for v in found})[0]
-            fitted, fit = refine_cameras(init, ref, infos, xy, pairs, coarse)
-            if "cost" in fit and (best is None or fit["cost"] < best[1]["cost"]):
-                best = (fitted, fit | {"start": start if start == "per pair" else f"{start} x image size"})
-        if best is not None:
-            cams = best[0]
-            details["joint_fit"] = best[1]
-            tol_px = max_median_fraction * max(np.hypot(i.width, i.height) for i in infos.values())
-            if best[1]["median_px_after"] > tol_px:
-                # most track pairs are off their epipolar lines at the coarse offsets: the offsets
-                # or the pairs are wrong, and cameras fitted to them would be too
-                why = (f"camera could not be registered: the cameras fitted to the moving points leave half "
-                       f"their track pairs more than {best[1]['median_px_after']:.1f} px from the epipolar "
-                       f"lines (tolerance {tol_px:.1f} px, {100 * max_median_fraction:g} % of the diagonal)")
-                return {}, reasons | {n: why for n in cams}, details
+        cams, refused = _fitted_together(ref, infos, xy, pairs, found, cams, details, max_median_fraction)
+        if refused:
+            return {}, reasons | refused, details
     return cams, reasons, details
+
+
+def _fitted_together(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.ndarray],
+                     pairs: dict[tuple[str, str], TrackPairs], found: dict[str, tuple], cams: dict[str, CameraTrack],
+                     details: dict, max_median_fraction: float) -> tuple[dict[str, CameraTrack], dict[str, str]]:
+    """(cameras, {camera: why} when refused) of refine_cameras on all pairs at once, started from the
+    per-pair focals and from a few shared guesses (the joint fit is not convex); details["joint_fit"]
+    says how well. Refused when the median track pair stays farther than max_median_fraction of the
+    image diagonal from its epipolar line: the coarse offsets or the pairs are wrong."""
+    size = float(np.median([max(i.width, i.height) for i in infos.values()]))
+    coarse = {v: g.offset_s for v, (g, _) in found.items()}
+    best = None
+    for start in ["per pair"] + list(FOCAL_STARTS):
+        init = cams if start == "per pair" else _cameras_at(ref, infos, found, {v: start * size for v in found})[0]
+        fitted, fit = refine_cameras(init, ref, infos, xy, pairs, coarse)
+        if "cost" in fit and (best is None or fit["cost"] < best[1]["cost"]):
+            best = (fitted, fit | {"start": start if start == "per pair" else f"{start} x image size"})
+    if best is None:
+        return cams, {}
+    details["joint_fit"] = best[1]
+    tol_px = max_median_fraction * max(np.hypot(i.width, i.height) for i in infos.values())
+    if best[1]["median_px_after"] > tol_px:
+        why = (f"camera could not be registered: the cameras fitted to the moving points leave half "
+               f"their track pairs more than {best[1]['median_px_after']:.1f} px from the epipolar "
+               f"lines (tolerance {tol_px:.1f} px, {100 * max_median_fraction:g} % of the diagonal)")
+        return best[0], {n: why for n in best[0]}
+    return best[0], {}
 
 
 FOCAL_STARTS = (0.5, 0.8, 1.2, 2.0)  # shared focal guesses (image sizes) that start the joint fit

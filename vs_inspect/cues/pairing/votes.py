@@ -23,7 +23,6 @@ peak with few supporters becomes a rival minimum, which the decision stage weigh
 
 from __future__ import annotations
 
-import itertools
 import warnings
 from dataclasses import dataclass
 
@@ -31,12 +30,30 @@ import numba as nb
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from ..geometry.epipolar import epipolar_residual, fundamental_from_cameras
-from ..geometry.offsets import OffsetGrid, span_of
-from ..geometry.sampling import camera_at_frames, camera_between_frames, tracks_between_frames
-from ..geometry.timing import frame_brackets
-from ..types import CameraTrack, TrackPairs, VideoInfo
-from .config import GeometricPairConfig
+from ...geometry.epipolar import epipolar_residual, fundamental_from_cameras
+from ...geometry.offsets import OffsetGrid, span_of
+from ...geometry.sampling import camera_at_frames, camera_between_frames, tracks_between_frames
+from ...geometry.timing import frame_brackets
+from ...types import CameraTrack, TrackPairs, VideoInfo
+
+
+@dataclass(frozen=True)
+class VoteParams:
+    """The epipolar vote's own parameters (not user settings: measured defaults, BENCHMARKS.md)."""
+
+    tau_diag: float = 0.004  # Sampson distance (share of the image diagonal, at least 2 px) below which a moment fits
+    min_frames: int = 8  # common moments a candidate needs at an offset
+    min_inlier_share: float = 0.8  # share of those moments that must fit
+    max_band_share: float = 0.08  # a pair consistent at more than this share of the offsets is uninformative
+    min_sweep_tau: float = 4.0  # a track must sweep this many tau across the epipolar lines (along them fits any offset)
+    epipole_margin_tau: float = 10.0  # a moment within this many tau of an epipole does not count (0: every moment)
+    max_tracks: int = 300  # longest tracks per video taken as candidates (cost grows with the product)
+    max_rate_hz: float = 30.0  # b's frames read at about this rate at most (every 2nd at 60 fps); 0: all
+    peaks: int = 3  # vote-histogram peaks whose supporters are kept
+    peak_halfwidth: int = 2  # grid steps either side of a peak that count as supporting it
+
+
+VOTE = VoteParams()
 
 
 @dataclass(frozen=True)
@@ -360,9 +377,31 @@ def _one_to_one(cand_a: np.ndarray, cand_b: np.ndarray, res: np.ndarray) -> np.n
     return np.sort(which[rows[ok], cols[ok]])
 
 
+def _peak_supporters(peaks: list[int], informative: np.ndarray, best: np.ndarray, cand_a: np.ndarray,
+                     cand_b: np.ndarray, res: np.ndarray, halfwidth: int) -> tuple[np.ndarray, np.ndarray, list[int]]:
+    """(index (P,2) of the track pairs kept, (P,) which peak each supports, votes per peak): at each
+    peak one partner per track, the one-to-one choice of least total residual; a track pair
+    supporting two peaks is kept once, with the first (highest)."""
+    keep_a, keep_b, keep_p, peak_votes = [], [], [], []
+    for pi, p in enumerate(peaks):
+        near = informative & (np.abs(best - p) <= halfwidth)
+        peak_votes.append(int(near.sum()))
+        sel = np.nonzero(near)[0]
+        if not len(sel):
+            continue
+        sel = sel[_one_to_one(cand_a[sel], cand_b[sel], res[sel])]
+        keep_a += cand_a[sel].tolist()
+        keep_b += cand_b[sel].tolist()
+        keep_p += [pi] * len(sel)
+    index = np.stack([np.array(keep_a, np.int64), np.array(keep_b, np.int64)], 1) \
+        if keep_a else np.zeros((0, 2), np.int64)
+    index, first = np.unique(index, axis=0, return_index=True)
+    return index, np.array(keep_p, np.int64)[first], peak_votes
+
+
 def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a: CameraTrack,
                     cam_b: CameraTrack, xy_a: np.ndarray, xy_b: np.ndarray,
-                    cfg: GeometricPairConfig = GeometricPairConfig(), grid: OffsetGrid = OffsetGrid()
+                    params: VoteParams = VOTE, grid: OffsetGrid = OffsetGrid()
                     ) -> tuple[TrackPairs, GeometricPairStats]:
     """Track pairs between cameras a and b from epipolar consistency over time.
 
@@ -374,7 +413,7 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
     peaks only, so that the votes' statistics (vote_z) stay the whole range's.
     """
     if cam_a.is_moving and not cam_b.is_moving:  # a moving camera is b inside: Δ_ba = -Δ_ab
-        tp, st = geometric_pairs(b, a, info_b, info_a, cam_b, cam_a, xy_b, xy_a, cfg, grid)
+        tp, st = geometric_pairs(b, a, info_b, info_a, cam_b, cam_a, xy_b, xy_a, params, grid)
         return TrackPairs(a, b, tp.index[:, ::-1].copy(), tp.weight), st.swapped()
     empty = TrackPairs(a, b, np.zeros((0, 2), np.int64), np.zeros(0))
     Tb = xy_b.shape[1]
@@ -392,7 +431,7 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
     if not posed.any():
         return empty, GeometricPairStats(0, 0, 0, (), ())
     diag = float(np.hypot(info_b.width, info_b.height))
-    tau = max(2.0, cfg.tau_diag * diag)
+    tau = max(2.0, params.tau_diag * diag)
     u, _, vt = np.linalg.svd(np.where(posed[..., None, None], G, np.eye(3)))
     e_a, e_b = u[..., -1], vt[..., -1, :]  # (Dg,Tb,3) unit null vectors: Gᵀ e_a = 0, G e_b = 0
     # a moving camera's extent is judged at a middle pose (both moving: the offset nearest 0
@@ -400,13 +439,13 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
     rows = np.nonzero(posed.any(1))[0]
     g_mid = rows[np.argmin(np.abs(offsets[rows]))] if len(G) > 1 else 0
     mid = np.nonzero(posed[g_mid])[0][posed[g_mid].sum() // 2]
-    ia = _candidates(xy_a, cfg.max_tracks, cfg.min_frames, epipolar_extent(xy_a, e_a[g_mid, mid]),
-                     cfg.min_sweep_tau * tau)
-    ib = _candidates(xy_b, cfg.max_tracks, cfg.min_frames, epipolar_extent(xy_b, e_b[g_mid, mid]),
-                     cfg.min_sweep_tau * tau)
+    ia = _candidates(xy_a, params.max_tracks, params.min_frames, epipolar_extent(xy_a, e_a[g_mid, mid]),
+                     params.min_sweep_tau * tau)
+    ib = _candidates(xy_b, params.max_tracks, params.min_frames, epipolar_extent(xy_b, e_b[g_mid, mid]),
+                     params.min_sweep_tau * tau)
     if not len(ia) or not len(ib):
         return empty, GeometricPairStats(0, 0, 0, (), ())
-    qstep = max(1, int(1.0 / (info_b.frame_interval_s * cfg.max_rate_hz))) if cfg.max_rate_hz > 0 else 1
+    qstep = max(1, int(1.0 / (info_b.frame_interval_s * params.max_rate_hz))) if params.max_rate_hz > 0 else 1
     cand_a = np.repeat(ia, len(ib))
     cand_b = np.tile(ib, len(ia))
     _, best, res = _consistency(np.ascontiguousarray(xy_a, np.float64),
@@ -414,96 +453,22 @@ def geometric_pairs(a: str, b: str, info_a: VideoInfo, info_b: VideoInfo, cam_a:
                                 np.ascontiguousarray(G), np.ascontiguousarray(e_a),
                                 np.ascontiguousarray(e_b),
                                 np.ascontiguousarray(k), np.ascontiguousarray(w), tau * tau,
-                                cfg.min_frames, cfg.min_inlier_share,
-                                max(1, int(cfg.max_band_share * len(offsets))),
-                                cfg.min_sweep_tau * tau, qstep, (cfg.epipole_margin_tau * tau) ** 2)
+                                params.min_frames, params.min_inlier_share,
+                                max(1, int(params.max_band_share * len(offsets))),
+                                params.min_sweep_tau * tau, qstep, (params.epipole_margin_tau * tau) ** 2)
     informative = best >= 0
     votes = np.bincount(best[informative], minlength=len(offsets)).astype(float)
-    peaks = _peaks(votes, cfg.peaks, cfg.peak_halfwidth, None if allowed.all() else allowed)
-    keep_a, keep_b, keep_p, peak_votes = [], [], [], []
-    for pi, p in enumerate(peaks):
-        near = informative & (np.abs(best - p) <= cfg.peak_halfwidth)
-        peak_votes.append(int(near.sum()))
-        sel = np.nonzero(near)[0]
-        if not len(sel):
-            continue
-        # one partner per track at this peak: the one-to-one choice of least total residual
-        sel = sel[_one_to_one(cand_a[sel], cand_b[sel], res[sel])]
-        keep_a += cand_a[sel].tolist()
-        keep_b += cand_b[sel].tolist()
-        keep_p += [pi] * len(sel)
-    index = np.stack([np.array(keep_a, np.int64), np.array(keep_b, np.int64)], 1) \
-        if keep_a else np.zeros((0, 2), np.int64)
-    # a track pair supporting two peaks is kept once, with the first (highest) peak
-    index, first = np.unique(index, axis=0, return_index=True)
+    peaks = _peaks(votes, params.peaks, params.peak_halfwidth, None if allowed.all() else allowed)
+    index, pair_peak, peak_votes = _peak_supporters(peaks, informative, best, cand_a, cand_b, res, params.peak_halfwidth)
     coarser = max(info_a.frame_interval_s, info_b.frame_interval_s)
     inf = np.nonzero(informative)[0]
     stats = GeometricPairStats(len(cand_a), int(informative.sum()), len(index),
                                tuple(float(offsets[p]) for p in peaks), tuple(peak_votes),
-                               np.array(keep_p, np.int64)[first], offsets, votes,
-                               max(step * cfg.peak_halfwidth, 0.5 * coarser),
+                               pair_peak, offsets, votes,
+                               max(step * params.peak_halfwidth, 0.5 * coarser),
                                np.stack([cand_a[inf], cand_b[inf]], 1), offsets[best[inf]], res[inf],
                                grid.pair_window(a, b))
     return TrackPairs(a, b, index, np.ones(len(index))), stats
-
-
-def consistent_peaks(peaks: dict[tuple[str, str], tuple[tuple[float, ...], tuple[int, ...]]],
-                     tol_s: float, max_pairs: int = 10
-                     ) -> tuple[dict[tuple[str, str], int] | None, str]:
-    """One vote peak per camera pair such that every triangle closes, Δ_ab + Δ_bc ≈ Δ_ac.
-
-    peaks: (a, b) -> (peak offsets Δ_ab in s, votes), names in a fixed order within each key.
-    A choice must close every triangle within tol_s. Among those, the one with the least cost
-    Σ_pairs ((v_top - v) / √v_top)² + Σ_triangles (closure / (tol_s / 3))² wins: vote counts
-    vary like Poisson counts, so peaks a few √v apart are near-ties that the closure decides
-    (each peak is located to about a frame, tol_s is about three). Returns (choice, "chosen"), or
-    (None, why): "no triangle" (fewer than three cameras with peaks), "too many pairs" (the
-    search tries every combination), "inconsistent" (no choice closes every triangle) or "one
-    triangle" (three cameras: a single closure is one check on 27 choices of three peaks, and
-    some close within tol_s by chance).
-    """
-    keys = [k for k in peaks if len(peaks[k][0])]
-    if len(keys) > max_pairs:
-        return None, "too many pairs"
-
-    def delta(ch, u, v):
-        return peaks[(u, v)][0][ch[(u, v)]] if (u, v) in ch else -peaks[(v, u)][0][ch[(v, u)]]
-
-    names = sorted({n for k in keys for n in k})
-    triangles = [t for t in itertools.combinations(names, 3)
-                 if all((u, v) in keys or (v, u) in keys for u, v in itertools.combinations(t, 2))]
-    if not triangles:
-        return None, "no triangle"
-    top = {k: max(peaks[k][1]) for k in keys}
-    sigma_s = tol_s / 3.0
-    best, best_cost = None, np.inf
-    for choice in itertools.product(*[range(len(peaks[k][0])) for k in keys]):
-        ch = dict(zip(keys, choice))
-        closure = np.array([delta(ch, a, b) + delta(ch, b, c) - delta(ch, a, c) for a, b, c in triangles])
-        if np.all(np.abs(closure) <= tol_s):
-            cost = sum(((top[k] - peaks[k][1][ch[k]]) / np.sqrt(max(top[k], 1))) ** 2 for k in keys)
-            cost += float(np.sum((closure / sigma_s) ** 2)) if sigma_s > 0 else 0.0
-            if cost < best_cost:
-                best, best_cost = ch, cost
-    if best is None:
-        return None, "inconsistent"
-    if len(triangles) == 1:
-        return None, "one triangle"
-    return best, "chosen"
-
-
-@dataclass(frozen=True)
-class JointChoice:
-    """Offsets of all cameras chosen at once from every pair's vote histogram."""
-
-    offsets_s: dict[str, float]  # camera -> offset_s (the first camera's is 0)
-    score: float  # Σ over pairs of the vote z-score at the implied Δ_ab
-    margin: dict[str, float]  # camera -> score lost by the best choice that moves it by > tol_s
-
-    @property
-    def origin(self) -> str:
-        """The camera whose offset is 0: the first by name (joint_offsets)."""
-        return min(self.offsets_s)
 
 
 def vote_z(st: GeometricPairStats) -> tuple[np.ndarray, np.ndarray]:
@@ -518,75 +483,6 @@ def vote_z(st: GeometricPairStats) -> tuple[np.ndarray, np.ndarray]:
     return offs, (sm - med) / max(mad, 1.0)
 
 
-def joint_offsets(found: dict[tuple[str, str], GeometricPairStats], tol_s: float,
-                  candidates: int = 10, max_combinations: int = 200_000) -> JointChoice | None:
-    """Offsets of every camera that together collect the most votes over all pairs.
-
-    Each pair's votes are z-scored (vote_z); a choice of offsets scores the sum over pairs of
-    the z-score at its Δ_ab = offset_b - offset_a (a Δ outside a pair's grid or its --around window scores -5). The
-    choices tried: with each camera in turn as the reference, every combination of the
-    `candidates` highest z-peaks of its pairs with the others. A single pair can have a false
-    peak above its true one (a repeated motion, points moving along their epipolar lines), but
-    the false peaks of several pairs rarely close. margin says how much each camera's offset is
-    preferred over the best choice that moves it by more than tol_s against every other camera. None when no camera is
-    paired with every other (or there are fewer than three cameras).
-    """
-    found = {k: st for k, st in found.items() if st.votes is not None and len(st.votes)}
-    names = sorted({n for k in found for n in k})
-    if len(names) < 3:
-        return None
-    zs = {k: vote_z(st) for k, st in found.items()}
-
-    def lookup(a: str, b: str, delta: np.ndarray) -> np.ndarray:
-        offs, z = zs[(a, b)]  # called for the pairs of zs only
-        i = np.clip(np.searchsorted(offs, delta), 1, max(1, len(offs) - 1))
-        i = np.where(np.abs(offs[i] - delta) < np.abs(offs[i - 1] - delta), i, i - 1)
-        inside = (delta >= offs[0] - 1e-9) & (delta <= offs[-1] + 1e-9) & found[(a, b)].allows(delta)
-        return np.where(inside, z[i], -5.0)
-
-    def peaks_of(a: str, b: str) -> list[float]:
-        offs, z = zs[(a, b)] if (a, b) in zs else (-zs[(b, a)][0], zs[(b, a)][1])
-        st = found[(a, b)] if (a, b) in found else found[(b, a)].swapped()
-        sep = max(st.halfwidth_s, 1e-6) * 2
-        out: list[float] = []
-        for i in np.argsort(-z, kind="stable"):
-            if len(out) >= per:
-                break
-            if not st.allows(offs[i]):  # outside the pair's --around window
-                continue
-            if all(abs(offs[i] - o) > sep for o in out):
-                out.append(float(offs[i]))
-        return out
-
-    per = max(1, min(candidates, int(max_combinations ** (1.0 / (len(names) - 1)))))
-    rows, scores = [], []
-    for ref in names:
-        others = [n for n in names if n != ref]
-        if not all((ref, c) in zs or (c, ref) in zs for c in others):
-            continue
-        grids = np.meshgrid(*[np.array(peaks_of(ref, c)) for c in others], indexing="ij")
-        combo = np.zeros((grids[0].size, len(names)))
-        for c, g in zip(others, grids):
-            combo[:, names.index(c)] = g.ravel()
-        score = np.zeros(len(combo))
-        for (a, b) in zs:
-            score += lookup(a, b, combo[:, names.index(b)] - combo[:, names.index(a)])
-        rows.append(combo - combo[:, :1])  # first camera at 0
-        scores.append(score)
-    if not rows:
-        return None
-    combo, score = np.concatenate(rows), np.concatenate(scores)
-    top = int(np.argmax(score))
-    margin = {}
-    for c, n in enumerate(names):
-        # c moved against every other camera (the first camera's offset is 0 by definition, so
-        # "moved" must be relative, or it would never move)
-        rel = (combo - combo[:, c:c + 1]) - (combo[top] - combo[top, c])
-        away = np.all(np.abs(np.delete(rel, c, axis=1)) > tol_s, axis=1)
-        margin[n] = float(score[top] - score[away].max()) if away.any() else float("inf")
-    return JointChoice({n: float(combo[top, c]) for c, n in enumerate(names)}, float(score[top]), margin)
-
-
 def _voting_for(st: GeometricPairStats, delta_s: float) -> np.ndarray:
     """(M,) bool: the informative candidates whose best offset lies within halfwidth_s of delta_s."""
     if st.cand_offset_s is None:
@@ -597,109 +493,6 @@ def _voting_for(st: GeometricPairStats, delta_s: float) -> np.ndarray:
 def votes_at(st: GeometricPairStats, delta_s: float) -> int:
     """The pair's votes at Δ_ab = delta_s: informative candidates whose best offset is that close."""
     return int(_voting_for(st, delta_s).sum())
-
-
-def joint_vote_share(st: GeometricPairStats, delta_s: float) -> float:
-    """The pair's votes at Δ_ab = delta_s (candidates whose best offset lies within halfwidth_s)
-    over the votes of its own highest peak: 1 when the joint choice takes the pair's top peak,
-    near 0 when the pair votes for another Δ and hardly at all for this one (1 with no votes)."""
-    if st.cand_offset_s is None or not st.peak_votes or max(st.peak_votes) <= 0:
-        return 1.0
-    return min(1.0, votes_at(st, delta_s) / max(st.peak_votes))
-
-
-def dissenting_cameras(found: dict[tuple[str, str], GeometricPairStats], joint: JointChoice,
-                       sure: dict[str, bool], min_share: float) -> dict[str, str]:
-    """Sure cameras that a pair of theirs with another sure camera contradicts: {camera: reason}.
-
-    A pair contradicts the joint choice when its votes at the implied Δ_ab are below min_share
-    of its own top peak's (joint_vote_share). The joint choice outvotes a single pair's false
-    peak, but it is also outvoted itself when a camera's pairs disagree with each other (a
-    periodic motion lets two of a camera's pairs agree on a wrong offset that the third rejects),
-    so such a camera is not sure. Each contradicting pair blames one of its two cameras: the one
-    in most contradicting pairs, then the one of smaller margin, until no sure pair contradicts."""
-    share = {k: joint_vote_share(st, joint.offsets_s[k[1]] - joint.offsets_s[k[0]])
-             for k, st in found.items() if sure.get(k[0]) and sure.get(k[1])}
-    low = {k: s for k, s in share.items() if s < min_share}
-    out: dict[str, str] = {}
-    while low:
-        count: dict[str, int] = {}
-        for a, b in low:
-            count[a], count[b] = count.get(a, 0) + 1, count.get(b, 0) + 1
-        cam = max(count, key=lambda n: (count[n], -joint.margin.get(n, 0.0), n))
-        mine = sorted((k, s) for k, s in low.items() if cam in k)
-        out[cam] = ("its pairs vote for other offsets than the joint choice: "
-                    + ", ".join(f"{a}__{b} has {s:.2f} of its top peak's votes at the joint "
-                                f"Δ {joint.offsets_s[b] - joint.offsets_s[a]:+.3f} s" for (a, b), s in mine)
-                    + f" (fewer than {min_share:g})")
-        low = {k: s for k, s in low.items() if cam not in k}
-    return out
-
-
-def disputed_by_other_model(joint: JointChoice, sure: dict[str, bool],
-                            other_peaks: dict[tuple[str, str], tuple[float, ...]], tol_s: float,
-                            other: str = "the other camera model", three_view_share: dict[str, float] | None = None,
-                            overrule_share: float | None = None) -> tuple[dict[str, str], dict[str, str]]:
-    """Sure cameras whose joint offsets the vote peaks of another camera model contradict:
-    ({camera: reason} disputed, {camera: reason} whose dispute its own three-view check overrules).
-
-    other_peaks: (a, b) -> the vote peaks Δ_ab (s) of the pair with the other model's cameras.
-    A sure camera is kept when one of its pairs with another sure camera has a peak of the other
-    model within tol_s of the joint Δ_ab; a camera none of whose such pairs the other model voted
-    on has no opinion against it and is kept. Two reconstructions from different features
-    rarely err alike, so a wrong camera of one model (even one that passes its three-view check)
-    tends to find no peak of the other model near its joint Δ, while right cameras do.
-
-    three_view_share: camera -> trajectories its tracks follow at its joint offset over those
-    followed at its best offset (transfer.ThreeViewCheck). A contradicted camera with at least
-    overrule_share (None: none) is kept, its dispute overruled: the other model's cameras can be the wrong
-    ones (measured: see BENCHMARKS.md, "Measurements behind defaults")."""
-    out: dict[str, str] = {}
-    overruled: dict[str, str] = {}
-    for cam in sorted(n for n, ok in sure.items() if ok):
-        voted = {}
-        for (a, b), peaks in other_peaks.items():
-            if cam in (a, b) and sure.get(a) and sure.get(b) and len(peaks):
-                voted[(a, b)] = (joint.offsets_s[b] - joint.offsets_s[a], peaks)
-        if voted and not any(min(abs(p - d) for p in peaks) <= tol_s for d, peaks in voted.values()):
-            why = (f"{other}'s vote peaks of its pairs lie more than {tol_s:.3f} s from the joint Δ: "
-                   + "; ".join(f"{a}__{b} Δ {d:+.3f} s, peaks {', '.join(f'{p:+.3f}' for p in peaks)} s"
-                               for (a, b), (d, peaks) in sorted(voted.items())))
-            share = (three_view_share or {}).get(cam)
-            if share is not None and overrule_share is not None and share >= overrule_share:
-                overruled[cam] = (f"{why}; overruled: its three-view check follows {share:.2f} of its best "
-                                  f"offset's trajectories at the joint offset (at least {overrule_share:g})")
-            else:
-                out[cam] = why
-    return out, overruled
-
-
-def rival_offsets(found: dict[tuple[str, str], GeometricPairStats], joint: JointChoice,
-                  sure: dict[str, bool], three_view_best_s: dict[str, tuple[float, int, int]],
-                  min_apart_s: float, min_share: float) -> dict[str, str]:
-    """Sure cameras with a rival offset: {camera: reason}.
-
-    three_view_best_s: camera -> (offset_s where its three-view check followed the most
-    trajectories, how many there, how many at its joint offset). A rival is that offset when it
-    lies more than min_apart_s from the joint offset with more trajectories followed, and every
-    pair of the camera with another sure camera keeps at least min_share of its own top peak's
-    votes at the Δ it implies (joint_vote_share). Three views then prefer the rival and the
-    epipolar vote does not rule it out: a repeated motion lets the joint vote choose a set of
-    peaks one period off that closes every triangle."""
-    out = {}
-    for cam, (best_s, n_best, n_joint) in sorted(three_view_best_s.items()):
-        if not sure.get(cam) or n_best <= n_joint or abs(best_s - joint.offsets_s[cam]) <= min_apart_s:
-            continue
-        at = {**joint.offsets_s, cam: best_s}
-        shares = {f"{a}__{b}": joint_vote_share(st, at[b] - at[a]) for (a, b), st in found.items()
-                  if cam in (a, b) and sure.get(a) and sure.get(b)}
-        if shares and min(shares.values()) >= min_share:
-            out[cam] = (f"its three-view check follows {n_best} trajectories at {best_s:+.3f} s against "
-                        f"{n_joint} at its joint offset {joint.offsets_s[cam]:+.3f} s, and its pairs keep "
-                        + ", ".join(f"{k} {v:.2f}" for k, v in shares.items())
-                        + f" of their top vote peaks' votes there (at least {min_share:g} each): two offsets, "
-                        "as a repeated motion gives")
-    return out
 
 
 def supporters(st: GeometricPairStats, delta_s: float) -> np.ndarray:

@@ -3,25 +3,28 @@
 For every pair of cameras, geometric_pairs votes for the offsets at which track pairs stay on
 their epipolar lines. Here those votes become decisions: the offsets of all cameras chosen
 together (or the peaks that close every triangle), which cameras are sure of theirs (their own
-pairs, the three-view checks of cues/transfer.py and another camera model's peaks agree), the
+pairs, the three-view checks of cues/pairing/transfer.py and another camera model's peaks agree), the
 supporters of the trusted offsets added to the descriptor pairs; and which cameras fitted to
 the moving points their own votes refuse (check_fitted_offsets; camera_choice takes them out).
-The pairing's decisions are reported to the sink. No I/O.
+The pairing's decisions come back as notes in words (the Stage 0 controller reports them). No I/O.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import logging
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from tqdm import tqdm
 
-from ..geometry.offsets import OffsetGrid
-from ..record.sink import Sink
-from ..types import TrackPairs, VideoInfo
-from .config import CueConfig
+from ...cue_stats import FittedOffsetCheck, FittedOffsetPair, JointVoteRecord, PairVoteSummary
+from ...geometry.offsets import OffsetGrid
+from ...types import TrackPairs, VideoInfo
+from ...memo import NO_MEMO, Memo
+from ..config import CueConfig
+from ..rules import ALL
+from ..records import Note, say
 
 # The vote's decisions are logged at INFO (`-v`): the recording and result.json hold them in full,
 # and the console ends with one plain reason per unresolved video.
@@ -35,12 +38,22 @@ class GeometricPairing:
     pairs: dict  # (a, b) -> TrackPairs: the descriptor pairs kept plus the geometric ones
     voted: dict  # (a, b) -> the Δ_ab (s) whose supporters were added
     peaks_s: dict  # (a, b) -> tuple of the pair's vote peaks Δ_ab (s), as the vote found them
+    status: str  # how the peaks were chosen: "joint", or consistent_peaks' status
+    votes: dict  # (a, b) -> PairVoteSummary of what its vote found and kept
+    transfer_new: dict  # (a, b) -> track pairs point transfer added
+    joint: JointVoteRecord | None  # the joint vote, None when the triangles decided
+    found: dict = field(default_factory=dict)  # (a, b) -> GeometricPairStats: the pair's vote
+    chosen_s: dict = field(default_factory=dict)  # (a, b) -> the Δ_ab whose supporters were kept, or None
+    transfer: dict = field(default_factory=dict)  # camera -> transfer.TransferCheck of an unsure camera
+    three_view: dict = field(default_factory=dict)  # camera -> transfer.ThreeViewCheck of a sure camera
+    notes: tuple[Note, ...] = ()  # the decisions in words, in order
 
 
 def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
-                        stats: dict, sink: Sink, progress: bool, estimated: bool,
+                        progress: bool, estimated: bool,
                         other_peaks: dict | None = None, other: str = "",
-                        grid: OffsetGrid = OffsetGrid()) -> GeometricPairing:
+                        grid: OffsetGrid = OffsetGrid(), rules: frozenset[str] = ALL,
+                        memo: Memo = NO_MEMO) -> GeometricPairing:
     """Descriptor pairs plus epipolar-consistency pairs for every pair of known cameras (a moving
     one with its per-frame poses), the Δ_ab whose supporters were added and every pair's vote peaks.
     estimated: Stage 0 estimated the cameras (no calibration given); only then are sure cameras
@@ -58,52 +71,56 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     accepts the pair only if its descriptor pairs alone give the same minimum); with a moving
     camera, none (GeometricPairConfig.unchecked_moving).
     """
-    from .geometric_pairs import consistent_peaks, geometric_pairs, joint_offsets
+    from .joint import consistent_peaks, joint_offsets
+    from .votes import VOTE, geometric_pairs
 
     # every pair of cameras: a moving one with its per-frame poses (two moving ones: the
     # geometry per frame of b and per offset)
     todo = list(pairs)
     found = {}
     for a, b in tqdm(todo, desc="geometric pairs", unit="pair", disable=not progress, leave=False):
-        found[(a, b)] = geometric_pairs(a, b, vids[a].info, vids[b].info, cameras[a], cameras[b],
-                                        tracks[a].xy, tracks[b].xy, cfg.geometric, grid)
+        found[(a, b)] = memo.call("votes", geometric_pairs, a, b, vids[a].info, vids[b].info, cameras[a],
+                                  cameras[b], tracks[a].xy, tracks[b].xy, VOTE, grid)
     peaks_s = {k: tuple(gs.peaks_s) for k, (_, gs) in found.items()}
     votes = {k: gs for k, (_, gs) in found.items()}  # each pair's vote evidence
+    notes: list[Note] = []
     coarsest = max((vids[n].info.frame_interval_s for k in found for n in k), default=0.0)
     # each of a triangle's three peaks is located to about ±1 frame (its support window), so
     # right peaks close within about 3 frames, while wrong ones miss by far more
     joint = joint_offsets(votes, 3.0 * coarsest) if cfg.geometric.joint else None
-    sure = {} if joint is None else {n: m >= cfg.geometric.joint_min_margin for n, m in joint.margin.items()}
+    sure = {} if joint is None else {n: m >= cfg.geometric.joint_min_margin or "margin" not in rules
+                                     for n, m in joint.margin.items()}
+    third = "moving_pair_third" in rules
     three_view = {}
     # the check is of cameras Stage 0 estimated: a calibration's are given (and a right calibrated
     # camera can follow as few trajectories as a wrong estimated one)
-    if cfg.geometric.three_view_min_supporters > 0 and estimated and sum(sure.values()) >= 3:
-        three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, sink, grid)
+    if "three_view" in rules and cfg.geometric.three_view_min_supporters > 0 and estimated and sum(sure.values()) >= 3:
+        three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, notes, grid, third, memo)
         sure = {n: ok and (n not in three_view or three_view[n].passed) for n, ok in sure.items()}
     dissent, dissent_short = {}, {}  # camera -> why it was made unsure; the same in a few words
     # three_view is only filled for estimated cameras (a calibration's are given)
-    if three_view and cfg.geometric.three_view_rival_frames > 0:
-        from .geometric_pairs import rival_offsets
+    if "rival_offset" in rules and three_view and cfg.geometric.three_view_rival_frames > 0:
+        from .rules import rival_offsets
 
         best = {n: (chk.best_offset_s, chk.best_supporters, chk.supporters) for n, chk in three_view.items()
                 if chk.best_offset_s is not None}
         rivals = rival_offsets(votes, joint, sure, best, cfg.geometric.three_view_rival_frames * coarsest,
                                cfg.geometric.three_view_rival_vote_share)
-        _not_sure(rivals, sure, dissent, sink, dissent_short,
+        _not_sure(rivals, sure, dissent, notes, dissent_short,
                   {n: f"two offsets {abs(best[n][0] - joint.offsets_s[n]):.2f} s apart, as a repeated motion gives"
                    for n in rivals})
     # after the three-view check, which triangulates the pairs of the cameras sure then (a camera
     # this refuses first could leave another too few trajectories); estimated cameras only: with a
     # calibration a right pair can keep a small share of its top peak's votes
-    if cfg.geometric.joint_min_pair_share > 0 and estimated and joint is not None:
-        from .geometric_pairs import dissenting_cameras
+    if "pair_share" in rules and cfg.geometric.joint_min_pair_share > 0 and estimated and joint is not None:
+        from .rules import dissenting_cameras
 
         dissenting = dissenting_cameras(votes, joint, sure, cfg.geometric.joint_min_pair_share)
-        _not_sure(dissenting, sure, dissent, sink, dissent_short,
+        _not_sure(dissenting, sure, dissent, notes, dissent_short,
                   {n: "a pair of its own has few votes at its joint offset" for n in dissenting})
     overruled = {}  # camera -> why the other model's dispute of it was overruled
-    if other_peaks is not None and estimated and joint is not None:
-        from .geometric_pairs import disputed_by_other_model
+    if "other_model" in rules and other_peaks is not None and estimated and joint is not None:
+        from .rules import disputed_by_other_model
 
         shares = {n: chk.supporters / chk.best_supporters for n, chk in three_view.items() if chk.best_supporters}
         disputed, overruled = disputed_by_other_model(joint, sure, other_peaks,
@@ -111,39 +128,42 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
                                                       shares, cfg.geometric.other_model_overrule_share)
         for n, why in overruled.items():
             msg = f"joint vote still sure of {n}: {why}"
-            sink.stage_event("cues", msg)
+            say(notes, msg)
             log.info(msg)
-        _not_sure(disputed, sure, dissent, sink, dissent_short,
+        _not_sure(disputed, sure, dissent, notes, dissent_short,
                   {n: f"{other}'s vote peaks disagree" for n in disputed})
     refused = bool(dissent) or any(not chk.passed for chk in three_view.values())
     # a camera refused (by its pairs or in three views) keeps the joint path (no geometric pair
     # for it), instead of the triangle fallback below choosing among the same cameras' vote peaks
-    if sum(sure.values()) >= 2 or refused:
+    if sum(sure.values()) >= 2 or refused or ("triangle_fallback" not in rules and joint is not None):
         checks, traj = {}, None
-        if cfg.geometric.transfer and not all(sure.values()) and sum(sure.values()) >= 2:
+        if "transfer" in rules and cfg.geometric.transfer and not all(sure.values()) and sum(sure.values()) >= 2:
             # not of a camera its own pairs contradict: point transfer projects into the same
             # camera, whose biased geometry it can then confirm at a wrong offset
-            checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, sink,
-                                                frozenset(dissent), grid)
+            checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, notes,
+                                                frozenset(dissent), grid, third, memo)
         sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
         said = _JointChecks({c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
                             {c: chk.summary() for c, chk in three_view.items()}, dissent, dissent_short, overruled)
-        out, used = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids, cfg, stats, sink, said)
-        return GeometricPairing(_add_transfer_pairs(out, checks, traj, list(vids), stats, sink), used, peaks_s)
+        out, used, summaries, record, chosen = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids,
+                                                                cfg, notes, said, rules)
+        out, transfer_new = _add_transfer_pairs(out, checks, traj, list(vids), notes)
+        return GeometricPairing(out, used, peaks_s, "joint", summaries, transfer_new, record, votes, chosen,
+                                checks, three_view, tuple(notes))
     if joint is not None:
         # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
         # decides (and refuses when the triangles do not close)
-        sink.stage_event("cues", "joint vote sure of fewer than two cameras (margins "
-                         + ", ".join(f"{n} {m:.1f}" for n, m in joint.margin.items())
-                         + "): geometric peaks chosen by triangle closure")
+        say(notes, "joint vote sure of fewer than two cameras (margins "
+            + ", ".join(f"{n} {m:.1f}" for n, m in joint.margin.items())
+            + "): geometric peaks chosen by triangle closure")
     chosen, status = consistent_peaks({k: (gs.peaks_s, gs.peak_votes) for k, (_, gs) in found.items()},
                                       3.0 * coarsest)
-    stats["geometric_peaks"] = status
     # the descriptor pairs are unchecked too then: alone they can put a camera a wrong offset that
     # Stage 1 accepts; kept only where consistent at the joint vote's offsets, unsure as they are,
     # so that a wrong offset leaves too few of them
     unchecked = status in ("inconsistent", "one triangle")
-    filter_desc = unchecked and joint is not None and cfg.geometric.joint_filter_descriptor
+    filter_desc = unchecked and joint is not None and cfg.geometric.joint_filter_descriptor \
+        and "descriptor_filter" in rules
     unchecked_why = unchecked_short = None
     if unchecked:
         unchecked_short = ("vote peaks do not close the triangles" if status == "inconsistent" else
@@ -154,9 +174,9 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
                          "check on 27 choices of vote peaks, some of which close by chance")
         msg = (f"geometric track pairs not used: {unchecked_why}"
                + ("; descriptor pairs kept only where consistent at the joint vote's offsets" if filter_desc else ""))
-        sink.stage_event("cues", msg)
+        say(notes, msg)
         log.info(msg)
-    out = dict(pairs)
+    out, summaries, chosen_s = dict(pairs), {}, {}
     for (a, b), (gp, gs) in found.items():
         pick = chosen.get((a, b)) if chosen is not None else None  # index of the chosen peak
         index, withheld, withheld_short = gp.index, None, None
@@ -164,15 +184,16 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
             index = index[gs.pair_peak == pick]
         elif unchecked:
             index, withheld, withheld_short = index[:0], unchecked_why, unchecked_short
-        elif len(index) and (cameras[a].is_moving or cameras[b].is_moving) and not cfg.geometric.unchecked_moving:
+        elif len(index) and (cameras[a].is_moving or cameras[b].is_moving) and not cfg.geometric.unchecked_moving \
+                and "lone_moving_pair" in rules:
             withheld = (f"no triangle checks its vote peaks ({', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s), "
                         f"and a moving camera's per-frame geometry lets wrong tracks fit a wrong offset")
             withheld_short = "a moving camera's vote peaks, no triangle to check them"
             msg = f"geometric track pairs not used for {a}__{b}: {withheld}"
-            sink.stage_event("cues", msg, pair=f"{a}__{b}")
+            say(notes, msg, pair=f"{a}__{b}")
             log.info(msg)
             index = index[:0]
-        _log_votes(sink, a, b, gs, gs.peaks_s[pick] if pick is not None else None)
+        chosen_s[(a, b)] = gs.peaks_s[pick] if pick is not None else None
         desc = pairs[(a, b)]
         n_desc = len(desc.index)
         if filter_desc:
@@ -182,28 +203,23 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
         # with no geometric pair, every row was kept at the joint vote's Δ
         kept_at = joint.offsets_s[b] - joint.offsets_s[a] if filter_desc and not len(index) else None
         out[(a, b)], n_new = _merge_pairs(desc, index, unchecked=pick is None, chosen_at_offset_s=kept_at)
-        info = {"geometric_candidates": gs.candidates, "geometric_informative": gs.informative,
-                "geometric_pairs": int(len(index)), "geometric_new": n_new,
-                "geometric_peaks_s": [round(p, 4) for p in gs.peaks_s],
-                "geometric_peak_votes": list(gs.peak_votes),
-                "geometric_chosen_peak_s": round(gs.peaks_s[pick], 4) if pick is not None else None}
-        if withheld:
-            info.update({"geometric_withheld": withheld, "geometric_withheld_short": withheld_short})
-        if pick is None and n_new:
-            info["geometric_unchecked"] = int(n_new)
-        if filter_desc:
-            info.update({"descriptor_pairs_kept": int(len(desc.index)), "descriptor_pairs_before": int(n_desc)})
-        stats["pairs"].setdefault(f"{a}__{b}", {}).update(info)
+        summaries[(a, b)] = PairVoteSummary(
+            gs.candidates, gs.informative, int(len(index)), n_new, tuple(round(p, 4) for p in gs.peaks_s),
+            tuple(gs.peak_votes), geometric_chosen_peak_s=round(gs.peaks_s[pick], 4) if pick is not None else None,
+            geometric_withheld=withheld, geometric_withheld_short=withheld_short,
+            geometric_unchecked=int(n_new) if pick is None and n_new else None,
+            descriptor_pairs_kept=int(len(desc.index)) if filter_desc else None,
+            descriptor_pairs_before=int(n_desc) if filter_desc else None)
         which = (f"peak {gs.peaks_s[pick]:+.3f} s chosen: the peaks of all static pairs close every triangle"
                  if pick is not None else
                  f"vote peaks at {', '.join(f'{p:+.3f}' for p in gs.peaks_s)} s")
-        sink.stage_event("cues", f"{a}__{b}: {len(index)} track pairs from epipolar consistency ({which})")
+        say(notes, f"{a}__{b}: {len(index)} track pairs from epipolar consistency ({which})")
         log.info("%s__%s: %d geometric track pairs (%d new), %s", a, b, len(index), n_new, which)
     used = {k: found[k][1].peaks_s[i] for k, i in (chosen or {}).items() if i is not None}
-    return GeometricPairing(out, used, peaks_s)
+    return GeometricPairing(out, used, peaks_s, status, summaries, {}, None, votes, chosen_s, {}, {}, tuple(notes))
 
 
-def _not_sure(refused: dict[str, str], sure: dict[str, bool], dissent: dict[str, str], sink: Sink,
+def _not_sure(refused: dict[str, str], sure: dict[str, bool], dissent: dict[str, str], notes: list[Note],
               dissent_short: dict[str, str], short: dict[str, str]) -> None:
     """Marks each camera of refused ({camera: why}) not sure, keeps why in dissent (and short's
     few words in dissent_short), and says so."""
@@ -212,26 +228,25 @@ def _not_sure(refused: dict[str, str], sure: dict[str, bool], dissent: dict[str,
         dissent[n] = why
         dissent_short[n] = short[n]
         msg = f"joint vote not sure of {n}: {why}"
-        sink.stage_event("cues", msg)
+        say(notes, msg)
         log.info(msg)
 
 
-def check_fitted_offsets(fallback: dict, voted: dict, vids: dict) -> dict[str, str]:
+def check_fitted_offsets(fitted: dict[str, float], voted: dict, vids: dict
+                         ) -> tuple[dict[str, str], FittedOffsetCheck]:
     """Cameras from the moving points that their own epipolar votes contradict or leave
-    unconfirmed: {camera: reason}; fallback["check"] records every pair's comparison.
+    unconfirmed: ({camera: reason}, the record of every pair's comparison).
 
-    Those cameras were fitted to track pairs aligned at coarse offsets (fitted_offsets_s). Right
-    cameras at right offsets make the votes over all track pairs peak at the same Δ (within about
-    a frame); cameras fitted to wrong pairs at wrong offsets put the peaks elsewhere (up to
-    seconds away), and Stage 1 then accepts minima at offsets the
-    cameras were never fitted for. Any contradiction refuses every such camera (they were fitted
-    jointly); a camera in no agreeing pair is refused as unconfirmed. Two cameras give no check
-    (their votes peak where their own F was fitted): they pass, marked unchecked (they are used
-    only with camera.fallback_unchecked_pair; by default _estimate refuses them)."""
-    fitted = fallback["fitted_offsets_s"]
+    Those cameras were fitted to track pairs aligned at coarse offsets (fitted: camera ->
+    offset_s relative to the reference). Right cameras at right offsets make the votes over all
+    track pairs peak at the same Δ (within about a frame); cameras fitted to wrong pairs at wrong
+    offsets put the peaks elsewhere (up to seconds away), and Stage 1 then accepts minima at
+    offsets the cameras were never fitted for. Any contradiction refuses every such camera (they
+    were fitted jointly); a camera in no agreeing pair is refused as unconfirmed. Two cameras give
+    no check (their votes peak where their own F was fitted): they pass, marked unchecked (they
+    are used only with camera.fallback_unchecked_pair; by default _estimate refuses them)."""
     if len(fitted) < 3:
-        fallback["check"] = {"verdict": "unchecked (two cameras: no third to confirm their offset)"}
-        return {}
+        return {}, FittedOffsetCheck("unchecked (two cameras: no third to confirm their offset)")
     tol_s = 3.0 * max(vids[n].info.frame_interval_s for n in fitted)
     rows, agreeing, contradicted = {}, set(), []
     for (a, b), delta in sorted(voted.items()):
@@ -239,7 +254,7 @@ def check_fitted_offsets(fallback: dict, voted: dict, vids: dict) -> dict[str, s
             continue
         expect = fitted[b] - fitted[a]
         ok = abs(delta - expect) <= tol_s
-        rows[f"{a}__{b}"] = {"fitted_s": round(expect, 4), "voted_s": round(delta, 4), "agrees": ok}
+        rows[f"{a}__{b}"] = FittedOffsetPair(round(expect, 4), round(delta, 4), ok)
         if ok:
             agreeing |= {a, b}
         else:
@@ -252,45 +267,34 @@ def check_fitted_offsets(fallback: dict, voted: dict, vids: dict) -> dict[str, s
     else:
         refused = {n: ("camera from the moving points refused: no pair of it with a sure epipolar vote "
                        "confirmed the offset it was fitted at") for n in fitted if n not in agreeing}
-    fallback["check"] = {"tolerance_s": round(tol_s, 4), "pairs": rows,
-                         "verdict": "contradicted" if contradicted else
-                         "confirmed" if not refused else "partly unconfirmed",
-                         "refused": sorted(refused)}
-    return refused
+    verdict = "contradicted" if contradicted else "confirmed" if not refused else "partly unconfirmed"
+    return refused, FittedOffsetCheck(verdict, round(tol_s, 4), rows, tuple(sorted(refused)))
 
 
-def _log_votes(sink: Sink, a: str, b: str, gs, chosen_s: float | None) -> None:
-    """The pair's geometric votes over Δ_ab and the Δ whose supporters were kept, to the sink."""
-    from .geometric_pairs import vote_z
-
-    if gs.votes is not None and len(gs.votes):
-        sink.pair_votes(a, b, gs.vote_offsets_s, gs.votes, vote_z(gs)[1], chosen_s)
-
-
-def _transfer_source(a: str, b: str, sure: dict[str, bool], cameras: dict) -> bool:
+def _transfer_source(a: str, b: str, sure: dict[str, bool], cameras: dict, third: bool = True) -> bool:
     """Whether pair (a, b)'s joint Δ may be triangulated for point transfer: both cameras sure,
     and when both move, a third camera sure too (their per-frame geometry lets wrong tracks fit
     one wrong offset)."""
     if not (sure.get(a) and sure.get(b)):
         return False
-    return not (cameras[a].is_moving and cameras[b].is_moving) or sum(sure.values()) >= 3
+    return not (third and cameras[a].is_moving and cameras[b].is_moving) or sum(sure.values()) >= 3
 
 
-def _joint_pair_used(a: str, b: str, sure: dict[str, bool], cameras: dict, min_sure: int) -> bool:
+def _joint_pair_used(a: str, b: str, sure: dict[str, bool], cameras: dict, min_sure: int, third: bool = True) -> bool:
     """Whether the joint vote's Δ of pair (a, b) is trusted: a transfer source, and at least
     min_sure cameras sure in all (GeometricPairConfig.joint_min_sure: 3 = a closed triangle of
     sure cameras confirms it; see _add_joint_pairs)."""
-    return _transfer_source(a, b, sure, cameras) and sum(sure.values()) >= min_sure
+    return _transfer_source(a, b, sure, cameras, third) and sum(sure.values()) >= min_sure
 
 
-def _sure_pairs(found: dict, joint, sure: dict[str, bool], cameras: dict) -> dict:
+def _sure_pairs(found: dict, joint, sure: dict[str, bool], cameras: dict, third: bool = True) -> dict:
     """The supporters of the joint Δ of every pair that point transfer may triangulate
     (_transfer_source)."""
-    from .geometric_pairs import supporters
+    from .votes import supporters
 
     out = {}
     for (a, b), (_, gs) in found.items():
-        if not _transfer_source(a, b, sure, cameras):
+        if not _transfer_source(a, b, sure, cameras, third):
             continue
         index = supporters(gs, joint.offsets_s[b] - joint.offsets_s[a])
         out[(a, b)] = TrackPairs(a, b, index, np.ones(len(index)))
@@ -303,7 +307,8 @@ def _transfer_radius_px(info: VideoInfo, g) -> float:
 
 
 def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
-                          vids: dict, cfg: CueConfig, sink: Sink, grid: OffsetGrid = OffsetGrid()) -> dict:
+                          vids: dict, cfg: CueConfig, notes: list[Note], grid: OffsetGrid = OffsetGrid(),
+                          third: bool = True, memo: Memo = NO_MEMO) -> dict:
     """{camera: transfer.ThreeViewCheck} for every sure camera: the other sure cameras' track
     pairs triangulated at their joint offsets and projected into it at its own. Wrong cameras can
     make the joint vote sure of wrong offsets, consistent in every triangle, since a line through
@@ -316,60 +321,56 @@ def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: di
     checks = {}
     for c in sorted(n for n, ok in sure.items() if ok):
         others = {n: ok and n != c for n, ok in sure.items()}
-        traj = triangulate_pairs(infos, cameras, xy, _sure_pairs(found, joint, others, cameras),
-                                 {n: joint.offsets_s[n] for n, ok in others.items() if ok})
-        chk = check_in_three_views(c, joint.offsets_s[c], traj, infos[c], cameras[c], xy[c],
-                                   _transfer_radius_px(infos[c], g), g.transfer_min_hits,
-                                   g.three_view_min_supporters, g.three_view_min_share_of_best, grid,
-                                   joint.origin)
+        traj = memo.call("triangulated", triangulate_pairs, infos, cameras, xy,
+                         _sure_pairs(found, joint, others, cameras, third),
+                         {n: joint.offsets_s[n] for n, ok in others.items() if ok})
+        chk = memo.call("three_view", check_in_three_views, c, joint.offsets_s[c], traj, infos[c], cameras[c], xy[c],
+                        _transfer_radius_px(infos[c], g), g.transfer_min_hits,
+                        g.three_view_min_supporters, g.three_view_min_share_of_best, grid, joint.origin)
         checks[c] = chk
-        sink.three_view_landscape(c, chk.landscape.offsets_s, chk.landscape.supporters, chk.joint_offset_s,
-                                  chk.passed)
         msg = f"{c}: {chk.reason}"
-        sink.stage_event("cues", msg, camera=c, passed=int(chk.passed), supporters=chk.supporters,
-                         best_supporters=chk.best_supporters, trajectories=chk.trajectories)
+        say(notes, msg, camera=c, passed=int(chk.passed), supporters=chk.supporters,
+            best_supporters=chk.best_supporters, trajectories=chk.trajectories)
         log.info(msg)
     return checks
 
 
 def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
-                         vids: dict, cfg: CueConfig, sink: Sink, skip: frozenset[str] = frozenset(),
-                         grid: OffsetGrid = OffsetGrid()):
+                         vids: dict, cfg: CueConfig, notes: list[Note], skip: frozenset[str] = frozenset(),
+                         grid: OffsetGrid = OffsetGrid(), third: bool = True, memo: Memo = NO_MEMO):
     """({camera: transfer.TransferCheck}, the transfer.Trajectories projected): a check of every
     camera the joint vote is unsure of (but those of skip), the sure cameras' track pairs
     triangulated at their joint offsets and projected into it over its candidate offsets
-    (cues/transfer.py)."""
+    (cues/pairing/transfer.py)."""
     from .transfer import candidate_offsets, confirm_offset, transfer_landscape, triangulate_pairs
 
     g = cfg.geometric
     sure_offsets = {n: joint.offsets_s[n] for n, ok in sure.items() if ok}
-    traj = triangulate_pairs({n: v.info for n, v in vids.items()}, cameras,
-                             {n: t.xy for n, t in tracks.items()},
-                             _sure_pairs(found, joint, sure, cameras), sure_offsets)
+    traj = memo.call("triangulated", triangulate_pairs, {n: v.info for n, v in vids.items()}, cameras,
+                     {n: t.xy for n, t in tracks.items()}, _sure_pairs(found, joint, sure, cameras, third), sure_offsets)
     checks = {}
     for c in sorted(n for n, ok in sure.items() if not ok and n not in skip):
         info = vids[c].info
         offsets = candidate_offsets(traj, info, 0.5 * info.frame_interval_s, grid, joint.origin)
-        land = transfer_landscape(traj, info, cameras[c], tracks[c].xy, offsets, _transfer_radius_px(info, g),
-                                  g.transfer_min_hits, allowed=grid.within_window(joint.origin, c, offsets))
+        land = memo.call("transfer", transfer_landscape, traj, info, cameras[c], tracks[c].xy, offsets,
+                         _transfer_radius_px(info, g), g.transfer_min_hits,
+                         allowed=grid.within_window(joint.origin, c, offsets))
         chk = confirm_offset(c, joint.offsets_s[c], land, info.frame_interval_s,
                              g.transfer_agree_frames, g.transfer_min_z, g.transfer_min_supporters)
         checks[c] = chk
-        sink.transfer_landscape(c, land.offsets_s, land.share, chk.joint_offset_s, land.offset_s,
-                                chk.confirmed)
         msg = f"{c}: {chk.reason}"
-        sink.stage_event("cues", msg, camera=c, confirmed=int(chk.confirmed), z=round(land.z, 2),
-                         trajectories=traj.num_trajectories)
+        say(notes, msg, camera=c, confirmed=int(chk.confirmed), z=round(land.z, 2),
+            trajectories=traj.num_trajectories)
         log.info(msg)
     return checks, traj
 
 
-def _add_transfer_pairs(pairs: dict, checks: dict, traj, order: list[str], stats: dict,
-                        sink: Sink) -> dict:
-    """pairs plus, for every camera that point transfer confirmed, its tracks that follow a
+def _add_transfer_pairs(pairs: dict, checks: dict, traj, order: list[str], notes: list[Note]) -> tuple[dict, dict]:
+    """(pairs plus, for every camera that point transfer confirmed, its tracks that follow a
     trajectory (of traj, transfer.Trajectories) paired with both tracks the trajectory was
-    triangulated from; order: the videos' order (a pair's key names the earlier one first)."""
-    out = dict(pairs)
+    triangulated from, {(a, b): track pairs added}); order: the videos' order (a pair's key
+    names the earlier one first)."""
+    out, added = dict(pairs), {}
     for c, chk in checks.items():
         if not chk.confirmed:
             continue
@@ -385,21 +386,21 @@ def _add_transfer_pairs(pairs: dict, checks: dict, traj, order: list[str], stats
                 continue
             # no chosen_at_offset_s: the new rows follow trajectories at the transfer's offset
             out[key], n_new = _merge_pairs(out[key], np.unique(np.array(rows, np.int64), axis=0))
-            stats["pairs"].setdefault(f"{key[0]}__{key[1]}", {})["transfer_new"] = int(n_new)
-            sink.stage_event("cues", f"{key[0]}__{key[1]}: {n_new} track pairs from point transfer",
-                             pair=f"{key[0]}__{key[1]}", transfer_new=int(n_new))
-    return out
+            added[key] = int(n_new)
+            say(notes, f"{key[0]}__{key[1]}: {n_new} track pairs from point transfer",
+                pair=f"{key[0]}__{key[1]}", transfer_new=int(n_new))
+    return out, added
 
 
 def _consistent_descriptor_pairs(desc: TrackPairs, delta_s: float, cameras: dict, tracks: dict,
                                  vids: dict, cfg: CueConfig) -> TrackPairs:
     """The descriptor pairs of (desc.a, desc.b) that are epipolar-consistent at Δ = delta_s
     (geometric_pairs.consistent_at with the geometric pairs' tolerances)."""
-    from .geometric_pairs import consistent_at
+    from .votes import VOTE, consistent_at
 
     if not len(desc.index):
         return desc
-    a, b, g = desc.a, desc.b, cfg.geometric
+    a, b, g = desc.a, desc.b, VOTE
     tau = max(2.0, g.tau_diag * float(np.hypot(vids[b].info.width, vids[b].info.height)))
     ok = consistent_at(vids[a].info, vids[b].info, cameras[a], cameras[b], tracks[a].xy,
                        tracks[b].xy, desc.index, delta_s, tau, g.min_inlier_share, g.min_frames)
@@ -425,47 +426,47 @@ def _merge_pairs(tp: TrackPairs, index: np.ndarray, unchecked: bool = False,
 class _JointChecks:
     """What the checks after the joint vote said of its cameras, kept in result.json."""
 
-    transfer: dict = dataclasses.field(default_factory=dict)  # camera -> point transfer's summary
-    three_view: dict = dataclasses.field(default_factory=dict)  # camera -> the three-view check's summary
+    transfer: dict = dataclasses.field(default_factory=dict)  # camera -> TransferSummary
+    three_view: dict = dataclasses.field(default_factory=dict)  # camera -> ThreeViewSummary
     dissent: dict = dataclasses.field(default_factory=dict)  # camera -> why its pairs (or the other model) contradict it
     dissent_short: dict = dataclasses.field(default_factory=dict)  # camera -> that in a few words (a null's headline)
     overruled: dict = dataclasses.field(default_factory=dict)  # camera -> why the other model's dispute was overruled
 
 
 def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cameras: dict,
-                     tracks: dict, vids: dict, cfg: CueConfig, stats: dict, sink: Sink,
-                     said: _JointChecks = _JointChecks()) -> tuple[dict, dict]:
-    """(pairs, {(a, b): the joint Δ_ab whose supporters were added}): the supporters of the
-    jointly chosen offsets (geometric_pairs.joint_offsets) for every pair whose Δ is trusted
-    (_joint_pair_used: both cameras' offsets won by at least joint_min_margin, or point transfer
-    confirmed them, and joint_min_sure cameras are sure; sure: camera -> whether it is, said:
-    what the checks after the vote said, for result.json); nothing for the others. A
-    descriptor pair is kept only if it is epipolar-consistent at the joint Δ (with
-    joint_filter_descriptor): the descriptor pairs are mostly wrong on small moving objects
-    (BENCHMARKS.md), and the joint Δ is the best evidence there is of the moment they share."""
-    from .geometric_pairs import supporters, votes_at
+                     tracks: dict, vids: dict, cfg: CueConfig, notes: list[Note],
+                     said: _JointChecks = _JointChecks(), rules: frozenset[str] = ALL
+                     ) -> tuple[dict, dict, dict, JointVoteRecord, dict]:
+    """(pairs, {(a, b): the joint Δ_ab whose supporters were added}, {(a, b): PairVoteSummary},
+    the JointVoteRecord, {(a, b): that Δ_ab or None for every pair}): the supporters of the jointly chosen offsets
+    (geometric_pairs.joint_offsets) for every pair whose Δ is trusted (_joint_pair_used: both
+    cameras' offsets won by at least joint_min_margin, or point transfer confirmed them, and
+    joint_min_sure cameras are sure; sure: camera -> whether it is, said: what the checks after
+    the vote said, for result.json); nothing for the others. A descriptor pair is kept only if it
+    is epipolar-consistent at the joint Δ (with joint_filter_descriptor): the descriptor pairs are
+    mostly wrong on small moving objects (BENCHMARKS.md), and the joint Δ is the best evidence
+    there is of the moment they share."""
+    from .votes import supporters, votes_at
 
     # the pairs whose joint Δ is trusted, and that Δ: the one decision everything below reads
     used = {(a, b): joint.offsets_s[b] - joint.offsets_s[a] for a, b in found
-            if _joint_pair_used(a, b, sure, cameras, cfg.geometric.joint_min_sure)}
-    stats["geometric_peaks"] = "joint"
-    stats["geometric_joint"] = {"origin": joint.origin,
-                                "offsets_s": {n: round(o, 4) for n, o in joint.offsets_s.items()},
-                                "score": round(joint.score, 2),
-                                "margin": {n: round(m, 2) for n, m in joint.margin.items()},
-                                "sure": sorted(n for n, ok in sure.items() if ok),
-                                "used": sorted({n for k in used for n in k})}
-    # copies (asdict), in field order; an empty check is left out
-    stats["geometric_joint"].update({key: value for key, value in dataclasses.asdict(said).items() if value})
+            if _joint_pair_used(a, b, sure, cameras, cfg.geometric.joint_min_sure if "min_sure" in rules else 2,
+                                "moving_pair_third" in rules)}
+    record = JointVoteRecord(joint.origin, {n: round(o, 4) for n, o in joint.offsets_s.items()},
+                             round(joint.score, 2), {n: round(m, 2) for n, m in joint.margin.items()},
+                             tuple(sorted(n for n, ok in sure.items() if ok)), tuple(sorted({n for k in used for n in k})),
+                             # an empty check is left out; its summaries stay typed (asdict would not)
+                             **{f.name: dict(getattr(said, f.name)) for f in dataclasses.fields(said)
+                                if getattr(said, f.name)})
     three_view, dissent, transfer = said.three_view, said.dissent, said.transfer
-    failed = sorted(n for n, chk in three_view.items() if not chk["passed"] and not sure[n])
+    failed = sorted(n for n, chk in three_view.items() if not chk.passed and not sure[n])
     if failed:
-        seen = ", ".join(f"{n} {three_view[n]['supporters']}" for n in failed)
+        seen = ", ".join(f"{n} {three_view[n].supporters}" for n in failed)
         msg = (f"geometric track pairs not used for {', '.join(failed)}: the joint vote was sure of "
                f"their offsets, but the points the other sure cameras triangulate are not seen there "
                f"(supporters {seen}; a camera needs {cfg.geometric.three_view_min_supporters}, and "
                f"{cfg.geometric.three_view_min_share_of_best:.2g} of those at its best offset)")
-        sink.stage_event("cues", msg)
+        say(notes, msg)
         log.info(msg)
     weak = sorted(n for n, ok in sure.items() if not ok and n not in failed and n not in dissent)
     if weak:
@@ -473,7 +474,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                f"offsets by less than {cfg.geometric.joint_min_margin:g} (margins "
                f"{', '.join(f'{n} {joint.margin[n]:.1f}' for n in weak)})"
                + ("; point transfer did not confirm them" if transfer else ""))
-        sink.stage_event("cues", msg)
+        say(notes, msg)
         log.info(msg)
     # a Δ only when a third camera is sure too (a closed triangle confirms it): with a single
     # sure pair nothing checks it, and Stage 1 accepts the minimum its own supporters make, right
@@ -483,38 +484,34 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
         names = ", ".join(sorted(f"{a}__{b}" for a, b in unconfirmed))
         msg = (f"geometric track pairs not used for {names}: the joint vote is sure of "
                f"{sum(sure.values())} camera(s) only, so no triangle of sure cameras confirms their Δ")
-        sink.stage_event("cues", msg)
+        say(notes, msg)
         log.info(msg)
-    out = dict(pairs)
+    out, summaries, chosen = dict(pairs), {}, {}
     for (a, b), (_, gs) in found.items():
         delta = joint.offsets_s[b] - joint.offsets_s[a]
         both = (a, b) in used
         index = supporters(gs, delta) if both else np.zeros((0, 2), np.int64)
-        _log_votes(sink, a, b, gs, delta if both else None)
+        chosen[(a, b)] = delta if both else None
         desc = pairs[(a, b)]
         n_desc = len(desc.index)
         # an unsure camera's descriptor pairs are filtered too: at a wrong joint Δ few survive
         # (the pair is then refused for too few pairs) instead of a wrong minimum being accepted
-        if cfg.geometric.joint_filter_descriptor:
+        if cfg.geometric.joint_filter_descriptor and "descriptor_filter" in rules:
             desc = _consistent_descriptor_pairs(desc, delta, cameras, tracks, vids, cfg)
-        every = cfg.geometric.joint_filter_descriptor or not n_desc  # every row kept at delta
+        every = (cfg.geometric.joint_filter_descriptor and "descriptor_filter" in rules) or not n_desc  # every row kept at delta
         out[(a, b)], n_new = _merge_pairs(desc, index, chosen_at_offset_s=delta if every else None)
-        stats["pairs"].setdefault(f"{a}__{b}", {}).update({
-            "geometric_candidates": gs.candidates, "geometric_informative": gs.informative,
-            "geometric_pairs": int(len(index)), "geometric_new": int(n_new),
-            "geometric_peaks_s": [round(p, 4) for p in gs.peaks_s],
-            "geometric_peak_votes": list(gs.peak_votes), "geometric_joint_delta_s": round(delta, 4),
-            "descriptor_pairs_kept": int(len(desc.index)), "descriptor_pairs_before": int(n_desc)})
         votes = votes_at(gs, delta)
-        stats["pairs"][f"{a}__{b}"].update({"geometric_joint_votes": votes,
-                                            "geometric_joint_margin": [round(joint.margin[a], 2),
-                                                                       round(joint.margin[b], 2)]})
-        sink.stage_event("cues", f"{a}__{b}: {len(index)} track pairs from epipolar consistency "
-                                 f"(joint vote over all camera pairs: Δ {delta:+.3f} s)",
-                         pair=f"{a}__{b}", votes=votes, informative=gs.informative,
-                         geometric_pairs=int(len(index)), descriptor_pairs_kept=int(len(desc.index)),
-                         descriptor_pairs_before=int(n_desc), margin_a=round(joint.margin[a], 2),
-                         margin_b=round(joint.margin[b], 2))
+        summaries[(a, b)] = PairVoteSummary(
+            gs.candidates, gs.informative, int(len(index)), int(n_new), tuple(round(p, 4) for p in gs.peaks_s),
+            tuple(gs.peak_votes), geometric_joint_delta_s=round(delta, 4), geometric_joint_votes=votes,
+            geometric_joint_margin=(round(joint.margin[a], 2), round(joint.margin[b], 2)),
+            descriptor_pairs_kept=int(len(desc.index)), descriptor_pairs_before=int(n_desc))
+        say(notes, f"{a}__{b}: {len(index)} track pairs from epipolar consistency "
+                   f"(joint vote over all camera pairs: Δ {delta:+.3f} s)",
+            pair=f"{a}__{b}", votes=votes, informative=gs.informative,
+            geometric_pairs=int(len(index)), descriptor_pairs_kept=int(len(desc.index)),
+            descriptor_pairs_before=int(n_desc), margin_a=round(joint.margin[a], 2),
+            margin_b=round(joint.margin[b], 2))
         log.info("%s__%s: %d geometric track pairs (%d new) at the joint Δ %+.3f s", a, b,
                  len(index), n_new, delta)
-    return out, used
+    return out, used, summaries, record, chosen

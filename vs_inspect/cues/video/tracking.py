@@ -5,22 +5,26 @@ Frame-to-frame KLT drifts: a track loses part of its motion each frame, slides b
 its object and looks late by a growing fraction of its age, which biases the offset. Each new
 position is therefore refined against the point's appearance in an anchor frame (where it was
 seeded, renewed when the refinement fails), which keeps the error from adding up frame after
-frame (measured in BENCHMARKS.md, "Measurements behind defaults").
-
-A point that the object has left behind (stuck on the background at an outline, or seeded in a
-loose region) sits outside every moving region. With max_frames_outside >= 0 it is dropped after
-that many frames there; the default keeps it, because dropping such points did not make the
-offsets consistently better (BENCHMARKS.md)."""
+frame (measured in BENCHMARKS.md, "Measurements behind defaults")."""
 
 from __future__ import annotations
 
 import cv2
 import numpy as np
 
-from .config import TrackConfig
+MAX_POINTS = 1500  # most tracks alive at once in a video (CueConfig.max_tracks)
+MIN_DISTANCE_PX = 6.0  # least distance between seeded points (working px)
+QUALITY_LEVEL = 0.005  # goodFeaturesToTrack's quality level
+WIN_SIZE = 9  # KLT window (working px); a larger one mixes more background into a point near an outline
+PYRAMID_LEVELS = 4  # KLT pyramid levels (large motion at low frame rates needs more)
+FB_MAX_PX = 1.0  # forward-backward check: a point whose round trip misses by more is lost
+MIN_LENGTH = 3  # tracks seen in fewer frames are dropped
+SEED_ERODE_PX = 5  # seeds at least about half this far inside a moving region (erosion, working px)
+RESEED_EVERY = 1  # new points seeded inside moving regions every this many frames
+ANCHOR_MAX_PX = 2.0  # an anchor refinement moving the point by more is refused and the point re-anchored
 
 
-def track_points(frames: np.ndarray, instances: np.ndarray, cfg: TrackConfig = TrackConfig(),
+def track_points(frames: np.ndarray, instances: np.ndarray, max_points: int = MAX_POINTS,
                  seed_mask: np.ndarray | None = None):
     """KLT tracks of one video at working resolution.
 
@@ -33,25 +37,18 @@ def track_points(frames: np.ndarray, instances: np.ndarray, cfg: TrackConfig = T
         raise ValueError(f"frames (T,H,W) and instances must match, got {frames.shape} and {instances.shape}")
     T, H, W = frames.shape
     criteria = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.01)
-    lk = dict(winSize=(cfg.win_size, cfg.win_size), maxLevel=cfg.pyramid_levels, criteria=criteria)
+    lk = dict(winSize=(WIN_SIZE, WIN_SIZE), maxLevel=PYRAMID_LEVELS, criteria=criteria)
     # refinement from the frame-to-frame estimate: one pyramid level is enough
-    lk_anchor = dict(winSize=(cfg.win_size, cfg.win_size), maxLevel=1, criteria=criteria,
+    lk_anchor = dict(winSize=(WIN_SIZE, WIN_SIZE), maxLevel=1, criteria=criteria,
                      flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
-    store = np.full((max(64, 2 * cfg.max_points), T, 2), np.nan, np.float32)  # grows as needed
+    store = np.full((max(64, 2 * max_points), T, 2), np.nan, np.float32)  # grows as needed
     n_rows = 0
     active_xy = np.zeros((0, 2), np.float32)
     active_id = np.zeros(0, np.int64)
     anchor_t = np.zeros(0, np.int64)  # frame of each active point's anchor
     anchor_xy = np.zeros((0, 2), np.float32)  # its position there
-    outside = np.zeros(0, np.int64)  # frames each active point has spent outside the moving regions
-    r = max(1, int(round(cfg.min_distance_px)))
+    r = max(1, int(round(MIN_DISTANCE_PX)))
     disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
-    margin = max(0, int(round(cfg.region_margin_px)))
-    near_disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * margin + 1, 2 * margin + 1))
-
-    def moving_near(t: int) -> np.ndarray:
-        region = (instances[t] > 0).astype(np.uint8)
-        return (cv2.dilate(region, near_disk) if margin else region) > 0
     for t in range(T):
         if t > 0 and len(active_xy):
             p0 = active_xy.reshape(-1, 1, 2)
@@ -59,31 +56,25 @@ def track_points(frames: np.ndarray, instances: np.ndarray, cfg: TrackConfig = T
             pb, st2, _ = cv2.calcOpticalFlowPyrLK(frames[t], frames[t - 1], p1, None, **lk)
             fb = np.linalg.norm((pb - p0).reshape(-1, 2), axis=1)
             q = p1.reshape(-1, 2)
-            ok = (st[:, 0] == 1) & (st2[:, 0] == 1) & (fb < cfg.fb_max_px)
-            if cfg.anchor_refine:
-                _refine_on_anchors(frames, t, q, ok, anchor_t, anchor_xy, lk_anchor, cfg)
+            ok = (st[:, 0] == 1) & (st2[:, 0] == 1) & (fb < FB_MAX_PX)
+            _refine_on_anchors(frames, t, q, ok, anchor_t, anchor_xy, lk_anchor)
             ok &= (q[:, 0] >= 0) & (q[:, 0] <= W - 1) & (q[:, 1] >= 0) & (q[:, 1] <= H - 1)
-            if cfg.max_frames_outside >= 0:
-                # a point outside every moving region has been left behind on the background
-                ij = np.clip(np.round(q).astype(int), 0, [W - 1, H - 1])
-                outside = np.where(moving_near(t)[ij[:, 1], ij[:, 0]], 0, outside + 1)
-                ok &= outside <= cfg.max_frames_outside
             active_xy, active_id = q[ok].astype(np.float32), active_id[ok]
-            anchor_t, anchor_xy, outside = anchor_t[ok], anchor_xy[ok], outside[ok]
+            anchor_t, anchor_xy = anchor_t[ok], anchor_xy[ok]
             store[active_id, t] = active_xy
-        want = cfg.max_points - len(active_xy)
-        if want > 0 and (t % max(1, cfg.reseed_every) == 0):
+        want = max_points - len(active_xy)
+        if want > 0 and (t % max(1, RESEED_EVERY) == 0):
             region = (seed_mask[t] if seed_mask is not None else instances[t] > 0).astype(np.uint8) * 255
-            if cfg.seed_erode_px > 1:  # corners on an object's outline straddle the background
-                region = cv2.erode(region, np.ones((cfg.seed_erode_px, cfg.seed_erode_px), np.uint8))
+            if SEED_ERODE_PX > 1:  # corners on an object's outline straddle the background
+                region = cv2.erode(region, np.ones((SEED_ERODE_PX, SEED_ERODE_PX), np.uint8))
             if region.any():
                 if len(active_xy):
                     taken = np.zeros_like(region)
                     ij = np.clip(np.round(active_xy).astype(int), 0, [W - 1, H - 1])
                     taken[ij[:, 1], ij[:, 0]] = 255
                     region[cv2.dilate(taken, disk) > 0] = 0
-                pts = cv2.goodFeaturesToTrack(frames[t], maxCorners=want, qualityLevel=cfg.quality_level,
-                                              minDistance=cfg.min_distance_px, mask=region, blockSize=5)
+                pts = cv2.goodFeaturesToTrack(frames[t], maxCorners=want, qualityLevel=QUALITY_LEVEL,
+                                              minDistance=MIN_DISTANCE_PX, mask=region, blockSize=5)
                 if pts is not None and len(pts):
                     pts = cv2.cornerSubPix(frames[t], pts.astype(np.float32), (3, 3), (-1, -1),
                                            (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03))
@@ -98,26 +89,25 @@ def track_points(frames: np.ndarray, instances: np.ndarray, cfg: TrackConfig = T
                     active_id = np.concatenate([active_id, ids])
                     anchor_t = np.concatenate([anchor_t, np.full(len(pts), t)])
                     anchor_xy = np.concatenate([anchor_xy, pts])
-                    outside = np.concatenate([outside, np.zeros(len(pts), np.int64)])
     if n_rows == 0:
         return np.zeros((0, T, 2), np.float32), np.zeros(0, np.int32)
     xy = store[:n_rows]
     seen = np.isfinite(xy[:, :, 0])
-    xy = xy[seen.sum(1) >= cfg.min_length]
+    xy = xy[seen.sum(1) >= MIN_LENGTH]
     return xy, track_instances(xy, instances)
 
 
 def _refine_on_anchors(frames: np.ndarray, t: int, q: np.ndarray, ok: np.ndarray, anchor_t: np.ndarray,
-                       anchor_xy: np.ndarray, lk_anchor: dict, cfg: TrackConfig) -> None:
+                       anchor_xy: np.ndarray, lk_anchor: dict) -> None:
     """In place: q[ok] (frame-to-frame positions at t) refined by KLT from each point's anchor;
-    points whose refinement fails (lost, or moved further than anchor_max_px: the appearance
+    points whose refinement fails (lost, or moved further than ANCHOR_MAX_PX: the appearance
     changed) are re-anchored at t on their frame-to-frame position."""
     for s in np.unique(anchor_t[ok]):
         g = np.nonzero(ok & (anchor_t == s))[0]
         p, st, _ = cv2.calcOpticalFlowPyrLK(frames[s], frames[t], anchor_xy[g].reshape(-1, 1, 2),
                                             q[g].reshape(-1, 1, 2), **lk_anchor)
         p = p.reshape(-1, 2)
-        good = (st[:, 0] == 1) & (np.linalg.norm(p - q[g], axis=1) < cfg.anchor_max_px)
+        good = (st[:, 0] == 1) & (np.linalg.norm(p - q[g], axis=1) < ANCHOR_MAX_PX)
         q[g[good]] = p[good]
         renew = g[~good]
         anchor_t[renew] = t

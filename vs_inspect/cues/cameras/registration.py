@@ -1,6 +1,6 @@
 """Per-frame poses of a moving camera: every frame registered against the scene's reconstruction.
 
-The reconstruction (cues/cameras.py) holds a few dozen frames of each moving video. Between them
+The reconstruction (cues/cameras/sfm.py) holds a few dozen frames of each moving video. Between them
 a head-worn or hand-held camera turns and walks, and a pose slerped over 3 frames at 10 fps is
 off by degrees: the epipolar lines of the moving points, which pairing and the energy read at
 every frame, move with it. So each frame of a moving video is registered on its own: its
@@ -19,14 +19,24 @@ reconstruction uses for a static camera's image.
 from __future__ import annotations
 
 import contextlib
+import logging
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from pathlib import Path
 
 import cv2
 import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
 from tqdm import tqdm
 
-from ..signals import import_pycolmap
+from ...cue_stats import FrameRegistration as FrameRegistrationRecord
+from ...geometry.camera_model import scale_points
+from ...geometry.timing import frame_brackets, interpolate_poses
+from ...signals import import_pycolmap
+from ..config import CameraConfig
+
+log = logging.getLogger(__name__)
+
+REGISTER_MIN_INLIERS = 20  # 2D-3D inliers a frame needs to be registered (fewer: it keeps the slerped pose)
 
 
 @dataclass(frozen=True)
@@ -90,7 +100,6 @@ def frame_features(grey: np.ndarray, moving: np.ndarray | None, frames: np.ndarr
     as for the reconstruction's own frames) or None; scale_xy: full px per working px."""
     sift = _colmap_like_sift(max_features)
     kernel = np.ones((dilate_px, dilate_px), np.uint8)
-    s = np.asarray(scale_xy, np.float64)
     xys, descs = [], []
     for k in frames:
         m = None if moving is None else \
@@ -101,7 +110,7 @@ def frame_features(grey: np.ndarray, moving: np.ndarray | None, frames: np.ndarr
             descs.append(np.zeros((0, 128), np.uint8))
             continue
         xy = np.array([p.pt for p in kp], np.float64)
-        xys.append((xy + 0.5) * s - 0.5)
+        xys.append(scale_points(xy, *scale_xy))
         descs.append(colmap_sift(d))
     return FrameFeatures(np.asarray(frames, int), xys, descs)
 
@@ -199,7 +208,7 @@ def ratio_matches(ratio: float = 0.8) -> Match:
 def cosine_matches(min_cossim: float = 0.82) -> Match:
     """A learned model's matching: mutual nearest neighbours of unit descriptors above a cosine
     similarity (learned.mutual_cosine_matches); cost = -cosine."""
-    from .learned import mutual_cosine_matches
+    from ..features.learned import mutual_cosine_matches
 
     def match(q: np.ndarray, kf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         m, cos = mutual_cosine_matches(q, kf, min_cossim)
@@ -219,7 +228,7 @@ def learned_frame_features(images: Iterable[tuple[int, np.ndarray, np.ndarray | 
                              leave=False):
         f = matcher.features(img, mask)
         frames.append(int(k))
-        xys.append((f.keypoints.astype(np.float64) + 0.5) / sfm_scale - 0.5)
+        xys.append(scale_points(f.keypoints, 1 / sfm_scale, 1 / sfm_scale))
         descs.append(f.descriptors.astype(np.float32))
     return FrameFeatures(np.array(frames, int), xys, descs)
 
@@ -282,3 +291,92 @@ def register_frames(features: FrameFeatures, keyframes: list[Keyframe], camera, 
         inl.append(int(res["num_inliers"]))
     return FrameRegistration(np.array(frames, int), np.array(poses).reshape(-1, 4, 4),
                              np.array(inl, int), len(features.frames))
+
+
+def registration_inputs(rec, database: Path, name: str, learned, sfm_scale: float,
+                         frame_features: dict | None, frame_images: dict | None, progress: bool = False,
+                         cancel=None):
+    """(keyframes, frame features, match) to register a moving video's frames against rec with,
+    or None when its frames are not available: SIFT's (frame_features, computed where the video
+    was decoded; the database's descriptors) or, for a learned database (learned: (matcher, image
+    id -> descriptors)), the matcher's own features on frame_images (name -> (a function giving
+    the frames, their number))."""
+    from .registration import (cosine_matches, keyframes_of, learned_frame_features, ratio_matches, sift_descriptors)
+
+    if learned is None:
+        if not frame_features or name not in frame_features:
+            return None
+        with sift_descriptors(database) as read:
+            return keyframes_of(rec, name, read), frame_features[name], ratio_matches()
+    if not frame_images or name not in frame_images:
+        return None
+    matcher, descriptors = learned
+    images, total = frame_images[name]
+    label = f"{name}: features to register" if progress else None
+    frames = images() if cancel is None else cancel.each(images())
+    feats = learned_frame_features(frames, matcher, sfm_scale, label, total)
+    return keyframes_of(rec, name, descriptors.__getitem__), feats, cosine_matches()
+
+
+def register_others(rec, name: str, keyframes, features, match, camera, sfm_scale: float, fk: np.ndarray,
+                     poses: np.ndarray, cfg: CameraConfig, seed: int, progress: bool = False,
+                     cancel=None):
+    """A moving video's frames outside the reconstruction registered against it: (frames (R,),
+    cam_from_world (R,4,4) of the SfM frames and the newly registered ones, report). A frame
+    whose rotation is farther from its nearest SfM frame's than a head can turn (10° per frame
+    between them, plus 5°) is refused as a wrong registration."""
+    from scipy.spatial.transform import Rotation
+
+    from .registration import register_frames
+
+    def angle_deg(Ra, Rb):
+        return float(np.degrees((Rotation.from_matrix(Ra) * Rotation.from_matrix(Rb).inv()).magnitude()))
+
+    reg = register_frames(features, keyframes, camera, sfm_scale, match=match,
+                          min_inliers=REGISTER_MIN_INLIERS, seed=seed,
+                          progress=f"{name}: registering frames" if progress else None,
+                          check=None if cancel is None else cancel.check)
+    own = np.isin(reg.frames, fk)  # reconstructed frames registered from their neighbours: a check
+    keep = ~own
+    for r, k in enumerate(reg.frames):
+        if own[r]:
+            continue
+        n = int(np.argmin(np.abs(fk - k)))
+        keep[r] = angle_deg(reg.cam_from_world[r, :3, :3], poses[n, :3, :3]) <= 10.0 * abs(int(fk[n]) - int(k)) + 5.0
+    # the check: on the reconstructed frames (not the first or last), the registration from the
+    # neighbours and the slerp between the neighbouring reconstructed frames, against the
+    # reconstruction's own pose (degrees)
+    err_reg, err_slerp = [], []
+    order = np.argsort(fk)
+    for r in np.nonzero(own)[0]:
+        k = int(reg.frames[r])
+        i = int(np.nonzero(fk == k)[0][0])
+        others = np.array([j for j in order if j != i])
+        if len(others) < 2 or k <= fk[others].min() or k >= fk[others].max():
+            continue
+        err_reg.append(angle_deg(reg.cam_from_world[r, :3, :3], poses[i, :3, :3]))
+        T = slerp_poses(fk[others], poses[others], k + 1)[k]
+        err_slerp.append(angle_deg(T[:3, :3], poses[i, :3, :3]))
+    new_frames = reg.frames[keep]
+    info = FrameRegistrationRecord(int((~np.isin(features.frames, fk)).sum()), int(keep.sum()), int((~own).sum() - keep.sum()),
+                             float(np.median(reg.inliers[keep])) if keep.any() else 0.0,
+                             tuple(new_frames.tolist()), len(err_reg),
+                             round(float(np.median(err_reg)), 3) if err_reg else None,
+                             round(float(np.median(err_slerp)), 3) if err_slerp else None)
+    log.info("%s: %d of %d other frames registered against the reconstruction (median %.0f inliers, "
+             "%d refused for a jump); on %d reconstructed frames, registered from their neighbours: "
+             "median rotation error %s° (slerp between neighbours: %s°)", name, info.registered,
+             info.tried, info.median_inliers, info.refused, len(err_reg),
+             info.check_rotation_deg_median, info.check_slerp_rotation_deg_median)
+    fk = np.concatenate([fk, new_frames])
+    poses = np.concatenate([poses, reg.cam_from_world[keep]])
+    return fk, poses, info
+
+
+def slerp_poses(frames_known: np.ndarray, poses: np.ndarray, T: int) -> np.ndarray:
+    """(T,4,4) cam_from_world at every frame: rotation slerp and centre lerp between known frames
+    (held constant before the first and after the last)."""
+    order = np.argsort(frames_known)
+    fk = frames_known[order].astype(float)
+    k, w = frame_brackets(fk, np.clip(np.arange(T), fk[0], fk[-1]))
+    return interpolate_poses(poses[order], k, w)

@@ -1,5 +1,5 @@
 """Stage 0 of one video on its own: decoding, moving regions, point tracks inside them, keyframe
-features, and the frames camera estimation may need, as an engine task (cues/extract.py runs one
+features, and the frames camera estimation may need, as an engine task (pipeline/stage0.py runs one
 per video and reports what it returns to the sink)."""
 
 from __future__ import annotations
@@ -11,17 +11,20 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from ..analysis.record_views import record_frame, record_mask
-from ..errors import InputError
-from ..record.sink import NullSink, Sink
-from ..types import VideoInfo
-from .config import CueConfig
-from .config import LEARNED_FEATURES
-from .matching import KeyframeFeatures, extract_keyframe_features, keyframe_indices
+from ...errors import InputError
+from ...geometry.camera_model import scale_points
+from ...types import VideoInfo
+from ..config import CueConfig
+from ..features import LEARNED_FEATURES
+from ..pairing.descriptors import KeyframeFeatures, extract_keyframe_features, keyframe_indices
 from .motion import moving_regions
 from .tracking import track_points
 
 log = logging.getLogger(__name__)
+
+SHOWN_FRAMES = 8  # frames per video the recording shows (with their moving regions)
+REGISTER_EVERY = 1  # a moving camera's frames registered on their own: every this many...
+REGISTER_MAX_HZ = 10.0  # ...and at most about this many a second (at 30 fps every 3rd; slerped between)
 
 
 @dataclass(frozen=True)
@@ -46,8 +49,7 @@ class VideoCues:
 
 def to_full_px(xy: np.ndarray, scale_xy: tuple[float, float]) -> np.ndarray:
     """Working-resolution px -> full-resolution px (pixel centres at integers on both)."""
-    s = np.asarray(scale_xy, dtype=np.float64)
-    return (xy.astype(np.float64) + 0.5) * s - 0.5
+    return scale_points(xy, *scale_xy)
 
 
 def _sfm_indices(T: int, moving: bool, cfg) -> np.ndarray:
@@ -56,10 +58,10 @@ def _sfm_indices(T: int, moving: bool, cfg) -> np.ndarray:
 
 
 def _register_indices(info: VideoInfo, cfg) -> np.ndarray:
-    """A moving video's frames to register against the reconstruction (cues/registration.py):
-    every cfg.camera.register_every-th, at most about register_max_hz per second, and the SfM
+    """A moving video's frames to register against the reconstruction (cues/cameras/registration.py):
+    every REGISTER_EVERY-th, at most about REGISTER_MAX_HZ per second, and the SfM
     frames too (registered from their neighbours they check the registration)."""
-    step = max(cfg.camera.register_every, frame_step(info, cfg.camera.register_max_hz))
+    step = max(REGISTER_EVERY, frame_step(info, REGISTER_MAX_HZ))
     return np.union1d(np.arange(0, info.num_frames, step), _sfm_indices(info.num_frames, True, cfg))
 
 
@@ -80,20 +82,22 @@ def _static_mask(moving: np.ndarray, size: tuple[int, int]) -> np.ndarray:
 def _learned_model_possible(cfg) -> bool:
     """Whether camera estimation may build a learned reconstruction: learned features asked for,
     or auto with XFeat installed (its second try) or ALIKED's tried last."""
-    from .cameras import aliked_tried_last
-    from .learned import xfeat_available
+    from ..cameras.sfm import aliked_tried_last
+    from ..features.learned import xfeat_available
 
     return cfg.camera.features in LEARNED_FEATURES or (cfg.camera.features == "auto" and xfeat_available()) \
         or aliked_tried_last(cfg.camera)
 
 
-def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) -> VideoCues:
-    from ..io.video import downscale, iter_frames
+def _video_cues(src, cfg: CueConfig, need_sfm: bool, timings: dict, shown: dict | None) -> VideoCues:
+    """One video's cues; shown (when not None) gets {frame index: (working-resolution BGR image,
+    (h,w) instance ids)} of SHOWN_FRAMES frames spread over the video, for the recording."""
+    from ...io.video import downscale, iter_frames
 
     info = src.info
     t0 = time.perf_counter()
     grey = []
-    sink_at = set(np.linspace(0, info.num_frames - 1, max(1, cfg.sink_frames)).round().astype(int).tolist())
+    sink_at = set(np.linspace(0, info.num_frames - 1, max(1, SHOWN_FRAMES)).round().astype(int).tolist())
     # the frames camera estimation may need (static or moving: decided after decoding) are kept
     # from this one pass instead of decoding the video a second time
     sfm_keep = (set(_sfm_indices(info.num_frames, False, cfg).tolist())
@@ -104,32 +108,30 @@ def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) 
             sfm_images[k] = downscale(full, cfg.camera.max_side)
         img = downscale(full, cfg.max_side)
         grey.append(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY))
-        if k in sink_at and sink.options is not None:
-            sink.video_frame(info.name, k, record_frame(img, sink.options))
+        if k in sink_at and shown is not None:
+            shown[k] = img
     frames = np.stack(grey)
     h, w = frames.shape[1:]
     scale = (info.width / w, info.height / h)
     timings["decode_s"] = timings.get("decode_s", 0.0) + time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    instances, mode, bg = moving_regions(frames, cfg.motion, cfg.camera_motion.get(info.name),
-                                             info.frame_interval_s)
+    instances, mode, bg = moving_regions(frames, cfg.camera_motion.get(info.name), info.frame_interval_s)
     moving_fraction = float((instances > 0).mean())
-    if sink.options is not None:
-        for k in sorted(sink_at):
-            sink.dynamic_mask(info.name, k, record_mask(instances[k], sink.options))
+    if shown is not None:
+        for k in sorted(shown):
+            shown[k] = (shown[k], instances[k].copy())
     timings["motion_s"] = timings.get("motion_s", 0.0) + time.perf_counter() - t0
     log.info("%s: %s camera (background motion %.2f px), moving regions cover %.1f%%",
              info.name, mode, bg, 100 * moving_fraction)
 
     t0 = time.perf_counter()
-    xy, inst = track_points(frames, instances, cfg.track)
+    xy, inst = track_points(frames, instances, cfg.max_tracks)
     timings["tracking_s"] = timings.get("tracking_s", 0.0) + time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    kf = keyframe_indices(info.num_frames, cfg.match.num_keyframes)
-    feats = extract_keyframe_features(frames, (instances > 0) if cfg.match.dynamic_only else None,
-                                      kf, xy, cfg.match)
+    kf = keyframe_indices(info.num_frames, cfg.keyframes)
+    feats = extract_keyframe_features(frames, instances > 0, kf, xy)
     timings["features_s"] = timings.get("features_s", 0.0) + time.perf_counter() - t0
 
     sfm = None
@@ -138,29 +140,25 @@ def _video_cues(src, cfg: CueConfig, sink: Sink, need_sfm: bool, timings: dict) 
         idx = _sfm_indices(info.num_frames, mode == "moving", cfg)
         imgs = [sfm_images[k] for k in idx.tolist()]
         del sfm_images
-        masks = []
-        for k, im in zip(idx, imgs):
-            masks.append(_static_mask(instances[k] > 0, (im.shape[1], im.shape[0]))
-                         if cfg.camera.mask_moving else None)
+        masks = [_static_mask(instances[k] > 0, (im.shape[1], im.shape[0])) for k, im in zip(idx, imgs)]
         if mode == "static" and len(imgs) > 1:
             # one image of a static camera: the temporal median shows the background without the
             # moving objects; pixels that move in most sampled frames stay masked
             imgs = [np.median(np.stack(imgs), axis=0).astype(np.uint8)]
-            if cfg.camera.mask_moving:
-                masks = [np.mean([~m for m in masks], axis=0) < 0.5]
+            masks = [np.mean([~m for m in masks], axis=0) < 0.5]
             idx = idx[:1]
         sfm = (idx, imgs, masks)
         timings["sfm_frames_s"] = timings.get("sfm_frames_s", 0.0) + time.perf_counter() - t0
     frame_feats = register_masks = None
-    if need_sfm and mode == "moving" and cfg.camera.register_every > 0:
+    if need_sfm and mode == "moving":
         todo = _register_indices(info, cfg)
         if cfg.camera.features not in LEARNED_FEATURES:
             # SIFT's features to register each frame with against a SIFT reconstruction (its
             # database's kind; registration.py), found here where the frames are decoded
-            from .registration import frame_features
+            from ..cameras.registration import frame_features
 
             t0 = time.perf_counter()
-            frame_feats = frame_features(frames, instances if cfg.camera.mask_moving else None, todo, scale,
+            frame_feats = frame_features(frames, instances, todo, scale,
                                          cfg.camera.max_features)
             timings["frame_features_s"] = timings.get("frame_features_s", 0.0) + time.perf_counter() - t0
         if _learned_model_possible(cfg):
@@ -176,52 +174,36 @@ def registration_images(src, v: VideoCues, cfg: CueConfig, chunk: int = 16):
     """(frame index, BGR image at SfM resolution, static mask or None) of v's frames to register
     (v.register_masks), decoded again from src, chunk frames at a time (a long video's frames are
     never all held at once)."""
-    from ..io.video import read_frames
+    from ...io.video import read_frames
 
     todo, packed, w = v.register_masks
     for start in range(0, len(todo), chunk):
         frames = todo[start:start + chunk]
         for i, (k, img) in enumerate(zip(frames, read_frames(src, frames, cfg.camera.max_side)), start):
             moving = np.unpackbits(packed[i], axis=-1, count=w).astype(bool)
-            yield int(k), img, _static_mask(moving, (img.shape[1], img.shape[0])) if cfg.camera.mask_moving else None
+            yield int(k), img, _static_mask(moving, (img.shape[1], img.shape[0]))
 
 
 @dataclass(frozen=True)
 class VideoCuesOutcome:
-    """What one video's Stage 0 task returns: its cues, or why it has none, with the views the
-    recording keeps (the driver hands them to its sink, so tasks need no sink)."""
+    """What one video's Stage 0 task returns: its cues, or why it has none, and the frames the
+    recording shows (the driver hands them to its sink, so tasks need no sink)."""
 
     cues: VideoCues | None  # None when the video could not be read
     error: str | None  # why (None when cues is set)
-    frames: tuple  # ((frame index, (h,w,3) uint8 BGR), ...) as the recording keeps them
-    masks: tuple  # ((frame index, (h,w) instance ids), ...)
+    shown: tuple  # ((frame index, (h,w,3) uint8 BGR working resolution, (h,w) instance ids), ...)
     timings_s: dict  # step -> seconds spent on this video
 
 
-class _Collect(NullSink):
-    """Keeps what _video_cues would show a recording sink, to hand over from a task."""
-
-    def __init__(self, options):
-        self.options = options
-        self.frames: list = []
-        self.masks: list = []
-
-    def video_frame(self, name, frame_index, image_bgr):
-        self.frames.append((frame_index, image_bgr))
-
-    def dynamic_mask(self, name, frame_index, instances):
-        self.masks.append((frame_index, instances))
-
-
 def video_cues_task(task: tuple, src) -> VideoCuesOutcome:
-    """Stage 0 of one video as an engine task. task: (CueConfig, the sink's RecordOptions or None,
-    whether camera-estimation frames are needed); src: its VideoSource (the task opens the file,
-    which must be reachable from the worker)."""
-    cfg, options, need_sfm = task
-    collect, timings = _Collect(options), {}
+    """Stage 0 of one video as an engine task. task: (CueConfig, whether the frames shown are
+    wanted, whether camera-estimation frames are needed); src: its VideoSource (the task opens
+    the file, which must be reachable from the worker)."""
+    cfg, show, need_sfm = task
+    shown, timings = ({} if show else None), {}
     try:
-        cues = _video_cues(src, cfg, collect, need_sfm, timings)
+        cues = _video_cues(src, cfg, need_sfm, timings, shown)
     except InputError as exc:
-        return VideoCuesOutcome(None, str(exc), tuple(collect.frames), tuple(collect.masks), timings)
-    return VideoCuesOutcome(cues, None, tuple(collect.frames), tuple(collect.masks), timings)
-
+        return VideoCuesOutcome(None, str(exc), (), timings)
+    return VideoCuesOutcome(cues, None, tuple((k, img, inst) for k, (img, inst) in sorted((shown or {}).items())),
+                            timings)
