@@ -287,6 +287,10 @@ class CueBundle:
     # (NaN: none, or not looked at), the worn-camera sightings' cue (geometry/sightings.py);
     # empty: not detected
     heads: dict[str, np.ndarray] = field(default_factory=dict)
+    # the static reconstruction of estimated cameras (drawn in the 3D scene, not used to synchronize):
+    # (N,3) float world points and their (N,3) uint8 colours; None: none
+    static_points: np.ndarray | None = None
+    static_colors: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         names = [v.name for v in self.videos]

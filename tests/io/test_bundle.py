@@ -89,6 +89,23 @@ def test_heads_round_trip_and_are_optional(good_bundle, tmp_path):
         dataclasses.replace(scene.bundle, heads={"zz": xy})
 
 
+def test_static_points_round_trip_and_are_optional(good_bundle, tmp_path):
+    """The static reconstruction of estimated cameras goes through the files (float32 points,
+    uint8 colours); a bundle without it has none, and colours that do not match the points are
+    refused naming the file."""
+    import dataclasses
+    _, scene = good_bundle
+    points = np.arange(30, dtype=np.float32).reshape(10, 3) / 7
+    colors = np.arange(30, dtype=np.uint8).reshape(10, 3)
+    back = read_bundle(write_bundle(dataclasses.replace(scene.bundle, static_points=points, static_colors=colors),
+                                    tmp_path / "b"))
+    assert np.array_equal(back.static_points, points) and np.array_equal(back.static_colors, colors)
+    assert read_bundle(good_bundle[0]).static_points is None
+    bad = corrupt(tmp_path / "b", tmp_path / "bad", set_npz("static_points.npz", points=points, colors=colors[:4]))
+    with pytest.raises(BundleError, match=r"static_points.npz.*4 colours for 10 points"):
+        read_bundle(bad)
+
+
 def test_writer_refuses_to_overwrite_and_leaves_no_partial(good_bundle, tmp_path):
     path, scene = good_bundle
     with pytest.raises(FileExistsError):

@@ -359,11 +359,12 @@ def report_data_from_run(run_dir: str | os.PathLike, pair: tuple[str, str] | Non
         gt = read_gt(bdir / "gt.json")
     data = build_report_data(result, bundle, source=str(run_dir), gt=gt,
                              video_paths=_video_paths(result, run_dir), pair=pair,
-                             frame_reader=_frame_reader)
-    if _estimated(result):  # its static points are in the recording only
-        data = replace(data, notes=data.notes + (
-            "the static reconstruction of the estimated cameras is kept in the run's recording, not in "
-            "its folder: `vs-inspect report RECORDING.rrd` draws it in the 3D scene",))
+                             frame_reader=_frame_reader,
+                             static_points=bundle.static_points if bundle is not None else None,
+                             static_colors=bundle.static_colors if bundle is not None else None)
+    if _estimated(result) and (bundle is None or bundle.static_points is None):
+        data = replace(data, notes=data.notes + ("the run's cue bundle holds no static reconstruction of its "
+                                                 "estimated cameras",))
     return data
 
 

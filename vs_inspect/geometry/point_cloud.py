@@ -5,6 +5,8 @@ Pure geometry (open3d's point cloud and line set), no I/O.
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 
 from ._shapes import check_shape
@@ -13,21 +15,27 @@ OUTLIER_NEIGHBOURS = 20  # neighbours whose mean distance a point is judged by
 OUTLIER_STD_RATIO = 2.0  # a point whose mean distance is beyond mean + this many std is a stray
 VOXELS_ACROSS = 200  # the cloud's robust extent over this is the voxel size it is thinned to
 
+log = logging.getLogger(__name__)
+
 
 def clean_point_cloud(points: np.ndarray, colors: np.ndarray | None = None
                       ) -> tuple[np.ndarray, np.ndarray | None]:
     """(points (M,3), colors (M,3) uint8 or None) of points (N,3) (colors (N,3) uint8): stray points
     removed (open3d's statistical outlier removal) and the rest averaged per voxel of 1/VOXELS_ACROSS
     of the cloud's robust extent (5th-95th percentile), sorted so that the same input gives the
-    same output. Fewer than OUTLIER_NEIGHBOURS + 1 points are returned as they are."""
-    import open3d as o3d
-
+    same output. Fewer than OUTLIER_NEIGHBOURS + 1 points, or any points where open3d cannot be
+    loaded, are returned as they are (finite ones only)."""
     points = check_shape("points", np.asarray(points, np.float64), (None, 3), batched=False)
     if colors is not None:
         check_shape("colors", np.asarray(colors), (len(points), 3), batched=False)
     points_ok = np.isfinite(points).all(1)
     points, colors = points[points_ok], None if colors is None else np.asarray(colors)[points_ok]
     if len(points) <= OUTLIER_NEIGHBOURS:
+        return points, colors
+    try:
+        import open3d as o3d
+    except (ImportError, OSError) as exc:  # open3d needs libusb at import time
+        log.warning("static points kept as they are: open3d cannot be loaded (%s)", exc)
         return points, colors
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     if colors is not None:

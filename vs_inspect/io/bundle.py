@@ -24,6 +24,7 @@ log = logging.getLogger(__name__)
 FORMAT = "vs-inspect-cues"
 VERSION = 1
 POSE_FREE_KEY = "pose_free"  # optional per-video key of bundle.json: the camera has K only
+STATIC_POINTS = "static_points.npz"  # optional: the static reconstruction of estimated cameras
 
 
 MAX_FRAMES = 10_000_000   # 46 h at 60 fps; more is a corrupt or hostile bundle.json
@@ -319,6 +320,17 @@ def read_bundle(folder: str | os.PathLike) -> CueBundle:
             hdata = _load_npz(hpath, {"xy": ((T, 2),)}, budget, f" (video {hpath.stem!r} has num_frames={T} frames)")
             heads[hpath.stem] = _require(hpath, hdata, "xy")
 
+    static_points, static_colors = None, None
+    spath = root / STATIC_POINTS  # optional: the static reconstruction of estimated cameras
+    if spath.is_file():
+        sdata = _load_npz(spath, {"points": ((None, 3),), "colors": ((None, 3),)}, budget)
+        static_points = _require(spath, sdata, "points")
+        static_colors = sdata.get("colors")
+        if static_colors is not None and len(static_colors) != len(static_points):
+            raise BundleError(spath, f"{len(static_colors)} colours for {len(static_points)} points")
+        if static_colors is not None:
+            static_colors = np.clip(static_colors, 0, 255).astype(np.uint8)
+
     gt, gt_drift = None, None
     gt_path = root / "gt.json"
     if gt_path.is_file():
@@ -327,7 +339,8 @@ def read_bundle(folder: str | os.PathLike) -> CueBundle:
     # optional per-video key (import-drone): only K is known, the pose is a placeholder
     pose_free = frozenset(str(e["name"]) for e in entries if e.get(POSE_FREE_KEY) is True)
     try:
-        return CueBundle(tuple(videos), cameras, tracks, pairs, gt, pose_free, gt_drift, heads)
+        return CueBundle(tuple(videos), cameras, tracks, pairs, gt, pose_free, gt_drift, heads,
+                         static_points, static_colors)
     except ValueError as exc:
         raise BundleError(root, str(exc)) from None
 
@@ -417,6 +430,11 @@ def write_bundle(bundle: CueBundle, folder: str | os.PathLike, overwrite: bool =
             (tmp / "heads").mkdir()
             for name, xy in bundle.heads.items():
                 np.savez_compressed(tmp / "heads" / f"{name}.npz", xy=xy)
+        if bundle.static_points is not None:
+            arrays = {"points": np.asarray(bundle.static_points, np.float32)}
+            if bundle.static_colors is not None:
+                arrays["colors"] = np.asarray(bundle.static_colors, np.uint8)
+            np.savez_compressed(tmp / STATIC_POINTS, **arrays)
         if bundle.gt_offsets_s is not None:
             gt: dict = {"offsets_s": bundle.gt_offsets_s}
             if bundle.gt_drift_ppm is not None:

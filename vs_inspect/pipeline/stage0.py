@@ -163,9 +163,10 @@ def _stage0(sources, calibration: dict | None, cfg: CueConfig, sink: Sink, progr
             timings["heads_s"] = time.perf_counter() - t0
     # 6. the bundle and the record
     cameras, pairs = kept.cameras, kept.pairs
+    points, colors = None, None
     if cameras:  # after the moving points' cameras were checked: a refused one is not drawn
         points, colors = kept.points, kept.colors
-        if points is not None and sink.options is not None:  # strays out, an even density (open3d)
+        if points is not None:  # strays out, an even density (open3d)
             points, colors = clean_point_cloud(points, colors)
         sink.cameras(cameras, points, colors)
     timings["total_s"] = time.perf_counter() - t_all
@@ -188,7 +189,9 @@ def _stage0(sources, calibration: dict | None, cfg: CueConfig, sink: Sink, progr
         raise NoUsableVideos(f"no video could be used: {reasons}", stats, inputs)
     bundle = CueBundle(tuple(vids[n].info for n in usable), {n: cameras[n] for n in usable},
                        {n: kept.tracks[n] for n in usable}, pairs,
-                       heads={n: h for n, h in heads.items() if n in usable})
+                       heads={n: h for n, h in heads.items() if n in usable},
+                       static_points=points if points is not None and len(points) else None,
+                       static_colors=colors if points is not None and len(points) else None)
     sink.stage_event("cues", "cue extraction finished", tracks=stats.tracks, track_pairs=stats.track_pairs,
                      cameras=len(cameras))
     return bundle, stats
