@@ -74,6 +74,9 @@ def _cli(args: list[str], cwd: Path, env: dict[str, str], check: bool = True) ->
     return r
 
 
+SCENE_CAMERAS = 4  # the rendered scene's cameras
+
+
 def prepare_inputs(workdir: Path, demo: bool = True) -> dict[str, Path]:
     """Small synthetic inputs, made once: a cue bundle, a rendered scene, a run folder with its
     recording (for report), a run of the scene's true cues (for export) and, with demo, the demo's
@@ -87,9 +90,10 @@ def prepare_inputs(workdir: Path, demo: bool = True) -> dict[str, Path]:
     if not (p["bundle"] / "bundle.json").is_file():
         _cli(["synth-cues", "--out", str(p["bundle"]), "--cameras", "4", "--seconds", "4", "--force"], inputs, env)
     if not (p["scene"] / "COMPLETE").is_file():
-        _cli(["synth-video", "--out", str(p["scene"]), "--cameras", "3", "--moving", "0", "--seconds", "3",
-              "--width", "320", "--height", "240", "--fps", "15", "--same-length", "--no-progress",
-              "--force"], inputs, env)
+        # four cameras, so that Stage 1 has six pairs of geometric track pairs to work on for seconds
+        _cli(["synth-video", "--out", str(p["scene"]), "--cameras", str(SCENE_CAMERAS), "--moving", "0",
+              "--seconds", "4", "--width", "320", "--height", "240", "--fps", "30", "--same-length",
+              "--seed", "3", "--no-progress", "--force"], inputs, env)
     if not (p["run"] / "result.json").is_file():
         _cli(["sync", "--bundle", str(p["bundle"]), "--out", str(p["run"]), "--rrd", str(p["rrd"]),
               "--no-progress", "--force"], inputs, env)
@@ -103,7 +107,7 @@ def prepare_inputs(workdir: Path, demo: bool = True) -> dict[str, Path]:
 
 
 def cases(p: dict[str, Path]) -> list[Case]:
-    videos = [str(p["scene"] / f"cam{i}.mp4") for i in range(3)]
+    videos = [str(p["scene"] / f"cam{i}.mp4") for i in range(SCENE_CAMERAS)]
     calib = str(p["scene"] / "calibration.json")
 
     return [

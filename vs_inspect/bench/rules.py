@@ -137,6 +137,26 @@ def demo_scene(scratch: Path) -> Scene:
     return Scene("demo", "demo", paths, folder / "calibration.json", truth, _fps_of(paths))
 
 
+SMALL_SEEDS = tuple(range(10))
+
+
+def small_scenes(scratch: Path, seeds: Sequence[int] = SMALL_SEEDS) -> list[Scene]:
+    """Small rendered rigs with their exact calibration: 4 static cameras around the scene, 320x240
+    at 30 fps, 4 s, offsets within ±0.4 s (few pixels per moving point, so a wrong Δ costs little)."""
+    from ..synth.videos import render_unless_cached
+    from ..synth.world import SceneConfig
+
+    out = []
+    for seed in seeds:
+        folder = scratch / "inputs" / f"small_s{seed}"
+        render_unless_cached(folder, SceneConfig(cameras=4, moving=0, seconds=4.0, same_length=True, width=320,
+                                                 height=240, fps=30.0, max_offset_s=0.4, seed=seed), progress=False)
+        paths = tuple(sorted(folder.glob("cam*.mp4")))
+        truth = json.loads((folder / "gt.json").read_text())["offsets_s"]
+        out.append(Scene("small", f"small_s{seed}", paths, folder / "calibration.json", truth, _fps_of(paths)))
+    return out
+
+
 def arc_scenes(set_name: str, scratch: Path) -> list[Scene]:
     """The rendered scenes of one arcs set (vs_inspect.bench.arcs), estimated cameras."""
     from ..synth.videos import render_unless_cached
@@ -279,7 +299,7 @@ def markdown(full: Variant, alone: list[Variant], steps: list[tuple[str, Variant
 
 
 def run(sets: Sequence[str], data: Path, scratch: Path, rules: Sequence[str] | None = None, progress=print) -> str:
-    """The ablation on the named sets ("clips", "caliscope", "demo", "arcs:SET"); returns the
+    """The ablation on the named sets ("clips", "caliscope", "demo", "small", "arcs:SET"); returns the
     markdown of the tables."""
     from ..cues.rules import RULES
 
@@ -291,10 +311,12 @@ def run(sets: Sequence[str], data: Path, scratch: Path, rules: Sequence[str] | N
             scenes += caliscope_scenes(data, scratch)
         elif s == "demo":
             scenes.append(demo_scene(scratch))
+        elif s == "small":
+            scenes += small_scenes(scratch)
         elif s.startswith("arcs:"):
             scenes += arc_scenes(s.removeprefix("arcs:"), scratch)
         else:
-            raise InputError(f"unknown set {s!r}: use clips, caliscope, demo or arcs:SET")
+            raise InputError(f"unknown set {s!r}: use clips, caliscope, demo, small or arcs:SET")
     names = list(rules or RULES)
     full, alone, steps = ablate(scenes, scratch, names, progress)
     return markdown(full, alone, steps, RULES)

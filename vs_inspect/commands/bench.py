@@ -381,8 +381,9 @@ def _rules(benches, name):
                 "2 frames and null; then drops, in order, each rule whose absence makes no set worse. "
                 "Each scene's expensive steps are kept in --scratch, so the variants replay decisions "
                 "only and a stopped run resumes.", _run_rules)
-    q.add_argument("--sets", nargs="+", default=["clips", "caliscope", "demo", "arcs:seeds-10-21"],
-                   help="clips, caliscope, demo, arcs:SET (default: all four, arcs:seeds-10-21)")
+    q.add_argument("--sets", nargs="+", default=["clips", "caliscope", "demo", "small", "arcs:seeds-10-21"],
+                   help="clips, caliscope, demo, small (ten small calibrated rendered rigs), arcs:SET "
+                        "(default: all five, arcs:seeds-10-21)")
     q.add_argument("--scratch", type=Path, required=True, help="folder for the inputs made and the kept steps")
     q.add_argument("--rules", nargs="+", help="only these rules (default: all, in their order)")
     q.add_argument("--markdown", type=Path, help="also write the tables here")
