@@ -22,6 +22,7 @@ from ...cue_stats import FittedOffsetCheck, FittedOffsetPair, JointVoteRecord, P
 from ...geometry.offsets import OffsetGrid
 from ...types import TrackPairs, VideoInfo
 from ...memo import NO_MEMO, Memo
+from ...progress import stage
 from ..config import CueConfig
 from ..rules import ALL
 from ..records import Note, say
@@ -87,7 +88,8 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     coarsest = max((vids[n].info.frame_interval_s for k in found for n in k), default=0.0)
     # each of a triangle's three peaks is located to about ±1 frame (its support window), so
     # right peaks close within about 3 frames, while wrong ones miss by far more
-    joint = joint_offsets(votes, 3.0 * coarsest) if cfg.geometric.joint else None
+    with stage("geometric pairs: every camera's offset chosen at once", progress and cfg.geometric.joint):
+        joint = joint_offsets(votes, 3.0 * coarsest) if cfg.geometric.joint else None
     sure = {} if joint is None else {n: m >= cfg.geometric.joint_min_margin or "margin" not in rules
                                      for n, m in joint.margin.items()}
     third = "moving_pair_third" in rules
@@ -95,7 +97,9 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     # the check is of cameras Stage 0 estimated: a calibration's are given (and a right calibrated
     # camera can follow as few trajectories as a wrong estimated one)
     if "three_view" in rules and cfg.geometric.three_view_min_supporters > 0 and estimated and sum(sure.values()) >= 3:
-        three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, notes, grid, third, memo)
+        with stage("geometric pairs: each sure camera checked against the others' 3D points", progress):
+            three_view = _check_in_three_views(found, joint, sure, cameras, tracks, vids, cfg, notes, grid, third,
+                                               memo)
         sure = {n: ok and (n not in three_view or three_view[n].passed) for n, ok in sure.items()}
     dissent, dissent_short = {}, {}  # camera -> why it was made unsure; the same in a few words
     # three_view is only filled for estimated cameras (a calibration's are given)
@@ -140,8 +144,9 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
         if "transfer" in rules and cfg.geometric.transfer and not all(sure.values()) and sum(sure.values()) >= 2:
             # not of a camera its own pairs contradict: point transfer projects into the same
             # camera, whose biased geometry it can then confirm at a wrong offset
-            checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, notes,
-                                                frozenset(dissent), grid, third, memo)
+            with stage("geometric pairs: unsure cameras checked by point transfer", progress):
+                checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, notes,
+                                                    frozenset(dissent), grid, third, memo)
         sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
         said = _JointChecks({c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
                             {c: chk.summary() for c, chk in three_view.items()}, dissent, dissent_short, overruled)
