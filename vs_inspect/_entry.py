@@ -34,16 +34,18 @@ def main(argv: list[str] | None = None) -> None:
         code = 128 + signum
     finally:
         signals.mark_finished()
-    signum = signals.requested()
-    if signum is not None and code not in (128 + signal.SIGINT, 128 + signal.SIGTERM):
-        # the signal came after the last safe point: what the command wrote is complete
-        signals.announce(signum, finished=True)
-        code = 128 + signum
     try:
         import logging
         logging.shutdown()
     except Exception:  # noqa: BLE001 - exiting anyway
         pass
+    signals.flush_output()
+    # the last check, after everything printed has been flushed: a signal recorded by now gets its
+    # line (what the command wrote is complete); one that comes later finds the command ended
+    signum = signals.requested()
+    if signum is not None and code not in (128 + signal.SIGINT, 128 + signal.SIGTERM):
+        signals.announce(signum, finished=True)
+        code = 128 + signum
     signals.hard_exit(code)
 
 

@@ -270,14 +270,19 @@ def remove_temporaries() -> None:
             pass
 
 
-def hard_exit(code: int) -> None:
-    """Flush stdout and stderr and end the process now (os._exit): interpreter shutdown with
-    VTK/EGL, numba or rerun threads alive is where the crashes come from."""
+def flush_output() -> None:
+    """Flush stdout and stderr (what the command printed reaches its file or pipe now)."""
     for f in (sys.stdout, sys.stderr):
         try:
             f.flush()
         except (OSError, ValueError):
             pass
+
+
+def hard_exit(code: int) -> None:
+    """Flush stdout and stderr and end the process now (os._exit): interpreter shutdown with
+    VTK/EGL, numba or rerun threads alive is where the crashes come from."""
+    flush_output()
     os._exit(code)
 
 

@@ -207,6 +207,15 @@ def _start(case: Case, folder: Path, env: dict[str, str], verbose: bool = False)
     return proc, reader
 
 
+def _printed_before(stdout: Path, t_wall: float) -> bool:
+    """Whether a command's stdout file holds output last written before t_wall (time.time())."""
+    try:
+        st = stdout.stat()
+    except OSError:
+        return False
+    return st.st_size > 0 and st.st_mtime < t_wall
+
+
 def _fresh_folder(case: Case, root: Path) -> Path:
     folder = root / "case"
     if folder.exists():
@@ -294,7 +303,7 @@ def interrupt_once(case: Case, root: Path, env: dict[str, str], sig: int, moment
         if not out.ok:
             out.problems.append(f"ended with {proc.returncode} before the signal")
         return out
-    t_sig = time.monotonic()
+    t_sig, t_sig_wall = time.monotonic(), time.time()
     proc.send_signal(sig)
     try:
         rc = proc.wait(timeout=grace_s + 60)
@@ -305,6 +314,12 @@ def interrupt_once(case: Case, root: Path, env: dict[str, str], sig: int, moment
     out.stop_s = time.monotonic() - t_sig
     reader.join(5)
     after = [l for t, l in reader.lines if t >= t_sig]
+    if rc == measured.exit_code and not after and _printed_before(folder / "stdout.txt", t_sig_wall) \
+            and frozenset(snapshot(folder, case.outputs)) == measured.complete:
+        # its last output was flushed (at exit: stdout to a file is written then) before the
+        # signal was sent: the process was ending, past its last check for a signal
+        out.missed, out.ok, out.stop_s = True, True, None
+        return out
     text = "\n".join(l for _, l in reader.lines)
     if rc < 0:
         out.problems.append(f"crashed: killed by {signal.Signals(-rc).name}")
