@@ -41,7 +41,7 @@ def _stats(delta_s: float, n: int = 12) -> GeometricPairStats:
                               0.1, idx, np.full(n, delta_s), np.ones(n))
 
 
-def _run(moving_b: bool, sure_c: bool, min_sure: int = 3):
+def _run(moving_b: bool, sure_c: bool):
     moving = CameraTrack(K, np.stack([look_at([6.0, 0.01 * t, 1.5], [0, 0, 1]) for t in range(50)]))
     static = CameraTrack(K, look_at([0.0, 6.0, 2.5], [0, 0, 1]))
     cams = {"a": moving, "b": moving if moving_b else static, "c": moving}
@@ -51,33 +51,28 @@ def _run(moving_b: bool, sure_c: bool, min_sure: int = 3):
     joint = JointChoice(offs, 10.0, {"a": 5.0, "b": 5.0, "c": 5.0 if sure_c else 1.0})
     sure = {"a": True, "b": True, "c": sure_c}
     notes = []
-    cfg = CueConfig(geometric=GeometricPairConfig(joint_min_sure=min_sure))
-    out, _, _, record, _ = _add_joint_pairs(pairs, found, joint, sure, cams, {}, {}, cfg, notes)
+    out, _, _, record, _ = _add_joint_pairs(pairs, found, joint, sure, cams, {}, {}, CueConfig(), notes)
     return {k: len(v.index) for k, v in out.items()}, [n.message for n in notes], {"geometric_joint": to_json(record)}
 
 
-def test_two_sure_cameras_alone_get_no_pairs():
-    """A Δ confirmed by no closed triangle of sure cameras is not used (default joint_min_sure 3)."""
-    for moving_b in (False, True):
-        used, msgs, stats = _run(moving_b=moving_b, sure_c=False)
-        assert used == {("a", "b"): 0, ("a", "c"): 0, ("b", "c"): 0}
-        assert any("sure of 2 camera(s) only" in m for m in msgs), msgs
-        assert stats["geometric_joint"]["sure"] == ["a", "b"] and stats["geometric_joint"]["used"] == []
-    # with the third camera sure the triangle confirms every pair: all supporters are used
+def test_two_sure_cameras_pair_unless_both_move():
+    """Two sure cameras use their joint Δ when one is static; two moving ones need a third sure
+    camera (their per-frame geometry lets wrong tracks fit one wrong offset). An unsure camera's
+    pairs are never used."""
+    used, msgs, stats = _run(moving_b=False, sure_c=False)
+    assert used == {("a", "b"): 12, ("a", "c"): 0, ("b", "c"): 0}
+    assert stats["geometric_joint"]["sure"] == ["a", "b"] and stats["geometric_joint"]["used"] == ["a", "b"]
+    assert not any("camera(s) only" in m for m in msgs)
+    used, msgs, stats = _run(moving_b=True, sure_c=False)
+    assert used == {("a", "b"): 0, ("a", "c"): 0, ("b", "c"): 0}
+    assert any("both cameras move and the joint vote is sure of 2 camera(s) only" in m for m in msgs), msgs
+    assert stats["geometric_joint"]["used"] == []
+    # with the third camera sure every pair is used
     for moving_b in (False, True):
         used, msgs, stats = _run(moving_b=moving_b, sure_c=True)
         assert used == {("a", "b"): 12, ("a", "c"): 12, ("b", "c"): 12}
         assert not any("camera(s) only" in m for m in msgs)
         assert stats["geometric_joint"]["used"] == ["a", "b", "c"]
-
-
-def test_with_the_rule_before_two_moving_cameras_still_need_a_third():
-    """joint_min_sure 2: two sure static-and-moving cameras pair, two moving ones do not."""
-    used, msgs, _ = _run(moving_b=False, sure_c=False, min_sure=2)
-    assert used == {("a", "b"): 12, ("a", "c"): 0, ("b", "c"): 0}
-    used, msgs, _ = _run(moving_b=True, sure_c=False, min_sure=2)
-    assert used == {("a", "b"): 0, ("a", "c"): 0, ("b", "c"): 0}
-    assert any("sure of 2 camera(s) only" in m for m in msgs), msgs
 
 
 def test_transfer_matches_join_both_source_pairs_in_video_order():

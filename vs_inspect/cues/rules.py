@@ -26,7 +26,6 @@ RULES: dict[str, str] = {
     "pair_share": "estimated cameras: a sure camera whose own pair votes elsewhere is not sure",
     "other_model": "a later model's sure camera must meet the first model's vote peaks",
     "transfer": "an unsure camera is made sure when point transfer confirms its joint offset",
-    "min_sure": "a pair's joint Δ is used only when three cameras are sure (a closed triangle)",
     "moving_pair_third": "two moving cameras' joint Δ needs a third sure camera",
     "descriptor_filter": "descriptor pairs are kept only where consistent at the joint Δ",
     "triangle_fallback": "when the joint vote is sure of fewer than two cameras, vote peaks that close every triangle decide",

@@ -285,13 +285,6 @@ def _transfer_source(a: str, b: str, sure: dict[str, bool], cameras: dict, third
     return not (third and cameras[a].is_moving and cameras[b].is_moving) or sum(sure.values()) >= 3
 
 
-def _joint_pair_used(a: str, b: str, sure: dict[str, bool], cameras: dict, min_sure: int, third: bool = True) -> bool:
-    """Whether the joint vote's Δ of pair (a, b) is trusted: a transfer source, and at least
-    min_sure cameras sure in all (GeometricPairConfig.joint_min_sure: 3 = a closed triangle of
-    sure cameras confirms it; see _add_joint_pairs)."""
-    return _transfer_source(a, b, sure, cameras, third) and sum(sure.values()) >= min_sure
-
-
 def _sure_pairs(found: dict, joint, sure: dict[str, bool], cameras: dict, third: bool = True) -> dict:
     """The supporters of the joint Δ of every pair that point transfer may triangulate
     (_transfer_source)."""
@@ -444,9 +437,9 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                      ) -> tuple[dict, dict, dict, JointVoteRecord, dict]:
     """(pairs, {(a, b): the joint Δ_ab whose supporters were added}, {(a, b): PairVoteSummary},
     the JointVoteRecord, {(a, b): that Δ_ab or None for every pair}): the supporters of the jointly chosen offsets
-    (geometric_pairs.joint_offsets) for every pair whose Δ is trusted (_joint_pair_used: both
-    cameras' offsets won by at least joint_min_margin, or point transfer confirmed them, and
-    joint_min_sure cameras are sure; sure: camera -> whether it is, said: what the checks after
+    (geometric_pairs.joint_offsets) for every pair whose Δ is trusted (_transfer_source: both
+    cameras' offsets won by at least joint_min_margin, or point transfer confirmed them, and a
+    third camera sure too when both move; sure: camera -> whether it is, said: what the checks after
     the vote said, for result.json); nothing for the others. A descriptor pair is kept only if it
     is epipolar-consistent at the joint Δ (with joint_filter_descriptor): the descriptor pairs are
     mostly wrong on small moving objects (BENCHMARKS.md), and the joint Δ is the best evidence
@@ -455,8 +448,7 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
 
     # the pairs whose joint Δ is trusted, and that Δ: the one decision everything below reads
     used = {(a, b): joint.offsets_s[b] - joint.offsets_s[a] for a, b in found
-            if _joint_pair_used(a, b, sure, cameras, cfg.geometric.joint_min_sure if "min_sure" in rules else 2,
-                                "moving_pair_third" in rules)}
+            if _transfer_source(a, b, sure, cameras, "moving_pair_third" in rules)}
     record = JointVoteRecord(joint.origin, {n: round(o, 4) for n, o in joint.offsets_s.items()},
                              round(joint.score, 2), {n: round(m, 2) for n, m in joint.margin.items()},
                              tuple(sorted(n for n, ok in sure.items() if ok)), tuple(sorted({n for k in used for n in k})),
@@ -481,14 +473,13 @@ def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cam
                + ("; point transfer did not confirm them" if transfer else ""))
         say(notes, msg)
         log.info(msg)
-    # a Δ only when a third camera is sure too (a closed triangle confirms it): with a single
-    # sure pair nothing checks it, and Stage 1 accepts the minimum its own supporters make, right
-    # or wrong
+    # two moving cameras' Δ only when a third camera is sure too: their per-frame geometry lets
+    # wrong tracks fit one wrong offset
     unconfirmed = {(a, b) for (a, b) in found if sure.get(a) and sure.get(b) and (a, b) not in used}
     if unconfirmed:
         names = ", ".join(sorted(f"{a}__{b}" for a, b in unconfirmed))
-        msg = (f"geometric track pairs not used for {names}: the joint vote is sure of "
-               f"{sum(sure.values())} camera(s) only, so no triangle of sure cameras confirms their Δ")
+        msg = (f"geometric track pairs not used for {names}: both cameras move and the joint vote is "
+               f"sure of {sum(sure.values())} camera(s) only, so no third camera confirms their Δ")
         say(notes, msg)
         log.info(msg)
     out, summaries, chosen = dict(pairs), {}, {}
