@@ -31,8 +31,6 @@ from .errors import VsInspectError
 log = logging.getLogger(__name__)
 
 EXIT_FAILED = 2
-EXIT_INTERRUPTED = 130   # 128 + SIGINT
-EXIT_TERMINATED = 143    # 128 + SIGTERM
 
 # every command, in the order --help lists them
 COMMANDS = (bench, calib, calibrate_board, cues, demo, eval_command, export, import_drone,
@@ -155,5 +153,5 @@ def _main(argv: list[str] | None) -> int:
 def _stopped(signum: int) -> int:
     signals.remove_temporaries()  # what no context manager removed (normally nothing)
     signals.announce(signum)
-    return EXIT_TERMINATED if signum == signal.SIGTERM else 128 + signum
+    return 128 + signum  # 130 for SIGINT, 143 for SIGTERM
 

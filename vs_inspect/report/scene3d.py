@@ -54,11 +54,6 @@ def nice_ticks(lo: float, hi: float, max_ticks: int = 6) -> tuple[float, float, 
     return lo2, hi2, round((hi2 - lo2) / step) + 1, decimals
 
 
-def _title_lines(text: str, width: int) -> str:
-    import textwrap
-    return "\n".join(textwrap.wrap(text, width))
-
-
 def render_scene(data: ReportData, path: Path, size: tuple[int, int], dpi: float = 200.0,
                  formats: tuple[str, ...] = ("png",)) -> Path:
     """The 3D scene in a figure of size (px at dpi): the off-screen render (cameras with their
