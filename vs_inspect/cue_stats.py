@@ -365,6 +365,31 @@ class HeadsRecord:
     failed: dict[str, str] | None = None
 
 
+@dataclass(frozen=True)
+class PeoplePairRecord:
+    """One pair of videos as their people timed it (types.PeoplePair, in short)."""
+
+    offset_s: float | None  # Δ_ab, s; None: refused
+    offset_std_s: float | None  # its 1-sigma, s
+    reason: str  # why taken, or why refused
+    people_associated: int  # people both videos see, paired up
+
+
+@dataclass(frozen=True)
+class PeopleRecord:
+    """The people cue's run (None in CueStats: not tried)."""
+
+    kept: bool  # its cameras were the ones used
+    why: str  # why it was tried, and why its cameras were kept or not
+    reference: str
+    people: dict[str, int]  # video -> people followed
+    pairs: dict[str, PeoplePairRecord]  # "a__b" -> its verdict
+    offsets_s: dict[str, float]  # video -> offset from the accepted pairs, s
+    refused: dict[str, str]  # video -> why the people give it no camera
+    reprojection_px: dict[str, float]  # placed video -> median reprojection of its landmarks, px
+    timings_s: dict[str, float]  # "people", "pairs", "cameras", "total"
+
+
 # ---- Stage 0 as a whole ------------------------------------------------------------------------
 
 
@@ -384,6 +409,7 @@ class CueStats:
     sfm: SfmRecord | None = None  # estimated cameras (None: calibrated)
     geometric_joint: JointVoteRecord | None = None
     heads: HeadsRecord | None = None
+    people: PeopleRecord | None = None
 
     def to_json(self) -> dict[str, Any]:
         """result.json's "cues" (the timings go with the run's)."""
@@ -405,7 +431,8 @@ class CueStats:
                         dict(d.get("dropped") or {}), dict(timings_s or {}), d.get("geometric_peaks"),
                         SfmRecord.from_json(d["sfm"]) if d.get("sfm") else None,
                         from_json(JointVoteRecord | None, d.get("geometric_joint")),
-                        from_json(HeadsRecord | None, d.get("heads")))
+                        from_json(HeadsRecord | None, d.get("heads")),
+                        from_json(PeopleRecord | None, d.get("people")))
 
     def refused_in_three_views(self) -> list[str]:
         """The cameras Stage 0's three-view check refused, by name."""

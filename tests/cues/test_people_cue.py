@@ -98,6 +98,8 @@ def test_recording(cue, tmp_path):
     rec.flush()
     rec.disconnect()
     assert path.stat().st_size > 10_000
+    out = rerun_verify(path, tmp_path)
+    assert out.returncode == 0, out.stderr
     assert rerun_verify(path, tmp_path).returncode == 0
 
 
@@ -123,3 +125,51 @@ def test_a_real_pair_of_webcams(shared_data):
     frame = float(np.median(np.diff(times["cam_2"])))
     assert abs(pair.offset_s - truth) < frame, (pair.offset_s, truth)
     assert set(cue.cameras) == {"cam_2", "cam_3"} and not cue.refused
+
+
+def test_camera_set_of_the_cue(cue):
+    """Stage 0's camera source: the cue's cameras, its landmark tracks and pairs; every placed video timed."""
+    from vs_inspect.cues.cameras.people import SOURCE, people_camera_set
+
+    s = people_camera_set(cue)
+    assert s.source == SOURCE and set(s.cameras) == set(OFFSETS) == set(s.used)
+    assert set(s.pairs) == set(cue.track_pairs) and s.undistort == {}
+    for v, t in s.tracks.items():
+        assert t.xy.shape[1] == len(cue.people[v].times_s)
+    assert any("placed by the people" in n.message for n in s.notes)
+
+
+def test_people_replace_the_background_only_when_they_time_more(cue):
+    import dataclasses
+
+    from vs_inspect.cue_stats import CueStats
+    from vs_inspect.cues.cameras.people import people_camera_set, wants_people
+    from vs_inspect.cues.config import CueConfig
+    from vs_inspect.pipeline.stage0 import _with_people
+
+    background = people_camera_set(cue)
+    none_timed = dataclasses.replace(background, used=frozenset(), source="estimated")
+    assert wants_people(CueConfig(), none_timed, 3) and not wants_people(CueConfig(), background, 3)
+    assert not wants_people(CueConfig(), none_timed, 1)  # the cue places static cameras only
+    assert wants_people(CueConfig(people="only"), background, 3)
+    assert not wants_people(CueConfig(people="off"), none_timed, 3)
+    kept, rec = _with_people(none_timed, cue)
+    assert kept.source != "estimated" and rec.kept and "people 3" in rec.why
+    kept, rec = _with_people(dataclasses.replace(background, source="estimated"), cue)
+    assert kept.source == "estimated" and not rec.kept
+    # result.json keeps the record
+    stats = CueStats("x", 3, 0, 0, {}, {}, {}, {}, people=rec)
+    back = CueStats.from_json(stats.to_json())
+    assert back.people == rec and set(back.people.pairs) == {"a__b", "a__c", "b__c"}
+
+
+def test_recorded_through_the_sink(cue, tmp_path):
+    from tests.record.test_rerun_sink import rerun_verify
+    from vs_inspect.record.rerun_sink import RerunSink
+
+    path = tmp_path / "people.rrd"
+    with RerunSink(path) as sink:
+        sink.people_cue(cue)
+    out = rerun_verify(path, tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert path.stat().st_size > 10_000

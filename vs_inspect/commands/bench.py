@@ -339,36 +339,35 @@ def _run_drone(args) -> int:
 
 def _people(benches, name):
     from ..bench.people import SCENES
+    from ..cues.config import PEOPLE_MODES
 
     q = _parser(benches, name, "people as cross-view correspondences: cameras and offsets from video alone",
-                "Finds and follows the people of every video (BlazePose), pairs them up across videos "
-                "with each pair's epipolar geometry and time shift, makes cameras from those pairs (no "
-                "background cameras), then runs Stage 1 + 2 on the landmarks; prints each video's error "
-                "against the truth, the reason of every null and the seconds spent, beside the "
-                "VisualSync paper's numbers.", _run_people)
+                "Runs each scene through the pipeline as `vs-inspect sync` does, with no calibration and "
+                "the people in view as Stage 0's camera source (--people only: the background's cameras "
+                "turned off; auto: as sync runs by default); prints each video's error against the "
+                "truth, the people cue's own error before Stage 1, the reason of every null and the "
+                "seconds spent, beside the VisualSync paper's numbers.", _run_people)
     q.add_argument("--scenes", nargs="+", default=list(SCENES), choices=list(SCENES),
                    help=f"scenes (default: {' '.join(SCENES)})")
     q.add_argument("--data", type=Path, default=None, help=DATA_HELP)
-    q.add_argument("--range-s", type=float, default=None, help="search only |Δ| <= this many seconds")
-    q.add_argument("--min-overlap-s", type=float, default=1.0, help="least common time of two videos (s)")
+    q.add_argument("--people", default="only", choices=[m for m in PEOPLE_MODES if m != "off"],
+                   help="the people's cameras alone (only, default) or when the background's time no video (auto)")
+    q.add_argument("--workdir", type=Path, default=None,
+                   help="where the run folders and caliscope's cut videos go (default: a temporary folder)")
     q.add_argument("--seed", type=int, default=0, help="seed of caliscope's leading cuts")
-    q.add_argument("--rrd", type=Path, default=None, metavar="DIR",
-                   help="write each scene's people cue as a recording people-<scene>.rrd into DIR")
-    q.add_argument("--people", type=Path, default=None, metavar="DIR",
-                   help="reuse each video's people saved in DIR by an earlier run (saved there when "
-                        "missing): the people step's time is then 0")
 
 
 def _run_people(args) -> int:
+    import tempfile
+
     from ..bench.people import format_table, run_benchmark
-    from ..geometry.offsets import OffsetGrid
 
     data = data_folder(args)
     if not data.is_dir():
         raise InputError(f"{data}: no data folder (give --data or set VS_INSPECT_DATA)")
-    grid = OffsetGrid(min_overlap_s=args.min_overlap_s, range_s=args.range_s)
-    runs = run_benchmark(data, args.scenes, grid, seed=args.seed, rrd_folder=args.rrd,
-                         people_folder=args.people, log=lambda s: print(s, flush=True))
+    with tempfile.TemporaryDirectory(prefix="vs-inspect-people-") as tmp:
+        runs = run_benchmark(data, args.workdir or Path(tmp), args.scenes, args.people, seed=args.seed,
+                             log=lambda s: print(s, flush=True))
     print()
     print(format_table(runs))
     return 0

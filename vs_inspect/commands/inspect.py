@@ -53,6 +53,19 @@ def _opt(x: float) -> float | None:
     return x if math.isfinite(x) else None
 
 
+def _people_lines(people) -> str:
+    """What the people in view gave Stage 0 (cue_stats.PeopleRecord), a few lines."""
+    lines = [f"\npeople as correspondences ({'their cameras used' if people.kept else 'not used'}): {people.why}",
+             "  people followed: " + ", ".join(f"{v} {n}" for v, n in people.people.items())]
+    for key, p in people.pairs.items():
+        shift = "refused" if p.offset_s is None else f"Δ {p.offset_s:+.4f} s" + (
+            f" ± {p.offset_std_s:.4f}" if p.offset_std_s is not None else "")
+        lines.append(f"  {key:<24} {shift}, {p.people_associated} people paired: {p.reason}")
+    for v, why in people.refused.items():
+        lines.append(f"  {v}: no camera: {why}")
+    return "\n".join(lines)
+
+
 def run(args: argparse.Namespace) -> int:
     from ..analysis.diagnose import CAUSE_LOOPS, CAUSE_MEANING, diagnose
     from ..io.recording import pair_key, read_recording
@@ -81,6 +94,9 @@ def run(args: argparse.Namespace) -> int:
                         frame_s if truth else None))
     if sign_in_words(res.offsets_s, res.reference):
         print(sign_in_words(res.offsets_s, res.reference))
+
+    if res.cues is not None and res.cues.people is not None:
+        print(_people_lines(res.cues.people))
 
     diag = diagnose(res, rec.videos, truth)
     by_key = {c.key: c for c in diag.checks}

@@ -11,6 +11,7 @@ from ..errors import check_fields
 from .features import FEATURES
 
 CAMERA_FEATURES = tuple(FEATURES) + ("auto",)
+PEOPLE_MODES = ("auto", "only", "off")
 
 
 def _check_numbers(cfg, positive: tuple[str, ...] = (), signed: tuple[str, ...] = ()) -> None:
@@ -118,11 +119,18 @@ class CueConfig:
         "help": "do not look for people's heads when a camera moves (MediaPipe BlazePose, when installed: "
                 "the worn-camera sightings)"})
     """When a camera moves, time a worn camera by its wearer's head seen in the others (MediaPipe BlazePose)."""
+    people: str = field(default="auto", metadata={
+        "flag": "--people", "choices": PEOPLE_MODES,
+        "help": "people as cross-view correspondences (MediaPipe BlazePose): auto = when the background's cameras "
+                "time no video; only = the people's cameras alone; off = never"})
+    """Cameras from the people in view (cues/people_cue.py): auto when the background's cameras time no video, only, or off."""
     geometric: GeometricPairConfig = field(default_factory=GeometricPairConfig)
     camera: CameraConfig = field(default_factory=CameraConfig)
 
     def __post_init__(self) -> None:
         check_fields(self, positive=("max_side", "max_tracks", "keyframes"))
+        if self.people not in PEOPLE_MODES:
+            raise ValueError(f"unknown people mode {self.people!r}: use {', '.join(PEOPLE_MODES)}")
         bad = {n: m for n, m in self.camera_motion.items() if m not in ("static", "moving")}
         if bad:
             raise ValueError(f"camera_motion must map video names to static or moving, got {bad}")

@@ -9,7 +9,8 @@ NoUsableVideos carries those reasons instead of a bundle.
     2. each video's own cues: decoding, moving regions, tracks, keyframe features (engine tasks)
     3. descriptor track pairs between every two videos
     4. the cameras: the calibration's, or estimated camera sets; each voted on (the geometric
-       track pairs and the joint vote), the set the vote trusts most kept
+       track pairs and the joint vote), the set the vote trusts most kept; when the background's
+       sets time no video, the people in view (their landmarks as correspondences)
     5. the people's heads, when a camera moves (the worn-camera sightings)
     6. the bundle of the videos with a camera, and CueStats
 """
@@ -35,7 +36,9 @@ from ..errors import BadVideoName, InputError, NoUsableVideos
 from ..cues.rules import ALL
 from ..geometry.offsets import OffsetGrid
 from ..geometry.point_cloud import clean_point_cloud
+from ..cues.cameras.people import wants_people
 from ..memo import NO_MEMO, Memo, digest
+from ..progress import stage
 from ..record.sink import NullSink, Sink
 from ..sync.config import SyncConfig
 from ..types import CueBundle, TrackPairs
@@ -144,14 +147,21 @@ def _stage0(sources, calibration: dict | None, cfg: CueConfig, sink: Sink, progr
         t0 = time.perf_counter()
         all_pairs, matched = _descriptor_pairs([n for n in names if n in vids], vids, sink, progress, memo)
         timings["matching_s"] = time.perf_counter() - t0
-        # 4. the cameras, voted on
+        # 4. the cameras, voted on; the people in view when the background's time no video
         t0 = time.perf_counter()
-        kept = _cameras(sources, vids, all_pairs, calibration, cfg, progress, grid, rules, memo)
+        kept = None if calibration is None and cfg.people == "only" else \
+            _cameras(sources, vids, all_pairs, calibration, cfg, progress, grid, rules, memo)
+        if kept is not None:
+            timings["cameras_s"] = time.perf_counter() - t0 - kept.voting_s
+            if cfg.geometric.enabled:
+                timings["geometric_pairs_s"] = kept.voting_s
+        people_record = None
+        if calibration is None and wants_people(cfg, kept, sum(v.camera_motion != "moving" for v in vids.values())):
+            t0 = time.perf_counter()
+            kept, people_record = _people_cameras(sources, vids, kept, cfg, sink, engine, progress, grid, memo)
+            timings["people_s"] = time.perf_counter() - t0
         _report_cameras(sink, kept)
         dropped.update(kept.dropped)
-        timings["cameras_s"] = time.perf_counter() - t0 - kept.voting_s
-        if cfg.geometric.enabled:
-            timings["geometric_pairs_s"] = kept.voting_s
         # 5. the heads
         heads, heads_record = {}, None
         if cfg.heads and any(c.is_moving for c in kept.cameras.values()):
@@ -182,7 +192,7 @@ def _stage0(sources, calibration: dict | None, cfg: CueConfig, sink: Sink, progr
                                                 votes.get((a, b)), transfer_new.get((a, b)))
                       for (a, b), ps in matched.items()},
                      dict(dropped), timings, pairing.status if pairing is not None else None, kept.sfm,
-                     pairing.joint if pairing is not None else None, heads_record)
+                     pairing.joint if pairing is not None else None, heads_record, people_record)
     usable = [n for n in names if n in cameras]
     if not usable:
         reasons = "; ".join(f"{n}: {r}" for n, r in dropped.items())
@@ -279,6 +289,47 @@ def _cameras(sources, vids: dict, all_pairs: dict, calibration: dict | None, cfg
     frame_images = {n: (functools.partial(registration_images, by_name[n], v, cfg), len(v.register_masks[0]))
                     for n, v in vids.items() if v.register_masks is not None}
     return estimated_cameras(vids, cfg, all_pairs, frame_images, progress, grid, rules, memo)
+
+
+def _people_cameras(sources, vids: dict, kept, cfg: CueConfig, sink: Sink, engine: Engine, progress: bool,
+                    grid: OffsetGrid, memo: Memo = NO_MEMO):
+    """Step 4's last source, the people in view (cues/people_cue.py), reported to the sink:
+    (the camera set kept, cue_stats.PeopleRecord or None). kept: the background's set (None: not
+    estimated). When the people cue fails, the background's set stands."""
+    from ..cues.people_cue import PeopleCueConfig, find_people_cameras
+
+    read = [s for s in sources if s.info.name in vids]
+    motion = {n: v.camera_motion for n, v in vids.items()}
+    key = f"people-{digest([(str(s.path), s.info) for s in read], motion, grid)}"
+    try:
+        with stage("cameras: the people in view as correspondences (BlazePose)", progress):
+            cue = memo.get(key, lambda: find_people_cameras(read, grid, PeopleCueConfig(), engine=engine,
+                                                            progress=progress, camera_motion=motion))
+    except Exception as exc:  # one more opinion: its failure leaves the background's standing
+        if kept is None:
+            raise
+        log.warning("the people cue failed (%s: %s)", type(exc).__name__, exc)
+        sink.stage_event("cameras", f"the people cue failed ({type(exc).__name__}: {exc})")
+        return kept, None
+    sink.people_cue(cue)
+    return _with_people(kept, cue)
+
+
+def _with_people(kept, cue):
+    """(the camera set kept, cue_stats.PeopleRecord): the people's set when it times more videos
+    than the background's (kept; None: not estimated), else kept."""
+    from ..cues.cameras.people import people_camera_set, people_record
+
+    people = people_camera_set(cue)
+    if kept is None:
+        return people, people_record(cue, True, "the people alone were asked for (--people only)")
+    if len(people.used) > len(kept.used):
+        why = (f"the background's cameras timed {len(kept.used)} video(s), the people {len(people.used)}: "
+               "the people's cameras were used")
+        return people, people_record(cue, True, why)
+    why = (f"the background's cameras timed {len(kept.used)} video(s), the people {len(people.used)}: "
+           "the background's cameras were kept")
+    return kept, people_record(cue, False, why)
 
 
 def _report_cameras(sink: Sink, kept) -> None:

@@ -45,7 +45,7 @@ from ..io.recording import (APPLICATION_ID, CUES_THREE_VIEW, CUES_TRANSFER, GUID
 from ..analysis.display_names import display_names as short_names_of, legend_lines
 from ..analysis.record_views import over_range
 from ..io.result import run_result_to_dict
-from ..types import CameraTrack, CueBundle, PairLandscape, RunResult, SyncResult, VideoInfo
+from ..types import CameraTrack, CueBundle, PairLandscape, PeopleCue, RunResult, SyncResult, VideoInfo
 from .blueprint import MAX_PAIR_CONTAINERS, blueprint, pair_order
 from ..analysis.record_options import RecordOptions
 from .sink import Sink
@@ -329,6 +329,12 @@ class RerunSink(Sink):
     # ---- Stage 1 and 2 hooks ----
 
     @_timed
+    @_timed
+    def people_cue(self, cue: PeopleCue) -> None:
+        from .people import log_people_cue
+
+        log_people_cue(self.rec, cue)
+
     def bundle(self, bundle: CueBundle) -> None:
         self._entities = check_entity_names([v.name for v in bundle.videos], self._entities)
         self._bundle = bundle

@@ -14,7 +14,7 @@ if TYPE_CHECKING:
     import numpy as np
 
     from ..analysis.record_views import PairRecordView, RunRecordView
-    from ..types import CameraTrack, CueBundle, PairLandscape, RunResult, SyncResult, VideoInfo
+    from ..types import CameraTrack, CueBundle, PairLandscape, PeopleCue, RunResult, SyncResult, VideoInfo
     from ..analysis.record_options import RecordOptions
 
 
@@ -67,6 +67,10 @@ class Sink:
         """Cameras of all videos in one world frame, and the static 3D points (N,3) with (N,3) uint8 colours."""
 
     # ---- Stage 1 and 2 ----
+
+    def people_cue(self, cue: PeopleCue) -> None:
+        """What the people in view gave Stage 0: their landmarks per video, each pair's shift
+        evidence and verdict, the cameras they placed."""
 
     def bundle(self, bundle: CueBundle) -> None:
         """Videos, cameras and tracks that Stage 1 starts from."""
