@@ -173,3 +173,29 @@ def test_recorded_through_the_sink(cue, tmp_path):
     out = rerun_verify(path, tmp_path)
     assert out.returncode == 0, out.stderr
     assert path.stat().st_size > 10_000
+
+
+def test_the_moving_points_are_voted_on_near_the_people_offsets(cue):
+    from vs_inspect.cues.cameras.people import people_grid
+
+    grid = people_grid(cue, GRID, frames=2.0)
+    assert grid.reference == "a" and grid.min_overlap_s == GRID.min_overlap_s
+    for v, truth in OFFSETS.items():
+        lo, hi = grid.video_window(v)
+        assert lo <= cue.offsets_s[v] <= hi and hi - lo <= 4.0 / FPS + 1e-9
+    lo, hi = grid.pair_window("b", "c")
+    assert lo <= OFFSETS["c"] - OFFSETS["b"] <= hi
+
+
+def test_a_pairs_moving_point_rows_and_landmark_rows_joined():
+    from vs_inspect.cues.cameras.people import _joined
+    from vs_inspect.types import TrackPairs
+
+    moving = TrackPairs("a", "b", np.array([[0, 1], [2, 3]]), unchecked=np.array([True, False]),
+                        chosen_at_offset_s=0.5)
+    landmark = TrackPairs("a", "b", np.array([[0, 0], [1, 2]]))
+    j = _joined("a", "b", moving, landmark, 10, 20)
+    assert j.index.tolist() == [[0, 1], [2, 3], [10, 20], [11, 22]]
+    assert j.unchecked is None and j.chosen_at_offset_s == 0.5 and j.weight is None
+    alone = _joined("a", "b", None, landmark, 10, 20)
+    assert alone.index.tolist() == [[10, 20], [11, 22]] and alone.chosen_at_offset_s is None

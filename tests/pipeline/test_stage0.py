@@ -49,3 +49,31 @@ def test_cues_report_nothing_themselves():
                 assert package not in ("record", "analysis"), (path.name, node.module)
             assert not (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name)
                         and node.value.id == "sink"), (path.name, node.lineno)
+
+
+def test_people_only_on_worn_cameras_gives_nulls_with_the_reason(shared_data, tmp_path):
+    """Stage 0 with the people as its only camera source, on three real head-worn cameras (the
+    first 30 frames of each): the people cue runs through the controller and refuses every
+    camera as moving, and the run stops with each video's reason and the cue's record."""
+    from vs_inspect.errors import NoUsableVideos
+    from vs_inspect.io.video import VideoWriter, iter_frames, open_video
+    from vs_inspect.pipeline.stage0 import run_stage0
+
+    clips = sorted((shared_data / "visualsync_clips" / "fencing1").glob("*.mp4"))
+    if len(clips) < 2:
+        pytest.skip(f"no fencing1 clips in {shared_data}")
+    paths = []
+    for clip in clips:
+        src = open_video(clip)
+        paths.append(tmp_path / clip.name)
+        with VideoWriter(paths[-1], src.info.width, src.info.height, src.info.fps, crf=18) as w:
+            for k, img in iter_frames(src):
+                if k < 30:
+                    w.write(img)
+    with pytest.raises(NoUsableVideos) as err:
+        run_stage0(paths, cfg=CueConfig(people="only"), progress=False)
+    stats = err.value.stats
+    assert stats.people is not None and stats.people.kept
+    assert set(stats.people.refused) == {p.stem for p in paths}
+    for p in paths:
+        assert "moving camera" in stats.dropped[p.stem], stats.dropped[p.stem]

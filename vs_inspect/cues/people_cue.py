@@ -21,6 +21,7 @@ Entry point: find_people_cameras(videos, grid, config) -> types.PeopleCue.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 from collections.abc import Sequence
@@ -29,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..engine import Engine, LocalEngine, TaskFailed
+from ..memo import NO_MEMO, Memo, digest
 from ..geometry.offsets import OffsetGrid, span_of
 from ..geometry.people_rig import (Observations, PairF, PairPose, bundle_adjust, chain_poses, focals_from_pairs,
                                    intrinsics, pair_pose, register_views)
@@ -98,13 +100,14 @@ def _pair_task(shared, item) -> PeoplePair:
 
 def find_people_cameras(videos: Sequence, grid: OffsetGrid = OffsetGrid(), config: PeopleCueConfig = PeopleCueConfig(),
                         reference: str | None = None, engine: Engine | None = None, progress: bool = False,
-                        camera_motion: dict[str, str] | None = None) -> PeopleCue:
+                        camera_motion: dict[str, str] | None = None, memo: Memo = NO_MEMO) -> PeopleCue:
     """The people cue of the videos (opened io.video.VideoSource's or VideoFrames): people, pair
     geometries, offsets, cameras and landmark track pairs; reference (default: the grid's, else
     the first video) has offset 0. engine: where the per-video and per-pair work runs (default:
     this process, two videos at a time on threads). camera_motion: {video: "static" | "moving"}
     known (else measured from each video's background); a moving camera is refused (its F
-    changes from frame to frame: this cue fits one per pair)."""
+    changes from frame to frame: this cue fits one per pair). memo: where each video's people are
+    kept (default: nowhere)."""
     t0 = time.perf_counter()
     engine = engine or LocalEngine()
     infos = {v.info.name: v.info for v in videos}
@@ -120,20 +123,24 @@ def find_people_cameras(videos: Sequence, grid: OffsetGrid = OffsetGrid(), confi
     people: dict[str, VideoPeople] = {}
     failed: dict[str, str] = {}
     motions: dict[str, float] = {}
-    for v, out in zip(videos, engine.map(_people_task, list(videos), shared=config.video, desc="people",
-                                         unit="video", progress=progress, threads=True)):
+    keys = {v.info.name: f"people-video-{v.info.name}-{digest(str(getattr(v, 'path', '')), v.info, config.video)}"
+            for v in videos}
+    todo = [v for v in videos if not memo.has(keys[v.info.name])]
+    done = dict(zip([v.info.name for v in todo], engine.map(_people_task, todo, shared=config.video, desc="people",
+                                                            unit="video", progress=progress, threads=True)))
+    for v in videos:
         n = v.info.name
+        out = done[n] if n in done else memo.get(keys[n], lambda: None)
         if isinstance(out, TaskFailed):
             failed[n] = f"finding its people failed: {out.reason}"
             continue
-        people[n], motions[n] = out
+        people[n], motions[n] = memo.get(keys[n], lambda: out)
     failed.update(moving_cameras(motions, config, camera_motion))
     timings["people"] = time.perf_counter() - t0
 
     cue = cameras_from_people(people, [infos[n] for n in names], grid, config, reference, engine, progress, failed)
-    return PeopleCue(cue.videos, cue.reference, cue.people, cue.pairs, cue.offsets_s, cue.cameras, cue.refused,
-                     cue.tracks, cue.track_pairs, cue.points_world, cue.reprojection_px, cue.landmarks,
-                     {**timings, **cue.timings_s, "total": time.perf_counter() - t0}, motions)
+    return dataclasses.replace(cue, timings_s={**timings, **cue.timings_s, "total": time.perf_counter() - t0},
+                               background_motion_px=motions)
 
 
 def moving_cameras(background_motion_px: dict[str, float], config: PeopleCueConfig = PeopleCueConfig(),
@@ -178,11 +185,12 @@ def cameras_from_people(people: dict[str, VideoPeople], videos: Sequence[VideoIn
     for v in names:
         if v not in usable:
             refused[v] = (failed or {}).get(v, "no people found")
-    placed = [v for v in names if v in offsets]
+    placed = [v for v in names if v in offsets and v in usable]  # the reference too only when usable
     identity, flip = _identities(people, kept)
     cameras, points, reproj, cam_refused = _cameras(placed, reference, infos, people, kept, offsets, identity, flip,
                                                     config)
-    refused.update(cam_refused)
+    for v, why in cam_refused.items():  # a video left out earlier keeps its first reason
+        refused.setdefault(v, why)
     timings["cameras"] = time.perf_counter() - t1
 
     L = len(config.pairs.landmarks)

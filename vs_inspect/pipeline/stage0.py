@@ -158,7 +158,8 @@ def _stage0(sources, calibration: dict | None, cfg: CueConfig, sink: Sink, progr
         people_record = None
         if calibration is None and wants_people(cfg, kept, sum(v.camera_motion != "moving" for v in vids.values())):
             t0 = time.perf_counter()
-            kept, people_record = _people_cameras(sources, vids, kept, cfg, sink, engine, progress, grid, memo)
+            kept, people_record = _people_cameras(sources, vids, all_pairs, kept, cfg, sink, engine, progress, grid,
+                                                  rules, memo)
             timings["people_s"] = time.perf_counter() - t0
         _report_cameras(sink, kept)
         dropped.update(kept.dropped)
@@ -291,20 +292,20 @@ def _cameras(sources, vids: dict, all_pairs: dict, calibration: dict | None, cfg
     return estimated_cameras(vids, cfg, all_pairs, frame_images, progress, grid, rules, memo)
 
 
-def _people_cameras(sources, vids: dict, kept, cfg: CueConfig, sink: Sink, engine: Engine, progress: bool,
-                    grid: OffsetGrid, memo: Memo = NO_MEMO):
+def _people_cameras(sources, vids: dict, all_pairs: dict, kept, cfg: CueConfig, sink: Sink, engine: Engine,
+                    progress: bool, grid: OffsetGrid, rules: frozenset[str] = ALL, memo: Memo = NO_MEMO):
     """Step 4's last source, the people in view (cues/people_cue.py), reported to the sink:
     (the camera set kept, cue_stats.PeopleRecord or None). kept: the background's set (None: not
     estimated). When the people cue fails, the background's set stands."""
+    from ..cues.cameras.people import with_moving_points
     from ..cues.people_cue import PeopleCueConfig, find_people_cameras
 
     read = [s for s in sources if s.info.name in vids]
     motion = {n: v.camera_motion for n, v in vids.items()}
-    key = f"people-{digest([(str(s.path), s.info) for s in read], motion, grid)}"
     try:
         with stage("cameras: the people in view as correspondences (BlazePose)", progress):
-            cue = memo.get(key, lambda: find_people_cameras(read, grid, PeopleCueConfig(), engine=engine,
-                                                            progress=progress, camera_motion=motion))
+            cue = find_people_cameras(read, grid, PeopleCueConfig(), engine=engine, progress=progress,
+                                      camera_motion=motion, memo=memo)
     except Exception as exc:  # one more opinion: its failure leaves the background's standing
         if kept is None:
             raise
@@ -312,7 +313,10 @@ def _people_cameras(sources, vids: dict, kept, cfg: CueConfig, sink: Sink, engin
         sink.stage_event("cameras", f"the people cue failed ({type(exc).__name__}: {exc})")
         return kept, None
     sink.people_cue(cue)
-    return _with_people(kept, cue)
+    kept, record = _with_people(kept, cue)
+    if record.kept and len(kept.cameras) >= 2:
+        kept = with_moving_points(kept, cue, vids, all_pairs, cfg, progress, grid, rules, memo)
+    return kept, record
 
 
 def _with_people(kept, cue):

@@ -1,20 +1,29 @@
 """Stage 0's last camera source: the people in view (cues/people_cue.py), for static cameras whose
 background gives no cameras to time them by (views 90° or more apart, little shared background).
 
-The cue's cameras come from the people's own landmarks, and so do the track pairs it hands to
-Stage 1: the same landmark of the same person in two views. Its offsets are the cue's own, each
-kept only when its pairs' shifts were sure (sync/people_pairs.py refuses a pair whose shift
-fits about as well a frame away); Stage 1 then times the videos on these pairs like any other.
-No I/O.
+The cue's cameras come from the people's own landmarks, and so do its first track pairs: the
+same landmark of the same person in two views. Its offsets are the cue's own, each kept only when
+its pairs' shifts were sure (sync/people_pairs.py refuses a pair whose shift fits about as well a
+frame away). The moving points then join (with_moving_points): their pairs are voted on with the
+people's cameras within a few frames of the people's offsets, as any estimated camera set's are,
+so that Stage 1 times each pair on both the landmarks and every moving point that follows the
+cameras' epipolar geometry. No I/O.
 """
 
 from __future__ import annotations
 
+import dataclasses
+
+import numpy as np
+
 from ...cue_stats import PeopleRecord, PeoplePairRecord
-from ...types import PeopleCue
+from ...geometry.offsets import OffsetGrid
+from ...memo import NO_MEMO, Memo
+from ...types import PeopleCue, TrackPairs, Tracks
 from ..config import CueConfig
 from ..records import Note, say_cameras
-from .choice import CameraSet
+from ..rules import ALL
+from .choice import CameraSet, vote_on_cameras
 
 SOURCE = "estimated from people (their landmarks as correspondences)"
 
@@ -56,3 +65,64 @@ def people_record(cue: PeopleCue, kept: bool, why: str) -> PeopleRecord:
          for p in cue.pairs},
         dict(cue.offsets_s), dict(cue.refused), {v: round(r, 2) for v, r in cue.reprojection_px.items()},
         {k: round(t, 2) for k, t in cue.timings_s.items()})
+
+
+WINDOW_FRAMES = 2.0
+"""The moving points are voted on within this many frames of each video's offset from the
+people (whose pairs are sure within a frame)."""
+
+
+def people_grid(cue: PeopleCue, grid: OffsetGrid, frames: float = WINDOW_FRAMES) -> OffsetGrid:
+    """grid with a window of frames frame lengths around each placed video's offset from the
+    people (their reference at 0)."""
+    frame_s = {v.name: v.frame_interval_s for v in cue.videos}
+    windows = tuple((v, o - frames * frame_s[v], o + frames * frame_s[v])
+                    for v, o in cue.offsets_s.items() if v in cue.cameras and v != cue.reference)
+    return dataclasses.replace(grid, windows_s=windows, reference=cue.reference)
+
+
+def with_moving_points(people: CameraSet, cue: PeopleCue, vids: dict, descriptor_pairs: dict, cfg: CueConfig,
+                       progress: bool, grid: OffsetGrid, rules: frozenset[str] = ALL,
+                       memo: Memo = NO_MEMO) -> CameraSet:
+    """people (people_camera_set's) with the moving points added: each placed video's point tracks
+    (before its landmarks), and the pairs the joint vote on the people's cameras keeps within the
+    people's windows (people_grid) besides the landmark pairs. The videos timed stay the people's."""
+    placed = list(people.cameras)
+    points = {n: Tracks(vids[n].xy_full, vids[n].instance) for n in placed}
+    voted = vote_on_cameras(CameraSet(dict(people.cameras), points, None, None, {}, {}, SOURCE), vids,
+                            descriptor_pairs, cfg, progress, estimated=True, grid=people_grid(cue, grid),
+                            rules=rules, memo=memo)
+    tracks, first_landmark = {}, {}
+    for n in placed:
+        p, lm = points[n], people.tracks[n]
+        first_landmark[n] = p.num_tracks
+        inst = p.instance if p.instance is not None else np.zeros(p.num_tracks, np.int64)
+        # the people's own instances after the moving regions'
+        tracks[n] = Tracks(np.concatenate([p.xy, lm.xy.astype(p.xy.dtype)]),
+                           np.concatenate([inst, lm.instance + int(inst.max(initial=0)) + 1]))
+    pairs = {}
+    for key in set(voted.pairs or {}) | set(people.pairs or {}):
+        a, b = key
+        moving = (voted.pairs or {}).get(key)
+        landmark = (people.pairs or {}).get(key)
+        pairs[key] = _joined(a, b, moving, landmark, first_landmark[a], first_landmark[b])
+    notes = people.notes + voted.notes
+    return dataclasses.replace(people, tracks=tracks, pairs=pairs, peaks=voted.peaks, voting_s=voted.voting_s,
+                               pairing=voted.pairing, notes=notes)
+
+
+def _joined(a: str, b: str, moving: TrackPairs | None, landmark: TrackPairs | None, shift_a: int,
+            shift_b: int) -> TrackPairs:
+    """One pair's moving-point rows and its landmark rows (indices moved past the point tracks).
+    The vote's Δ stays the pair's chosen one: the landmark rows fit it (the windows are the
+    people's). No row stays unchecked: the people's own pairs found both offsets sure, and the
+    vote's Δ lies within frames of theirs, a check independent of the moving points, as a third
+    camera's would be."""
+    rows = [] if moving is None else [moving.index]
+    weight = [] if moving is None else [moving.weight if moving.weight is not None else np.ones(len(moving.index))]
+    if landmark is not None:
+        rows.append(landmark.index + np.array([shift_a, shift_b]))
+        weight.append(landmark.weight if landmark.weight is not None else np.ones(len(landmark.index)))
+    any_weight = (moving is not None and moving.weight is not None) or (landmark is not None and landmark.weight is not None)
+    return TrackPairs(a, b, np.concatenate(rows), np.concatenate(weight) if any_weight else None,
+                      None, moving.chosen_at_offset_s if moving is not None else None)
