@@ -12,9 +12,18 @@ from ..cue_records import joint as joint_vote
 from vs_inspect.cue_stats import CueStats, VideoCueStats
 
 
-def _stats(source="estimated", dropped=None, note=None, joint=None, pairs=None):
+def _stats(source="estimated", dropped=None, note=None, joint=None, pairs=None, people=None):
     videos = {"v": VideoCueStats("v.mp4", "static", 0.1, 0.0 if note else 0.1, 0 if note else 50, 1, 10, 5, note)}
-    return CueStats(source, 3, 50, 10, videos, pairs or {}, dropped or {}, {}, "joint", None, joint)
+    return CueStats(source, 3, 50, 10, videos, pairs or {}, dropped or {}, {}, "joint", None, joint, people=people)
+
+
+def _people(dropped: str):
+    """Stage 0's record when the people's cameras were used and `v` was left out for `dropped`."""
+    from vs_inspect.cue_stats import PeopleRecord
+
+    record = PeopleRecord(True, "the people alone were asked for", "r", {"r": 2, "v": 1}, {}, {"r": 0.0},
+                          {"v": dropped}, {}, {})
+    return _stats("estimated from people", dropped={"v": dropped}, people=record)
 
 
 def _pair(reason, a="r", b="v"):
@@ -30,6 +39,13 @@ def _pair(reason, a="r", b="v"):
     (_stats(dropped={"v": "no reconstruction: too few matches"}), "", (),
      "its camera could not be placed from the background it shares with the other videos; try giving a "
      "calibration (--calib) or a video that shows more of that background"),
+    (_people("a moving camera (its background moves 4.0 px between frames): the people cue fits ..."), "", (),
+     "its camera moves, and the people in view time static cameras only"),
+    (_people("no people found"), "", (), "no person was followed in it, and the background gave no camera"),
+    (_people("no accepted pair of people links it to r (r__v: uncertain shift: from -8.80 to -8.40 s ...)"), "", (),
+     "the people it shares with the other videos move too slowly to time it within a frame"),
+    (_people("no accepted pair of people links it to r (r__v: ambiguous shift: ...)"), "", (),
+     "the people it shares with the other videos gave no clear time shift"),
     (_stats(joint=joint_vote({"v": 3.3})), "not connected", (),
      "its offset could not be confirmed by a third camera; try giving a calibration (--calib), a rough "
      "offset window (--range-s or --around) or another camera that sees the same motion"),

@@ -94,8 +94,8 @@ def format_scene(r: PeopleRun) -> str:
     t = (people.timings_s if people else {}) or {}
     lines = [f"{r.scene}: run {r.seconds:.1f} s, Stage 0 {(cues.timings_s if cues else {}).get('total_s', float('nan')):.1f} s, "
              f"people step {t.get('people', float('nan')):.1f} s, people pairs {t.get('pairs', float('nan')):.1f} s "
-             f"(load {r.load[0]:.1f} -> {r.load[1]:.1f} on {os.cpu_count()} cores); cameras: "
-             f"{cues.camera_source if cues else 'none'}"]
+             f"(load {r.load[0]:.1f} -> {r.load[1]:.1f} on {os.cpu_count()} cores); "
+             + (f"{cues.registered_cameras} camera(s) {cues.camera_source}" if cues else "no camera")]
     if people is not None:
         lines += [f"  {k}: " + ("refused" if p.offset_s is None else f"Δ {p.offset_s:+.3f} s") + f", {p.reason}"
                   for k, p in people.pairs.items()]

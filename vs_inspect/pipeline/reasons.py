@@ -40,6 +40,8 @@ def plain_reason(video: str, why: str, stats: CueStats | None, pairs: Sequence[A
     if note is not None:
         return ("nothing moving was found in it to follow; it needs people or objects that move in view "
                 "of another camera too")
+    if dropped is not None and stats.people is not None and stats.people.kept:
+        return _people_reason(dropped)
     if dropped is not None:
         if calibrated:
             return ("the calibration gives no usable camera for it; check that the calibration names this "
@@ -69,6 +71,19 @@ def plain_reason(video: str, why: str, stats: CueStats | None, pairs: Sequence[A
     if mine and all("track pairs" in r for r in mine):
         return "too little of its motion could be matched with another video's" + _try(calib, CAMERA)
     return "no pair with another video gave one clear offset" + _try(calib, WINDOW, CAMERA)
+
+
+def _people_reason(dropped: str) -> str:
+    """The plain sentence of a video the people in view gave no camera."""
+    if "moving camera" in dropped:
+        return ("its camera moves, and the people in view time static cameras only"
+                + _try(CALIB, "--camera-motion NAME=static if it does not move"))
+    if "no people found" in dropped or "no person followed" in dropped:
+        return "no person was followed in it, and the background gave no camera" + _try(CALIB, CAMERA)
+    if "uncertain shift" in dropped or "flat landscape" in dropped:
+        return ("the people it shares with the other videos move too slowly to time it within a frame"
+                + _try(CALIB, CAMERA))
+    return "the people it shares with the other videos gave no clear time shift" + _try(CALIB, CAMERA)
 
 
 def with_plain_reason(plain: str, why: str) -> str:
