@@ -42,8 +42,11 @@ from ..io.recording import (APPLICATION_ID, CUES_THREE_VIEW, CUES_TRANSFER, GUID
                             solve_weight_path, three_view_path, trajectory_path, transfer_path, video_asset_path, video_image_path,
                             video_mask_path, video_path, video_still_path,
                             video_tracks_path)
+from ..analysis.camera_layout import eye_behind, scene_scale
+from ..analysis.colours import GREY, PALETTE, RAMP, distance_colors, distance_ramp_px, instance_colors
 from ..analysis.display_names import display_names as short_names_of, legend_lines
 from ..analysis.record_views import over_range
+from ..analysis.run_result import run_result_from_sync
 from ..io.result import run_result_to_dict
 from ..types import CameraTrack, CueBundle, PairLandscape, RunResult, SyncResult, VideoInfo
 from .blueprint import MAX_PAIR_CONTAINERS, blueprint, pair_order
@@ -57,36 +60,12 @@ log = logging.getLogger(__name__)
 
 # Colours: vs_inspect.palette, shared with the report (green and red mean only accepted/rejected).
 ACCEPTED, REJECTED = palette.ACCEPTED, palette.REJECTED
-GREY = palette.NEUTRAL  # unknown, no data
 MINIMA = palette.OTHER_MINIMA
 TRUTH = palette.TRUTH_ON_DARK  # the viewer's background is dark
 APPEARANCE_ONLY = GREY  # a pair's landscape without its unchecked track pairs
 WINDOW = palette.SOLVED  # the --around window of a pair's Δ
-PALETTE = np.array(palette.INSTANCE, dtype=np.uint8)  # moving instances (masks, tracks, lines)
-# point-to-line distance in the epipolar views: blue (far) through grey to yellow (on the line)
-RAMP = np.array([palette.FAR, (150, 150, 160), palette.ON_LINE], dtype=float)  # visible on black
 H264_LIKE = {"h264", "av1"}
-MIN_RAMP_PX = 1.0  # the distance ramp spans at least this many px, so sub-pixel noise keeps one colour
 FRUSTUM_SCALE = 0.3  # frustum depth as a share of the cameras' spread around their median
-
-
-def instance_colors(instance: np.ndarray) -> np.ndarray:
-    """(N,3) uint8: PALETTE by instance id (the same colours as the masks' annotation context);
-    GREY for -1 (unknown)."""
-    inst = np.asarray(instance, dtype=np.int64)
-    out = PALETTE[np.mod(inst, len(PALETTE))].copy()
-    out[inst < 0] = GREY
-    return out
-
-
-def distance_colors(distance_px: np.ndarray, scale_px: float) -> np.ndarray:
-    """(...,3) uint8 on RAMP: yellow at 0 px, blue at scale_px and beyond, GREY for NaN."""
-    d = np.asarray(distance_px, dtype=float)
-    x = 1.0 - np.clip(np.nan_to_num(d, nan=np.inf) / max(scale_px, 1e-9), 0.0, 1.0)
-    stops = np.linspace(0.0, 1.0, len(RAMP))
-    out = np.stack([np.interp(x, stops, RAMP[:, c]) for c in range(3)], -1).round().astype(np.uint8)
-    out[~np.isfinite(d)] = GREY
-    return out
 
 
 def annotation_context(max_id: int = 255) -> "rr.AnnotationContext":
@@ -109,41 +88,6 @@ def _num(x: Any) -> float | None:
 def _fmt(x: Any, unit: str = "", prec: int = 4) -> str:
     v = _num(x)
     return "n/a" if v is None else f"{v:+.{prec}f}{unit}"
-
-
-def _eye_behind(cams: dict[str, CameraTrack]) -> tuple | None:
-    """(position, look target, up) of a 3D view behind and above the cameras, looking where they
-    look, so that all frustums and what they see are in view (rerun's default eye frames the
-    bounding box of everything, which a few far triangulated points make tiny)."""
-    C, fwd, up = [], [], []
-    for cam in cams.values():
-        T = cam.cam_from_world.reshape(-1, 4, 4)
-        c = cam.centers()
-        ok = np.isfinite(c).all(1)
-        if not ok.any():
-            continue
-        R = T[ok][:, :3, :3]
-        C.append(c[ok].mean(0))
-        fwd.append(R[:, 2, :].mean(0))  # camera z (forward) in world coordinates
-        up.append(-R[:, 1, :].mean(0))  # camera y points down
-    if len(C) < 1:
-        return None
-    C, f, u = np.array(C), np.mean(fwd, 0), np.mean(up, 0)
-    if np.linalg.norm(u) < 1e-6:
-        return None
-    u = u / np.linalg.norm(u)
-    centre = C.mean(0)
-    spread = max(float(np.linalg.norm(C - centre, axis=1).max()), 1e-3)
-    facing = float(np.linalg.norm(f))  # ~1: cameras look the same way; ~0: they look inward
-    if facing < 0.5:  # a ring of cameras: look at its centre, from outside and above
-        f = fwd[0]
-    f = f - np.dot(f, u) * u
-    if np.linalg.norm(f) < 1e-6:
-        return None
-    f = f / np.linalg.norm(f)
-    target = centre + (f * spread if facing >= 0.5 else 0.0)
-    position = target - f * 2.0 * spread + u * 1.2 * spread
-    return tuple(map(lambda x: [float(v) for v in x], (position, target, u)))
 
 
 def _decoded(jpeg: bytes, draw_order: float | None = None) -> rr.Image:
@@ -479,9 +423,7 @@ class RerunSink(Sink):
             if summary is None and self._result is not None:
                 r = self._result
                 gt = self._bundle.gt_offsets_s if self._bundle is not None else None
-                summary = RunResult(r.reference, r.offsets_s, r.uncertainty_s, r.unresolved_reason,
-                                    r.pairs, r.solver, r.solve_pairs, r.iterations, r.timings_s,
-                                    gt_offsets_s=gt or None)
+                summary = run_result_from_sync(r, gt)
             self._log_final_offsets()
             if summary is not None:
                 self.rec.log(META_RESULT, rr.TextDocument(json.dumps(run_result_to_dict(summary),
@@ -558,20 +500,6 @@ class RerunSink(Sink):
 
     # ---- internals: cameras ----
 
-    def _scene_scale(self, cams: dict[str, CameraTrack]) -> float:
-        """Median distance of the cameras (a moving one by its mean centre, so that its many
-        frames do not outvote the others) from their mean, world units."""
-        C = []
-        for cam in cams.values():
-            c = cam.centers()
-            c = c[np.isfinite(c).all(1)]
-            if len(c):
-                C.append(c.mean(0))
-        if len(C) < 2:
-            return 1.0
-        C = np.array(C)
-        return float(np.median(np.linalg.norm(C - C.mean(0), axis=1))) or 1.0
-
     def _truth(self) -> dict[str, float] | None:
         """The true offsets when the run knows them (its cue bundle's, or the run summary's)."""
         if self._bundle is not None and self._bundle.gt_offsets_s:
@@ -595,7 +523,7 @@ class RerunSink(Sink):
         camera's centre (the middle pose of a moving one), in the camera's colour."""
         if not cams:
             return
-        dist = FRUSTUM_SCALE * self._scene_scale(cams)
+        dist = FRUSTUM_SCALE * scene_scale(cams)
         new = False
         for v in videos:
             cam = cams.get(v.name)
@@ -622,7 +550,7 @@ class RerunSink(Sink):
                                              labels=[f"{self.display_names().get(v.name, v.name)} path"]),
                              static=True)
         if new:
-            self._eye = _eye_behind(cams)
+            self._eye = eye_behind(cams)
             names = [n for n in self._cams_logged if n in cams]
             centres, labels, colors = [], [], []
             for n in sorted(names, key=lambda n: list(cams).index(n)):
@@ -949,11 +877,7 @@ class RerunSink(Sink):
                 video_reference=video_asset_path(land.a)), static=True)
         ms = _offset_ms(sw.offsets_s)
         cols_inst = instance_colors(sw.instance)
-        # the ramp's far end: the median distance over all offsets shown, so that points are
-        # yellow only where they are much closer to their lines than usual (an absolute threshold
-        # paints every point "on its line" at every offset when the points barely move)
-        fin = sw.distance_px[np.isfinite(sw.distance_px)]
-        ramp_px = max(float(np.median(fin)) if len(fin) else MIN_RAMP_PX, MIN_RAMP_PX)
+        ramp_px = distance_ramp_px(sw.distance_px)  # over all offsets shown
         lines_pos, lines_col, line_len, pt_col = [], [], [], []
         for d in range(len(ms)):
             seg = sw.segments[d]
