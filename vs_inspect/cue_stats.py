@@ -369,10 +369,10 @@ class HeadsRecord:
 class PeoplePairRecord:
     """One pair of videos as their people timed it (types.PeoplePair, in short)."""
 
-    offset_s: float | None  # Δ_ab, s; None: refused
-    offset_std_s: float | None  # its 1-sigma, s
     reason: str  # why taken, or why refused
     people_associated: int  # people both videos see, paired up
+    offset_s: float | None = None  # Δ_ab, s; None: refused
+    offset_std_s: float | None = None  # its 1-sigma, s
 
 
 @dataclass(frozen=True)

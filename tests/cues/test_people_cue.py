@@ -141,6 +141,7 @@ def test_camera_set_of_the_cue(cue):
 
 def test_people_replace_the_background_only_when_they_time_more(cue):
     import dataclasses
+    import json
 
     from vs_inspect.cue_stats import CueStats
     from vs_inspect.cues.cameras.people import people_camera_set, wants_people
@@ -157,10 +158,13 @@ def test_people_replace_the_background_only_when_they_time_more(cue):
     assert kept.source != "estimated" and rec.kept and "people 3" in rec.why
     kept, rec = _with_people(dataclasses.replace(background, source="estimated"), cue)
     assert kept.source == "estimated" and not rec.kept
-    # result.json keeps the record
+    # result.json keeps the record, a refused pair's too
+    refused = dataclasses.replace(cue.pairs[0], offset_s=None, offset_std_s=None, reason="uncertain shift")
+    _, rec = _with_people(none_timed, dataclasses.replace(cue, pairs=(refused,) + cue.pairs[1:]))
     stats = CueStats("x", 3, 0, 0, {}, {}, {}, {}, people=rec)
-    back = CueStats.from_json(stats.to_json())
+    back = CueStats.from_json(json.loads(json.dumps(stats.to_json())))
     assert back.people == rec and set(back.people.pairs) == {"a__b", "a__c", "b__c"}
+    assert back.people.pairs["a__b"].offset_s is None
 
 
 def test_recorded_through_the_sink(cue, tmp_path):

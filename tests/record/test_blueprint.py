@@ -71,6 +71,18 @@ def test_point_transfer_view_only_when_a_check_was_logged():
             assert str(got[0].origin).strip("/") == "cues/transfer"
 
 
+def test_people_views_only_when_the_people_cue_ran():
+    result = SyncResult("a", {"a": 0.0, "b": 0.0}, {}, {}, (), (), ())
+    for logged in (None, [], ["a__b"]):
+        left = blueprint(["a", "b"], [], result, {}, people_logged=logged).root_container.contents[0]
+        names = [v.name for v in _views(left)]
+        assert ("people (Stage 0)" in names) == (logged is not None)
+        shifts = [v for v in _views(left) if v.name.startswith("people shifts")]
+        assert len(shifts) == bool(logged)
+        if logged:
+            assert "pairs/a__b/people/evidence/evidence" in str(shifts[0].contents)
+
+
 def test_a_run_that_searched_no_pair_opens_on_frames_and_its_offsets_table():
     """Stage 0 could use no video: no SyncResult and no pair, so no offset_ms
     timeline; the layout still shows the run's offsets table (why each video is null), in front,

@@ -22,6 +22,7 @@ from ..io.recording import (GUIDE, LOG, SYNC_GRAPH, SYNC_IRLS, SYNC_LOOPS, SYNC_
                             TIMELINE_OFFSET_MS, WORLD, pair_decision_path, pair_epipolar_path,
                             pair_landscape_path, pair_votes_path, video_path)
 from ..types import PairLandscape, SyncResult
+from .people import PEOPLE_CUE, pair_people_path
 
 MAX_PAIR_CONTAINERS = 12  # pair containers in the middle column; the rest are in the pairs table
 MAX_VIDEO_VIEWS = 8  # video views in the grid
@@ -120,7 +121,7 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
               has_loops: bool = False, range_ms: tuple[int, int] | None = None,
               sizes: dict[str, tuple[int, int]] | None = None, eye: tuple | None = None,
               transfer_origin: str | None = None, three_view_origin: str | None = None,
-              votes_logged: list[str] | None = None,
+              votes_logged: list[str] | None = None, people_logged: list[str] | None = None,
               show_world: bool = True, offsets_logged: bool = False,
               labels: dict[str, str] | None = None, with_frames: set[str] | None = None):
     """The default blueprint.
@@ -134,6 +135,8 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
     transfer_origin: where Stage 0's point-transfer checks were logged (None: none were).
     three_view_origin: where Stage 0's three-view checks of sure cameras were logged (None: none were).
     votes_logged: "a__b" of the pairs whose geometric pairing votes were logged (Stage 0).
+    people_logged: "a__b" of the pairs whose people shift evidence was logged (Stage 0's people cue;
+    None: the cue did not run).
     show_world: whether the 3D view is shown (False: no camera was logged, e.g. Stage 0 refused
     every one, and the view would open empty). offsets_logged: the run's offsets table was logged
     (also without a SyncResult: Stage 0 could use no video); with no pair logged it opens in front.
@@ -155,6 +158,8 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
         info.append(rrb.TextDocumentView(origin=SYNC_OFFSETS, name="offsets"))
     if has_loops:
         info.append(rrb.TextDocumentView(origin=SYNC_LOOPS, name="loop closure"))
+    if people_logged is not None:
+        info.append(rrb.TextDocumentView(origin=PEOPLE_CUE, name="people (Stage 0)"))
     info.append(rrb.TextLogView(origin=LOG, name="decision log"))
     # every pair's energy in its colour, with its chosen Δ marked by verdict (diamond / cross)
     energies = [f"+ /{pair_landscape_path(*k.split('__', 1))}/{part}" for k in pairs_logged
@@ -178,6 +183,12 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
             origin="/", contents=[f"+ /{pair_votes_path(*k.split('__', 1))}/{part}" for k in votes_logged
                                   for part in ("z", "chosen")],
             name="pairing votes (Stage 0, z per Δ)", time_ranges=_full_range(), axis_x=_axis(range_ms),
+            plot_legend=rrb.PlotLegend(visible=True)))
+    if people_logged:
+        overview.append(rrb.TimeSeriesView(
+            origin="/", contents=[f"+ /{pair_people_path(*k.split('__', 1))}/evidence/{part}" for k in people_logged
+                                  for part in ("evidence", "chosen")],
+            name="people shifts (Stage 0, evidence per Δ)", time_ranges=_full_range(), axis_x=_axis(range_ms),
             plot_legend=rrb.PlotLegend(visible=True)))
     if transfer_origin is not None:
         overview.append(rrb.TimeSeriesView(origin=transfer_origin, name="point transfer (Stage 0: a camera's offset)",

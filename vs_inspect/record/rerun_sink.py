@@ -120,6 +120,7 @@ class RerunSink(Sink):
         self._videos = VideoLog(self._ctx)
         self._cameras = CameraLog(self._ctx)
         self._pairing = PairingLog(self._ctx)
+        self._people_logged: list[str] | None = None  # "a__b" with the people cue's shift evidence (None: not run)
         self._pairs = PairLog(self._ctx, self._videos.still_frames)
         self.hook_s = 0.0
         self.stats: dict[str, float] = {}
@@ -183,12 +184,13 @@ class RerunSink(Sink):
     # ---- Stage 1 and 2 hooks ----
 
     @_timed
-    @_timed
     def people_cue(self, cue: PeopleCue) -> None:
         from .people import log_people_cue
 
         log_people_cue(self.rec, cue)
+        self._people_logged = [f"{p.a}__{p.b}" for p in cue.pairs if len(p.offsets_s)]
 
+    @_timed
     def bundle(self, bundle: CueBundle) -> None:
         self._entities = check_entity_names([v.name for v in bundle.videos], self._entities)
         self._ctx.bundle = bundle
@@ -281,7 +283,7 @@ class RerunSink(Sink):
                          eye=self._cameras.eye,
                          transfer_origin=CUES_TRANSFER if pairing.transfer_logged else None,
                          three_view_origin=CUES_THREE_VIEW if pairing.three_view_logged else None,
-                         votes_logged=pairing.votes_logged,
+                         votes_logged=pairing.votes_logged, people_logged=self._people_logged,
                          show_world=bool(ctx.world_cameras) or ctx.bundle is not None,
                          offsets_logged=ctx.summary is not None, labels=self.display_names(),
                          with_frames=self._videos.framed)

@@ -61,7 +61,7 @@ def people_record(cue: PeopleCue, kept: bool, why: str) -> PeopleRecord:
     """What the people cue found, for result.json and `inspect`."""
     return PeopleRecord(
         kept, why, cue.reference, {n: p.num_people for n, p in cue.people.items()},
-        {f"{p.a}__{p.b}": PeoplePairRecord(p.offset_s, p.offset_std_s, p.reason, len(p.associations))
+        {f"{p.a}__{p.b}": PeoplePairRecord(p.reason, len(p.associations), p.offset_s, p.offset_std_s)
          for p in cue.pairs},
         dict(cue.offsets_s), dict(cue.refused), {v: round(r, 2) for v, r in cue.reprojection_px.items()},
         {k: round(t, 2) for k, t in cue.timings_s.items()})
