@@ -74,9 +74,14 @@ def _decision_text(p: PeoplePair) -> str:
 
 
 def log_pairs(rec: rr.RecordingStream, cue: PeopleCue) -> None:
-    """Every pair's evidence over the candidate shifts and its decision."""
+    """Every pair's evidence over the candidate shifts and its decision; each series named by its
+    pair's short names, so that the pairs' plots can share one view."""
+    from ..analysis.display_names import display_names
+
+    short = display_names([v.name for v in cue.videos])
     for p in cue.pairs:
         base = pair_people_path(p.a, p.b)
+        pair = f"{short.get(p.a, p.a)}→{short.get(p.b, p.b)}"
         rec.log(f"{base}/decision", rr.TextDocument(_decision_text(p), media_type=rr.MediaType.MARKDOWN), static=True)
         if not len(p.offsets_s):
             continue
@@ -89,12 +94,13 @@ def log_pairs(rec: rr.RecordingStream, cue: PeopleCue) -> None:
             if values is None:
                 continue
             path = f"{base}/evidence/{leaf}"
-            rec.log(path, rr.SeriesLines(names=[label]), static=True)
+            rec.log(path, rr.SeriesLines(names=[f"{pair} {label}"]), static=True)
             rec.send_columns(path, [rr.TimeColumn(TIMELINE_OFFSET_MS, sequence=ms)],
                              rr.Scalars.columns(scalars=np.asarray(values, dtype=np.float64)))
         if p.accepted:
             rec.set_time(TIMELINE_OFFSET_MS, sequence=int(round(1000 * p.offset_s)))
-            rec.log(f"{base}/evidence/chosen", rr.SeriesPoints(names=["chosen Δ"], markers="diamond", marker_sizes=8.0))
+            rec.log(f"{base}/evidence/chosen", rr.SeriesPoints(names=[f"{pair} chosen Δ"], markers="diamond",
+                                                               marker_sizes=8.0))
             rec.log(f"{base}/evidence/chosen", rr.Scalars(float(np.nanmax(p.evidence)) if p.evidence is not None else 0.0))
             rec.reset_time()
 
