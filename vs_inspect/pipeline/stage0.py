@@ -30,13 +30,13 @@ import numpy as np
 from tqdm import tqdm
 
 from ..cue_stats import CueStats, PairCueStats, VideoCueStats
+from ..cues.cameras.people import wants_people
 from ..cues.config import CueConfig
 from ..engine import Engine, LocalEngine, TaskFailed
 from ..errors import BadVideoName, InputError, NoUsableVideos
 from ..cues.rules import ALL
 from ..geometry.offsets import OffsetGrid
 from ..geometry.point_cloud import clean_point_cloud
-from ..cues.cameras.people import wants_people
 from ..memo import NO_MEMO, Memo, digest
 from ..progress import stage
 from ..record.sink import NullSink, Sink
