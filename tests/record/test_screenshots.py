@@ -239,7 +239,7 @@ def test_a_panel_with_only_a_border_or_a_cursor_is_empty(tmp_path):
         pytest.skip("no rerun viewer executable beside this Python or on PATH")
     import rerun.blueprint as rrb
 
-    from vs_inspect.io.recording import SYNC_SOLVE, video_path
+    from vs_inspect.io.recording_paths import SYNC_SOLVE, video_path
     from vs_inspect.record.rerun_sink import RerunSink
     from vs_inspect.record.screenshots import main
 
@@ -275,7 +275,8 @@ def test_recording_without_frames_has_no_video_panel_and_opens_at_the_front_pair
     on screen; and no panel is empty at the chosen offset, the IRLS tab included."""
     if rerun_executable() is None:
         pytest.skip("no rerun viewer executable beside this Python or on PATH")
-    from vs_inspect.io.recording import read_epipolar_sweep, read_recording
+    from vs_inspect.io.recorded_series import read_epipolar_sweep
+    from vs_inspect.io.recording import read_recording
     from vs_inspect.record.screenshots import chosen_and_wrong_ms
     from vs_inspect.record.viewer import open_recording
 

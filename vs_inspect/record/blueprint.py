@@ -18,9 +18,10 @@ from __future__ import annotations
 
 import math
 
-from ..io.recording import (GUIDE, LOG, SYNC_GRAPH, SYNC_IRLS, SYNC_LOOPS, SYNC_OFFSETS, SYNC_PAIRS,
-                            TIMELINE_OFFSET_MS, WORLD, pair_decision_path, pair_epipolar_path,
-                            pair_landscape_path, pair_votes_path, video_path)
+from ..io.recording_paths import (
+    GUIDE, LOG, SYNC_GRAPH, SYNC_IRLS, SYNC_LOOPS, SYNC_OFFSETS, SYNC_PAIRS, TIMELINE_OFFSET_MS, WORLD,
+    pair_decision_path, pair_epipolar_path, pair_landscape_path, pair_votes_path, video_path,
+)
 from ..types import PairLandscape, SyncResult
 
 MAX_PAIR_CONTAINERS = 12  # pair containers in the middle column; the rest are in the pairs table

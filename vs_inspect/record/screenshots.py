@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..io.recording import TIMELINE_OFFSET_MS
+from ..io.recording_paths import TIMELINE_OFFSET_MS
 
 INK_DIFF = 40  # a pixel is ink when a channel differs from the empty panel by more than this (0-255)
 MIN_INK = 0.002  # a panel shows something when at least this share of its pixels is ink
@@ -222,7 +222,9 @@ def _scaffold_recording(path: Path, rrd: Path, timelines) -> Path:
     no panel shows), so that time panel, cursor and axes look the same; no data."""
     import rerun as rr
 
-    from ..io.recording import pair_epipolar_path, read_chunks, read_recording, video_path
+    from ..io.recording import read_recording
+    from ..io.recording_paths import pair_epipolar_path, video_path
+    from ..io.rrd_chunks import read_chunks
     rec_in = read_recording(rrd, with_structure=False)
     borders = [f"{video_path(v.name)}/border" for v in rec_in.videos]
     borders += [f"{pair_epipolar_path(*k.split('__', 1))}/border" for k in rec_in.meta.get("pairs", [])]
@@ -274,7 +276,7 @@ def chosen_and_wrong_ms(rec, pair: tuple[str, str] | None = None) -> tuple[int, 
         chosen = (lo + hi) // 2
     wrong = None
     if pair is not None:
-        from ..io.recording import read_epipolar_sweep
+        from ..io.recorded_series import read_epipolar_sweep
         sweep = read_epipolar_sweep(rec.path, *pair)
         wrong = wrong_ms(sweep, chosen) if sweep is not None else None
     if wrong is None:
@@ -284,7 +286,7 @@ def chosen_and_wrong_ms(rec, pair: tuple[str, str] | None = None) -> tuple[int, 
 
 
 def wrong_ms(sweep, chosen_ms: int) -> int | None:
-    """A wrong Δ of an epipolar sweep (io.recording.EpipolarSweepSeries) worth a screenshot: the
+    """A wrong Δ of an epipolar sweep (io.recorded_series.EpipolarSweepSeries) worth a screenshot: the
     offset nearest the chosen one whose lines are on screen (at least half as many as at the
     chosen Δ, and 3) but miss the points (median distance at least 4 times the smallest one near
     the chosen Δ, and 5 px more); None when no logged offset is such."""
