@@ -35,7 +35,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from scipy.spatial.transform import Rotation  # noqa: E402
 
 from vs_inspect.report import figures  # noqa: E402
-from vs_inspect.report.figures import fmt_px  # noqa: E402
+from vs_inspect.report.figure_style import fmt_px  # noqa: E402
 from vs_inspect.report.build import render_report  # noqa: E402
 from vs_inspect.analysis.report_data import report_data_from_recording  # noqa: E402
 from vs_inspect.pipeline import run  # noqa: E402

@@ -75,7 +75,7 @@ def sample(xy: np.ndarray, ts: np.ndarray, q: float) -> np.ndarray:
 def px(sampson_px2: float) -> str:
     """A Sampson error as the distance it stands for (its square root), px, for people (the
     report's format)."""
-    from vs_inspect.report.figures import fmt_px
+    from vs_inspect.report.figure_style import fmt_px
     return fmt_px(float(np.sqrt(sampson_px2)) if np.isfinite(sampson_px2) else float("nan"))
 
 

@@ -662,7 +662,7 @@ def test_sigterm_while_writing_a_video_removes_the_partial_mp4(tmp_path):
 def _recording(path: Path, meta, result=None) -> Path:
     import rerun as rr
 
-    from vs_inspect.io.recording import APPLICATION_ID, META_RECORDING, META_RESULT
+    from vs_inspect.io.recording_paths import APPLICATION_ID, META_RECORDING, META_RESULT
     rec = rr.RecordingStream(APPLICATION_ID, recording_id=path.stem)
     rec.save(str(path))
     rec.log(META_RECORDING, rr.TextDocument(json.dumps(meta), media_type="text/plain"), static=True)
@@ -679,7 +679,7 @@ def _recording(path: Path, meta, result=None) -> Path:
     ({"format": "vs-inspect-recording"}, {"reference": "a", "offsets_s": {"a": "0.5"}}, "offsets_s"),
 ])
 def test_hostile_recording(meta, result, needle, tmp_path, capsys):
-    from vs_inspect.io.recording import RECORDING_FORMAT
+    from vs_inspect.io.recording_paths import RECORDING_FORMAT
     if isinstance(meta, dict):
         meta = {**meta, "format": RECORDING_FORMAT}
     rrd = _recording(tmp_path / "r.rrd", meta, result)

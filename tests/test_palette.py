@@ -1,13 +1,13 @@
 """The recording, the report's figures and its HTML page draw with one palette (vs_inspect.palette)."""
 from vs_inspect import palette
 from vs_inspect.record import rerun_sink
-from vs_inspect.report import figures
+from vs_inspect.report import figure_style
 
 
 def test_verdict_colours_are_one_in_recording_and_report():
     assert rerun_sink.ACCEPTED == palette.ACCEPTED
-    assert figures.ACCEPT == palette.hex_of(palette.ACCEPTED) == "#009E73"
-    assert figures.REJECT == palette.hex_of(rerun_sink.REJECTED) == "#D55E00"
+    assert figure_style.ACCEPT == palette.hex_of(palette.ACCEPTED) == "#009E73"
+    assert figure_style.REJECT == palette.hex_of(rerun_sink.REJECTED) == "#D55E00"
 
 
 def test_video_colours_never_mean_a_verdict_and_match_in_both():
@@ -15,7 +15,7 @@ def test_video_colours_never_mean_a_verdict_and_match_in_both():
     rgb = palette.video_colours(names)
     assert palette.ACCEPTED not in rgb.values() and palette.REJECTED not in rgb.values()
     assert len(set(list(rgb.values())[:len(palette.CAMERA)])) == len(palette.CAMERA)
-    as_float = figures.video_colors(names)
+    as_float = figure_style.video_colors(names)
     assert all(tuple(round(255 * c) for c in as_float[n]) == rgb[n] for n in names)
 
 

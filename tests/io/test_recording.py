@@ -1,6 +1,6 @@
-"""The recording's entity paths (named once) and its reader: a recording written by RerunSink
-reads back as the run's RunResult, typed videos, decisions, landscapes, solve iterations and the
-embedded cue bundle; missing, damaged and foreign files give InputError."""
+"""The recording's reader: a recording written by RerunSink reads back as the run's RunResult,
+typed videos, decisions, landscapes, solve iterations and the embedded cue bundle; missing,
+damaged and foreign files give InputError."""
 
 from __future__ import annotations
 
@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from vs_inspect.errors import InputError
-from vs_inspect.io import recording as R
-from vs_inspect.io.recording import (RecordedVideo, read_recorded_bundle, read_recording,
-                                     read_rrd_frames)
+from vs_inspect.io import recording_paths as P
+from vs_inspect.io.recorded_frames import read_rrd_frames
+from vs_inspect.io.recording import RecordedVideo, read_recorded_bundle, read_recording
 from vs_inspect.io.result import run_result_to_dict
 from vs_inspect.analysis.record_options import RecordOptions
 from vs_inspect.record.rerun_sink import RerunSink
@@ -21,36 +21,6 @@ from vs_inspect.sync.config import SyncConfig
 from vs_inspect.pipeline.stage12 import sync_bundle
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
 from vs_inspect.types import RunResult
-
-
-def test_entity_paths():
-    assert R.entity_name("cam 1/x.mp4") == "cam_1_x_mp4"
-    assert R.entity_name("") == "_"
-    assert R.pair_key("a b", "c") == "a_b__c"
-    assert R.pair_path("a b", "c") == "pairs/a_b__c"
-    assert R.pair_landscape_path("a", "b") == "pairs/a__b/landscape"
-    assert R.pair_decision_path("a", "b") == "pairs/a__b/decision"
-    assert R.pair_epipolar_path("a", "b") == "pairs/a__b/epipolar"
-    assert R.video_path("c 0") == "videos/c_0"
-    assert (R.video_asset_path("c0"), R.video_image_path("c0"), R.video_mask_path("c0"),
-            R.video_tracks_path("c0")) == ("videos/c0/video", "videos/c0/image", "videos/c0/mask",
-                                           "videos/c0/tracks")
-    assert R.camera_path("c0") == "world/cameras/c0"
-    assert R.camera_trail_path("c0") == "world/camera_paths/c0"
-    assert R.trajectory_path("a", "b") == "world/trajectories/a__b"
-    assert R.solve_residual_path("a", "b") == "sync/solve/residual_ms/a__b"
-    assert R.solve_weight_path("a", "b") == "sync/solve/weight/a__b"
-    assert R.log_path("stage 0") == "log/stage_0"
-
-
-def test_entity_names_must_not_collide():
-    assert R.check_entity_names(["cam0", "cam 1"]) == {"cam0": "cam0", "cam_1": "cam 1"}
-    with pytest.raises(InputError, match=r"'cam\.1' and 'cam_1' would share the recording entity 'cam_1'"):
-        R.check_entity_names(["cam.1", "cam_1"])
-    known = R.check_entity_names(["a.b"])
-    with pytest.raises(InputError, match="'a.b' and 'a b'"):
-        R.check_entity_names(["a b"], known)
-    assert R.check_entity_names(["a.b"], known) == known  # the same name again is no collision
 
 
 def test_recorded_video_frame_interval():
@@ -81,16 +51,16 @@ def test_read_back_the_run(recorded):
     rec = read_recording(path)
     assert run_result_to_dict(rec.result) == json.loads(json.dumps(run_result_to_dict(run)))
     assert rec.config == {"k": 1}
-    assert rec.meta["format"] == R.RECORDING_FORMAT and rec.meta["version"] == R.RECORDING_VERSION
+    assert rec.meta["format"] == P.RECORDING_FORMAT and rec.meta["version"] == P.RECORDING_VERSION
     assert rec.gt_offsets_s == b.gt_offsets_s
     assert [v.name for v in rec.videos] == b.names
     for v, info in zip(rec.videos, b.videos):
         assert (v.entity, v.width, v.height, v.num_frames, v.fps) == \
-            (R.entity_name(info.name), info.width, info.height, info.num_frames, info.fps)
+            (P.entity_name(info.name), info.width, info.height, info.num_frames, info.fps)
         assert v.duration_s == info.duration_s
-    assert set(rec.decisions) == {R.pair_key(p.a, p.b) for p in run.pairs}
+    assert set(rec.decisions) == {P.pair_key(p.a, p.b) for p in run.pairs}
     for p in run.pairs:
-        key = R.pair_key(p.a, p.b)
+        key = P.pair_key(p.a, p.b)
         assert ("ACCEPTED" if p.decision.accepted else "REJECTED") in rec.decisions[key]
         ok = np.isfinite(p.energy)
         if ok.any():
@@ -98,7 +68,7 @@ def test_read_back_the_run(recorded):
             np.testing.assert_array_equal(e.offset_ms, np.round(p.offsets_s[ok] * 1000).astype(int))
             np.testing.assert_array_equal(e.value, p.energy[ok])
     for i, (a, b_) in enumerate(run.solve_pairs):
-        np.testing.assert_allclose(rec.solve["weight"][R.pair_key(a, b_)], [it.weight[i] for it in run.iterations])
+        np.testing.assert_allclose(rec.solve["weight"][P.pair_key(a, b_)], [it.weight[i] for it in run.iterations])
     assert rec.bundle_zip is None  # only when asked
 
 

@@ -16,7 +16,8 @@ import pytest
 
 from vs_inspect.cli import main
 from vs_inspect.io.bundle import write_bundle
-from vs_inspect.io.recording import pair_key, read_recording
+from vs_inspect.io.recording import read_recording
+from vs_inspect.io.recording_paths import pair_key
 from vs_inspect.pipeline import RunConfig, run
 from vs_inspect.sync.config import LandscapeConfig, SyncConfig, parse_around
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene

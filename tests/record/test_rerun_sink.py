@@ -19,7 +19,10 @@ from scipy.spatial.transform import Rotation
 
 from vs_inspect.analysis.record_views import record_frame, record_mask
 from vs_inspect.cli import main
-from vs_inspect.io.recording import pair_key, read_recording, read_static_points, read_video_frames
+from vs_inspect.io.recorded_frames import read_video_frames
+from vs_inspect.io.recorded_series import read_static_points
+from vs_inspect.io.recording import read_recording
+from vs_inspect.io.recording_paths import pair_key
 from vs_inspect.io.result import run_result_to_dict, write_run_result
 from vs_inspect.analysis.record_options import RecordOptions
 from vs_inspect.record.rerun_sink import RerunSink
@@ -351,7 +354,8 @@ def test_drift_run_records_the_rate_landscape_image(tmp_path):
     sys.path.insert(0, str(Path(__file__).parents[1] / "pipeline"))
     from test_stage12_posefree import CFG, drone_bundle
 
-    from vs_inspect.io.recording import pair_rate_landscape_path, read_rate_landscape
+    from vs_inspect.io.recorded_series import read_rate_landscape
+    from vs_inspect.io.recording_paths import pair_rate_landscape_path
     from vs_inspect.sync.config import DriftConfig
 
     full = drone_bundle()
@@ -589,7 +593,8 @@ def test_the_3d_view_is_left_out_when_no_camera_was_logged(tmp_path):
 def test_the_offsets_panel_gives_every_null_in_a_few_words_and_in_full(tmp_path):
     """The run's summary rewrites the offsets panel: a video Stage 0 left out (not in Stage 2's
     table) is listed too, each null with its headline in the table and its whole reason below."""
-    from vs_inspect.io.recording import SYNC_OFFSETS, _chunks, _first_text
+    from vs_inspect.io.recording_paths import SYNC_OFFSETS
+    from vs_inspect.io.rrd_chunks import _chunks, _first_text
 
     full = "no reconstruction: too few matches; from the moving points: half the pairs 16.7 px off (also tried: ...)"
     res = RunResult("a", {"a": 0.0, "b": 0.5, "c": None}, {"a": 0.0, "b": 0.01, "c": None},
@@ -632,7 +637,8 @@ def _offsets_texts(path: Path) -> list[str]:
     store keeps only the last static value, which would hide a second write)."""
     import rerun.chunk as rrc
 
-    from vs_inspect.io.recording import SYNC_OFFSETS, _first_text
+    from vs_inspect.io.recording_paths import SYNC_OFFSETS
+    from vs_inspect.io.rrd_chunks import _first_text
     chunks = [c for c in rrc.RrdReader(str(path)).stream().to_chunks() if c.entity_path.lstrip("/") == SYNC_OFFSETS]
     return [t for c in chunks if (t := _first_text(c.to_record_batch()))]
 

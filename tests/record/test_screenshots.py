@@ -14,7 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vs_inspect.record.screenshots import MIN_INK, rerun_executable, take_screenshots
+from vs_inspect.record.native_viewer import rerun_executable
+from vs_inspect.record.panel_ink import MIN_INK
+from vs_inspect.record.screenshots import take_screenshots
 
 SHOTS_ENV = "VS_INSPECT_SCREENSHOTS"  # keep the PNGs here (default: pytest's temporary folder)
 
@@ -129,7 +131,7 @@ def test_every_panel_shows_something_at_the_chosen_and_a_wrong_offset(tmp_path):
 
 
 def test_activate_tab_brings_a_titled_view_or_container_to_the_front():
-    from vs_inspect.record.screenshots import activate_tab, on_screen_views
+    from vs_inspect.record.layout_tabs import activate_tab, on_screen_views
 
     v1, v2, c1 = "view/" + "1" * 32, "view/" + "2" * 32, "container/" + "3" * 32
     layout = {
@@ -152,7 +154,7 @@ def test_activate_tab_brings_a_titled_view_or_container_to_the_front():
 def test_a_container_with_one_child_given_as_a_string_is_read():
     """The viewer's blueprint gives a container's single child as a string, not a list (a run
     that accepted no pair): its view is on screen, and a tab inside it can be activated."""
-    from vs_inspect.record.screenshots import activate_tab, on_screen_views
+    from vs_inspect.record.layout_tabs import activate_tab, on_screen_views
 
     v1, v2 = "view/" + "1" * 32, "view/" + "2" * 32
     layout = {
@@ -239,7 +241,7 @@ def test_a_panel_with_only_a_border_or_a_cursor_is_empty(tmp_path):
         pytest.skip("no rerun viewer executable beside this Python or on PATH")
     import rerun.blueprint as rrb
 
-    from vs_inspect.io.recording import SYNC_SOLVE, video_path
+    from vs_inspect.io.recording_paths import SYNC_SOLVE, video_path
     from vs_inspect.record.rerun_sink import RerunSink
     from vs_inspect.record.screenshots import main
 
@@ -275,8 +277,9 @@ def test_recording_without_frames_has_no_video_panel_and_opens_at_the_front_pair
     on screen; and no panel is empty at the chosen offset, the IRLS tab included."""
     if rerun_executable() is None:
         pytest.skip("no rerun viewer executable beside this Python or on PATH")
-    from vs_inspect.io.recording import read_epipolar_sweep, read_recording
-    from vs_inspect.record.screenshots import chosen_and_wrong_ms
+    from vs_inspect.io.recorded_series import read_epipolar_sweep
+    from vs_inspect.io.recording import read_recording
+    from vs_inspect.record.screenshot_offsets import chosen_and_wrong_ms
     from vs_inspect.record.viewer import open_recording
 
     from vs_inspect.record.viewer import front_offset_ms

@@ -19,7 +19,9 @@ matplotlib.use("Agg")
 
 from vs_inspect.analysis.report_data import build_report_data  # noqa: E402
 from vs_inspect.pipeline import run as run_pipeline  # noqa: E402
-from vs_inspect.report import figures  # noqa: E402
+from vs_inspect.report import curve_panels, figures, frame_panels, sync_overview  # noqa: E402
+from vs_inspect.report.figure_layout import figure_size_in  # noqa: E402
+from vs_inspect.report.figure_style import DPI, FONT_PT, WIDTHS_IN  # noqa: E402
 from vs_inspect.report.build import available, render_report  # noqa: E402
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene  # noqa: E402
 from vs_inspect.types import CueBundle  # noqa: E402
@@ -63,14 +65,15 @@ def long_names():
 
 
 def _captured(monkeypatch):
-    """The figures the report draws, kept open instead of written (figures._save)."""
+    """The figures the report draws, kept open instead of written (figure_layout._save, as each
+    drawing module holds it)."""
     kept = {}
-    real = figures._save
 
-    def keep(fig, path, dpi=figures.DPI, formats=("png",)):
+    def keep(fig, path, dpi=DPI, formats=("png",)):
         kept[Path(path).stem] = fig
-        return real(fig, path, dpi, formats) if False else Path(path)
-    monkeypatch.setattr(figures, "_save", keep)
+        return Path(path)
+    for module in (curve_panels, sync_overview, frame_panels):
+        monkeypatch.setattr(module, "_save", keep)
     return kept
 
 
@@ -119,13 +122,13 @@ def test_figures_fit_their_printed_width_with_long_names(long_names, monkeypatch
     for key in available(data):
         if key == "scene3d":
             continue  # a picture with matplotlib text: checked in test_scene_and_fonts below
-        getattr(figures, key)(data, tmp_path / f"{key}.png", figures.DPI, ("png",), size)
+        getattr(figures, key)(data, tmp_path / f"{key}.png", DPI, ("png",), size)
     assert set(kept) == set(available(data)) - {"scene3d"}
     assert {"three_view", "transfer", "epipolar", "pair_graph"} <= set(kept)
     for key, fig in kept.items():
         w, h = fig.get_size_inches()
-        assert w == pytest.approx(figures.WIDTHS_IN[size]), key
-        assert (w, h) == pytest.approx(figures.figure_size_in(key, data, size)), key
+        assert w == pytest.approx(WIDTHS_IN[size]), key
+        assert (w, h) == pytest.approx(figure_size_in(key, data, size)), key
         _check_text(fig, key)
         text = " ".join(t.get_text() for t in fig.findobj(matplotlib.text.Text))
         # drawn by short names, the full names once, under the figure
@@ -140,9 +143,9 @@ def test_pair_graph_labels_fit_inside_their_node():
     fig = plt.figure(dpi=72)
     r = fig.canvas.get_renderer()
     for label in ("cam0", "cam06", "head_right", "blenderbox_cam06_13_282_0"):
-        t = fig.text(0, 0, label, fontsize=figures.FONT_PT, fontweight="bold")
+        t = fig.text(0, 0, label, fontsize=FONT_PT, fontweight="bold")
         width_pt = t.get_window_extent(r).width  # 72 dpi: px are points
-        assert width_pt <= figures._node_diameter_pt(label) - 4, label
+        assert width_pt <= sync_overview._node_diameter_pt(label) - 4, label
     plt.close(fig)
 
 

@@ -17,7 +17,7 @@ from vs_inspect.io.result import write_run_result
 from vs_inspect.pipeline import run as run_pipeline
 from vs_inspect.types import RunInputs
 from vs_inspect.report.build import available, render_report
-from vs_inspect.report.figures import figure_size_px
+from vs_inspect.report.figure_layout import figure_size_px
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
 
 REPO = Path(__file__).resolve().parents[2]
@@ -214,7 +214,7 @@ def test_formats_and_dpi(run, tmp_path):
 
 
 def test_readable_numbers_and_round_ticks():
-    from vs_inspect.report.figures import fmt_error, fmt_px2
+    from vs_inspect.report.figure_style import fmt_error, fmt_px2
     from vs_inspect.report.scene3d import nice_ticks
 
     assert fmt_px2(3.77e-06) == "< 0.001"
@@ -337,7 +337,7 @@ def test_a_pair_checked_without_its_unchecked_track_pairs_shows_that_landscape(r
     import matplotlib.pyplot as plt
 
     from vs_inspect.io.result import read_run_result
-    from vs_inspect.report.figures import _landscape_axes
+    from vs_inspect.report.curve_panels import _landscape_axes
     res = read_run_result(run[0])
     first = res.pairs[0]
     confirm = np.linspace(5.0, 50.0, len(first.offsets_s))
@@ -370,7 +370,7 @@ def test_a_sighting_pair_says_what_its_curve_is(tmp_path, refitted):
 
     from vs_inspect.analysis.report_data import pair_views
     from vs_inspect.io.result import read_run_result
-    from vs_inspect.report.figures import _landscape_axes
+    from vs_inspect.report.curve_panels import _landscape_axes
     from vs_inspect.sync.sightings import RefinedPeak
     from vs_inspect.types import PairDecision, PairLandscape, RunResult
 

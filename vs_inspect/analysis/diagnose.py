@@ -255,10 +255,31 @@ def diagnose(result: RunResult, videos: Iterable[RecordedVideo | VideoInfo] | No
         per.setdefault(c.a, []).append(c)
         per.setdefault(c.b, []).append(c)
     bad = [c for c in checks if c.bad]
+    # 1. blind videos, 2. + 3. loops, then videos whose unexplained pairs mostly fail
+    suspects, accused = _blind_videos(result, checks, per)
+    failing, accused, blamed = _failing_videos(checks, loops, per, names, accused)
+    suspects += failing
+    # 4. pairs: loop-blamed, or failing between videos that are fine elsewhere
+    pair_suspects, cautious, unexplained = _pair_suspects(checks, per, accused, blamed)
+    global_cause = None
+    overall = _global_suspect(result, checks, bad, names, accused, pair_suspects)
+    if overall is not None:
+        global_cause = overall.cause
+        suspects = [overall]
+        pair_suspects, cautious, unexplained = [], [], []
+        accused = set()
+    suspects += pair_suspects
+    unsynced, consequences = _unsynchronized(result, names, per, accused)
+    suspects += unsynced
+    return Diagnosis(checks, loops, suspects, global_cause, cautious, unexplained, consequences)
+
+
+def _blind_videos(result: RunResult, checks: list[PairCheck], per: dict[str, list[PairCheck]]
+                  ) -> tuple[list[Suspect], set[str]]:
+    """(suspects, their videos) of the videos with no cross-view pairs in any of their pairs,
+    while the others have some."""
     suspects: list[Suspect] = []
     accused: set[str] = set()
-
-    # 1. blind videos: no cross-view pairs in any of its pairs, while the others have some
     for v, cs in per.items():
         if len(cs) < 2 or not all(c.bad and c.cause == CAUSE_NO_PAIRS for c in cs):
             continue
@@ -272,30 +293,21 @@ def diagnose(result: RunResult, videos: Iterable[RecordedVideo | VideoInfo] | No
                 f"{v}: {CAUSE_NO_PAIRS}: none of its {len(cs)} pairs has enough cross-view track "
                 f"pairs ({f'{lo}-{hi}' if lo != hi else lo} track pairs) while most other pairs do: "
                 f"{why}"), CAUSE_NO_PAIRS))
+    return suspects, accused
 
-    # 2. + 3. loops, then videos whose unexplained pairs mostly fail
+
+def _failing_videos(checks: list[PairCheck], loops: list[Loop], per: dict[str, list[PairCheck]],
+                    names: list[str], accused: set[str]) -> tuple[list[Suspect], set[str], set[frozenset]]:
+    """(suspects, all accused videos, loop-blamed pairs): videos whose pairs not explained by
+    the accused or by loops mostly fail, the worst first, each accusation changing the rest."""
+    accused = set(accused)
+    suspects: list[Suspect] = []
     blamed = _loop_blamed(checks, loops, accused)
     while True:
-        best = None
-        for v, cs in per.items():
-            if v in accused or len(cs) < 2:
-                continue
-            mine = [c for c in cs if not ({c.a, c.b} - {v}) & accused]
-            fail = [c for c in mine if c.bad]
-            if not mine:
-                continue
-            score = sum(0.5 if frozenset((c.a, c.b)) in blamed else 1.0 for c in fail)
-            others = [c for c in checks if v not in (c.a, c.b) and not {c.a, c.b} & accused]
-            others_bad = sum(c.bad for c in others) / len(others) if others else 0.0
-            share = len(fail) / len(mine)
-            if score >= MIN_FAILING_PAIRS and share >= SUSPECT_SHARE and others_bad < share:
-                homogeneous = Counter(c.cause for c in fail).most_common(1)[0][1]
-                key = (score, share, homogeneous, -names.index(v) if v in names else 0)
-                if best is None or key > best[0]:
-                    best = (key, v, fail, mine, others_bad)
+        best = _worst_video(checks, per, names, accused, blamed)
         if best is None:
             break
-        _, v, fail, mine, others_bad = best
+        v, fail, others_bad = best
         accused.add(v)
         blamed = _loop_blamed(checks, loops, accused)
         causes = Counter(c.cause for c in fail)
@@ -309,8 +321,38 @@ def diagnose(result: RunResult, videos: Iterable[RecordedVideo | VideoInfo] | No
             f"{v}: {n_bad_all} of {len(all_cs)} pairs fail ({rej} rejected, {inc} inconsistent with "
             f"the solution; {what}) while only {others_bad:.0%} of the other pairs do: "
             + _video_blame(main)), main))
+    return suspects, accused, blamed
 
-    # 4. pairs: loop-blamed, or failing between videos that are fine elsewhere
+
+def _worst_video(checks: list[PairCheck], per: dict[str, list[PairCheck]], names: list[str], accused: set[str],
+                 blamed: set[frozenset]) -> tuple[str, list[PairCheck], float] | None:
+    """(video, its failing pairs, the share of the other pairs failing) of the video not yet
+    accused whose pairs fail most (MIN_FAILING_PAIRS, SUSPECT_SHARE, more than the others);
+    None when there is none such."""
+    best = None
+    for v, cs in per.items():
+        if v in accused or len(cs) < 2:
+            continue
+        mine = [c for c in cs if not ({c.a, c.b} - {v}) & accused]
+        fail = [c for c in mine if c.bad]
+        if not mine:
+            continue
+        score = sum(0.5 if frozenset((c.a, c.b)) in blamed else 1.0 for c in fail)
+        others = [c for c in checks if v not in (c.a, c.b) and not {c.a, c.b} & accused]
+        others_bad = sum(c.bad for c in others) / len(others) if others else 0.0
+        share = len(fail) / len(mine)
+        if score >= MIN_FAILING_PAIRS and share >= SUSPECT_SHARE and others_bad < share:
+            homogeneous = Counter(c.cause for c in fail).most_common(1)[0][1]
+            key = (score, share, homogeneous, -names.index(v) if v in names else 0)
+            if best is None or key > best[0]:
+                best = (key, v, fail, others_bad)
+    return None if best is None else best[1:]
+
+
+def _pair_suspects(checks: list[PairCheck], per: dict[str, list[PairCheck]], accused: set[str],
+                   blamed: set[frozenset]) -> tuple[list[Suspect], list[PairCheck], list[PairCheck]]:
+    """(suspect pairs, cautious pairs, unexplained pairs) among the failing pairs of videos not
+    accused."""
     cautious, unexplained = [], []
     pair_suspects = []
     for c in checks:
@@ -332,33 +374,41 @@ def diagnose(result: RunResult, videos: Iterable[RecordedVideo | VideoInfo] | No
             pair_suspects.append(Suspect("pair", c.key, _pair_message(c, loop=False), c.cause))
         else:
             unexplained.append(c)
+    return pair_suspects, cautious, unexplained
 
-    # the global verdict: most pairs fail, and what the suspects explain is little of it
-    global_cause = None
+
+def _global_suspect(result: RunResult, checks: list[PairCheck], bad: list[PairCheck], names: list[str],
+                    accused: set[str], pair_suspects: list[Suspect]) -> Suspect | None:
+    """The global verdict, when most pairs fail and what the suspects explain is little of it
+    (None: the suspects stand)."""
     explained = [c for c in bad if {c.a, c.b} & accused or any(s.name == c.key for s in pair_suspects)]
-    if bad and len(bad) > 0.5 * len(checks) and (len(explained) < 0.5 * len(bad)
-                                                 or len(accused) > len(names) / 2):
-        causes = Counter(c.cause for c in bad)
-        global_cause = causes.most_common(1)[0][0]
-        spread = ", ".join(f"{n} {k}" for k, n in causes.most_common())
-        extra, stage0 = "", ""
-        if global_cause == CAUSE_NO_PAIRS:
-            counts = [c.num_track_pairs for c in bad if c.cause == CAUSE_NO_PAIRS]
-            extra = f" ({min(counts)}-{max(counts)} track pairs per pair)"
-            if refused := (result.cues.refused_in_three_views() if result.cues is not None else []):
-                stage0 = (f"; Stage 0 refused {', '.join(refused)} in three views (their tracks do not "
-                          f"follow the points the other cameras triangulate at the joint vote's offsets), "
-                          f"which points to wrong estimated cameras: a calibration (--calib) or other "
-                          f"camera features (--sfm-features) may help")
-            stage0 += _tracks_found(result.cues)
-        msg = (f"most pairs fail ({len(bad)} of {len(checks)}: {spread}): the cause is global: "
-               f"{global_cause}{extra}: {CAUSE_MEANING[global_cause]}; no single video or pair "
-               f"is to blame{stage0}")
-        suspects = [Suspect("global", "all", msg, global_cause)]
-        pair_suspects, cautious, unexplained = [], [], []
-        accused = set()
-    suspects += pair_suspects
+    if not (bad and len(bad) > 0.5 * len(checks) and (len(explained) < 0.5 * len(bad)
+                                                      or len(accused) > len(names) / 2)):
+        return None
+    causes = Counter(c.cause for c in bad)
+    global_cause = causes.most_common(1)[0][0]
+    spread = ", ".join(f"{n} {k}" for k, n in causes.most_common())
+    extra, stage0 = "", ""
+    if global_cause == CAUSE_NO_PAIRS:
+        counts = [c.num_track_pairs for c in bad if c.cause == CAUSE_NO_PAIRS]
+        extra = f" ({min(counts)}-{max(counts)} track pairs per pair)"
+        if refused := (result.cues.refused_in_three_views() if result.cues is not None else []):
+            stage0 = (f"; Stage 0 refused {', '.join(refused)} in three views (their tracks do not "
+                      f"follow the points the other cameras triangulate at the joint vote's offsets), "
+                      f"which points to wrong estimated cameras: a calibration (--calib) or other "
+                      f"camera features (--sfm-features) may help")
+        stage0 += _tracks_found(result.cues)
+    msg = (f"most pairs fail ({len(bad)} of {len(checks)}: {spread}): the cause is global: "
+           f"{global_cause}{extra}: {CAUSE_MEANING[global_cause]}; no single video or pair "
+           f"is to blame{stage0}")
+    return Suspect("global", "all", msg, global_cause)
 
+
+def _unsynchronized(result: RunResult, names: list[str], per: dict[str, list[PairCheck]], accused: set[str]
+                    ) -> tuple[list[Suspect], dict[str, str]]:
+    """(suspects, consequences) of the videos left without an offset and not accused: a suspect
+    when none of its pairs was evaluated, else a consequence of the others' failures."""
+    suspects: list[Suspect] = []
     consequences: dict[str, str] = {}
     for v in names:
         if result.offsets_s.get(v, 0.0) is not None or v in accused:
@@ -368,7 +418,7 @@ def diagnose(result: RunResult, videos: Iterable[RecordedVideo | VideoInfo] | No
             suspects.append(Suspect("video", v, f"{v}: not synchronized ({why})"))
         else:
             consequences[v] = why
-    return Diagnosis(checks, loops, suspects, global_cause, cautious, unexplained, consequences)
+    return suspects, consequences
 
 
 def _tracks_found(cues) -> str:

@@ -377,8 +377,10 @@ def report_data_from_recording(path: str | os.PathLike, pair: tuple[str, str] | 
                                gt: dict[str, float] | None = None) -> ReportData:
     """ReportData from a recording alone (no run folder, no videos, no recompute): its result,
     its embedded cue bundle and the frames it carries."""
-    from ..io.recording import (META_BUNDLE, META_RESULT, read_recorded_bundle, read_recording, read_rrd_frames,
-                                read_static_points)
+    from ..io.recorded_frames import read_rrd_frames
+    from ..io.recorded_series import read_static_points
+    from ..io.recording import read_recorded_bundle, read_recording
+    from ..io.recording_paths import META_BUNDLE, META_RESULT
 
     path = Path(path)
     if not path.is_file():

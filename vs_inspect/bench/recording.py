@@ -23,7 +23,7 @@ import numpy as np  # before pycolmap
 from ..pipeline import RunConfig, run
 from ..analysis.record_options import RecordOptions
 from ..record.rerun_sink import RerunSink
-from ..record.screenshots import rerun_executable
+from ..record.native_viewer import rerun_executable
 from ..synth.cues import CueSceneConfig, make_cue_scene
 
 CASES = ("demo", "budget", "caliscope")

@@ -68,7 +68,8 @@ def _people_lines(people) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from ..analysis.diagnose import CAUSE_LOOPS, CAUSE_MEANING, diagnose
-    from ..io.recording import pair_key, read_recording
+    from ..io.recording import read_recording
+    from ..io.recording_paths import pair_key
 
     _not_a_run_folder(args.rrd)
     rec = read_recording(args.rrd)

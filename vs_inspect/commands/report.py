@@ -44,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace) -> int:
     from ..analysis.report_data import load_report_data
     from ..report.build import render_report
-    from ..report.figures import checked_render_options
+    from ..report.figure_style import checked_render_options
 
     formats = checked_render_options(args.format, args.dpi, args.size)  # before any loading
     gt = None

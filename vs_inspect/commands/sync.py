@@ -77,7 +77,7 @@ def _checked_run(args: argparse.Namespace, cfg, out: Path) -> int:
     if args.gt is not None:  # a missing, malformed or mismatched truth fails now, not after the run
         truth = read_gt(args.gt, names)
     if args.videos and not args.no_rrd:  # names are known now: refuse a recording collision early
-        from ..io.recording import check_entity_names
+        from ..io.recording_paths import check_entity_names
         check_entity_names(video_names)
     fresh = not out.exists()
     if fresh:  # removed whole also if the process is ended from the watchdog

@@ -30,7 +30,7 @@ class ViewerUnavailable(VsInspectError):
 
 def run(args: argparse.Namespace) -> int:
     from ..io.recording import read_recording
-    from ..record.screenshots import rerun_executable
+    from ..record.native_viewer import rerun_executable
     from ..record.viewer import front_offset_ms, front_pair, open_recording
 
     rec = read_recording(args.rrd)  # a missing or unreadable file fails here, naming it

@@ -18,9 +18,10 @@ from __future__ import annotations
 
 import math
 
-from ..io.recording import (GUIDE, LOG, SYNC_GRAPH, SYNC_IRLS, SYNC_LOOPS, SYNC_OFFSETS, SYNC_PAIRS,
-                            TIMELINE_OFFSET_MS, WORLD, pair_decision_path, pair_epipolar_path,
-                            pair_landscape_path, pair_votes_path, video_path)
+from ..io.recording_paths import (
+    GUIDE, LOG, SYNC_GRAPH, SYNC_IRLS, SYNC_LOOPS, SYNC_OFFSETS, SYNC_PAIRS, TIMELINE_OFFSET_MS, WORLD,
+    pair_decision_path, pair_epipolar_path, pair_landscape_path, pair_votes_path, video_path,
+)
 from ..types import PairLandscape, SyncResult
 from .people import PEOPLE_CUE, pair_people_path
 
@@ -148,6 +149,28 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
     shown = shown_pairs(pairs_logged, result)
     containers = [_pair_container(a, b, acc, pair_views.get(f"{a}__{b}", {"landscape", "epipolar"}),
                                   range_ms, sizes.get(a), labels) for a, b, acc in shown]
+    info, active = _info_tabs(pairs_logged, result, has_loops, offsets_logged)
+    overview = _overview_tabs(pairs_logged, result, pair_views, range_ms, transfer_origin, three_view_origin,
+                              votes_logged)
+    left = rrb.Vertical(rrb.Tabs(*info, active_tab=active), *( [rrb.Tabs(*overview, active_tab=0)] if overview else []),
+                        row_shares=[1, 1][: 1 + bool(overview)])
+    right = _scene_views(video_names, sizes, eye, show_world, labels, with_frames)
+    columns = [left]
+    if containers:
+        columns.append(rrb.Tabs(*containers, active_tab=0, name="pair containers"))
+    if right:
+        columns.append(rrb.Vertical(*right, row_shares=[1] * len(right)) if len(right) > 1 else right[0])
+    shares = ([2, 3] if containers else [2]) + ([3] if right else [])
+    return rrb.Blueprint(rrb.Horizontal(*columns, column_shares=shares),
+                         rrb.BlueprintPanel(state="collapsed"), rrb.SelectionPanel(state="collapsed"),
+                         rrb.TimePanel(state="expanded", timeline=timeline, play_state="paused"),
+                         auto_views=False)
+
+
+def _info_tabs(pairs_logged: list[str], result: SyncResult | None, has_loops: bool, offsets_logged: bool):
+    """(the text views of the left column's upper tabs: guide, pairs, offsets, loops, log; the
+    index of the one in front)."""
+    import rerun.blueprint as rrb
     info = [rrb.TextDocumentView(origin=GUIDE, name="how to read this recording")]
     if result is not None:
         info.append(rrb.TextDocumentView(origin=SYNC_PAIRS, name="pairs (failed first)"))
@@ -161,6 +184,15 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
     if people_logged is not None:
         info.append(rrb.TextDocumentView(origin=PEOPLE_CUE, name="people (Stage 0)"))
     info.append(rrb.TextLogView(origin=LOG, name="decision log"))
+    return info, active
+
+
+def _overview_tabs(pairs_logged: list[str], result: SyncResult | None, pair_views: dict[str, set[str]],
+                   range_ms: tuple[int, int] | None, transfer_origin: str | None, three_view_origin: str | None,
+                   votes_logged: list[str] | None) -> list:
+    """The views of the left column's lower tabs: all landscapes, pair graph, IRLS solve, Stage 0's
+    pairing votes and checks (only those with data)."""
+    import rerun.blueprint as rrb
     # every pair's energy in its colour, with its chosen Δ marked by verdict (diamond / cross)
     energies = [f"+ /{pair_landscape_path(*k.split('__', 1))}/{part}" for k in pairs_logged
                 if "landscape" in pair_views.get(k, {"landscape"}) for part in ("energy", "chosen")]
@@ -196,8 +228,14 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
     if three_view_origin is not None:
         overview.append(rrb.TimeSeriesView(origin=three_view_origin, name="three-view check (Stage 0: sure cameras)",
                                            time_ranges=_full_range(), plot_legend=rrb.PlotLegend(visible=True)))
-    left = rrb.Vertical(rrb.Tabs(*info, active_tab=active), *( [rrb.Tabs(*overview, active_tab=0)] if overview else []),
-                        row_shares=[1, 1][: 1 + bool(overview)])
+    return overview
+
+
+def _scene_views(video_names: list[str], sizes: dict[str, tuple[int, int]], eye: tuple | None, show_world: bool,
+                 labels: dict[str, str], with_frames: set[str] | None) -> list:
+    """The right column: a grid of the videos with frames and the 3D view (none of either: no
+    column)."""
+    import rerun.blueprint as rrb
     framed = [v for v in video_names if with_frames is None or v in with_frames]
     video_views = [rrb.Spatial2DView(origin=video_path(v), name=labels.get(v, v), visual_bounds=_bounds(sizes.get(v)))
                    for v in framed[:MAX_VIDEO_VIEWS]]
@@ -208,13 +246,4 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
     # without videos and 3D (a run that wrote no frame and no camera)
     right = [rrb.Grid(*video_views, name="videos")] if video_views else []
     right += world
-    columns = [left]
-    if containers:
-        columns.append(rrb.Tabs(*containers, active_tab=0, name="pair containers"))
-    if right:
-        columns.append(rrb.Vertical(*right, row_shares=[1] * len(right)) if len(right) > 1 else right[0])
-    shares = ([2, 3] if containers else [2]) + ([3] if right else [])
-    return rrb.Blueprint(rrb.Horizontal(*columns, column_shares=shares),
-                         rrb.BlueprintPanel(state="collapsed"), rrb.SelectionPanel(state="collapsed"),
-                         rrb.TimePanel(state="expanded", timeline=timeline, play_state="paused"),
-                         auto_views=False)
+    return right

@@ -3,7 +3,7 @@ colour), a moving camera's path and its pose per frame, a label at each camera's
 static points Stage 0 reconstructed.
 
 Entities: world/cameras/<v> (Pinhole, Transform3D), world/cameras/<v>/trail, the camera labels
-and world/points (io/recording.py).
+and world/points (io/recording_paths.py).
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import numpy as np
 import rerun as rr
 
 from ..analysis.camera_layout import Eye, eye_behind, scene_scale
-from ..io.recording import WORLD_POINTS, camera_labels_path, camera_path, camera_trail_path
+from ..io.recording_paths import WORLD_POINTS, camera_labels_path, camera_path, camera_trail_path
 from ..types import CameraTrack, VideoInfo
 from .context import RecordingContext
 from .style import at_offset_ms

@@ -1,7 +1,7 @@
 """The recording's guide ("how to read this recording", the first panel): a text template
 filled with what the run logged.
 
-Entity: guide (io/recording.py).
+Entity: guide (io/recording_paths.py).
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from string import Template
 import rerun as rr
 
 from ..analysis.display_names import legend_lines
-from ..io.recording import GUIDE
+from ..io.recording_paths import GUIDE
 from .blueprint import MAX_PAIR_CONTAINERS
 from .context import RecordingContext
 

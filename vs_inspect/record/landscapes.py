@@ -3,7 +3,7 @@ its minima, the chosen Δ, the truth, the --around window and the appearance pai
 its (Δ, rate) landscape under the drift model, its decision, and its epipolar view.
 
 Entities: pairs/<a>__<b>/{landscape,rate_landscape,decision,epipolar}/* and log/decisions
-(io/recording.py).
+(io/recording_paths.py).
 """
 
 from __future__ import annotations
@@ -17,8 +17,10 @@ import rerun as rr
 from .. import palette
 from ..analysis.colours import distance_colors, distance_ramp_px, instance_colors
 from ..analysis.record_views import over_range
-from ..io.recording import (LOG_DECISIONS, TIMELINE_EVENT, TIMELINE_OFFSET_MS, pair_decision_path,
-                            pair_epipolar_path, pair_landscape_path, pair_rate_landscape_path, video_asset_path)
+from ..io.recording_paths import (
+    LOG_DECISIONS, TIMELINE_EVENT, TIMELINE_OFFSET_MS, pair_decision_path, pair_epipolar_path,
+    pair_landscape_path, pair_rate_landscape_path, video_asset_path,
+)
 from ..types import PairLandscape
 from .context import RecordingContext
 from .style import (ACCEPTED, APPEARANCE_ONLY, MINIMA, REJECTED, TRUTH, WINDOW, fmt, image_border, offset_ms,

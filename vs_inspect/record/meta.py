@@ -2,7 +2,7 @@
 videos, the cue bundle (zip), the run's result and config, and what the recording holds; and the
 stages' events on the event timeline.
 
-Entities: meta/* and log/<stage> (io/recording.py).
+Entities: meta/* and log/<stage> (io/recording_paths.py).
 """
 
 from __future__ import annotations
@@ -15,8 +15,10 @@ import rerun as rr
 
 from .. import __version__
 from ..io.atomic import json_default
-from ..io.recording import (META_BUNDLE, META_CONFIG, META_RECORDING, META_RESULT, META_VIDEOS, RECORDING_FORMAT,
-                            RECORDING_VERSION, TIMELINE_EVENT, entity_name, log_path)
+from ..io.recording_paths import (
+    META_BUNDLE, META_CONFIG, META_RECORDING, META_RESULT, META_VIDEOS, RECORDING_FORMAT, RECORDING_VERSION,
+    TIMELINE_EVENT, entity_name, log_path,
+)
 from ..io.result import run_result_to_dict
 from ..types import CueBundle, RunResult
 from .context import RecordingContext

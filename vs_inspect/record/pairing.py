@@ -4,7 +4,7 @@ each camera over its candidate offsets. All but the matches are series on offset
 landscapes' axis, so that a run that stops before Stage 1 still opens there.
 
 Entities: pairs/<a>__<b>/keyframe_matches, pairs/<a>__<b>/votes/*, cues/transfer/<v>/*,
-cues/three_view/<v>/* (io/recording.py).
+cues/three_view/<v>/* (io/recording_paths.py).
 """
 
 from __future__ import annotations
@@ -13,8 +13,9 @@ import numpy as np
 import rerun as rr
 
 from .. import palette
-from ..io.recording import (TIMELINE_KEYFRAME_PAIR, TIMELINE_OFFSET_MS, pair_matches_path, pair_votes_path,
-                            three_view_path, transfer_path)
+from ..io.recording_paths import (
+    TIMELINE_KEYFRAME_PAIR, TIMELINE_OFFSET_MS, pair_matches_path, pair_votes_path, three_view_path, transfer_path,
+)
 from .context import RecordingContext
 from .style import ACCEPTED, REJECTED, offset_ms
 

@@ -3,7 +3,7 @@ landmarks over its frames, every pair's association, its evidence at each candid
 F's inliers, the cost, the search's score) and its decision, and the cameras and 3D landmarks
 the cue made. Takes the stream explicitly (no global recording).
 
-Entities (below each video's and pair's own, io/recording.py):
+Entities (below each video's and pair's own, io/recording_paths.py):
     videos/<v>/people                Points2D per frame (frame timeline): class = person track,
                                      keypoints = BlazePose landmarks, drawn as a skeleton
     pairs/<a>__<b>/people/evidence   series over Δ (offset_ms timeline): inliers, cost, evidence, search
@@ -20,7 +20,7 @@ import rerun as rr
 
 from .. import palette
 from ..geometry.skeleton import LANDMARK_NAMES, SKELETON_EDGES
-from ..io.recording import TIMELINE_FRAME, TIMELINE_OFFSET_MS, WORLD, entity_name, pair_path, video_path
+from ..io.recording_paths import TIMELINE_FRAME, TIMELINE_OFFSET_MS, WORLD, entity_name, pair_path, video_path
 from ..types import PeopleCue, PeoplePair
 
 PEOPLE_CUE = "cues/people"

@@ -2,7 +2,7 @@
 
 A thin facade: each hook hands what the stages give it (their results, and the views that
 analysis/record_views.py computed for the recording) to the part that logs it, at the entity
-paths of io/recording.py:
+paths of io/recording_paths.py:
 
     videos.py      frames, masks, tracks and stills of each video
     cameras.py     cameras, frustums, moving cameras' poses, static points
@@ -39,8 +39,10 @@ from .. import signals
 from ..analysis.colours import PALETTE, RAMP, distance_colors, instance_colors  # noqa: F401 - re-exported: imported from here
 from ..analysis.run_result import run_result_from_sync
 from ..io.atomic import atomic_path
-from ..io.recording import (APPLICATION_ID, CUES_THREE_VIEW, CUES_TRANSFER, TIMELINE_FRAME, TIMELINE_OFFSET_MS,
-                            TIMELINE_TIME, check_entity_names)
+from ..io.recording_paths import (
+    APPLICATION_ID, CUES_THREE_VIEW, CUES_TRANSFER, TIMELINE_FRAME, TIMELINE_OFFSET_MS, TIMELINE_TIME,
+    check_entity_names,
+)
 from ..analysis.record_options import RecordOptions
 from ..types import CameraTrack, CueBundle, PairLandscape, PeopleCue, RunResult, SyncResult, VideoInfo
 from . import meta, solve

@@ -2,7 +2,7 @@
 on `iteration` and bars shown on every timeline), the offsets, pairs and loop-closure tables, and
 the accepted pairs' tracks triangulated at the solved offsets.
 
-Entities: sync/{graph,solve,offsets,pairs,loops} and world/trajectories/* (io/recording.py).
+Entities: sync/{graph,solve,offsets,pairs,loops} and world/trajectories/* (io/recording_paths.py).
 """
 
 from __future__ import annotations
@@ -14,9 +14,10 @@ import rerun as rr
 
 from .. import palette
 from ..analysis.colours import GREY, instance_colors
-from ..io.recording import (SYNC_GRAPH, SYNC_LOOPS, SYNC_OFFSETS, SYNC_PAIRS, TIMELINE_ITERATION, TIMELINE_TIME,
-                            irls_residual_path, irls_weight_path, solve_residual_path, solve_weight_path,
-                            trajectory_path)
+from ..io.recording_paths import (
+    SYNC_GRAPH, SYNC_LOOPS, SYNC_OFFSETS, SYNC_PAIRS, TIMELINE_ITERATION, TIMELINE_TIME, irls_residual_path,
+    irls_weight_path, solve_residual_path, solve_weight_path, trajectory_path,
+)
 from ..types import SyncResult
 from .blueprint import MAX_PAIR_CONTAINERS, pair_order
 from .context import RecordingContext

@@ -13,7 +13,7 @@ import rerun as rr
 
 from .. import palette
 from ..analysis.colours import GREY, PALETTE
-from ..io.recording import TIMELINE_OFFSET_MS
+from ..io.recording_paths import TIMELINE_OFFSET_MS
 
 # green and red mean only accepted/rejected
 ACCEPTED, REJECTED = palette.ACCEPTED, palette.REJECTED

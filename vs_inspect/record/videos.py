@@ -18,8 +18,10 @@ import rerun as rr
 from tqdm import tqdm
 
 from ..analysis.colours import instance_colors
-from ..io.recording import (TIMELINE_FRAME, TIMELINE_TIME, VIDEOS, camera_path, video_asset_path, video_image_path,
-                            video_mask_path, video_path, video_still_path, video_tracks_path)
+from ..io.recording_paths import (
+    TIMELINE_FRAME, TIMELINE_TIME, VIDEOS, camera_path, video_asset_path, video_image_path, video_mask_path,
+    video_path, video_still_path, video_tracks_path,
+)
 from ..types import VideoInfo
 from .context import RecordingContext, VideoBuffer
 from .style import annotation_context, at_offset_ms, fmt, image_border, scaled_to

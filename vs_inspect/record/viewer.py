@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io.recording import TIMELINE_OFFSET_MS
+from ..io.recording_paths import TIMELINE_OFFSET_MS
 
 
 def front_pair(rec) -> tuple[str, str] | None:
@@ -31,7 +31,7 @@ def front_pair(rec) -> tuple[str, str] | None:
 def front_offset_ms(rec, pair: tuple[str, str] | None = None) -> int | None:
     """The chosen Δ (ms on offset_ms) of `pair` (default: the front pair), else its lowest energy's
     Δ; None when the pair has neither (or no pair has a landscape)."""
-    from ..io.recording import pair_key
+    from ..io.recording_paths import pair_key
     pair = pair or front_pair(rec)
     if pair is None:
         return None

@@ -11,6 +11,8 @@ from .. import palette, signals
 from ..io.atomic import atomic_dir
 from . import figures
 from .data import ReportData
+from .figure_layout import figure_size_px
+from .figure_style import DPI, checked_render_options
 from .html import write_index
 
 log = logging.getLogger(__name__)
@@ -81,14 +83,14 @@ def available(data: ReportData) -> list[str]:
 
 
 def render_report(data: ReportData, out_dir: str | Path, overwrite: bool = True,
-                  formats: tuple[str, ...] = ("png",), dpi: float = figures.DPI,
+                  formats: tuple[str, ...] = ("png",), dpi: float = DPI,
                   size: str = "page") -> dict[str, Path]:
     """Write <key>.<format> for every available figure and format (png, pdf, svg; PNG at dpi),
     index.html and render_times.json into a fresh folder (io.atomic.atomic_dir: nothing stale
     from an earlier report, nothing half-written on an error or an interrupt). size: "column"
     (3.5 in wide) or "page" (7.1 in), the printed width the figures' 7-9 pt text is for.
     overwrite=False: refuse a non-empty out_dir (FileExistsError). Returns {key: first format's file}."""
-    formats = figures.checked_render_options(formats, dpi, size)
+    formats = checked_render_options(formats, dpi, size)
     out = Path(out_dir)
     with atomic_dir(out, overwrite=overwrite) as tmp:
         paths = _render_into(data, Path(tmp), tuple(formats), float(dpi), size)
@@ -96,7 +98,7 @@ def render_report(data: ReportData, out_dir: str | Path, overwrite: bool = True,
 
 
 def _render_into(data: ReportData, out: Path, formats: tuple[str, ...] = ("png",),
-                 dpi: float = figures.DPI, size: str = "page") -> dict[str, Path]:
+                 dpi: float = DPI, size: str = "page") -> dict[str, Path]:
     paths: dict[str, Path] = {}
     times: dict[str, float] = {}
     for key in available(data):
@@ -105,7 +107,7 @@ def _render_into(data: ReportData, out: Path, formats: tuple[str, ...] = ("png",
         p = out / f"{key}.{formats[0]}"
         if key == "scene3d":
             from .scene3d import render_scene
-            render_scene(data, p, figures.figure_size_px("scene3d", data, dpi, size), dpi, formats)
+            render_scene(data, p, figure_size_px("scene3d", data, dpi, size), dpi, formats)
         else:
             getattr(figures, key)(data, p, dpi, formats, size)
         times[key] = round(time.perf_counter() - t0, 3)

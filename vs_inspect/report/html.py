@@ -8,7 +8,7 @@ from pathlib import Path
 
 from .. import palette
 from .data import ReportData
-from .figures import fmt_px
+from .figure_style import fmt_px
 
 
 def _s(x: float | None, digits: int = 4, sign: bool = True) -> str:

@@ -62,7 +62,8 @@ def render_scene(data: ReportData, path: Path, size: tuple[int, int], dpi: float
     import matplotlib.pyplot as plt
     from matplotlib import cm, colors as mcolors
 
-    from . import figures
+    from .figure_layout import _finish, _save, size_of_width
+    from .figure_style import FONT_PT, LINE_IN, _chars, _wrap
 
     w_in, h_in = size[0] / dpi, size[1] / dpi
     title = _title(data)
@@ -70,10 +71,10 @@ def render_scene(data: ReportData, path: Path, size: tuple[int, int], dpi: float
     fig = plt.figure(figsize=(w_in, h_in), dpi=dpi, layout="constrained")
     grid = fig.add_gridspec(1, 2, width_ratios=[1, 0.035]) if bar else fig.add_gridspec(1, 1)
     ax = fig.add_subplot(grid[0, 0])
-    fig.suptitle(figures._wrap(title, figures._chars(w_in, figures.FONT_PT)), fontsize=figures.FONT_PT)
-    figures._finish(fig, data, figures.size_of_width(w_in))
+    fig.suptitle(_wrap(title, _chars(w_in, FONT_PT)), fontsize=FONT_PT)
+    _finish(fig, data, size_of_width(w_in))
     # the picture at about the size it is shown (labels stay near 8 pt)
-    text_in = 0.18 * (title.count("\n") + 2) + figures.LINE_IN * len(data.label_legend() and [1] or [])
+    text_in = 0.18 * (title.count("\n") + 2) + LINE_IN * len(data.label_legend() and [1] or [])
     render_px = (max(64, int((w_in - (0.75 if bar else 0.1)) * dpi)), max(64, int((h_in - text_in) * dpi)))
     with tempfile.TemporaryDirectory(prefix="vs-inspect-3d-") as tmp:
         png = _render_png(data, Path(tmp) / "scene.png", render_px, dpi / 72.0)
@@ -85,8 +86,8 @@ def render_scene(data: ReportData, path: Path, size: tuple[int, int], dpi: float
         cb = fig.colorbar(cm.ScalarMappable(mcolors.Normalize(lo, hi), "viridis"), cax=fig.add_subplot(grid[0, 1]))
         cb.set_ticks(np.linspace(lo, hi, n_labels))
         cb.ax.yaxis.set_major_formatter(f"{{x:.{dec}f}}")
-        cb.set_label("global time [s]", fontsize=figures.FONT_PT)
-    return figures._save(fig, path, dpi, formats)
+        cb.set_label("global time [s]", fontsize=FONT_PT)
+    return _save(fig, path, dpi, formats)
 
 
 def _title(data: ReportData) -> str:
@@ -108,7 +109,7 @@ def _time_range(data: ReportData) -> tuple[float, float]:
 def _render_png(data: ReportData, path: Path, size: tuple[int, int], px_per_pt: float) -> Path:
     import pyvista as pv
 
-    from .figures import video_colors
+    from .figure_style import video_colors
 
     colors = video_colors(data.names or [c.name for c in data.cameras])
     zoom = px_per_pt  # text and line sizes below are in points at the printed size

@@ -24,7 +24,8 @@ import vtk  # noqa: E402
 from vtk.util.numpy_support import vtk_to_numpy  # noqa: E402
 
 from ..geometry.epipolar import camera_centers  # noqa: E402
-from .world import Mesh, World  # noqa: E402
+from .meshes import Mesh  # noqa: E402
+from .world import World  # noqa: E402
 
 log = logging.getLogger(__name__)
 
