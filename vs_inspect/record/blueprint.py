@@ -149,9 +149,9 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
     shown = shown_pairs(pairs_logged, result)
     containers = [_pair_container(a, b, acc, pair_views.get(f"{a}__{b}", {"landscape", "epipolar"}),
                                   range_ms, sizes.get(a), labels) for a, b, acc in shown]
-    info, active = _info_tabs(pairs_logged, result, has_loops, offsets_logged)
+    info, active = _info_tabs(pairs_logged, result, has_loops, offsets_logged, people_logged is not None)
     overview = _overview_tabs(pairs_logged, result, pair_views, range_ms, transfer_origin, three_view_origin,
-                              votes_logged)
+                              votes_logged, people_logged)
     left = rrb.Vertical(rrb.Tabs(*info, active_tab=active), *( [rrb.Tabs(*overview, active_tab=0)] if overview else []),
                         row_shares=[1, 1][: 1 + bool(overview)])
     right = _scene_views(video_names, sizes, eye, show_world, labels, with_frames)
@@ -167,9 +167,10 @@ def blueprint(video_names: list[str], pairs_logged: list[str], result: SyncResul
                          auto_views=False)
 
 
-def _info_tabs(pairs_logged: list[str], result: SyncResult | None, has_loops: bool, offsets_logged: bool):
-    """(the text views of the left column's upper tabs: guide, pairs, offsets, loops, log; the
-    index of the one in front)."""
+def _info_tabs(pairs_logged: list[str], result: SyncResult | None, has_loops: bool, offsets_logged: bool,
+               people: bool = False):
+    """(the text views of the left column's upper tabs: guide, pairs, offsets, loops, the people
+    cue's summary (people: it ran), log; the index of the one in front)."""
     import rerun.blueprint as rrb
     info = [rrb.TextDocumentView(origin=GUIDE, name="how to read this recording")]
     if result is not None:
@@ -181,7 +182,7 @@ def _info_tabs(pairs_logged: list[str], result: SyncResult | None, has_loops: bo
         info.append(rrb.TextDocumentView(origin=SYNC_OFFSETS, name="offsets"))
     if has_loops:
         info.append(rrb.TextDocumentView(origin=SYNC_LOOPS, name="loop closure"))
-    if people_logged is not None:
+    if people:
         info.append(rrb.TextDocumentView(origin=PEOPLE_CUE, name="people (Stage 0)"))
     info.append(rrb.TextLogView(origin=LOG, name="decision log"))
     return info, active
@@ -189,9 +190,9 @@ def _info_tabs(pairs_logged: list[str], result: SyncResult | None, has_loops: bo
 
 def _overview_tabs(pairs_logged: list[str], result: SyncResult | None, pair_views: dict[str, set[str]],
                    range_ms: tuple[int, int] | None, transfer_origin: str | None, three_view_origin: str | None,
-                   votes_logged: list[str] | None) -> list:
+                   votes_logged: list[str] | None, people_logged: list[str] | None = None) -> list:
     """The views of the left column's lower tabs: all landscapes, pair graph, IRLS solve, Stage 0's
-    pairing votes and checks (only those with data)."""
+    pairing votes, people shifts and checks (only those with data)."""
     import rerun.blueprint as rrb
     # every pair's energy in its colour, with its chosen Δ marked by verdict (diamond / cross)
     energies = [f"+ /{pair_landscape_path(*k.split('__', 1))}/{part}" for k in pairs_logged
