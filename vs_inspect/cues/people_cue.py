@@ -130,11 +130,12 @@ def find_people_cameras(videos: Sequence, grid: OffsetGrid = OffsetGrid(), confi
                                                             unit="video", progress=progress, threads=True)))
     for v in videos:
         n = v.info.name
-        out = done[n] if n in done else memo.get(keys[n], lambda: None)
+        # found now (kept for the next run unless it failed), or kept by an earlier run
+        out = done[n] if isinstance(done.get(n), TaskFailed) else memo.get(keys[n], lambda: done[n])
         if isinstance(out, TaskFailed):
             failed[n] = f"finding its people failed: {out.reason}"
             continue
-        people[n], motions[n] = memo.get(keys[n], lambda: out)
+        people[n], motions[n] = out
     failed.update(moving_cameras(motions, config, camera_motion))
     timings["people"] = time.perf_counter() - t0
 

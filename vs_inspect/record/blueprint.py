@@ -212,17 +212,12 @@ def _overview_tabs(pairs_logged: list[str], result: SyncResult | None, pair_view
                                  plot_legend=rrb.PlotLegend(visible=True)),
                 name="IRLS solve"))
     if votes_logged:
-        overview.append(rrb.TimeSeriesView(
-            origin="/", contents=[f"+ /{pair_votes_path(*k.split('__', 1))}/{part}" for k in votes_logged
-                                  for part in ("z", "chosen")],
-            name="pairing votes (Stage 0, z per Δ)", time_ranges=_full_range(), axis_x=_axis(range_ms),
-            plot_legend=rrb.PlotLegend(visible=True)))
+        overview.append(_pairs_series("pairing votes (Stage 0, z per Δ)", votes_logged, pair_votes_path,
+                                      ("z", "chosen"), range_ms))
     if people_logged:
-        overview.append(rrb.TimeSeriesView(
-            origin="/", contents=[f"+ /{pair_people_path(*k.split('__', 1))}/evidence/{part}" for k in people_logged
-                                  for part in ("evidence", "chosen")],
-            name="people shifts (Stage 0, evidence per Δ)", time_ranges=_full_range(), axis_x=_axis(range_ms),
-            plot_legend=rrb.PlotLegend(visible=True)))
+        overview.append(_pairs_series("people shifts (Stage 0, evidence per Δ)", people_logged,
+                                      lambda a, b: f"{pair_people_path(a, b)}/evidence", ("evidence", "chosen"),
+                                      range_ms))
     if transfer_origin is not None:
         overview.append(rrb.TimeSeriesView(origin=transfer_origin, name="point transfer (Stage 0: a camera's offset)",
                                            time_ranges=_full_range(), plot_legend=rrb.PlotLegend(visible=True)))
@@ -230,6 +225,16 @@ def _overview_tabs(pairs_logged: list[str], result: SyncResult | None, pair_view
         overview.append(rrb.TimeSeriesView(origin=three_view_origin, name="three-view check (Stage 0: sure cameras)",
                                            time_ranges=_full_range(), plot_legend=rrb.PlotLegend(visible=True)))
     return overview
+
+
+def _pairs_series(name: str, keys: list[str], path_of, parts: tuple[str, ...], range_ms: tuple[int, int] | None):
+    """One plot of the series `parts` below path_of(a, b) of every pair "a__b" in keys, over the
+    offsets searched."""
+    import rerun.blueprint as rrb
+    return rrb.TimeSeriesView(origin="/", contents=[f"+ /{path_of(*k.split('__', 1))}/{part}" for k in keys
+                                                    for part in parts],
+                              name=name, time_ranges=_full_range(), axis_x=_axis(range_ms),
+                              plot_legend=rrb.PlotLegend(visible=True))
 
 
 def _scene_views(video_names: list[str], sizes: dict[str, tuple[int, int]], eye: tuple | None, show_world: bool,

@@ -73,18 +73,21 @@ def _decision_text(p: PeoplePair) -> str:
     return "\n".join(lines)
 
 
-def log_pairs(rec: rr.RecordingStream, cue: PeopleCue) -> None:
+def log_pairs(rec: rr.RecordingStream, cue: PeopleCue) -> list[str]:
     """Every pair's evidence over the candidate shifts and its decision; each series named by its
-    pair's short names, so that the pairs' plots can share one view."""
+    pair's short names, so that the pairs' plots can share one view. Returns "a__b" of the pairs
+    whose evidence was logged."""
     from ..analysis.display_names import display_names
 
     short = display_names([v.name for v in cue.videos])
+    logged = []
     for p in cue.pairs:
         base = pair_people_path(p.a, p.b)
         pair = f"{short.get(p.a, p.a)}→{short.get(p.b, p.b)}"
         rec.log(f"{base}/decision", rr.TextDocument(_decision_text(p), media_type=rr.MediaType.MARKDOWN), static=True)
         if not len(p.offsets_s):
             continue
+        logged.append(f"{p.a}__{p.b}")
         ms = np.rint(1000 * np.asarray(p.offsets_s)).astype(np.int64)
         series = (("inliers", p.inliers, "inlier correspondences of the association's F"),
                   ("cost", p.cost, "mean truncated Sampson cost (noise units², 0..1)"),
@@ -103,6 +106,7 @@ def log_pairs(rec: rr.RecordingStream, cue: PeopleCue) -> None:
                                                                marker_sizes=8.0))
             rec.log(f"{base}/evidence/chosen", rr.Scalars(float(np.nanmax(p.evidence)) if p.evidence is not None else 0.0))
             rec.reset_time()
+    return logged
 
 
 def log_cameras(rec: rr.RecordingStream, cue: PeopleCue) -> None:
@@ -136,9 +140,10 @@ def log_summary(rec: rr.RecordingStream, cue: PeopleCue) -> None:
     rec.log(PEOPLE_CUE, rr.TextDocument("\n".join(lines), media_type=rr.MediaType.MARKDOWN), static=True)
 
 
-def log_people_cue(rec: rr.RecordingStream, cue: PeopleCue) -> None:
-    """Everything above, into rec."""
+def log_people_cue(rec: rr.RecordingStream, cue: PeopleCue) -> list[str]:
+    """Everything above, into rec; "a__b" of the pairs whose shift evidence was logged."""
     log_summary(rec, cue)
     log_people(rec, cue)
-    log_pairs(rec, cue)
+    logged = log_pairs(rec, cue)
     log_cameras(rec, cue)
+    return logged

@@ -189,8 +189,7 @@ class RerunSink(Sink):
     def people_cue(self, cue: PeopleCue) -> None:
         from .people import log_people_cue
 
-        log_people_cue(self.rec, cue)
-        self._people_logged = [f"{p.a}__{p.b}" for p in cue.pairs if len(p.offsets_s)]
+        self._people_logged = log_people_cue(self.rec, cue)
 
     @_timed
     def bundle(self, bundle: CueBundle) -> None:
