@@ -42,6 +42,8 @@ def _pair(reason, a="r", b="v"):
     (_people("a moving camera (its background moves 4.0 px between frames): the people cue fits ..."), "", (),
      "its camera moves, and the people in view time static cameras only"),
     (_people("no people found"), "", (), "no person was followed in it, and the background gave no camera"),
+    (_people("no accepted pair of people links it to r (r__v: no person followed in r)"), "", (),
+     "the people it shares with the other videos gave no clear time shift"),  # its partner had none
     (_people("no accepted pair of people links it to r (r__v: uncertain shift: from -8.80 to -8.40 s ...)"), "", (),
      "the people it shares with the other videos move too slowly to time it within a frame"),
     (_people("no accepted pair of people links it to r (r__v: ambiguous shift: ...)"), "", (),

@@ -41,7 +41,7 @@ def plain_reason(video: str, why: str, stats: CueStats | None, pairs: Sequence[A
         return ("nothing moving was found in it to follow; it needs people or objects that move in view "
                 "of another camera too")
     if dropped is not None and stats.people is not None and stats.people.kept:
-        return _people_reason(dropped)
+        return _people_reason(video, dropped)
     if dropped is not None:
         if calibrated:
             return ("the calibration gives no usable camera for it; check that the calibration names this "
@@ -73,12 +73,13 @@ def plain_reason(video: str, why: str, stats: CueStats | None, pairs: Sequence[A
     return "no pair with another video gave one clear offset" + _try(calib, WINDOW, CAMERA)
 
 
-def _people_reason(dropped: str) -> str:
-    """The plain sentence of a video the people in view gave no camera."""
+def _people_reason(video: str, dropped: str) -> str:
+    """The plain sentence of a video the people in view gave no camera (dropped: why, its pairs'
+    reasons included)."""
     if "moving camera" in dropped:
         return ("its camera moves, and the people in view time static cameras only"
                 + _try(CALIB, "--camera-motion NAME=static if it does not move"))
-    if "no people found" in dropped or "no person followed" in dropped:
+    if "no people found" in dropped or f"no person followed in {video}" in dropped:  # not its partner's
         return "no person was followed in it, and the background gave no camera" + _try(CALIB, CAMERA)
     if "uncertain shift" in dropped or "flat landscape" in dropped:
         return ("the people it shares with the other videos move too slowly to time it within a frame"
