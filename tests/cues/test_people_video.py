@@ -90,3 +90,22 @@ def test_the_task_bundle_is_made_from_the_wheels_networks():
         assert sorted(z.namelist()) == ["pose_detector.tflite", "pose_landmarks_detector.tflite"]
     with PeopleDetector() as d:
         assert len(d.detect(np.zeros((240, 320, 3), np.uint8)).landmarks) == 0  # nobody in a black frame
+
+
+@pytest.mark.skipif(NO_MEDIAPIPE is not None, reason=str(NO_MEDIAPIPE))
+def test_two_detector_threads_find_the_same_people_as_one(shared_data):
+    """A frame's crops and windows shared between two detectors: the same tracks, landmark for
+    landmark (each window is looked at alone), on a real crowd clip."""
+    from vs_inspect.cues.people_video import PeopleVideoConfig, find_people
+    from vs_inspect.io.video import iter_frames, open_video
+
+    path = sorted((shared_data / "visualsync_clips" / "pan160906").glob("*.mp4"))[1]
+    video = open_video(path)
+    frames = [f for _, f in zip(range(8), iter_frames(video))]
+    times = video.info.timestamps_s[:8]
+    # two frames searched whole, the others cropped; tracks of 0.5 s kept
+    cfg = PeopleVideoConfig(discover_s=0.5, tracking=TrackingConfig(min_track_s=0.5))
+    one, _ = find_people("v", iter(frames), times, cfg, workers=1)
+    two, stats = find_people("v", iter(frames), times, cfg, workers=2)
+    assert one.num_people >= 1 and stats.crops >= 1
+    np.testing.assert_array_equal(one.landmarks, two.landmarks)

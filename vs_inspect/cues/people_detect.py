@@ -237,6 +237,59 @@ class PeopleDetector:
         self.close()
 
 
+class DetectorPool:
+    """Several PeopleDetector's, each on a thread of its own, looking at the windows of one frame
+    at once (BlazePose releases the GIL while it runs). The result is the same whatever the
+    number of workers: each window is looked at alone. close() (or a with block) frees them."""
+
+    def __init__(self, cfg: DetectorConfig = DetectorConfig(), workers: int = 1):
+        from concurrent.futures import ThreadPoolExecutor
+
+        if workers < 1:
+            raise ValueError(f"a detector pool needs one worker or more, got {workers}")
+        self._detectors: list[PeopleDetector] = []
+        self._threads = []
+        try:
+            for i in range(workers):
+                self._detectors.append(PeopleDetector(cfg))
+                if workers > 1:
+                    self._threads.append(ThreadPoolExecutor(1, thread_name_prefix=f"people-{i}"))
+        except BaseException:
+            self.close()
+            raise
+
+    def poses_in(self, rgb: np.ndarray, windows: list[tuple[int, int, int, int]], crop: list[bool]
+                 ) -> list[list[np.ndarray]]:
+        """Per window of an (H,W,3) RGB frame, the poses (33,3) found in it (frame px +
+        visibility); crop[i]: window i is a crop around one person (PeopleDetector.poses_in)."""
+        n = len(self._detectors)
+
+        def look(d: int) -> list[list[np.ndarray]]:
+            out = []
+            for i in range(d, len(windows), n):
+                found, _ = self._detectors[d].poses_in(rgb, [windows[i]], crop=crop[i])
+                out.append(found)
+            return out
+
+        if n == 1:
+            shares = [look(0)]
+        else:  # each detector always on its own thread
+            shares = [f.result() for f in [t.submit(look, d) for d, t in enumerate(self._threads)]]
+        return [shares[i % n][i // n] for i in range(len(windows))]
+
+    def close(self) -> None:
+        for t in self._threads:
+            t.shutdown(wait=True)
+        for d in self._detectors:
+            d.close()
+
+    def __enter__(self) -> DetectorPool:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
 def _mp_image(rgb: np.ndarray):
     import mediapipe as mp
 

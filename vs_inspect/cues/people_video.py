@@ -10,6 +10,7 @@ background moves (cues/video/motion.py), which tells a static camera from a movi
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -20,7 +21,7 @@ from ..geometry.skeleton import person_scale_px, pose_distance
 from ..io.video import downscale
 from ..types import VideoPeople
 from .video.motion import background_motion
-from .people_detect import DetectorConfig, PeopleDetector, frame_windows, merge_duplicates
+from .people_detect import DetectorConfig, DetectorPool, frame_windows, merge_duplicates
 from .people_tracking import PeopleTracker, TrackingConfig, seen_xy
 
 
@@ -86,54 +87,51 @@ class PeopleVideoStats:
 
 
 def find_people(name: str, frames: Iterable[tuple[int, np.ndarray]], times_s: np.ndarray,
-                cfg: PeopleVideoConfig = PeopleVideoConfig(), detector: PeopleDetector | None = None
+                cfg: PeopleVideoConfig = PeopleVideoConfig(), workers: int | None = None
                 ) -> tuple[VideoPeople, PeopleVideoStats]:
     """The people of one video: frames yields (frame index, (H,W,3) uint8 BGR) in order (every
     frame, at the resolution the landmarks are wanted in), times_s (T,) are the video's local
-    frame times. detector: a started one (closed by the caller), None: one is started here."""
+    frame times. workers: detectors looking at a frame's crops and windows at once (default: two,
+    or one on a one-core machine); the result does not depend on it."""
     import cv2
 
     t0 = time.perf_counter()
     times_s = np.asarray(times_s, dtype=np.float64)
     tracker = PeopleTracker(name, times_s, cfg.tracking)
-    own = detector is None
-    detector = detector or PeopleDetector(cfg.detector)
     last_discovery, n_frames, n_disc, n_crops = -np.inf, 0, 0, 0
     T = len(times_s)
     firsts = set(np.unique(np.linspace(0, max(T - 2, 0), min(cfg.motion_pairs, max(T - 1, 0))).astype(int)).tolist())
     grey: dict[int, np.ndarray] = {}
-    try:
+    with DetectorPool(cfg.detector, workers or min(2, os.cpu_count() or 1)) as detectors:
         for k, bgr in frames:
             h, w = bgr.shape[:2]
             if k in firsts or k - 1 in firsts:
                 grey[k] = cv2.cvtColor(downscale(bgr, cfg.motion_side), cv2.COLOR_BGR2GRAY)
-            rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+            followed = [pose for _, pose in tracker.live(k)]
+            crops = [crop_around(pose, w, h, cfg.crop_scale, cfg.min_crop_px) for pose in followed]
+            discover = times_s[k] - last_discovery >= cfg.discover_s - 1e-9
+            whole = frame_windows(w, h, cfg.detector) if discover else []
+            found = detectors.poses_in(cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB), crops + whole,
+                                       [True] * len(crops) + [False] * len(whole))
+            n_crops += len(crops)
             poses, windows, window_of = [], [], []
-            for _, pose in tracker.live(k):
-                box = crop_around(pose, w, h, cfg.crop_scale, cfg.min_crop_px)
-                found, _ = detector.poses_in(rgb, [box], crop=True)
-                n_crops += 1
-                match = _matching(pose, found, cfg.tracking)
+            for pose, box, in_crop in zip(followed, crops, found):
+                match = _matching(pose, in_crop, cfg.tracking)
                 if match is not None:
                     windows.append(box)
                     window_of.append(len(windows) - 1)
                     poses.append(match)
-            if times_s[k] - last_discovery >= cfg.discover_s - 1e-9:
-                whole = frame_windows(w, h, cfg.detector)
-                found, where = detector.poses_in(rgb, whole)
-                poses += found
-                window_of += [len(windows) + i for i in where]
+            if discover:
+                for i, in_window in enumerate(found[len(crops):]):
+                    poses += in_window
+                    window_of += [len(windows) + i] * len(in_window)
                 windows += whole
                 last_discovery = times_s[k]
                 n_disc += 1
             merged = merge_duplicates(poses, windows, window_of, cfg.detector)
             tracker.update(k, merged.landmarks)
             n_frames += 1
-    finally:
-        if own:
-            detector.close()
     moves = [background_motion(np.stack([grey[t], grey[t + 1]]), samples=1) for t in sorted(firsts)
              if t in grey and t + 1 in grey]
     motion = float(np.median(moves)) if moves else 0.0
     return tracker.result(), PeopleVideoStats(n_frames, n_disc, n_crops, time.perf_counter() - t0, motion)
-
