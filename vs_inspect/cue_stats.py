@@ -367,7 +367,7 @@ class HeadsRecord:
 
 @dataclass(frozen=True)
 class PeoplePairRecord:
-    """One pair of videos as their people timed it (types.PeoplePair, in short)."""
+    """One pair of videos as their people timed it (people_types.PeoplePair, in short)."""
 
     reason: str  # why taken, or why refused
     people_associated: int  # people both videos see, paired up

@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 
 from ..errors import InputError
-from ..types import PairLandscape, RunResult
+from ..result_types import PairLandscape, RunResult
 from ._common import add_gt_option, load_gt, offsets_table, sign_in_words
 
 

@@ -50,7 +50,7 @@ from ..geometry.sampling import tracks_between_frames
 from ..geometry.skeleton import GEOMETRY_LANDMARKS, person_scale_px, subset_mirror
 from ..geometry.timing import frame_brackets
 from ..geometry.two_view import fundamental_irls, fundamental_ransac, sampson_px
-from ..types import PeopleAssociation, PeoplePair
+from ..people_types import PeopleAssociation, PeoplePair
 from .decision import local_minima
 
 EPS_S = 1e-9

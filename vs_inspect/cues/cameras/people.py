@@ -19,7 +19,8 @@ import numpy as np
 from ...cue_stats import PeopleRecord, PeoplePairRecord
 from ...geometry.offsets import OffsetGrid
 from ...memo import NO_MEMO, Memo
-from ...types import PeopleCue, TrackPairs, Tracks
+from ...people_types import PeopleCue
+from ...types import TrackPairs, Tracks
 from ..config import CueConfig
 from ..records import Note, say_cameras
 from ..rules import ALL
