@@ -10,7 +10,8 @@ from vs_inspect.geometry.epipolar import look_at
 from vs_inspect.types import CameraTrack, TrackPairs
 
 from tests.cue_records import joint
-from vs_inspect.cue_stats import CueStats, MovingPointsCameras, SfmRecord
+from vs_inspect.camera_stats import MovingPointsCameras, SfmRecord
+from vs_inspect.cue_stats import CueStats
 from vs_inspect.cues.pairing.pairing import GeometricPairing
 from vs_inspect.cues.records import Note
 

@@ -14,7 +14,8 @@ from vs_inspect.cues.pairing.joint import JointChoice
 from vs_inspect.cues.pairing.votes import GeometricPairStats
 from vs_inspect.cues.pairing.pairing import _add_joint_pairs
 from vs_inspect.geometry.epipolar import look_at
-from vs_inspect.cue_stats import CueStats, PairCueStats, to_json
+from vs_inspect.cue_stats import CueStats, PairCueStats
+from vs_inspect.json_records import to_json
 from vs_inspect.types import CameraTrack, TrackPairs
 
 from .stage0_fakes import K

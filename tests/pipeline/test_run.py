@@ -326,7 +326,8 @@ def test_a_null_reason_names_what_the_other_camera_models_made_of_the_video():
     what the other models tried made of it (CueStats.other_models_note); a video Stage 0 dropped
     already carries that in its own reason."""
     from vs_inspect.pipeline.run import _run_result
-    from vs_inspect.cue_stats import CueStats, SfmRecord
+    from vs_inspect.camera_stats import SfmRecord
+    from vs_inspect.cue_stats import CueStats
     from vs_inspect.result_types import SyncResult
 
     note = "XFEAT's model registered it, but its set was not kept (its joint vote trusted 2 video(s))"

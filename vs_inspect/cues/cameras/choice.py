@@ -18,7 +18,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...cue_stats import (ImagePairMatches, JointCoarseOffsets, JointFit, ModelTried, MovingPointsCameras, MovingPointsPair, SfmRecord, from_json, refusal_texts)
+from ...camera_stats import (ImagePairMatches, JointCoarseOffsets, JointFit, ModelTried, MovingPointsCameras,
+                             MovingPointsPair, SfmRecord)
+from ...cue_stats import refusal_texts
+from ...json_records import from_json
 from ...errors import InputError
 from ...geometry.offsets import OffsetGrid
 from ...types import FROM_MOVING_POINTS, CameraTrack, Tracks, first_clause

@@ -18,7 +18,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from tqdm import tqdm
 
-from ...cue_stats import FittedOffsetCheck, FittedOffsetPair, JointVoteRecord, PairVoteSummary
+from ...camera_stats import FittedOffsetCheck, FittedOffsetPair
+from ...cue_stats import JointVoteRecord, PairVoteSummary
 from ...geometry.offsets import OffsetGrid
 from ...types import TrackPairs, VideoInfo
 from ...memo import NO_MEMO, Memo
