@@ -27,7 +27,7 @@ SCENE = dict(cameras=3, moving=1, seconds=2.0, width=240, height=180, fps=None, 
 
 
 # the modules whose numba kernels are cached, under the package
-KERNEL_MODULES = ("sync.kernels", "sync.people_pairs", "cues.pairing.votes", "cues.features.guided",
+KERNEL_MODULES = ("sync.kernels", "sync.people_pairs", "cues.pairing.vote_kernels", "cues.features.guided",
                   "cues.features.nearest_neighbours")
 
 
