@@ -73,7 +73,54 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     accepts the pair only if its descriptor pairs alone give the same minimum); with a moving
     camera, none (GeometricPairConfig.unchecked_moving).
     """
-    from .joint import consistent_peaks, joint_offsets
+    from .joint import joint_offsets
+
+    found = _vote_on_every_pair(pairs, cameras, tracks, vids, progress, grid, memo)
+    peaks_s = {k: tuple(gs.peaks_s) for k, (_, gs) in found.items()}
+    votes = {k: gs for k, (_, gs) in found.items()}  # each pair's vote evidence
+    notes: list[Note] = []
+    coarsest = max((vids[n].info.frame_interval_s for k in found for n in k), default=0.0)
+    # each of a triangle's three peaks is located to about ±1 frame (its support window), so
+    # right peaks close within about 3 frames, while wrong ones miss by far more
+    with stage("geometric pairs: every camera's offset chosen at once", progress and cfg.geometric.joint):
+        joint = joint_offsets(votes, 3.0 * coarsest) if cfg.geometric.joint else None
+    third = "moving_pair_third" in rules
+    sure, three_view, dissent, dissent_short, overruled = _sure_cameras(
+        found, votes, joint, cameras, tracks, vids, cfg, notes, coarsest, estimated, other_peaks, other, progress,
+        grid, third, rules, memo)
+    refused = bool(dissent) or any(not chk.passed for chk in three_view.values())
+    # a camera refused (by its pairs or in three views) keeps the joint path (no geometric pair
+    # for it), instead of the triangle fallback below choosing among the same cameras' vote peaks
+    if sum(sure.values()) >= 2 or refused or ("triangle_fallback" not in rules and joint is not None):
+        checks, traj = {}, None
+        if "transfer" in rules and cfg.geometric.transfer and not all(sure.values()) and sum(sure.values()) >= 2:
+            # not of a camera its own pairs contradict: point transfer projects into the same
+            # camera, whose biased geometry it can then confirm at a wrong offset
+            with stage("geometric pairs: unsure cameras checked by point transfer", progress):
+                checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, notes,
+                                                    frozenset(dissent), grid, third, memo)
+        sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
+        said = _JointChecks({c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
+                            {c: chk.summary() for c, chk in three_view.items()}, dissent, dissent_short, overruled)
+        out, used, summaries, record, chosen = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids,
+                                                                cfg, notes, said, rules)
+        out, transfer_new = _add_transfer_pairs(out, checks, traj, list(vids), notes)
+        return GeometricPairing(out, used, peaks_s, "joint", summaries, transfer_new, record, votes, chosen,
+                                checks, three_view, tuple(notes))
+    if joint is not None:
+        # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
+        # decides (and refuses when the triangles do not close)
+        say(notes, "joint vote sure of fewer than two cameras (margins "
+            + ", ".join(f"{n} {m:.1f}" for n, m in joint.margin.items())
+            + "): geometric peaks chosen by triangle closure")
+    return _triangle_pairing(pairs, found, joint, cameras, tracks, vids, cfg, notes, coarsest, peaks_s, votes,
+                             rules)
+
+
+def _vote_on_every_pair(pairs: dict, cameras: dict, tracks: dict, vids: dict, progress: bool,
+                        grid: OffsetGrid, memo: Memo) -> dict:
+    """{(a, b): (TrackPairs, GeometricPairStats)}: geometric_pairs' vote on every pair of cameras
+    in pairs."""
     from .votes import VOTE, geometric_pairs
 
     # every pair of cameras: a moving one with its per-frame poses (two moving ones: the
@@ -83,17 +130,22 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     for a, b in tqdm(todo, desc="geometric pairs", unit="pair", disable=not progress, leave=False):
         found[(a, b)] = memo.call("votes", geometric_pairs, a, b, vids[a].info, vids[b].info, cameras[a],
                                   cameras[b], tracks[a].xy, tracks[b].xy, VOTE, grid)
-    peaks_s = {k: tuple(gs.peaks_s) for k, (_, gs) in found.items()}
-    votes = {k: gs for k, (_, gs) in found.items()}  # each pair's vote evidence
-    notes: list[Note] = []
-    coarsest = max((vids[n].info.frame_interval_s for k in found for n in k), default=0.0)
-    # each of a triangle's three peaks is located to about ±1 frame (its support window), so
-    # right peaks close within about 3 frames, while wrong ones miss by far more
-    with stage("geometric pairs: every camera's offset chosen at once", progress and cfg.geometric.joint):
-        joint = joint_offsets(votes, 3.0 * coarsest) if cfg.geometric.joint else None
+    return found
+
+
+def _sure_cameras(found: dict, votes: dict, joint, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
+                  notes: list[Note], coarsest: float, estimated: bool, other_peaks: dict | None, other: str,
+                  progress: bool, grid: OffsetGrid, third: bool, rules: frozenset[str], memo: Memo
+                  ) -> tuple[dict, dict, dict, dict, dict]:
+    """(sure, three_view, dissent, dissent_short, overruled): whether the joint vote is sure of each
+    camera ({camera: bool}: its margin is wide enough), then unsure of those that fail a check, in
+    turn: the three-view check of estimated cameras (three_view: {camera: transfer.ThreeViewCheck}),
+    a rival offset in three views, a pair of its own with few votes at the joint offset, another
+    camera model's vote peaks. dissent: {camera: why it was made unsure}, dissent_short: the same in
+    a few words, overruled: {camera: why another model's dispute of it was overruled}. Each
+    decision is said in notes."""
     sure = {} if joint is None else {n: m >= cfg.geometric.joint_min_margin or "margin" not in rules
                                      for n, m in joint.margin.items()}
-    third = "moving_pair_third" in rules
     three_view = {}
     # the check is of cameras Stage 0 estimated: a calibration's are given (and a right calibrated
     # camera can follow as few trajectories as a wrong estimated one)
@@ -137,31 +189,20 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
             log.info(msg)
         _not_sure(disputed, sure, dissent, notes, dissent_short,
                   {n: f"{other}'s vote peaks disagree" for n in disputed})
-    refused = bool(dissent) or any(not chk.passed for chk in three_view.values())
-    # a camera refused (by its pairs or in three views) keeps the joint path (no geometric pair
-    # for it), instead of the triangle fallback below choosing among the same cameras' vote peaks
-    if sum(sure.values()) >= 2 or refused or ("triangle_fallback" not in rules and joint is not None):
-        checks, traj = {}, None
-        if "transfer" in rules and cfg.geometric.transfer and not all(sure.values()) and sum(sure.values()) >= 2:
-            # not of a camera its own pairs contradict: point transfer projects into the same
-            # camera, whose biased geometry it can then confirm at a wrong offset
-            with stage("geometric pairs: unsure cameras checked by point transfer", progress):
-                checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, notes,
-                                                    frozenset(dissent), grid, third, memo)
-        sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
-        said = _JointChecks({c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
-                            {c: chk.summary() for c, chk in three_view.items()}, dissent, dissent_short, overruled)
-        out, used, summaries, record, chosen = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids,
-                                                                cfg, notes, said, rules)
-        out, transfer_new = _add_transfer_pairs(out, checks, traj, list(vids), notes)
-        return GeometricPairing(out, used, peaks_s, "joint", summaries, transfer_new, record, votes, chosen,
-                                checks, three_view, tuple(notes))
-    if joint is not None:
-        # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
-        # decides (and refuses when the triangles do not close)
-        say(notes, "joint vote sure of fewer than two cameras (margins "
-            + ", ".join(f"{n} {m:.1f}" for n, m in joint.margin.items())
-            + "): geometric peaks chosen by triangle closure")
+    return sure, three_view, dissent, dissent_short, overruled
+
+
+def _triangle_pairing(pairs: dict, found: dict, joint, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
+                      notes: list[Note], coarsest: float, peaks_s: dict, votes: dict,
+                      rules: frozenset[str]) -> GeometricPairing:
+    """The GeometricPairing when the joint vote decided nothing (the triangle rule): each pair gets
+    the supporters of its vote peak that closes every triangle (consistent_peaks); when the peaks
+    do not close the triangles, or three cameras give only one, no pair gets any and the descriptor
+    pairs are kept only where consistent at the joint vote's offsets (when there is a joint vote);
+    with no triangle, a pair gets every kept peak's supporters, marked unchecked, unless one of its
+    cameras moves."""
+    from .joint import consistent_peaks
+
     chosen, status = consistent_peaks({k: (gs.peaks_s, gs.peak_votes) for k, (_, gs) in found.items()},
                                       3.0 * coarsest)
     # the descriptor pairs are unchecked too then: alone they can put a camera a wrong offset that
