@@ -35,7 +35,8 @@ from ..geometry.offsets import OffsetGrid, span_of
 from ..geometry.people_rig import (Observations, PairF, PairPose, bundle_adjust, chain_poses, focals_from_pairs,
                                    intrinsics, pair_pose, register_views)
 from ..geometry.skeleton import subset_mirror
-from ..sync.people_pairs import PeoplePairConfig, estimate_people_pair
+from ..sync.people_config import PeoplePairConfig
+from ..sync.people_pairs import estimate_people_pair
 from ..sync.solve import PairMeasurement, solve_offsets
 from ..people_types import PeopleCue, PeoplePair, VideoPeople
 from ..types import CameraTrack, TrackPairs, Tracks, VideoInfo
