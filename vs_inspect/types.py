@@ -42,7 +42,7 @@ def pairs_by_reason(items: list[tuple[str, str]], verb: str = "", max_names: int
 
 
 # how a dropped video's reason adds why the moving points' own cameras did not place it either
-# (cues/cameras/choice.py); a headline keeps that clause too
+# (cues/cameras/model_or_points.py); a headline keeps that clause too
 FROM_MOVING_POINTS = "from the moving points: "
 
 

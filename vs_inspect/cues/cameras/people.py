@@ -24,7 +24,8 @@ from ...types import TrackPairs, Tracks
 from ..config import CueConfig
 from ..records import Note, say_cameras
 from ..rules import ALL
-from .choice import CameraSet, vote_on_cameras
+from .camera_set import CameraSet
+from .choice import vote_on_cameras
 
 SOURCE = "estimated from people (their landmarks as correspondences)"
 
