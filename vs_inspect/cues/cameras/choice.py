@@ -130,6 +130,37 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
     (CameraModels.third), held to the first set's peaks too, and kept only when it trusts more videos.
     The kept set's sfm record holds every tried set's counts (models).
     grid: the limits of every offset Stage 0 searches (the moving points' cameras' and the votes')."""
+    seen: dict = {}  # the moving points' cameras, fitted once for every model
+
+    def attempt(est, other_peaks=None, other="", from_tracks=False,
+                as_built=False) -> tuple[str, CameraSet] | None:
+        cams = _estimate(vids, cfg, all_pairs, est, from_tracks, seen, as_built, grid, rules, memo)
+        if from_tracks and not (cams.sfm.fallback is not None and cams.sfm.fallback.used):
+            return None  # est's own cameras again, already voted on
+        out = vote_on_cameras(cams, vids, all_pairs, cfg, progress, estimated=True,
+                              other_peaks=other_peaks, other=other, grid=grid, rules=rules, memo=memo)
+        kind = MOVING_POINTS if from_tracks else est.features + (OWN if as_built else "")
+        return kind, out
+
+    with _kept_models(vids, cfg, frame_images, progress, rules, memo) as models:
+        with stage("cameras: estimating them from the videos (pycolmap)", progress):
+            kept_est = models.first()
+        first_est = kept_est
+        kind, kept = attempt(kept_est)
+        first_kind, first_peaks = kind, kept.peaks
+        tried, failed = [(kind, kept)], []
+        kind, kept, kept_est = _try_later_models(models, attempt, kind, kept, kept_est, first_kind, first_peaks, tried,
+                                                 failed, vids, cfg, rules, progress)
+        kind, kept = _try_moving_points_and_own(attempt, kind, kept, kept_est, first_est, first_kind, tried, cfg,
+                                                rules)
+        skipped = models.third_skipped
+    return _choice_noted(kind, kept, tried, failed, skipped, vids)
+
+
+def _kept_models(vids: dict[str, VideoCues], cfg: CueConfig, frame_images: dict, progress: bool,
+                 rules: frozenset[str], memo: Memo) -> _KeptModels:
+    """pycolmap's camera models of the videos (cameras.CameraModels, built only when needed), each
+    estimate kept in memo under a digest of the camera settings, frames and features."""
     from .sfm import CameraModels
 
     frames = {n: v.sfm_frames for n, v in vids.items() if v.sfm_frames is not None}
@@ -144,70 +175,74 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
                             frame_features=features, frame_images=frame_images, progress=progress,
                             xfeat_first=xfeat_first)
 
-    with _KeptModels(build, memo, key) as models:
+    return _KeptModels(build, memo, key)
 
-        seen: dict = {}  # the moving points' cameras, fitted once for every model
 
-        def attempt(est, other_peaks=None, other="", from_tracks=False,
-                    as_built=False) -> tuple[str, CameraSet] | None:
-            cams = _estimate(vids, cfg, all_pairs, est, from_tracks, seen, as_built, grid, rules, memo)
-            if from_tracks and not (cams.sfm.fallback is not None and cams.sfm.fallback.used):
-                return None  # est's own cameras again, already voted on
-            out = vote_on_cameras(cams, vids, all_pairs, cfg, progress, estimated=True,
-                                  other_peaks=other_peaks, other=other, grid=grid, rules=rules, memo=memo)
-            kind = MOVING_POINTS if from_tracks else est.features + (OWN if as_built else "")
-            return kind, out
-
-        with stage("cameras: estimating them from the videos (pycolmap)", progress):
-            kept_est = models.first()
-        first_est = kept_est
-        kind, kept = attempt(kept_est)
-        first_kind, first_peaks = kind, kept.peaks
-        tried, failed = [(kind, kept)], []
-        for which, build_next in (("second", models.second), ("third", models.third)):
-            if not cfg.geometric.enabled or kept.used >= set(vids):
-                break
-            if f"{which}_model" not in rules:
+def _try_later_models(models: _KeptModels, attempt, kind: str, kept: CameraSet, kept_est, first_kind: str,
+                      first_peaks: dict, tried: list, failed: list, vids: dict, cfg: CueConfig, rules: frozenset[str],
+                      progress: bool) -> tuple[str, CameraSet, object]:
+    """(kind, kept set, its estimate) after the second and third camera models were tried while a
+    video is left untrusted, each voted on with attempt (held to the first set's peaks) and kept
+    when its joint vote trusts more videos; tried gets each set tried, failed why a model failed."""
+    for which, build_next in (("second", models.second), ("third", models.third)):
+        if not cfg.geometric.enabled or kept.used >= set(vids):
+            break
+        if f"{which}_model" not in rules:
+            continue
+        try:
+            with stage(f"cameras: the {which} camera model", progress):
+                est = build_next()
+            if est is None:
                 continue
-            try:
-                with stage(f"cameras: the {which} camera model", progress):
-                    est = build_next()
-                if est is None:
-                    continue
-                log.info("the joint vote trusted %d of %d videos on %s's cameras: trying %s's model",
-                         len(kept.used), len(vids), kind.upper(), est.features.upper())
-                # each later model is held to the first one's vote peaks
-                tried.append(attempt(est, first_peaks, f"{first_kind.upper()}'s model"))
-            except Exception as exc:  # another opinion that fails leaves the earlier ones standing
-                failed.append(f"the {which} camera model failed ({type(exc).__name__}: {exc}); "
-                              f"{kind.upper()}'s kept")
-                log.warning("%s", failed[-1])
-                continue
-            if len(tried[-1][1].used) > len(kept.used):
-                (kind, kept), kept_est = tried[-1], est
-        if (cfg.geometric.enabled and cfg.camera.fallback_when_untrusted and cfg.camera.fallback_from_tracks
-                and "points_when_untrusted" in rules
-                and not kept.used
-                and not any(c.sfm.fallback is not None for _, c in tried)):
-            # every model placed the static cameras, and none was trusted: the moving points' own cameras
-            log.info("the joint vote trusted no video on any camera model: trying the moving points' cameras")
-            points = attempt(kept_est, from_tracks=True)
-            if points is not None:
-                tried.append(points)
-                if points[1].used:
-                    kind, kept = points
-        first_fallback = tried[0][1].sfm.fallback
-        if (cfg.geometric.enabled and cfg.camera.weak_model_when_replaced and "weak_own" in rules and not kept.used
-                and first_fallback is not None and first_fallback.used and len(first_est.cameras) >= 2):
-            # the first model was weak and the moving points' cameras replaced its own, and no video
-            # was trusted on any set: its own cameras get their vote too (a weak model may be right:
-            # the moving points' cameras are judged on track pairs at their own coarse offsets)
-            log.info("the joint vote trusted no video on any camera set: trying %s own cameras", _owner(first_kind))
-            own = attempt(first_est, as_built=True)
-            tried.append(own)
-            if own[1].used:
-                kind, kept = own
-        skipped = models.third_skipped
+            log.info("the joint vote trusted %d of %d videos on %s's cameras: trying %s's model",
+                     len(kept.used), len(vids), kind.upper(), est.features.upper())
+            # each later model is held to the first one's vote peaks
+            tried.append(attempt(est, first_peaks, f"{first_kind.upper()}'s model"))
+        except Exception as exc:  # another opinion that fails leaves the earlier ones standing
+            failed.append(f"the {which} camera model failed ({type(exc).__name__}: {exc}); "
+                          f"{kind.upper()}'s kept")
+            log.warning("%s", failed[-1])
+            continue
+        if len(tried[-1][1].used) > len(kept.used):
+            (kind, kept), kept_est = tried[-1], est
+    return kind, kept, kept_est
+
+
+def _try_moving_points_and_own(attempt, kind: str, kept: CameraSet, kept_est, first_est, first_kind: str,
+                               tried: list, cfg: CueConfig, rules: frozenset[str]) -> tuple[str, CameraSet]:
+    """(kind, kept set) after the last resorts when no video was trusted on any set: the moving
+    points' own cameras (when no model was replaced by them), then the first model's own cameras
+    (when the moving points' replaced them); each kept when its joint vote trusts a video; tried
+    gets each set tried."""
+    if (cfg.geometric.enabled and cfg.camera.fallback_when_untrusted and cfg.camera.fallback_from_tracks
+            and "points_when_untrusted" in rules
+            and not kept.used
+            and not any(c.sfm.fallback is not None for _, c in tried)):
+        # every model placed the static cameras, and none was trusted: the moving points' own cameras
+        log.info("the joint vote trusted no video on any camera model: trying the moving points' cameras")
+        points = attempt(kept_est, from_tracks=True)
+        if points is not None:
+            tried.append(points)
+            if points[1].used:
+                kind, kept = points
+    first_fallback = tried[0][1].sfm.fallback
+    if (cfg.geometric.enabled and cfg.camera.weak_model_when_replaced and "weak_own" in rules and not kept.used
+            and first_fallback is not None and first_fallback.used and len(first_est.cameras) >= 2):
+        # the first model was weak and the moving points' cameras replaced its own, and no video
+        # was trusted on any set: its own cameras get their vote too (a weak model may be right:
+        # the moving points' cameras are judged on track pairs at their own coarse offsets)
+        log.info("the joint vote trusted no video on any camera set: trying %s own cameras", _owner(first_kind))
+        own = attempt(first_est, as_built=True)
+        tried.append(own)
+        if own[1].used:
+            kind, kept = own
+    return kind, kept
+
+
+def _choice_noted(kind: str, kept: CameraSet, tried: list, failed: list, skipped: str | None,
+                  vids: dict) -> CameraSet:
+    """The kept set (of kind) with its notes and sfm record saying what every camera set tried
+    made of the videos, which one was kept, which models failed and which were skipped."""
     notes = list(kept.notes)  # only the kept set's notes are reported, then the choice
     models_tried = tuple(ModelTried(k, len(c.cameras), tuple(sorted(c.used)), c is kept) for k, c in tried)
     kept = _note_other_models(kind, kept, [(k, c) for k, c in tried if c is not kept], vids)
