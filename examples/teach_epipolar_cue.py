@@ -51,7 +51,7 @@ from vs_inspect.pipeline import run  # noqa: E402
 from vs_inspect.report.build import render_report  # noqa: E402
 from vs_inspect.analysis.report_data import report_data_from_run  # noqa: E402
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene  # noqa: E402
-from vs_inspect.types import RunInputs  # noqa: E402
+from vs_inspect.result_types import RunInputs  # noqa: E402
 
 from vs_inspect import palette  # noqa: E402  (the recording's and the report's colours)
 

@@ -1,88 +1,18 @@
-"""Stage 0's typed records: what it found per video and per pair, the cameras it estimated and the
-joint vote it took on them, as result.json's "cues" keeps them (the same keys as its JSON, written
-and read by to_json/from_json here) and the recording shows them.
-
-Every record is a frozen dataclass of plain values (numbers, strings, tuples, dicts of those,
-other records). A field that is None is left out of the JSON, unless its metadata says "null"
-(then it is written as null); a field marked "flat" is a record whose keys go into its owner's.
+"""Stage 0's typed records: what it found per video and per pair, the joint vote it took on the
+cameras, the person detector's and the people cue's runs, as result.json's "cues" keeps them (the
+same keys as its JSON, written and read with json_records) and the recording shows them. The
+records of the cameras it estimated are in camera_stats.py.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import functools
-import types
-import typing
 from dataclasses import dataclass, field
 from typing import Any
 
-from .geometry.camera_model import Lens
+from .camera_stats import SfmRecord
+from .json_records import FLAT, NULL, from_json, to_json
 from .types import FROM_MOVING_POINTS, first_clause, pairs_by_reason
-
-NULL = {"null": True}  # field metadata: written as null when None
-FLAT = {"flat": True}  # field metadata: a record whose keys go into its owner's
-
-
-# ---- JSON of records ---------------------------------------------------------------------------
-
-
-def to_json(obj: Any) -> Any:
-    """A record (or a value holding records) as JSON values."""
-    if dataclasses.is_dataclass(obj):
-        out: dict[str, Any] = {}
-        for f in dataclasses.fields(obj):
-            v = getattr(obj, f.name)
-            if v is None and not f.metadata.get("null"):
-                continue
-            if f.metadata.get("flat"):
-                out.update(to_json(v))
-            else:
-                out[f.name] = to_json(v)
-        return out
-    if isinstance(obj, dict):
-        return {k: to_json(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [to_json(v) for v in obj]
-    return obj
-
-
-@functools.cache
-def _hints(cls: type) -> dict[str, Any]:
-    return typing.get_type_hints(cls)
-
-
-def from_json(tp: Any, data: Any) -> Any:
-    """The value of type tp (a record, a container of records or a plain type) from to_json's output."""
-    origin = typing.get_origin(tp)
-    if origin in (typing.Union, types.UnionType):
-        args = [a for a in typing.get_args(tp) if a is not type(None)]
-        return None if data is None else from_json(args[0], data)
-    if dataclasses.is_dataclass(tp):
-        hints = _hints(tp)
-        kwargs = {}
-        for f in dataclasses.fields(tp):
-            if f.metadata.get("flat"):  # left out (None) when none of its keys is there
-                inner = [a for a in typing.get_args(hints[f.name]) if a is not type(None)] or [hints[f.name]]
-                kwargs[f.name] = from_json(inner[0], data) if _has_any(data, inner[0]) else None
-            elif f.name in data:
-                kwargs[f.name] = from_json(hints[f.name], data[f.name])
-        return tp(**kwargs)
-    if origin is dict:
-        _, vt = typing.get_args(tp)
-        return {k: from_json(vt, v) for k, v in data.items()}
-    if origin is tuple:
-        args = typing.get_args(tp)
-        if len(args) == 2 and args[1] is Ellipsis:
-            return tuple(from_json(args[0], v) for v in data)
-        return tuple(from_json(a, v) for a, v in zip(args, data))
-    if tp is float and data is not None:
-        return float(data)
-    return data
-
-
-def _has_any(data: dict, cls: type) -> bool:
-    """Whether data holds any key of record cls."""
-    return any(f.name in data for f in dataclasses.fields(cls))
 
 
 # ---- one video ---------------------------------------------------------------------------------
@@ -137,165 +67,6 @@ class PairCueStats:
     track_pairs: int  # descriptor track pairs
     vote: PairVoteSummary | None = field(default=None, metadata=FLAT)  # None: the pair was not voted on
     transfer_new: int | None = None  # track pairs that point transfer added
-
-
-# ---- the cameras -------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class ImagePairMatches:
-    """Matches of one SfM image pair (which frames of which videos the reconstruction could tie)."""
-
-    a: str  # "video/frame.jpg"
-    b: str
-    matches: int
-    verified: int
-
-
-@dataclass(frozen=True)
-class FrameRegistration:
-    """A moving camera's frames registered on their own against the reconstruction."""
-
-    tried: int
-    registered: int
-    refused: int  # refused for a jump in rotation
-    median_inliers: float
-    frames: tuple[int, ...]  # frames registered
-    check_frames: int  # reconstructed frames registered from their neighbours, as a check
-    check_rotation_deg_median: float | None = field(default=None, metadata=NULL)
-    check_slerp_rotation_deg_median: float | None = field(default=None, metadata=NULL)
-
-
-@dataclass(frozen=True)
-class MovingPointsPair:
-    """The moving points' two-view geometry of one camera with the reference."""
-
-    coarse_offset_s: float | None = None  # the offset its cameras were fitted at, s
-    inlier_share: float | None = None
-    correspondences: int | None = None
-    focal_px: float | None = None
-    scale_from_shared_points: bool | None = None
-
-
-@dataclass(frozen=True)
-class MovedOffset:
-    alone_s: float  # its best coarse offset with the reference alone
-    together_s: float  # the one chosen with every pair
-
-
-@dataclass(frozen=True)
-class JointCoarseOffsets:
-    pairs: int
-    summed_share: float
-    moved: dict[str, MovedOffset]
-
-
-@dataclass(frozen=True)
-class JointFit:
-    """One focal per camera and every pose fitted to all camera pairs' track pairs at once."""
-
-    pairs: int
-    cost: float | None = None  # scipy's robust cost
-    median_px_before: float | None = None
-    median_px_after: float | None = None
-    focal_px: dict[str, float] | None = None
-    start: str | None = None  # which start of the fit won
-
-
-@dataclass(frozen=True)
-class FittedOffsetPair:
-    fitted_s: float  # Δ_ab the cameras were fitted at
-    voted_s: float  # Δ_ab the epipolar vote chose
-    agrees: bool
-
-
-@dataclass(frozen=True)
-class FittedOffsetCheck:
-    """The moving points' cameras' fitted offsets against their own epipolar votes."""
-
-    verdict: str
-    tolerance_s: float | None = None
-    pairs: dict[str, FittedOffsetPair] | None = None
-    refused: tuple[str, ...] | None = None
-
-
-@dataclass(frozen=True)
-class MovingPointsCameras:
-    """Whether the moving points' own cameras were fitted and used instead of a model's."""
-
-    why: str
-    used: bool
-    reference: str | None = None
-    pairs: dict[str, MovingPointsPair] | None = None  # camera -> its geometry with the reference
-    joint_offsets: JointCoarseOffsets | None = None
-    joint_fit: JointFit | None = None
-    fitted_offsets_s: dict[str, float] | None = None
-    check: FittedOffsetCheck | None = None
-
-    def to_json(self) -> dict[str, Any]:
-        """The diagnostics of the fit go under "pairs" with the cameras (result.json's shape)."""
-        out = to_json(dataclasses.replace(self, pairs=None, joint_offsets=None, joint_fit=None))
-        if self.reference is not None:
-            pairs: dict[str, Any] = to_json(self.pairs or {})
-            if self.joint_offsets is not None:
-                pairs["joint_offsets"] = to_json(self.joint_offsets)
-            if self.joint_fit is not None:
-                pairs["joint_fit"] = to_json(self.joint_fit)
-            out = {"reference": self.reference, "pairs": pairs, **{k: v for k, v in out.items() if k != "reference"}}
-        return out
-
-    @staticmethod
-    def from_json(d: dict[str, Any]) -> MovingPointsCameras:
-        pairs = dict(d.get("pairs") or {})
-        joint_offsets, joint_fit = pairs.pop("joint_offsets", None), pairs.pop("joint_fit", None)
-        plain = from_json(MovingPointsCameras, {k: v for k, v in d.items() if k != "pairs"})
-        return dataclasses.replace(
-            plain, pairs=from_json(dict[str, MovingPointsPair], pairs) if "pairs" in d else None,
-            joint_offsets=from_json(JointCoarseOffsets | None, joint_offsets),
-            joint_fit=from_json(JointFit | None, joint_fit))
-
-
-@dataclass(frozen=True)
-class ModelTried:
-    """One camera set the joint vote was taken on."""
-
-    features: str  # "sift", "xfeat", "aliked", "moving points", "sift own", ...
-    cameras: int
-    trusted: tuple[str, ...]  # videos the joint vote trusted on it
-    kept: bool
-
-
-@dataclass(frozen=True)
-class SfmRecord:
-    """Estimated cameras: the kept model, what the others made of the videos it gives no offset."""
-
-    features: str  # what the kept reconstruction was built from
-    images: int  # SfM images
-    registered_images: int
-    registered_frames: dict[str, tuple[int, ...]]  # video -> frames with a pose
-    image_pairs: tuple[ImagePairMatches, ...]
-    lens: dict[str, Lens]  # video -> its estimated lens (the tracks were undistorted with it)
-    frame_registration: dict[str, FrameRegistration] | None = None
-    static_images: str | None = None  # how the static cameras' images got their features
-    fallback: MovingPointsCameras | None = None
-    models: tuple[ModelTried, ...] | None = None  # every camera set voted on, when more than one
-    models_failed: str | None = None
-    models_skipped: str | None = None
-    kept_model: str | None = None  # whose set was kept ("SIFT's model")
-    other_models_headline: dict[str, dict[str, str]] | None = None  # video -> {whose: few words}
-    other_models: dict[str, str] | None = None  # video placed but not trusted -> what the others made of it
-
-    def to_json(self) -> dict[str, Any]:
-        out = to_json(dataclasses.replace(self, fallback=None))
-        if self.fallback is not None:
-            out["fallback"] = self.fallback.to_json()
-        return out
-
-    @staticmethod
-    def from_json(d: dict[str, Any]) -> SfmRecord:
-        plain = from_json(SfmRecord, {k: v for k, v in d.items() if k != "fallback"})
-        return dataclasses.replace(plain, fallback=MovingPointsCameras.from_json(d["fallback"])
-                                   if d.get("fallback") is not None else None)
 
 
 # ---- the joint vote ----------------------------------------------------------------------------
@@ -367,7 +138,7 @@ class HeadsRecord:
 
 @dataclass(frozen=True)
 class PeoplePairRecord:
-    """One pair of videos as their people timed it (types.PeoplePair, in short)."""
+    """One pair of videos as their people timed it (people_types.PeoplePair, in short)."""
 
     reason: str  # why taken, or why refused
     people_associated: int  # people both videos see, paired up

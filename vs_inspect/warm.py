@@ -27,7 +27,7 @@ SCENE = dict(cameras=3, moving=1, seconds=2.0, width=240, height=180, fps=None, 
 
 
 # the modules whose numba kernels are cached, under the package
-KERNEL_MODULES = ("sync.kernels", "sync.people_pairs", "cues.pairing.votes", "cues.features.guided",
+KERNEL_MODULES = ("sync.kernels", "sync.people_search", "cues.pairing.vote_kernels", "cues.features.guided",
                   "cues.features.nearest_neighbours")
 
 
@@ -88,7 +88,7 @@ def warm(workdir: str | Path | None = None) -> dict[str, float]:
     # the people cue's pairing score (its arguments are normalised to float64/int64 arrays):
     # made-up landmarks of two people in three frames compile it without running pose detection
     from .geometry.skeleton import MIRROR
-    from .sync.people_pairs import _score
+    from .sync.people_search import _score
     t = time.perf_counter()
     landmarks = rng.uniform(0, 200, (2, 3, len(MIRROR), 2))
     _score(np.eye(3)[[1, 0, 2]], landmarks, landmarks + 1.0, MIRROR, np.full((2, 2), 4.0))

@@ -8,7 +8,8 @@ import pytest
 
 from vs_inspect.analysis.diagnose import DEFAULT_FRAME_MS, check_pairs, find_suspects
 from vs_inspect.io.recording import RecordedVideo
-from vs_inspect.types import PairDecision, PairLandscape, RunResult, VideoInfo
+from vs_inspect.result_types import PairDecision, PairLandscape, RunResult
+from vs_inspect.types import VideoInfo
 
 TRUE_S = {"A": 0.0, "B": 1.0, "C": 2.0, "D": 3.0}
 WRONG_DELTA_S = 1.5  # C__D's own Δ, 0.5 s from the solution's 1.0 s
@@ -262,7 +263,7 @@ def test_a_pair_refused_as_too_wide_is_given_that_cause():
     from vs_inspect.analysis.diagnose import CAUSE_MEANING, CAUSE_WIDE, _cause_of_reason
     from vs_inspect.sync.config import DecisionConfig
     from vs_inspect.sync.decision import check_uncertainty
-    from vs_inspect.types import PairDecision
+    from vs_inspect.result_types import PairDecision
 
     ok = PairDecision(True, "single clear minimum", 0.8, 0.0, 1, 1, False)
     refused = check_uncertainty(ok, 0.077, -1.604, 1 / 30, DecisionConfig())

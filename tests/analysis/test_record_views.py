@@ -17,7 +17,7 @@ from vs_inspect.analysis.record_options import RecordOptions
 from vs_inspect.sync.config import SyncConfig
 from vs_inspect.pipeline.stage12 import sync_bundle
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
-from vs_inspect.types import PairDecision, PairLandscape, SyncResult
+from vs_inspect.result_types import PairDecision, PairLandscape, SyncResult
 
 
 def _land(offsets_s: np.ndarray, minima_idx: list[int], best_offset_s: float) -> PairLandscape:

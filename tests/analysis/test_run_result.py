@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from vs_inspect.analysis.run_result import run_result_from_sync
-from vs_inspect.types import SyncResult
+from vs_inspect.result_types import SyncResult
 
 SYNC = SyncResult("a", {"a": 0.0, "b": 1.25, "c": None}, {"a": 0.0, "b": 0.01, "c": None},
                   {"c": "no pair"}, (), (("a", "b"),), (), solver="ls", timings_s={"total_s": 2.0})

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from vs_inspect.bench.drift_cues import DriftSceneRow, end_errors, summarize
-from vs_inspect.types import CameraTrack, CueBundle, SyncResult, Tracks, VideoInfo
+from vs_inspect.result_types import SyncResult
+from vs_inspect.types import CameraTrack, CueBundle, Tracks, VideoInfo
 
 
 def _bundle():

@@ -10,7 +10,8 @@ from vs_inspect.geometry.epipolar import look_at
 from vs_inspect.types import CameraTrack, TrackPairs
 
 from tests.cue_records import joint
-from vs_inspect.cue_stats import CueStats, MovingPointsCameras, SfmRecord
+from vs_inspect.camera_stats import MovingPointsCameras, SfmRecord
+from vs_inspect.cue_stats import CueStats
 from vs_inspect.cues.pairing.pairing import GeometricPairing
 from vs_inspect.cues.records import Note
 
@@ -31,7 +32,7 @@ def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), m
 
     import vs_inspect.cues.cameras.moving_points as pairwise_mod
     from vs_inspect.cues.cameras.sfm import CameraEstimate
-    from vs_inspect.cues.cameras.choice import _estimate
+    from vs_inspect.cues.cameras.model_or_points import _estimate
 
     no_model = "no reconstruction: too few matches"
     est = CameraEstimate({}, dict.fromkeys(names, no_model), None, None, len(names), 0, "sift")
@@ -107,6 +108,7 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
 
     import vs_inspect.cues.cameras.sfm as cameras_mod
     import vs_inspect.cues.cameras.choice as ex
+    from vs_inspect.cues.cameras.camera_set import CameraSet
 
     class Models:
         def __init__(self, *args, **kwargs):
@@ -147,11 +149,11 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
         if from_tracks:  # the moving points' cameras, used when the test's trusted names them
             sfm = dataclasses.replace(sfm, fallback=MovingPointsCameras("none trusted", kind in trusted))
             if kind not in trusted:
-                return ex.CameraSet({}, {}, None, None, {}, sfm=sfm)
+                return CameraSet({}, {}, None, None, {}, sfm=sfm)
         names = (registered or {}).get(kind, "".join(vids))
         dropped = {n: f"{kind} matched too little; the moving points' cameras refused" for n in vids if n not in names}
-        return ex.CameraSet({n: CameraTrack(K, look_at([6.0, 0, 2.0], [0, 0, 1])) for n in names}, {}, None, None, {},
-                            dropped, sfm=sfm)
+        return CameraSet({n: CameraTrack(K, look_at([6.0, 0, 2.0], [0, 0, 1])) for n in names}, {}, None, None, {},
+                         dropped, sfm=sfm)
 
     def vote(cams, vids, all_pairs, cfg, progress, estimated, other_peaks=None, other="", grid=None, **kept):
         kind = cams.sfm.features
@@ -312,7 +314,7 @@ def test_the_record_says_when_sifts_static_images_had_asift_features(monkeypatch
     # every camera moving: no static image had any
     from types import SimpleNamespace
 
-    from vs_inspect.cues.cameras.choice import _estimate
+    from vs_inspect.cues.cameras.model_or_points import _estimate
     from vs_inspect.cues.cameras.sfm import CameraEstimate
 
     est = CameraEstimate({}, dict.fromkeys("ab", "no reconstruction"), None, None, 2, 0, "sift")
@@ -356,7 +358,7 @@ def test_the_moving_points_cameras_are_not_fitted_when_they_could_not_replace_a_
     from types import SimpleNamespace
 
     import vs_inspect.cues.cameras.moving_points as pairwise_mod
-    from vs_inspect.cues.cameras.choice import _estimate
+    from vs_inspect.cues.cameras.model_or_points import _estimate
     from vs_inspect.cues.cameras.sfm import CameraEstimate, EstimatedCamera
     from vs_inspect.geometry.camera_model import Lens
 

@@ -416,7 +416,7 @@ def _one_candidate(y_a: np.ndarray, y_b: np.ndarray, min_share: float):
     """_consistency on one track pair under epipolar lines y_a = y_b (two cameras side by side),
     at three offsets: a's frame q - 1, q, q + 1 for b's frame q (-1 where a has no frame).
     Returns (number of consistent offsets, best offset index)."""
-    from vs_inspect.cues.pairing.votes import _consistency
+    from vs_inspect.cues.pairing.vote_kernels import _consistency
 
     Ta, Tb = len(y_a), len(y_b)
     xa = np.stack([np.full(Ta, 100.0), y_a], 1)[None]  # (1,Ta,2)

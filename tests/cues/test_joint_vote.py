@@ -12,9 +12,10 @@ import vs_inspect.cues.pairing.rules as rules_mod
 import vs_inspect.cues.pairing.votes as votes_mod
 from vs_inspect.cues.pairing.joint import JointChoice
 from vs_inspect.cues.pairing.votes import GeometricPairStats
-from vs_inspect.cues.pairing.pairing import _add_joint_pairs
+from vs_inspect.cues.pairing.kept_pairs import _add_joint_pairs
 from vs_inspect.geometry.epipolar import look_at
-from vs_inspect.cue_stats import CueStats, PairCueStats, to_json
+from vs_inspect.cue_stats import CueStats, PairCueStats
+from vs_inspect.json_records import to_json
 from vs_inspect.types import CameraTrack, TrackPairs
 
 from .stage0_fakes import K
@@ -78,7 +79,7 @@ def test_two_sure_cameras_pair_unless_both_move():
 def test_transfer_matches_join_both_source_pairs_in_video_order():
     """A confirmed camera's tracks that follow a trajectory are paired with both tracks the
     trajectory came from, in each pair's key order (the camera first or second)."""
-    from vs_inspect.cues.pairing.pairing import _add_transfer_pairs
+    from vs_inspect.cues.pairing.kept_pairs import _add_transfer_pairs
     from vs_inspect.cues.pairing.transfer import TransferCheck, TransferLandscape, Trajectories
 
     # trajectories 0 and 1 from pair (a, c): tracks a3-c5 and a4-c6; the checked camera is b

@@ -11,7 +11,7 @@ from vs_inspect.cues.people_cue import PeopleCueConfig, cameras_from_people
 from vs_inspect.geometry.epipolar import fundamental_from_cameras, project
 from vs_inspect.geometry.offsets import OffsetGrid
 from vs_inspect.geometry.two_view import sampson_px
-from vs_inspect.sync.people_pairs import PeoplePairConfig
+from vs_inspect.sync.people_config import PeoplePairConfig
 from vs_inspect.synth.people import ViewOptions, default_walkers, people_scene, ring_camera
 from vs_inspect.types import VideoInfo
 

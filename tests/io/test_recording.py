@@ -20,7 +20,7 @@ from vs_inspect.record.rerun_sink import RerunSink
 from vs_inspect.sync.config import SyncConfig
 from vs_inspect.pipeline.stage12 import sync_bundle
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
-from vs_inspect.types import RunResult
+from vs_inspect.result_types import RunResult
 
 
 def test_recorded_video_frame_interval():

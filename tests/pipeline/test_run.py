@@ -16,7 +16,8 @@ from vs_inspect.pipeline import RunConfig, run, sync_bundle
 from vs_inspect.record.sink import NullSink
 from vs_inspect.sync.config import LandscapeConfig, SyncConfig
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
-from vs_inspect.types import RunInputs, RunResult, first_clause
+from vs_inspect.result_types import RunInputs, RunResult
+from vs_inspect.types import first_clause
 
 SMALL = CueSceneConfig(cameras=3, moving=1, variable_rate=1, seconds=4.0, pairs_per_view_pair=100,
                        max_offset_s=1.0, seed=4)
@@ -226,7 +227,7 @@ def test_an_unresolved_video_stage0_was_unsure_of_says_why_first():
     reason and a dropped video's are left as they are."""
     from vs_inspect.pipeline.run import _run_result
     from ..cue_records import cue_stats, joint
-    from vs_inspect.types import SyncResult
+    from vs_inspect.result_types import SyncResult
 
     sync = SyncResult("a", {"a": 0.0, "b": 0.5, "c": None, "d": None}, {}, {
         "c": "not connected to the reference 'a' through accepted pairs; its pairs: a__c: no cross-view track pairs",
@@ -251,7 +252,7 @@ def test_an_unresolved_videos_pairs_that_share_a_reason_say_it_once():
     from vs_inspect.pipeline.run import _run_result
     from vs_inspect.sync.stage2 import with_its_pairs as _with_its_pairs
     from ..cue_records import cue_stats, withheld
-    from vs_inspect.types import SyncResult
+    from vs_inspect.result_types import SyncResult
 
     why = "the vote peaks of the camera pairs do not close the triangles"
     pairs = {k: withheld(why) for k in ("a__c", "b__c", "c__d")}
@@ -280,7 +281,7 @@ def test_an_unresolved_video_the_joint_vote_was_sure_of_alone_with_one_other_say
     unresolved video's reason says that, not that the vote was unsure of it."""
     from vs_inspect.pipeline.run import _run_result
     from ..cue_records import cue_stats, joint
-    from vs_inspect.types import SyncResult
+    from vs_inspect.result_types import SyncResult
 
     sync = SyncResult("a", {"a": None, "b": None, "c": None}, {}, {
         "a": "the reference, but no accepted pair links it", "b": "not connected",
@@ -305,7 +306,7 @@ def test_an_unresolved_video_whose_own_pair_contradicted_the_joint_vote_says_so(
     says so; the videos it was used for keep their offsets."""
     from vs_inspect.pipeline.run import _run_result
     from ..cue_records import cue_stats, joint
-    from vs_inspect.types import SyncResult
+    from vs_inspect.result_types import SyncResult
 
     sync = SyncResult("b", {"a": None, "b": 0.0, "c": 0.4, "d": -0.2}, {}, {
         "a": "the reference, but no accepted pair links it"}, (), (), ())
@@ -325,8 +326,9 @@ def test_a_null_reason_names_what_the_other_camera_models_made_of_the_video():
     what the other models tried made of it (CueStats.other_models_note); a video Stage 0 dropped
     already carries that in its own reason."""
     from vs_inspect.pipeline.run import _run_result
-    from vs_inspect.cue_stats import CueStats, SfmRecord
-    from vs_inspect.types import SyncResult
+    from vs_inspect.camera_stats import SfmRecord
+    from vs_inspect.cue_stats import CueStats
+    from vs_inspect.result_types import SyncResult
 
     note = "XFEAT's model registered it, but its set was not kept (its joint vote trusted 2 video(s))"
     sfm = SfmRecord("sift", 3, 3, {}, (), {}, other_models={"c": note, "d": "not this"})

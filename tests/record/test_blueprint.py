@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from vs_inspect.record.blueprint import MAX_PAIR_CONTAINERS, blueprint, pair_order, shown_pairs
-from vs_inspect.types import PairDecision, PairLandscape, SyncResult
+from vs_inspect.result_types import PairDecision, PairLandscape, SyncResult
 
 
 def _pair(a, b, accepted, contrast, tracks):

@@ -29,7 +29,8 @@ from vs_inspect.record.rerun_sink import RerunSink
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
 from vs_inspect.sync.config import SyncConfig
 from vs_inspect.pipeline.stage12 import sync_bundle
-from vs_inspect.types import CameraTrack, RunResult, SyncResult
+from vs_inspect.result_types import RunResult, SyncResult
+from vs_inspect.types import CameraTrack
 
 RERUN = Path(sys.executable).parent / "rerun"
 WRONG_POSE_CAMERA = "cam2"
@@ -552,7 +553,7 @@ def test_a_run_that_stops_in_stage0_shows_its_stills_and_reasons_on_offset_ms(tm
 def test_inspect_of_a_run_with_no_pair_says_none_was_evaluated(tmp_path, capsys):
     """A run that stopped in Stage 0 has no pair: inspect says so and names each video's reason,
     instead of "every pair is accepted and agrees with the solution"."""
-    from vs_inspect.types import RunResult
+    from vs_inspect.result_types import RunResult
 
     why = "camera from the moving points refused: its own epipolar votes contradict the offsets"
     result = RunResult("a", {"a": None, "b": None, "c": None}, {"a": None, "b": None, "c": None},
@@ -618,7 +619,7 @@ def test_a_pair_without_a_landscape_gets_its_decision_alone(tmp_path):
     energy and no epipolar view: its container holds the decision only, not two empty panels."""
     import rerun.blueprint as rrb
 
-    from vs_inspect.types import PairDecision, PairLandscape
+    from vs_inspect.result_types import PairDecision, PairLandscape
 
     land = PairLandscape("a", "b", np.linspace(-1, 1, 5), np.full(5, np.nan), np.zeros(5, int), np.array([], int),
                          math.nan, math.nan, math.nan, 0,

@@ -177,7 +177,8 @@ def test_a_run_that_synchronized_nothing_opens_with_frames_and_its_reasons(tmp_p
     if rerun_executable() is None:
         pytest.skip("no rerun viewer executable beside this Python or on PATH")
     from vs_inspect.record.rerun_sink import RerunSink
-    from vs_inspect.types import RunResult, VideoInfo
+    from vs_inspect.result_types import RunResult
+    from vs_inspect.types import VideoInfo
 
     rrd = tmp_path / "nothing.rrd"
     names = ("a", "b")

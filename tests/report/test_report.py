@@ -15,7 +15,7 @@ from vs_inspect.analysis.report_data import load_report_data
 from vs_inspect.io.bundle import write_bundle
 from vs_inspect.io.result import write_run_result
 from vs_inspect.pipeline import run as run_pipeline
-from vs_inspect.types import RunInputs
+from vs_inspect.result_types import RunInputs
 from vs_inspect.report.build import available, render_report
 from vs_inspect.report.figure_layout import figure_size_px
 from vs_inspect.synth.cues import CueSceneConfig, make_cue_scene
@@ -372,7 +372,7 @@ def test_a_sighting_pair_says_what_its_curve_is(tmp_path, refitted):
     from vs_inspect.io.result import read_run_result
     from vs_inspect.report.curve_panels import _landscape_axes
     from vs_inspect.sync.sightings import RefinedPeak
-    from vs_inspect.types import PairDecision, PairLandscape, RunResult
+    from vs_inspect.result_types import PairDecision, PairLandscape, RunResult
 
     offsets = np.arange(-10, 11) * 0.1
     energy = 1.0 - np.exp(-((offsets - 0.3) / 0.15) ** 2)

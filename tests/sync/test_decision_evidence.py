@@ -7,7 +7,7 @@ from vs_inspect.sync import decision as decision_mod
 from vs_inspect.sync.config import DecisionConfig
 from vs_inspect.sync.decision import (check_chosen_offset, check_track_pairs_at_best, check_uncertainty, decide,
                                       support_fraction)
-from vs_inspect.types import PairDecision
+from vs_inspect.result_types import PairDecision
 
 OFFS = np.linspace(-1, 1, 201)
 

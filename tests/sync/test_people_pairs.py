@@ -10,7 +10,8 @@ from vs_inspect.geometry.epipolar import fundamental_from_cameras
 from vs_inspect.geometry.offsets import OffsetGrid
 from vs_inspect.geometry.two_view import sampson_px
 from vs_inspect.synth.people import ViewOptions, Walker, default_walkers, people_scene, ring_camera
-from vs_inspect.sync.people_pairs import PeoplePairConfig, estimate_people_pair
+from vs_inspect.sync.people_config import PeoplePairConfig
+from vs_inspect.sync.people_pairs import estimate_people_pair
 
 OFFSET_S = 1.23  # b started this long after a: 2.3 frames and a third
 FPS = 10.0

@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..types import CommonSpan, VideoInfo, VideoSpan
+from ..result_types import CommonSpan, VideoSpan
+from ..types import VideoInfo
 
 
 def common_span(infos: list[VideoInfo], offsets_s: dict[str, float | None], reference: str

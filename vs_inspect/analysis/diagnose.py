@@ -25,7 +25,8 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from ..eval.metrics import offset_errors_ms
-from ..types import RunResult, SyncResult, VideoInfo
+from ..result_types import RunResult, SyncResult
+from ..types import VideoInfo
 
 if TYPE_CHECKING:
     from ..io.recording import RecordedVideo

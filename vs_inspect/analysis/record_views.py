@@ -17,7 +17,8 @@ from .diagnose import loop_closures
 from .epipolar_sweep import EpipolarSweep, epipolar_sweep
 from .trajectories import PairTrajectories, run_trajectories
 from .record_options import RecordOptions
-from ..types import CueBundle, PairLandscape, RateLandscape, SyncResult, VideoInfo
+from ..result_types import PairLandscape, RateLandscape, SyncResult
+from ..types import CueBundle, VideoInfo
 
 GRAPH_RADIUS_PX = 300.0  # video nodes sit on a circle of this radius in the pair graph view
 GRAPH_PAIR_AT = 0.35  # a pair's node sits this far along the chord from a to b (not halfway:

@@ -23,7 +23,8 @@ from ..errors import InputError
 from ..geometry.epipolar import (epipolar_lines, epipolar_residual,
                                  fundamental_from_cameras)
 from ..geometry.sampling import camera_at_frames, sample_video
-from ..types import CueBundle, RunResult
+from ..result_types import RunResult
+from ..types import CueBundle
 from ..report.data import (CameraView, EpipolarPanel, EpipolarState, Mosaic, MosaicTile, PairView,
                            ReportData, ThreeViewView, Trajectory, TransferView, VideoClock)
 

@@ -3,7 +3,7 @@ summary): the summary is rebuilt from SyncResult, without inputs, config or cue 
 
 from __future__ import annotations
 
-from ..types import RunResult, SyncResult
+from ..result_types import RunResult, SyncResult
 
 
 def run_result_from_sync(result: SyncResult, gt_offsets_s: dict[str, float] | None = None) -> RunResult:

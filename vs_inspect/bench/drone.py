@@ -25,7 +25,8 @@ from ..eval.metrics import VideoTimeError, time_errors
 from ..sync.config import DriftConfig, SyncConfig
 from ..sync.drift import DriftSolution
 from ..sync.posefree import PoseFreePair
-from ..types import CueBundle, SyncResult
+from ..result_types import SyncResult
+from ..types import CueBundle
 
 log = logging.getLogger(__name__)
 

@@ -29,7 +29,7 @@ from ..sync.pairs import select_pairs
 from ..pipeline.stage12 import solve_stage2, sync_bundle
 from ..sync.sightings import RESIDUAL as SIGHTING
 from ..pipeline.config import RunConfig
-from ..types import PairLandscape, RunResult
+from ..result_types import PairLandscape, RunResult
 from .datasets import BenchData
 from .videos import VideoSet
 

@@ -27,7 +27,7 @@ from ..io.result import write_run_result
 from ..io.video import VideoWriter, iter_frames, open_video
 from ..pipeline.config import RunConfig
 from ..pipeline.run import run
-from ..types import RunResult
+from ..result_types import RunResult
 from .datasets import CALISCOPE, read_caliscope_frame_times
 
 CLIPS = "visualsync_clips"

@@ -22,7 +22,7 @@ from ..pipeline import run as run_pipeline
 from ..record.sink import Sink
 from ..synth.videos import is_complete, render_scene, rendered_with
 from ..synth.world import SceneConfig, make_scene
-from ..types import RunInputs, RunResult
+from ..result_types import RunInputs, RunResult
 from ._common import offsets_table, print_run
 from ._common import run_config as run_config_of
 from ._record import add_record_options, describe, open_sink, rrd_path

@@ -11,7 +11,7 @@ from ._common import (add_force_option, check_output_file, check_output_folder, 
                       positive_int, sign_in_words)
 from ..errors import InputError
 from ..io.result import read_run_result
-from ..types import RunResult
+from ..result_types import RunResult
 from ..io.video import open_video
 
 

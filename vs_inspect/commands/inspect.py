@@ -5,10 +5,15 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..errors import InputError
-from ..types import PairLandscape, RunResult
+from ..result_types import PairLandscape, RunResult
 from ._common import add_gt_option, load_gt, offsets_table, sign_in_words
+
+if TYPE_CHECKING:  # loaded when the command runs (the CLI starts without them)
+    from ..analysis.diagnose import Diagnosis, PairCheck
+    from ..io.recording import Recording
 
 
 def register(sub) -> None:
@@ -67,9 +72,8 @@ def _people_lines(people) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..analysis.diagnose import CAUSE_LOOPS, CAUSE_MEANING, diagnose
+    from ..analysis.diagnose import diagnose
     from ..io.recording import read_recording
-    from ..io.recording_paths import pair_key
 
     _not_a_run_folder(args.rrd)
     rec = read_recording(args.rrd)
@@ -87,6 +91,26 @@ def run(args: argparse.Namespace) -> int:
     gt = load_gt(args.gt, list(res.offsets_s), res.reference)
     truth = gt or res.gt_offsets_s or rec.gt_offsets_s
     frame_s = {v.name: v.frame_interval_s for v in rec.videos}
+    _print_videos(rec, res, truth, frame_s)
+
+    diag = diagnose(res, rec.videos, truth)
+    pairs = res.pairs
+    _print_pairs(pairs, diag, truth)
+    _print_disagreeing(diag, args.top)
+    _print_loops(diag, args.top)
+    failing = _print_causes(diag)
+    _print_suspects(diag, failing)
+
+    if args.pair:
+        a, b = args.pair
+        _print_pair_minima(rec, res, pairs, a, b)
+    return 0
+
+
+def _print_videos(rec: Recording, res: RunResult, truth: dict[str, float] | None,
+                  frame_s: dict[str, float]) -> None:
+    """Prints the recording's videos, their offsets (with the truth when known) and what the
+    people in view gave Stage 0."""
     print(f"\nvideos ({len(res.offsets_s)}), reference {res.reference}:")
     for v in rec.videos:
         rate = f"{v.fps:g} fps" if v.fps else "variable rate"
@@ -99,9 +123,10 @@ def run(args: argparse.Namespace) -> int:
     if res.cues is not None and res.cues.people is not None:
         print(_people_lines(res.cues.people))
 
-    diag = diagnose(res, rec.videos, truth)
+
+def _print_pairs(pairs: tuple[PairLandscape, ...], diag: Diagnosis, truth: dict[str, float] | None) -> None:
+    """Prints every pair evaluated: its decision, Δ, track pairs, error (with the truth) and cause."""
     by_key = {c.key: c for c in diag.checks}
-    pairs = res.pairs
     acc = sum(p.decision.accepted for p in pairs)
     print(f"\npairs: {len(pairs)} evaluated, {acc} accepted, {len(pairs) - acc} rejected"
           + ("; error = |Δ − true Δ|" if truth else ""))
@@ -113,12 +138,15 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {p.a + '__' + p.b:<24} {'accepted' if p.decision.accepted else 'REJECTED':<9} "
               f"Δ={off:<12} {p.num_track_pairs:>5} track pairs  {err}{p.decision.reason}{cause}")
 
+
+def _print_disagreeing(diag: Diagnosis, top: int) -> None:
+    """Prints the top pairs that most disagree with the final solution, each flagged."""
     checks = [c for c in diag.checks if c.disagreement_ms is not None]
     print("\nmost disagreeing with the final solution (|Δ_ab − (s_b − s_a)|, largest first; ok = "
           "within tolerance and every loop through it closes):")
     if not checks:
         print("  (no pair with both videos synchronized)")
-    for c in checks[: args.top]:
+    for c in checks[:top]:
         if c.disagreement_ms > c.tolerance_ms:
             flag = "INCONSISTENT"
         elif c.loops_bad:
@@ -129,12 +157,20 @@ def run(args: argparse.Namespace) -> int:
               f"{c.solution_s:+.4f}, tolerance {c.tolerance_ms:.0f} ms) {flag}"
               f"{'' if c.accepted else ', rejected: ' + c.reason}")
 
+
+def _print_loops(diag: Diagnosis, top: int) -> None:
+    """Prints how many loops of three pairs miss, and the top ones by residual."""
     print(f"\nloops of three pairs (Δ_ab + Δ_bc − Δ_ac should be 0): {len(diag.loops)}, "
           f"{sum(lp.bad for lp in diag.loops)} miss")
-    for lp in sorted(diag.loops, key=lambda lp: -abs(lp.residual_ms))[: args.top]:
+    for lp in sorted(diag.loops, key=lambda lp: -abs(lp.residual_ms))[:top]:
         a, b, c = lp.videos
         print(f"  {a} → {b} → {c}: {lp.residual_ms:+9.1f} ms (tolerance {lp.tolerance_ms:.1f} ms) "
               f"{'MISSES' if lp.bad else 'closes'}")
+
+
+def _print_causes(diag: Diagnosis) -> list[PairCheck]:
+    """Prints the failing pairs grouped by cause, with what each cause means; returns them."""
+    from ..analysis.diagnose import CAUSE_MEANING
 
     print("\ncauses of the failing pairs:")
     failing = [c for c in diag.checks if c.bad]
@@ -147,6 +183,13 @@ def run(args: argparse.Namespace) -> int:
         causes.setdefault(c.cause or "?", []).append(c.key)
     for cause, keys in sorted(causes.items(), key=lambda kv: -len(kv[1])):
         print(f"  {cause} ({len(keys)}): {', '.join(keys)}\n      {CAUSE_MEANING.get(cause, '')}")
+    return failing
+
+
+def _print_suspects(diag: Diagnosis, failing: list[PairCheck]) -> None:
+    """Prints the videos and pairs to blame, the cautious rejections, the loops no suspect
+    explains and the videos left unsynchronized as a consequence."""
+    from ..analysis.diagnose import CAUSE_LOOPS
 
     print("\nsuspects:")
     if not diag.suspects:
@@ -172,23 +215,26 @@ def run(args: argparse.Namespace) -> int:
     for v, why in diag.consequences.items():
         print(f"  (consequence, not a suspect) {v}: not synchronized: {why}")
 
-    if args.pair:
-        a, b = args.pair
-        p, sign = _pair_entry(res, a, b)
-        if p is None:
-            known = ", ".join(f"{q.a} {q.b}" for q in pairs)
-            raise InputError(f"pair {a} {b} was not evaluated in this run; evaluated: {known}")
-        print(f"\npair {p.a} → {p.b}" + (f" (evaluated in this order; Δ for {a} → {b} is the "
-                                         "negative)" if sign < 0 else "") + ":")
-        print(f"  {'accepted' if p.decision.accepted else 'REJECTED'}: {p.decision.reason}")
-        print(f"  chosen Δ = {p.best_offset_s:+.4f} s" if _opt(p.best_offset_s) is not None else "  no minimum")
-        print("  landscape minima (best first):")
-        for i in p.minima_idx:
-            o, e = float(p.offsets_s[i]), _opt(float(p.energy[i]))
-            print(f"    Δ = {o:+.4f} s   E = {e:.6g}" if e is not None else f"    Δ = {o:+.4f} s")
-        series = rec.landscapes.get(pair_key(p.a, p.b), {})
-        if "energy" in series:
-            e = series["energy"]
-            print(f"  logged landscape: {len(e.offset_ms)} offsets from {e.offset_ms.min():+d} to "
-                  f"{e.offset_ms.max():+d} ms on the offset_ms timeline")
-    return 0
+
+def _print_pair_minima(rec: Recording, res: RunResult, pairs: tuple[PairLandscape, ...], a: str, b: str) -> None:
+    """Prints pair (a, b)'s decision, chosen Δ and landscape minima (in the order it was
+    evaluated); InputError when the run did not evaluate it."""
+    from ..io.recording_paths import pair_key
+
+    p, sign = _pair_entry(res, a, b)
+    if p is None:
+        known = ", ".join(f"{q.a} {q.b}" for q in pairs)
+        raise InputError(f"pair {a} {b} was not evaluated in this run; evaluated: {known}")
+    print(f"\npair {p.a} → {p.b}" + (f" (evaluated in this order; Δ for {a} → {b} is the "
+                                     "negative)" if sign < 0 else "") + ":")
+    print(f"  {'accepted' if p.decision.accepted else 'REJECTED'}: {p.decision.reason}")
+    print(f"  chosen Δ = {p.best_offset_s:+.4f} s" if _opt(p.best_offset_s) is not None else "  no minimum")
+    print("  landscape minima (best first):")
+    for i in p.minima_idx:
+        o, e = float(p.offsets_s[i]), _opt(float(p.energy[i]))
+        print(f"    Δ = {o:+.4f} s   E = {e:.6g}" if e is not None else f"    Δ = {o:+.4f} s")
+    series = rec.landscapes.get(pair_key(p.a, p.b), {})
+    if "energy" in series:
+        e = series["energy"]
+        print(f"  logged landscape: {len(e.offset_ms)} offsets from {e.offset_ms.min():+d} to "
+              f"{e.offset_ms.max():+d} ms on the offset_ms timeline")

@@ -14,9 +14,9 @@ people in the videos are a calibration target that moves. Steps (each its own mo
    (geometry/people_rig.py). A video no accepted pair reaches gets a refusal with the reasons
    of its pairs;
 4. the landmarks as point tracks and the same landmark of one person in two placed videos as a
-   cross-view track pair (types.PeopleCue.bundle), for Stage 1's energy.
+   cross-view track pair (people_types.PeopleCue.bundle), for Stage 1's energy.
 
-Entry point: find_people_cameras(videos, grid, config) -> types.PeopleCue.
+Entry point: find_people_cameras(videos, grid, config) -> people_types.PeopleCue.
 """
 
 from __future__ import annotations
@@ -35,9 +35,11 @@ from ..geometry.offsets import OffsetGrid, span_of
 from ..geometry.people_rig import (Observations, PairF, PairPose, bundle_adjust, chain_poses, focals_from_pairs,
                                    intrinsics, pair_pose, register_views)
 from ..geometry.skeleton import subset_mirror
-from ..sync.people_pairs import PeoplePairConfig, estimate_people_pair
+from ..sync.people_config import PeoplePairConfig
+from ..sync.people_pairs import estimate_people_pair
 from ..sync.solve import PairMeasurement, solve_offsets
-from ..types import CameraTrack, PeopleCue, PeoplePair, TrackPairs, Tracks, VideoInfo, VideoPeople
+from ..people_types import PeopleCue, PeoplePair, VideoPeople
+from ..types import CameraTrack, TrackPairs, Tracks, VideoInfo
 from .video.motion import STATIC_MAX_MOTION_PX
 from .people_video import PeopleVideoConfig, find_people
 

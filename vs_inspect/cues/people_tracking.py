@@ -19,7 +19,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from ..geometry.skeleton import MIRROR, NUM_LANDMARKS, box_overlap, landmark_box, person_scale_px, pose_distance
-from ..types import VideoPeople
+from ..people_types import VideoPeople
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..geometry.skeleton import person_scale_px, pose_distance
 from ..io.video import downscale
-from ..types import VideoPeople
+from ..people_types import VideoPeople
 from .video.motion import background_motion
 from .people_detect import DetectorConfig, DetectorPool, frame_windows, merge_duplicates
 from .people_tracking import PeopleTracker, TrackingConfig, seen_xy

@@ -235,11 +235,7 @@ def bundle_adjust(cam_from_world: dict[int, np.ndarray], focal_px: dict[int, flo
     x0 = pack(cam_from_world, focal_px, X[pts])
     ci = np.array([index[v] for v in view])
     pi = pindex[point]
-    # the scale: the nearest camera to the reference stays at its distance
-    centres = {v: -cam_from_world[v][:3, :3].T @ cam_from_world[v][:3, 3] for v in views}
-    others = [v for v in views if v != reference]
-    anchor = min(others, key=lambda v: np.linalg.norm(centres[v] - centres[reference])) if others else None
-    anchor_dist = float(np.linalg.norm(centres[anchor] - centres[reference])) if anchor is not None else 1.0
+    anchor, anchor_dist = _scale_anchor(cam_from_world, views, reference)
 
     def unpack(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         full = x0.copy()
@@ -256,6 +252,44 @@ def bundle_adjust(cam_from_world: dict[int, np.ndarray], focal_px: dict[int, flo
             r = np.r_[r, 100.0 * (np.linalg.norm(C) / anchor_dist - 1.0)]
         return r
 
+    S, cols, colpos = _jacobian_sparsity(point, free, ci, pi, nc, anchor, index)
+    lo_b, hi_b = _focal_bounds(views, index, cols, colpos, focal_bounds_px)
+    xs = x0[free].copy()
+    xs = np.clip(xs, lo_b + 1e-9, hi_b - 1e-9)
+    r0 = residuals(xs)
+    sol = least_squares(residuals, xs, jac_sparsity=S.tocsr(), loss="soft_l1", f_scale=loss_scale, x_scale="jac",
+                        tr_solver="lsmr", bounds=(lo_b, hi_b), max_nfev=max_nfev, method="trf")
+    cams, Xs = unpack(sol.x)
+    T_out, f_out = _poses_and_focals(cams, views, index)
+    X_out = np.full((N, 3), np.nan)
+    X_out[pts] = Xs
+    res = np.full(len(obs.point), np.nan)
+    proj = _project(cams[ci], pp[view], Xs[pi])
+    res[np.flatnonzero(use)[keep]] = np.linalg.norm(proj - xy, axis=1)
+
+    def robust(r: np.ndarray) -> float:
+        z = (r / loss_scale) ** 2
+        return float(np.sum(2 * (np.sqrt(1 + z) - 1)))
+
+    return AdjustedRig(T_out, f_out, X_out, res, robust(r0), robust(sol.fun))
+
+
+def _scale_anchor(cam_from_world: dict[int, np.ndarray], views: list[int], reference: int) -> tuple[int | None, float]:
+    """(the view whose camera centre is nearest the reference's (None: no other view), that
+    distance (1 without one)): the bundle adjustment holds it, which fixes the scale."""
+    # the scale: the nearest camera to the reference stays at its distance
+    centres = {v: -cam_from_world[v][:3, :3].T @ cam_from_world[v][:3, 3] for v in views}
+    others = [v for v in views if v != reference]
+    anchor = min(others, key=lambda v: np.linalg.norm(centres[v] - centres[reference])) if others else None
+    anchor_dist = float(np.linalg.norm(centres[anchor] - centres[reference])) if anchor is not None else 1.0
+    return anchor, anchor_dist
+
+
+def _jacobian_sparsity(point: np.ndarray, free: np.ndarray, ci: np.ndarray, pi: np.ndarray, nc: int,
+                       anchor: int | None, index: dict[int, int]) -> tuple[lil_matrix, np.ndarray, np.ndarray]:
+    """(S, cols, colpos): which free parameters each residual depends on (two rows per sighting:
+    its camera's 7 and its point's 3; one last row for the anchor's distance), the free
+    parameters' indices among all, and each parameter's column among the free ones (-1: fixed)."""
     M = len(point)
     cols = np.flatnonzero(free)
     colpos = np.full(len(free), -1)
@@ -276,32 +310,30 @@ def bundle_adjust(cam_from_world: dict[int, np.ndarray], focal_px: dict[int, flo
             c = colpos[7 * index[anchor] + k]
             if c >= 0:
                 S[2 * M, c] = 1
+    return S, cols, colpos
+
+
+def _focal_bounds(views: list[int], index: dict[int, int], cols: np.ndarray, colpos: np.ndarray,
+                  focal_bounds_px: dict[int, tuple[float, float]] | None) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) bounds of the free parameters: each view's focal length within its
+    focal_bounds_px (default above 1e-3 px), the rest unbounded."""
     lo_b = np.full(len(cols), -np.inf)
     hi_b = np.full(len(cols), np.inf)
     for v in views:
         c = colpos[7 * index[v] + 6]
         lo, hi = (focal_bounds_px or {}).get(v, (1e-3, np.inf))
         lo_b[c], hi_b[c] = lo, hi
-    xs = x0[free].copy()
-    xs = np.clip(xs, lo_b + 1e-9, hi_b - 1e-9)
-    r0 = residuals(xs)
-    sol = least_squares(residuals, xs, jac_sparsity=S.tocsr(), loss="soft_l1", f_scale=loss_scale, x_scale="jac",
-                        tr_solver="lsmr", bounds=(lo_b, hi_b), max_nfev=max_nfev, method="trf")
-    cams, Xs = unpack(sol.x)
+    return lo_b, hi_b
+
+
+def _poses_and_focals(cams: np.ndarray, views: list[int], index: dict[int, int]
+                      ) -> tuple[dict[int, np.ndarray], dict[int, float]]:
+    """({view: cam_from_world (4,4)}, {view: focal px}) from the adjusted parameters (V,7): rotation
+    vector, translation, focal length per view."""
     T_out, f_out = {}, {}
     for v in views:
         T = np.eye(4)
         T[:3, :3] = Rotation.from_rotvec(cams[index[v], :3]).as_matrix()
         T[:3, 3] = cams[index[v], 3:6]
         T_out[v], f_out[v] = T, float(cams[index[v], 6])
-    X_out = np.full((N, 3), np.nan)
-    X_out[pts] = Xs
-    res = np.full(len(obs.point), np.nan)
-    proj = _project(cams[ci], pp[view], Xs[pi])
-    res[np.flatnonzero(use)[keep]] = np.linalg.norm(proj - xy, axis=1)
-
-    def robust(r: np.ndarray) -> float:
-        z = (r / loss_scale) ** 2
-        return float(np.sum(2 * (np.sqrt(1 + z) - 1)))
-
-    return AdjustedRig(T_out, f_out, X_out, res, robust(r0), robust(sol.fun))
+    return T_out, f_out

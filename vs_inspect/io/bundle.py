@@ -226,6 +226,34 @@ def read_bundle(folder: str | os.PathLike) -> CueBundle:
     if not root.is_dir():
         raise BundleError(root, "not a folder (a cue bundle is a folder with bundle.json)")
     meta_path = root / "bundle.json"
+    entries, videos, names = _read_meta(meta_path)
+
+    cameras: dict[str, CameraTrack] = {}
+    tracks: dict[str, Tracks] = {}
+    budget = _Budget(memory_budget_bytes())
+    for v in videos:
+        cameras[v.name] = _read_camera(root, v, budget)
+        tracks[v.name] = _read_tracks(root, v, budget)
+    pairs = _read_pairs(root, names, tracks, budget)
+    heads = _read_heads(root, videos, names, budget)
+    static_points, static_colors = _read_static_points(root, budget)
+    gt, gt_drift = None, None
+    gt_path = root / "gt.json"
+    if gt_path.is_file():
+        gt = read_gt(gt_path, names)
+        gt_drift = read_gt_drift(gt_path, names)
+    # optional per-video key (import-drone): only K is known, the pose is a placeholder
+    pose_free = frozenset(str(e["name"]) for e in entries if e.get(POSE_FREE_KEY) is True)
+    try:
+        return CueBundle(tuple(videos), cameras, tracks, pairs, gt, pose_free, gt_drift, heads,
+                         static_points, static_colors)
+    except ValueError as exc:
+        raise BundleError(root, str(exc)) from None
+
+
+def _read_meta(meta_path: Path) -> tuple[list, list[VideoInfo], list[str]]:
+    """(bundle.json's video entries, each as a VideoInfo, their names), checked: the format and
+    version, at least one video, no name twice."""
     if not meta_path.is_file():
         raise BundleError(meta_path, "missing file")
     meta = _load_json(meta_path)
@@ -243,39 +271,48 @@ def read_bundle(folder: str | os.PathLike) -> CueBundle:
     dupes = sorted({n for n in names if names.count(n) > 1})
     if dupes:
         raise BundleError(meta_path, f"duplicate video names {dupes}")
+    return entries, videos, names
 
-    cameras: dict[str, CameraTrack] = {}
-    tracks: dict[str, Tracks] = {}
-    budget = _Budget(memory_budget_bytes())
-    for v in videos:
-        T = v.num_frames
-        cpath = root / "cameras" / f"{v.name}.npz"
-        cdata = _load_npz(cpath, {"K": ((3, 3), (T, 3, 3)), "cam_from_world": ((4, 4), (T, 4, 4)),
-                                  "valid": ((T,),)}, budget,
-                          f" (video {v.name!r} has num_frames={T} frames)")
-        try:
-            cam = CameraTrack(_require(cpath, cdata, "K"), _require(cpath, cdata, "cam_from_world"),
-                              cdata.get("valid"))
-        except ValueError as exc:
-            raise BundleError(cpath, str(exc)) from None
-        _check_camera(cpath, cam)
-        if cam.is_moving and cam.num_pose_frames != v.num_frames:
-            raise BundleError(cpath, f"has {cam.num_pose_frames} per-frame entries but video "
-                                     f"{v.name!r} has num_frames={v.num_frames}")
-        cameras[v.name] = cam
 
-        tpath = root / "tracks" / f"{v.name}.npz"
-        tdata = _load_npz(tpath, {"xy": ((None, T, 2),), "instance": ((None,),)}, budget,
-                          f" (video {v.name!r} has num_frames={T} frames)")
-        try:
-            tr = Tracks(_require(tpath, tdata, "xy"), tdata.get("instance"))
-        except ValueError as exc:
-            raise BundleError(tpath, str(exc)) from None
-        if tr.num_frames != v.num_frames:
-            raise BundleError(tpath, f"xy has {tr.num_frames} frames (shape {tr.xy.shape}) but "
-                                     f"video {v.name!r} has num_frames={v.num_frames}")
-        tracks[v.name] = tr
+def _read_camera(root: Path, v: VideoInfo, budget: _Budget) -> CameraTrack:
+    """cameras/<name>.npz of video v, checked against its frames."""
+    T = v.num_frames
+    cpath = root / "cameras" / f"{v.name}.npz"
+    cdata = _load_npz(cpath, {"K": ((3, 3), (T, 3, 3)), "cam_from_world": ((4, 4), (T, 4, 4)),
+                              "valid": ((T,),)}, budget,
+                      f" (video {v.name!r} has num_frames={T} frames)")
+    try:
+        cam = CameraTrack(_require(cpath, cdata, "K"), _require(cpath, cdata, "cam_from_world"),
+                          cdata.get("valid"))
+    except ValueError as exc:
+        raise BundleError(cpath, str(exc)) from None
+    _check_camera(cpath, cam)
+    if cam.is_moving and cam.num_pose_frames != v.num_frames:
+        raise BundleError(cpath, f"has {cam.num_pose_frames} per-frame entries but video "
+                                 f"{v.name!r} has num_frames={v.num_frames}")
+    return cam
 
+
+def _read_tracks(root: Path, v: VideoInfo, budget: _Budget) -> Tracks:
+    """tracks/<name>.npz of video v, checked against its frames."""
+    T = v.num_frames
+    tpath = root / "tracks" / f"{v.name}.npz"
+    tdata = _load_npz(tpath, {"xy": ((None, T, 2),), "instance": ((None,),)}, budget,
+                      f" (video {v.name!r} has num_frames={T} frames)")
+    try:
+        tr = Tracks(_require(tpath, tdata, "xy"), tdata.get("instance"))
+    except ValueError as exc:
+        raise BundleError(tpath, str(exc)) from None
+    if tr.num_frames != v.num_frames:
+        raise BundleError(tpath, f"xy has {tr.num_frames} frames (shape {tr.xy.shape}) but "
+                                 f"video {v.name!r} has num_frames={v.num_frames}")
+    return tr
+
+
+def _read_pairs(root: Path, names: list[str], tracks: dict[str, Tracks], budget: _Budget
+                ) -> dict[tuple[str, str], TrackPairs]:
+    """pairs/<a>__<b>.npz (none without the folder), each pair given once, its track indices in
+    range of both videos' tracks."""
     pairs: dict[tuple[str, str], TrackPairs] = {}
     pair_dir = root / "pairs"
     if pair_dir.is_dir():
@@ -308,7 +345,12 @@ def read_bundle(folder: str | os.PathLike) -> CueBundle:
         others = [p.name for p in pair_dir.iterdir() if p.suffix != ".npz"]
         if others:
             log.warning("%s: ignoring files that are not .npz: %s", pair_dir, others)
+    return pairs
 
+
+def _read_heads(root: Path, videos: list[VideoInfo], names: list[str], budget: _Budget) -> dict[str, np.ndarray]:
+    """heads/<name>.npz: {video: (T,2) px of the head a person detector found}, empty without the
+    folder."""
     heads: dict[str, np.ndarray] = {}
     head_dir = root / "heads"  # optional: a person detector's heads (the worn-camera sightings)
     if head_dir.is_dir():
@@ -319,7 +361,11 @@ def read_bundle(folder: str | os.PathLike) -> CueBundle:
             T = by_name[hpath.stem].num_frames
             hdata = _load_npz(hpath, {"xy": ((T, 2),)}, budget, f" (video {hpath.stem!r} has num_frames={T} frames)")
             heads[hpath.stem] = _require(hpath, hdata, "xy")
+    return heads
 
+
+def _read_static_points(root: Path, budget: _Budget) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """(points (N,3), colours (N,3) uint8) of static_points.npz, (None, None) without it."""
     static_points, static_colors = None, None
     spath = root / STATIC_POINTS  # optional: the static reconstruction of estimated cameras
     if spath.is_file():
@@ -330,19 +376,7 @@ def read_bundle(folder: str | os.PathLike) -> CueBundle:
             raise BundleError(spath, f"{len(static_colors)} colours for {len(static_points)} points")
         if static_colors is not None:
             static_colors = np.clip(static_colors, 0, 255).astype(np.uint8)
-
-    gt, gt_drift = None, None
-    gt_path = root / "gt.json"
-    if gt_path.is_file():
-        gt = read_gt(gt_path, names)
-        gt_drift = read_gt_drift(gt_path, names)
-    # optional per-video key (import-drone): only K is known, the pose is a placeholder
-    pose_free = frozenset(str(e["name"]) for e in entries if e.get(POSE_FREE_KEY) is True)
-    try:
-        return CueBundle(tuple(videos), cameras, tracks, pairs, gt, pose_free, gt_drift, heads,
-                         static_points, static_colors)
-    except ValueError as exc:
-        raise BundleError(root, str(exc)) from None
+    return static_points, static_colors
 
 
 def read_gt(path: str | os.PathLike, names: list[str] | None = None) -> dict[str, float]:

@@ -16,7 +16,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..types import CueBundle, RunResult, frame_length_s
+from ..result_types import RunResult
+from ..types import CueBundle, frame_length_s
 from .recording_paths import (
     META_BUNDLE, META_CONFIG, META_RECORDING, META_RESULT, META_VIDEOS, PAIRS, RECORDING_FORMAT, SYNC_SOLVE,
     TIMELINE_ITERATION, TIMELINE_OFFSET_MS, entity_name,

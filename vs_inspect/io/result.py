@@ -15,7 +15,7 @@ from ..errors import InputError
 from .atomic import write_json_atomic
 from .names import check_video_name
 from ..cue_stats import CueStats
-from ..types import PairDecision, PairLandscape, RateLandscape, RunInputs, RunResult, SolveIteration
+from ..result_types import PairDecision, PairLandscape, RateLandscape, RunInputs, RunResult, SolveIteration
 
 
 def _num(x: float) -> float | None:

@@ -15,7 +15,7 @@ import io
 import math
 from pathlib import Path
 
-from ..types import CommonSpan
+from ..result_types import CommonSpan
 from .atomic import write_json_atomic, write_text_atomic
 
 SIGN = ("offset_s: when the video's first frame was taken, in seconds on {ref}'s clock "

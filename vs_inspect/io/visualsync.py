@@ -309,46 +309,68 @@ def import_visualsync(folder, cfg: ImportConfig = ImportConfig(), calibration=No
     videos, cameras, tracks = [], {}, {}
     for vdir in vdirs:
         name = vdir.name
-        tr = read_cotracker(vdir / TRACKS_FILE, cfg.visibility_threshold)
-        T = tr.num_frames
-        vfile = _video_file(vdir)
-        info = None
-        if vfile is not None:
-            info = open_video(vfile, name=name).info
-            if info.num_frames != T:
-                raise InputError(f"{vfile}: video has {info.num_frames} frames but "
-                                 f"{vdir / TRACKS_FILE} tracks {T}")
-        elif cfg.fps is None:
-            raise InputError(f"{vdir}: no video file to take frame times from; give --fps")
-        if calibration is not None:
-            from .calibration import fit_to_video, to_camera_track, undistort_points
-            if name not in calibration:
-                raise InputError(f"no calibration for video {name!r}")
-            cal = calibration[name]
-            if info is not None:
-                cal = fit_to_video(cal, info.width, info.height, name=f"{vfile}")
-            tr = Tracks(undistort_points(cal, tr.xy), tr.instance)
-            cam = to_camera_track(cal)
-            size = cal.size
-        else:
-            cam_path = vdir / CAMERAS_FILE
-            if not cam_path.is_file():
-                raise InputError(f"{cam_path}: missing (VGGT cameras), and no calibration given")
-            cam = read_vggt_cameras(cam_path, T, cfg)
-            size = None
-        if info is None:
-            if size is None:  # the principal point is the best guess of the image centre
-                K0 = cam.K if cam.K.ndim == 2 else cam.K[0]
-                size = (int(round(2 * (K0[0, 2] + 0.5))), int(round(2 * (K0[1, 2] + 0.5))))
-            try:
-                info = VideoInfo.constant_rate(name, max(size[0], 1), max(size[1], 1), T, cfg.fps)
-            except ValueError as exc:
-                raise InputError(f"{vdir}: {exc}") from None
+        info, cam, tr = _import_video(vdir, cfg, calibration)
         videos.append(info)
         cameras[name] = cam
         tracks[name] = tr
-        log.info("%s: %d tracks over %d frames, %s camera", name, tr.num_tracks, T,
-                 "moving" if cam.is_moving else "static")
+    pairs = _read_pairs(folder, names, tracks)
+    if not pairs:
+        log.warning("%s: no cross-view pairs (%s/<a>__<b>.npz); nothing can be synchronized",
+                    folder, PAIRS_DIR)
+    try:
+        return CueBundle(tuple(videos), cameras, tracks, pairs)
+    except ValueError as exc:
+        raise InputError(f"{folder}: {exc}") from None
+
+
+def _import_video(vdir: Path, cfg: ImportConfig, calibration) -> tuple[VideoInfo, CameraTrack, Tracks]:
+    """(its clock and size, its camera, its tracks) of one video folder: the tracks from
+    tracks.pkl, the frame times from its video file (else cfg.fps), the camera from calibration
+    (the tracks undistorted with it) or else from VGGT's camera_parameters.npz."""
+    name = vdir.name
+    tr = read_cotracker(vdir / TRACKS_FILE, cfg.visibility_threshold)
+    T = tr.num_frames
+    vfile = _video_file(vdir)
+    info = None
+    if vfile is not None:
+        info = open_video(vfile, name=name).info
+        if info.num_frames != T:
+            raise InputError(f"{vfile}: video has {info.num_frames} frames but "
+                             f"{vdir / TRACKS_FILE} tracks {T}")
+    elif cfg.fps is None:
+        raise InputError(f"{vdir}: no video file to take frame times from; give --fps")
+    if calibration is not None:
+        from .calibration import fit_to_video, to_camera_track, undistort_points
+        if name not in calibration:
+            raise InputError(f"no calibration for video {name!r}")
+        cal = calibration[name]
+        if info is not None:
+            cal = fit_to_video(cal, info.width, info.height, name=f"{vfile}")
+        tr = Tracks(undistort_points(cal, tr.xy), tr.instance)
+        cam = to_camera_track(cal)
+        size = cal.size
+    else:
+        cam_path = vdir / CAMERAS_FILE
+        if not cam_path.is_file():
+            raise InputError(f"{cam_path}: missing (VGGT cameras), and no calibration given")
+        cam = read_vggt_cameras(cam_path, T, cfg)
+        size = None
+    if info is None:
+        if size is None:  # the principal point is the best guess of the image centre
+            K0 = cam.K if cam.K.ndim == 2 else cam.K[0]
+            size = (int(round(2 * (K0[0, 2] + 0.5))), int(round(2 * (K0[1, 2] + 0.5))))
+        try:
+            info = VideoInfo.constant_rate(name, max(size[0], 1), max(size[1], 1), T, cfg.fps)
+        except ValueError as exc:
+            raise InputError(f"{vdir}: {exc}") from None
+    log.info("%s: %d tracks over %d frames, %s camera", name, tr.num_tracks, T,
+             "moving" if cam.is_moving else "static")
+    return info, cam, tr
+
+
+def _read_pairs(folder: Path, names: list[str], tracks: dict[str, Tracks]) -> dict[tuple[str, str], TrackPairs]:
+    """pairs/<a>__<b>.npz (none without the folder), each pair given once, its track indices in
+    range of both videos' tracks."""
     pairs: dict[tuple[str, str], TrackPairs] = {}
     pdir = folder / PAIRS_DIR
     if pdir.is_dir():
@@ -365,10 +387,4 @@ def import_visualsync(folder, cfg: ImportConfig = ImportConfig(), calibration=No
             if (b, a) in pairs:
                 raise InputError(f"{f}: pairs for {a} and {b} are given twice ({b}__{a}.npz too)")
             pairs[(a, b)] = TrackPairs(a, b, idx)
-    if not pairs:
-        log.warning("%s: no cross-view pairs (%s/<a>__<b>.npz); nothing can be synchronized",
-                    folder, PAIRS_DIR)
-    try:
-        return CueBundle(tuple(videos), cameras, tracks, pairs)
-    except ValueError as exc:
-        raise InputError(f"{folder}: {exc}") from None
+    return pairs

@@ -21,7 +21,8 @@ from ..errors import InputError, NoUsableVideos
 from ..record.sink import NullSink, Sink
 from ..sync.config import SyncConfig
 from ..cue_stats import CueStats
-from ..types import CueBundle, RunInputs, RunResult, SyncResult
+from ..result_types import RunInputs, RunResult, SyncResult
+from ..types import CueBundle
 from .config import RunConfig
 from .reasons import plain_reason, with_plain_reason
 from .stage0 import run_stage0

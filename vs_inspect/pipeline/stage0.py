@@ -279,7 +279,7 @@ def _descriptor_pairs(names: list[str], vids: dict, sink: Sink, progress: bool,
 
 def _cameras(sources, vids: dict, all_pairs: dict, calibration: dict | None, cfg: CueConfig, progress: bool,
              grid: OffsetGrid, rules: frozenset[str] = ALL, memo: Memo = NO_MEMO):
-    """Step 4: the kept cues.cameras.choice.CameraSet, its pairs and records."""
+    """Step 4: the kept cues.cameras.camera_set.CameraSet, its pairs and records."""
     from ..cues.cameras.choice import calibrated_cameras, estimated_cameras, vote_on_cameras
     from ..cues.video.extract import registration_images
 

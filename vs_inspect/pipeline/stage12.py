@@ -20,7 +20,8 @@ from ..sync.pairs import select_pairs
 from ..sync.posefree import PoseFreePair, estimate_pair
 from ..sync.sightings import with_sightings
 from ..sync.stage2 import solve_stage2, solve_stage2_drift
-from ..types import CueBundle, PairLandscape, SyncResult
+from ..result_types import PairLandscape, SyncResult
+from ..types import CueBundle
 
 log = logging.getLogger(__name__)
 

@@ -22,7 +22,7 @@ from ..io.recording_paths import (
     GUIDE, LOG, SYNC_GRAPH, SYNC_IRLS, SYNC_LOOPS, SYNC_OFFSETS, SYNC_PAIRS, TIMELINE_OFFSET_MS, WORLD,
     pair_decision_path, pair_epipolar_path, pair_landscape_path, pair_votes_path, video_path,
 )
-from ..types import PairLandscape, SyncResult
+from ..result_types import PairLandscape, SyncResult
 from .people import PEOPLE_CUE, pair_people_path
 
 MAX_PAIR_CONTAINERS = 12  # pair containers in the middle column; the rest are in the pairs table

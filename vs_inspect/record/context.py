@@ -18,7 +18,8 @@ import rerun as rr
 from .. import palette
 from ..analysis.display_names import display_names as short_names_of
 from ..analysis.record_options import RecordOptions
-from ..types import CameraTrack, CueBundle, RunResult, SyncResult, VideoInfo
+from ..result_types import RunResult, SyncResult
+from ..types import CameraTrack, CueBundle, VideoInfo
 
 if TYPE_CHECKING:
     from ..analysis.record_views import RunRecordView

@@ -21,7 +21,7 @@ from ..io.recording_paths import (
     LOG_DECISIONS, TIMELINE_EVENT, TIMELINE_OFFSET_MS, pair_decision_path, pair_epipolar_path,
     pair_landscape_path, pair_rate_landscape_path, video_asset_path,
 )
-from ..types import PairLandscape
+from ..result_types import PairLandscape
 from .context import RecordingContext
 from .style import (ACCEPTED, APPEARANCE_ONLY, MINIMA, REJECTED, TRUTH, WINDOW, fmt, image_border, offset_ms,
                     scaled_to)

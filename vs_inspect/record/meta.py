@@ -20,7 +20,8 @@ from ..io.recording_paths import (
     TIMELINE_EVENT, entity_name, log_path,
 )
 from ..io.result import run_result_to_dict
-from ..types import CueBundle, RunResult
+from ..result_types import RunResult
+from ..types import CueBundle
 from .context import RecordingContext
 from .style import at_offset_ms
 

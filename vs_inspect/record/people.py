@@ -1,4 +1,4 @@
-"""The people cue (types.PeopleCue) in a rerun recording: each video's people and their
+"""The people cue (people_types.PeopleCue) in a rerun recording: each video's people and their
 landmarks over its frames, every pair's association, its evidence at each candidate shift (the
 F's inliers, the cost, the search's score) and its decision, and the cameras and 3D landmarks
 the cue made. Takes the stream explicitly (no global recording).
@@ -21,7 +21,7 @@ import rerun as rr
 from .. import palette
 from ..geometry.skeleton import LANDMARK_NAMES, SKELETON_EDGES
 from ..io.recording_paths import TIMELINE_FRAME, TIMELINE_OFFSET_MS, WORLD, entity_name, pair_path, video_path
-from ..types import PeopleCue, PeoplePair
+from ..people_types import PeopleCue, PeoplePair
 
 PEOPLE_CUE = "cues/people"
 PEOPLE_WORLD = f"{WORLD}/people"

@@ -44,7 +44,9 @@ from ..io.recording_paths import (
     check_entity_names,
 )
 from ..analysis.record_options import RecordOptions
-from ..types import CameraTrack, CueBundle, PairLandscape, PeopleCue, RunResult, SyncResult, VideoInfo
+from ..people_types import PeopleCue
+from ..result_types import PairLandscape, RunResult, SyncResult
+from ..types import CameraTrack, CueBundle, VideoInfo
 from . import meta, solve
 from .blueprint import blueprint
 from .cameras import CameraLog

@@ -14,7 +14,9 @@ if TYPE_CHECKING:
     import numpy as np
 
     from ..analysis.record_views import PairRecordView, RunRecordView
-    from ..types import CameraTrack, CueBundle, PairLandscape, PeopleCue, RunResult, SyncResult, VideoInfo
+    from ..people_types import PeopleCue
+    from ..result_types import PairLandscape, RunResult, SyncResult
+    from ..types import CameraTrack, CueBundle, VideoInfo
     from ..analysis.record_options import RecordOptions
 
 

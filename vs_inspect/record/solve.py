@@ -18,7 +18,7 @@ from ..io.recording_paths import (
     SYNC_GRAPH, SYNC_LOOPS, SYNC_OFFSETS, SYNC_PAIRS, TIMELINE_ITERATION, TIMELINE_TIME, irls_residual_path,
     irls_weight_path, solve_residual_path, solve_weight_path, trajectory_path,
 )
-from ..types import SyncResult
+from ..result_types import SyncResult
 from .blueprint import MAX_PAIR_CONTAINERS, pair_order
 from .context import RecordingContext
 from .style import ACCEPTED, REJECTED, fmt

@@ -17,7 +17,7 @@ from dataclasses import replace
 import numpy as np
 from scipy.signal import find_peaks
 
-from ..types import PairDecision
+from ..result_types import PairDecision
 from .config import DecisionConfig
 
 MIN_SUPPORT_FRACTION = 0.4  # a minimum resting on fewer terms than this share of the landscape's median is refused

@@ -12,7 +12,8 @@ from typing import NamedTuple
 import numpy as np
 
 from ..geometry.offsets import OffsetGrid, grid_between, span_of
-from ..types import CameraTrack, CueBundle, PairDecision, PairLandscape, TrackPairs
+from ..result_types import PairDecision, PairLandscape
+from ..types import CameraTrack, CueBundle, TrackPairs
 from .config import SyncConfig
 from .decision import INLIER_PX_FRACTION, check_chosen_offset, check_inliers, check_track_pairs_at_best, check_uncertainty, decide
 from .landscape import (PairEnergy, PairInput, RawLandscape, compute_landscape, curvature_uncertainty,

@@ -16,7 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..types import RateLandscape, TrackPairs, VideoInfo
+from ..result_types import RateLandscape
+from ..types import TrackPairs, VideoInfo
 from .config import DriftConfig, LandscapeConfig
 
 RATE_HALF_WIDTH_PPM = 1000.0  # the (Δ, rate) search spans the pair's rate ± this (pose-free: the rate its tracks gave)

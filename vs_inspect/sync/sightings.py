@@ -20,7 +20,8 @@ import numpy as np
 from ..geometry.offsets import grid_around
 from ..geometry.sightings import (SightingLandscape, SightingShiftFit, sighting_landscape, sighting_peak,
                                   sighting_shift_fit)
-from ..types import CueBundle, PairDecision, PairLandscape
+from ..result_types import PairDecision, PairLandscape
+from ..types import CueBundle
 from .config import SyncConfig
 from .landscape import search_offsets
 

@@ -17,7 +17,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from ..types import SolveIteration
+from ..result_types import SolveIteration
 
 
 @dataclass(frozen=True)

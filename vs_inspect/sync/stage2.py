@@ -10,7 +10,8 @@ import math
 import numpy as np
 
 from ..errors import InputError
-from ..types import CueBundle, PairLandscape, SolveIteration, SyncResult, pairs_by_reason
+from ..result_types import PairLandscape, SolveIteration, SyncResult
+from ..types import CueBundle, pairs_by_reason
 from .config import DriftConfig, SolveConfig
 from .drift import PairTiming, solve_offsets_drift
 from .sightings import RESIDUAL as SIGHTING

@@ -110,6 +110,8 @@ def _rand_rotation(rng: np.random.Generator, deg: float) -> np.ndarray:
 
 
 def make_cue_scene(cfg: CueSceneConfig = CueSceneConfig()) -> CueScene:
+    """The scene of cfg (deterministic from cfg.seed): its videos' clocks, true and written
+    cameras, fragmented tracks and track pairs (some wrong) as a cue bundle with the true offsets."""
     rng = np.random.default_rng(cfg.seed)
     n = cfg.cameras
     if n < 2:
@@ -128,85 +130,138 @@ def make_cue_scene(cfg: CueSceneConfig = CueSceneConfig()) -> CueScene:
     videos, true_cams, cams, tracks = [], {}, {}, {}
     per_video_obs = {}
     for ci, v in enumerate(names):
-        W, H = resolutions[ci % len(resolutions)]
-        fps = float(rng.choice(cfg.fps_choices))
-        dur = cfg.seconds * rng.uniform(0.8, 1.0)
-        T = int(dur * fps)
-        if v in vfr:
-            dt = (1.0 / fps) * rng.uniform(0.7, 1.3, size=T - 1)
-            ts = np.concatenate([[0.0], np.cumsum(dt)])
-            video = VideoInfo(v, W, H, T, ts, None)
-        else:
-            video = VideoInfo.constant_rate(v, W, H, T, fps)
+        video, g = _scene_video(v, ci, resolutions, vfr, offsets, drift, cfg, rng)
         videos.append(video)
-        g = video.timestamps_s + offsets[v] if not cfg.drift_ppm else \
-            offsets[v] + (1.0 + drift[v] * 1e-6) * video.timestamps_s
-        fx = W * rng.uniform(0.8, 1.1)
-        K = np.array([[fx, 0, W / 2 + rng.uniform(-10, 10)],
-                      [0, fx * rng.uniform(0.97, 1.03), H / 2 + rng.uniform(-10, 10)], [0, 0, 1]])
-        angle = 2 * np.pi * ci / n + rng.uniform(-0.2, 0.2)
-        radius = rng.uniform(8.0, 10.0)
-        height = rng.uniform(1.2, 3.0)
-        target = np.array([0.0, 0.0, 1.0]) + rng.uniform(-0.3, 0.3, 3)
-        if v in moving:
-            # hand-held: walks along an arc while panning, plus shake at 2-5 Hz.
-            ang = angle + 0.06 * (g - g[0])
-            shake = sum(rng.uniform(0.005, 0.02) * np.sin(2 * np.pi * f * g + rng.uniform(0, 6))[:, None]
-                        * rng.normal(size=3)[None] for f in (2.1, 3.3, 4.7))
-            C = np.stack([radius * np.cos(ang), radius * np.sin(ang), np.full_like(g, height)], -1) + shake
-            aim = target[None] + 0.3 * np.stack([np.sin(0.5 * g), np.cos(0.4 * g), 0.2 * np.sin(0.7 * g)], -1)
-            T_true = np.stack([look_at(C[k], aim[k]) for k in range(T)])
-        else:
-            C = np.array([radius * np.cos(angle), radius * np.sin(angle), height])
-            T_true = look_at(C, target)
+        K, T_true, radius = _scene_camera(v, ci, n, video, g, moving, rng)
         true_cams[v] = CameraTrack(K, T_true)
-        # written pose: rotation error pose_error_deg, translation error 1% of the distance.
-        R_err = _rand_rotation(rng, cfg.pose_error_deg)
-        t_err = rng.normal(size=3)
-        t_err *= 0.01 * radius / np.linalg.norm(t_err) if cfg.pose_error_deg > 0 else 0.0
-        T_noisy = np.array(T_true, copy=True)
-        T_noisy[..., :3, :3] = R_err @ T_true[..., :3, :3]
-        T_noisy[..., :3, 3] = (R_err @ T_true[..., :3, 3].T).T + t_err if T_true.ndim == 3 else \
-            R_err @ T_true[:3, 3] + t_err
-        cams[v] = CameraTrack(K, T_noisy)
-        # observations of every point at every frame
-        X = object_points(g, np.random.default_rng(cfg.seed + 7919), cfg.points_per_object)
-        Tm = T_true if T_true.ndim == 3 else np.broadcast_to(T_true, (T, 4, 4))
-        xy = project(K[None, None], Tm[None], X)
-        inside = (xy[..., 0] >= 0) & (xy[..., 0] <= W - 1) & (xy[..., 1] >= 0) & (xy[..., 1] <= H - 1)
-        xy[~inside] = np.nan
-        xy += rng.normal(scale=cfg.noise_px, size=xy.shape) if cfg.noise_px > 0 else 0.0
-        per_video_obs[v] = xy
+        cams[v] = CameraTrack(K, _written_pose(T_true, radius, cfg, rng))
+        per_video_obs[v] = _observed(g, K, T_true, video, cfg, rng)
 
     M = per_video_obs[names[0]].shape[0]
     inst_of_point = np.repeat(np.arange(M // cfg.points_per_object), cfg.points_per_object)
     seg_point: dict[str, np.ndarray] = {}
     for video in videos:
         v = video.name
-        obs = per_video_obs[v]
-        T = video.num_frames
-        rows, owners = [], []
-        for m in range(M):
-            seen = np.isfinite(obs[m, :, 0])
-            k = 0
-            while k < T:
-                if not seen[k]:
-                    k += 1
-                    continue
-                life = rng.uniform(*cfg.track_life_s)
-                end = k
-                while end < T and seen[end] and video.timestamps_s[end] - video.timestamps_s[k] < life:
-                    end += 1
-                if end - k >= 3:
-                    row = np.full((T, 2), np.nan)
-                    row[k:end] = obs[m, k:end]
-                    rows.append(row)
-                    owners.append(m)
-                k = end + int(rng.integers(0, 3))  # a short gap before the tracker re-seeds
-        xy = np.stack(rows) if rows else np.zeros((0, T, 2))
-        tracks[v] = Tracks(xy.astype(np.float32), inst_of_point[np.asarray(owners, dtype=int)])
-        seg_point[v] = np.asarray(owners, dtype=int)
+        tracks[v], seg_point[v] = _fragmented_tracks(video, per_video_obs[v], M, inst_of_point, cfg, rng)
 
+    pairs, no_match, all_wrong = _scene_pairs(names, n, seg_point, inst_of_point, cfg, rng)
+
+    g_grid = np.linspace(-cfg.max_offset_s, cfg.seconds + cfg.max_offset_s, 200)
+    pts = object_points(g_grid, np.random.default_rng(cfg.seed + 7919), cfg.points_per_object)
+    bundle = CueBundle(tuple(videos), cams, tracks, pairs, offsets,
+                       gt_drift_ppm=drift if cfg.drift_ppm else None)
+    return CueScene(bundle, true_cams, pts, g_grid, all_wrong, no_match)
+
+
+def _scene_video(v: str, ci: int, resolutions: list[tuple[int, int]], vfr: set[str], offsets: dict[str, float],
+                 drift: dict[str, float], cfg: CueSceneConfig, rng: np.random.Generator
+                 ) -> tuple[VideoInfo, np.ndarray]:
+    """(video v's clock and size, the global time (T,) s of each of its frames): a frame rate of
+    cfg.fps_choices, 0.8-1.0 of cfg.seconds long, a variable rate when v is in vfr."""
+    W, H = resolutions[ci % len(resolutions)]
+    fps = float(rng.choice(cfg.fps_choices))
+    dur = cfg.seconds * rng.uniform(0.8, 1.0)
+    T = int(dur * fps)
+    if v in vfr:
+        dt = (1.0 / fps) * rng.uniform(0.7, 1.3, size=T - 1)
+        ts = np.concatenate([[0.0], np.cumsum(dt)])
+        video = VideoInfo(v, W, H, T, ts, None)
+    else:
+        video = VideoInfo.constant_rate(v, W, H, T, fps)
+    g = video.timestamps_s + offsets[v] if not cfg.drift_ppm else \
+        offsets[v] + (1.0 + drift[v] * 1e-6) * video.timestamps_s
+    return video, g
+
+
+def _scene_camera(v: str, ci: int, n: int, video: VideoInfo, g: np.ndarray, moving: set[str],
+                  rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, float]:
+    """(K (3,3), true cam_from_world (4,4), or (T,4,4) for a moving camera, its distance from the
+    scene's centre): camera ci of n on a ring around the scene, looking at its middle; a moving
+    one walks along the ring while panning, with shake."""
+    W, H, T = video.width, video.height, video.num_frames
+    fx = W * rng.uniform(0.8, 1.1)
+    K = np.array([[fx, 0, W / 2 + rng.uniform(-10, 10)],
+                  [0, fx * rng.uniform(0.97, 1.03), H / 2 + rng.uniform(-10, 10)], [0, 0, 1]])
+    angle = 2 * np.pi * ci / n + rng.uniform(-0.2, 0.2)
+    radius = rng.uniform(8.0, 10.0)
+    height = rng.uniform(1.2, 3.0)
+    target = np.array([0.0, 0.0, 1.0]) + rng.uniform(-0.3, 0.3, 3)
+    if v in moving:
+        # hand-held: walks along an arc while panning, plus shake at 2-5 Hz.
+        ang = angle + 0.06 * (g - g[0])
+        shake = sum(rng.uniform(0.005, 0.02) * np.sin(2 * np.pi * f * g + rng.uniform(0, 6))[:, None]
+                    * rng.normal(size=3)[None] for f in (2.1, 3.3, 4.7))
+        C = np.stack([radius * np.cos(ang), radius * np.sin(ang), np.full_like(g, height)], -1) + shake
+        aim = target[None] + 0.3 * np.stack([np.sin(0.5 * g), np.cos(0.4 * g), 0.2 * np.sin(0.7 * g)], -1)
+        T_true = np.stack([look_at(C[k], aim[k]) for k in range(T)])
+    else:
+        C = np.array([radius * np.cos(angle), radius * np.sin(angle), height])
+        T_true = look_at(C, target)
+    return K, T_true, radius
+
+
+def _written_pose(T_true: np.ndarray, radius: float, cfg: CueSceneConfig, rng: np.random.Generator) -> np.ndarray:
+    """T_true as the bundle writes it: rotated by cfg.pose_error_deg about a random axis and moved
+    by 1% of radius."""
+    # written pose: rotation error pose_error_deg, translation error 1% of the distance.
+    R_err = _rand_rotation(rng, cfg.pose_error_deg)
+    t_err = rng.normal(size=3)
+    t_err *= 0.01 * radius / np.linalg.norm(t_err) if cfg.pose_error_deg > 0 else 0.0
+    T_noisy = np.array(T_true, copy=True)
+    T_noisy[..., :3, :3] = R_err @ T_true[..., :3, :3]
+    T_noisy[..., :3, 3] = (R_err @ T_true[..., :3, 3].T).T + t_err if T_true.ndim == 3 else \
+        R_err @ T_true[:3, 3] + t_err
+    return T_noisy
+
+
+def _observed(g: np.ndarray, K: np.ndarray, T_true: np.ndarray, video: VideoInfo, cfg: CueSceneConfig,
+              rng: np.random.Generator) -> np.ndarray:
+    """(M,T,2) px of every moving point in every frame (global times g), with cfg.noise_px of
+    noise; NaN outside the image."""
+    W, H, T = video.width, video.height, video.num_frames
+    # observations of every point at every frame
+    X = object_points(g, np.random.default_rng(cfg.seed + 7919), cfg.points_per_object)
+    Tm = T_true if T_true.ndim == 3 else np.broadcast_to(T_true, (T, 4, 4))
+    xy = project(K[None, None], Tm[None], X)
+    inside = (xy[..., 0] >= 0) & (xy[..., 0] <= W - 1) & (xy[..., 1] >= 0) & (xy[..., 1] <= H - 1)
+    xy[~inside] = np.nan
+    xy += rng.normal(scale=cfg.noise_px, size=xy.shape) if cfg.noise_px > 0 else 0.0
+    return xy
+
+
+def _fragmented_tracks(video: VideoInfo, obs: np.ndarray, M: int, inst_of_point: np.ndarray, cfg: CueSceneConfig,
+                       rng: np.random.Generator) -> tuple[Tracks, np.ndarray]:
+    """(the video's tracks, the point (M) each follows): each point's observations obs (M,T,2) cut
+    into tracks that live cfg.track_life_s, with short gaps before the tracker seeds again."""
+    T = video.num_frames
+    rows, owners = [], []
+    for m in range(M):
+        seen = np.isfinite(obs[m, :, 0])
+        k = 0
+        while k < T:
+            if not seen[k]:
+                k += 1
+                continue
+            life = rng.uniform(*cfg.track_life_s)
+            end = k
+            while end < T and seen[end] and video.timestamps_s[end] - video.timestamps_s[k] < life:
+                end += 1
+            if end - k >= 3:
+                row = np.full((T, 2), np.nan)
+                row[k:end] = obs[m, k:end]
+                rows.append(row)
+                owners.append(m)
+            k = end + int(rng.integers(0, 3))  # a short gap before the tracker re-seeds
+    xy = np.stack(rows) if rows else np.zeros((0, T, 2))
+    return Tracks(xy.astype(np.float32), inst_of_point[np.asarray(owners, dtype=int)]), np.asarray(owners, dtype=int)
+
+
+def _scene_pairs(names: list[str], n: int, seg_point: dict[str, np.ndarray], inst_of_point: np.ndarray,
+                 cfg: CueSceneConfig, rng: np.random.Generator
+                 ) -> tuple[dict[tuple[str, str], TrackPairs], tuple[tuple[str, str], ...], tuple[str, str] | None]:
+    """(track pairs of every pair of views, the pairs of views given none, the pair whose pairs
+    are all wrong or None): up to cfg.pairs_per_view_pair tracks of the same point, a
+    cfg.wrong_fraction of them joined to another point instead (half on the same object)."""
     all_pairs = [(names[i], names[j]) for i in range(n) for j in range(i + 1, n)]
     order = rng.permutation(len(all_pairs))
     no_match = tuple(all_pairs[i] for i in order[: cfg.no_match_pairs])
@@ -230,9 +285,4 @@ def make_cue_scene(cfg: CueSceneConfig = CueSceneConfig()) -> CueScene:
             pool = same_obj if (rng.random() < 0.5 and len(same_obj)) else np.flatnonzero(pb != pa[i])
             take[r, 1] = rng.choice(pool)
         pairs[(a, b)] = TrackPairs(a, b, take)
-
-    g_grid = np.linspace(-cfg.max_offset_s, cfg.seconds + cfg.max_offset_s, 200)
-    pts = object_points(g_grid, np.random.default_rng(cfg.seed + 7919), cfg.points_per_object)
-    bundle = CueBundle(tuple(videos), cams, tracks, pairs, offsets,
-                       gt_drift_ppm=drift if cfg.drift_ppm else None)
-    return CueScene(bundle, true_cams, pts, g_grid, all_wrong, no_match)
+    return pairs, no_match, all_wrong

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..geometry.epipolar import look_at, project
 from ..geometry.skeleton import LANDMARK_NAMES, MIRROR, NUM_LANDMARKS
-from ..types import VideoPeople
+from ..people_types import VideoPeople
 
 # body frame: x to the person's right, y forward, z up, origin between the feet; metres
 _RIGHT_TEMPLATE = {

@@ -9,26 +9,25 @@ video's reason says what each model made of it. No I/O beyond the models' own sc
 from __future__ import annotations
 
 import contextlib
-import copy
 import dataclasses
 import functools
 import logging
 import time
-from dataclasses import dataclass
 
-import numpy as np
-
-from ...cue_stats import (ImagePairMatches, JointCoarseOffsets, JointFit, ModelTried, MovingPointsCameras, MovingPointsPair, SfmRecord, from_json, refusal_texts)
+from ...camera_stats import ModelTried
+from ...cue_stats import refusal_texts
 from ...errors import InputError
 from ...geometry.offsets import OffsetGrid
-from ...types import FROM_MOVING_POINTS, CameraTrack, Tracks, first_clause
+from ...types import Tracks, first_clause
 from ..config import CueConfig
 from ...memo import NO_MEMO, Memo, digest
 from ...progress import stage
 from ..records import Note, say_cameras
 from ..rules import ALL
-from ..pairing.pairing import GeometricPairing, add_geometric_pairs, check_fitted_offsets
+from ..pairing.pairing import add_geometric_pairs, check_fitted_offsets
 from ..video.extract import VideoCues
+from .camera_set import CameraSet
+from .model_or_points import _estimate
 
 log = logging.getLogger(__name__)
 
@@ -46,30 +45,6 @@ def _owner(kind: str) -> str:
     if kind.endswith(OWN):
         return f"{kind.removesuffix(OWN).upper()}'s own"
     return f"{kind.upper()}'s"
-
-
-@dataclass
-class CameraSet:
-    """One set of cameras for the videos and what the pairing made of them."""
-
-    cameras: dict[str, CameraTrack]
-    tracks: dict[str, Tracks]  # undistorted with the cameras' lenses
-    points: np.ndarray | None  # (P,3) static points of the reconstruction, None without one
-    colors: np.ndarray | None  # (P,3) uint8
-    undistort: dict  # name -> function undistorting (...,2) full-resolution px
-    dropped: dict = dataclasses.field(default_factory=dict)  # video -> why this set has no camera for it
-    source: str = "estimated"  # where the cameras came from (CueStats.camera_source)
-    sfm: SfmRecord | None = None  # the estimate's record (None: calibrated)
-    pairs: dict | None = None  # (a, b) -> TrackPairs after the pairing
-    used: frozenset = frozenset()  # cameras with a pair whose geometric Δ the pairing trusted
-    peaks: dict | None = None  # (a, b) -> the pair's vote peaks Δ_ab (s)
-    voting_s: float = 0.0  # seconds spent voting
-    pairing: GeometricPairing | None = None  # what the pairing made of the set (None: not run)
-    notes: tuple[Note, ...] = ()  # what was decided on the set, in words, in order (its pairing's included)
-
-    def votes(self) -> dict:
-        """"a__b" -> the pair's PairVoteSummary on these cameras."""
-        return {f"{a}__{b}": v for (a, b), v in (self.pairing.votes if self.pairing else {}).items()}
 
 
 def calibrated_cameras(calibration: dict, vids: dict[str, VideoCues]) -> CameraSet:
@@ -155,6 +130,37 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
     (CameraModels.third), held to the first set's peaks too, and kept only when it trusts more videos.
     The kept set's sfm record holds every tried set's counts (models).
     grid: the limits of every offset Stage 0 searches (the moving points' cameras' and the votes')."""
+    seen: dict = {}  # the moving points' cameras, fitted once for every model
+
+    def attempt(est, other_peaks=None, other="", from_tracks=False,
+                as_built=False) -> tuple[str, CameraSet] | None:
+        cams = _estimate(vids, cfg, all_pairs, est, from_tracks, seen, as_built, grid, rules, memo)
+        if from_tracks and not (cams.sfm.fallback is not None and cams.sfm.fallback.used):
+            return None  # est's own cameras again, already voted on
+        out = vote_on_cameras(cams, vids, all_pairs, cfg, progress, estimated=True,
+                              other_peaks=other_peaks, other=other, grid=grid, rules=rules, memo=memo)
+        kind = MOVING_POINTS if from_tracks else est.features + (OWN if as_built else "")
+        return kind, out
+
+    with _kept_models(vids, cfg, frame_images, progress, rules, memo) as models:
+        with stage("cameras: estimating them from the videos (pycolmap)", progress):
+            kept_est = models.first()
+        first_est = kept_est
+        kind, kept = attempt(kept_est)
+        first_kind, first_peaks = kind, kept.peaks
+        tried, failed = [(kind, kept)], []
+        kind, kept, kept_est = _try_later_models(models, attempt, kind, kept, kept_est, first_kind, first_peaks, tried,
+                                                 failed, vids, cfg, rules, progress)
+        kind, kept = _try_moving_points_and_own(attempt, kind, kept, kept_est, first_est, first_kind, tried, cfg,
+                                                rules)
+        skipped = models.third_skipped
+    return _choice_noted(kind, kept, tried, failed, skipped, vids)
+
+
+def _kept_models(vids: dict[str, VideoCues], cfg: CueConfig, frame_images: dict, progress: bool,
+                 rules: frozenset[str], memo: Memo) -> _KeptModels:
+    """pycolmap's camera models of the videos (cameras.CameraModels, built only when needed), each
+    estimate kept in memo under a digest of the camera settings, frames and features."""
     from .sfm import CameraModels
 
     frames = {n: v.sfm_frames for n, v in vids.items() if v.sfm_frames is not None}
@@ -169,70 +175,74 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
                             frame_features=features, frame_images=frame_images, progress=progress,
                             xfeat_first=xfeat_first)
 
-    with _KeptModels(build, memo, key) as models:
+    return _KeptModels(build, memo, key)
 
-        seen: dict = {}  # the moving points' cameras, fitted once for every model
 
-        def attempt(est, other_peaks=None, other="", from_tracks=False,
-                    as_built=False) -> tuple[str, CameraSet] | None:
-            cams = _estimate(vids, cfg, all_pairs, est, from_tracks, seen, as_built, grid, rules, memo)
-            if from_tracks and not (cams.sfm.fallback is not None and cams.sfm.fallback.used):
-                return None  # est's own cameras again, already voted on
-            out = vote_on_cameras(cams, vids, all_pairs, cfg, progress, estimated=True,
-                                  other_peaks=other_peaks, other=other, grid=grid, rules=rules, memo=memo)
-            kind = MOVING_POINTS if from_tracks else est.features + (OWN if as_built else "")
-            return kind, out
-
-        with stage("cameras: estimating them from the videos (pycolmap)", progress):
-            kept_est = models.first()
-        first_est = kept_est
-        kind, kept = attempt(kept_est)
-        first_kind, first_peaks = kind, kept.peaks
-        tried, failed = [(kind, kept)], []
-        for which, build_next in (("second", models.second), ("third", models.third)):
-            if not cfg.geometric.enabled or kept.used >= set(vids):
-                break
-            if f"{which}_model" not in rules:
+def _try_later_models(models: _KeptModels, attempt, kind: str, kept: CameraSet, kept_est, first_kind: str,
+                      first_peaks: dict, tried: list, failed: list, vids: dict, cfg: CueConfig, rules: frozenset[str],
+                      progress: bool) -> tuple[str, CameraSet, object]:
+    """(kind, kept set, its estimate) after the second and third camera models were tried while a
+    video is left untrusted, each voted on with attempt (held to the first set's peaks) and kept
+    when its joint vote trusts more videos; tried gets each set tried, failed why a model failed."""
+    for which, build_next in (("second", models.second), ("third", models.third)):
+        if not cfg.geometric.enabled or kept.used >= set(vids):
+            break
+        if f"{which}_model" not in rules:
+            continue
+        try:
+            with stage(f"cameras: the {which} camera model", progress):
+                est = build_next()
+            if est is None:
                 continue
-            try:
-                with stage(f"cameras: the {which} camera model", progress):
-                    est = build_next()
-                if est is None:
-                    continue
-                log.info("the joint vote trusted %d of %d videos on %s's cameras: trying %s's model",
-                         len(kept.used), len(vids), kind.upper(), est.features.upper())
-                # each later model is held to the first one's vote peaks
-                tried.append(attempt(est, first_peaks, f"{first_kind.upper()}'s model"))
-            except Exception as exc:  # another opinion that fails leaves the earlier ones standing
-                failed.append(f"the {which} camera model failed ({type(exc).__name__}: {exc}); "
-                              f"{kind.upper()}'s kept")
-                log.warning("%s", failed[-1])
-                continue
-            if len(tried[-1][1].used) > len(kept.used):
-                (kind, kept), kept_est = tried[-1], est
-        if (cfg.geometric.enabled and cfg.camera.fallback_when_untrusted and cfg.camera.fallback_from_tracks
-                and "points_when_untrusted" in rules
-                and not kept.used
-                and not any(c.sfm.fallback is not None for _, c in tried)):
-            # every model placed the static cameras, and none was trusted: the moving points' own cameras
-            log.info("the joint vote trusted no video on any camera model: trying the moving points' cameras")
-            points = attempt(kept_est, from_tracks=True)
-            if points is not None:
-                tried.append(points)
-                if points[1].used:
-                    kind, kept = points
-        first_fallback = tried[0][1].sfm.fallback
-        if (cfg.geometric.enabled and cfg.camera.weak_model_when_replaced and "weak_own" in rules and not kept.used
-                and first_fallback is not None and first_fallback.used and len(first_est.cameras) >= 2):
-            # the first model was weak and the moving points' cameras replaced its own, and no video
-            # was trusted on any set: its own cameras get their vote too (a weak model may be right:
-            # the moving points' cameras are judged on track pairs at their own coarse offsets)
-            log.info("the joint vote trusted no video on any camera set: trying %s own cameras", _owner(first_kind))
-            own = attempt(first_est, as_built=True)
-            tried.append(own)
-            if own[1].used:
-                kind, kept = own
-        skipped = models.third_skipped
+            log.info("the joint vote trusted %d of %d videos on %s's cameras: trying %s's model",
+                     len(kept.used), len(vids), kind.upper(), est.features.upper())
+            # each later model is held to the first one's vote peaks
+            tried.append(attempt(est, first_peaks, f"{first_kind.upper()}'s model"))
+        except Exception as exc:  # another opinion that fails leaves the earlier ones standing
+            failed.append(f"the {which} camera model failed ({type(exc).__name__}: {exc}); "
+                          f"{kind.upper()}'s kept")
+            log.warning("%s", failed[-1])
+            continue
+        if len(tried[-1][1].used) > len(kept.used):
+            (kind, kept), kept_est = tried[-1], est
+    return kind, kept, kept_est
+
+
+def _try_moving_points_and_own(attempt, kind: str, kept: CameraSet, kept_est, first_est, first_kind: str,
+                               tried: list, cfg: CueConfig, rules: frozenset[str]) -> tuple[str, CameraSet]:
+    """(kind, kept set) after the last resorts when no video was trusted on any set: the moving
+    points' own cameras (when no model was replaced by them), then the first model's own cameras
+    (when the moving points' replaced them); each kept when its joint vote trusts a video; tried
+    gets each set tried."""
+    if (cfg.geometric.enabled and cfg.camera.fallback_when_untrusted and cfg.camera.fallback_from_tracks
+            and "points_when_untrusted" in rules
+            and not kept.used
+            and not any(c.sfm.fallback is not None for _, c in tried)):
+        # every model placed the static cameras, and none was trusted: the moving points' own cameras
+        log.info("the joint vote trusted no video on any camera model: trying the moving points' cameras")
+        points = attempt(kept_est, from_tracks=True)
+        if points is not None:
+            tried.append(points)
+            if points[1].used:
+                kind, kept = points
+    first_fallback = tried[0][1].sfm.fallback
+    if (cfg.geometric.enabled and cfg.camera.weak_model_when_replaced and "weak_own" in rules and not kept.used
+            and first_fallback is not None and first_fallback.used and len(first_est.cameras) >= 2):
+        # the first model was weak and the moving points' cameras replaced its own, and no video
+        # was trusted on any set: its own cameras get their vote too (a weak model may be right:
+        # the moving points' cameras are judged on track pairs at their own coarse offsets)
+        log.info("the joint vote trusted no video on any camera set: trying %s own cameras", _owner(first_kind))
+        own = attempt(first_est, as_built=True)
+        tried.append(own)
+        if own[1].used:
+            kind, kept = own
+    return kind, kept
+
+
+def _choice_noted(kind: str, kept: CameraSet, tried: list, failed: list, skipped: str | None,
+                  vids: dict) -> CameraSet:
+    """The kept set (of kind) with its notes and sfm record saying what every camera set tried
+    made of the videos, which one was kept, which models failed and which were skipped."""
     notes = list(kept.notes)  # only the kept set's notes are reported, then the choice
     models_tried = tuple(ModelTried(k, len(c.cameras), tuple(sorted(c.used)), c is kept) for k, c in tried)
     kept = _note_other_models(kind, kept, [(k, c) for k, c in tried if c is not kept], vids)
@@ -345,125 +355,3 @@ def _verdict(kind: str, c: CameraSet, n: str) -> tuple[str, str]:
     whole = f"{whose}: {dropped.split('; ')[0]}" + (f" (its joint vote: {dissent})" if dissent else "")
     # a refused camera's rival offset says more than "refused"
     return whole, ((joint.dissent_short if joint else None) or {}).get(n) or first_clause(dropped)
-
-
-def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict, est,
-              from_tracks: bool = False, memo: dict | None = None, as_built: bool = False,
-              grid: OffsetGrid = OffsetGrid(), rules: frozenset[str] = ALL, kept: Memo = NO_MEMO) -> CameraSet:
-    """The cameras of est (cameras.CameraEstimate) and the tracks undistorted with them, or the
-    cameras the moving points give when their cameras explain the points better and est is weak,
-    or from_tracks (the joint vote trusted no video on est's cameras; the moving points' cameras
-    may then be fewer). memo: kept between calls on the same videos and pairs, so that the moving
-    points' cameras, which do not depend on est, are fitted once. as_built: est's cameras even
-    when weak (the moving points' are not fitted nor compared)."""
-    from .sfm import MIN_INLIERS, undistort_with_colmap
-    from .moving_points import cameras_from_tracks, epipolar_fit_px
-
-    static = [n for n, v in vids.items() if v.camera_motion != "moving"]
-    regs = {n: c.frame_registration for n, c in est.cameras.items() if c.frame_registration is not None}
-    sfm = SfmRecord(est.features, est.num_images, est.num_registered,
-                    {n: tuple(c.registered_frames.tolist()) for n, c in est.cameras.items()},
-                    tuple(ImagePairMatches(**p) for p in est.image_pairs),
-                    # the tracks are undistorted with it; other image points (e.g. an evidence
-                    # script's detections) need it too
-                    {n: c.lens for n, c in est.cameras.items()},
-                    frame_registration=regs or None,
-                    # the static cameras' images
-                    static_images=f"ASIFT, {cfg.camera.asift_per_view} features per simulated view"
-                    if est.features == "sift" and cfg.camera.asift_per_view and static else None)
-    # a model resting on few points per image, or missing a static camera, is checked against the
-    # moving points: such models can pass the point threshold with wrong focals and rotations
-    fewest = min((c.points_seen for c in est.cameras.values()), default=0)
-    weak = len(est.cameras) < 2 or any(n not in est.cameras for n in static) or \
-        fewest < 2 * MIN_INLIERS
-    weak_why = (f"the background reconstruction rests on few points (fewest {fewest} per image) or left a "
-                f"static camera out")
-    # the moving points give static cameras only, so when the model placed more videos than there
-    # are static ones their cameras cannot replace it (`use` below): not fitted (it would cost seconds)
-    outnumbered = not from_tracks and len(est.cameras) > len(static)
-    compared = ((weak and "weak_model_replaced" in rules) or from_tracks) and cfg.camera.fallback_from_tracks \
-        and len(static) >= 2 and not as_built
-    if compared and outnumbered:
-        why = (f"{weak_why}; the moving points' cameras were not fitted: they would be {len(static)} static "
-               f"camera(s) at most, fewer than its {len(est.cameras)}, so they could not replace it")
-        sfm = dataclasses.replace(sfm, fallback=MovingPointsCameras(why, False))
-        log.warning("%s", why)
-    elif compared:
-        ref = max(vids, key=lambda n: sum(len(p.index) for k, p in pairs.items() if n in k))
-        infos = {n: v.info for n, v in vids.items()}
-        xy = {n: v.xy_full for n, v in vids.items()}
-        if memo is not None and "from_tracks" in memo:  # the same track pairs for every model
-            cams, reasons, details = copy.deepcopy(memo["from_tracks"])
-        else:
-            cams, reasons, details = kept.call(
-                "moving_points", cameras_from_tracks, ref, infos, xy, pairs,
-                {n: v.camera_motion == "moving" for n, v in vids.items()},
-                joint=cfg.camera.fallback_joint_offsets and "joint_coarse_offsets" in rules, grid=grid)
-            if memo is not None:
-                memo["from_tracks"] = copy.deepcopy((cams, reasons, details))
-        if from_tracks:  # the background did reconstruct; these cameras are the static ones only
-            reasons = {n: ("camera could not be registered: a moving camera, and the moving points give "
-                           "static cameras only" if vids[n].camera_motion == "moving" else reason)
-                       for n, reason in reasons.items()}
-        if len(est.cameras) < 2:
-            why = f"the background reconstruction registered {len(est.cameras)} camera(s)"
-        elif weak:
-            why = weak_why
-        else:
-            why = "the joint vote trusted no video on any camera model's cameras"
-        if len(cams) == 2 and not cfg.camera.fallback_unchecked_pair and "two_point_cameras" in rules:
-            # the coarse offset and F were chosen by the same track pairs; Stage 1 then finds the
-            # minimum they were fitted for, right or wrong, and no third camera can refuse it
-            lone = ("only two cameras came out, whose geometry and offset would both come from the same "
-                    "track pairs with no third camera to check them")
-            reasons = reasons | dict.fromkeys(cams, f"camera could not be registered: {lone}")
-            why += f"; {lone}"
-            cams = {}
-        use = len(cams) >= 2
-        if use and len(est.cameras) >= 2:
-            # both: keep the one whose cameras explain the moving points better, on the pairs of
-            # the background model's static cameras (tracks undistorted with its lens)
-            coarse = {n: d["coarse_offset_s"] for n, d in details.items() if "coarse_offset_s" in d} | {ref: 0.0}
-            sfm_static = {n: c.track for n, c in est.cameras.items() if n in static}
-            sfm_px, n_sfm = epipolar_fit_px(sfm_static, infos, {n: undistort_with_colmap(est.cameras[n], xy[n])
-                                                                  for n in sfm_static}, pairs, coarse)
-            fb_px, n_fb = epipolar_fit_px({n: c for n, c in cams.items() if n in sfm_static}, infos, xy, pairs, coarse)
-            use = (len(cams) >= len(est.cameras) or from_tracks) and n_fb >= n_sfm and fb_px < sfm_px
-            if n_sfm == 0:  # e.g. one static camera and a moving one: nothing to compare on
-                why += (f"; no pair of its {len(sfm_static)} static camera(s) has enough aligned track pairs "
-                        f"to compare it with the moving points' cameras on, so it is kept")
-            else:
-                why += (f"; on the moving points its cameras leave a median epipolar distance of {sfm_px:.1f} px, "
-                        f"the moving points' own cameras {fb_px:.1f} px")
-        fallback = _moving_points_record(ref, details, why, bool(use))
-        log.warning("%s; cameras from the moving points: %d (%s)", why, len(cams), "used" if use else "not used")
-        if use:
-            # the offsets the cameras were fitted at, relative to the reference (check_fitted_offsets)
-            fallback = dataclasses.replace(fallback, fitted_offsets_s={ref: 0.0} | {
-                n: details[n]["coarse_offset_s"] for n in cams if n != ref})
-            for n, reason in reasons.items():
-                log.warning("%s: %s", n, reason)
-            # pinhole cameras: their points are not undistorted, and there is no lens
-            return CameraSet(cams, {n: Tracks(vids[n].xy_full, vids[n].instance) for n in cams}, None, None, {},
-                             dict(reasons), "estimated from moving points (two-view geometry)",
-                             dataclasses.replace(sfm, lens={}, fallback=fallback))
-        sfm = dataclasses.replace(sfm, fallback=fallback)
-        if len(est.cameras) < 2:  # neither worked: say why for both
-            est = dataclasses.replace(est, unregistered={
-                n: (f"{sfm_why}; {FROM_MOVING_POINTS}{reasons[n].removeprefix('camera could not be registered: ')}"
-                    if n in reasons else sfm_why) for n, sfm_why in est.unregistered.items()})
-    for n, why in est.unregistered.items():
-        log.warning("%s: %s", n, why)
-    cameras, tracks, undistort = {}, {}, {}
-    for n, c in est.cameras.items():
-        cameras[n] = c.track
-        undistort[n] = functools.partial(undistort_with_colmap, c)
-        tracks[n] = Tracks(undistort[n](vids[n].xy_full), vids[n].instance)
-    return CameraSet(cameras, tracks, est.points_world, est.colors, undistort, dict(est.unregistered), "estimated", sfm)
-
-
-def _moving_points_record(ref: str, details: dict, why: str, used: bool) -> MovingPointsCameras:
-    """The record of the moving points' cameras from cameras_from_tracks' details."""
-    per = {n: MovingPointsPair(**d) for n, d in details.items() if n not in ("joint_offsets", "joint_fit")}
-    return MovingPointsCameras(why, used, ref, per, from_json(JointCoarseOffsets | None, details.get("joint_offsets")),
-                               from_json(JointFit | None, details.get("joint_fit")))

@@ -19,11 +19,13 @@ import numpy as np
 from ...cue_stats import PeopleRecord, PeoplePairRecord
 from ...geometry.offsets import OffsetGrid
 from ...memo import NO_MEMO, Memo
-from ...types import PeopleCue, TrackPairs, Tracks
+from ...people_types import PeopleCue
+from ...types import TrackPairs, Tracks
 from ..config import CueConfig
 from ..records import Note, say_cameras
 from ..rules import ALL
-from .choice import CameraSet, vote_on_cameras
+from .camera_set import CameraSet
+from .choice import vote_on_cameras
 
 SOURCE = "estimated from people (their landmarks as correspondences)"
 

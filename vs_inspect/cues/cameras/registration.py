@@ -28,7 +28,7 @@ import cv2
 import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
 from tqdm import tqdm
 
-from ...cue_stats import FrameRegistration as FrameRegistrationRecord
+from ...camera_stats import FrameRegistration as FrameRegistrationRecord
 from ...geometry.camera_model import scale_points
 from ...geometry.timing import frame_brackets, interpolate_poses
 from ...signals import import_pycolmap

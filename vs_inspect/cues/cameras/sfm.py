@@ -20,7 +20,7 @@ from pathlib import Path
 import cv2
 import numpy as np  # noqa: I001  (numpy before pycolmap, see ENVIRONMENT.md)
 
-from ...cue_stats import FrameRegistration
+from ...camera_stats import FrameRegistration
 from ...geometry.camera_model import Lens, scale_intrinsics
 from ...geometry.epipolar import camera_centers
 from ... import signals

@@ -11,21 +11,22 @@ The pairing's decisions come back as notes in words (the Stage 0 controller repo
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 from dataclasses import dataclass, field
 
-import numpy as np
 from tqdm import tqdm
 
-from ...cue_stats import FittedOffsetCheck, FittedOffsetPair, JointVoteRecord, PairVoteSummary
+from ...camera_stats import FittedOffsetCheck, FittedOffsetPair
+from ...cue_stats import JointVoteRecord, PairVoteSummary
 from ...geometry.offsets import OffsetGrid
-from ...types import TrackPairs, VideoInfo
 from ...memo import NO_MEMO, Memo
 from ...progress import stage
 from ..config import CueConfig
 from ..rules import ALL
 from ..records import Note, say
+from .joint_checks import _check_in_three_views, _confirm_by_transfer
+from .kept_pairs import (_JointChecks, _add_joint_pairs, _add_transfer_pairs, _consistent_descriptor_pairs,
+                         _merge_pairs)
 
 # The vote's decisions are logged at INFO (`-v`): the recording and result.json hold them in full,
 # and the console ends with one plain reason per unresolved video.
@@ -72,7 +73,54 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     accepts the pair only if its descriptor pairs alone give the same minimum); with a moving
     camera, none (GeometricPairConfig.unchecked_moving).
     """
-    from .joint import consistent_peaks, joint_offsets
+    from .joint import joint_offsets
+
+    found = _vote_on_every_pair(pairs, cameras, tracks, vids, progress, grid, memo)
+    peaks_s = {k: tuple(gs.peaks_s) for k, (_, gs) in found.items()}
+    votes = {k: gs for k, (_, gs) in found.items()}  # each pair's vote evidence
+    notes: list[Note] = []
+    coarsest = max((vids[n].info.frame_interval_s for k in found for n in k), default=0.0)
+    # each of a triangle's three peaks is located to about ±1 frame (its support window), so
+    # right peaks close within about 3 frames, while wrong ones miss by far more
+    with stage("geometric pairs: every camera's offset chosen at once", progress and cfg.geometric.joint):
+        joint = joint_offsets(votes, 3.0 * coarsest) if cfg.geometric.joint else None
+    third = "moving_pair_third" in rules
+    sure, three_view, dissent, dissent_short, overruled = _sure_cameras(
+        found, votes, joint, cameras, tracks, vids, cfg, notes, coarsest, estimated, other_peaks, other, progress,
+        grid, third, rules, memo)
+    refused = bool(dissent) or any(not chk.passed for chk in three_view.values())
+    # a camera refused (by its pairs or in three views) keeps the joint path (no geometric pair
+    # for it), instead of the triangle fallback below choosing among the same cameras' vote peaks
+    if sum(sure.values()) >= 2 or refused or ("triangle_fallback" not in rules and joint is not None):
+        checks, traj = {}, None
+        if "transfer" in rules and cfg.geometric.transfer and not all(sure.values()) and sum(sure.values()) >= 2:
+            # not of a camera its own pairs contradict: point transfer projects into the same
+            # camera, whose biased geometry it can then confirm at a wrong offset
+            with stage("geometric pairs: unsure cameras checked by point transfer", progress):
+                checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, notes,
+                                                    frozenset(dissent), grid, third, memo)
+        sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
+        said = _JointChecks({c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
+                            {c: chk.summary() for c, chk in three_view.items()}, dissent, dissent_short, overruled)
+        out, used, summaries, record, chosen = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids,
+                                                                cfg, notes, said, rules)
+        out, transfer_new = _add_transfer_pairs(out, checks, traj, list(vids), notes)
+        return GeometricPairing(out, used, peaks_s, "joint", summaries, transfer_new, record, votes, chosen,
+                                checks, three_view, tuple(notes))
+    if joint is not None:
+        # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
+        # decides (and refuses when the triangles do not close)
+        say(notes, "joint vote sure of fewer than two cameras (margins "
+            + ", ".join(f"{n} {m:.1f}" for n, m in joint.margin.items())
+            + "): geometric peaks chosen by triangle closure")
+    return _triangle_pairing(pairs, found, joint, cameras, tracks, vids, cfg, notes, coarsest, peaks_s, votes,
+                             rules)
+
+
+def _vote_on_every_pair(pairs: dict, cameras: dict, tracks: dict, vids: dict, progress: bool,
+                        grid: OffsetGrid, memo: Memo) -> dict:
+    """{(a, b): (TrackPairs, GeometricPairStats)}: geometric_pairs' vote on every pair of cameras
+    in pairs."""
     from .votes import VOTE, geometric_pairs
 
     # every pair of cameras: a moving one with its per-frame poses (two moving ones: the
@@ -82,17 +130,22 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     for a, b in tqdm(todo, desc="geometric pairs", unit="pair", disable=not progress, leave=False):
         found[(a, b)] = memo.call("votes", geometric_pairs, a, b, vids[a].info, vids[b].info, cameras[a],
                                   cameras[b], tracks[a].xy, tracks[b].xy, VOTE, grid)
-    peaks_s = {k: tuple(gs.peaks_s) for k, (_, gs) in found.items()}
-    votes = {k: gs for k, (_, gs) in found.items()}  # each pair's vote evidence
-    notes: list[Note] = []
-    coarsest = max((vids[n].info.frame_interval_s for k in found for n in k), default=0.0)
-    # each of a triangle's three peaks is located to about ±1 frame (its support window), so
-    # right peaks close within about 3 frames, while wrong ones miss by far more
-    with stage("geometric pairs: every camera's offset chosen at once", progress and cfg.geometric.joint):
-        joint = joint_offsets(votes, 3.0 * coarsest) if cfg.geometric.joint else None
+    return found
+
+
+def _sure_cameras(found: dict, votes: dict, joint, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
+                  notes: list[Note], coarsest: float, estimated: bool, other_peaks: dict | None, other: str,
+                  progress: bool, grid: OffsetGrid, third: bool, rules: frozenset[str], memo: Memo
+                  ) -> tuple[dict, dict, dict, dict, dict]:
+    """(sure, three_view, dissent, dissent_short, overruled): whether the joint vote is sure of each
+    camera ({camera: bool}: its margin is wide enough), then unsure of those that fail a check, in
+    turn: the three-view check of estimated cameras (three_view: {camera: transfer.ThreeViewCheck}),
+    a rival offset in three views, a pair of its own with few votes at the joint offset, another
+    camera model's vote peaks. dissent: {camera: why it was made unsure}, dissent_short: the same in
+    a few words, overruled: {camera: why another model's dispute of it was overruled}. Each
+    decision is said in notes."""
     sure = {} if joint is None else {n: m >= cfg.geometric.joint_min_margin or "margin" not in rules
                                      for n, m in joint.margin.items()}
-    third = "moving_pair_third" in rules
     three_view = {}
     # the check is of cameras Stage 0 estimated: a calibration's are given (and a right calibrated
     # camera can follow as few trajectories as a wrong estimated one)
@@ -136,31 +189,20 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
             log.info(msg)
         _not_sure(disputed, sure, dissent, notes, dissent_short,
                   {n: f"{other}'s vote peaks disagree" for n in disputed})
-    refused = bool(dissent) or any(not chk.passed for chk in three_view.values())
-    # a camera refused (by its pairs or in three views) keeps the joint path (no geometric pair
-    # for it), instead of the triangle fallback below choosing among the same cameras' vote peaks
-    if sum(sure.values()) >= 2 or refused or ("triangle_fallback" not in rules and joint is not None):
-        checks, traj = {}, None
-        if "transfer" in rules and cfg.geometric.transfer and not all(sure.values()) and sum(sure.values()) >= 2:
-            # not of a camera its own pairs contradict: point transfer projects into the same
-            # camera, whose biased geometry it can then confirm at a wrong offset
-            with stage("geometric pairs: unsure cameras checked by point transfer", progress):
-                checks, traj = _confirm_by_transfer(found, joint, sure, cameras, tracks, vids, cfg, notes,
-                                                    frozenset(dissent), grid, third, memo)
-        sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
-        said = _JointChecks({c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
-                            {c: chk.summary() for c, chk in three_view.items()}, dissent, dissent_short, overruled)
-        out, used, summaries, record, chosen = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids,
-                                                                cfg, notes, said, rules)
-        out, transfer_new = _add_transfer_pairs(out, checks, traj, list(vids), notes)
-        return GeometricPairing(out, used, peaks_s, "joint", summaries, transfer_new, record, votes, chosen,
-                                checks, three_view, tuple(notes))
-    if joint is not None:
-        # sure of fewer than two cameras, the joint vote has chosen nothing: the triangle rule
-        # decides (and refuses when the triangles do not close)
-        say(notes, "joint vote sure of fewer than two cameras (margins "
-            + ", ".join(f"{n} {m:.1f}" for n, m in joint.margin.items())
-            + "): geometric peaks chosen by triangle closure")
+    return sure, three_view, dissent, dissent_short, overruled
+
+
+def _triangle_pairing(pairs: dict, found: dict, joint, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
+                      notes: list[Note], coarsest: float, peaks_s: dict, votes: dict,
+                      rules: frozenset[str]) -> GeometricPairing:
+    """The GeometricPairing when the joint vote decided nothing (the triangle rule): each pair gets
+    the supporters of its vote peak that closes every triangle (consistent_peaks); when the peaks
+    do not close the triangles, or three cameras give only one, no pair gets any and the descriptor
+    pairs are kept only where consistent at the joint vote's offsets (when there is a joint vote);
+    with no triangle, a pair gets every kept peak's supporters, marked unchecked, unless one of its
+    cameras moves."""
+    from .joint import consistent_peaks
+
     chosen, status = consistent_peaks({k: (gs.peaks_s, gs.peak_votes) for k, (_, gs) in found.items()},
                                       3.0 * coarsest)
     # the descriptor pairs are unchecked too then: alone they can put a camera a wrong offset that
@@ -274,240 +316,3 @@ def check_fitted_offsets(fitted: dict[str, float], voted: dict, vids: dict
                        "confirmed the offset it was fitted at") for n in fitted if n not in agreeing}
     verdict = "contradicted" if contradicted else "confirmed" if not refused else "partly unconfirmed"
     return refused, FittedOffsetCheck(verdict, round(tol_s, 4), rows, tuple(sorted(refused)))
-
-
-def _transfer_source(a: str, b: str, sure: dict[str, bool], cameras: dict, third: bool = True) -> bool:
-    """Whether pair (a, b)'s joint Δ may be triangulated for point transfer: both cameras sure,
-    and when both move, a third camera sure too (their per-frame geometry lets wrong tracks fit
-    one wrong offset)."""
-    if not (sure.get(a) and sure.get(b)):
-        return False
-    return not (third and cameras[a].is_moving and cameras[b].is_moving) or sum(sure.values()) >= 3
-
-
-def _sure_pairs(found: dict, joint, sure: dict[str, bool], cameras: dict, third: bool = True) -> dict:
-    """The supporters of the joint Δ of every pair that point transfer may triangulate
-    (_transfer_source)."""
-    from .votes import supporters
-
-    out = {}
-    for (a, b), (_, gs) in found.items():
-        if not _transfer_source(a, b, sure, cameras, third):
-            continue
-        index = supporters(gs, joint.offsets_s[b] - joint.offsets_s[a])
-        out[(a, b)] = TrackPairs(a, b, index, np.ones(len(index)))
-    return out
-
-
-def _transfer_radius_px(info: VideoInfo, g) -> float:
-    """How near a projected point a track of the camera must be (GeometricPairConfig.transfer_radius_diag)."""
-    return max(3.0, g.transfer_radius_diag * float(np.hypot(info.width, info.height)))
-
-
-def _check_in_three_views(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
-                          vids: dict, cfg: CueConfig, notes: list[Note], grid: OffsetGrid = OffsetGrid(),
-                          third: bool = True, memo: Memo = NO_MEMO) -> dict:
-    """{camera: transfer.ThreeViewCheck} for every sure camera: the other sure cameras' track
-    pairs triangulated at their joint offsets and projected into it at its own. Wrong cameras can
-    make the joint vote sure of wrong offsets, consistent in every triangle, since a line through
-    a wrong epipole still meets some track; a point in a third view rarely does."""
-    from .transfer import check_in_three_views, triangulate_pairs
-
-    g = cfg.geometric
-    infos = {n: v.info for n, v in vids.items()}
-    xy = {n: t.xy for n, t in tracks.items()}
-    checks = {}
-    for c in sorted(n for n, ok in sure.items() if ok):
-        others = {n: ok and n != c for n, ok in sure.items()}
-        traj = memo.call("triangulated", triangulate_pairs, infos, cameras, xy,
-                         _sure_pairs(found, joint, others, cameras, third),
-                         {n: joint.offsets_s[n] for n, ok in others.items() if ok})
-        chk = memo.call("three_view", check_in_three_views, c, joint.offsets_s[c], traj, infos[c], cameras[c], xy[c],
-                        _transfer_radius_px(infos[c], g), g.transfer_min_hits,
-                        g.three_view_min_supporters, g.three_view_min_share_of_best, grid, joint.origin)
-        checks[c] = chk
-        msg = f"{c}: {chk.reason}"
-        say(notes, msg, camera=c, passed=int(chk.passed), supporters=chk.supporters,
-            best_supporters=chk.best_supporters, trajectories=chk.trajectories)
-        log.info(msg)
-    return checks
-
-
-def _confirm_by_transfer(found: dict, joint, sure: dict[str, bool], cameras: dict, tracks: dict,
-                         vids: dict, cfg: CueConfig, notes: list[Note], skip: frozenset[str] = frozenset(),
-                         grid: OffsetGrid = OffsetGrid(), third: bool = True, memo: Memo = NO_MEMO):
-    """({camera: transfer.TransferCheck}, the transfer.Trajectories projected): a check of every
-    camera the joint vote is unsure of (but those of skip), the sure cameras' track pairs
-    triangulated at their joint offsets and projected into it over its candidate offsets
-    (cues/pairing/transfer.py)."""
-    from .transfer import candidate_offsets, confirm_offset, transfer_landscape, triangulate_pairs
-
-    g = cfg.geometric
-    sure_offsets = {n: joint.offsets_s[n] for n, ok in sure.items() if ok}
-    traj = memo.call("triangulated", triangulate_pairs, {n: v.info for n, v in vids.items()}, cameras,
-                     {n: t.xy for n, t in tracks.items()}, _sure_pairs(found, joint, sure, cameras, third), sure_offsets)
-    checks = {}
-    for c in sorted(n for n, ok in sure.items() if not ok and n not in skip):
-        info = vids[c].info
-        offsets = candidate_offsets(traj, info, 0.5 * info.frame_interval_s, grid, joint.origin)
-        land = memo.call("transfer", transfer_landscape, traj, info, cameras[c], tracks[c].xy, offsets,
-                         _transfer_radius_px(info, g), g.transfer_min_hits,
-                         allowed=grid.within_window(joint.origin, c, offsets))
-        chk = confirm_offset(c, joint.offsets_s[c], land, info.frame_interval_s,
-                             g.transfer_agree_frames, g.transfer_min_z, g.transfer_min_supporters)
-        checks[c] = chk
-        msg = f"{c}: {chk.reason}"
-        say(notes, msg, camera=c, confirmed=int(chk.confirmed), z=round(land.z, 2),
-            trajectories=traj.num_trajectories)
-        log.info(msg)
-    return checks, traj
-
-
-def _add_transfer_pairs(pairs: dict, checks: dict, traj, order: list[str], notes: list[Note]) -> tuple[dict, dict]:
-    """(pairs plus, for every camera that point transfer confirmed, its tracks that follow a
-    trajectory (of traj, transfer.Trajectories) paired with both tracks the trajectory was
-    triangulated from, {(a, b): track pairs added}); order: the videos' order (a pair's key
-    names the earlier one first)."""
-    out, added = dict(pairs), {}
-    for c, chk in checks.items():
-        if not chk.confirmed:
-            continue
-        new: dict[tuple[str, str], list] = {}
-        for t, j in chk.landscape.matches.tolist():
-            pair_no, ta, tb, _ = traj.source[t].tolist()
-            a, b = traj.pairs[pair_no]
-            for other, track in ((a, ta), (b, tb)):
-                key = (other, c) if order.index(other) < order.index(c) else (c, other)
-                new.setdefault(key, []).append((track, j) if key[0] == other else (j, track))
-        for key, rows in new.items():
-            if key not in out:
-                continue
-            # no chosen_at_offset_s: the new rows follow trajectories at the transfer's offset
-            out[key], n_new = _merge_pairs(out[key], np.unique(np.array(rows, np.int64), axis=0))
-            added[key] = int(n_new)
-            say(notes, f"{key[0]}__{key[1]}: {n_new} track pairs from point transfer",
-                pair=f"{key[0]}__{key[1]}", transfer_new=int(n_new))
-    return out, added
-
-
-def _consistent_descriptor_pairs(desc: TrackPairs, delta_s: float, cameras: dict, tracks: dict,
-                                 vids: dict, cfg: CueConfig) -> TrackPairs:
-    """The descriptor pairs of (desc.a, desc.b) that are epipolar-consistent at Δ = delta_s
-    (geometric_pairs.consistent_at with the geometric pairs' tolerances)."""
-    from .votes import VOTE, consistent_at
-
-    if not len(desc.index):
-        return desc
-    a, b, g = desc.a, desc.b, VOTE
-    tau = max(2.0, g.tau_diag * float(np.hypot(vids[b].info.width, vids[b].info.height)))
-    ok = consistent_at(vids[a].info, vids[b].info, cameras[a], cameras[b], tracks[a].xy,
-                       tracks[b].xy, desc.index, delta_s, tau, g.min_inlier_share, g.min_frames)
-    return TrackPairs(a, b, desc.index[ok], None if desc.weight is None else desc.weight[ok])
-
-
-def _merge_pairs(tp: TrackPairs, index: np.ndarray, unchecked: bool = False,
-                 chosen_at_offset_s: float | None = None) -> tuple[TrackPairs, int]:
-    """Descriptor pairs tp plus the geometric pairs index (P,2) not already in it: (pairs, new).
-    unchecked: the new rows are marked TrackPairs.unchecked (no triangle checked their vote peak);
-    chosen_at_offset_s: the Δ_ab at which every row of both was kept (TrackPairs), if one was."""
-    w_desc = tp.weight if tp.weight is not None else np.ones(len(tp.index))
-    have = {tuple(x) for x in tp.index.tolist()}
-    new = np.array([x for x in index.tolist() if tuple(x) not in have], np.int64).reshape(-1, 2)
-    mark = None
-    if unchecked and len(new):
-        mark = np.concatenate([np.zeros(len(tp.index), bool), np.ones(len(new), bool)])
-    return TrackPairs(tp.a, tp.b, np.concatenate([tp.index, new]),
-                      np.concatenate([w_desc, np.ones(len(new))]), mark, chosen_at_offset_s), len(new)
-
-
-@dataclass(frozen=True)
-class _JointChecks:
-    """What the checks after the joint vote said of its cameras, kept in result.json."""
-
-    transfer: dict = dataclasses.field(default_factory=dict)  # camera -> TransferSummary
-    three_view: dict = dataclasses.field(default_factory=dict)  # camera -> ThreeViewSummary
-    dissent: dict = dataclasses.field(default_factory=dict)  # camera -> why its pairs (or the other model) contradict it
-    dissent_short: dict = dataclasses.field(default_factory=dict)  # camera -> that in a few words (a null's headline)
-    overruled: dict = dataclasses.field(default_factory=dict)  # camera -> why the other model's dispute was overruled
-
-
-def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cameras: dict,
-                     tracks: dict, vids: dict, cfg: CueConfig, notes: list[Note],
-                     said: _JointChecks = _JointChecks(), rules: frozenset[str] = ALL
-                     ) -> tuple[dict, dict, dict, JointVoteRecord, dict]:
-    """(pairs, {(a, b): the joint Δ_ab whose supporters were added}, {(a, b): PairVoteSummary},
-    the JointVoteRecord, {(a, b): that Δ_ab or None for every pair}): the supporters of the jointly chosen offsets
-    (geometric_pairs.joint_offsets) for every pair whose Δ is trusted (_transfer_source: both
-    cameras' offsets won by at least joint_min_margin, or point transfer confirmed them, and a
-    third camera sure too when both move; sure: camera -> whether it is, said: what the checks after
-    the vote said, for result.json); nothing for the others. A descriptor pair is kept only if it
-    is epipolar-consistent at the joint Δ (with joint_filter_descriptor): the descriptor pairs are
-    mostly wrong on small moving objects (BENCHMARKS.md), and the joint Δ is the best evidence
-    there is of the moment they share."""
-    from .votes import supporters, votes_at
-
-    # the pairs whose joint Δ is trusted, and that Δ: the one decision everything below reads
-    used = {(a, b): joint.offsets_s[b] - joint.offsets_s[a] for a, b in found
-            if _transfer_source(a, b, sure, cameras, "moving_pair_third" in rules)}
-    record = JointVoteRecord(joint.origin, {n: round(o, 4) for n, o in joint.offsets_s.items()},
-                             round(joint.score, 2), {n: round(m, 2) for n, m in joint.margin.items()},
-                             tuple(sorted(n for n, ok in sure.items() if ok)), tuple(sorted({n for k in used for n in k})),
-                             # an empty check is left out; its summaries stay typed (asdict would not)
-                             **{f.name: dict(getattr(said, f.name)) for f in dataclasses.fields(said)
-                                if getattr(said, f.name)})
-    three_view, dissent, transfer = said.three_view, said.dissent, said.transfer
-    failed = sorted(n for n, chk in three_view.items() if not chk.passed and not sure[n])
-    if failed:
-        seen = ", ".join(f"{n} {three_view[n].supporters}" for n in failed)
-        msg = (f"geometric track pairs not used for {', '.join(failed)}: the joint vote was sure of "
-               f"their offsets, but the points the other sure cameras triangulate are not seen there "
-               f"(supporters {seen}; a camera needs {cfg.geometric.three_view_min_supporters}, and "
-               f"{cfg.geometric.three_view_min_share_of_best:.2g} of those at its best offset)")
-        say(notes, msg)
-        log.info(msg)
-    weak = sorted(n for n, ok in sure.items() if not ok and n not in failed and n not in dissent)
-    if weak:
-        msg = (f"geometric track pairs not used for {', '.join(weak)}: the joint vote prefers their "
-               f"offsets by less than {cfg.geometric.joint_min_margin:g} (margins "
-               f"{', '.join(f'{n} {joint.margin[n]:.1f}' for n in weak)})"
-               + ("; point transfer did not confirm them" if transfer else ""))
-        say(notes, msg)
-        log.info(msg)
-    # two moving cameras' Δ only when a third camera is sure too: their per-frame geometry lets
-    # wrong tracks fit one wrong offset
-    unconfirmed = {(a, b) for (a, b) in found if sure.get(a) and sure.get(b) and (a, b) not in used}
-    if unconfirmed:
-        names = ", ".join(sorted(f"{a}__{b}" for a, b in unconfirmed))
-        msg = (f"geometric track pairs not used for {names}: both cameras move and the joint vote is "
-               f"sure of {sum(sure.values())} camera(s) only, so no third camera confirms their Δ")
-        say(notes, msg)
-        log.info(msg)
-    out, summaries, chosen = dict(pairs), {}, {}
-    for (a, b), (_, gs) in found.items():
-        delta = joint.offsets_s[b] - joint.offsets_s[a]
-        both = (a, b) in used
-        index = supporters(gs, delta) if both else np.zeros((0, 2), np.int64)
-        chosen[(a, b)] = delta if both else None
-        desc = pairs[(a, b)]
-        n_desc = len(desc.index)
-        # an unsure camera's descriptor pairs are filtered too: at a wrong joint Δ few survive
-        # (the pair is then refused for too few pairs) instead of a wrong minimum being accepted
-        if cfg.geometric.joint_filter_descriptor and "descriptor_filter" in rules:
-            desc = _consistent_descriptor_pairs(desc, delta, cameras, tracks, vids, cfg)
-        every = (cfg.geometric.joint_filter_descriptor and "descriptor_filter" in rules) or not n_desc  # every row kept at delta
-        out[(a, b)], n_new = _merge_pairs(desc, index, chosen_at_offset_s=delta if every else None)
-        votes = votes_at(gs, delta)
-        summaries[(a, b)] = PairVoteSummary(
-            gs.candidates, gs.informative, int(len(index)), int(n_new), tuple(round(p, 4) for p in gs.peaks_s),
-            tuple(gs.peak_votes), geometric_joint_delta_s=round(delta, 4), geometric_joint_votes=votes,
-            geometric_joint_margin=(round(joint.margin[a], 2), round(joint.margin[b], 2)),
-            descriptor_pairs_kept=int(len(desc.index)), descriptor_pairs_before=int(n_desc))
-        say(notes, f"{a}__{b}: {len(index)} track pairs from epipolar consistency "
-                   f"(joint vote over all camera pairs: Δ {delta:+.3f} s)",
-            pair=f"{a}__{b}", votes=votes, informative=gs.informative,
-            geometric_pairs=int(len(index)), descriptor_pairs_kept=int(len(desc.index)),
-            descriptor_pairs_before=int(n_desc), margin_a=round(joint.margin[a], 2),
-            margin_b=round(joint.margin[b], 2))
-        log.info("%s__%s: %d geometric track pairs (%d new) at the joint Δ %+.3f s", a, b,
-                 len(index), n_new, delta)
-    return out, used, summaries, record, chosen
