@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import pytest
 
 from vs_inspect.memo import NO_MEMO, Memo, digest
 
@@ -66,3 +67,24 @@ def test_a_kept_value_is_computed_once(tmp_path):
     assert not list(tmp_path.glob(".partial-*"))  # written whole or not at all
     NO_MEMO.call("f", f, 2.0)
     assert calls == [2.0, 3.0, 2.0] and NO_MEMO.folder is None  # nothing kept
+
+
+def test_a_value_kept_by_another_version_is_computed_again(tmp_path):
+    """A kept value naming a class this version no longer has (renamed or moved) is not an error:
+    it is computed again and kept in its place."""
+    import pickle
+    import sys
+    import types
+
+    gone = types.ModuleType("vs_inspect_moved_away")
+    gone.Gone = type("Gone", (), {"__module__": gone.__name__})
+    sys.modules[gone.__name__] = gone
+    try:
+        (tmp_path / "k.pkl").write_bytes(pickle.dumps(gone.Gone()))
+    finally:
+        del sys.modules[gone.__name__]
+    with pytest.raises(ImportError):
+        pickle.loads((tmp_path / "k.pkl").read_bytes())
+    memo = Memo(tmp_path)
+    assert memo.get("k", lambda: 7) == 7 and memo.misses == 1
+    assert Memo(tmp_path).get("k", lambda: 8) == 7  # kept in its place

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import logging
 import os
 import pickle
 import tempfile
@@ -18,6 +19,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 T = TypeVar("T")
+log = logging.getLogger(__name__)
 
 
 def digest(*parts: Any) -> str:
@@ -87,9 +89,14 @@ class Memo:
             return compute()
         path = self.folder / f"{key}.pkl"
         if path.exists():
-            self.hits += 1
-            with path.open("rb") as f:
-                return pickle.load(f)
+            try:
+                with path.open("rb") as f:
+                    value = pickle.load(f)
+                self.hits += 1
+                return value
+            except (pickle.UnpicklingError, EOFError, AttributeError, ImportError) as exc:
+                # kept by another version of the package (a record since renamed or moved): computed again
+                log.info("%s could not be read (%s): computed again", path, exc)
         self.misses += 1
         value = compute()
         path.parent.mkdir(parents=True, exist_ok=True)

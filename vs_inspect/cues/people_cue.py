@@ -133,7 +133,9 @@ def find_people_cameras(videos: Sequence, grid: OffsetGrid = OffsetGrid(), confi
     for v in videos:
         n = v.info.name
         # found now (kept for the next run unless it failed), or kept by an earlier run
-        out = done[n] if isinstance(done.get(n), TaskFailed) else memo.get(keys[n], lambda: done[n])
+        # (a kept result another version wrote, unreadable now, is found again here)
+        out = done[n] if isinstance(done.get(n), TaskFailed) else \
+            memo.get(keys[n], lambda: done[n] if n in done else _people_task(config.video, v))
         if isinstance(out, TaskFailed):
             failed[n] = f"finding its people failed: {out.reason}"
             continue
