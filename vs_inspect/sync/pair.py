@@ -43,11 +43,7 @@ def pair_landscape(bundle: CueBundle, a: str, b: str, cfg: SyncConfig,
         decision_cfg = dataclasses.replace(cfg.decision, min_track_pairs=min(cfg.decision.min_track_pairs, 1))
     raw, pe, minima, decision, best, best_e, sigma = _decided_landscape(side[a], side[b], tp, cfg, decision_cfg,
                                                                         offsets, grid)
-    confirm = None
-    if decision.accepted and tp.unchecked is not None and tp.unchecked.any() and decision_cfg.enabled \
-            and decision_cfg.unchecked_agree_frames > 0:
-        decision, confirm = _confirm_without_unchecked(side[a], side[b], tp, cfg, decision_cfg, offsets, decision,
-                                                       best, grid)
+    decision, confirm = _check_stage0_choice(side[a], side[b], tp, cfg, decision_cfg, offsets, decision, best, grid)
     if len(tp.index) == 0 and not decision.accepted:
         decision = PairDecision(False, "no cross-view track pairs (no matched motion, or Stage 0 kept none)",
                                 0.0, 0.0, 0, 0, False)
@@ -119,8 +115,22 @@ def _decided_landscape(a: PairInput, b: PairInput, tp: TrackPairs, cfg: SyncConf
         decision = check_track_pairs_at_best(decision, seen, best, decision_cfg)
         frame_s = max(va.frame_interval_s, vb.frame_interval_s)
         decision = check_uncertainty(decision, sigma, best, frame_s, decision_cfg)
-        decision = check_chosen_offset(decision, best, tp.chosen_at_offset_s, frame_s, decision_cfg)
     return _Decided(raw, pe, minima, decision, best, best_e, sigma)
+
+
+def _check_stage0_choice(a: PairInput, b: PairInput, tp: TrackPairs, cfg: SyncConfig, decision_cfg,
+                         offsets: np.ndarray | None, decision: PairDecision, best: float,
+                         grid: OffsetGrid | None = None) -> tuple[PairDecision, _Decided | None]:
+    """(decision, the landscape of the track pairs found by appearance alone or None): the one
+    place where Stage 1 looks at what Stage 0 decided about a pair's track pairs. Its minimum
+    must lie near the Δ Stage 0 kept them at (TrackPairs.chosen_at_offset_s), and track pairs no
+    triangle checked (TrackPairs.unchecked) must be confirmed by the others alone."""
+    frame_s = max(a.video.frame_interval_s, b.video.frame_interval_s)
+    decision = check_chosen_offset(decision, best, tp.chosen_at_offset_s, frame_s, decision_cfg)
+    if decision.accepted and tp.unchecked is not None and tp.unchecked.any() and decision_cfg.enabled \
+            and decision_cfg.unchecked_agree_frames > 0:
+        return _confirm_without_unchecked(a, b, tp, cfg, decision_cfg, offsets, decision, best, grid)
+    return decision, None
 
 
 def _confirm_without_unchecked(a: PairInput, b: PairInput, tp: TrackPairs, cfg: SyncConfig, decision_cfg,
