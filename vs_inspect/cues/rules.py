@@ -10,7 +10,6 @@ from ..sync.config import SyncConfig
 
 RULES: dict[str, str] = {
     # the camera sets tried, in order, when the cameras are estimated
-    "xfeat_first": "SIFT's model gives way to XFeat's before any vote when XFeat registers more videos",
     "second_model": "XFeat's model is voted on when SIFT's cameras leave a video untrusted",
     "third_model": "ALIKED's model is voted on when the kept set still leaves a video untrusted",
     "weak_model_replaced": "the moving points' cameras replace a weak background model when they explain the points better",

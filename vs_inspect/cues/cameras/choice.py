@@ -142,7 +142,7 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
         kind = MOVING_POINTS if from_tracks else est.features + (OWN if as_built else "")
         return kind, out
 
-    with _kept_models(vids, cfg, frame_images, progress, rules, memo) as models:
+    with _kept_models(vids, cfg, frame_images, progress, memo) as models:
         with stage("cameras: estimating them from the videos (pycolmap)", progress):
             kept_est = models.first()
         first_est = kept_est
@@ -158,7 +158,7 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
 
 
 def _kept_models(vids: dict[str, VideoCues], cfg: CueConfig, frame_images: dict, progress: bool,
-                 rules: frozenset[str], memo: Memo) -> _KeptModels:
+                 memo: Memo) -> _KeptModels:
     """pycolmap's camera models of the videos (cameras.CameraModels, built only when needed), each
     estimate kept in memo under a digest of the camera settings, frames and features."""
     from .sfm import CameraModels
@@ -166,14 +166,12 @@ def _kept_models(vids: dict[str, VideoCues], cfg: CueConfig, frame_images: dict,
     frames = {n: v.sfm_frames for n, v in vids.items() if v.sfm_frames is not None}
     sizes = {n: (v.info.width, v.info.height) for n, v in vids.items()}
     features = {n: v.frame_features for n, v in vids.items() if v.frame_features is not None}
-    xfeat_first = "xfeat_first" in rules
-    key = digest(cfg.camera, frames, features, xfeat_first)
+    key = digest(cfg.camera, frames, features)
 
     def build():
         return CameraModels(frames, sizes, {n: v.info.num_frames for n, v in vids.items()},
                             {n: v.camera_motion == "moving" for n, v in vids.items()}, cfg.camera,
-                            frame_features=features, frame_images=frame_images, progress=progress,
-                            xfeat_first=xfeat_first)
+                            frame_features=features, frame_images=frame_images, progress=progress)
 
     return _KeptModels(build, memo, key)
 
