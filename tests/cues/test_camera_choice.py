@@ -55,19 +55,14 @@ def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), m
 
 def test_the_moving_points_cameras_are_fitted_once_for_every_model(monkeypatch):
     """They depend on the track pairs only, not on the model: with a memo, a second model's
-    _estimate reuses them (the same cameras and details), and the config's joint choice is passed."""
-    from vs_inspect.cues.config import CameraConfig
-
+    _estimate reuses them (the same cameras and details)."""
     memo, calls = {}, []
     first, stats1 = _moving_point_cameras(monkeypatch, ["a", "b", "c"], memo=memo, calls=calls)
     again, stats2 = _moving_point_cameras(monkeypatch, ["a", "b", "c"], memo=memo, calls=calls)
-    assert len(calls) == 1 and calls[0]["joint"] is True
+    assert len(calls) == 1
     assert set(again) == set(first) == {"a", "b", "c"}
     assert all(np.array_equal(again[n].cam_from_world, first[n].cam_from_world) for n in first)
     assert stats2["sfm"]["fallback"] == stats1["sfm"]["fallback"]
-    _moving_point_cameras(monkeypatch, ["a", "b", "c"], CueConfig(camera=CameraConfig(fallback_joint_offsets=False)),
-                          calls=calls)
-    assert len(calls) == 2 and calls[1]["joint"] is False
 
 
 def test_two_cameras_from_the_moving_points_alone_are_refused(monkeypatch):

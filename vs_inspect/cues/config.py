@@ -86,8 +86,6 @@ class CameraConfig:
     """Frames per moving camera of ALIKED's model, the last one auto tries; 0: never tried."""
     fallback_from_tracks: bool = True
     """Build static cameras from the moving points' two-view geometry when the background model places fewer than two or is weak; the cameras that fit the moving points better are used."""
-    fallback_joint_offsets: bool = True
-    """Cameras from the moving points, three or more static cameras: choose their coarse offsets together (all pairs' F inlier shares) instead of each one's best with the reference alone."""
     fallback_when_untrusted: bool = True
     """Also try the moving points' cameras when the background models placed the static cameras yet the joint vote trusted no video; they are kept only when it trusts a video on them."""
     weak_model_when_replaced: bool = True

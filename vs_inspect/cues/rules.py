@@ -13,7 +13,6 @@ RULES: dict[str, str] = {
     "second_model": "XFeat's model is voted on when SIFT's cameras leave a video untrusted",
     "third_model": "ALIKED's model is voted on when the kept set still leaves a video untrusted",
     "weak_model_replaced": "the moving points' cameras replace a weak background model when they explain the points better",
-    "joint_coarse_offsets": "the moving points' cameras are fitted at coarse offsets chosen with every pair at once",
     "two_point_cameras": "only two cameras from the moving points are refused (their F and offset share the same pairs)",
     "points_when_untrusted": "the moving points' cameras are voted on when no model's vote trusts any video",
     "weak_own": "a weak model's own cameras are voted on when the moving points' replaced them for nothing",

@@ -11,8 +11,7 @@ import dataclasses
 import functools
 import logging
 
-from ...camera_stats import (ImagePairMatches, JointCoarseOffsets, JointFit, MovingPointsCameras, MovingPointsPair,
-                             SfmRecord)
+from ...camera_stats import ImagePairMatches, JointFit, MovingPointsCameras, MovingPointsPair, SfmRecord
 from ...geometry.offsets import OffsetGrid
 from ...json_records import from_json
 from ...memo import NO_MEMO, Memo
@@ -59,8 +58,7 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict, est,
         ref = max(vids, key=lambda n: sum(len(p.index) for k, p in pairs.items() if n in k))
         infos = {n: v.info for n, v in vids.items()}
         xy = {n: v.xy_full for n, v in vids.items()}
-        cams, reasons, details = _fitted_moving_points(ref, infos, xy, vids, cfg, pairs, from_tracks, memo, grid,
-                                                       rules, kept)
+        cams, reasons, details = _fitted_moving_points(ref, infos, xy, vids, pairs, from_tracks, memo, grid, kept)
         if len(est.cameras) < 2:
             why = f"the background reconstruction registered {len(est.cameras)} camera(s)"
         elif weak:
@@ -99,9 +97,8 @@ def _sfm_record(est, cfg: CueConfig, static: list[str]) -> SfmRecord:
                      if est.features == "sift" and cfg.camera.asift_per_view and static else None)
 
 
-def _fitted_moving_points(ref: str, infos: dict, xy: dict, vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict,
-                          from_tracks: bool, memo: dict | None, grid: OffsetGrid, rules: frozenset[str],
-                          kept: Memo) -> tuple[dict, dict, dict]:
+def _fitted_moving_points(ref: str, infos: dict, xy: dict, vids: dict[str, VideoCues], pairs: dict,
+                          from_tracks: bool, memo: dict | None, grid: OffsetGrid, kept: Memo) -> tuple[dict, dict, dict]:
     """(cameras, {video: why it has none}, details) the moving points give relative to ref
     (cameras_from_tracks), fitted once per memo; from_tracks: a moving camera's reason says the
     moving points give static cameras only."""
@@ -112,8 +109,7 @@ def _fitted_moving_points(ref: str, infos: dict, xy: dict, vids: dict[str, Video
     else:
         cams, reasons, details = kept.call(
             "moving_points", cameras_from_tracks, ref, infos, xy, pairs,
-            {n: v.camera_motion == "moving" for n, v in vids.items()},
-            joint=cfg.camera.fallback_joint_offsets and "joint_coarse_offsets" in rules, grid=grid)
+            {n: v.camera_motion == "moving" for n, v in vids.items()}, grid=grid)
         if memo is not None:
             memo["from_tracks"] = copy.deepcopy((cams, reasons, details))
     if from_tracks:  # the background did reconstruct; these cameras are the static ones only
@@ -195,6 +191,5 @@ def _model_set(est, vids: dict[str, VideoCues], sfm: SfmRecord) -> CameraSet:
 
 def _moving_points_record(ref: str, details: dict, why: str, used: bool) -> MovingPointsCameras:
     """The record of the moving points' cameras from cameras_from_tracks' details."""
-    per = {n: MovingPointsPair(**d) for n, d in details.items() if n not in ("joint_offsets", "joint_fit")}
-    return MovingPointsCameras(why, used, ref, per, from_json(JointCoarseOffsets | None, details.get("joint_offsets")),
-                               from_json(JointFit | None, details.get("joint_fit")))
+    per = {n: MovingPointsPair(**d) for n, d in details.items() if n != "joint_fit"}
+    return MovingPointsCameras(why, used, ref, per, from_json(JointFit | None, details.get("joint_fit")))
