@@ -1,5 +1,5 @@
 """Stage 0's records of the cameras it estimated: the kept model with its matches and frame
-registrations, the moving points' own cameras and their checks, and every model tried, as
+registrations, the moving points' own cameras and their fit, and every model tried, as
 result.json's "cues" keeps them under "sfm" (written and read with json_records).
 """
 
@@ -61,23 +61,6 @@ class JointFit:
 
 
 @dataclass(frozen=True)
-class FittedOffsetPair:
-    fitted_s: float  # Δ_ab the cameras were fitted at
-    voted_s: float  # Δ_ab the epipolar vote chose
-    agrees: bool
-
-
-@dataclass(frozen=True)
-class FittedOffsetCheck:
-    """The moving points' cameras' fitted offsets against their own epipolar votes."""
-
-    verdict: str
-    tolerance_s: float | None = None
-    pairs: dict[str, FittedOffsetPair] | None = None
-    refused: tuple[str, ...] | None = None
-
-
-@dataclass(frozen=True)
 class MovingPointsCameras:
     """Whether the moving points' own cameras were fitted and used instead of a model's."""
 
@@ -86,8 +69,6 @@ class MovingPointsCameras:
     reference: str | None = None
     pairs: dict[str, MovingPointsPair] | None = None  # camera -> its geometry with the reference
     joint_fit: JointFit | None = None
-    fitted_offsets_s: dict[str, float] | None = None
-    check: FittedOffsetCheck | None = None
 
     def to_json(self) -> dict[str, Any]:
         """The diagnostics of the fit go under "pairs" with the cameras (result.json's shape)."""

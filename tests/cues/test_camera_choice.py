@@ -78,14 +78,13 @@ def test_two_cameras_from_the_moving_points_alone_are_refused(monkeypatch):
     # in a few words, both causes are kept (e.g. "only 2 track pairs" as the second)
     head = CueStats.from_json(stats).headline("a")
     assert head.startswith("no reconstruction: too few matches; from the moving points: only two cameras came out")
-    # three are used (their fitted offsets are then checked against their votes), and so are two
-    # when the config asks for them
+    # three are used, and so are two when the config asks for them
     cams, stats = _moving_point_cameras(monkeypatch, ["a", "b", "c"])
     assert set(cams) == {"a", "b", "c"} and stats["sfm"]["fallback"]["used"] is True
     from vs_inspect.cues.config import CameraConfig
     cams, stats = _moving_point_cameras(monkeypatch, ["a", "b"], CueConfig(
         camera=CameraConfig(fallback_unchecked_pair=True)))
-    assert set(cams) == {"a", "b"} and stats["sfm"]["fallback"]["fitted_offsets_s"] == {"a": 0.0, "b": 0.1}
+    assert set(cams) == {"a", "b"} and stats["sfm"]["fallback"]["pairs"]["b"]["coarse_offset_s"] == 0.1
 
 
 def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: bool = True,

@@ -270,46 +270,6 @@ def test_cameras_from_a_calibration_are_not_checked_in_three_views(monkeypatch):
 
 
 
-def _videos(names, fps: float = 30.0) -> dict:
-    from types import SimpleNamespace
-    return {n: SimpleNamespace(info=SimpleNamespace(frame_interval_s=1.0 / fps)) for n in names}
-
-
-def test_cameras_from_moving_points_whose_votes_agree_are_kept():
-    from vs_inspect.cues.pairing.pairing import check_fitted_offsets
-
-    # voted Δ within a frame of the fitted ones (caliscope's case)
-    voted = {("r", "u"): 0.52, ("r", "v"): -1.03, ("u", "v"): -1.5}
-    refused, check = check_fitted_offsets({"r": 0.0, "u": 0.5, "v": -1.0}, voted, _videos("ruv"))
-    assert refused == {} and check.verdict == "confirmed"
-    assert all(row.agrees for row in check.pairs.values())
-
-
-def test_cameras_from_moving_points_contradicted_by_their_votes_are_all_refused():
-    from vs_inspect.cues.pairing.pairing import check_fitted_offsets
-
-    # rendered seed 0 with SIFT: fitted at seconds away from where their own votes peak
-    voted = {("u", "r"): 0.458, ("u", "v"): -0.133, ("r", "v"): 0.345}
-    refused, check = check_fitted_offsets({"r": 0.0, "u": -2.717, "v": 1.79}, voted, _videos("ruv"))
-    assert set(refused) == {"r", "u", "v"}
-    assert "contradict" in refused["u"] and "u__r" in refused["u"]
-    assert check.verdict == "contradicted"
-    # one pair off by 4 frames (tolerance 3) is enough
-    voted = {("r", "u"): 0.5, ("r", "v"): -1.0, ("u", "v"): -1.5 + 4 / 30}
-    assert set(check_fitted_offsets({"r": 0.0, "u": 0.5, "v": -1.0}, voted, _videos("ruv"))[0]) == {"r", "u", "v"}
-
-
-def test_camera_from_moving_points_without_an_agreeing_vote_is_refused_alone():
-    from vs_inspect.cues.pairing.pairing import check_fitted_offsets
-
-    refused, check = check_fitted_offsets({"r": 0.0, "u": 0.5, "v": -1.0}, {("r", "u"): 0.5}, _videos("ruv"))
-    assert list(refused) == ["v"] and "confirmed" in refused["v"]
-    assert check.verdict == "partly unconfirmed"
-    # two cameras: nothing to check against, marked so
-    refused, check = check_fitted_offsets({"r": 0.0, "u": 0.5}, {("r", "u"): 3.0}, _videos("ru"))
-    assert refused == {} and check.verdict.startswith("unchecked")
-
-
 def _lone_pair(monkeypatch, moving_b: bool, **geometric):
     """Stage 0's geometric pairs of two cameras (no triangle; the joint vote sure of neither):
     a static, b static or moving, the vote with three peaks and 12 supporters each, 3 descriptor

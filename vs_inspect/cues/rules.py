@@ -16,7 +16,6 @@ RULES: dict[str, str] = {
     "two_point_cameras": "only two cameras from the moving points are refused (their F and offset share the same pairs)",
     "points_when_untrusted": "the moving points' cameras are voted on when no model's vote trusts any video",
     "weak_own": "a weak model's own cameras are voted on when the moving points' replaced them for nothing",
-    "fitted_offsets": "cameras from the moving points are refused when their own votes contradict their fit",
     # the joint vote on one camera set
     "margin": "a camera is sure only when its joint offset beats every other choice by a summed z-score of 5",
     "three_view": "estimated cameras: a sure camera must see the other sure cameras' triangulated points",

@@ -24,7 +24,7 @@ from ...memo import NO_MEMO, Memo, digest
 from ...progress import stage
 from ..records import Note, say_cameras
 from ..rules import ALL
-from ..pairing.pairing import add_geometric_pairs, check_fitted_offsets
+from ..pairing.pairing import add_geometric_pairs
 from ..video.extract import VideoCues
 from .camera_set import CameraSet
 from .model_or_points import _estimate
@@ -80,9 +80,8 @@ def vote_on_cameras(cams: CameraSet, vids: dict, all_pairs: dict, cfg: CueConfig
                     memo: Memo = NO_MEMO) -> CameraSet:
     """cams with its pairs: the descriptor pairs of its cameras plus the geometric ones
     (add_geometric_pairs; other_peaks, other: another camera model's vote peaks and its name;
-    grid: the limits of the offsets voted for), a camera fitted to the moving points at an offset
-    its votes refuse taken out."""
-    cameras, dropped, sfm = dict(cams.cameras), dict(cams.dropped), cams.sfm
+    grid: the limits of the offsets voted for)."""
+    cameras, dropped, sfm = cams.cameras, cams.dropped, cams.sfm
     notes: list[Note] = []
     for name, why in dropped.items():
         if name in vids:
@@ -101,21 +100,11 @@ def vote_on_cameras(cams: CameraSet, vids: dict, all_pairs: dict, cfg: CueConfig
                                       rules=rules, memo=memo)
         pairs, voted = pairing.pairs, pairing.voted
         notes += pairing.notes
-        fallback = sfm.fallback if sfm is not None else None
-        if fallback is not None and fallback.used and "fitted_offsets" in rules:
-            refused, check = check_fitted_offsets(fallback.fitted_offsets_s, voted, vids)
-            sfm = dataclasses.replace(sfm, fallback=dataclasses.replace(fallback, check=check))
-            for n, why in refused.items():
-                cameras.pop(n, None)
-                dropped[n] = why
-                say_cameras(notes, f"{n}: {why}")
-                log.warning("%s: %s", n, why)
-            pairs = {k: v for k, v in pairs.items() if k[0] in cameras and k[1] in cameras}
         used = frozenset(n for k in voted for n in k if n in cameras)
         peaks = {k: pairing.peaks_s.get(k, ()) for k in pairs}
         voting_s = time.perf_counter() - t0
-    return dataclasses.replace(cams, cameras=cameras, dropped=dropped, sfm=sfm, pairs=pairs, used=used, peaks=peaks,
-                               voting_s=voting_s, pairing=pairing, notes=tuple(notes))
+    return dataclasses.replace(cams, pairs=pairs, used=used, peaks=peaks, voting_s=voting_s, pairing=pairing,
+                               notes=tuple(notes))
 
 
 def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dict,

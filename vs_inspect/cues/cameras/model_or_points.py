@@ -72,7 +72,7 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict, est,
         fallback = _moving_points_record(ref, details, why, bool(use))
         log.warning("%s; cameras from the moving points: %d (%s)", why, len(cams), "used" if use else "not used")
         if use:
-            return _moving_points_set(cams, reasons, details, ref, fallback, sfm, vids)
+            return _moving_points_set(cams, reasons, fallback, sfm, vids)
         sfm = dataclasses.replace(sfm, fallback=fallback)
         if len(est.cameras) < 2:  # neither worked: say why for both
             est = dataclasses.replace(est, unregistered={
@@ -159,13 +159,9 @@ def _explain_better(est, cams: dict, details: dict, ref: str, static: list[str],
     return use, why
 
 
-def _moving_points_set(cams: dict, reasons: dict, details: dict, ref: str, fallback: MovingPointsCameras,
-                       sfm: SfmRecord, vids: dict[str, VideoCues]) -> CameraSet:
-    """The moving points' cameras as the videos' set (pinhole, tracks as seen), with the offsets
-    they were fitted at relative to ref in their record."""
-    # the offsets the cameras were fitted at, relative to the reference (check_fitted_offsets)
-    fallback = dataclasses.replace(fallback, fitted_offsets_s={ref: 0.0} | {
-        n: details[n]["coarse_offset_s"] for n in cams if n != ref})
+def _moving_points_set(cams: dict, reasons: dict, fallback: MovingPointsCameras, sfm: SfmRecord,
+                       vids: dict[str, VideoCues]) -> CameraSet:
+    """The moving points' cameras as the videos' set (pinhole, tracks as seen), fallback their record."""
     for n, reason in reasons.items():
         log.warning("%s: %s", n, reason)
     # pinhole cameras: their points are not undistorted, and there is no lens

@@ -4,9 +4,7 @@ For every pair of cameras, geometric_pairs votes for the offsets at which track 
 their epipolar lines. Here those votes become decisions: the offsets of all cameras chosen
 together (or the peaks that close every triangle), which cameras are sure of theirs (their own
 pairs, the three-view checks of cues/pairing/transfer.py and another camera model's peaks agree), the
-supporters of the trusted offsets added to the descriptor pairs; and which cameras fitted to
-the moving points their own votes refuse (check_fitted_offsets; camera_choice takes them out).
-The pairing's decisions come back as notes in words (the Stage 0 controller reports them). No I/O.
+supporters of the trusted offsets added to the descriptor pairs. The pairing's decisions come back as notes in words (the Stage 0 controller reports them). No I/O.
 """
 
 from __future__ import annotations
@@ -16,7 +14,6 @@ from dataclasses import dataclass, field
 
 from tqdm import tqdm
 
-from ...camera_stats import FittedOffsetCheck, FittedOffsetPair
 from ...cue_stats import JointVoteRecord, PairVoteSummary
 from ...geometry.offsets import OffsetGrid
 from ...memo import NO_MEMO, Memo
@@ -277,42 +274,3 @@ def _not_sure(refused: dict[str, str], sure: dict[str, bool], dissent: dict[str,
         msg = f"joint vote not sure of {n}: {why}"
         say(notes, msg)
         log.info(msg)
-
-
-def check_fitted_offsets(fitted: dict[str, float], voted: dict, vids: dict
-                         ) -> tuple[dict[str, str], FittedOffsetCheck]:
-    """Cameras from the moving points that their own epipolar votes contradict or leave
-    unconfirmed: ({camera: reason}, the record of every pair's comparison).
-
-    Those cameras were fitted to track pairs aligned at coarse offsets (fitted: camera ->
-    offset_s relative to the reference). Right cameras at right offsets make the votes over all
-    track pairs peak at the same Δ (within about a frame); cameras fitted to wrong pairs at wrong
-    offsets put the peaks elsewhere (up to seconds away), and Stage 1 then accepts minima at
-    offsets the cameras were never fitted for. Any contradiction refuses every such camera (they
-    were fitted jointly); a camera in no agreeing pair is refused as unconfirmed. Two cameras give
-    no check (their votes peak where their own F was fitted): they pass, marked unchecked (they
-    are used only with camera.fallback_unchecked_pair; by default _estimate refuses them)."""
-    if len(fitted) < 3:
-        return {}, FittedOffsetCheck("unchecked (two cameras: no third to confirm their offset)")
-    tol_s = 3.0 * max(vids[n].info.frame_interval_s for n in fitted)
-    rows, agreeing, contradicted = {}, set(), []
-    for (a, b), delta in sorted(voted.items()):
-        if a not in fitted or b not in fitted:
-            continue
-        expect = fitted[b] - fitted[a]
-        ok = abs(delta - expect) <= tol_s
-        rows[f"{a}__{b}"] = FittedOffsetPair(round(expect, 4), round(delta, 4), ok)
-        if ok:
-            agreeing |= {a, b}
-        else:
-            contradicted.append(f"{a}__{b} fitted at Δ {expect:+.3f} s, voted {delta:+.3f} s")
-    if contradicted:
-        why = ("camera from the moving points refused: its own epipolar votes contradict the offsets "
-               f"it was fitted at ({'; '.join(contradicted)}; tolerance {tol_s:.3f} s), so the track "
-               "pairs it was fitted to were wrong")
-        refused = {n: why for n in fitted}
-    else:
-        refused = {n: ("camera from the moving points refused: no pair of it with a sure epipolar vote "
-                       "confirmed the offset it was fitted at") for n in fitted if n not in agreeing}
-    verdict = "contradicted" if contradicted else "confirmed" if not refused else "partly unconfirmed"
-    return refused, FittedOffsetCheck(verdict, round(tol_s, 4), rows, tuple(sorted(refused)))
