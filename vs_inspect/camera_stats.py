@@ -97,7 +97,7 @@ class MovingPointsCameras:
 class ModelTried:
     """One camera set the joint vote was taken on."""
 
-    features: str  # "sift", "xfeat", "aliked", "moving points", "sift own", ...
+    features: str  # "sift", "xfeat", "aliked", "moving points"
     cameras: int
     trusted: tuple[str, ...]  # videos the joint vote trusted on it
     kept: bool

@@ -89,12 +89,11 @@ def test_two_cameras_from_the_moving_points_alone_are_refused(monkeypatch):
 
 def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: bool = True,
                        second_fails: bool = False, registered: dict[str, str] | None = None,
-                       weak_first: bool = False, config: CueConfig = CueConfig(), joints: dict | None = None):
+                       config: CueConfig = CueConfig(), joints: dict | None = None):
     """camera_choice.estimated_cameras on three videos with camera models ("sift" first, "xfeat"
     second, "aliked" third when `trusted` names it, else none; the moving points' cameras, when
     `trusted` names "moving points", are used) whose pairing trusts the videos of `trusted`; each
-    model has a camera for the videos `registered` names for it (default: all). weak_first: the
-    moving points' cameras replace the first model's (its own are "sift own"). joints: a model's
+    model has a camera for the videos `registered` names for it (default: all). joints: a model's
     joint vote record (CueStats' geometric_joint) as its vote leaves it.
     Returns (kept set, stats, sink, votes seen as (kind, other_peaks, other))."""
     import dataclasses
@@ -134,12 +133,9 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
 
     seen = []
 
-    def estimate(vids, cfg, pairs, est, from_tracks=False, memo=None, as_built=False, grid=None, rules=None,
-                 kept=None):
-        kind = ex.MOVING_POINTS if from_tracks else est.features + (ex.OWN if as_built else "")
+    def estimate(vids, cfg, pairs, est, from_tracks=False, memo=None, grid=None, rules=None, kept=None):
+        kind = ex.MOVING_POINTS if from_tracks else est.features
         sfm = SfmRecord(kind, 3, 3, {}, (), {})
-        if weak_first and kind == "sift":  # replaced by the moving points' cameras
-            sfm = dataclasses.replace(sfm, fallback=MovingPointsCameras("weak", True))
         if from_tracks:  # the moving points' cameras, used when the test's trusted names them
             sfm = dataclasses.replace(sfm, fallback=MovingPointsCameras("none trusted", kind in trusted))
             if kind not in trusted:
@@ -315,33 +311,6 @@ def test_the_record_says_when_sifts_static_images_had_asift_features(monkeypatch
     vids = {n: SimpleNamespace(camera_motion="moving") for n in "ab"}
     stats = _as_json(_estimate(vids, CueConfig(), {}, est))
     assert stats["sfm"]["features"] == "sift" and "static_images" not in stats["sfm"]
-
-
-def test_a_weak_models_own_cameras_are_voted_on_when_the_moving_points_replaced_them_for_nothing(monkeypatch):
-    """The first model was weak, the moving points' cameras replaced its own, and no set was
-    trusted for any video: the first model's own cameras get their vote, and are kept when it
-    trusts a video."""
-    from vs_inspect.cues.config import CameraConfig
-
-    kept, stats, sink, seen = _two_camera_models(
-        monkeypatch, {"sift": set(), "xfeat": set(), "sift own": {"a", "b", "c"}}, weak_first=True)
-    assert [s[0] for s in seen] == ["sift", "xfeat", "sift own"]
-    assert kept.used == {"a", "b", "c"} and stats["sfm"]["features"] == "sift own"
-    assert [(m["features"], m["kept"]) for m in stats["sfm"]["models"]] == [
-        ("sift", False), ("xfeat", False), ("sift own", True)]
-    assert ("camera models: SIFT's own kept; the joint vote trusted 0 video(s) on SIFT's, 0 video(s) on XFEAT's, "
-            "3 video(s) on SIFT's own") in sink.messages
-    # trusted for none either: the first set stays, the attempt listed
-    _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": set(), "xfeat": set(), "sift own": set()},
-                                           weak_first=True)
-    assert seen[-1][0] == "sift own" and [m["kept"] for m in stats["sfm"]["models"]] == [True, False, False]
-    # not tried: a video trusted already, the first model not replaced, or switched off
-    for trusted, weak, cfg in (({"sift": set(), "xfeat": {"a", "b"}}, True, CueConfig()),
-                               ({"sift": set(), "xfeat": set()}, False, CueConfig()),
-                               ({"sift": set(), "xfeat": set()}, True,
-                                CueConfig(camera=CameraConfig(weak_model_when_replaced=False)))):
-        _, _, _, seen = _two_camera_models(monkeypatch, trusted, weak_first=weak, config=cfg)
-        assert "sift own" not in [s[0] for s in seen], (trusted, weak)
 
 
 def test_the_moving_points_cameras_are_not_fitted_when_they_could_not_replace_a_weak_model(monkeypatch):

@@ -88,8 +88,6 @@ class CameraConfig:
     """Build static cameras from the moving points' two-view geometry when the background model places fewer than two or is weak; the cameras that fit the moving points better are used."""
     fallback_when_untrusted: bool = True
     """Also try the moving points' cameras when the background models placed the static cameras yet the joint vote trusted no video; they are kept only when it trusts a video on them."""
-    weak_model_when_replaced: bool = True
-    """When the moving points' cameras replaced a weak first model and the joint vote then trusted no video, vote on that model's own cameras too, and keep them when a video is trusted."""
     fallback_unchecked_pair: bool = False
     """Use cameras from the moving points when only two come out: geometry and offset are then fitted to the same track pairs, and no third camera checks them. Off: refused, with that reason."""
 

@@ -15,7 +15,6 @@ RULES: dict[str, str] = {
     "weak_model_replaced": "the moving points' cameras replace a weak background model when they explain the points better",
     "two_point_cameras": "only two cameras from the moving points are refused (their F and offset share the same pairs)",
     "points_when_untrusted": "the moving points' cameras are voted on when no model's vote trusts any video",
-    "weak_own": "a weak model's own cameras are voted on when the moving points' replaced them for nothing",
     # the joint vote on one camera set
     "margin": "a camera is sure only when its joint offset beats every other choice by a summed z-score of 5",
     "three_view": "estimated cameras: a sure camera must see the other sure cameras' triangulated points",

@@ -35,15 +35,10 @@ log = logging.getLogger(__name__)
 MOVING_POINTS = "moving points"  # the kind of the camera set _estimate builds from the moving points alone
 
 
-OWN = " own"  # a weak model's kind with this suffix: its own cameras, voted on after the moving points' failed
-
-
 def _owner(kind: str) -> str:
-    """Whose cameras a set of `kind` are, for messages: "SIFT's", "the moving points'", "SIFT's own"."""
+    """Whose cameras a set of `kind` are, for messages: "SIFT's", "the moving points'"."""
     if kind == MOVING_POINTS:
         return "the moving points'"
-    if kind.endswith(OWN):
-        return f"{kind.removesuffix(OWN).upper()}'s own"
     return f"{kind.upper()}'s"
 
 
@@ -121,27 +116,24 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
     grid: the limits of every offset Stage 0 searches (the moving points' cameras' and the votes')."""
     seen: dict = {}  # the moving points' cameras, fitted once for every model
 
-    def attempt(est, other_peaks=None, other="", from_tracks=False,
-                as_built=False) -> tuple[str, CameraSet] | None:
-        cams = _estimate(vids, cfg, all_pairs, est, from_tracks, seen, as_built, grid, rules, memo)
+    def attempt(est, other_peaks=None, other="", from_tracks=False) -> tuple[str, CameraSet] | None:
+        cams = _estimate(vids, cfg, all_pairs, est, from_tracks, seen, grid, rules, memo)
         if from_tracks and not (cams.sfm.fallback is not None and cams.sfm.fallback.used):
             return None  # est's own cameras again, already voted on
         out = vote_on_cameras(cams, vids, all_pairs, cfg, progress, estimated=True,
                               other_peaks=other_peaks, other=other, grid=grid, rules=rules, memo=memo)
-        kind = MOVING_POINTS if from_tracks else est.features + (OWN if as_built else "")
+        kind = MOVING_POINTS if from_tracks else est.features
         return kind, out
 
     with _kept_models(vids, cfg, frame_images, progress, memo) as models:
         with stage("cameras: estimating them from the videos (pycolmap)", progress):
             kept_est = models.first()
-        first_est = kept_est
         kind, kept = attempt(kept_est)
         first_kind, first_peaks = kind, kept.peaks
         tried, failed = [(kind, kept)], []
         kind, kept, kept_est = _try_later_models(models, attempt, kind, kept, kept_est, first_kind, first_peaks, tried,
                                                  failed, vids, cfg, rules, progress)
-        kind, kept = _try_moving_points_and_own(attempt, kind, kept, kept_est, first_est, first_kind, tried, cfg,
-                                                rules)
+        kind, kept = _try_moving_points(attempt, kind, kept, kept_est, tried, cfg, rules)
         skipped = models.third_skipped
     return _choice_noted(kind, kept, tried, failed, skipped, vids)
 
@@ -195,12 +187,11 @@ def _try_later_models(models: _KeptModels, attempt, kind: str, kept: CameraSet, 
     return kind, kept, kept_est
 
 
-def _try_moving_points_and_own(attempt, kind: str, kept: CameraSet, kept_est, first_est, first_kind: str,
-                               tried: list, cfg: CueConfig, rules: frozenset[str]) -> tuple[str, CameraSet]:
-    """(kind, kept set) after the last resorts when no video was trusted on any set: the moving
-    points' own cameras (when no model was replaced by them), then the first model's own cameras
-    (when the moving points' replaced them); each kept when its joint vote trusts a video; tried
-    gets each set tried."""
+def _try_moving_points(attempt, kind: str, kept: CameraSet, kept_est, tried: list, cfg: CueConfig,
+                       rules: frozenset[str]) -> tuple[str, CameraSet]:
+    """(kind, kept set) after the last resort when no video was trusted on any set: the moving
+    points' own cameras (when no model was replaced by them), kept when their joint vote trusts a
+    video; tried gets them when tried."""
     if (cfg.geometric.enabled and cfg.camera.fallback_when_untrusted and cfg.camera.fallback_from_tracks
             and "points_when_untrusted" in rules
             and not kept.used
@@ -212,17 +203,6 @@ def _try_moving_points_and_own(attempt, kind: str, kept: CameraSet, kept_est, fi
             tried.append(points)
             if points[1].used:
                 kind, kept = points
-    first_fallback = tried[0][1].sfm.fallback
-    if (cfg.geometric.enabled and cfg.camera.weak_model_when_replaced and "weak_own" in rules and not kept.used
-            and first_fallback is not None and first_fallback.used and len(first_est.cameras) >= 2):
-        # the first model was weak and the moving points' cameras replaced its own, and no video
-        # was trusted on any set: its own cameras get their vote too (a weak model may be right:
-        # the moving points' cameras are judged on track pairs at their own coarse offsets)
-        log.info("the joint vote trusted no video on any camera set: trying %s own cameras", _owner(first_kind))
-        own = attempt(first_est, as_built=True)
-        tried.append(own)
-        if own[1].used:
-            kind, kept = own
     return kind, kept
 
 

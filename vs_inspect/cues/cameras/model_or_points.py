@@ -25,14 +25,13 @@ log = logging.getLogger(__name__)
 
 
 def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict, est,
-              from_tracks: bool = False, memo: dict | None = None, as_built: bool = False,
+              from_tracks: bool = False, memo: dict | None = None,
               grid: OffsetGrid = OffsetGrid(), rules: frozenset[str] = ALL, kept: Memo = NO_MEMO) -> CameraSet:
     """The cameras of est (cameras.CameraEstimate) and the tracks undistorted with them, or the
     cameras the moving points give when their cameras explain the points better and est is weak,
     or from_tracks (the joint vote trusted no video on est's cameras; the moving points' cameras
     may then be fewer). memo: kept between calls on the same videos and pairs, so that the moving
-    points' cameras, which do not depend on est, are fitted once. as_built: est's cameras even
-    when weak (the moving points' are not fitted nor compared)."""
+    points' cameras, which do not depend on est, are fitted once."""
     from .sfm import MIN_INLIERS
 
     static = [n for n, v in vids.items() if v.camera_motion != "moving"]
@@ -48,7 +47,7 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict, est,
     # are static ones their cameras cannot replace it (`use` below): not fitted (it would cost seconds)
     outnumbered = not from_tracks and len(est.cameras) > len(static)
     compared = ((weak and "weak_model_replaced" in rules) or from_tracks) and cfg.camera.fallback_from_tracks \
-        and len(static) >= 2 and not as_built
+        and len(static) >= 2
     if compared and outnumbered:
         why = (f"{weak_why}; the moving points' cameras were not fitted: they would be {len(static)} static "
                f"camera(s) at most, fewer than its {len(est.cameras)}, so they could not replace it")
