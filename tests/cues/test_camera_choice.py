@@ -1,5 +1,5 @@
 """Stage 0's choice of cameras when none are given (cues/cameras/choice.py): the moving points'
-cameras fitted once and refused alone in pairs; later camera models tried, kept or not."""
+cameras refused alone in pairs; later camera models tried, kept or not."""
 
 from __future__ import annotations
 
@@ -23,10 +23,9 @@ def _as_json(cams) -> dict:
     return {"camera_source": cams.source, "dropped": dict(cams.dropped), "sfm": cams.sfm.to_json()}
 
 
-def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), memo: dict | None = None,
-                          calls: list | None = None):
-    """_estimate when the background reconstruction registers nothing and the moving points give
-    a static camera for every video (memo: _estimate's; calls: gets one entry per fit). Returns
+def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig()):
+    """_estimate of the moving points' cameras (from_tracks) when the background reconstruction
+    registers nothing and the moving points give a static camera for every video. Returns
     (cameras, stats)."""
     from types import SimpleNamespace
 
@@ -40,7 +39,6 @@ def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), m
               for i, n in enumerate(names)}
     details = {n: {"coarse_offset_s": 0.1 * i} for i, n in enumerate(names) if i}
     def fit(*a, **k):
-        (calls if calls is not None else []).append(k)
         return dict(fitted), {}, details
 
     monkeypatch.setattr(pairwise_mod, "cameras_from_tracks", fit)
@@ -49,20 +47,8 @@ def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), m
                                register_masks=None, xy_full=np.zeros((0, 50, 2)),
                                instance=np.zeros(0, np.int64)) for n in names}
     pairs = {(a, b): TrackPairs(a, b, np.zeros((0, 2), np.int64)) for a, b in zip(names, names[1:])}
-    got = _estimate(vids, config, pairs, est, memo=memo)
+    got = _estimate(vids, config, pairs, est, from_tracks=True)
     return got.cameras, _as_json(got)
-
-
-def test_the_moving_points_cameras_are_fitted_once_for_every_model(monkeypatch):
-    """They depend on the track pairs only, not on the model: with a memo, a second model's
-    _estimate reuses them (the same cameras and details)."""
-    memo, calls = {}, []
-    first, stats1 = _moving_point_cameras(monkeypatch, ["a", "b", "c"], memo=memo, calls=calls)
-    again, stats2 = _moving_point_cameras(monkeypatch, ["a", "b", "c"], memo=memo, calls=calls)
-    assert len(calls) == 1
-    assert set(again) == set(first) == {"a", "b", "c"}
-    assert all(np.array_equal(again[n].cam_from_world, first[n].cam_from_world) for n in first)
-    assert stats2["sfm"]["fallback"] == stats1["sfm"]["fallback"]
 
 
 def test_two_cameras_from_the_moving_points_alone_are_refused(monkeypatch):
@@ -133,7 +119,7 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
 
     seen = []
 
-    def estimate(vids, cfg, pairs, est, from_tracks=False, memo=None, grid=None, rules=None, kept=None):
+    def estimate(vids, cfg, pairs, est, from_tracks=False, grid=None, rules=None, kept=None):
         kind = ex.MOVING_POINTS if from_tracks else est.features
         sfm = SfmRecord(kind, 3, 3, {}, (), {})
         if from_tracks:  # the moving points' cameras, used when the test's trusted names them
@@ -311,45 +297,3 @@ def test_the_record_says_when_sifts_static_images_had_asift_features(monkeypatch
     vids = {n: SimpleNamespace(camera_motion="moving") for n in "ab"}
     stats = _as_json(_estimate(vids, CueConfig(), {}, est))
     assert stats["sfm"]["features"] == "sift" and "static_images" not in stats["sfm"]
-
-
-def test_the_moving_points_cameras_are_not_fitted_when_they_could_not_replace_a_weak_model(monkeypatch):
-    """A weak model (few points per image) that placed a hand-held camera besides the two static
-    ones: the moving points give static cameras only, 2 < 3, so they could not replace it and are
-    not fitted; the model's cameras are used and the record says why. With only the two static
-    cameras placed, they are fitted (here none come out, so the model is kept)."""
-    from types import SimpleNamespace
-
-    import vs_inspect.cues.cameras.moving_points as pairwise_mod
-    from vs_inspect.cues.cameras.model_or_points import _estimate
-    from vs_inspect.cues.cameras.sfm import CameraEstimate, EstimatedCamera
-    from vs_inspect.geometry.camera_model import Lens
-
-    lens = Lens("SIMPLE_RADIAL", (500.0, 320.0, 240.0, 0.0), 640, 480, 1.0)
-    motion = {"a": "static", "b": "static", "h": "moving"}
-    info = SimpleNamespace(width=640, height=480, num_frames=50)
-    vids = {n: SimpleNamespace(info=info, camera_motion=m, xy_full=np.zeros((0, 50, 2)),
-                               instance=np.zeros(0, np.int64)) for n, m in motion.items()}
-    pairs = {("a", "b"): TrackPairs("a", "b", np.zeros((0, 2), np.int64))}
-    calls = []
-
-    def fit(*a, **k):
-        calls.append(k)
-        return {}, {}, {}
-
-    monkeypatch.setattr(pairwise_mod, "cameras_from_tracks", fit)
-
-    def estimate(names):
-        cams = {n: EstimatedCamera(CameraTrack(K, look_at([6.0 * np.cos(i), 6.0 * np.sin(i), 2.0], [0, 0, 1])),
-                                   lens, np.arange(1), points_seen=40) for i, n in enumerate(names)}
-        est = CameraEstimate(cams, {}, None, None, 3, 3, "sift")
-        got = _estimate(vids, CueConfig(), pairs, est)
-        return got, _as_json(got)
-
-    kept, stats = estimate("abh")
-    assert calls == [] and set(kept.cameras) == {"a", "b", "h"}
-    fb = stats["sfm"]["fallback"]
-    assert fb["used"] is False and "fewest 40 per image" in fb["why"]
-    assert "2 static camera(s) at most, fewer than its 3" in fb["why"]
-    kept, stats = estimate("ab")
-    assert len(calls) == 1 and set(kept.cameras) == {"a", "b"} and stats["sfm"]["fallback"]["used"] is False

@@ -85,9 +85,9 @@ class CameraConfig:
     auto_aliked_frames: int = field(default=10, metadata={"flag": "--sfm-aliked-frames", "metavar": "N"})
     """Frames per moving camera of ALIKED's model, the last one auto tries; 0: never tried."""
     fallback_from_tracks: bool = True
-    """Build static cameras from the moving points' two-view geometry when the background model places fewer than two or is weak; the cameras that fit the moving points better are used."""
+    """Static cameras from the moving points' two-view geometry may stand in for a camera model's (when no video is trusted on any model, fallback_when_untrusted); off: never fitted."""
     fallback_when_untrusted: bool = True
-    """Also try the moving points' cameras when the background models placed the static cameras yet the joint vote trusted no video; they are kept only when it trusts a video on them."""
+    """Try the moving points' cameras when the joint vote trusted no video on any camera model; used when the model placed fewer than two or they fit the moving points better, kept when a video is trusted on them."""
     fallback_unchecked_pair: bool = False
     """Use cameras from the moving points when only two come out: geometry and offset are then fitted to the same track pairs, and no third camera checks them. Off: refused, with that reason."""
 

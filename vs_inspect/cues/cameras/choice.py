@@ -112,12 +112,12 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
     (geometric_pairs.disputed_by_other_model); the set with more such videos is kept, SIFT's on
     a tie. When the kept set still leaves one untrusted, ALIKED's model is tried last
     (CameraModels.third), held to the first set's peaks too, and kept only when it trusts more videos.
+    When no set trusts any video, the moving points' own cameras are tried last (_try_moving_points).
     The kept set's sfm record holds every tried set's counts (models).
     grid: the limits of every offset Stage 0 searches (the moving points' cameras' and the votes')."""
-    seen: dict = {}  # the moving points' cameras, fitted once for every model
 
     def attempt(est, other_peaks=None, other="", from_tracks=False) -> tuple[str, CameraSet] | None:
-        cams = _estimate(vids, cfg, all_pairs, est, from_tracks, seen, grid, rules, memo)
+        cams = _estimate(vids, cfg, all_pairs, est, from_tracks, grid, rules, memo)
         if from_tracks and not (cams.sfm.fallback is not None and cams.sfm.fallback.used):
             return None  # est's own cameras again, already voted on
         out = vote_on_cameras(cams, vids, all_pairs, cfg, progress, estimated=True,
@@ -190,12 +190,9 @@ def _try_later_models(models: _KeptModels, attempt, kind: str, kept: CameraSet, 
 def _try_moving_points(attempt, kind: str, kept: CameraSet, kept_est, tried: list, cfg: CueConfig,
                        rules: frozenset[str]) -> tuple[str, CameraSet]:
     """(kind, kept set) after the last resort when no video was trusted on any set: the moving
-    points' own cameras (when no model was replaced by them), kept when their joint vote trusts a
-    video; tried gets them when tried."""
+    points' own cameras, kept when their joint vote trusts a video; tried gets them when tried."""
     if (cfg.geometric.enabled and cfg.camera.fallback_when_untrusted and cfg.camera.fallback_from_tracks
-            and "points_when_untrusted" in rules
-            and not kept.used
-            and not any(c.sfm.fallback is not None for _, c in tried)):
+            and "points_when_untrusted" in rules and not kept.used):
         # every model placed the static cameras, and none was trusted: the moving points' own cameras
         log.info("the joint vote trusted no video on any camera model: trying the moving points' cameras")
         points = attempt(kept_est, from_tracks=True)
