@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from vs_inspect.cues.pairing.joint import JointChoice, consistent_peaks, joint_offsets
-from vs_inspect.cues.pairing.rules import disputed_by_other_model, dissenting_cameras, joint_vote_share, rival_offsets
+from vs_inspect.cues.pairing.rules import disputed_by_other_model, joint_vote_share, rival_offsets
 from vs_inspect.cues.pairing.votes import GeometricPairStats, consistent_at, epipolar_extent, geometric_pairs, supporters
 from vs_inspect.geometry.epipolar import fundamental_from_cameras, look_at, project
 from vs_inspect.geometry.offsets import OffsetGrid
@@ -341,30 +341,6 @@ def test_joint_vote_share_is_the_votes_at_the_delta_over_the_top_peak():
     assert joint_vote_share(st, -0.9) == 1.0
     assert joint_vote_share(st, 2.0) == 0.0
     assert joint_vote_share(GeometricPairStats(0, 0, 0, (), ()), 0.0) == 1.0  # no votes: no dissent
-
-
-def test_a_camera_whose_pair_votes_elsewhere_is_not_sure():
-    # a's pair with b votes for -0.9, not the joint 0.3 (its pairs with c and d agree with the
-    # joint choice, as a periodic motion can make them): a, of the smaller margin, is blamed
-    joint = JointChoice({"a": 0.0, "b": 0.3, "c": -0.2, "d": 1.0}, 50.0,
-                        {"a": 6.0, "b": 30.0, "c": 35.0, "d": 20.0})
-    agree = {("a", "c"): _voted({-0.2: 60}), ("a", "d"): _voted({1.0: 40}), ("b", "c"): _voted({-0.5: 200}),
-             ("b", "d"): _voted({0.7: 50}), ("c", "d"): _voted({1.2: 50})}
-    found = {("a", "b"): _voted({-0.9: 100, 0.3: 20}), **agree}
-    sure = dict.fromkeys("abcd", True)
-    out = dissenting_cameras(found, joint, sure, 0.5)
-    assert list(out) == ["a"]
-    assert "a__b has 0.20 of its top peak's votes at the joint Δ +0.300 s" in out["a"]
-    # the other way round in margin, b is blamed
-    flipped = JointChoice(joint.offsets_s, 50.0, {"a": 30.0, "b": 6.0, "c": 35.0, "d": 20.0})
-    assert list(dissenting_cameras(found, flipped, sure, 0.5)) == ["b"]
-    # a camera in two contradicting pairs is blamed whatever its margin: d, not a or b
-    two = {**found, ("a", "b"): _voted({0.3: 100}), ("a", "d"): _voted({-1.0: 90, 1.0: 30}),
-           ("b", "d"): _voted({2.0: 90, 0.7: 10})}
-    assert list(dissenting_cameras(two, joint, sure, 0.5)) == ["d"]
-    # a share at the bar passes; unsure cameras are not judged; 0.5 of 100 votes at the joint Δ
-    assert dissenting_cameras({**agree, ("a", "b"): _voted({-0.9: 100, 0.3: 50})}, joint, sure, 0.5) == {}
-    assert dissenting_cameras(found, joint, {**sure, "b": False}, 0.5) == {}
 
 
 def _one_camera_the_other_model_disputes():

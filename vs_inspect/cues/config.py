@@ -32,8 +32,6 @@ class GeometricPairConfig:
     """With three or more cameras, choose every camera's offset at once from all pairs' vote histograms and keep each pair's supporters of the implied Δ (else: close triangles of top peaks)."""
     joint_min_margin: float = 5.0
     """Joint choice: a camera's pairs are used only if its offset beats the best choice that moves it against every other camera (by over 3 frames) by this much summed vote z-score."""
-    joint_min_pair_share: float = 0.5
-    """Estimated cameras: a sure camera stays sure only when each of its pairs with another sure camera keeps at least this share of its top vote peak's votes at the joint Δ; 0 = no check."""
     other_model_agree_frames: float = 2.0
     """When a second camera model is tried (features auto), its sure cameras stay sure only when a pair with another sure camera has a first-model vote peak within this many frames of the joint Δ."""
     other_model_overrule_share: float = 0.8

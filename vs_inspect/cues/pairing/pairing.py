@@ -137,8 +137,7 @@ def _sure_cameras(found: dict, votes: dict, joint, cameras: dict, tracks: dict, 
     """(sure, three_view, dissent, dissent_short, overruled): whether the joint vote is sure of each
     camera ({camera: bool}: its margin is wide enough), then unsure of those that fail a check, in
     turn: the three-view check of estimated cameras (three_view: {camera: transfer.ThreeViewCheck}),
-    a rival offset in three views, a pair of its own with few votes at the joint offset, another
-    camera model's vote peaks. dissent: {camera: why it was made unsure}, dissent_short: the same in
+    a rival offset in three views, another camera model's vote peaks. dissent: {camera: why it was made unsure}, dissent_short: the same in
     a few words, overruled: {camera: why another model's dispute of it was overruled}. Each
     decision is said in notes."""
     sure = {} if joint is None else {n: m >= cfg.geometric.joint_min_margin or "margin" not in rules
@@ -163,15 +162,6 @@ def _sure_cameras(found: dict, votes: dict, joint, cameras: dict, tracks: dict, 
         _not_sure(rivals, sure, dissent, notes, dissent_short,
                   {n: f"two offsets {abs(best[n][0] - joint.offsets_s[n]):.2f} s apart, as a repeated motion gives"
                    for n in rivals})
-    # after the three-view check, which triangulates the pairs of the cameras sure then (a camera
-    # this refuses first could leave another too few trajectories); estimated cameras only: with a
-    # calibration a right pair can keep a small share of its top peak's votes
-    if "pair_share" in rules and cfg.geometric.joint_min_pair_share > 0 and estimated and joint is not None:
-        from .rules import dissenting_cameras
-
-        dissenting = dissenting_cameras(votes, joint, sure, cfg.geometric.joint_min_pair_share)
-        _not_sure(dissenting, sure, dissent, notes, dissent_short,
-                  {n: "a pair of its own has few votes at its joint offset" for n in dissenting})
     overruled = {}  # camera -> why the other model's dispute of it was overruled
     if "other_model" in rules and other_peaks is not None and estimated and joint is not None:
         from .rules import disputed_by_other_model

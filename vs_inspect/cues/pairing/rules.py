@@ -15,34 +15,6 @@ def joint_vote_share(st: GeometricPairStats, delta_s: float) -> float:
     return min(1.0, votes_at(st, delta_s) / max(st.peak_votes))
 
 
-def dissenting_cameras(found: dict[tuple[str, str], GeometricPairStats], joint: JointChoice,
-                       sure: dict[str, bool], min_share: float) -> dict[str, str]:
-    """Sure cameras that a pair of theirs with another sure camera contradicts: {camera: reason}.
-
-    A pair contradicts the joint choice when its votes at the implied Δ_ab are below min_share
-    of its own top peak's (joint_vote_share). The joint choice outvotes a single pair's false
-    peak, but it is also outvoted itself when a camera's pairs disagree with each other (a
-    periodic motion lets two of a camera's pairs agree on a wrong offset that the third rejects),
-    so such a camera is not sure. Each contradicting pair blames one of its two cameras: the one
-    in most contradicting pairs, then the one of smaller margin, until no sure pair contradicts."""
-    share = {k: joint_vote_share(st, joint.offsets_s[k[1]] - joint.offsets_s[k[0]])
-             for k, st in found.items() if sure.get(k[0]) and sure.get(k[1])}
-    low = {k: s for k, s in share.items() if s < min_share}
-    out: dict[str, str] = {}
-    while low:
-        count: dict[str, int] = {}
-        for a, b in low:
-            count[a], count[b] = count.get(a, 0) + 1, count.get(b, 0) + 1
-        cam = max(count, key=lambda n: (count[n], -joint.margin.get(n, 0.0), n))
-        mine = sorted((k, s) for k, s in low.items() if cam in k)
-        out[cam] = ("its pairs vote for other offsets than the joint choice: "
-                    + ", ".join(f"{a}__{b} has {s:.2f} of its top peak's votes at the joint "
-                                f"Δ {joint.offsets_s[b] - joint.offsets_s[a]:+.3f} s" for (a, b), s in mine)
-                    + f" (fewer than {min_share:g})")
-        low = {k: s for k, s in low.items() if cam not in k}
-    return out
-
-
 def disputed_by_other_model(joint: JointChoice, sure: dict[str, bool],
                             other_peaks: dict[tuple[str, str], tuple[float, ...]], tol_s: float,
                             other: str = "the other camera model", three_view_share: dict[str, float] | None = None,
