@@ -81,7 +81,7 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
     `trusted` names "moving points", are used) whose pairing trusts the videos of `trusted`; each
     model has a camera for the videos `registered` names for it (default: all). joints: a model's
     joint vote record (CueStats' geometric_joint) as its vote leaves it.
-    Returns (kept set, stats, sink, votes seen as (kind, other_peaks, other))."""
+    Returns (kept set, stats, sink, the kinds of the sets voted on, in order)."""
     import dataclasses
     from types import SimpleNamespace
 
@@ -131,12 +131,11 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
         return CameraSet({n: CameraTrack(K, look_at([6.0, 0, 2.0], [0, 0, 1])) for n in names}, {}, None, None, {},
                          dropped, sfm=sfm)
 
-    def vote(cams, vids, all_pairs, cfg, progress, estimated, other_peaks=None, other="", grid=None, **kept):
+    def vote(cams, vids, all_pairs, cfg, progress, estimated, grid=None, **kept):
         kind = cams.sfm.features
-        seen.append((kind, other_peaks, other))
+        seen.append(kind)
         pairing = GeometricPairing({}, {}, {}, "joint", {}, {}, joints.get(kind) if joints else None)
         return dataclasses.replace(cams, pairs={}, used=frozenset(trusted[kind]), pairing=pairing,
-                                   peaks={("a", "b"): (0.1,) if kind == "sift" else (0.2,)},
                                    notes=(Note("cues", f"voted on {kind}"),))
 
     monkeypatch.setattr(cameras_mod, "CameraModels", Models)
@@ -152,8 +151,7 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
 def test_second_camera_model_is_kept_when_its_joint_vote_trusts_more_videos(monkeypatch):
     kept, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b"}, "xfeat": {"a", "b", "c"}})
     assert kept.used == {"a", "b", "c"} and stats["sfm"]["features"] == "xfeat"
-    # XFeat's sure cameras were held to SIFT's vote peaks
-    assert seen == [("sift", None, ""), ("xfeat", {("a", "b"): (0.1,)}, "SIFT's model")]
+    assert seen == ["sift", "xfeat"]
     assert stats["sfm"]["models"] == [{"features": "sift", "cameras": 3, "trusted": ["a", "b"], "kept": False},
                                       {"features": "xfeat", "cameras": 3, "trusted": ["a", "b", "c"], "kept": True}]
     # only the kept set's reports reach the sink, then the choice
@@ -167,7 +165,7 @@ def test_first_camera_model_is_kept_on_a_tie_and_alone_when_it_trusts_every_vide
     assert stats["sfm"]["features"] == "sift" and [m["kept"] for m in stats["sfm"]["models"]] == [True, False]
     assert "voted on sift" in sink.messages and "voted on xfeat" not in sink.messages
     kept, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b", "c"}}, second_allowed=False)
-    assert [s[0] for s in seen] == ["sift"] and "models" not in stats["sfm"]
+    assert seen == ["sift"] and "models" not in stats["sfm"]
     assert sink.messages == ["voted on sift"]
 
 
@@ -175,9 +173,7 @@ def test_third_camera_model_is_tried_when_the_kept_set_leaves_a_video_untrusted(
     kept, stats, _, seen = _two_camera_models(
         monkeypatch, {"sift": {"a"}, "xfeat": {"a", "b"}, "aliked": {"a", "b", "c"}})
     assert kept.used == {"a", "b", "c"} and stats["sfm"]["features"] == "aliked"
-    # ALIKED's sure cameras are held to the first (SIFT's) vote peaks, as XFeat's were
-    assert seen[1:] == [("xfeat", {("a", "b"): (0.1,)}, "SIFT's model"),
-                        ("aliked", {("a", "b"): (0.1,)}, "SIFT's model")]
+    assert seen == ["sift", "xfeat", "aliked"]
     assert [(m["features"], m["kept"]) for m in stats["sfm"]["models"]] == [
         ("sift", False), ("xfeat", False), ("aliked", True)]
     # a third set trusting no more than the kept one is not kept
@@ -185,11 +181,11 @@ def test_third_camera_model_is_tried_when_the_kept_set_leaves_a_video_untrusted(
     assert stats["sfm"]["features"] == "xfeat" and kept.used == {"a", "b"}
     # when XFeat's set trusts every video, ALIKED's is not tried
     _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": {"a"}, "xfeat": {"a", "b", "c"}, "aliked": set()})
-    assert [s[0] for s in seen] == ["sift", "xfeat"] and stats["sfm"]["features"] == "xfeat"
+    assert seen == ["sift", "xfeat"] and stats["sfm"]["features"] == "xfeat"
     assert "models_skipped" not in stats["sfm"]
     # a third model skipped says why, in result.json and to the recording, after the choice
     _, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a"}, "xfeat": {"a", "b"}})
-    assert [s[0] for s in seen] == ["sift", "xfeat"]
+    assert seen == ["sift", "xfeat"]
     assert stats["sfm"]["models_skipped"] == "ALIKED's model not tried: large images"
     assert sink.messages[-1] == "ALIKED's model not tried: large images"
 
@@ -209,7 +205,7 @@ def test_a_video_without_a_camera_says_what_every_model_made_of_it(monkeypatch):
     # with one model tried (XFeat's failed, ALIKED's skipped), the reason is the model's own
     _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b"}}, registered={"sift": "ab"},
                                            second_fails=True)
-    assert [s[0] for s in seen] == ["sift"]
+    assert seen == ["sift"]
     assert stats["dropped"] == {"c": "sift matched too little; the moving points' cameras refused"}
 
 
@@ -242,7 +238,7 @@ def test_a_video_placed_but_not_timed_says_what_the_other_models_made_of_it(monk
 
 def test_a_second_camera_model_that_fails_leaves_the_first_standing(monkeypatch):
     kept, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b"}}, second_fails=True)
-    assert kept.used == {"a", "b"} and [s[0] for s in seen] == ["sift"]
+    assert kept.used == {"a", "b"} and seen == ["sift"]
     why = "the second camera model failed (RuntimeError: XFeat ran out of memory); SIFT's kept"
     # the third model is still asked for (here it is skipped)
     assert stats["sfm"]["models_failed"] == why
@@ -255,7 +251,7 @@ def test_the_moving_points_cameras_are_tried_when_no_model_is_trusted_for_any_vi
     kept, stats, sink, seen = _two_camera_models(
         monkeypatch, {"sift": set(), "xfeat": set(), "aliked": set(), "moving points": {"a", "b"}},
         registered={"moving points": "ab"})
-    assert [s[0] for s in seen] == ["sift", "xfeat", "aliked", "moving points"]
+    assert seen == ["sift", "xfeat", "aliked", "moving points"]
     assert stats["sfm"]["features"] == "moving points" and kept.used == {"a", "b"}
     assert [(m["features"], m["kept"]) for m in stats["sfm"]["models"]] == [
         ("sift", False), ("xfeat", False), ("aliked", False), ("moving points", True)]
@@ -267,14 +263,14 @@ def test_the_moving_points_cameras_are_tried_when_no_model_is_trusted_for_any_vi
     assert "SIFT's model registered it, but its set was not kept" in stats["dropped"]["c"]
     # trusted on none of them either: the first model's set stays, the attempt is listed
     _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": set(), "xfeat": set(), "moving points": set()})
-    assert stats["sfm"]["features"] == "sift" and seen[-1][0] == "moving points"
+    assert stats["sfm"]["features"] == "sift" and seen[-1] == "moving points"
     assert [m["features"] for m in stats["sfm"]["models"]] == ["sift", "xfeat", "moving points"]
     # not used (they explained the points worse): not listed
     _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": set(), "xfeat": set()})
     assert [m["features"] for m in stats["sfm"]["models"]] == ["sift", "xfeat"]
     # a model trusted for some video: not tried
     _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": {"a"}, "xfeat": set(), "moving points": {"a", "b"}})
-    assert "moving points" not in [s[0] for s in seen] and stats["sfm"]["features"] == "sift"
+    assert "moving points" not in seen and stats["sfm"]["features"] == "sift"
 
 
 def test_the_record_says_when_sifts_static_images_had_asift_features(monkeypatch):

@@ -130,8 +130,8 @@ def test_cue_stats_with_the_joint_vote_and_transfer_checks_round_trip():
 
 def test_an_older_result_json_with_the_keys_of_removed_checks_is_read_and_those_keys_passed_over():
     """Stage 0 once kept more under "cues" (the moving points' coarse offsets chosen with every
-    pair at once, their fitted offsets checked against their votes); a reader takes such a
-    result.json and leaves those keys out."""
+    pair at once, their fitted offsets checked against their votes, another camera model's
+    disputes overruled); a reader takes such a result.json and leaves those keys out."""
     from vs_inspect.cue_stats import CueStats
 
     fallback = {"why": "weak", "used": True, "reference": "a",
@@ -145,7 +145,10 @@ def test_an_older_result_json_with_the_keys_of_removed_checks_is_read_and_those_
     sfm = {"features": "sift", "images": 4, "registered_images": 4, "registered_frames": {}, "image_pairs": [],
            "lens": {}, "fallback": fallback}
     old = {"camera_source": "estimated", "registered_cameras": 2, "tracks": 20, "track_pairs": 5,
-           "videos": {}, "pairs": {}, "dropped": {}, "sfm": sfm}
+           "videos": {}, "pairs": {}, "dropped": {}, "sfm": sfm,
+           "geometric_joint": {"origin": "a", "offsets_s": {"a": 0.0, "b": 0.5}, "sure": ["a", "b"],
+                               "overruled": {"b": "SIFT's model's vote peaks disagree; overruled"}}}
+    assert CueStats.from_json(old).geometric_joint.sure == ("a", "b")
     back = CueStats.from_json(old).sfm.fallback
     assert set(back.pairs) == {"b"} and back.pairs["b"].coarse_offset_s == 0.5
     assert back.joint_fit.pairs == 3

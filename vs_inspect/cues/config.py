@@ -32,10 +32,6 @@ class GeometricPairConfig:
     """With three or more cameras, choose every camera's offset at once from all pairs' vote histograms and keep each pair's supporters of the implied Δ (else: close triangles of top peaks)."""
     joint_min_margin: float = 5.0
     """Joint choice: a camera's pairs are used only if its offset beats the best choice that moves it against every other camera (by over 3 frames) by this much summed vote z-score."""
-    other_model_agree_frames: float = 2.0
-    """When a second camera model is tried (features auto), its sure cameras stay sure only when a pair with another sure camera has a first-model vote peak within this many frames of the joint Δ."""
-    other_model_overrule_share: float = 0.8
-    """A camera the first model's vote peaks contradict stays sure when its three-view check follows at least this share of its best offset's trajectories at its joint offset; above 1: never."""
     three_view_min_supporters: int = 4
     """Estimated cameras, three or more sure: each stays sure only when its tracks follow at least this many trajectories of the other sure cameras at its joint offset; 0 = no check."""
     three_view_min_share_of_best: float = 1.0 / 3.0

@@ -18,7 +18,6 @@ RULES: dict[str, str] = {
     "margin": "a camera is sure only when its joint offset beats every other choice by a summed z-score of 5",
     "three_view": "estimated cameras: a sure camera must see the other sure cameras' triangulated points",
     "rival_offset": "a sure camera with a rival offset in three views (a repeated motion) is not sure",
-    "other_model": "a later model's sure camera must meet the first model's vote peaks",
     "transfer": "an unsure camera is made sure when point transfer confirms its joint offset",
     "moving_pair_third": "two moving cameras' joint Δ needs a third sure camera",
     "descriptor_filter": "descriptor pairs are kept only where consistent at the joint Δ",

@@ -70,12 +70,10 @@ def calibrated_cameras(calibration: dict, vids: dict[str, VideoCues]) -> CameraS
 
 
 def vote_on_cameras(cams: CameraSet, vids: dict, all_pairs: dict, cfg: CueConfig,
-                    progress: bool, estimated: bool, other_peaks: dict | None = None,
-                    other: str = "", grid: OffsetGrid = OffsetGrid(), rules: frozenset[str] = ALL,
-                    memo: Memo = NO_MEMO) -> CameraSet:
+                    progress: bool, estimated: bool, grid: OffsetGrid = OffsetGrid(),
+                    rules: frozenset[str] = ALL, memo: Memo = NO_MEMO) -> CameraSet:
     """cams with its pairs: the descriptor pairs of its cameras plus the geometric ones
-    (add_geometric_pairs; other_peaks, other: another camera model's vote peaks and its name;
-    grid: the limits of the offsets voted for)."""
+    (add_geometric_pairs; grid: the limits of the offsets voted for)."""
     cameras, dropped, sfm = cams.cameras, cams.dropped, cams.sfm
     notes: list[Note] = []
     for name, why in dropped.items():
@@ -87,19 +85,16 @@ def vote_on_cameras(cams: CameraSet, vids: dict, all_pairs: dict, cfg: CueConfig
                                f"against it (median {r.median_inliers:.0f} inliers, {r.refused} refused); the rest "
                                "slerped", registered=r.registered, tried=r.tried, refused=r.refused)
     pairs = {k: v for k, v in all_pairs.items() if k[0] in cameras and k[1] in cameras}
-    used, peaks, voting_s, pairing = frozenset(), {}, 0.0, None
+    used, voting_s, pairing = frozenset(), 0.0, None
     if cfg.geometric.enabled:
         t0 = time.perf_counter()
         pairing = add_geometric_pairs(pairs, cameras, cams.tracks, vids, cfg, progress,
-                                      estimated=estimated, other_peaks=other_peaks, other=other, grid=grid,
-                                      rules=rules, memo=memo)
+                                      estimated=estimated, grid=grid, rules=rules, memo=memo)
         pairs, voted = pairing.pairs, pairing.voted
         notes += pairing.notes
         used = frozenset(n for k in voted for n in k if n in cameras)
-        peaks = {k: pairing.peaks_s.get(k, ()) for k in pairs}
         voting_s = time.perf_counter() - t0
-    return dataclasses.replace(cams, pairs=pairs, used=used, peaks=peaks, voting_s=voting_s, pairing=pairing,
-                               notes=tuple(notes))
+    return dataclasses.replace(cams, pairs=pairs, used=used, voting_s=voting_s, pairing=pairing, notes=tuple(notes))
 
 
 def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dict,
@@ -108,20 +103,19 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
     """The cameras pycolmap estimates and their pairs (frame_images: name -> (a function giving a
     moving camera's frames to register, how many), as cameras.CameraModels takes them). With
     camera features "auto", when the joint vote on SIFT's cameras leaves a video without a
-    trusted geometric Δ, XFeat's model is tried too (cameras.CameraModels.second), its sure cameras held to SIFT's vote peaks
-    (geometric_pairs.disputed_by_other_model); the set with more such videos is kept, SIFT's on
-    a tie. When the kept set still leaves one untrusted, ALIKED's model is tried last
-    (CameraModels.third), held to the first set's peaks too, and kept only when it trusts more videos.
+    trusted geometric Δ, XFeat's model is tried too (cameras.CameraModels.second); the set with
+    more such videos is kept, SIFT's on a tie. When the kept set still leaves one untrusted,
+    ALIKED's model is tried last (CameraModels.third), and kept only when it trusts more videos.
     When no set trusts any video, the moving points' own cameras are tried last (_try_moving_points).
     The kept set's sfm record holds every tried set's counts (models).
     grid: the limits of every offset Stage 0 searches (the moving points' cameras' and the votes')."""
 
-    def attempt(est, other_peaks=None, other="", from_tracks=False) -> tuple[str, CameraSet] | None:
+    def attempt(est, from_tracks=False) -> tuple[str, CameraSet] | None:
         cams = _estimate(vids, cfg, all_pairs, est, from_tracks, grid, rules, memo)
         if from_tracks and not (cams.sfm.fallback is not None and cams.sfm.fallback.used):
             return None  # est's own cameras again, already voted on
-        out = vote_on_cameras(cams, vids, all_pairs, cfg, progress, estimated=True,
-                              other_peaks=other_peaks, other=other, grid=grid, rules=rules, memo=memo)
+        out = vote_on_cameras(cams, vids, all_pairs, cfg, progress, estimated=True, grid=grid, rules=rules,
+                              memo=memo)
         kind = MOVING_POINTS if from_tracks else est.features
         return kind, out
 
@@ -129,10 +123,9 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
         with stage("cameras: estimating them from the videos (pycolmap)", progress):
             kept_est = models.first()
         kind, kept = attempt(kept_est)
-        first_kind, first_peaks = kind, kept.peaks
         tried, failed = [(kind, kept)], []
-        kind, kept, kept_est = _try_later_models(models, attempt, kind, kept, kept_est, first_kind, first_peaks, tried,
-                                                 failed, vids, cfg, rules, progress)
+        kind, kept, kept_est = _try_later_models(models, attempt, kind, kept, kept_est, tried, failed, vids, cfg,
+                                                 rules, progress)
         kind, kept = _try_moving_points(attempt, kind, kept, kept_est, tried, cfg, rules)
         skipped = models.third_skipped
     return _choice_noted(kind, kept, tried, failed, skipped, vids)
@@ -157,12 +150,11 @@ def _kept_models(vids: dict[str, VideoCues], cfg: CueConfig, frame_images: dict,
     return _KeptModels(build, memo, key)
 
 
-def _try_later_models(models: _KeptModels, attempt, kind: str, kept: CameraSet, kept_est, first_kind: str,
-                      first_peaks: dict, tried: list, failed: list, vids: dict, cfg: CueConfig, rules: frozenset[str],
-                      progress: bool) -> tuple[str, CameraSet, object]:
+def _try_later_models(models: _KeptModels, attempt, kind: str, kept: CameraSet, kept_est, tried: list, failed: list,
+                      vids: dict, cfg: CueConfig, rules: frozenset[str], progress: bool) -> tuple[str, CameraSet, object]:
     """(kind, kept set, its estimate) after the second and third camera models were tried while a
-    video is left untrusted, each voted on with attempt (held to the first set's peaks) and kept
-    when its joint vote trusts more videos; tried gets each set tried, failed why a model failed."""
+    video is left untrusted, each voted on with attempt and kept when its joint vote trusts more
+    videos; tried gets each set tried, failed why a model failed."""
     for which, build_next in (("second", models.second), ("third", models.third)):
         if not cfg.geometric.enabled or kept.used >= set(vids):
             break
@@ -175,8 +167,7 @@ def _try_later_models(models: _KeptModels, attempt, kind: str, kept: CameraSet, 
                 continue
             log.info("the joint vote trusted %d of %d videos on %s's cameras: trying %s's model",
                      len(kept.used), len(vids), kind.upper(), est.features.upper())
-            # each later model is held to the first one's vote peaks
-            tried.append(attempt(est, first_peaks, f"{first_kind.upper()}'s model"))
+            tried.append(attempt(est))
         except Exception as exc:  # another opinion that fails leaves the earlier ones standing
             failed.append(f"the {which} camera model failed ({type(exc).__name__}: {exc}); "
                           f"{kind.upper()}'s kept")

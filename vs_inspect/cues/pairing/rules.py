@@ -15,44 +15,6 @@ def joint_vote_share(st: GeometricPairStats, delta_s: float) -> float:
     return min(1.0, votes_at(st, delta_s) / max(st.peak_votes))
 
 
-def disputed_by_other_model(joint: JointChoice, sure: dict[str, bool],
-                            other_peaks: dict[tuple[str, str], tuple[float, ...]], tol_s: float,
-                            other: str = "the other camera model", three_view_share: dict[str, float] | None = None,
-                            overrule_share: float | None = None) -> tuple[dict[str, str], dict[str, str]]:
-    """Sure cameras whose joint offsets the vote peaks of another camera model contradict:
-    ({camera: reason} disputed, {camera: reason} whose dispute its own three-view check overrules).
-
-    other_peaks: (a, b) -> the vote peaks Δ_ab (s) of the pair with the other model's cameras.
-    A sure camera is kept when one of its pairs with another sure camera has a peak of the other
-    model within tol_s of the joint Δ_ab; a camera none of whose such pairs the other model voted
-    on has no opinion against it and is kept. Two reconstructions from different features
-    rarely err alike, so a wrong camera of one model (even one that passes its three-view check)
-    tends to find no peak of the other model near its joint Δ, while right cameras do.
-
-    three_view_share: camera -> trajectories its tracks follow at its joint offset over those
-    followed at its best offset (transfer.ThreeViewCheck). A contradicted camera with at least
-    overrule_share (None: none) is kept, its dispute overruled: the other model's cameras can be the wrong
-    ones (measured: see BENCHMARKS.md, "Measurements behind defaults")."""
-    out: dict[str, str] = {}
-    overruled: dict[str, str] = {}
-    for cam in sorted(n for n, ok in sure.items() if ok):
-        voted = {}
-        for (a, b), peaks in other_peaks.items():
-            if cam in (a, b) and sure.get(a) and sure.get(b) and len(peaks):
-                voted[(a, b)] = (joint.offsets_s[b] - joint.offsets_s[a], peaks)
-        if voted and not any(min(abs(p - d) for p in peaks) <= tol_s for d, peaks in voted.values()):
-            why = (f"{other}'s vote peaks of its pairs lie more than {tol_s:.3f} s from the joint Δ: "
-                   + "; ".join(f"{a}__{b} Δ {d:+.3f} s, peaks {', '.join(f'{p:+.3f}' for p in peaks)} s"
-                               for (a, b), (d, peaks) in sorted(voted.items())))
-            share = (three_view_share or {}).get(cam)
-            if share is not None and overrule_share is not None and share >= overrule_share:
-                overruled[cam] = (f"{why}; overruled: its three-view check follows {share:.2f} of its best "
-                                  f"offset's trajectories at the joint offset (at least {overrule_share:g})")
-            else:
-                out[cam] = why
-    return out, overruled
-
-
 def rival_offsets(found: dict[tuple[str, str], GeometricPairStats], joint: JointChoice,
                   sure: dict[str, bool], three_view_best_s: dict[str, tuple[float, int, int]],
                   min_apart_s: float, min_share: float) -> dict[str, str]:
