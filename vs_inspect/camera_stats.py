@@ -1,5 +1,5 @@
 """Stage 0's records of the cameras it estimated: the kept model with its matches and frame
-registrations, the moving points' own cameras and their checks, and every model tried, as
+registrations, the moving points' own cameras and their fit, and every model tried, as
 result.json's "cues" keeps them under "sfm" (written and read with json_records).
 """
 
@@ -49,19 +49,6 @@ class MovingPointsPair:
 
 
 @dataclass(frozen=True)
-class MovedOffset:
-    alone_s: float  # its best coarse offset with the reference alone
-    together_s: float  # the one chosen with every pair
-
-
-@dataclass(frozen=True)
-class JointCoarseOffsets:
-    pairs: int
-    summed_share: float
-    moved: dict[str, MovedOffset]
-
-
-@dataclass(frozen=True)
 class JointFit:
     """One focal per camera and every pose fitted to all camera pairs' track pairs at once."""
 
@@ -74,23 +61,6 @@ class JointFit:
 
 
 @dataclass(frozen=True)
-class FittedOffsetPair:
-    fitted_s: float  # Δ_ab the cameras were fitted at
-    voted_s: float  # Δ_ab the epipolar vote chose
-    agrees: bool
-
-
-@dataclass(frozen=True)
-class FittedOffsetCheck:
-    """The moving points' cameras' fitted offsets against their own epipolar votes."""
-
-    verdict: str
-    tolerance_s: float | None = None
-    pairs: dict[str, FittedOffsetPair] | None = None
-    refused: tuple[str, ...] | None = None
-
-
-@dataclass(frozen=True)
 class MovingPointsCameras:
     """Whether the moving points' own cameras were fitted and used instead of a model's."""
 
@@ -98,18 +68,13 @@ class MovingPointsCameras:
     used: bool
     reference: str | None = None
     pairs: dict[str, MovingPointsPair] | None = None  # camera -> its geometry with the reference
-    joint_offsets: JointCoarseOffsets | None = None
     joint_fit: JointFit | None = None
-    fitted_offsets_s: dict[str, float] | None = None
-    check: FittedOffsetCheck | None = None
 
     def to_json(self) -> dict[str, Any]:
         """The diagnostics of the fit go under "pairs" with the cameras (result.json's shape)."""
-        out = to_json(dataclasses.replace(self, pairs=None, joint_offsets=None, joint_fit=None))
+        out = to_json(dataclasses.replace(self, pairs=None, joint_fit=None))
         if self.reference is not None:
             pairs: dict[str, Any] = to_json(self.pairs or {})
-            if self.joint_offsets is not None:
-                pairs["joint_offsets"] = to_json(self.joint_offsets)
             if self.joint_fit is not None:
                 pairs["joint_fit"] = to_json(self.joint_fit)
             out = {"reference": self.reference, "pairs": pairs, **{k: v for k, v in out.items() if k != "reference"}}
@@ -117,12 +82,14 @@ class MovingPointsCameras:
 
     @staticmethod
     def from_json(d: dict[str, Any]) -> MovingPointsCameras:
+        """The record from its JSON; an older result.json's "joint_offsets" among the pairs (the
+        coarse offsets once chosen with every pair at once) is passed over."""
         pairs = dict(d.get("pairs") or {})
-        joint_offsets, joint_fit = pairs.pop("joint_offsets", None), pairs.pop("joint_fit", None)
+        joint_fit = pairs.pop("joint_fit", None)
+        pairs.pop("joint_offsets", None)
         plain = from_json(MovingPointsCameras, {k: v for k, v in d.items() if k != "pairs"})
         return dataclasses.replace(
             plain, pairs=from_json(dict[str, MovingPointsPair], pairs) if "pairs" in d else None,
-            joint_offsets=from_json(JointCoarseOffsets | None, joint_offsets),
             joint_fit=from_json(JointFit | None, joint_fit))
 
 
@@ -130,7 +97,7 @@ class MovingPointsCameras:
 class ModelTried:
     """One camera set the joint vote was taken on."""
 
-    features: str  # "sift", "xfeat", "aliked", "moving points", "sift own", ...
+    features: str  # "sift", "xfeat", "aliked", "moving points"
     cameras: int
     trusted: tuple[str, ...]  # videos the joint vote trusted on it
     kept: bool

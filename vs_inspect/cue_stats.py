@@ -117,9 +117,8 @@ class JointVoteRecord:
     used: tuple[str, ...] = ()  # cameras with a pair whose Δ was trusted
     transfer: dict[str, TransferSummary] | None = None
     three_view: dict[str, ThreeViewSummary] | None = None
-    dissent: dict[str, str] | None = None  # camera -> why its pairs (or another model) contradict it
+    dissent: dict[str, str] | None = None  # camera -> why a check after the vote contradicts it
     dissent_short: dict[str, str] | None = None
-    overruled: dict[str, str] | None = None  # camera -> why another model's dispute was overruled
 
     def refused_in_three_views(self) -> list[str]:
         return sorted(v for v, chk in (self.three_view or {}).items() if not chk.passed)

@@ -1,5 +1,5 @@
 """Stage 0's choice of cameras when none are given (cues/cameras/choice.py): the moving points'
-cameras fitted once and refused alone in pairs; later camera models tried, kept or not."""
+cameras refused alone in pairs; later camera models tried, kept or not."""
 
 from __future__ import annotations
 
@@ -23,10 +23,9 @@ def _as_json(cams) -> dict:
     return {"camera_source": cams.source, "dropped": dict(cams.dropped), "sfm": cams.sfm.to_json()}
 
 
-def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), memo: dict | None = None,
-                          calls: list | None = None):
-    """_estimate when the background reconstruction registers nothing and the moving points give
-    a static camera for every video (memo: _estimate's; calls: gets one entry per fit). Returns
+def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig()):
+    """_estimate of the moving points' cameras (from_tracks) when the background reconstruction
+    registers nothing and the moving points give a static camera for every video. Returns
     (cameras, stats)."""
     from types import SimpleNamespace
 
@@ -40,7 +39,6 @@ def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), m
               for i, n in enumerate(names)}
     details = {n: {"coarse_offset_s": 0.1 * i} for i, n in enumerate(names) if i}
     def fit(*a, **k):
-        (calls if calls is not None else []).append(k)
         return dict(fitted), {}, details
 
     monkeypatch.setattr(pairwise_mod, "cameras_from_tracks", fit)
@@ -49,25 +47,8 @@ def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), m
                                register_masks=None, xy_full=np.zeros((0, 50, 2)),
                                instance=np.zeros(0, np.int64)) for n in names}
     pairs = {(a, b): TrackPairs(a, b, np.zeros((0, 2), np.int64)) for a, b in zip(names, names[1:])}
-    got = _estimate(vids, config, pairs, est, memo=memo)
+    got = _estimate(vids, config, pairs, est, from_tracks=True)
     return got.cameras, _as_json(got)
-
-
-def test_the_moving_points_cameras_are_fitted_once_for_every_model(monkeypatch):
-    """They depend on the track pairs only, not on the model: with a memo, a second model's
-    _estimate reuses them (the same cameras and details), and the config's joint choice is passed."""
-    from vs_inspect.cues.config import CameraConfig
-
-    memo, calls = {}, []
-    first, stats1 = _moving_point_cameras(monkeypatch, ["a", "b", "c"], memo=memo, calls=calls)
-    again, stats2 = _moving_point_cameras(monkeypatch, ["a", "b", "c"], memo=memo, calls=calls)
-    assert len(calls) == 1 and calls[0]["joint"] is True
-    assert set(again) == set(first) == {"a", "b", "c"}
-    assert all(np.array_equal(again[n].cam_from_world, first[n].cam_from_world) for n in first)
-    assert stats2["sfm"]["fallback"] == stats1["sfm"]["fallback"]
-    _moving_point_cameras(monkeypatch, ["a", "b", "c"], CueConfig(camera=CameraConfig(fallback_joint_offsets=False)),
-                          calls=calls)
-    assert len(calls) == 2 and calls[1]["joint"] is False
 
 
 def test_two_cameras_from_the_moving_points_alone_are_refused(monkeypatch):
@@ -83,26 +64,24 @@ def test_two_cameras_from_the_moving_points_alone_are_refused(monkeypatch):
     # in a few words, both causes are kept (e.g. "only 2 track pairs" as the second)
     head = CueStats.from_json(stats).headline("a")
     assert head.startswith("no reconstruction: too few matches; from the moving points: only two cameras came out")
-    # three are used (their fitted offsets are then checked against their votes), and so are two
-    # when the config asks for them
+    # three are used, and so are two when the config asks for them
     cams, stats = _moving_point_cameras(monkeypatch, ["a", "b", "c"])
     assert set(cams) == {"a", "b", "c"} and stats["sfm"]["fallback"]["used"] is True
     from vs_inspect.cues.config import CameraConfig
     cams, stats = _moving_point_cameras(monkeypatch, ["a", "b"], CueConfig(
         camera=CameraConfig(fallback_unchecked_pair=True)))
-    assert set(cams) == {"a", "b"} and stats["sfm"]["fallback"]["fitted_offsets_s"] == {"a": 0.0, "b": 0.1}
+    assert set(cams) == {"a", "b"} and stats["sfm"]["fallback"]["pairs"]["b"]["coarse_offset_s"] == 0.1
 
 
 def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: bool = True,
                        second_fails: bool = False, registered: dict[str, str] | None = None,
-                       weak_first: bool = False, config: CueConfig = CueConfig(), joints: dict | None = None):
+                       config: CueConfig = CueConfig(), joints: dict | None = None):
     """camera_choice.estimated_cameras on three videos with camera models ("sift" first, "xfeat"
     second, "aliked" third when `trusted` names it, else none; the moving points' cameras, when
     `trusted` names "moving points", are used) whose pairing trusts the videos of `trusted`; each
-    model has a camera for the videos `registered` names for it (default: all). weak_first: the
-    moving points' cameras replace the first model's (its own are "sift own"). joints: a model's
+    model has a camera for the videos `registered` names for it (default: all). joints: a model's
     joint vote record (CueStats' geometric_joint) as its vote leaves it.
-    Returns (kept set, stats, sink, votes seen as (kind, other_peaks, other))."""
+    Returns (kept set, stats, sink, the kinds of the sets voted on, in order)."""
     import dataclasses
     from types import SimpleNamespace
 
@@ -140,12 +119,9 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
 
     seen = []
 
-    def estimate(vids, cfg, pairs, est, from_tracks=False, memo=None, as_built=False, grid=None, rules=None,
-                 kept=None):
-        kind = ex.MOVING_POINTS if from_tracks else est.features + (ex.OWN if as_built else "")
+    def estimate(vids, cfg, pairs, est, from_tracks=False, grid=None, rules=None, kept=None):
+        kind = ex.MOVING_POINTS if from_tracks else est.features
         sfm = SfmRecord(kind, 3, 3, {}, (), {})
-        if weak_first and kind == "sift":  # replaced by the moving points' cameras
-            sfm = dataclasses.replace(sfm, fallback=MovingPointsCameras("weak", True))
         if from_tracks:  # the moving points' cameras, used when the test's trusted names them
             sfm = dataclasses.replace(sfm, fallback=MovingPointsCameras("none trusted", kind in trusted))
             if kind not in trusted:
@@ -155,12 +131,11 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
         return CameraSet({n: CameraTrack(K, look_at([6.0, 0, 2.0], [0, 0, 1])) for n in names}, {}, None, None, {},
                          dropped, sfm=sfm)
 
-    def vote(cams, vids, all_pairs, cfg, progress, estimated, other_peaks=None, other="", grid=None, **kept):
+    def vote(cams, vids, all_pairs, cfg, progress, estimated, grid=None, **kept):
         kind = cams.sfm.features
-        seen.append((kind, other_peaks, other))
+        seen.append(kind)
         pairing = GeometricPairing({}, {}, {}, "joint", {}, {}, joints.get(kind) if joints else None)
         return dataclasses.replace(cams, pairs={}, used=frozenset(trusted[kind]), pairing=pairing,
-                                   peaks={("a", "b"): (0.1,) if kind == "sift" else (0.2,)},
                                    notes=(Note("cues", f"voted on {kind}"),))
 
     monkeypatch.setattr(cameras_mod, "CameraModels", Models)
@@ -176,8 +151,7 @@ def _two_camera_models(monkeypatch, trusted: dict[str, set], second_allowed: boo
 def test_second_camera_model_is_kept_when_its_joint_vote_trusts_more_videos(monkeypatch):
     kept, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b"}, "xfeat": {"a", "b", "c"}})
     assert kept.used == {"a", "b", "c"} and stats["sfm"]["features"] == "xfeat"
-    # XFeat's sure cameras were held to SIFT's vote peaks
-    assert seen == [("sift", None, ""), ("xfeat", {("a", "b"): (0.1,)}, "SIFT's model")]
+    assert seen == ["sift", "xfeat"]
     assert stats["sfm"]["models"] == [{"features": "sift", "cameras": 3, "trusted": ["a", "b"], "kept": False},
                                       {"features": "xfeat", "cameras": 3, "trusted": ["a", "b", "c"], "kept": True}]
     # only the kept set's reports reach the sink, then the choice
@@ -191,7 +165,7 @@ def test_first_camera_model_is_kept_on_a_tie_and_alone_when_it_trusts_every_vide
     assert stats["sfm"]["features"] == "sift" and [m["kept"] for m in stats["sfm"]["models"]] == [True, False]
     assert "voted on sift" in sink.messages and "voted on xfeat" not in sink.messages
     kept, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b", "c"}}, second_allowed=False)
-    assert [s[0] for s in seen] == ["sift"] and "models" not in stats["sfm"]
+    assert seen == ["sift"] and "models" not in stats["sfm"]
     assert sink.messages == ["voted on sift"]
 
 
@@ -199,9 +173,7 @@ def test_third_camera_model_is_tried_when_the_kept_set_leaves_a_video_untrusted(
     kept, stats, _, seen = _two_camera_models(
         monkeypatch, {"sift": {"a"}, "xfeat": {"a", "b"}, "aliked": {"a", "b", "c"}})
     assert kept.used == {"a", "b", "c"} and stats["sfm"]["features"] == "aliked"
-    # ALIKED's sure cameras are held to the first (SIFT's) vote peaks, as XFeat's were
-    assert seen[1:] == [("xfeat", {("a", "b"): (0.1,)}, "SIFT's model"),
-                        ("aliked", {("a", "b"): (0.1,)}, "SIFT's model")]
+    assert seen == ["sift", "xfeat", "aliked"]
     assert [(m["features"], m["kept"]) for m in stats["sfm"]["models"]] == [
         ("sift", False), ("xfeat", False), ("aliked", True)]
     # a third set trusting no more than the kept one is not kept
@@ -209,11 +181,11 @@ def test_third_camera_model_is_tried_when_the_kept_set_leaves_a_video_untrusted(
     assert stats["sfm"]["features"] == "xfeat" and kept.used == {"a", "b"}
     # when XFeat's set trusts every video, ALIKED's is not tried
     _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": {"a"}, "xfeat": {"a", "b", "c"}, "aliked": set()})
-    assert [s[0] for s in seen] == ["sift", "xfeat"] and stats["sfm"]["features"] == "xfeat"
+    assert seen == ["sift", "xfeat"] and stats["sfm"]["features"] == "xfeat"
     assert "models_skipped" not in stats["sfm"]
     # a third model skipped says why, in result.json and to the recording, after the choice
     _, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a"}, "xfeat": {"a", "b"}})
-    assert [s[0] for s in seen] == ["sift", "xfeat"]
+    assert seen == ["sift", "xfeat"]
     assert stats["sfm"]["models_skipped"] == "ALIKED's model not tried: large images"
     assert sink.messages[-1] == "ALIKED's model not tried: large images"
 
@@ -233,7 +205,7 @@ def test_a_video_without_a_camera_says_what_every_model_made_of_it(monkeypatch):
     # with one model tried (XFeat's failed, ALIKED's skipped), the reason is the model's own
     _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b"}}, registered={"sift": "ab"},
                                            second_fails=True)
-    assert [s[0] for s in seen] == ["sift"]
+    assert seen == ["sift"]
     assert stats["dropped"] == {"c": "sift matched too little; the moving points' cameras refused"}
 
 
@@ -266,7 +238,7 @@ def test_a_video_placed_but_not_timed_says_what_the_other_models_made_of_it(monk
 
 def test_a_second_camera_model_that_fails_leaves_the_first_standing(monkeypatch):
     kept, stats, sink, seen = _two_camera_models(monkeypatch, {"sift": {"a", "b"}}, second_fails=True)
-    assert kept.used == {"a", "b"} and [s[0] for s in seen] == ["sift"]
+    assert kept.used == {"a", "b"} and seen == ["sift"]
     why = "the second camera model failed (RuntimeError: XFeat ran out of memory); SIFT's kept"
     # the third model is still asked for (here it is skipped)
     assert stats["sfm"]["models_failed"] == why
@@ -279,7 +251,7 @@ def test_the_moving_points_cameras_are_tried_when_no_model_is_trusted_for_any_vi
     kept, stats, sink, seen = _two_camera_models(
         monkeypatch, {"sift": set(), "xfeat": set(), "aliked": set(), "moving points": {"a", "b"}},
         registered={"moving points": "ab"})
-    assert [s[0] for s in seen] == ["sift", "xfeat", "aliked", "moving points"]
+    assert seen == ["sift", "xfeat", "aliked", "moving points"]
     assert stats["sfm"]["features"] == "moving points" and kept.used == {"a", "b"}
     assert [(m["features"], m["kept"]) for m in stats["sfm"]["models"]] == [
         ("sift", False), ("xfeat", False), ("aliked", False), ("moving points", True)]
@@ -291,14 +263,14 @@ def test_the_moving_points_cameras_are_tried_when_no_model_is_trusted_for_any_vi
     assert "SIFT's model registered it, but its set was not kept" in stats["dropped"]["c"]
     # trusted on none of them either: the first model's set stays, the attempt is listed
     _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": set(), "xfeat": set(), "moving points": set()})
-    assert stats["sfm"]["features"] == "sift" and seen[-1][0] == "moving points"
+    assert stats["sfm"]["features"] == "sift" and seen[-1] == "moving points"
     assert [m["features"] for m in stats["sfm"]["models"]] == ["sift", "xfeat", "moving points"]
     # not used (they explained the points worse): not listed
     _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": set(), "xfeat": set()})
     assert [m["features"] for m in stats["sfm"]["models"]] == ["sift", "xfeat"]
     # a model trusted for some video: not tried
     _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": {"a"}, "xfeat": set(), "moving points": {"a", "b"}})
-    assert "moving points" not in [s[0] for s in seen] and stats["sfm"]["features"] == "sift"
+    assert "moving points" not in seen and stats["sfm"]["features"] == "sift"
 
 
 def test_the_record_says_when_sifts_static_images_had_asift_features(monkeypatch):
@@ -321,72 +293,3 @@ def test_the_record_says_when_sifts_static_images_had_asift_features(monkeypatch
     vids = {n: SimpleNamespace(camera_motion="moving") for n in "ab"}
     stats = _as_json(_estimate(vids, CueConfig(), {}, est))
     assert stats["sfm"]["features"] == "sift" and "static_images" not in stats["sfm"]
-
-
-def test_a_weak_models_own_cameras_are_voted_on_when_the_moving_points_replaced_them_for_nothing(monkeypatch):
-    """The first model was weak, the moving points' cameras replaced its own, and no set was
-    trusted for any video: the first model's own cameras get their vote, and are kept when it
-    trusts a video."""
-    from vs_inspect.cues.config import CameraConfig
-
-    kept, stats, sink, seen = _two_camera_models(
-        monkeypatch, {"sift": set(), "xfeat": set(), "sift own": {"a", "b", "c"}}, weak_first=True)
-    assert [s[0] for s in seen] == ["sift", "xfeat", "sift own"]
-    assert kept.used == {"a", "b", "c"} and stats["sfm"]["features"] == "sift own"
-    assert [(m["features"], m["kept"]) for m in stats["sfm"]["models"]] == [
-        ("sift", False), ("xfeat", False), ("sift own", True)]
-    assert ("camera models: SIFT's own kept; the joint vote trusted 0 video(s) on SIFT's, 0 video(s) on XFEAT's, "
-            "3 video(s) on SIFT's own") in sink.messages
-    # trusted for none either: the first set stays, the attempt listed
-    _, stats, _, seen = _two_camera_models(monkeypatch, {"sift": set(), "xfeat": set(), "sift own": set()},
-                                           weak_first=True)
-    assert seen[-1][0] == "sift own" and [m["kept"] for m in stats["sfm"]["models"]] == [True, False, False]
-    # not tried: a video trusted already, the first model not replaced, or switched off
-    for trusted, weak, cfg in (({"sift": set(), "xfeat": {"a", "b"}}, True, CueConfig()),
-                               ({"sift": set(), "xfeat": set()}, False, CueConfig()),
-                               ({"sift": set(), "xfeat": set()}, True,
-                                CueConfig(camera=CameraConfig(weak_model_when_replaced=False)))):
-        _, _, _, seen = _two_camera_models(monkeypatch, trusted, weak_first=weak, config=cfg)
-        assert "sift own" not in [s[0] for s in seen], (trusted, weak)
-
-
-def test_the_moving_points_cameras_are_not_fitted_when_they_could_not_replace_a_weak_model(monkeypatch):
-    """A weak model (few points per image) that placed a hand-held camera besides the two static
-    ones: the moving points give static cameras only, 2 < 3, so they could not replace it and are
-    not fitted; the model's cameras are used and the record says why. With only the two static
-    cameras placed, they are fitted (here none come out, so the model is kept)."""
-    from types import SimpleNamespace
-
-    import vs_inspect.cues.cameras.moving_points as pairwise_mod
-    from vs_inspect.cues.cameras.model_or_points import _estimate
-    from vs_inspect.cues.cameras.sfm import CameraEstimate, EstimatedCamera
-    from vs_inspect.geometry.camera_model import Lens
-
-    lens = Lens("SIMPLE_RADIAL", (500.0, 320.0, 240.0, 0.0), 640, 480, 1.0)
-    motion = {"a": "static", "b": "static", "h": "moving"}
-    info = SimpleNamespace(width=640, height=480, num_frames=50)
-    vids = {n: SimpleNamespace(info=info, camera_motion=m, xy_full=np.zeros((0, 50, 2)),
-                               instance=np.zeros(0, np.int64)) for n, m in motion.items()}
-    pairs = {("a", "b"): TrackPairs("a", "b", np.zeros((0, 2), np.int64))}
-    calls = []
-
-    def fit(*a, **k):
-        calls.append(k)
-        return {}, {}, {}
-
-    monkeypatch.setattr(pairwise_mod, "cameras_from_tracks", fit)
-
-    def estimate(names):
-        cams = {n: EstimatedCamera(CameraTrack(K, look_at([6.0 * np.cos(i), 6.0 * np.sin(i), 2.0], [0, 0, 1])),
-                                   lens, np.arange(1), points_seen=40) for i, n in enumerate(names)}
-        est = CameraEstimate(cams, {}, None, None, 3, 3, "sift")
-        got = _estimate(vids, CueConfig(), pairs, est)
-        return got, _as_json(got)
-
-    kept, stats = estimate("abh")
-    assert calls == [] and set(kept.cameras) == {"a", "b", "h"}
-    fb = stats["sfm"]["fallback"]
-    assert fb["used"] is False and "fewest 40 per image" in fb["why"]
-    assert "2 static camera(s) at most, fewer than its 3" in fb["why"]
-    kept, stats = estimate("ab")
-    assert len(calls) == 1 and set(kept.cameras) == {"a", "b"} and stats["sfm"]["fallback"]["used"] is False

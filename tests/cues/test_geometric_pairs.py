@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from vs_inspect.cues.pairing.joint import JointChoice, consistent_peaks, joint_offsets
-from vs_inspect.cues.pairing.rules import disputed_by_other_model, dissenting_cameras, joint_vote_share, rival_offsets
+from vs_inspect.cues.pairing.rules import joint_vote_share, rival_offsets
 from vs_inspect.cues.pairing.votes import GeometricPairStats, consistent_at, epipolar_extent, geometric_pairs, supporters
 from vs_inspect.geometry.epipolar import fundamental_from_cameras, look_at, project
 from vs_inspect.geometry.offsets import OffsetGrid
@@ -341,75 +341,6 @@ def test_joint_vote_share_is_the_votes_at_the_delta_over_the_top_peak():
     assert joint_vote_share(st, -0.9) == 1.0
     assert joint_vote_share(st, 2.0) == 0.0
     assert joint_vote_share(GeometricPairStats(0, 0, 0, (), ()), 0.0) == 1.0  # no votes: no dissent
-
-
-def test_a_camera_whose_pair_votes_elsewhere_is_not_sure():
-    # a's pair with b votes for -0.9, not the joint 0.3 (its pairs with c and d agree with the
-    # joint choice, as a periodic motion can make them): a, of the smaller margin, is blamed
-    joint = JointChoice({"a": 0.0, "b": 0.3, "c": -0.2, "d": 1.0}, 50.0,
-                        {"a": 6.0, "b": 30.0, "c": 35.0, "d": 20.0})
-    agree = {("a", "c"): _voted({-0.2: 60}), ("a", "d"): _voted({1.0: 40}), ("b", "c"): _voted({-0.5: 200}),
-             ("b", "d"): _voted({0.7: 50}), ("c", "d"): _voted({1.2: 50})}
-    found = {("a", "b"): _voted({-0.9: 100, 0.3: 20}), **agree}
-    sure = dict.fromkeys("abcd", True)
-    out = dissenting_cameras(found, joint, sure, 0.5)
-    assert list(out) == ["a"]
-    assert "a__b has 0.20 of its top peak's votes at the joint Δ +0.300 s" in out["a"]
-    # the other way round in margin, b is blamed
-    flipped = JointChoice(joint.offsets_s, 50.0, {"a": 30.0, "b": 6.0, "c": 35.0, "d": 20.0})
-    assert list(dissenting_cameras(found, flipped, sure, 0.5)) == ["b"]
-    # a camera in two contradicting pairs is blamed whatever its margin: d, not a or b
-    two = {**found, ("a", "b"): _voted({0.3: 100}), ("a", "d"): _voted({-1.0: 90, 1.0: 30}),
-           ("b", "d"): _voted({2.0: 90, 0.7: 10})}
-    assert list(dissenting_cameras(two, joint, sure, 0.5)) == ["d"]
-    # a share at the bar passes; unsure cameras are not judged; 0.5 of 100 votes at the joint Δ
-    assert dissenting_cameras({**agree, ("a", "b"): _voted({-0.9: 100, 0.3: 50})}, joint, sure, 0.5) == {}
-    assert dissenting_cameras(found, joint, {**sure, "b": False}, 0.5) == {}
-
-
-def _one_camera_the_other_model_disputes():
-    """Four cameras, XFeat's joint vote puts the hand-held d 0.53 s off; SIFT's peaks of d's pairs
-    lie far from XFeat's Δ, while one pair of each other camera has a SIFT peak at its Δ.
-    (joint, sure, SIFT's peaks)."""
-    joint = JointChoice({"a": 0.0, "b": -1.383, "c": -1.4, "d": -0.867}, 87.0,
-                        {"a": 6.4, "b": 8.8, "c": 24.4, "d": 15.6})
-    sift = {("a", "b"): (0.717, 0.2), ("a", "c"): (-2.483,), ("a", "d"): (-4.283, -0.067),
-            ("b", "c"): (-0.017, 0.067), ("b", "d"): (-0.1, 0.017), ("c", "d"): (1.9, -0.033)}
-    return joint, dict.fromkeys("abcd", True), sift
-
-
-def test_a_camera_no_peak_of_the_other_model_meets_is_disputed():
-    joint, sure, sift = _one_camera_the_other_model_disputes()
-    out, overruled = disputed_by_other_model(joint, sure, sift, 0.067, "SIFT's model")
-    # a is disputed too: SIFT's camera a was wrong, so none of its pairs' peaks meets XFeat's Δ
-    assert sorted(out) == ["a", "d"] and overruled == {}
-    assert out["d"].startswith("SIFT's model's vote peaks of its pairs lie more than 0.067 s from the joint Δ")
-    assert "b__d Δ +0.516 s, peaks -0.100, +0.017 s" in out["d"]
-
-    def disputed(*args, **kwargs):
-        return sorted(disputed_by_other_model(*args, **kwargs)[0])
-
-    # one agreeing pair is enough, for both its cameras
-    assert disputed(joint, sure, {**sift, ("a", "d"): (-0.85,)}, 0.067) == []
-    # no opinion (the other model voted on none of its pairs, or only with unsure cameras): kept
-    no_d = {k: v for k, v in sift.items() if "d" not in k}
-    assert disputed(joint, sure, no_d, 0.067) == ["a"]
-    assert disputed(joint, sure, {**sift, ("b", "d"): (), ("c", "d"): (), ("a", "d"): ()}, 0.067) == ["a"]
-    assert disputed(joint, {**sure, "a": False}, sift, 0.067) == ["d"]
-
-
-def test_a_disputed_camera_its_own_three_view_check_backs_is_kept():
-    # the three-view shares: a (right, its SIFT camera wrong) follows 113 of its best offset's 120
-    # trajectories at the joint offset; d (16 frames off) 67 of 183
-    joint, sure, sift = _one_camera_the_other_model_disputes()
-    shares = {"a": 113 / 120, "b": 1.0, "c": 1.0, "d": 67 / 183}
-    out, overruled = disputed_by_other_model(joint, sure, sift, 0.067, "SIFT's model", shares, 0.8)
-    assert sorted(out) == ["d"] and sorted(overruled) == ["a"]
-    assert "overruled: its three-view check follows 0.94 of its best offset's trajectories" in overruled["a"]
-    # at the bar it is kept; without a share (no three-view check) or without a bar, disputed
-    assert sorted(disputed_by_other_model(joint, sure, sift, 0.067, "", {"a": 0.8}, 0.8)[1]) == ["a"]
-    assert sorted(disputed_by_other_model(joint, sure, sift, 0.067, "", {"d": 0.9}, 0.8)[0]) == ["a"]
-    assert sorted(disputed_by_other_model(joint, sure, sift, 0.067, "", shares)[0]) == ["a", "d"]
 
 
 def _one_candidate(y_a: np.ndarray, y_b: np.ndarray, min_share: float):

@@ -149,17 +149,15 @@ def test_descriptor_pairs_are_checked_when_the_triangles_do_not_close(monkeypatc
         assert stats["pairs"][f"{u}__{v}"]["descriptor_pairs_kept"] == len(kept)
 
 
-def _sure_of_all(monkeypatch, offsets: dict[str, float], estimated: bool = True, other_peaks: dict | None = None,
-                 cfg: CueConfig = CueConfig()):
+def _sure_of_all(monkeypatch, offsets: dict[str, float], estimated: bool = True, cfg: CueConfig = CueConfig()):
     """Stage 0's geometric pairs of the transfer scene (cameras a, b, c, true geometry) with the
-    joint vote replaced by one sure (margin 10) of every camera at `offsets` (other_peaks: a first
-    camera model's vote peaks): (pairs, stats, stage events, the scene's rows of each point)."""
-    got, row_of = _pairing(monkeypatch, offsets, estimated, other_peaks, cfg)
+    joint vote replaced by one sure (margin 10) of every camera at `offsets`: (pairs, stats, stage
+    events, the scene's rows of each point)."""
+    got, row_of = _pairing(monkeypatch, offsets, estimated, cfg)
     return got.pairs, _as_json(got), [n.message for n in got.notes], row_of
 
 
-def _pairing(monkeypatch, offsets: dict[str, float], estimated: bool = True, other_peaks: dict | None = None,
-             cfg: CueConfig = CueConfig()):
+def _pairing(monkeypatch, offsets: dict[str, float], estimated: bool = True, cfg: CueConfig = CueConfig()):
     """(the GeometricPairing of _sure_of_all, the scene's rows of each point)."""
     from types import SimpleNamespace
 
@@ -173,8 +171,7 @@ def _pairing(monkeypatch, offsets: dict[str, float], estimated: bool = True, oth
     monkeypatch.setattr(joint_mod, "joint_offsets", lambda *a, **k: JointChoice(dict(offsets), 30.0, dict.fromkeys(offsets, 10.0)))
     got = add_geometric_pairs(pairs, cams, {n: Tracks(xy[n], None) for n in "abc"},
                               {n: SimpleNamespace(info=infos[n]) for n in "abc"}, cfg,
-                              progress=False, estimated=estimated, other_peaks=other_peaks,
-                              other="SIFT's model")
+                              progress=False, estimated=estimated)
     return got, row_of
 
 
@@ -238,27 +235,6 @@ def test_a_sure_camera_with_a_rival_offset_says_how_far_apart_the_two_offsets_li
                                                       "its three-view check follows more")
 
 
-def test_cameras_another_model_disputes_are_kept_when_their_three_view_checks_back_them(monkeypatch):
-    """Right cameras whose first model's vote peaks all lie far off (its cameras were wrong): each
-    one's three-view check follows nearly all its best offset's trajectories at its joint offset,
-    so the dispute is overruled, with the reason in result.json; with overruling off, none stays
-    sure and no pair is used."""
-    offsets = {"a": 0.0, "b": 0.42, "c": -0.3}
-    far = {("a", "b"): (2.0,), ("a", "c"): (-3.0,), ("b", "c"): (1.5,)}
-    out, stats, msgs, _ = _sure_of_all(monkeypatch, offsets, other_peaks=far)
-    joint = stats["geometric_joint"]
-    assert joint["used"] == ["a", "b", "c"] and "dissent" not in joint
-    assert sorted(joint["overruled"]) == ["a", "b", "c"]
-    assert all("overruled: its three-view check follows" in why for why in joint["overruled"].values())
-    assert sum("joint vote still sure of" in m for m in msgs) == 3
-    cfg = CueConfig(geometric=GeometricPairConfig(other_model_overrule_share=2.0))
-    out, stats, msgs, _ = _sure_of_all(monkeypatch, offsets, other_peaks=far, cfg=cfg)
-    joint = stats["geometric_joint"]
-    assert joint["used"] == [] and sorted(joint["dissent"]) == ["a", "b", "c"] and "overruled" not in joint
-    assert joint["dissent_short"] == dict.fromkeys("abc", "SIFT's model's vote peaks disagree")
-    assert all(len(tp.index) == 0 for tp in out.values())
-
-
 def test_cameras_from_a_calibration_are_not_checked_in_three_views(monkeypatch):
     """The check is of estimated cameras: a calibration's are used as given, so the joint vote's
     choice stands unchecked here."""
@@ -268,46 +244,6 @@ def test_cameras_from_a_calibration_are_not_checked_in_three_views(monkeypatch):
     assert not any("three views" in m for m in msgs)
 
 
-
-
-def _videos(names, fps: float = 30.0) -> dict:
-    from types import SimpleNamespace
-    return {n: SimpleNamespace(info=SimpleNamespace(frame_interval_s=1.0 / fps)) for n in names}
-
-
-def test_cameras_from_moving_points_whose_votes_agree_are_kept():
-    from vs_inspect.cues.pairing.pairing import check_fitted_offsets
-
-    # voted Δ within a frame of the fitted ones (caliscope's case)
-    voted = {("r", "u"): 0.52, ("r", "v"): -1.03, ("u", "v"): -1.5}
-    refused, check = check_fitted_offsets({"r": 0.0, "u": 0.5, "v": -1.0}, voted, _videos("ruv"))
-    assert refused == {} and check.verdict == "confirmed"
-    assert all(row.agrees for row in check.pairs.values())
-
-
-def test_cameras_from_moving_points_contradicted_by_their_votes_are_all_refused():
-    from vs_inspect.cues.pairing.pairing import check_fitted_offsets
-
-    # rendered seed 0 with SIFT: fitted at seconds away from where their own votes peak
-    voted = {("u", "r"): 0.458, ("u", "v"): -0.133, ("r", "v"): 0.345}
-    refused, check = check_fitted_offsets({"r": 0.0, "u": -2.717, "v": 1.79}, voted, _videos("ruv"))
-    assert set(refused) == {"r", "u", "v"}
-    assert "contradict" in refused["u"] and "u__r" in refused["u"]
-    assert check.verdict == "contradicted"
-    # one pair off by 4 frames (tolerance 3) is enough
-    voted = {("r", "u"): 0.5, ("r", "v"): -1.0, ("u", "v"): -1.5 + 4 / 30}
-    assert set(check_fitted_offsets({"r": 0.0, "u": 0.5, "v": -1.0}, voted, _videos("ruv"))[0]) == {"r", "u", "v"}
-
-
-def test_camera_from_moving_points_without_an_agreeing_vote_is_refused_alone():
-    from vs_inspect.cues.pairing.pairing import check_fitted_offsets
-
-    refused, check = check_fitted_offsets({"r": 0.0, "u": 0.5, "v": -1.0}, {("r", "u"): 0.5}, _videos("ruv"))
-    assert list(refused) == ["v"] and "confirmed" in refused["v"]
-    assert check.verdict == "partly unconfirmed"
-    # two cameras: nothing to check against, marked so
-    refused, check = check_fitted_offsets({"r": 0.0, "u": 0.5}, {("r", "u"): 3.0}, _videos("ru"))
-    assert refused == {} and check.verdict.startswith("unchecked")
 
 
 def _lone_pair(monkeypatch, moving_b: bool, **geometric):

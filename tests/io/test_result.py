@@ -126,3 +126,31 @@ def test_cue_stats_with_the_joint_vote_and_transfer_checks_round_trip():
     no_joint = CueStats("calibration", 2, 20, 5, videos, {"a__b": PairCueStats(3, 2, 1, 1)}, {}, {}).to_json()
     assert "geometric_joint" not in no_joint and CueStats.from_json(no_joint).geometric_joint is None
     assert CueStats.from_json(no_joint).pairs["a__b"].vote is None
+
+
+def test_an_older_result_json_with_the_keys_of_removed_checks_is_read_and_those_keys_passed_over():
+    """Stage 0 once kept more under "cues" (the moving points' coarse offsets chosen with every
+    pair at once, their fitted offsets checked against their votes, another camera model's
+    disputes overruled); a reader takes such a result.json and leaves those keys out."""
+    from vs_inspect.cue_stats import CueStats
+
+    fallback = {"why": "weak", "used": True, "reference": "a",
+                "pairs": {"b": {"coarse_offset_s": 0.5, "inlier_share": 0.4},
+                          "joint_offsets": {"pairs": 3, "summed_share": 1.7,
+                                            "moved": {"b": {"alone_s": 1.5, "together_s": 0.5}}},
+                          "joint_fit": {"pairs": 3, "cost": 1.0}},
+                "fitted_offsets_s": {"a": 0.0, "b": 0.5},
+                "check": {"verdict": "confirmed", "tolerance_s": 0.1,
+                          "pairs": {"a__b": {"fitted_s": 0.5, "voted_s": 0.51, "agrees": True}}, "refused": []}}
+    sfm = {"features": "sift", "images": 4, "registered_images": 4, "registered_frames": {}, "image_pairs": [],
+           "lens": {}, "fallback": fallback}
+    old = {"camera_source": "estimated", "registered_cameras": 2, "tracks": 20, "track_pairs": 5,
+           "videos": {}, "pairs": {}, "dropped": {}, "sfm": sfm,
+           "geometric_joint": {"origin": "a", "offsets_s": {"a": 0.0, "b": 0.5}, "sure": ["a", "b"],
+                               "overruled": {"b": "SIFT's model's vote peaks disagree; overruled"}}}
+    assert CueStats.from_json(old).geometric_joint.sure == ("a", "b")
+    back = CueStats.from_json(old).sfm.fallback
+    assert set(back.pairs) == {"b"} and back.pairs["b"].coarse_offset_s == 0.5
+    assert back.joint_fit.pairs == 3
+    assert "joint_offsets" not in back.to_json()["pairs"]
+    assert not {"fitted_offsets_s", "check"} & set(back.to_json())

@@ -32,12 +32,6 @@ class GeometricPairConfig:
     """With three or more cameras, choose every camera's offset at once from all pairs' vote histograms and keep each pair's supporters of the implied Δ (else: close triangles of top peaks)."""
     joint_min_margin: float = 5.0
     """Joint choice: a camera's pairs are used only if its offset beats the best choice that moves it against every other camera (by over 3 frames) by this much summed vote z-score."""
-    joint_min_pair_share: float = 0.5
-    """Estimated cameras: a sure camera stays sure only when each of its pairs with another sure camera keeps at least this share of its top vote peak's votes at the joint Δ; 0 = no check."""
-    other_model_agree_frames: float = 2.0
-    """When a second camera model is tried (features auto), its sure cameras stay sure only when a pair with another sure camera has a first-model vote peak within this many frames of the joint Δ."""
-    other_model_overrule_share: float = 0.8
-    """A camera the first model's vote peaks contradict stays sure when its three-view check follows at least this share of its best offset's trajectories at its joint offset; above 1: never."""
     three_view_min_supporters: int = 4
     """Estimated cameras, three or more sure: each stays sure only when its tracks follow at least this many trajectories of the other sure cameras at its joint offset; 0 = no check."""
     three_view_min_share_of_best: float = 1.0 / 3.0
@@ -85,13 +79,9 @@ class CameraConfig:
     auto_aliked_frames: int = field(default=10, metadata={"flag": "--sfm-aliked-frames", "metavar": "N"})
     """Frames per moving camera of ALIKED's model, the last one auto tries; 0: never tried."""
     fallback_from_tracks: bool = True
-    """Build static cameras from the moving points' two-view geometry when the background model places fewer than two or is weak; the cameras that fit the moving points better are used."""
-    fallback_joint_offsets: bool = True
-    """Cameras from the moving points, three or more static cameras: choose their coarse offsets together (all pairs' F inlier shares) instead of each one's best with the reference alone."""
+    """Static cameras from the moving points' two-view geometry may stand in for a camera model's (when no video is trusted on any model, fallback_when_untrusted); off: never fitted."""
     fallback_when_untrusted: bool = True
-    """Also try the moving points' cameras when the background models placed the static cameras yet the joint vote trusted no video; they are kept only when it trusts a video on them."""
-    weak_model_when_replaced: bool = True
-    """When the moving points' cameras replaced a weak first model and the joint vote then trusted no video, vote on that model's own cameras too, and keep them when a video is trusted."""
+    """Try the moving points' cameras when the joint vote trusted no video on any camera model; used when the model placed fewer than two or they fit the moving points better, kept when a video is trusted on them."""
     fallback_unchecked_pair: bool = False
     """Use cameras from the moving points when only two come out: geometry and offset are then fitted to the same track pairs, and no third camera checks them. Off: refused, with that reason."""
 

@@ -10,21 +10,14 @@ from ..sync.config import SyncConfig
 
 RULES: dict[str, str] = {
     # the camera sets tried, in order, when the cameras are estimated
-    "xfeat_first": "SIFT's model gives way to XFeat's before any vote when XFeat registers more videos",
     "second_model": "XFeat's model is voted on when SIFT's cameras leave a video untrusted",
     "third_model": "ALIKED's model is voted on when the kept set still leaves a video untrusted",
-    "weak_model_replaced": "the moving points' cameras replace a weak background model when they explain the points better",
-    "joint_coarse_offsets": "the moving points' cameras are fitted at coarse offsets chosen with every pair at once",
     "two_point_cameras": "only two cameras from the moving points are refused (their F and offset share the same pairs)",
     "points_when_untrusted": "the moving points' cameras are voted on when no model's vote trusts any video",
-    "weak_own": "a weak model's own cameras are voted on when the moving points' replaced them for nothing",
-    "fitted_offsets": "cameras from the moving points are refused when their own votes contradict their fit",
     # the joint vote on one camera set
     "margin": "a camera is sure only when its joint offset beats every other choice by a summed z-score of 5",
     "three_view": "estimated cameras: a sure camera must see the other sure cameras' triangulated points",
     "rival_offset": "a sure camera with a rival offset in three views (a repeated motion) is not sure",
-    "pair_share": "estimated cameras: a sure camera whose own pair votes elsewhere is not sure",
-    "other_model": "a later model's sure camera must meet the first model's vote peaks",
     "transfer": "an unsure camera is made sure when point transfer confirms its joint offset",
     "moving_pair_third": "two moving cameras' joint Δ needs a third sure camera",
     "descriptor_filter": "descriptor pairs are kept only where consistent at the joint Δ",

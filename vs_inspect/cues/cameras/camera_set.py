@@ -28,7 +28,6 @@ class CameraSet:
     sfm: SfmRecord | None = None  # the estimate's record (None: calibrated)
     pairs: dict | None = None  # (a, b) -> TrackPairs after the pairing
     used: frozenset = frozenset()  # cameras with a pair whose geometric Δ the pairing trusted
-    peaks: dict | None = None  # (a, b) -> the pair's vote peaks Δ_ab (s)
     voting_s: float = 0.0  # seconds spent voting
     pairing: GeometricPairing | None = None  # what the pairing made of the set (None: not run)
     notes: tuple[Note, ...] = ()  # what was decided on the set, in words, in order (its pairing's included)

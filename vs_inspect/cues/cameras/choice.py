@@ -24,7 +24,7 @@ from ...memo import NO_MEMO, Memo, digest
 from ...progress import stage
 from ..records import Note, say_cameras
 from ..rules import ALL
-from ..pairing.pairing import add_geometric_pairs, check_fitted_offsets
+from ..pairing.pairing import add_geometric_pairs
 from ..video.extract import VideoCues
 from .camera_set import CameraSet
 from .model_or_points import _estimate
@@ -35,15 +35,10 @@ log = logging.getLogger(__name__)
 MOVING_POINTS = "moving points"  # the kind of the camera set _estimate builds from the moving points alone
 
 
-OWN = " own"  # a weak model's kind with this suffix: its own cameras, voted on after the moving points' failed
-
-
 def _owner(kind: str) -> str:
-    """Whose cameras a set of `kind` are, for messages: "SIFT's", "the moving points'", "SIFT's own"."""
+    """Whose cameras a set of `kind` are, for messages: "SIFT's", "the moving points'"."""
     if kind == MOVING_POINTS:
         return "the moving points'"
-    if kind.endswith(OWN):
-        return f"{kind.removesuffix(OWN).upper()}'s own"
     return f"{kind.upper()}'s"
 
 
@@ -75,14 +70,11 @@ def calibrated_cameras(calibration: dict, vids: dict[str, VideoCues]) -> CameraS
 
 
 def vote_on_cameras(cams: CameraSet, vids: dict, all_pairs: dict, cfg: CueConfig,
-                    progress: bool, estimated: bool, other_peaks: dict | None = None,
-                    other: str = "", grid: OffsetGrid = OffsetGrid(), rules: frozenset[str] = ALL,
-                    memo: Memo = NO_MEMO) -> CameraSet:
+                    progress: bool, estimated: bool, grid: OffsetGrid = OffsetGrid(),
+                    rules: frozenset[str] = ALL, memo: Memo = NO_MEMO) -> CameraSet:
     """cams with its pairs: the descriptor pairs of its cameras plus the geometric ones
-    (add_geometric_pairs; other_peaks, other: another camera model's vote peaks and its name;
-    grid: the limits of the offsets voted for), a camera fitted to the moving points at an offset
-    its votes refuse taken out."""
-    cameras, dropped, sfm = dict(cams.cameras), dict(cams.dropped), cams.sfm
+    (add_geometric_pairs; grid: the limits of the offsets voted for)."""
+    cameras, dropped, sfm = cams.cameras, cams.dropped, cams.sfm
     notes: list[Note] = []
     for name, why in dropped.items():
         if name in vids:
@@ -93,29 +85,16 @@ def vote_on_cameras(cams: CameraSet, vids: dict, all_pairs: dict, cfg: CueConfig
                                f"against it (median {r.median_inliers:.0f} inliers, {r.refused} refused); the rest "
                                "slerped", registered=r.registered, tried=r.tried, refused=r.refused)
     pairs = {k: v for k, v in all_pairs.items() if k[0] in cameras and k[1] in cameras}
-    used, peaks, voting_s, pairing = frozenset(), {}, 0.0, None
+    used, voting_s, pairing = frozenset(), 0.0, None
     if cfg.geometric.enabled:
         t0 = time.perf_counter()
         pairing = add_geometric_pairs(pairs, cameras, cams.tracks, vids, cfg, progress,
-                                      estimated=estimated, other_peaks=other_peaks, other=other, grid=grid,
-                                      rules=rules, memo=memo)
+                                      estimated=estimated, grid=grid, rules=rules, memo=memo)
         pairs, voted = pairing.pairs, pairing.voted
         notes += pairing.notes
-        fallback = sfm.fallback if sfm is not None else None
-        if fallback is not None and fallback.used and "fitted_offsets" in rules:
-            refused, check = check_fitted_offsets(fallback.fitted_offsets_s, voted, vids)
-            sfm = dataclasses.replace(sfm, fallback=dataclasses.replace(fallback, check=check))
-            for n, why in refused.items():
-                cameras.pop(n, None)
-                dropped[n] = why
-                say_cameras(notes, f"{n}: {why}")
-                log.warning("%s: %s", n, why)
-            pairs = {k: v for k, v in pairs.items() if k[0] in cameras and k[1] in cameras}
         used = frozenset(n for k in voted for n in k if n in cameras)
-        peaks = {k: pairing.peaks_s.get(k, ()) for k in pairs}
         voting_s = time.perf_counter() - t0
-    return dataclasses.replace(cams, cameras=cameras, dropped=dropped, sfm=sfm, pairs=pairs, used=used, peaks=peaks,
-                               voting_s=voting_s, pairing=pairing, notes=tuple(notes))
+    return dataclasses.replace(cams, pairs=pairs, used=used, voting_s=voting_s, pairing=pairing, notes=tuple(notes))
 
 
 def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dict,
@@ -124,41 +103,36 @@ def estimated_cameras(vids: dict[str, VideoCues], cfg: CueConfig, all_pairs: dic
     """The cameras pycolmap estimates and their pairs (frame_images: name -> (a function giving a
     moving camera's frames to register, how many), as cameras.CameraModels takes them). With
     camera features "auto", when the joint vote on SIFT's cameras leaves a video without a
-    trusted geometric Δ, XFeat's model is tried too (cameras.CameraModels.second), its sure cameras held to SIFT's vote peaks
-    (geometric_pairs.disputed_by_other_model); the set with more such videos is kept, SIFT's on
-    a tie. When the kept set still leaves one untrusted, ALIKED's model is tried last
-    (CameraModels.third), held to the first set's peaks too, and kept only when it trusts more videos.
+    trusted geometric Δ, XFeat's model is tried too (cameras.CameraModels.second); the set with
+    more such videos is kept, SIFT's on a tie. When the kept set still leaves one untrusted,
+    ALIKED's model is tried last (CameraModels.third), and kept only when it trusts more videos.
+    When no set trusts any video, the moving points' own cameras are tried last (_try_moving_points).
     The kept set's sfm record holds every tried set's counts (models).
     grid: the limits of every offset Stage 0 searches (the moving points' cameras' and the votes')."""
-    seen: dict = {}  # the moving points' cameras, fitted once for every model
 
-    def attempt(est, other_peaks=None, other="", from_tracks=False,
-                as_built=False) -> tuple[str, CameraSet] | None:
-        cams = _estimate(vids, cfg, all_pairs, est, from_tracks, seen, as_built, grid, rules, memo)
+    def attempt(est, from_tracks=False) -> tuple[str, CameraSet] | None:
+        cams = _estimate(vids, cfg, all_pairs, est, from_tracks, grid, rules, memo)
         if from_tracks and not (cams.sfm.fallback is not None and cams.sfm.fallback.used):
             return None  # est's own cameras again, already voted on
-        out = vote_on_cameras(cams, vids, all_pairs, cfg, progress, estimated=True,
-                              other_peaks=other_peaks, other=other, grid=grid, rules=rules, memo=memo)
-        kind = MOVING_POINTS if from_tracks else est.features + (OWN if as_built else "")
+        out = vote_on_cameras(cams, vids, all_pairs, cfg, progress, estimated=True, grid=grid, rules=rules,
+                              memo=memo)
+        kind = MOVING_POINTS if from_tracks else est.features
         return kind, out
 
-    with _kept_models(vids, cfg, frame_images, progress, rules, memo) as models:
+    with _kept_models(vids, cfg, frame_images, progress, memo) as models:
         with stage("cameras: estimating them from the videos (pycolmap)", progress):
             kept_est = models.first()
-        first_est = kept_est
         kind, kept = attempt(kept_est)
-        first_kind, first_peaks = kind, kept.peaks
         tried, failed = [(kind, kept)], []
-        kind, kept, kept_est = _try_later_models(models, attempt, kind, kept, kept_est, first_kind, first_peaks, tried,
-                                                 failed, vids, cfg, rules, progress)
-        kind, kept = _try_moving_points_and_own(attempt, kind, kept, kept_est, first_est, first_kind, tried, cfg,
-                                                rules)
+        kind, kept, kept_est = _try_later_models(models, attempt, kind, kept, kept_est, tried, failed, vids, cfg,
+                                                 rules, progress)
+        kind, kept = _try_moving_points(attempt, kind, kept, kept_est, tried, cfg, rules)
         skipped = models.third_skipped
     return _choice_noted(kind, kept, tried, failed, skipped, vids)
 
 
 def _kept_models(vids: dict[str, VideoCues], cfg: CueConfig, frame_images: dict, progress: bool,
-                 rules: frozenset[str], memo: Memo) -> _KeptModels:
+                 memo: Memo) -> _KeptModels:
     """pycolmap's camera models of the videos (cameras.CameraModels, built only when needed), each
     estimate kept in memo under a digest of the camera settings, frames and features."""
     from .sfm import CameraModels
@@ -166,24 +140,21 @@ def _kept_models(vids: dict[str, VideoCues], cfg: CueConfig, frame_images: dict,
     frames = {n: v.sfm_frames for n, v in vids.items() if v.sfm_frames is not None}
     sizes = {n: (v.info.width, v.info.height) for n, v in vids.items()}
     features = {n: v.frame_features for n, v in vids.items() if v.frame_features is not None}
-    xfeat_first = "xfeat_first" in rules
-    key = digest(cfg.camera, frames, features, xfeat_first)
+    key = digest(cfg.camera, frames, features)
 
     def build():
         return CameraModels(frames, sizes, {n: v.info.num_frames for n, v in vids.items()},
                             {n: v.camera_motion == "moving" for n, v in vids.items()}, cfg.camera,
-                            frame_features=features, frame_images=frame_images, progress=progress,
-                            xfeat_first=xfeat_first)
+                            frame_features=features, frame_images=frame_images, progress=progress)
 
     return _KeptModels(build, memo, key)
 
 
-def _try_later_models(models: _KeptModels, attempt, kind: str, kept: CameraSet, kept_est, first_kind: str,
-                      first_peaks: dict, tried: list, failed: list, vids: dict, cfg: CueConfig, rules: frozenset[str],
-                      progress: bool) -> tuple[str, CameraSet, object]:
+def _try_later_models(models: _KeptModels, attempt, kind: str, kept: CameraSet, kept_est, tried: list, failed: list,
+                      vids: dict, cfg: CueConfig, rules: frozenset[str], progress: bool) -> tuple[str, CameraSet, object]:
     """(kind, kept set, its estimate) after the second and third camera models were tried while a
-    video is left untrusted, each voted on with attempt (held to the first set's peaks) and kept
-    when its joint vote trusts more videos; tried gets each set tried, failed why a model failed."""
+    video is left untrusted, each voted on with attempt and kept when its joint vote trusts more
+    videos; tried gets each set tried, failed why a model failed."""
     for which, build_next in (("second", models.second), ("third", models.third)):
         if not cfg.geometric.enabled or kept.used >= set(vids):
             break
@@ -196,8 +167,7 @@ def _try_later_models(models: _KeptModels, attempt, kind: str, kept: CameraSet, 
                 continue
             log.info("the joint vote trusted %d of %d videos on %s's cameras: trying %s's model",
                      len(kept.used), len(vids), kind.upper(), est.features.upper())
-            # each later model is held to the first one's vote peaks
-            tried.append(attempt(est, first_peaks, f"{first_kind.upper()}'s model"))
+            tried.append(attempt(est))
         except Exception as exc:  # another opinion that fails leaves the earlier ones standing
             failed.append(f"the {which} camera model failed ({type(exc).__name__}: {exc}); "
                           f"{kind.upper()}'s kept")
@@ -208,16 +178,12 @@ def _try_later_models(models: _KeptModels, attempt, kind: str, kept: CameraSet, 
     return kind, kept, kept_est
 
 
-def _try_moving_points_and_own(attempt, kind: str, kept: CameraSet, kept_est, first_est, first_kind: str,
-                               tried: list, cfg: CueConfig, rules: frozenset[str]) -> tuple[str, CameraSet]:
-    """(kind, kept set) after the last resorts when no video was trusted on any set: the moving
-    points' own cameras (when no model was replaced by them), then the first model's own cameras
-    (when the moving points' replaced them); each kept when its joint vote trusts a video; tried
-    gets each set tried."""
+def _try_moving_points(attempt, kind: str, kept: CameraSet, kept_est, tried: list, cfg: CueConfig,
+                       rules: frozenset[str]) -> tuple[str, CameraSet]:
+    """(kind, kept set) after the last resort when no video was trusted on any set: the moving
+    points' own cameras, kept when their joint vote trusts a video; tried gets them when tried."""
     if (cfg.geometric.enabled and cfg.camera.fallback_when_untrusted and cfg.camera.fallback_from_tracks
-            and "points_when_untrusted" in rules
-            and not kept.used
-            and not any(c.sfm.fallback is not None for _, c in tried)):
+            and "points_when_untrusted" in rules and not kept.used):
         # every model placed the static cameras, and none was trusted: the moving points' own cameras
         log.info("the joint vote trusted no video on any camera model: trying the moving points' cameras")
         points = attempt(kept_est, from_tracks=True)
@@ -225,17 +191,6 @@ def _try_moving_points_and_own(attempt, kind: str, kept: CameraSet, kept_est, fi
             tried.append(points)
             if points[1].used:
                 kind, kept = points
-    first_fallback = tried[0][1].sfm.fallback
-    if (cfg.geometric.enabled and cfg.camera.weak_model_when_replaced and "weak_own" in rules and not kept.used
-            and first_fallback is not None and first_fallback.used and len(first_est.cameras) >= 2):
-        # the first model was weak and the moving points' cameras replaced its own, and no video
-        # was trusted on any set: its own cameras get their vote too (a weak model may be right:
-        # the moving points' cameras are judged on track pairs at their own coarse offsets)
-        log.info("the joint vote trusted no video on any camera set: trying %s own cameras", _owner(first_kind))
-        own = attempt(first_est, as_built=True)
-        tried.append(own)
-        if own[1].used:
-            kind, kept = own
     return kind, kept
 
 

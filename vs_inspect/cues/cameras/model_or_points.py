@@ -1,18 +1,16 @@
-"""One camera model's cameras for the videos, or the moving points' own cameras instead when the
-model is weak (few points per image, a static camera left out) and they explain the moving points
-better, or when no video was trusted on any model (cues/cameras/moving_points.py fits them). No
-I/O beyond the models' own scratch folders.
+"""One camera model's cameras for the videos, or, when the joint vote trusted no video on any
+model's cameras, the moving points' own cameras (cues/cameras/moving_points.py fits them) when
+the model placed fewer than two or they explain the moving points better. No I/O beyond the
+models' own scratch folders.
 """
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import functools
 import logging
 
-from ...camera_stats import (ImagePairMatches, JointCoarseOffsets, JointFit, MovingPointsCameras, MovingPointsPair,
-                             SfmRecord)
+from ...camera_stats import ImagePairMatches, JointFit, MovingPointsCameras, MovingPointsPair, SfmRecord
 from ...geometry.offsets import OffsetGrid
 from ...json_records import from_json
 from ...memo import NO_MEMO, Memo
@@ -25,62 +23,49 @@ from .camera_set import CameraSet
 log = logging.getLogger(__name__)
 
 
-def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict, est,
-              from_tracks: bool = False, memo: dict | None = None, as_built: bool = False,
+def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict, est, from_tracks: bool = False,
               grid: OffsetGrid = OffsetGrid(), rules: frozenset[str] = ALL, kept: Memo = NO_MEMO) -> CameraSet:
-    """The cameras of est (cameras.CameraEstimate) and the tracks undistorted with them, or the
-    cameras the moving points give when their cameras explain the points better and est is weak,
-    or from_tracks (the joint vote trusted no video on est's cameras; the moving points' cameras
-    may then be fewer). memo: kept between calls on the same videos and pairs, so that the moving
-    points' cameras, which do not depend on est, are fitted once. as_built: est's cameras even
-    when weak (the moving points' are not fitted nor compared)."""
-    from .sfm import MIN_INLIERS
-
+    """The cameras of est (cameras.CameraEstimate) and the tracks undistorted with them; with
+    from_tracks (the joint vote trusted no video on any model's cameras), the cameras the moving
+    points give instead, when est placed fewer than two or theirs explain the moving points better
+    (they may be fewer)."""
     static = [n for n, v in vids.items() if v.camera_motion != "moving"]
     sfm = _sfm_record(est, cfg, static)
-    # a model resting on few points per image, or missing a static camera, is checked against the
-    # moving points: such models can pass the point threshold with wrong focals and rotations
-    fewest = min((c.points_seen for c in est.cameras.values()), default=0)
-    weak = len(est.cameras) < 2 or any(n not in est.cameras for n in static) or \
-        fewest < 2 * MIN_INLIERS
-    weak_why = (f"the background reconstruction rests on few points (fewest {fewest} per image) or left a "
-                f"static camera out")
-    # the moving points give static cameras only, so when the model placed more videos than there
-    # are static ones their cameras cannot replace it (`use` below): not fitted (it would cost seconds)
-    outnumbered = not from_tracks and len(est.cameras) > len(static)
-    compared = ((weak and "weak_model_replaced" in rules) or from_tracks) and cfg.camera.fallback_from_tracks \
-        and len(static) >= 2 and not as_built
-    if compared and outnumbered:
-        why = (f"{weak_why}; the moving points' cameras were not fitted: they would be {len(static)} static "
-               f"camera(s) at most, fewer than its {len(est.cameras)}, so they could not replace it")
-        sfm = dataclasses.replace(sfm, fallback=MovingPointsCameras(why, False))
-        log.warning("%s", why)
-    elif compared:
-        ref = max(vids, key=lambda n: sum(len(p.index) for k, p in pairs.items() if n in k))
-        infos = {n: v.info for n, v in vids.items()}
-        xy = {n: v.xy_full for n, v in vids.items()}
-        cams, reasons, details = _fitted_moving_points(ref, infos, xy, vids, cfg, pairs, from_tracks, memo, grid,
-                                                       rules, kept)
-        if len(est.cameras) < 2:
-            why = f"the background reconstruction registered {len(est.cameras)} camera(s)"
-        elif weak:
-            why = weak_why
-        else:
-            why = "the joint vote trusted no video on any camera model's cameras"
-        cams, reasons, why = _without_a_lone_pair(cams, reasons, why, cfg, rules)
-        use = len(cams) >= 2
-        if use and len(est.cameras) >= 2:
-            use, why = _explain_better(est, cams, details, ref, static, infos, xy, pairs, from_tracks, why)
-        fallback = _moving_points_record(ref, details, why, bool(use))
-        log.warning("%s; cameras from the moving points: %d (%s)", why, len(cams), "used" if use else "not used")
-        if use:
-            return _moving_points_set(cams, reasons, details, ref, fallback, sfm, vids)
-        sfm = dataclasses.replace(sfm, fallback=fallback)
-        if len(est.cameras) < 2:  # neither worked: say why for both
-            est = dataclasses.replace(est, unregistered={
-                n: (f"{sfm_why}; {FROM_MOVING_POINTS}{reasons[n].removeprefix('camera could not be registered: ')}"
-                    if n in reasons else sfm_why) for n, sfm_why in est.unregistered.items()})
+    if not (from_tracks and cfg.camera.fallback_from_tracks and len(static) >= 2):
+        return _model_set(est, vids, sfm)
+    ref = max(vids, key=lambda n: sum(len(p.index) for k, p in pairs.items() if n in k))
+    infos = {n: v.info for n, v in vids.items()}
+    xy = {n: v.xy_full for n, v in vids.items()}
+    cams, reasons, details = _fitted_moving_points(ref, infos, xy, vids, pairs, grid, kept)
+    cams, reasons, why = _without_a_lone_pair(cams, reasons, _why_fitted(est, static), cfg, rules)
+    use = len(cams) >= 2
+    if use and len(est.cameras) >= 2:
+        use, why = _explain_better(est, cams, details, ref, static, infos, xy, pairs, why)
+    fallback = _moving_points_record(ref, details, why, bool(use))
+    log.warning("%s; cameras from the moving points: %d (%s)", why, len(cams), "used" if use else "not used")
+    if use:
+        return _moving_points_set(cams, reasons, fallback, sfm, vids)
+    sfm = dataclasses.replace(sfm, fallback=fallback)
+    if len(est.cameras) < 2:  # neither worked: say why for both
+        est = dataclasses.replace(est, unregistered={
+            n: (f"{sfm_why}; {FROM_MOVING_POINTS}{reasons[n].removeprefix('camera could not be registered: ')}"
+                if n in reasons else sfm_why) for n, sfm_why in est.unregistered.items()})
     return _model_set(est, vids, sfm)
+
+
+def _why_fitted(est, static: list[str]) -> str:
+    """What the moving points' cameras' record says of est (cameras.CameraEstimate; static: the
+    static videos) when they are fitted: it placed fewer than two cameras, rests on few points per
+    image or left a static camera out, or none of its videos was trusted."""
+    from .sfm import MIN_INLIERS
+
+    fewest = min((c.points_seen for c in est.cameras.values()), default=0)
+    if len(est.cameras) < 2:
+        return f"the background reconstruction registered {len(est.cameras)} camera(s)"
+    if any(n not in est.cameras for n in static) or fewest < 2 * MIN_INLIERS:
+        return (f"the background reconstruction rests on few points (fewest {fewest} per image) or left a "
+                f"static camera out")
+    return "the joint vote trusted no video on any camera model's cameras"
 
 
 def _sfm_record(est, cfg: CueConfig, static: list[str]) -> SfmRecord:
@@ -99,27 +84,19 @@ def _sfm_record(est, cfg: CueConfig, static: list[str]) -> SfmRecord:
                      if est.features == "sift" and cfg.camera.asift_per_view and static else None)
 
 
-def _fitted_moving_points(ref: str, infos: dict, xy: dict, vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict,
-                          from_tracks: bool, memo: dict | None, grid: OffsetGrid, rules: frozenset[str],
-                          kept: Memo) -> tuple[dict, dict, dict]:
+def _fitted_moving_points(ref: str, infos: dict, xy: dict, vids: dict[str, VideoCues], pairs: dict,
+                          grid: OffsetGrid, kept: Memo) -> tuple[dict, dict, dict]:
     """(cameras, {video: why it has none}, details) the moving points give relative to ref
-    (cameras_from_tracks), fitted once per memo; from_tracks: a moving camera's reason says the
-    moving points give static cameras only."""
+    (cameras_from_tracks); a moving camera's reason says the moving points give static cameras
+    only."""
     from .moving_points import cameras_from_tracks
 
-    if memo is not None and "from_tracks" in memo:  # the same track pairs for every model
-        cams, reasons, details = copy.deepcopy(memo["from_tracks"])
-    else:
-        cams, reasons, details = kept.call(
-            "moving_points", cameras_from_tracks, ref, infos, xy, pairs,
-            {n: v.camera_motion == "moving" for n, v in vids.items()},
-            joint=cfg.camera.fallback_joint_offsets and "joint_coarse_offsets" in rules, grid=grid)
-        if memo is not None:
-            memo["from_tracks"] = copy.deepcopy((cams, reasons, details))
-    if from_tracks:  # the background did reconstruct; these cameras are the static ones only
-        reasons = {n: ("camera could not be registered: a moving camera, and the moving points give "
-                       "static cameras only" if vids[n].camera_motion == "moving" else reason)
-                   for n, reason in reasons.items()}
+    cams, reasons, details = kept.call(
+        "moving_points", cameras_from_tracks, ref, infos, xy, pairs,
+        {n: v.camera_motion == "moving" for n, v in vids.items()}, grid=grid)
+    reasons = {n: ("camera could not be registered: a moving camera, and the moving points give "
+                   "static cameras only" if vids[n].camera_motion == "moving" else reason)
+               for n, reason in reasons.items()}
     return cams, reasons, details
 
 
@@ -139,10 +116,10 @@ def _without_a_lone_pair(cams: dict, reasons: dict, why: str, cfg: CueConfig,
 
 
 def _explain_better(est, cams: dict, details: dict, ref: str, static: list[str], infos: dict, xy: dict, pairs: dict,
-                    from_tracks: bool, why: str) -> tuple[bool, str]:
+                    why: str) -> tuple[bool, str]:
     """(whether the moving points' cameras are used instead of est's, why with the comparison
-    added): they must be as many (unless from_tracks) and leave the moving points a smaller median
-    epipolar distance, on as many track pairs, over the pairs of est's static cameras."""
+    added): they must leave the moving points a smaller median epipolar distance, on as many track
+    pairs, over the pairs of est's static cameras."""
     from .moving_points import epipolar_fit_px
     from .sfm import undistort_with_colmap
 
@@ -153,7 +130,7 @@ def _explain_better(est, cams: dict, details: dict, ref: str, static: list[str],
     sfm_px, n_sfm = epipolar_fit_px(sfm_static, infos, {n: undistort_with_colmap(est.cameras[n], xy[n])
                                                           for n in sfm_static}, pairs, coarse)
     fb_px, n_fb = epipolar_fit_px({n: c for n, c in cams.items() if n in sfm_static}, infos, xy, pairs, coarse)
-    use = (len(cams) >= len(est.cameras) or from_tracks) and n_fb >= n_sfm and fb_px < sfm_px
+    use = n_fb >= n_sfm and fb_px < sfm_px
     if n_sfm == 0:  # e.g. one static camera and a moving one: nothing to compare on
         why += (f"; no pair of its {len(sfm_static)} static camera(s) has enough aligned track pairs "
                 f"to compare it with the moving points' cameras on, so it is kept")
@@ -163,13 +140,9 @@ def _explain_better(est, cams: dict, details: dict, ref: str, static: list[str],
     return use, why
 
 
-def _moving_points_set(cams: dict, reasons: dict, details: dict, ref: str, fallback: MovingPointsCameras,
-                       sfm: SfmRecord, vids: dict[str, VideoCues]) -> CameraSet:
-    """The moving points' cameras as the videos' set (pinhole, tracks as seen), with the offsets
-    they were fitted at relative to ref in their record."""
-    # the offsets the cameras were fitted at, relative to the reference (check_fitted_offsets)
-    fallback = dataclasses.replace(fallback, fitted_offsets_s={ref: 0.0} | {
-        n: details[n]["coarse_offset_s"] for n in cams if n != ref})
+def _moving_points_set(cams: dict, reasons: dict, fallback: MovingPointsCameras, sfm: SfmRecord,
+                       vids: dict[str, VideoCues]) -> CameraSet:
+    """The moving points' cameras as the videos' set (pinhole, tracks as seen), fallback their record."""
     for n, reason in reasons.items():
         log.warning("%s: %s", n, reason)
     # pinhole cameras: their points are not undistorted, and there is no lens
@@ -195,6 +168,5 @@ def _model_set(est, vids: dict[str, VideoCues], sfm: SfmRecord) -> CameraSet:
 
 def _moving_points_record(ref: str, details: dict, why: str, used: bool) -> MovingPointsCameras:
     """The record of the moving points' cameras from cameras_from_tracks' details."""
-    per = {n: MovingPointsPair(**d) for n, d in details.items() if n not in ("joint_offsets", "joint_fit")}
-    return MovingPointsCameras(why, used, ref, per, from_json(JointCoarseOffsets | None, details.get("joint_offsets")),
-                               from_json(JointFit | None, details.get("joint_fit")))
+    per = {n: MovingPointsPair(**d) for n, d in details.items() if n != "joint_fit"}
+    return MovingPointsCameras(why, used, ref, per, from_json(JointFit | None, details.get("joint_fit")))

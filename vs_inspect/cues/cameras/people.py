@@ -109,7 +109,7 @@ def with_moving_points(people: CameraSet, cue: PeopleCue, vids: dict, descriptor
         landmark = (people.pairs or {}).get(key)
         pairs[key] = _joined(a, b, moving, landmark, first_landmark[a], first_landmark[b])
     notes = people.notes + voted.notes
-    return dataclasses.replace(people, tracks=tracks, pairs=pairs, peaks=voted.peaks, voting_s=voted.voting_s,
+    return dataclasses.replace(people, tracks=tracks, pairs=pairs, voting_s=voted.voting_s,
                                pairing=voted.pairing, notes=notes)
 
 

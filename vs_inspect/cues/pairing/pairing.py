@@ -2,11 +2,10 @@
 
 For every pair of cameras, geometric_pairs votes for the offsets at which track pairs stay on
 their epipolar lines. Here those votes become decisions: the offsets of all cameras chosen
-together (or the peaks that close every triangle), which cameras are sure of theirs (their own
-pairs, the three-view checks of cues/pairing/transfer.py and another camera model's peaks agree), the
-supporters of the trusted offsets added to the descriptor pairs; and which cameras fitted to
-the moving points their own votes refuse (check_fitted_offsets; camera_choice takes them out).
-The pairing's decisions come back as notes in words (the Stage 0 controller reports them). No I/O.
+together (or the peaks that close every triangle), which cameras are sure of theirs (the
+three-view checks of cues/pairing/transfer.py agree), the supporters of the trusted offsets added
+to the descriptor pairs. The pairing's decisions come back as notes in words (the Stage 0
+controller reports them). No I/O.
 """
 
 from __future__ import annotations
@@ -16,7 +15,6 @@ from dataclasses import dataclass, field
 
 from tqdm import tqdm
 
-from ...camera_stats import FittedOffsetCheck, FittedOffsetPair
 from ...cue_stats import JointVoteRecord, PairVoteSummary
 from ...geometry.offsets import OffsetGrid
 from ...memo import NO_MEMO, Memo
@@ -53,15 +51,12 @@ class GeometricPairing:
 
 def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
                         progress: bool, estimated: bool,
-                        other_peaks: dict | None = None, other: str = "",
                         grid: OffsetGrid = OffsetGrid(), rules: frozenset[str] = ALL,
                         memo: Memo = NO_MEMO) -> GeometricPairing:
     """Descriptor pairs plus epipolar-consistency pairs for every pair of known cameras (a moving
     one with its per-frame poses), the Δ_ab whose supporters were added and every pair's vote peaks.
     estimated: Stage 0 estimated the cameras (no calibration given); only then are sure cameras
-    checked in three views. other_peaks: (a, b) -> the vote peaks of another camera model (named
-    other), which a sure camera's joint offset must meet in one of its pairs
-    (geometric_pairs.disputed_by_other_model). grid: the limits of every vote's offsets (overlap,
+    checked in three views. grid: the limits of every vote's offsets (overlap,
     range), the point transfer's included; its --around windows hold the peaks and offsets chosen.
 
     With three or more such cameras, the vote peaks whose offsets close every triangle
@@ -85,9 +80,9 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
     with stage("geometric pairs: every camera's offset chosen at once", progress and cfg.geometric.joint):
         joint = joint_offsets(votes, 3.0 * coarsest) if cfg.geometric.joint else None
     third = "moving_pair_third" in rules
-    sure, three_view, dissent, dissent_short, overruled = _sure_cameras(
-        found, votes, joint, cameras, tracks, vids, cfg, notes, coarsest, estimated, other_peaks, other, progress,
-        grid, third, rules, memo)
+    sure, three_view, dissent, dissent_short = _sure_cameras(
+        found, votes, joint, cameras, tracks, vids, cfg, notes, coarsest, estimated, progress, grid, third, rules,
+        memo)
     refused = bool(dissent) or any(not chk.passed for chk in three_view.values())
     # a camera refused (by its pairs or in three views) keeps the joint path (no geometric pair
     # for it), instead of the triangle fallback below choosing among the same cameras' vote peaks
@@ -101,7 +96,7 @@ def add_geometric_pairs(pairs: dict, cameras: dict, tracks: dict, vids: dict, cf
                                                     frozenset(dissent), grid, third, memo)
         sure = {n: ok or (n in checks and checks[n].confirmed) for n, ok in sure.items()}
         said = _JointChecks({c: chk.summary(traj.num_trajectories) for c, chk in checks.items()},
-                            {c: chk.summary() for c, chk in three_view.items()}, dissent, dissent_short, overruled)
+                            {c: chk.summary() for c, chk in three_view.items()}, dissent, dissent_short)
         out, used, summaries, record, chosen = _add_joint_pairs(pairs, found, joint, sure, cameras, tracks, vids,
                                                                 cfg, notes, said, rules)
         out, transfer_new = _add_transfer_pairs(out, checks, traj, list(vids), notes)
@@ -134,16 +129,13 @@ def _vote_on_every_pair(pairs: dict, cameras: dict, tracks: dict, vids: dict, pr
 
 
 def _sure_cameras(found: dict, votes: dict, joint, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
-                  notes: list[Note], coarsest: float, estimated: bool, other_peaks: dict | None, other: str,
-                  progress: bool, grid: OffsetGrid, third: bool, rules: frozenset[str], memo: Memo
-                  ) -> tuple[dict, dict, dict, dict, dict]:
-    """(sure, three_view, dissent, dissent_short, overruled): whether the joint vote is sure of each
-    camera ({camera: bool}: its margin is wide enough), then unsure of those that fail a check, in
-    turn: the three-view check of estimated cameras (three_view: {camera: transfer.ThreeViewCheck}),
-    a rival offset in three views, a pair of its own with few votes at the joint offset, another
-    camera model's vote peaks. dissent: {camera: why it was made unsure}, dissent_short: the same in
-    a few words, overruled: {camera: why another model's dispute of it was overruled}. Each
-    decision is said in notes."""
+                  notes: list[Note], coarsest: float, estimated: bool, progress: bool, grid: OffsetGrid,
+                  third: bool, rules: frozenset[str], memo: Memo) -> tuple[dict, dict, dict, dict]:
+    """(sure, three_view, dissent, dissent_short): whether the joint vote is sure of each camera
+    ({camera: bool}: its margin is wide enough), then unsure of those that fail a check, in turn:
+    the three-view check of estimated cameras (three_view: {camera: transfer.ThreeViewCheck}), a
+    rival offset in three views. dissent: {camera: why it was made unsure}, dissent_short: the
+    same in a few words. Each decision is said in notes."""
     sure = {} if joint is None else {n: m >= cfg.geometric.joint_min_margin or "margin" not in rules
                                      for n, m in joint.margin.items()}
     three_view = {}
@@ -166,30 +158,7 @@ def _sure_cameras(found: dict, votes: dict, joint, cameras: dict, tracks: dict, 
         _not_sure(rivals, sure, dissent, notes, dissent_short,
                   {n: f"two offsets {abs(best[n][0] - joint.offsets_s[n]):.2f} s apart, as a repeated motion gives"
                    for n in rivals})
-    # after the three-view check, which triangulates the pairs of the cameras sure then (a camera
-    # this refuses first could leave another too few trajectories); estimated cameras only: with a
-    # calibration a right pair can keep a small share of its top peak's votes
-    if "pair_share" in rules and cfg.geometric.joint_min_pair_share > 0 and estimated and joint is not None:
-        from .rules import dissenting_cameras
-
-        dissenting = dissenting_cameras(votes, joint, sure, cfg.geometric.joint_min_pair_share)
-        _not_sure(dissenting, sure, dissent, notes, dissent_short,
-                  {n: "a pair of its own has few votes at its joint offset" for n in dissenting})
-    overruled = {}  # camera -> why the other model's dispute of it was overruled
-    if "other_model" in rules and other_peaks is not None and estimated and joint is not None:
-        from .rules import disputed_by_other_model
-
-        shares = {n: chk.supporters / chk.best_supporters for n, chk in three_view.items() if chk.best_supporters}
-        disputed, overruled = disputed_by_other_model(joint, sure, other_peaks,
-                                                      cfg.geometric.other_model_agree_frames * coarsest, other,
-                                                      shares, cfg.geometric.other_model_overrule_share)
-        for n, why in overruled.items():
-            msg = f"joint vote still sure of {n}: {why}"
-            say(notes, msg)
-            log.info(msg)
-        _not_sure(disputed, sure, dissent, notes, dissent_short,
-                  {n: f"{other}'s vote peaks disagree" for n in disputed})
-    return sure, three_view, dissent, dissent_short, overruled
+    return sure, three_view, dissent, dissent_short
 
 
 def _triangle_pairing(pairs: dict, found: dict, joint, cameras: dict, tracks: dict, vids: dict, cfg: CueConfig,
@@ -277,42 +246,3 @@ def _not_sure(refused: dict[str, str], sure: dict[str, bool], dissent: dict[str,
         msg = f"joint vote not sure of {n}: {why}"
         say(notes, msg)
         log.info(msg)
-
-
-def check_fitted_offsets(fitted: dict[str, float], voted: dict, vids: dict
-                         ) -> tuple[dict[str, str], FittedOffsetCheck]:
-    """Cameras from the moving points that their own epipolar votes contradict or leave
-    unconfirmed: ({camera: reason}, the record of every pair's comparison).
-
-    Those cameras were fitted to track pairs aligned at coarse offsets (fitted: camera ->
-    offset_s relative to the reference). Right cameras at right offsets make the votes over all
-    track pairs peak at the same Δ (within about a frame); cameras fitted to wrong pairs at wrong
-    offsets put the peaks elsewhere (up to seconds away), and Stage 1 then accepts minima at
-    offsets the cameras were never fitted for. Any contradiction refuses every such camera (they
-    were fitted jointly); a camera in no agreeing pair is refused as unconfirmed. Two cameras give
-    no check (their votes peak where their own F was fitted): they pass, marked unchecked (they
-    are used only with camera.fallback_unchecked_pair; by default _estimate refuses them)."""
-    if len(fitted) < 3:
-        return {}, FittedOffsetCheck("unchecked (two cameras: no third to confirm their offset)")
-    tol_s = 3.0 * max(vids[n].info.frame_interval_s for n in fitted)
-    rows, agreeing, contradicted = {}, set(), []
-    for (a, b), delta in sorted(voted.items()):
-        if a not in fitted or b not in fitted:
-            continue
-        expect = fitted[b] - fitted[a]
-        ok = abs(delta - expect) <= tol_s
-        rows[f"{a}__{b}"] = FittedOffsetPair(round(expect, 4), round(delta, 4), ok)
-        if ok:
-            agreeing |= {a, b}
-        else:
-            contradicted.append(f"{a}__{b} fitted at Δ {expect:+.3f} s, voted {delta:+.3f} s")
-    if contradicted:
-        why = ("camera from the moving points refused: its own epipolar votes contradict the offsets "
-               f"it was fitted at ({'; '.join(contradicted)}; tolerance {tol_s:.3f} s), so the track "
-               "pairs it was fitted to were wrong")
-        refused = {n: why for n in fitted}
-    else:
-        refused = {n: ("camera from the moving points refused: no pair of it with a sure epipolar vote "
-                       "confirmed the offset it was fitted at") for n in fitted if n not in agreeing}
-    verdict = "contradicted" if contradicted else "confirmed" if not refused else "partly unconfirmed"
-    return refused, FittedOffsetCheck(verdict, round(tol_s, 4), rows, tuple(sorted(refused)))
