@@ -49,6 +49,19 @@ class MovingPointsPair:
 
 
 @dataclass(frozen=True)
+class MovedOffset:
+    alone_s: float  # its best coarse offset with the reference alone
+    together_s: float  # the one chosen with every pair
+
+
+@dataclass(frozen=True)
+class JointCoarseOffsets:
+    pairs: int
+    summed_share: float
+    moved: dict[str, MovedOffset]
+
+
+@dataclass(frozen=True)
 class JointFit:
     """One focal per camera and every pose fitted to all camera pairs' track pairs at once."""
 
@@ -68,13 +81,16 @@ class MovingPointsCameras:
     used: bool
     reference: str | None = None
     pairs: dict[str, MovingPointsPair] | None = None  # camera -> its geometry with the reference
+    joint_offsets: JointCoarseOffsets | None = None
     joint_fit: JointFit | None = None
 
     def to_json(self) -> dict[str, Any]:
         """The diagnostics of the fit go under "pairs" with the cameras (result.json's shape)."""
-        out = to_json(dataclasses.replace(self, pairs=None, joint_fit=None))
+        out = to_json(dataclasses.replace(self, pairs=None, joint_offsets=None, joint_fit=None))
         if self.reference is not None:
             pairs: dict[str, Any] = to_json(self.pairs or {})
+            if self.joint_offsets is not None:
+                pairs["joint_offsets"] = to_json(self.joint_offsets)
             if self.joint_fit is not None:
                 pairs["joint_fit"] = to_json(self.joint_fit)
             out = {"reference": self.reference, "pairs": pairs, **{k: v for k, v in out.items() if k != "reference"}}
@@ -82,14 +98,12 @@ class MovingPointsCameras:
 
     @staticmethod
     def from_json(d: dict[str, Any]) -> MovingPointsCameras:
-        """The record from its JSON; an older result.json's "joint_offsets" among the pairs (the
-        coarse offsets once chosen with every pair at once) is passed over."""
         pairs = dict(d.get("pairs") or {})
-        joint_fit = pairs.pop("joint_fit", None)
-        pairs.pop("joint_offsets", None)
+        joint_offsets, joint_fit = pairs.pop("joint_offsets", None), pairs.pop("joint_fit", None)
         plain = from_json(MovingPointsCameras, {k: v for k, v in d.items() if k != "pairs"})
         return dataclasses.replace(
             plain, pairs=from_json(dict[str, MovingPointsPair], pairs) if "pairs" in d else None,
+            joint_offsets=from_json(JointCoarseOffsets | None, joint_offsets),
             joint_fit=from_json(JointFit | None, joint_fit))
 
 

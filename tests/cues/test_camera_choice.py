@@ -23,10 +23,10 @@ def _as_json(cams) -> dict:
     return {"camera_source": cams.source, "dropped": dict(cams.dropped), "sfm": cams.sfm.to_json()}
 
 
-def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig()):
+def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig(), calls: list | None = None):
     """_estimate of the moving points' cameras (from_tracks) when the background reconstruction
     registers nothing and the moving points give a static camera for every video. Returns
-    (cameras, stats)."""
+    (cameras, stats); calls: where each fit's keyword arguments are noted."""
     from types import SimpleNamespace
 
     import vs_inspect.cues.cameras.moving_points as pairwise_mod
@@ -39,6 +39,8 @@ def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig()):
               for i, n in enumerate(names)}
     details = {n: {"coarse_offset_s": 0.1 * i} for i, n in enumerate(names) if i}
     def fit(*a, **k):
+        if calls is not None:
+            calls.append(k)
         return dict(fitted), {}, details
 
     monkeypatch.setattr(pairwise_mod, "cameras_from_tracks", fit)
@@ -49,6 +51,18 @@ def _moving_point_cameras(monkeypatch, names, config: CueConfig = CueConfig()):
     pairs = {(a, b): TrackPairs(a, b, np.zeros((0, 2), np.int64)) for a, b in zip(names, names[1:])}
     got = _estimate(vids, config, pairs, est, from_tracks=True)
     return got.cameras, _as_json(got)
+
+
+def test_the_moving_points_cameras_get_the_configs_joint_choice(monkeypatch):
+    """Their coarse offsets are chosen with every pair at once unless the config says each with
+    the reference alone."""
+    from vs_inspect.cues.config import CameraConfig
+
+    calls = []
+    _moving_point_cameras(monkeypatch, ["a", "b", "c"], calls=calls)
+    _moving_point_cameras(monkeypatch, ["a", "b", "c"], CueConfig(camera=CameraConfig(fallback_joint_offsets=False)),
+                          calls=calls)
+    assert [c["joint"] for c in calls] == [True, False]
 
 
 def test_two_cameras_from_the_moving_points_alone_are_refused(monkeypatch):

@@ -139,6 +139,87 @@ def test_cameras_that_leave_the_track_pairs_off_their_lines_are_not_returned():
     assert all("from the epipolar lines" in why for why in reasons.values())
 
 
+def _curve(peaks: dict[float, float], lo: float = -3.0, hi: float = 3.0, step: float = 0.1,
+           floor: float = 0.3) -> pairwise.OffsetCurve:
+    """An OffsetCurve on a step grid from lo to hi: share `floor` but at the given {offset: share}."""
+    offsets = np.round(np.arange(lo, hi + step / 2, step), 6)
+    share = np.full(len(offsets), floor)
+    for d, s in peaks.items():
+        share[np.argmin(np.abs(offsets - d))] = s
+    return pairwise.OffsetCurve(offsets, step, share, np.full(len(offsets), 500), (np.eye(3),) * len(offsets))
+
+
+def _offsets(curves, chosen: dict[str, int]) -> dict[str, float]:
+    """joint_coarse_offsets' grid indices on the reference "r"'s curves, as offsets in seconds."""
+    return {v: float(curves[("r", v)].offsets_s[k]) for v, k in chosen.items()}
+
+
+def test_joint_coarse_offsets_close_the_triangle_where_one_pair_alone_peaks_wrong():
+    """r-a alone peaks 1.5 s from the truth; r-b and a-b agree on the truth only with a's second
+    peak: summed over the triangle, the truth wins."""
+    curves = {("r", "a"): _curve({2.0: 0.62, 0.5: 0.55}),  # truth Δ_ra 0.5
+              ("r", "b"): _curve({1.0: 0.60}),  # truth Δ_rb 1.0
+              ("a", "b"): _curve({0.5: 0.58})}  # Δ_ab = Δ_rb − Δ_ra
+    got, score = pairwise.joint_coarse_offsets("r", curves)
+    assert _offsets(curves, got) == pytest.approx({"a": 0.5, "b": 1.0}) and score == pytest.approx(0.55 + 0.60 + 0.58)
+    # without the pair between a and b there is nothing to close: no joint choice
+    assert pairwise.joint_coarse_offsets("r", {k: v for k, v in curves.items() if k != ("a", "b")}) is None
+    # a pair keyed the other way round is read as Δ_ba = Δ_ra − Δ_rb
+    flipped = curves | {("a", "b"): _curve({-0.5: 0.58})}
+    del flipped[("a", "b")]
+    flipped[("b", "a")] = _curve({-0.5: 0.58})
+    assert _offsets(flipped, pairwise.joint_coarse_offsets("r", flipped)[0]) == pytest.approx({"a": 0.5, "b": 1.0})
+
+
+def test_offset_curve_reads_the_nearest_grid_offset_and_nan_off_the_grid():
+    c = _curve({0.5: 0.9}, lo=0.0, hi=1.0)
+    assert c.at(np.array([0.5, 0.54, 0.46])) == pytest.approx([0.9, 0.9, 0.9])
+    assert np.isnan(c.at(np.array([1.2, -0.2]))).all()
+    assert c.at(np.array([[0.0, 1.0]])).shape == (1, 2)
+
+
+def test_cameras_from_tracks_moves_a_camera_whose_pair_with_the_reference_peaks_wrong(monkeypatch):
+    """On the ring of four views, c1's curve with the reference is given a false peak 1 s from the
+    truth, above the truth's: alone it would be chosen; with the other pairs' curves the truth is, and details say so."""
+    names, infos, xy, pairs, _ = ring_of_views()
+    moving = {n: False for n in names}
+    real = pairwise.offset_curve
+    false_peak = RING_STARTS_S[1] + 1.0
+
+    def with_a_false_peak(xy_a, info_a, xy_b, info_b, index, **kw):
+        curve = real(xy_a, info_a, xy_b, info_b, index, **kw)
+        if info_a.name == "c0" and info_b.name == "c1":
+            share = curve.share.copy()
+            share[np.argmin(np.abs(curve.offsets_s - false_peak))] = 1.0
+            share[np.argmin(np.abs(curve.offsets_s - RING_STARTS_S[1]))] = 0.9  # exact tracks: 1.0
+            curve = pairwise.OffsetCurve(curve.offsets_s, curve.step_s, share, curve.count, curve.F)
+        return curve
+
+    monkeypatch.setattr(pairwise, "offset_curve", with_a_false_peak)
+    alone = pairwise.search_pair(xy["c0"], infos["c0"], xy["c1"], infos["c1"], pairs[("c0", "c1")].index)
+    assert alone.offset_s == pytest.approx(false_peak)
+    cams, reasons, details = pairwise.cameras_from_tracks("c0", infos, xy, pairs, moving)
+    assert not reasons and set(cams) == set(names)
+    for i, v in enumerate(names[1:], 1):
+        assert details[v]["coarse_offset_s"] == pytest.approx(RING_STARTS_S[i])
+    assert details["joint_offsets"]["pairs"] == 6
+    assert details["joint_offsets"]["moved"] == {"c1": {"alone_s": pytest.approx(false_peak),
+                                                        "together_s": pytest.approx(RING_STARTS_S[1])}}
+    assert details["joint_fit"]["median_px_after"] < 0.1
+
+
+def test_joint_coarse_offsets_on_a_grid_too_large_to_score_whole_refines_a_coarser_one():
+    """Over max_grid combinations, every k-th offset is scored, then each camera refined on its
+    full grid: the same answer as the full search here."""
+    curves = {("r", "a"): _curve({2.0: 0.62, 0.5: 0.55, 0.6: 0.5, 0.4: 0.5}),
+              ("r", "b"): _curve({1.0: 0.60, 0.9: 0.5, 1.1: 0.5}),
+              ("a", "b"): _curve({0.5: 0.58, 0.4: 0.5, 0.6: 0.5})}
+    full = pairwise.joint_coarse_offsets("r", curves)
+    coarse = pairwise.joint_coarse_offsets("r", curves, max_grid=400)  # 61 x 61 offsets: every 4th
+    assert _offsets(curves, full[0]) == pytest.approx({"a": 0.5, "b": 1.0})
+    assert coarse[0] == full[0] and coarse[1] == pytest.approx(full[1])
+
+
 def test_offset_curve_searches_only_the_offsets_the_run_allows():
     from vs_inspect.geometry.offsets import OffsetGrid
 

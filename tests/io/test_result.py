@@ -129,9 +129,9 @@ def test_cue_stats_with_the_joint_vote_and_transfer_checks_round_trip():
 
 
 def test_an_older_result_json_with_the_keys_of_removed_checks_is_read_and_those_keys_passed_over():
-    """Stage 0 once kept more under "cues" (the moving points' coarse offsets chosen with every
-    pair at once, their fitted offsets checked against their votes, another camera model's
-    disputes overruled); a reader takes such a result.json and leaves those keys out."""
+    """Stage 0 once kept more under "cues" (the moving points' fitted offsets checked against
+    their votes, another camera model's disputes overruled); a reader takes such a result.json
+    and leaves those keys out."""
     from vs_inspect.cue_stats import CueStats
 
     fallback = {"why": "weak", "used": True, "reference": "a",
@@ -152,5 +152,5 @@ def test_an_older_result_json_with_the_keys_of_removed_checks_is_read_and_those_
     back = CueStats.from_json(old).sfm.fallback
     assert set(back.pairs) == {"b"} and back.pairs["b"].coarse_offset_s == 0.5
     assert back.joint_fit.pairs == 3
-    assert "joint_offsets" not in back.to_json()["pairs"]
+    assert back.joint_offsets.summed_share == 1.7 and "joint_offsets" in back.to_json()["pairs"]
     assert not {"fitted_offsets_s", "check"} & set(back.to_json())

@@ -80,6 +80,8 @@ class CameraConfig:
     """Frames per moving camera of ALIKED's model, the last one auto tries; 0: never tried."""
     fallback_from_tracks: bool = True
     """Static cameras from the moving points' two-view geometry may stand in for a camera model's (when no video is trusted on any model, fallback_when_untrusted); off: never fitted."""
+    fallback_joint_offsets: bool = True
+    """Cameras from the moving points, three or more static cameras: choose their coarse offsets together (all pairs' F inlier shares) instead of each one's best with the reference alone."""
     fallback_when_untrusted: bool = True
     """Try the moving points' cameras when the joint vote trusted no video on any camera model; used when the model placed fewer than two or they fit the moving points better, kept when a video is trusted on them."""
     fallback_unchecked_pair: bool = False

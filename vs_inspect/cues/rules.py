@@ -12,6 +12,7 @@ RULES: dict[str, str] = {
     # the camera sets tried, in order, when the cameras are estimated
     "second_model": "XFeat's model is voted on when SIFT's cameras leave a video untrusted",
     "third_model": "ALIKED's model is voted on when the kept set still leaves a video untrusted",
+    "joint_coarse_offsets": "the moving points' cameras are fitted at coarse offsets chosen with every pair at once",
     "two_point_cameras": "only two cameras from the moving points are refused (their F and offset share the same pairs)",
     "points_when_untrusted": "the moving points' cameras are voted on when no model's vote trusts any video",
     # the joint vote on one camera set

@@ -10,7 +10,8 @@ import dataclasses
 import functools
 import logging
 
-from ...camera_stats import ImagePairMatches, JointFit, MovingPointsCameras, MovingPointsPair, SfmRecord
+from ...camera_stats import (ImagePairMatches, JointCoarseOffsets, JointFit, MovingPointsCameras, MovingPointsPair,
+                             SfmRecord)
 from ...geometry.offsets import OffsetGrid
 from ...json_records import from_json
 from ...memo import NO_MEMO, Memo
@@ -36,7 +37,7 @@ def _estimate(vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict, est, from
     ref = max(vids, key=lambda n: sum(len(p.index) for k, p in pairs.items() if n in k))
     infos = {n: v.info for n, v in vids.items()}
     xy = {n: v.xy_full for n, v in vids.items()}
-    cams, reasons, details = _fitted_moving_points(ref, infos, xy, vids, pairs, grid, kept)
+    cams, reasons, details = _fitted_moving_points(ref, infos, xy, vids, cfg, pairs, grid, rules, kept)
     cams, reasons, why = _without_a_lone_pair(cams, reasons, _why_fitted(est, static), cfg, rules)
     use = len(cams) >= 2
     if use and len(est.cameras) >= 2:
@@ -84,8 +85,8 @@ def _sfm_record(est, cfg: CueConfig, static: list[str]) -> SfmRecord:
                      if est.features == "sift" and cfg.camera.asift_per_view and static else None)
 
 
-def _fitted_moving_points(ref: str, infos: dict, xy: dict, vids: dict[str, VideoCues], pairs: dict,
-                          grid: OffsetGrid, kept: Memo) -> tuple[dict, dict, dict]:
+def _fitted_moving_points(ref: str, infos: dict, xy: dict, vids: dict[str, VideoCues], cfg: CueConfig, pairs: dict,
+                          grid: OffsetGrid, rules: frozenset[str], kept: Memo) -> tuple[dict, dict, dict]:
     """(cameras, {video: why it has none}, details) the moving points give relative to ref
     (cameras_from_tracks); a moving camera's reason says the moving points give static cameras
     only."""
@@ -93,7 +94,8 @@ def _fitted_moving_points(ref: str, infos: dict, xy: dict, vids: dict[str, Video
 
     cams, reasons, details = kept.call(
         "moving_points", cameras_from_tracks, ref, infos, xy, pairs,
-        {n: v.camera_motion == "moving" for n, v in vids.items()}, grid=grid)
+        {n: v.camera_motion == "moving" for n, v in vids.items()},
+        joint=cfg.camera.fallback_joint_offsets and "joint_coarse_offsets" in rules, grid=grid)
     reasons = {n: ("camera could not be registered: a moving camera, and the moving points give "
                    "static cameras only" if vids[n].camera_motion == "moving" else reason)
                for n, reason in reasons.items()}
@@ -168,5 +170,6 @@ def _model_set(est, vids: dict[str, VideoCues], sfm: SfmRecord) -> CameraSet:
 
 def _moving_points_record(ref: str, details: dict, why: str, used: bool) -> MovingPointsCameras:
     """The record of the moving points' cameras from cameras_from_tracks' details."""
-    per = {n: MovingPointsPair(**d) for n, d in details.items() if n != "joint_fit"}
-    return MovingPointsCameras(why, used, ref, per, from_json(JointFit | None, details.get("joint_fit")))
+    per = {n: MovingPointsPair(**d) for n, d in details.items() if n not in ("joint_offsets", "joint_fit")}
+    return MovingPointsCameras(why, used, ref, per, from_json(JointCoarseOffsets | None, details.get("joint_offsets")),
+                               from_json(JointFit | None, details.get("joint_fit")))

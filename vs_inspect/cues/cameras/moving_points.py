@@ -3,10 +3,11 @@ reconstruct (wide baselines, textureless or repetitive walls).
 
 For a reference video r and each other static video v: search the time offset whose aligned
 track pairs (x_r(t + Δ), x_v(t)) give the most consistent fundamental matrix (RANSAC inlier
-share, as in unsynchronized two-view geometry), self-calibrate one focal length per pair (the f
-that makes K_rᵀ F_rv K_v closest to an essential matrix, principal points at the image centres),
-decompose into a relative pose, and fix the scale of every pair from points triangulated on the
-reference's tracks. With three or more cameras, one focal per
+share, as in unsynchronized two-view geometry; with three or more static cameras the offsets of
+all of them together, every pair's share summed with its triangles closed), self-calibrate one
+focal length per pair (the f that makes K_rᵀ F_rv K_v closest to an essential matrix, principal
+points at the image centres), decompose into a relative pose, and fix the scale of every pair
+from points triangulated on the reference's tracks. With three or more cameras, one focal per
 camera and every pose are then fitted to the track pairs of all camera pairs at once (scipy
 least squares, Cauchy loss), started from the per-pair focals and from a few shared guesses: one
 pair's focal is ill-posed when the optical axes nearly meet, as they do around a scene. Pure
@@ -74,6 +75,16 @@ class OffsetCurve:
     count: np.ndarray  # (K,) aligned correspondences used at each offset
     F: tuple  # K (3,3) arrays F_ab: x_aᵀ F x_b = 0 (full-resolution px)
 
+    def at(self, delta_s: np.ndarray) -> np.ndarray:
+        """share at the grid offsets nearest delta_s (any shape); NaN off the curve."""
+        d = np.asarray(delta_s, np.float64)
+        last = len(self.offsets_s) - 1
+        right = np.clip(np.searchsorted(self.offsets_s, d), 0, last)
+        left = np.clip(right - 1, 0, last)
+        k = np.where(np.abs(self.offsets_s[left] - d) <= np.abs(self.offsets_s[right] - d), left, right)
+        near = np.abs(self.offsets_s[k] - d) <= 0.5 * self.step_s + 1e-9
+        return np.where(near, self.share[k], np.nan)
+
 
 def offset_curve(xy_a, info_a, xy_b, info_b, index, min_corr: int = 40, thresh_px: float = 2.0,
                  max_corr: int = 2000, seed: int = 0, min_share_of_max: float = 0.5,
@@ -121,16 +132,59 @@ def search_pair(xy_r, info_r, xy_v, info_v, index, **kwargs) -> PairGeometry | N
     return None if curve is None else _geometry_at(curve, int(np.argmax(curve.share)), info_r, info_v)
 
 
+def joint_coarse_offsets(ref: str, curves: dict[tuple[str, str], OffsetCurve], max_grid: int = 2_000_000
+                         ) -> tuple[dict[str, int], float] | None:
+    """Coarse offsets Δ_rv of every camera v with a curve against ref that together explain the
+    most: the sum of every pair's inlier share at Δ_uv = Δ_rv − Δ_ru (a triangle must close, so a
+    wrong peak of one pair is outvoted by the two pairs that go round it). ({v: index of Δ_rv in
+    curves[(ref, v)].offsets_s}, the summed share), or None with fewer than two such cameras or no
+    pair between them. Every combination of ref's curves' grid offsets is scored while there are at
+    most max_grid; beyond, every k-th offset, then each camera's offset refined on its full grid
+    with the others held."""
+    others = sorted(v for (a, v) in curves if a == ref)
+    linked = [k for k in curves if ref not in k and k[0] in others and k[1] in others]
+    if len(others) < 2 or not linked:
+        return None
+    grids = [curves[(ref, v)].offsets_s for v in others]
+    stride = 1
+    while np.prod([float(len(g[::stride])) for g in grids]) > max_grid:
+        stride += 1
+
+    def score(ks: list[np.ndarray]) -> np.ndarray:  # ks: each camera's grid indices, broadcast together
+        mesh = [g[k] for g, k in zip(grids, ks)]
+        total = sum(curves[(ref, v)].share[k] for v, k in zip(others, ks))
+        for a, b in linked:  # a pair with too little overlap there: NaN, not a candidate
+            total = total + curves[(a, b)].at(mesh[others.index(b)] - mesh[others.index(a)])
+        return np.nan_to_num(total, nan=-np.inf)
+
+    ks = np.meshgrid(*[np.arange(0, len(g), stride) for g in grids], indexing="ij")
+    total = score(ks)
+    best = np.unravel_index(int(np.argmax(total)), total.shape)
+    chosen = [int(k[best]) for k in ks]
+    for _ in range(3 if stride > 1 else 0):
+        for i, g in enumerate(grids):
+            near = np.nonzero(np.abs(g - g[chosen[i]]) <= stride * curves[(ref, others[i])].step_s + 1e-9)[0]
+            s_near = score([near if j == i else np.full(len(near), c) for j, c in enumerate(chosen)])
+            chosen[i] = int(near[int(np.argmax(s_near))])
+    best_score = float(score([np.array([c]) for c in chosen])[0])
+    if not np.isfinite(best_score):
+        return None
+    return dict(zip(others, chosen)), best_score
+
+
 def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.ndarray],
                         pairs: dict[tuple[str, str], TrackPairs], moving: dict[str, bool],
                         refine: bool = True, min_inlier_share: float = 0.2, max_median_fraction: float = 0.01,
-                        grid: OffsetGrid = OffsetGrid()
+                        joint: bool = True, grid: OffsetGrid = OffsetGrid()
                         ) -> tuple[dict[str, CameraTrack], dict[str, str], dict[str, dict]]:
     """Static cameras in the reference's camera frame: (cameras, unregistered reasons, details).
 
     A camera needs min_inlier_share of its correspondences with the reference within 2 px of the
-    best F (right offsets score higher than wrong ones; the measured shares are in BENCHMARKS.md),
-    at its best coarse offset with the reference. refine: with three or more cameras, fit every focal and pose to all pairs at once
+    best F (right offsets score higher than wrong ones; the measured shares are in BENCHMARKS.md).
+    joint: with two or more other static cameras that share track pairs, the coarse offsets are
+    chosen together (joint_coarse_offsets: every pair's curve, triangles closed) instead of each
+    camera's best with the reference alone; details["joint_offsets"] names the cameras it moved.
+    refine: with three or more cameras, fit every focal and pose to all pairs at once
     (refine_cameras; details["joint_fit"] says how well); when the fit leaves the median track
     pair farther than max_median_fraction of the image diagonal from its epipolar line (Stage 1's
     inlier tolerance), no camera is returned. grid: the limits of the coarse offsets searched."""
@@ -138,7 +192,7 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
     details: dict[str, dict] = {}
     found: dict[str, tuple] = {}  # name -> (PairGeometry, aligned correspondences with ref)
     info_r = infos[ref]
-    curves: dict[tuple[str, str], OffsetCurve] = {}  # (ref, v) of the other static cameras
+    curves: dict[tuple[str, str], OffsetCurve] = {}  # (ref, v) and (u, v) of the other static cameras
     index: dict[str, np.ndarray] = {}  # v -> its track pairs with ref, ref's track first
     for v in infos:
         if v == ref:
@@ -161,6 +215,20 @@ def cameras_from_tracks(ref: str, infos: dict[str, VideoInfo], xy: dict[str, np.
             continue
         curves[(ref, v)], index[v] = curve, idx
     chosen = {v: int(np.argmax(curves[(ref, v)].share)) for v in index}  # v -> index on its curve with ref
+    if joint and len(index) >= 2:
+        for (a, b), tp in sorted(pairs.items()):
+            if a in index and b in index and len(tp.index) >= 8:
+                curve = offset_curve(xy[a], infos[a], xy[b], infos[b], tp.index, grid=grid)
+                if curve is not None:
+                    curves[(a, b)] = curve
+        together = joint_coarse_offsets(ref, curves)
+        if together is not None:
+            alone, (chosen, score) = chosen, together
+            details["joint_offsets"] = {
+                "pairs": len(curves), "summed_share": round(score, 3),
+                "moved": {v: {"alone_s": round(float(curves[(ref, v)].offsets_s[alone[v]]), 4),
+                              "together_s": round(float(curves[(ref, v)].offsets_s[chosen[v]]), 4)}
+                          for v in chosen if chosen[v] != alone[v]}}
     for v, idx in index.items():
         g = _geometry_at(curves[(ref, v)], chosen[v], info_r, infos[v])
         if g.inlier_share < min_inlier_share:
