@@ -83,7 +83,7 @@ class CameraConfig:
     fallback_joint_offsets: bool = True
     """Cameras from the moving points, three or more static cameras: choose their coarse offsets together (all pairs' F inlier shares) instead of each one's best with the reference alone."""
     fallback_when_untrusted: bool = True
-    """Try the moving points' cameras when the joint vote trusted no video on any camera model; used when the model placed fewer than two or they fit the moving points better, kept when a video is trusted on them."""
+    """When the joint vote trusted no video on any model, try the moving points' cameras: used when the model placed fewer than two or they fit the points better, kept when a video is trusted on them."""
     fallback_unchecked_pair: bool = False
     """Use cameras from the moving points when only two come out: geometry and offset are then fitted to the same track pairs, and no third camera checks them. Off: refused, with that reason."""
 
